@@ -1,0 +1,87 @@
+/* Arm contract: joint commands and feedback, sensors, tool changer and a
+ * manual input device. hal/sim implements all of them on an ODE world; a real
+ * controller implements what its hardware has and leaves the rest NULL.
+ *
+ * Threading: every operation except open/close is called from the control
+ * loop: no blocking, no allocation. Units: SI (m, rad, N, Nm, s). */
+#ifndef HAL_ARM_H
+#define HAL_ARM_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "hal/hal_status.h"
+
+#define HAL_ARM_MAX_JOINTS 8
+#define HAL_MAX_SENSORS 4
+#define HAL_SENSOR_MAX_VALUES 8
+
+typedef struct {
+    uint8_t n_joints;
+    double q_min_rad[HAL_ARM_MAX_JOINTS];
+    double q_max_rad[HAL_ARM_MAX_JOINTS];
+    double torque_max_Nm[HAL_ARM_MAX_JOINTS];
+} hal_arm_info_t;
+
+typedef struct {
+    int (*info)(void *self, hal_arm_info_t *out);
+    /* Enable or disable the drives. Disabled drives hold nothing (brakes in sim). */
+    int (*enable)(void *self, bool on);
+    /* Set-point for this cycle: position and velocity feed-forward per joint. */
+    int (*command)(void *self, const double *q_rad, const double *qd_rad_s);
+    /* Measured joint positions and velocities. */
+    int (*read)(void *self, double *q_rad, double *qd_rad_s);
+    /* Advance a simulated world by dt (NULL on real hardware). */
+    int (*step)(void *self, double dt_s);
+    void (*close)(void *self);
+} hal_arm_ops_t;
+
+typedef struct {
+    const hal_arm_ops_t *ops;
+    void *self;
+    char name[64];
+} hal_arm_t;
+
+/* A sensor, e.g. "force_sensor" (Fx Fy Fz Tx Ty Tz in the tool frame, N and
+ * Nm) or "laser_standoff_sensor" (distance along the tool z axis, m). */
+typedef struct {
+    const char *name;
+    uint8_t n_values;
+    int (*read)(void *self, double *values); /* n_values doubles */
+    void *self;
+} hal_sensor_t;
+
+/* Tool changer: the rack and the tool's output bits (a gripper in sim). */
+typedef struct {
+    /* Where tool `index` sits in the rack: flange pose to approach, base frame. */
+    int (*rack_pose)(void *self, const char *tool_id, double xyzrpy[6]);
+    /* Tool offset (flange -> tool tip) of a tool, x y z roll pitch yaw. */
+    int (*tool_offset)(void *self, const char *tool_id, double xyzrpy[6]);
+    /* Couple the tool at the flange (1) or leave it in the rack (0). HAL_EINVAL
+     * when the flange is not at the rack pose of that tool. */
+    int (*couple)(void *self, const char *tool_id, bool attach);
+    /* Drive the coupled tool's bits. */
+    int (*set_bits)(void *self, uint32_t on, uint32_t off);
+    int (*get_bits)(void *self, uint32_t *bits);
+} hal_tool_ops_t;
+
+typedef struct {
+    const hal_tool_ops_t *ops;
+    void *self;
+} hal_tool_t;
+
+/* Manual input device (teach pendant, 6-DOF mouse): a normalised twist. */
+typedef struct {
+    /* twist[6] in -1..1 (vx vy vz wx wy wz, tool frame), buttons bit mask. */
+    int (*read)(void *self, double *twist, uint32_t *buttons);
+    void *self;
+} hal_manual_t;
+
+int hal_arm_info(hal_arm_t *arm, hal_arm_info_t *out);
+int hal_arm_enable(hal_arm_t *arm, bool on);
+int hal_arm_command(hal_arm_t *arm, const double *q_rad, const double *qd_rad_s);
+int hal_arm_read(hal_arm_t *arm, double *q_rad, double *qd_rad_s);
+int hal_arm_step(hal_arm_t *arm, double dt_s);
+void hal_arm_close(hal_arm_t *arm);
+
+#endif

@@ -1,0 +1,68 @@
+/* CAN link contract: one bus segment carrying classic CAN 2.0 frames.
+ * Backends: hal/sim (SLCAN on a pseudo-terminal), hal/linux (SocketCAN).
+ * Nothing above this contract knows which backend carries the frames.
+ *
+ * Threading: a link is used from one thread (the comms thread). */
+#ifndef HAL_CAN_H
+#define HAL_CAN_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "hal/hal_status.h"
+
+#define HAL_CAN_F_EXT 0x01u /* 29-bit identifier */
+#define HAL_CAN_F_RTR 0x02u /* remote frame */
+
+typedef struct {
+    uint32_t id;     /* 11 or 29 bits, without flag bits */
+    uint8_t flags;   /* HAL_CAN_F_* */
+    uint8_t len;     /* 0..8 */
+    uint8_t data[8];
+} hal_can_frame_t;
+
+typedef enum {
+    HAL_CAN_STATE_ACTIVE = 0,
+    HAL_CAN_STATE_WARNING,
+    HAL_CAN_STATE_PASSIVE,
+    HAL_CAN_STATE_BUS_OFF,
+} hal_can_state_t;
+
+typedef struct {
+    hal_can_state_t state;
+    uint32_t rx_frames, tx_frames;
+    uint32_t rx_dropped;   /* frames the backend could not parse or had no room for */
+    uint32_t tx_dropped;
+    uint32_t error_frames; /* error frames / error reports seen */
+    uint32_t bitrate;      /* bit/s, 0 when unknown */
+} hal_can_status_t;
+
+typedef struct {
+    /* Queue one frame for transmission. Never blocks. HAL_EAGAIN when the
+     * backend's queue is full (the caller keeps the frame and retries). */
+    int (*send)(void *self, const hal_can_frame_t *frame);
+    /* Take one received frame. Never blocks. 1: a frame was written;
+     * HAL_EAGAIN: none pending; other negatives: link failed. */
+    int (*recv)(void *self, hal_can_frame_t *frame);
+    /* A file descriptor that polls readable when recv may have a frame, or -1. */
+    int (*poll_fd)(void *self);
+    /* Bus state and counters. */
+    int (*status)(void *self, hal_can_status_t *out);
+    /* Release everything the link holds (fds, symlinks). Idempotent. */
+    void (*close)(void *self);
+} hal_can_ops_t;
+
+typedef struct {
+    const hal_can_ops_t *ops;
+    void *self;
+    char name[64]; /* e.g. "slcan:pty:/tmp/ls0" or "socketcan:vcan0", for logs */
+} hal_can_link_t;
+
+int hal_can_send(hal_can_link_t *link, const hal_can_frame_t *frame);
+int hal_can_recv(hal_can_link_t *link, hal_can_frame_t *frame);
+int hal_can_poll_fd(hal_can_link_t *link);
+int hal_can_status(hal_can_link_t *link, hal_can_status_t *out);
+void hal_can_close(hal_can_link_t *link);
+
+#endif
