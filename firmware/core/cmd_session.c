@@ -1,0 +1,53 @@
+/* Seed 3.1: lock, release, activate, deactivate. The dispatcher has already
+ * checked the state and the owner. */
+#include "ls_core.h"
+
+#include <stdio.h>
+
+int32_t ls_h_lock(struct ls_core *core, struct ls_call *call)
+{
+    core->owner = call->sup;
+    core->state = ls_State_LOCKED;
+    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "locked by 0x%02X", core->sessions[call->sup].addr);
+}
+
+int32_t ls_h_release(struct ls_core *core, struct ls_call *call)
+{
+    core->owner = -1;
+    core->state = ls_State_UNLOCKED;
+    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "released: the device is under local control");
+}
+
+int32_t ls_h_activate(struct ls_core *core, struct ls_call *call)
+{
+    if (core->fault[0] != '\0') {
+        /* Activation acknowledges the latched fault: the supervisor saw it
+         * (alarm, getMotionControlState) and decides to go on. */
+        core->fault[0] = '\0';
+    }
+    if (core->act.enable_drives != NULL) {
+        int r = core->act.enable_drives(core->act.ctx, true);
+        if (r < 0) {
+            return ls_reply(call, ls_RetCode_CMD_UNSUPPORTED_ERR,
+                            "the drives could not be enabled (HAL status %d): check the arm backend (--arm)", r);
+        }
+    }
+    core->state = ls_State_RESTING;
+    snprintf(core->motion_state, sizeof core->motion_state, "robot_at_rest");
+    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "active: drives enabled");
+}
+
+int32_t ls_h_deactivate(struct ls_core *core, struct ls_call *call)
+{
+    if (core->state == ls_State_MOVING || core->state == ls_State_PAUSED) {
+        if (core->act.stop_motion != NULL) {
+            core->act.stop_motion(core->act.ctx);
+        }
+        snprintf(core->motion_state, sizeof core->motion_state, "robot_stopped_on_command");
+    }
+    if (core->act.enable_drives != NULL) {
+        (void)core->act.enable_drives(core->act.ctx, false);
+    }
+    core->state = ls_State_LOCKED;
+    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "inactive: drives disabled");
+}

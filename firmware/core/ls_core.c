@@ -1,0 +1,441 @@
+/* Sessions, ownership, state checks and dispatch: the one place where the
+ * schema's valid states and owner rules are enforced (handlers never repeat
+ * those checks). */
+#include "ls_core.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+#include <pb_decode.h>
+#include <pb_encode.h>
+
+const char *ls_core_state_name(ls_State s)
+{
+    switch (s) {
+    case ls_State_IDLE: return "IDLE";
+    case ls_State_UNLOCKED: return "UNLOCKED";
+    case ls_State_LOCKED: return "LOCKED";
+    case ls_State_RESTING: return "RESTING";
+    case ls_State_MOVING: return "MOVING";
+    case ls_State_PAUSED: return "PAUSED";
+    case ls_State_STATE_NONE: break;
+    }
+    return "NONE";
+}
+
+const char *ls_core_ret_name(int32_t code)
+{
+    switch (code) {
+    case ls_RetCode_CMD_EXEC_OK: return "CMD_EXEC_OK";
+    case ls_RetCode_CMD_STARTED_OK: return "CMD_STARTED_OK";
+    case ls_RetCode_CMD_ERR: return "CMD_ERR";
+    case ls_RetCode_CMD_PARAM_ERR: return "CMD_PARAM_ERR";
+    case ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR: return "CMD_PARAM_OUT_OF_RANGE_ERR";
+    case ls_RetCode_CMD_WRONG_STATE_ERR: return "CMD_WRONG_STATE_ERR";
+    case ls_RetCode_CMD_NOT_OWNER_ERR: return "CMD_NOT_OWNER_ERR";
+    case ls_RetCode_CMD_BUSY_ERR: return "CMD_BUSY_ERR";
+    case ls_RetCode_CMD_TIMEOUT_ERR: return "CMD_TIMEOUT_ERR";
+    case ls_RetCode_CMD_NOT_CONNECTED_ERR: return "CMD_NOT_CONNECTED_ERR";
+    case ls_RetCode_CMD_NOT_IMPLEMENTED_ERR: return "CMD_NOT_IMPLEMENTED_ERR";
+    case ls_RetCode_CMD_UNSUPPORTED_ERR: return "CMD_UNSUPPORTED_ERR";
+    case ls_RetCode_CMD_VERSION_MISMATCH_ERR: return "CMD_VERSION_MISMATCH_ERR";
+    case ls_RetCode_CMD_FAULT_ERR: return "CMD_FAULT_ERR";
+    case ls_RetCode_CMD_UNKNOWN_CMD_ERR: return "CMD_UNKNOWN_CMD_ERR";
+    case ls_RetCode_CMD_NO_RESOURCES_ERR: return "CMD_NO_RESOURCES_ERR";
+    default: return "UNKNOWN_RET_CODE";
+    }
+}
+
+void ls_core_init(ls_core_t *core, const ls_core_config_t *cfg, const ls_core_io_t *io, const ls_core_actions_t *act)
+{
+    memset(core, 0, sizeof *core);
+    core->cfg = *cfg;
+    core->io = *io;
+    if (act != NULL) {
+        core->act = *act;
+    }
+    core->state = ls_State_IDLE;
+    core->owner = -1;
+    snprintf(core->motion_state, sizeof core->motion_state, "robot_at_rest");
+}
+
+int32_t ls_reply(ls_call_t *call, int32_t code, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(call->res->ret_msg, sizeof call->res->ret_msg, fmt, ap);
+    va_end(ap);
+    return code;
+}
+
+static int find_session(const ls_core_t *core, uint8_t addr)
+{
+    for (int i = 0; i < LS_MAX_SUPERVISORS; i++) {
+        if (core->sessions[i].connected && core->sessions[i].addr == addr) {
+            return i;
+        }
+    }
+    return -1;
+}
+
+static int connected_count(const ls_core_t *core)
+{
+    int n = 0;
+    for (int i = 0; i < LS_MAX_SUPERVISORS; i++) {
+        n += core->sessions[i].connected ? 1 : 0;
+    }
+    return n;
+}
+
+static size_t encode_downlink(ls_core_t *core)
+{
+    pb_ostream_t os = pb_ostream_from_buffer(core->enc, sizeof core->enc);
+    if (!pb_encode(&os, ls_Downlink_fields, &core->down)) {
+        return 0;
+    }
+    return os.bytes_written;
+}
+
+static void send_bytes(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t len)
+{
+    if (core->io.send_downlink == NULL || core->io.send_downlink(core->io.ctx, addr, buf, len) != 0) {
+        core->tx_lost++;
+    }
+}
+
+void ls_core_notify(ls_core_t *core, int sup, ls_NoticeKind kind, const char *event_id, uint32_t ref_seq,
+                    bool final, const char *const *data, size_t n_data)
+{
+    for (int i = 0; i < LS_MAX_SUPERVISORS; i++) {
+        ls_session_t *s = &core->sessions[i];
+        if (!s->connected || (sup >= 0 && i != sup)) {
+            continue;
+        }
+        memset(&core->down, 0, sizeof core->down);
+        core->down.which_msg = ls_Downlink_notice_tag;
+        ls_Notice *n = &core->down.msg.notice;
+        n->kind = kind;
+        snprintf(n->event_id, sizeof n->event_id, "%s", event_id);
+        n->ref_seq = ref_seq;
+        n->final = final;
+        n->notice_seq = ++s->notice_seq;
+        size_t cap = sizeof n->data / sizeof n->data[0];
+        for (size_t k = 0; k < n_data && k < cap; k++) {
+            snprintf(n->data[k], sizeof n->data[k], "%s", data[k]);
+            n->data_count++;
+        }
+        size_t len = encode_downlink(core);
+        if (len > 0) {
+            send_bytes(core, s->addr, core->enc, len);
+        }
+    }
+}
+
+void ls_core_fault(ls_core_t *core, const char *text, uint64_t now_us)
+{
+    if (core->act.stop_motion != NULL) {
+        core->act.stop_motion(core->act.ctx);
+    }
+    if (core->state == ls_State_RESTING || core->state == ls_State_MOVING || core->state == ls_State_PAUSED) {
+        if (core->act.enable_drives != NULL) {
+            (void)core->act.enable_drives(core->act.ctx, false);
+        }
+        core->state = ls_State_LOCKED;
+    }
+    snprintf(core->fault, sizeof core->fault, "%s", text);
+    snprintf(core->motion_state, sizeof core->motion_state, "robot_stopped_on_error");
+    ls_fault_entry_t *e = &core->fault_log[core->fault_log_count % LS_FAULT_LOG_LEN];
+    e->at_us = now_us;
+    snprintf(e->text, sizeof e->text, "%s", text);
+    core->fault_log_count++;
+    char d[80];
+    snprintf(d, sizeof d, "fault=%s", text);
+    const char *data[] = { d };
+    ls_core_notify(core, -1, ls_NoticeKind_ALARM, "fault", 0, false, data, 1);
+}
+
+/* Seed 2.2 disconnect handler: stop, deactivate, release; IDLE when nobody is left. */
+static void drop_session(ls_core_t *core, int i, const char *why, uint64_t now_us)
+{
+    ls_session_t *s = &core->sessions[i];
+    bool was_owner = core->owner == i;
+    uint8_t addr = s->addr;
+    s->connected = false;
+    if (was_owner) {
+        if (core->state == ls_State_MOVING || core->state == ls_State_PAUSED) {
+            if (core->act.stop_motion != NULL) {
+                core->act.stop_motion(core->act.ctx);
+            }
+        }
+        if (core->state == ls_State_RESTING || core->state == ls_State_MOVING || core->state == ls_State_PAUSED) {
+            if (core->act.enable_drives != NULL) {
+                (void)core->act.enable_drives(core->act.ctx, false);
+            }
+        }
+        core->owner = -1;
+        core->state = ls_State_UNLOCKED;
+        char d1[40], d2[64];
+        snprintf(d1, sizeof d1, "supervisor=0x%02X", addr);
+        snprintf(d2, sizeof d2, "reason=%s", why);
+        const char *data[] = { d1, d2, "action=deactivated,released" };
+        ls_core_notify(core, -1, ls_NoticeKind_ALARM, "ownerLost", 0, false, data, 3);
+        ls_fault_entry_t *e = &core->fault_log[core->fault_log_count % LS_FAULT_LOG_LEN];
+        e->at_us = now_us;
+        snprintf(e->text, sizeof e->text, "owner 0x%02X lost (%s): deactivated and released", addr, why);
+        core->fault_log_count++;
+    }
+    if (connected_count(core) == 0) {
+        core->state = ls_State_IDLE;
+    }
+}
+
+void ls_core_on_heartbeat(ls_core_t *core, uint8_t addr, uint64_t now_us)
+{
+    int i = find_session(core, addr);
+    if (i >= 0) {
+        core->sessions[i].last_heard_us = now_us;
+    }
+}
+
+void ls_core_tick(ls_core_t *core, uint64_t now_us)
+{
+    uint64_t limit = (uint64_t)core->cfg.heartbeat_timeout_ms * 1000u;
+    for (int i = 0; i < LS_MAX_SUPERVISORS; i++) {
+        ls_session_t *s = &core->sessions[i];
+        if (s->connected && now_us > s->last_heard_us && now_us - s->last_heard_us > limit) {
+            core->sessions_dropped++;
+            drop_session(core, i, "heartbeat lost", now_us);
+        }
+    }
+}
+
+/* ---- connect / disconnect: the only commands that create or end a session */
+
+static int32_t do_connect(ls_core_t *core, uint8_t addr, ls_call_t *call)
+{
+    const ls_ConnectReq *rq = &call->req->cmd.connect;
+    ls_ConnectRes *rs = &call->res->result.connect;
+    call->res->which_result = ls_Response_connect_tag;
+    rs->protocol_version = ls_Protocol_PROTOCOL_VERSION;
+    rs->schema_hash = LS_SCHEMA_HASH;
+    snprintf(rs->device_name, sizeof rs->device_name, "%s", core->cfg.device_name);
+    snprintf(rs->firmware_version, sizeof rs->firmware_version, "%s", core->cfg.firmware_version);
+    rs->joint_count = core->cfg.joint_count;
+    rs->heartbeat_timeout_ms = core->cfg.heartbeat_timeout_ms;
+    if (rq->protocol_version != (uint32_t)ls_Protocol_PROTOCOL_VERSION) {
+        bool host_older = rq->protocol_version < (uint32_t)ls_Protocol_PROTOCOL_VERSION;
+        return ls_reply(call, ls_RetCode_CMD_VERSION_MISMATCH_ERR,
+                        "protocol version %u on the host, %u on the device: update the %s",
+                        (unsigned)rq->protocol_version, (unsigned)ls_Protocol_PROTOCOL_VERSION,
+                        host_older ? "host tool" : "firmware");
+    }
+    if (rq->schema_hash != LS_SCHEMA_HASH) {
+        return ls_reply(call, ls_RetCode_CMD_VERSION_MISMATCH_ERR,
+                        "schema %08X on the host, %08X on the device: install the host tool built from the "
+                        "firmware's tree (or update the firmware)",
+                        (unsigned)rq->schema_hash, (unsigned)LS_SCHEMA_HASH);
+    }
+    int i = find_session(core, addr);
+    if (i < 0) {
+        for (int k = 0; k < LS_MAX_SUPERVISORS; k++) {
+            if (!core->sessions[k].connected) {
+                i = k;
+                break;
+            }
+        }
+        if (i < 0) {
+            return ls_reply(call, ls_RetCode_CMD_NO_RESOURCES_ERR,
+                            "%d supervisors are already connected: disconnect one first", LS_MAX_SUPERVISORS);
+        }
+        bool was_owner_slot = core->owner == i;
+        memset(&core->sessions[i], 0, sizeof core->sessions[i]);
+        (void)was_owner_slot;
+    }
+    ls_session_t *s = &core->sessions[i];
+    s->connected = true;
+    s->addr = addr;
+    s->last_heard_us = call->now_us;
+    s->heartbeat_period_ms = rq->heartbeat_period_ms;
+    snprintf(s->name, sizeof s->name, "%s", rq->client_name);
+    call->sup = i;
+    if (core->state == ls_State_IDLE) {
+        core->state = ls_State_UNLOCKED;
+    }
+    rs->state = core->state;
+    rs->owner = core->owner == i;
+    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "connected to %s as 0x%02X", core->cfg.device_name, addr);
+}
+
+int32_t ls_h_connect(struct ls_core *core, struct ls_call *call)
+{
+    (void)core;
+    (void)call;
+    return ls_reply(call, ls_RetCode_CMD_ERR, "connect is handled by the dispatcher");
+}
+
+int32_t ls_h_disconnect(struct ls_core *core, struct ls_call *call)
+{
+    call->res->which_result = ls_Response_disconnect_tag;
+    drop_session(core, call->sup, "disconnect", call->now_us);
+    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "disconnected");
+}
+
+/* ---- dispatch */
+
+static void describe_states(uint8_t mask, char *out, size_t cap)
+{
+    static const ls_State all[] = { ls_State_IDLE, ls_State_UNLOCKED, ls_State_LOCKED,
+                                    ls_State_RESTING, ls_State_MOVING, ls_State_PAUSED };
+    size_t n = 0;
+    out[0] = '\0';
+    for (size_t i = 0; i < sizeof all / sizeof all[0]; i++) {
+        if ((mask & (uint8_t)all[i]) != 0u) {
+            int w = snprintf(out + n, cap - n, "%s%s", n > 0 ? "/" : "", ls_core_state_name(all[i]));
+            if (w < 0 || (size_t)w >= cap - n) {
+                return;
+            }
+            n += (size_t)w;
+        }
+    }
+}
+
+static const char *how_to_reach(uint8_t mask)
+{
+    if ((mask & (uint8_t)ls_State_UNLOCKED) != 0u) {
+        return "release the device first";
+    }
+    if ((mask & (uint8_t)ls_State_LOCKED) != 0u) {
+        return "lock the device (and deactivate it if active)";
+    }
+    if ((mask & (uint8_t)ls_State_RESTING) != 0u) {
+        return "lock and activate the device, and wait until it is at rest";
+    }
+    if ((mask & (uint8_t)ls_State_MOVING) != 0u) {
+        return "it applies only while a motion runs";
+    }
+    if ((mask & (uint8_t)ls_State_PAUSED) != 0u) {
+        return "it applies only after stopMotion";
+    }
+    return "see docs/state-machine.md";
+}
+
+static int32_t dispatch(ls_core_t *core, uint8_t addr, ls_call_t *call)
+{
+    const ls_Request *rq = call->req;
+    const ls_cmd_desc_t *d = ls_cmd_find(rq->which_cmd);
+    if (d == NULL) {
+        return ls_reply(call, ls_RetCode_CMD_UNKNOWN_CMD_ERR,
+                        "command id %u is not in this firmware's schema: update the firmware or the host tool",
+                        (unsigned)rq->which_cmd);
+    }
+    if (rq->which_cmd == ls_Request_connect_tag) {
+        return do_connect(core, addr, call);
+    }
+    if (call->sup < 0) {
+        return ls_reply(call, ls_RetCode_CMD_NOT_CONNECTED_ERR,
+                        "%s: supervisor 0x%02X has no session: send connect first", d->name, addr);
+    }
+    if ((d->states & (uint8_t)core->state) == 0u) {
+        char valid[64];
+        describe_states(d->states, valid, sizeof valid);
+        return ls_reply(call, ls_RetCode_CMD_WRONG_STATE_ERR, "%s is valid in %s, the device is %s: %s", d->name,
+                        valid, ls_core_state_name(core->state), how_to_reach(d->states));
+    }
+    if ((d->flags & LS_CMD_F_OWNER_ONLY) != 0u && core->owner != call->sup) {
+        if (core->owner < 0) {
+            return ls_reply(call, ls_RetCode_CMD_NOT_OWNER_ERR, "%s needs the owner: lock the device first", d->name);
+        }
+        return ls_reply(call, ls_RetCode_CMD_NOT_OWNER_ERR,
+                        "%s needs the owner: supervisor 0x%02X (%s) owns the device; queries still work", d->name,
+                        core->sessions[core->owner].addr, core->sessions[core->owner].name);
+    }
+    call->res->which_result = rq->which_cmd; /* result tag mirrors the command id */
+    return d->handler(core, call);
+}
+
+static void send_response(ls_core_t *core, ls_session_t *s, uint8_t addr)
+{
+    size_t len = encode_downlink(core);
+    if (len == 0) {
+        /* Cannot happen with bounded fields; answer something rather than nothing. */
+        ls_Response *r = &core->down.msg.response;
+        r->which_result = 0;
+        r->ret_code = ls_RetCode_CMD_ERR;
+        snprintf(r->ret_msg, sizeof r->ret_msg, "internal: response did not encode");
+        len = encode_downlink(core);
+    }
+    if (s != NULL) {
+        memcpy(s->last_resp, core->enc, len);
+        s->last_resp_len = len;
+        s->last_pending = false;
+    }
+    send_bytes(core, addr, core->enc, len);
+}
+
+static void on_request(ls_core_t *core, uint8_t addr, const ls_Request *rq, uint64_t now_us)
+{
+    int sup = find_session(core, addr);
+    ls_session_t *s = sup >= 0 ? &core->sessions[sup] : NULL;
+    if (s != NULL && s->have_last && rq->seq == s->last_seq && rq->which_cmd != ls_Request_connect_tag) {
+        /* A retransmission: answer from the cache, never execute twice. */
+        if (!s->last_pending && s->last_resp_len > 0) {
+            send_bytes(core, addr, s->last_resp, s->last_resp_len);
+        }
+        return;
+    }
+    memset(&core->down, 0, sizeof core->down);
+    core->down.which_msg = ls_Downlink_response_tag;
+    ls_Response *res = &core->down.msg.response;
+    res->seq = rq->seq;
+    ls_call_t call = { .core = core, .sup = sup, .req = rq, .res = res, .now_us = now_us };
+    int32_t code = dispatch(core, addr, &call);
+    sup = call.sup; /* connect may have created the session */
+    s = sup >= 0 && core->sessions[sup].connected ? &core->sessions[sup] : NULL;
+    if (s != NULL) {
+        s->have_last = true;
+        s->last_seq = rq->seq;
+        s->executed++;
+        s->last_heard_us = now_us;
+    }
+    if (code == LS_CALL_DEFERRED) {
+        if (s != NULL) {
+            s->last_pending = true;
+        }
+        return;
+    }
+    res->ret_code = code;
+    if (code < 0) {
+        res->which_result = 0; /* no result on errors */
+    }
+    send_response(core, s, addr);
+}
+
+void ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t len, uint64_t now_us)
+{
+    memset(&core->up, 0, sizeof core->up);
+    pb_istream_t is = pb_istream_from_buffer(buf, len);
+    if (!pb_decode(&is, ls_Uplink_fields, &core->up)) {
+        core->rx_malformed++;
+        /* Answer so the host does not wait for a time-out; seq is unknown (0). */
+        memset(&core->down, 0, sizeof core->down);
+        core->down.which_msg = ls_Downlink_response_tag;
+        ls_Response *res = &core->down.msg.response;
+        res->ret_code = ls_RetCode_CMD_PARAM_ERR;
+        snprintf(res->ret_msg, sizeof res->ret_msg, "message did not decode (%s): check that host and firmware "
+                 "use the same schema", PB_GET_ERROR(&is));
+        send_response(core, NULL, addr);
+        return;
+    }
+    if (core->up.which_msg == ls_Uplink_request_tag) {
+        on_request(core, addr, &core->up.msg.request, now_us);
+    } else if (core->up.which_msg == ls_Uplink_rsvp_reply_tag) {
+        int sup = find_session(core, addr);
+        if (sup >= 0) {
+            core->sessions[sup].last_heard_us = now_us;
+        }
+        /* RSVP waits are owned by the feature that asked (DIO, paths); none is pending here. */
+    } else {
+        core->rx_malformed++;
+    }
+}

@@ -1,0 +1,123 @@
+/* The controller core: supervisor sessions, ownership, the state machine of
+ * DESIGN.md section 4, the command dispatcher and the seed's return codes.
+ *
+ * Runs in the comms thread only (never in the control loop). Time is passed
+ * in. All storage is static, inside ls_core_t. */
+#ifndef LS_CORE_H
+#define LS_CORE_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "landscape.pb.h"
+#include "ls_cmd_table.h"
+
+#define LS_MAX_SUPERVISORS 4
+#define LS_DOWNLINK_MAX ls_Downlink_size
+#define LS_UPLINK_MAX 4095u
+#define LS_CALL_DEFERRED INT32_MIN /* a handler will answer later */
+#define LS_FAULT_LOG_LEN 16
+
+/* How the core talks to the bus: implemented by the network layer (or a test). */
+typedef struct {
+    /* Queue one encoded ls.Downlink for the supervisor at `addr`. Returns 0,
+     * or negative when its queue is full (the message is then lost and counted). */
+    int (*send_downlink)(void *ctx, uint8_t addr, const uint8_t *buf, size_t len);
+    void *ctx;
+} ls_core_io_t;
+
+typedef struct {
+    bool connected;
+    uint8_t addr;
+    char name[32];
+    uint64_t last_heard_us;
+    uint32_t heartbeat_period_ms;
+    /* retransmission cache: the last request's seq and its encoded response */
+    bool have_last;
+    bool last_pending;        /* the last request is still running (deferred) */
+    uint32_t last_seq;
+    uint8_t last_resp[LS_DOWNLINK_MAX];
+    size_t last_resp_len;
+    uint32_t notice_seq;
+    uint32_t executed;        /* requests executed (not answered from the cache) */
+} ls_session_t;
+
+typedef struct {
+    uint64_t at_us;
+    char text[80];
+} ls_fault_entry_t;
+
+typedef struct {
+    const char *device_name;
+    const char *firmware_version;
+    uint8_t node_addr;
+    uint8_t joint_count;
+    uint32_t heartbeat_timeout_ms;
+} ls_core_config_t;
+
+/* Actions the core asks of the rest of the firmware (drives, motion). */
+typedef struct {
+    /* Enable or disable the drives; returns 0 or a negative HAL status. */
+    int (*enable_drives)(void *ctx, bool on);
+    /* Stop any motion at once along its path (used by the disconnect handler). */
+    void (*stop_motion)(void *ctx);
+    void *ctx;
+} ls_core_actions_t;
+
+typedef struct ls_core {
+    ls_core_config_t cfg;
+    ls_core_io_t io;
+    ls_core_actions_t act;
+    ls_State state;
+    int owner;                 /* index in sessions[], -1 when unlocked */
+    ls_session_t sessions[LS_MAX_SUPERVISORS];
+    char fault[96];            /* latched fault, empty when none */
+    char motion_state[32];     /* seed 3.3.1 motionControlState */
+    ls_fault_entry_t fault_log[LS_FAULT_LOG_LEN];
+    uint32_t fault_log_count;
+    uint32_t rx_malformed;     /* uplinks that did not decode */
+    uint32_t tx_lost;          /* downlinks the network could not queue */
+    uint32_t sessions_dropped; /* heartbeat time-outs */
+    /* scratch (kept here, not on the stack: the messages are large) */
+    ls_Uplink up;
+    ls_Downlink down;
+    uint8_t enc[LS_DOWNLINK_MAX];
+} ls_core_t;
+
+/* One command being dispatched. */
+typedef struct ls_call {
+    ls_core_t *core;
+    int sup;                   /* index of the calling session */
+    const ls_Request *req;
+    ls_Response *res;
+    uint64_t now_us;
+} ls_call_t;
+
+void ls_core_init(ls_core_t *core, const ls_core_config_t *cfg, const ls_core_io_t *io, const ls_core_actions_t *act);
+
+/* One ISO-TP message from the supervisor at `addr` (an encoded ls.Uplink). */
+void ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t len, uint64_t now_us);
+
+/* A HEARTBEAT frame from a supervisor. */
+void ls_core_on_heartbeat(ls_core_t *core, uint8_t addr, uint64_t now_us);
+
+/* Liveness: drops sessions whose heartbeat stopped. Call every loop turn. */
+void ls_core_tick(ls_core_t *core, uint64_t now_us);
+
+/* Send a notice (event, alarm) to one session (sup >= 0) or to all (sup < 0). */
+void ls_core_notify(ls_core_t *core, int sup, ls_NoticeKind kind, const char *event_id, uint32_t ref_seq,
+                    bool final, const char *const *data, size_t n_data);
+
+/* Latch a fault: stop, deactivate, record it and raise an alarm to everyone. */
+void ls_core_fault(ls_core_t *core, const char *text, uint64_t now_us);
+
+const char *ls_core_state_name(ls_State s);
+const char *ls_core_ret_name(int32_t code);
+
+/* Fill call->res->ret_msg (printf-style) and return `code`: handlers end with
+ * `return ls_reply(call, CODE, "...", ...)`. */
+int32_t ls_reply(ls_call_t *call, int32_t code, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+
+#endif

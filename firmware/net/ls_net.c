@@ -1,0 +1,201 @@
+#include "ls_net.h"
+
+#include <string.h>
+
+static int isotp_send_frame(void *ctx, uint32_t can_id, const uint8_t *data, uint8_t len)
+{
+    ls_net_t *net = ctx;
+    hal_can_frame_t f;
+    memset(&f, 0, sizeof f);
+    f.id = can_id;
+    f.flags = HAL_CAN_F_EXT;
+    f.len = len;
+    memcpy(f.data, data, len);
+    return ls_net_send_frame(net, &f);
+}
+
+void ls_net_init(ls_net_t *net, uint8_t node, ls_core_t *core)
+{
+    memset(net, 0, sizeof *net);
+    net->node = node;
+    net->core = core;
+    net->sending_link = -1;
+    ls_isotp_default_config(&net->isotp_cfg);
+}
+
+int ls_net_add_link(ls_net_t *net, const hal_can_link_t *link)
+{
+    if (net->n_links >= LS_NET_MAX_LINKS) {
+        return -1;
+    }
+    net->links[net->n_links++] = *link;
+    return 0;
+}
+
+int ls_net_send_frame(ls_net_t *net, const hal_can_frame_t *frame)
+{
+    int ok = 0;
+    for (size_t i = 0; i < net->n_links; i++) {
+        if ((int)i == net->sending_link) {
+            continue;
+        }
+        if (hal_can_send(&net->links[i], frame) >= 0) {
+            ok++;
+        } else {
+            net->tx_full++;
+        }
+    }
+    if (ok > 0 || net->n_links == 0) {
+        net->frames_out++;
+        return 0;
+    }
+    return -1;
+}
+
+static ls_net_peer_t *find_peer(ls_net_t *net, uint8_t addr)
+{
+    for (size_t i = 0; i < LS_NET_MAX_PEERS; i++) {
+        if (net->peers[i].used && net->peers[i].addr == addr) {
+            return &net->peers[i];
+        }
+    }
+    return NULL;
+}
+
+/* A peer for `addr`: an existing one, a free slot, or the least recently used
+ * idle one (a supervisor that went away without a word). */
+static ls_net_peer_t *get_peer(ls_net_t *net, uint8_t addr)
+{
+    ls_net_peer_t *p = find_peer(net, addr);
+    if (p != NULL) {
+        return p;
+    }
+    ls_net_peer_t *victim = NULL;
+    for (size_t i = 0; i < LS_NET_MAX_PEERS; i++) {
+        ls_net_peer_t *c = &net->peers[i];
+        if (!c->used) {
+            victim = c;
+            break;
+        }
+        bool idle = !ls_isotp_tx_busy(&c->isotp) && c->isotp.rx_state == LS_ISOTP_RX_IDLE && c->q_count == 0;
+        if (idle && (victim == NULL || c->last_used_us < victim->last_used_us)) {
+            victim = c;
+        }
+    }
+    if (victim == NULL) {
+        return NULL;
+    }
+    if (victim->used) {
+        net->peers_evicted++;
+    }
+    memset(victim, 0, sizeof *victim);
+    victim->used = true;
+    victim->addr = addr;
+    uint32_t tx_id = LS_ID_ISOTP_PHYS | ((uint32_t)addr << 8) | net->node;
+    uint32_t rx_id = LS_ID_ISOTP_PHYS | ((uint32_t)net->node << 8) | addr;
+    (void)ls_isotp_init(&victim->isotp, &net->isotp_cfg, tx_id, rx_id, isotp_send_frame, net);
+    return victim;
+}
+
+int ls_net_send_downlink(void *ctx, uint8_t addr, const uint8_t *buf, size_t len)
+{
+    ls_net_t *net = ctx;
+    ls_net_peer_t *p = get_peer(net, addr);
+    if (p == NULL || len > LS_DOWNLINK_MAX) {
+        return -1;
+    }
+    if (p->q_count >= LS_NET_OUTQ) {
+        p->q_dropped++;
+        return -1;
+    }
+    ls_net_msg_t *m = &p->q[(p->q_head + p->q_count) % LS_NET_OUTQ];
+    memcpy(m->buf, buf, len);
+    m->len = (uint16_t)len;
+    p->q_count++;
+    p->last_used_us = net->now_us;
+    return 0;
+}
+
+static void route(ls_net_t *net, const hal_can_frame_t *f)
+{
+    if ((f->flags & HAL_CAN_F_EXT) == 0u || (f->flags & HAL_CAN_F_RTR) != 0u) {
+        return; /* everything of ours is a 29-bit data frame */
+    }
+    uint32_t pf = f->id & LS_ID_MASK_PF;
+    uint8_t target = (uint8_t)((f->id >> 8) & 0xFFu);
+    uint8_t source = (uint8_t)(f->id & 0xFFu);
+    if (pf == LS_ID_ISOTP_PHYS && target == net->node) {
+        ls_net_peer_t *p = get_peer(net, source);
+        if (p != NULL) {
+            p->last_used_us = net->now_us;
+            ls_isotp_on_frame(&p->isotp, f->data, f->len, net->now_us);
+        }
+    } else if (pf == LS_ID_ISOTP_FUNC && (target == LS_ADDR_ALL || target == net->node)) {
+        uint8_t payload[8];
+        size_t n = ls_isotp_decode_single(f->data, f->len, payload, sizeof payload);
+        if (n > 0) {
+            ls_core_on_uplink(net->core, source, payload, n, net->now_us);
+        }
+    } else if ((f->id & LS_ID_MASK_SRC) == LS_ID_HEARTBEAT && f->len >= 3 && f->data[2] == 1u) {
+        ls_core_on_heartbeat(net->core, source, net->now_us);
+    } else if ((f->id & LS_ID_MASK_SRC) == LS_ID_EMERGENCY && source != net->node) {
+        ls_core_fault(net->core, "emergency stop frame on the bus", net->now_us);
+    }
+}
+
+void ls_net_poll(ls_net_t *net, uint64_t now_us)
+{
+    net->now_us = now_us;
+    for (size_t i = 0; i < net->n_links; i++) {
+        hal_can_frame_t f;
+        /* Bounded per turn so one busy link cannot starve the others. */
+        for (int k = 0; k < 256 && hal_can_recv(&net->links[i], &f) == 1; k++) {
+            net->frames_in++;
+            if (net->n_links > 1) {
+                net->sending_link = (int)i;
+                (void)ls_net_send_frame(net, &f);
+                net->sending_link = -1;
+                net->frames_bridged++;
+            }
+            route(net, &f);
+        }
+    }
+    for (size_t i = 0; i < LS_NET_MAX_PEERS; i++) {
+        ls_net_peer_t *p = &net->peers[i];
+        if (!p->used) {
+            continue;
+        }
+        ls_isotp_poll(&p->isotp, now_us);
+        size_t n = ls_isotp_take_rx(&p->isotp, net->rxbuf, sizeof net->rxbuf);
+        if (n > 0) {
+            ls_core_on_uplink(net->core, p->addr, net->rxbuf, n, now_us);
+        }
+        if (p->q_count > 0 && !ls_isotp_tx_busy(&p->isotp)) {
+            ls_net_msg_t *m = &p->q[p->q_head];
+            if (ls_isotp_send(&p->isotp, m->buf, m->len, now_us) == LS_ISOTP_OK) {
+                p->q_head = (uint8_t)((p->q_head + 1u) % LS_NET_OUTQ);
+                p->q_count--;
+            }
+        }
+    }
+}
+
+uint64_t ls_net_next_deadline_us(const ls_net_t *net)
+{
+    uint64_t t = UINT64_MAX;
+    for (size_t i = 0; i < LS_NET_MAX_PEERS; i++) {
+        if (net->peers[i].used) {
+            uint64_t d = ls_isotp_next_deadline_us(&net->peers[i].isotp);
+            t = d < t ? d : t;
+        }
+    }
+    return t;
+}
+
+void ls_net_close(ls_net_t *net)
+{
+    for (size_t i = 0; i < net->n_links; i++) {
+        hal_can_close(&net->links[i]);
+    }
+    net->n_links = 0;
+}

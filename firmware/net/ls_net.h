@@ -1,0 +1,77 @@
+/* The network layer: CAN links (bus segments), routing of frames by id,
+ * one ISO-TP link per supervisor, per-supervisor downlink queues, and
+ * bridging between links (a frame received on one link is forwarded to the
+ * others, so several pty links form one bus).
+ *
+ * Identifiers (docs/protocol.md): ISO-TP normal fixed 29-bit addressing
+ * 0x18DA<target><source> (physical) and 0x18DB<target><source> (functional,
+ * target 0xFF = every device); broadcasts of protocol/landscape.dbc with the
+ * sender's address in the low byte.
+ *
+ * Comms thread only. All storage is inside ls_net_t. */
+#ifndef LS_NET_H
+#define LS_NET_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "hal/hal_can.h"
+#include "ls_core.h"
+#include "ls_isotp.h"
+
+#define LS_NET_MAX_LINKS 4
+#define LS_NET_MAX_PEERS 6
+#define LS_NET_OUTQ 8
+
+#define LS_ID_ISOTP_PHYS 0x18DA0000u
+#define LS_ID_ISOTP_FUNC 0x18DB0000u
+#define LS_ID_MASK_PF 0x1FFF0000u
+#define LS_ID_MASK_SRC 0x1FFFFF00u
+#define LS_ID_EMERGENCY 0x00FF0000u
+#define LS_ID_HEARTBEAT 0x14FF0100u
+#define LS_ADDR_ALL 0xFFu
+
+typedef struct {
+    uint16_t len;
+    uint8_t buf[LS_DOWNLINK_MAX];
+} ls_net_msg_t;
+
+typedef struct {
+    bool used;
+    uint8_t addr;
+    uint64_t last_used_us;
+    ls_isotp_link_t isotp;
+    ls_net_msg_t q[LS_NET_OUTQ];
+    uint8_t q_head, q_count;
+    uint32_t q_dropped;
+} ls_net_peer_t;
+
+typedef struct ls_net {
+    uint8_t node;
+    ls_core_t *core;
+    hal_can_link_t links[LS_NET_MAX_LINKS];
+    size_t n_links;
+    int sending_link; /* the link a frame came from is skipped when bridging */
+    ls_net_peer_t peers[LS_NET_MAX_PEERS];
+    ls_isotp_config_t isotp_cfg;
+    uint64_t now_us;
+    uint32_t frames_in, frames_out, frames_bridged, tx_full, peers_evicted;
+    uint8_t rxbuf[LS_ISOTP_MAX_PAYLOAD];
+} ls_net_t;
+
+void ls_net_init(ls_net_t *net, uint8_t node, ls_core_t *core);
+/* Add an opened link (copied). Returns 0, or -1 when the table is full. */
+int ls_net_add_link(ls_net_t *net, const hal_can_link_t *link);
+/* Receive and route every pending frame, run ISO-TP timers, deliver complete
+ * messages to the core and start queued transmissions. */
+void ls_net_poll(ls_net_t *net, uint64_t now_us);
+/* Send one frame on every link (broadcasts). Returns 0 when at least one link took it. */
+int ls_net_send_frame(ls_net_t *net, const hal_can_frame_t *frame);
+/* The ls_core_io_t.send_downlink implementation. */
+int ls_net_send_downlink(void *net, uint8_t addr, const uint8_t *buf, size_t len);
+/* Earliest ISO-TP deadline, for the caller's poll timeout. */
+uint64_t ls_net_next_deadline_us(const ls_net_t *net);
+void ls_net_close(ls_net_t *net);
+
+#endif

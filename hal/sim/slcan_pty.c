@@ -1,0 +1,246 @@
+/* SLCAN over a pseudo-terminal. Frames are only sent while the channel is
+ * open (the host sent 'O'), so nothing stale piles up in the pty while no
+ * supervisor is attached; commands are acknowledged with CR like a Lawicel
+ * adapter (BEL on error). Transmitted frames are not acknowledged with 'z'
+ * (python-can ignores it and the device->host direction is the slower one). */
+#include "slcan_pty.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <termios.h>
+#include <unistd.h>
+
+#include "slcan_codec.h"
+
+typedef struct {
+    bool used;
+    int master;
+    int slave_keep; /* our own slave fd: keeps the master from seeing EIO while no host is attached */
+    bool open;      /* the host sent 'O' */
+    char path[256];
+    ls_slcan_lexer_t lx;
+    char rbuf[512];
+    size_t rlen, rpos;
+    char tbuf[4096]; /* whole lines waiting for room in the pty */
+    size_t tlen;
+    hal_can_status_t st;
+} slcan_pty_t;
+
+static slcan_pty_t g_links[HAL_SLCAN_PTY_MAX_LINKS];
+
+static void reply(slcan_pty_t *p, char c)
+{
+    /* Queued behind pending frames so a line is never split; a full queue
+     * loses the ack, which python-can ignores anyway. */
+    if (p->tlen < sizeof p->tbuf) {
+        p->tbuf[p->tlen++] = c;
+    }
+}
+
+/* Write as much of the pending lines as the pty takes; keeps the rest. */
+static int flush_tx(slcan_pty_t *p)
+{
+    while (p->tlen > 0) {
+        ssize_t w = write(p->master, p->tbuf, p->tlen);
+        if (w < 0) {
+            if (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR) {
+                return HAL_EAGAIN;
+            }
+            return HAL_EIO;
+        }
+        memmove(p->tbuf, p->tbuf + w, p->tlen - (size_t)w);
+        p->tlen -= (size_t)w;
+    }
+    return HAL_OK;
+}
+
+static int pty_send(void *self, const hal_can_frame_t *frame)
+{
+    slcan_pty_t *p = self;
+    if (!p->open) {
+        p->st.tx_dropped++;
+        return HAL_OK; /* no supervisor attached: the frame is lost on an unlistened bus */
+    }
+    char line[LS_SLCAN_MAX_LINE];
+    size_t n = ls_slcan_format(frame, line, sizeof line);
+    if (n == 0) {
+        return HAL_EINVAL;
+    }
+    (void)flush_tx(p);
+    if (p->tlen + n > sizeof p->tbuf) {
+        return HAL_EAGAIN; /* the host is not reading: the caller keeps the frame */
+    }
+    memcpy(p->tbuf + p->tlen, line, n);
+    p->tlen += n;
+    p->st.tx_frames++;
+    int r = flush_tx(p);
+    return r == HAL_EIO ? HAL_EIO : HAL_OK;
+}
+
+static void handle_line(slcan_pty_t *p, const char *line, size_t len, hal_can_frame_t *frame, bool *got)
+{
+    ls_slcan_msg_t m;
+    if (ls_slcan_parse(line, len, &m) != 0) {
+        p->st.rx_dropped++;
+        reply(p, '\a');
+        return;
+    }
+    switch (m.kind) {
+    case LS_SLCAN_FRAME:
+        *frame = m.frame;
+        *got = true;
+        p->st.rx_frames++;
+        return;
+    case LS_SLCAN_OPEN:
+        /* Drop whatever was written while nobody listened. */
+        tcflush(p->master, TCOFLUSH);
+        p->tlen = 0;
+        p->open = true;
+        break;
+    case LS_SLCAN_CLOSE:
+        p->open = false;
+        break;
+    case LS_SLCAN_BITRATE:
+        p->st.bitrate = m.bitrate;
+        break;
+    case LS_SLCAN_EMPTY:
+        return; /* python-can sends a bare CR to clear the adapter's buffer */
+    case LS_SLCAN_VERSION:
+    case LS_SLCAN_SERIAL:
+    case LS_SLCAN_FLAGS:
+    case LS_SLCAN_TIMESTAMP:
+        break;
+    }
+    reply(p, '\r');
+}
+
+static int pty_recv(void *self, hal_can_frame_t *frame)
+{
+    slcan_pty_t *p = self;
+    (void)flush_tx(p);
+    for (;;) {
+        while (p->rpos < p->rlen) {
+            char c = p->rbuf[p->rpos++];
+            size_t len = 0;
+            if (ls_slcan_lexer_feed(&p->lx, c, &len)) {
+                bool got = false;
+                handle_line(p, p->lx.buf, len, frame, &got);
+                if (got) {
+                    return 1;
+                }
+            }
+        }
+        ssize_t r = read(p->master, p->rbuf, sizeof p->rbuf);
+        if (r <= 0) {
+            if (r < 0 && (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR || errno == EIO)) {
+                return HAL_EAGAIN;
+            }
+            return r == 0 ? HAL_EAGAIN : HAL_EIO;
+        }
+        p->rlen = (size_t)r;
+        p->rpos = 0;
+    }
+}
+
+static int pty_poll_fd(void *self)
+{
+    return ((slcan_pty_t *)self)->master;
+}
+
+static int pty_status(void *self, hal_can_status_t *out)
+{
+    slcan_pty_t *p = self;
+    *out = p->st;
+    out->rx_dropped += p->lx.overlong;
+    return HAL_OK;
+}
+
+static void pty_close(void *self)
+{
+    slcan_pty_t *p = self;
+    if (!p->used) {
+        return;
+    }
+    if (p->path[0] != '\0') {
+        unlink(p->path);
+    }
+    close(p->slave_keep);
+    close(p->master);
+    p->used = false;
+}
+
+static const hal_can_ops_t g_ops = {
+    .send = pty_send,
+    .recv = pty_recv,
+    .poll_fd = pty_poll_fd,
+    .status = pty_status,
+    .close = pty_close,
+};
+
+int hal_sim_slcan_pty_open(hal_can_link_t *out, const char *path, char *msg, size_t msglen)
+{
+    slcan_pty_t *p = NULL;
+    for (size_t i = 0; i < HAL_SLCAN_PTY_MAX_LINKS; i++) {
+        if (!g_links[i].used) {
+            p = &g_links[i];
+            break;
+        }
+    }
+    if (p == NULL) {
+        snprintf(msg, msglen, "at most %d slcan pty links", HAL_SLCAN_PTY_MAX_LINKS);
+        return HAL_EINVAL;
+    }
+    if (path == NULL || path[0] == '\0' || strlen(path) >= sizeof p->path) {
+        snprintf(msg, msglen, "slcan:pty needs a path for the symlink, e.g. --link slcan:pty:/tmp/landscape0");
+        return HAL_EINVAL;
+    }
+    struct stat sb;
+    if (lstat(path, &sb) == 0) {
+        if (!S_ISLNK(sb.st_mode)) {
+            snprintf(msg, msglen, "%s exists and is not a symlink: choose another path for the pty link", path);
+            return HAL_EINVAL;
+        }
+        unlink(path); /* a stale link from a controller that did not exit cleanly */
+    }
+    int master = posix_openpt(O_RDWR | O_NOCTTY | O_NONBLOCK);
+    if (master < 0 || grantpt(master) != 0 || unlockpt(master) != 0) {
+        snprintf(msg, msglen, "cannot create a pseudo-terminal: %s", strerror(errno));
+        if (master >= 0) {
+            close(master);
+        }
+        return HAL_EIO;
+    }
+    const char *slave_name = ptsname(master);
+    int slave = slave_name != NULL ? open(slave_name, O_RDWR | O_NOCTTY | O_NONBLOCK) : -1;
+    if (slave < 0) {
+        snprintf(msg, msglen, "cannot open the pty slave: %s", strerror(errno));
+        close(master);
+        return HAL_EIO;
+    }
+    struct termios tio;
+    if (tcgetattr(slave, &tio) == 0) {
+        cfmakeraw(&tio);
+        tcsetattr(slave, TCSANOW, &tio);
+    }
+    if (symlink(slave_name, path) != 0) {
+        snprintf(msg, msglen, "cannot create the symlink %s -> %s: %s", path, slave_name, strerror(errno));
+        close(slave);
+        close(master);
+        return HAL_EIO;
+    }
+    memset(p, 0, sizeof *p);
+    p->used = true;
+    p->master = master;
+    p->slave_keep = slave;
+    snprintf(p->path, sizeof p->path, "%s", path);
+    ls_slcan_lexer_init(&p->lx);
+    out->ops = &g_ops;
+    out->self = p;
+    snprintf(out->name, sizeof out->name, "slcan:pty:%s", path);
+    return HAL_OK;
+}
