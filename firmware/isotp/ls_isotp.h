@@ -93,18 +93,38 @@ typedef struct {
     ls_isotp_result_t last_error;
 } ls_isotp_link_t;
 
-/* Prepare a link. `cfg` NULL means the defaults. Returns LS_ISOTP_EARG on a
- * NULL link or send function. */
+/* Prepare a link (init time; clears counters). `cfg` NULL means the defaults.
+ * Returns LS_ISOTP_EARG on a NULL link or send function, a reserved st_min or
+ * a zero timeout. */
 int ls_isotp_init(ls_isotp_link_t *l, const ls_isotp_config_t *cfg, uint32_t tx_id, uint32_t rx_id,
                   ls_isotp_send_fn send, void *send_ctx);
 
 /* Feed one received CAN frame of this link (can_id == rx_id; the caller routes).
  * Handles SF/FF/CF for the receiver and FC for the sender. Malformed frames are
- * counted and dropped, never crash. */
+ * counted and dropped, never crash. Expires N_Bs/N_Cr first, like poll.
+ *
+ * Receiver policy (counters in rx_results unless said otherwise):
+ *  - Padded and unpadded frames are accepted (len >= the bytes the PCI needs);
+ *    len 0 or > 8, a too-short frame, an unknown PCI type, SF length 0 or > 7
+ *    and FF length 1..7 count N_MALFORMED and are dropped; a too-short CF does
+ *    not abort the reception (N_Cr still runs).
+ *  - A FF with length 0 (32-bit escape, unsupported) or > LS_ISOTP_MAX_PAYLOAD
+ *    is answered with FC.OVFLW and counts N_BUFFER_OVFLW.
+ *  - A new SF/FF during a reception aborts it (N_UNEXP_PDU) and starts anew.
+ *  - While a completed message waits for ls_isotp_take_rx (RX_DONE), an
+ *    incoming SF or FF is dropped and counts N_BUFFER_OVFLW; a FF is also
+ *    answered with FC.OVFLW so that its sender aborts at once instead of
+ *    waiting out N_Bs. Take messages every loop turn to avoid this.
+ *  - A CF while not receiving counts N_UNEXP_PDU; a CF with the wrong SN
+ *    aborts the reception (N_WRONG_SN).
+ * Sender policy (tx_results): an FC while not waiting for one counts
+ * N_UNEXP_PDU and is ignored; an FC.CTS sends the CFs that are due at once. */
 void ls_isotp_on_frame(ls_isotp_link_t *l, const uint8_t *data, uint8_t len, uint64_t now_us);
 
 /* Start sending `len` bytes (copied). Sends the SF or FF at once when the CAN
- * queue has room, else on the next poll. */
+ * queue has room, else on the next poll (a refused frame is retried by every
+ * poll until the queue takes it). Returns LS_ISOTP_OK, LS_ISOTP_EARG (NULL),
+ * LS_ISOTP_ELEN or LS_ISOTP_EBUSY. */
 int ls_isotp_send(ls_isotp_link_t *l, const uint8_t *payload, size_t len, uint64_t now_us);
 
 /* Send due consecutive frames (honouring STmin and BS), pending flow controls,
@@ -119,7 +139,8 @@ size_t ls_isotp_take_rx(ls_isotp_link_t *l, uint8_t *out, size_t cap);
 bool ls_isotp_tx_busy(const ls_isotp_link_t *l);
 
 /* The earliest time at which ls_isotp_poll has work (a CF due, a timeout), or
- * UINT64_MAX when idle. Lets the caller sleep exactly as long as allowed. */
+ * UINT64_MAX when idle. Lets the caller sleep exactly as long as allowed. A
+ * value <= now (0 for a pending flow control) means: poll now. */
 uint64_t ls_isotp_next_deadline_us(const ls_isotp_link_t *l);
 
 /* Decode a single frame outside of any link (functional addressing carries
