@@ -300,22 +300,38 @@ static void describe_states(uint8_t mask, char *out, size_t cap)
     }
 }
 
-static const char *how_to_reach(uint8_t mask)
+/* What the supervisor should do to reach one of the states in `mask` from `now`. */
+static const char *how_to_reach(uint8_t mask, ls_State now)
 {
-    if ((mask & (uint8_t)ls_State_UNLOCKED) != 0u) {
-        return "release the device first";
+    const uint8_t active = (uint8_t)(ls_State_RESTING | ls_State_MOVING | ls_State_PAUSED);
+    bool now_active = ((uint8_t)now & active) != 0u;
+    if (now == ls_State_UNLOCKED) {
+        return (mask & (uint8_t)ls_State_LOCKED) != 0u ? "lock the device first" : "lock and activate the device first";
     }
-    if ((mask & (uint8_t)ls_State_LOCKED) != 0u) {
-        return "lock the device (and deactivate it if active)";
+    if (now == ls_State_LOCKED) {
+        if ((mask & (uint8_t)ls_State_UNLOCKED) != 0u) {
+            return "release the device first";
+        }
+        if ((mask & (uint8_t)ls_State_RESTING) != 0u) {
+            return "activate the device first";
+        }
+        return (mask & (uint8_t)ls_State_PAUSED) != 0u ? "there is no paused motion" : "there is no motion to act on";
     }
-    if ((mask & (uint8_t)ls_State_RESTING) != 0u) {
-        return "lock and activate the device, and wait until it is at rest";
-    }
-    if ((mask & (uint8_t)ls_State_MOVING) != 0u) {
-        return "it applies only while a motion runs";
-    }
-    if ((mask & (uint8_t)ls_State_PAUSED) != 0u) {
-        return "it applies only after stopMotion";
+    if (now_active) {
+        if ((mask & (uint8_t)ls_State_RESTING) != 0u) {
+            return now == ls_State_MOVING ? "wait until the motion completes, or stopMotion"
+                                          : "resumeMotion or abortMotion first";
+        }
+        if ((mask & (uint8_t)ls_State_LOCKED) != 0u) {
+            return "deactivate the device first";
+        }
+        if ((mask & (uint8_t)ls_State_PAUSED) != 0u) {
+            return "it applies only after stopMotion";
+        }
+        if ((mask & (uint8_t)ls_State_MOVING) != 0u) {
+            return "it applies only while a motion runs";
+        }
+        return "deactivate and release the device first";
     }
     return "see docs/state-machine.md";
 }
@@ -340,7 +356,7 @@ static int32_t dispatch(ls_core_t *core, uint8_t addr, ls_call_t *call)
         char valid[64];
         describe_states(d->states, valid, sizeof valid);
         return ls_reply(call, ls_RetCode_CMD_WRONG_STATE_ERR, "%s is valid in %s, the device is %s: %s", d->name,
-                        valid, ls_core_state_name(core->state), how_to_reach(d->states));
+                        valid, ls_core_state_name(core->state), how_to_reach(d->states, core->state));
     }
     if ((d->flags & LS_CMD_F_OWNER_ONLY) != 0u && core->owner != call->sup) {
         if (core->owner < 0) {

@@ -1,0 +1,72 @@
+/* Seed 4.1 sendCommand: the vendor hook. Sub-commands (docs/protocol.md):
+ *   help     the list below
+ *   version  firmware version, protocol version, schema hash
+ *   status   state, owner, sessions and their counters
+ *   faults   the fault log (oldest first)
+ * Output is plain text, one item per line, at most 1 KiB. */
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "ls_core.h"
+
+typedef struct {
+    char *buf;
+    size_t cap, len;
+} out_t;
+
+static void put(out_t *o, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void put(out_t *o, const char *fmt, ...)
+{
+    if (o->len >= o->cap) {
+        return;
+    }
+    va_list ap;
+    va_start(ap, fmt);
+    int w = vsnprintf(o->buf + o->len, o->cap - o->len, fmt, ap);
+    va_end(ap);
+    if (w > 0) {
+        o->len += (size_t)w < o->cap - o->len ? (size_t)w : o->cap - o->len - 1u;
+    }
+}
+
+int32_t ls_h_send_command(struct ls_core *core, struct ls_call *call)
+{
+    const char *in = call->req->cmd.send_command.input;
+    ls_SendCommandRes *r = &call->res->result.send_command;
+    out_t o = { r->result, sizeof r->result, 0 };
+    if (strcmp(in, "help") == 0 || in[0] == '\0') {
+        put(&o, "help\nversion\nstatus\nfaults\n");
+    } else if (strcmp(in, "version") == 0) {
+        put(&o, "firmware=%s\nprotocol=%u\nschema=%08X\n", core->cfg.firmware_version,
+            (unsigned)ls_Protocol_PROTOCOL_VERSION, (unsigned)LS_SCHEMA_HASH);
+    } else if (strcmp(in, "status") == 0) {
+        put(&o, "state=%s\nowner=", ls_core_state_name(core->state));
+        if (core->owner >= 0) {
+            put(&o, "0x%02X\n", core->sessions[core->owner].addr);
+        } else {
+            put(&o, "none\n");
+        }
+        put(&o, "fault=%s\nrx_malformed=%u\ntx_lost=%u\nsessions_dropped=%u\n", core->fault,
+            (unsigned)core->rx_malformed, (unsigned)core->tx_lost, (unsigned)core->sessions_dropped);
+        for (int i = 0; i < LS_MAX_SUPERVISORS; i++) {
+            const ls_session_t *s = &core->sessions[i];
+            if (s->connected) {
+                put(&o, "session 0x%02X name=%s executed=%u\n", s->addr, s->name, (unsigned)s->executed);
+            }
+        }
+    } else if (strcmp(in, "faults") == 0) {
+        uint32_t n = core->fault_log_count < LS_FAULT_LOG_LEN ? core->fault_log_count : LS_FAULT_LOG_LEN;
+        for (uint32_t k = core->fault_log_count - n; k < core->fault_log_count; k++) {
+            const ls_fault_entry_t *e = &core->fault_log[k % LS_FAULT_LOG_LEN];
+            put(&o, "%llu.%03llu %s\n", (unsigned long long)(e->at_us / 1000000u),
+                (unsigned long long)(e->at_us / 1000u % 1000u), e->text);
+        }
+        if (n == 0) {
+            put(&o, "no faults\n");
+        }
+    } else {
+        return ls_reply(call, ls_RetCode_CMD_PARAM_ERR, "sendCommand '%.40s': unknown; try 'help'", in);
+    }
+    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "%s", in[0] != '\0' ? in : "help");
+}

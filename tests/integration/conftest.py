@@ -1,0 +1,67 @@
+"""Integration tier: start the built landscaped (sim HAL, SLCAN on a pty) and
+drive it through the host library and the CLI."""
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Iterator
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+BUILD = Path(os.environ.get("LS_BUILD_DIR", ROOT / "build"))
+LANDSCAPED = BUILD / "bin" / "landscaped"
+CLI = Path(sys.executable).parent / "landscape"
+
+
+@dataclass
+class Controller:
+    pty: str
+    proc: subprocess.Popen[bytes]
+
+    def cli(self, *args: str, timeout: float = 60.0, check: bool = False) -> subprocess.CompletedProcess[str]:
+        return run_cli("--interface", "slcan", "--channel", self.pty, *args, timeout=timeout, check=check)
+
+    def stop(self, sig: int = signal.SIGTERM) -> int:
+        if self.proc.poll() is None:
+            self.proc.send_signal(sig)
+        try:
+            return self.proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            raise AssertionError("landscaped did not stop within 10 s of a signal")
+
+
+def run_cli(*args: str, timeout: float = 60.0, check: bool = False) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([str(CLI), *args], capture_output=True, text=True, timeout=timeout, check=check)
+
+
+def start_controller(path: Path, *extra: str) -> Controller:
+    if not LANDSCAPED.exists():
+        raise AssertionError(f"{LANDSCAPED} is missing: build first (bash .ci/build)")
+    proc = subprocess.Popen([str(LANDSCAPED), "--hal", "sim", "--link", f"slcan:pty:{path}", *extra],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    deadline = time.monotonic() + 10
+    while not path.exists():
+        if proc.poll() is not None:
+            err = proc.stderr.read().decode() if proc.stderr else ""
+            raise AssertionError(f"landscaped exited with {proc.returncode}: {err}")
+        if time.monotonic() > deadline:
+            proc.kill()
+            raise AssertionError("landscaped did not create its pty link within 10 s")
+        time.sleep(0.02)
+    return Controller(str(path), proc)
+
+
+@pytest.fixture
+def controller(tmp_path: Path) -> Iterator[Controller]:
+    c = start_controller(tmp_path / "ls0")
+    try:
+        yield c
+    finally:
+        c.stop()
