@@ -15,8 +15,6 @@
 #include <math.h>
 #include <stddef.h>
 
-#define PI_ 3.14159265358979323846
-
 /* Durations within this relative margin below the minimum are rounding. */
 #define DURATION_REL_TOL 1e-12
 /* A time-scale ramp this close to its end (relative) counts as finished. */
@@ -127,15 +125,19 @@ static double peak_for_duration(double D, double a_max, double j_max, double v_h
     } else {
         /* Pure jerk phases, s = Tj = sqrt(v / j): 2 s^3 - T s^2 + D / j = 0.
          * Of its three real roots, the middle one (the smallest positive) is
-         * ours; the trigonometric form gives it directly, Newton polishes it.
-         * f'(s) < 0 there, well away from the double root at s = T / 3. */
-        double c = 1.0 - 54.0 * D / (j_max * T * T * T);
-        if (c > 1.0) {
-            c = 1.0;
-        } else if (c < -1.0) {
-            c = -1.0;
+         * ours. Trigonometric form: s = T/6 + (T/3) cos(theta/3 - 2 pi/3)
+         * with cos(theta) = 1 - 54 D / (j T^3); rewritten as
+         * s = (T/3) (sin^2(x/2) + (sqrt(3)/2) sin x), x = theta/3, and
+         * theta = 2 asin(sqrt(27 D / (j T^3))), it has no cancellation when
+         * T is long and s tiny. Newton polishes it: f'(s) < 0 there, well
+         * away from the double root at s = T / 3. */
+        double e = sqrt(27.0 * D / j_max / T) / T;
+        if (e > 1.0) {
+            e = 1.0;
         }
-        double s = T / 6.0 + (T / 3.0) * cos(acos(c) / 3.0 - 2.0 * PI_ / 3.0);
+        const double x = 2.0 * asin(e) / 3.0;
+        const double sh = sin(0.5 * x);
+        double s = (T / 3.0) * (sh * sh + 0.5 * sqrt(3.0) * sin(x));
         for (int k = 0; k < 2; ++k) {
             const double f = (2.0 * s - T) * s * s + D / j_max;
             const double fd = (6.0 * s - 2.0 * T) * s;
@@ -181,6 +183,9 @@ int ls_traj_plan_axis_duration(ls_traj_axis_t *ax, double p0, double p1, double 
     const double D = fabs(d);
     const double v_hi = min_time_peak(D, v_max, a_max, j_max);
     const double v = peak_for_duration(D, a_max, j_max, v_hi, duration_s);
+    if (!(v > 0.0)) {
+        return LS_TRAJ_EARG; /* duration so long against the distance that the peak underflows */
+    }
     double tj, ta;
     half_of_peak(v, a_max, j_max, &tj, &ta);
     double tv = duration_s - 2.0 * (2.0 * tj + ta);

@@ -312,6 +312,26 @@ static void test_duration_hand_cases(void **state)
     assert_true(p == 2.0 && v == 0.0);
 }
 
+static void test_duration_very_long(void **state)
+{
+    (void)state;
+    /* d=10, v=1, a=10, j=1 (a_max out of reach: pure jerk phases) stretched
+     * to 1e9 s: the peak v ~ 1e-8 must still satisfy the defining equation
+     * d = v (T - Tacc), Tacc = 2 sqrt(v / j), and the halves must meet. */
+    const double T[2] = {1e9, 1e6};
+    for (int k = 0; k < 2; ++k) {
+        ls_traj_axis_t ax;
+        assert_int_equal(ls_traj_plan_axis_duration(&ax, 0.0, 10.0, 1.0, 10.0, 1.0, T[k]), LS_TRAJ_OK);
+        const double v = ax.t[0] * ax.t[0]; /* j Tj^2 with j = 1 */
+        assert_close(v * (T[k] - 2.0 * ax.t[0]), 10.0, 1e-12);
+        double pl, pr;
+        ls_traj_sample_axis(&ax, T[k] / 2.0 * (1.0 - 1e-15), &pl, NULL, NULL);
+        ls_traj_sample_axis(&ax, T[k] / 2.0 * (1.0 + 1e-15), &pr, NULL, NULL);
+        assert_close(pl, 5.0, 1e-12);
+        assert_close(pr, 5.0, 1e-12);
+    }
+}
+
 static void test_duration_too_short(void **state)
 {
     (void)state;
@@ -679,6 +699,7 @@ int main(void)
         cmocka_unit_test(test_endpoints_exact_and_clamped),
         cmocka_unit_test(test_random_profiles_limits_continuity),
         cmocka_unit_test(test_duration_hand_cases),
+        cmocka_unit_test(test_duration_very_long),
         cmocka_unit_test(test_duration_too_short),
         cmocka_unit_test(test_duration_random),
         cmocka_unit_test(test_sync_hand_case),
