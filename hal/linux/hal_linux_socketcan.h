@@ -9,7 +9,8 @@
  * Storage: links live in a static pool of HAL_LINUX_SOCKETCAN_MAX_LINKS
  * entries; open and close take and give back a pool entry (no heap at all).
  * The caller owns the hal_can_link_t it passes in; after a failed open it
- * holds no ops (hal_can_close on it is a no-op).
+ * holds no ops (hal_can_close on it is a no-op). close is idempotent until
+ * another open reuses the pool entry: drop the hal_can_link_t after closing.
  *
  * Threading: open, probe and close at init/shutdown (they take a mutex and
  * make a few syscalls); send, recv, poll_fd and status from the one comms
