@@ -1,0 +1,504 @@
+/* Seven-segment rest-to-rest profiles and the stop/resume time scaling.
+ *
+ * A symmetric rest-to-rest profile is fully described by its peak velocity
+ * v: the acceleration half reaches a_p = min(a_max, sqrt(v j_max)) with jerk
+ * phases of Tj = a_p / j_max and a constant-acceleration phase of
+ * Ta = v / a_p - Tj. Its duration is Tacc = 2 Tj + Ta and, because the
+ * velocity is point-symmetric about the middle of that half, it covers
+ * v Tacc / 2. Hence for distance D:
+ *   cruise Tv = D / v - Tacc  and  total T(v) = Tacc(v) + D / v.
+ * T(v) strictly decreases on the feasible range (Tv >= 0), so the minimum
+ * time uses the largest feasible v, and any longer duration has exactly one
+ * v below it. */
+#include "ls_traj.h"
+
+#include <math.h>
+#include <stddef.h>
+
+/* Durations within this relative margin below the minimum are rounding. */
+#define DURATION_REL_TOL 1e-12
+/* A time-scale ramp this close to its end (relative) counts as finished. */
+#define SETTLE_REL_TOL 1e-9
+
+static int is_limit(double x) { return isfinite(x) && x > 0.0; }
+
+/* The acceleration half for peak velocity v (> 0). */
+static void half_of_peak(double v, double a_max, double j_max, double *tj, double *ta)
+{
+    if (v * j_max >= a_max * a_max) {
+        *tj = a_max / j_max;
+        *ta = v / a_max - *tj;
+        if (*ta < 0.0) {
+            *ta = 0.0;
+        }
+    } else {
+        *tj = sqrt(v / j_max);
+        *ta = 0.0;
+    }
+}
+
+/* Peak velocity of the minimum-time profile for distance d > 0. */
+static double min_time_peak(double d, double v_max, double a_max, double j_max)
+{
+    double tj, ta;
+    half_of_peak(v_max, a_max, j_max, &tj, &ta);
+    if (v_max * (2.0 * tj + ta) <= d) {
+        return v_max; /* cruise at v_max */
+    }
+    const double a2j = a_max * a_max / j_max;
+    /* At v = a2j the acceleration just touches a_max; the half covers 2 a2j^2/a_max. */
+    if (d >= 2.0 * a2j * a2j / a_max) {
+        /* v^2 / a + v a / j = d, written without cancellation. */
+        return 2.0 * a_max * d / (a2j + sqrt(a2j * a2j + 4.0 * a_max * d));
+    }
+    /* Pure jerk phases: 2 v sqrt(v / j) = d. */
+    return cbrt(d * d * j_max / 4.0);
+}
+
+static void set_axis(ls_traj_axis_t *ax, double p0, double p1, double d, double tj, double ta, double tv,
+                     double jerk, double T)
+{
+    ax->p0 = p0;
+    ax->p1 = p1;
+    ax->dist = d;
+    ax->t[0] = ax->t[2] = ax->t[4] = ax->t[6] = tj;
+    ax->t[1] = ax->t[5] = ta;
+    ax->t[3] = tv;
+    ax->j = jerk;
+    ax->T = T;
+}
+
+static int check_axis_args(const ls_traj_axis_t *ax, double p0, double p1, double v_max, double a_max,
+                           double j_max)
+{
+    if (ax == NULL || !isfinite(p0) || !isfinite(p1) || !isfinite(p1 - p0)) {
+        return LS_TRAJ_EARG;
+    }
+    if (!is_limit(v_max) || !is_limit(a_max) || !is_limit(j_max)) {
+        return LS_TRAJ_EARG;
+    }
+    return LS_TRAJ_OK;
+}
+
+int ls_traj_plan_axis(ls_traj_axis_t *ax, double p0, double p1, double v_max, double a_max, double j_max)
+{
+    if (check_axis_args(ax, p0, p1, v_max, a_max, j_max) != LS_TRAJ_OK) {
+        return LS_TRAJ_EARG;
+    }
+    const double d = p1 - p0;
+    if (d == 0.0) {
+        set_axis(ax, p0, p1, d, 0.0, 0.0, 0.0, 0.0, 0.0);
+        return LS_TRAJ_OK;
+    }
+    const double D = fabs(d);
+    const double v = min_time_peak(D, v_max, a_max, j_max);
+    double tj, ta;
+    half_of_peak(v, a_max, j_max, &tj, &ta);
+    /* Below v_max the peak was solved for an empty cruise: keep it exactly empty. */
+    double tv = v < v_max ? 0.0 : D / v - (2.0 * tj + ta);
+    if (tv < 0.0) {
+        tv = 0.0;
+    }
+    const double T = 4.0 * tj + 2.0 * ta + tv;
+    if (!isfinite(T) || !isfinite(v)) {
+        return LS_TRAJ_EARG; /* limits so extreme that the profile overflows */
+    }
+    set_axis(ax, p0, p1, d, tj, ta, tv, d > 0.0 ? j_max : -j_max, T);
+    return LS_TRAJ_OK;
+}
+
+/* Peak velocity v <= v_hi with Tacc(v) + D / v = T, for T above the minimum
+ * time (whose peak is v_hi). */
+static double peak_for_duration(double D, double a_max, double j_max, double v_hi, double T)
+{
+    const double a2j = a_max * a_max / j_max; /* peak at which a_max is just reached */
+    double v;
+    if (v_hi > a2j && T <= 2.0 * a_max / j_max + D / a2j) {
+        /* a_max reached: v^2 / a + (a / j - T) v + D = 0, the smaller root
+         * (the larger one lies beyond the feasible range), cancellation-free. */
+        const double b = T - a_max / j_max;
+        double disc = b * b - 4.0 * D / a_max;
+        if (disc < 0.0) {
+            disc = 0.0;
+        }
+        v = 2.0 * D / (b + sqrt(disc));
+    } else {
+        /* Pure jerk phases, s = Tj = sqrt(v / j): 2 s^3 - T s^2 + D / j = 0.
+         * Of its three real roots, the middle one (the smallest positive) is
+         * ours. Trigonometric form: s = T/6 + (T/3) cos(theta/3 - 2 pi/3)
+         * with cos(theta) = 1 - 54 D / (j T^3); rewritten as
+         * s = (T/3) (sin^2(x/2) + (sqrt(3)/2) sin x), x = theta/3, and
+         * theta = 2 asin(sqrt(27 D / (j T^3))), it has no cancellation when
+         * T is long and s tiny. Newton polishes it: f'(s) < 0 there, well
+         * away from the double root at s = T / 3. */
+        double e = sqrt(27.0 * D / j_max / T) / T;
+        if (e > 1.0) {
+            e = 1.0;
+        }
+        const double x = 2.0 * asin(e) / 3.0;
+        const double sh = sin(0.5 * x);
+        double s = (T / 3.0) * (sh * sh + 0.5 * sqrt(3.0) * sin(x));
+        for (int k = 0; k < 2; ++k) {
+            const double f = (2.0 * s - T) * s * s + D / j_max;
+            const double fd = (6.0 * s - 2.0 * T) * s;
+            if (fd < 0.0) {
+                const double sn = s - f / fd;
+                if (sn > 0.0) {
+                    s = sn;
+                }
+            }
+        }
+        v = j_max * s * s;
+    }
+    if (!(v <= v_hi)) {
+        v = v_hi;
+    }
+    return v;
+}
+
+int ls_traj_plan_axis_duration(ls_traj_axis_t *ax, double p0, double p1, double v_max, double a_max,
+                               double j_max, double duration_s)
+{
+    if (check_axis_args(ax, p0, p1, v_max, a_max, j_max) != LS_TRAJ_OK || !isfinite(duration_s) ||
+        duration_s < 0.0) {
+        return LS_TRAJ_EARG;
+    }
+    ls_traj_axis_t fast;
+    if (ls_traj_plan_axis(&fast, p0, p1, v_max, a_max, j_max) != LS_TRAJ_OK) {
+        return LS_TRAJ_EARG;
+    }
+    if (duration_s < fast.T * (1.0 - DURATION_REL_TOL)) {
+        return LS_TRAJ_ETIME;
+    }
+    const double d = fast.dist;
+    if (d == 0.0) {
+        set_axis(ax, p0, p1, d, 0.0, 0.0, duration_s, 0.0, duration_s);
+        return LS_TRAJ_OK;
+    }
+    if (duration_s <= fast.T) {
+        *ax = fast;
+        ax->T = duration_s; /* equal up to rounding */
+        return LS_TRAJ_OK;
+    }
+    const double D = fabs(d);
+    const double v_hi = min_time_peak(D, v_max, a_max, j_max);
+    const double v = peak_for_duration(D, a_max, j_max, v_hi, duration_s);
+    if (!(v > 0.0)) {
+        return LS_TRAJ_EARG; /* duration so long against the distance that the peak underflows */
+    }
+    double tj, ta;
+    half_of_peak(v, a_max, j_max, &tj, &ta);
+    double tv = duration_s - 2.0 * (2.0 * tj + ta);
+    if (tv < 0.0) {
+        tv = 0.0;
+    }
+    set_axis(ax, p0, p1, d, tj, ta, tv, d > 0.0 ? j_max : -j_max, duration_s);
+    return LS_TRAJ_OK;
+}
+
+int ls_traj_plan(ls_traj_t *tr, uint8_t n, const double *p0, const double *p1, const ls_traj_limits_t *lim)
+{
+    if (tr == NULL || p0 == NULL || p1 == NULL || lim == NULL || n == 0 || n > LS_TRAJ_MAX_AXES) {
+        return LS_TRAJ_EARG;
+    }
+    ls_traj_t out;
+    out.n = n;
+    out.duration_s = 0.0;
+    for (uint8_t i = 0; i < n; ++i) {
+        if (ls_traj_plan_axis(&out.axis[i], p0[i], p1[i], lim->v_max[i], lim->a_max[i], lim->j_max[i]) !=
+            LS_TRAJ_OK) {
+            return LS_TRAJ_EARG;
+        }
+        if (out.axis[i].T > out.duration_s) {
+            out.duration_s = out.axis[i].T;
+        }
+    }
+    for (uint8_t i = 0; i < n; ++i) {
+        if (out.axis[i].T == out.duration_s) {
+            continue;
+        }
+        /* duration_s >= this axis's minimum, so ETIME cannot happen. */
+        if (ls_traj_plan_axis_duration(&out.axis[i], p0[i], p1[i], lim->v_max[i], lim->a_max[i],
+                                       lim->j_max[i], out.duration_s) != LS_TRAJ_OK) {
+            return LS_TRAJ_EARG;
+        }
+    }
+    for (uint8_t i = n; i < LS_TRAJ_MAX_AXES; ++i) {
+        set_axis(&out.axis[i], 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    }
+    *tr = out;
+    return LS_TRAJ_OK;
+}
+
+/* First half of the motion in the direction of travel (jerk magnitude jm),
+ * at time tau from the start: phases 1-3 and the cruise. */
+static void first_half(const ls_traj_axis_t *ax, double jm, double tau, double *p, double *v, double *a)
+{
+    const double tj = ax->t[0], ta = ax->t[1];
+    if (tau <= tj) {
+        *a = jm * tau;
+        *v = 0.5 * jm * tau * tau;
+        *p = jm * tau * tau * tau / 6.0;
+        return;
+    }
+    const double a1 = jm * tj, v1 = 0.5 * jm * tj * tj, p1 = jm * tj * tj * tj / 6.0;
+    tau -= tj;
+    if (tau <= ta) {
+        *a = a1;
+        *v = v1 + a1 * tau;
+        *p = p1 + v1 * tau + 0.5 * a1 * tau * tau;
+        return;
+    }
+    const double v2 = v1 + a1 * ta, p2 = p1 + v1 * ta + 0.5 * a1 * ta * ta;
+    tau -= ta;
+    if (tau <= tj) {
+        *a = a1 - jm * tau;
+        *v = v2 + a1 * tau - 0.5 * jm * tau * tau;
+        *p = p2 + v2 * tau + 0.5 * a1 * tau * tau - jm * tau * tau * tau / 6.0;
+        return;
+    }
+    const double v3 = v2 + a1 * tj - 0.5 * jm * tj * tj;
+    const double p3 = p2 + v2 * tj + 0.5 * a1 * tj * tj - jm * tj * tj * tj / 6.0;
+    tau -= tj;
+    *a = 0.0;
+    *v = v3;
+    *p = p3 + v3 * tau;
+}
+
+void ls_traj_sample_axis(const ls_traj_axis_t *ax, double t_s, double *p, double *v, double *a)
+{
+    if (ax == NULL) {
+        return;
+    }
+    double pp, vv, aa;
+    if (!(t_s > 0.0)) {
+        t_s = 0.0;
+    }
+    if (t_s >= ax->T || ax->j == 0.0) {
+        /* At rest: at the end, or an axis that does not move. */
+        pp = t_s >= ax->T ? ax->p1 : ax->p0;
+        vv = 0.0;
+        aa = 0.0;
+    } else {
+        const double sgn = ax->j > 0.0 ? 1.0 : -1.0;
+        const double jm = fabs(ax->j);
+        double pf, vf, af;
+        if (t_s <= 0.5 * ax->T) {
+            first_half(ax, jm, t_s, &pf, &vf, &af);
+            pp = ax->p0 + sgn * pf;
+            aa = sgn * af;
+        } else {
+            /* The second half mirrors the first about the midpoint, counted back from p1. */
+            first_half(ax, jm, ax->T - t_s, &pf, &vf, &af);
+            pp = ax->p1 - sgn * pf;
+            aa = -sgn * af;
+        }
+        vv = sgn * vf;
+    }
+    if (p != NULL) {
+        *p = pp;
+    }
+    if (v != NULL) {
+        *v = vv;
+    }
+    if (a != NULL) {
+        *a = aa;
+    }
+}
+
+void ls_traj_sample(const ls_traj_t *tr, double t_s, double *p, double *v, double *a)
+{
+    if (tr == NULL) {
+        return;
+    }
+    const uint8_t n = tr->n <= LS_TRAJ_MAX_AXES ? tr->n : LS_TRAJ_MAX_AXES;
+    if (!(t_s <= tr->duration_s)) {
+        t_s = tr->duration_s; /* also guards each axis against a T rounded differently */
+    }
+    for (uint8_t i = 0; i < n; ++i) {
+        ls_traj_sample_axis(&tr->axis[i], t_s >= tr->duration_s ? tr->axis[i].T : t_s, p ? &p[i] : NULL,
+                            v ? &v[i] : NULL, a ? &a[i] : NULL);
+    }
+}
+
+/* Peak speed of a symmetric profile: J Tj (Tj + Ta). */
+static double axis_peak_speed(const ls_traj_axis_t *ax)
+{
+    return fabs(ax->j) * ax->t[0] * (ax->t[0] + ax->t[1]);
+}
+
+double ls_traj_stop_ramp_s(const ls_traj_t *tr, const ls_traj_limits_t *lim)
+{
+    if (tr == NULL || lim == NULL || tr->n == 0 || tr->n > LS_TRAJ_MAX_AXES) {
+        return (double)LS_TRAJ_EARG;
+    }
+    double ramp = 0.0;
+    for (uint8_t i = 0; i < tr->n; ++i) {
+        if (!is_limit(lim->a_max[i]) || !is_limit(lim->j_max[i])) {
+            return (double)LS_TRAJ_EARG;
+        }
+        const double vp = axis_peak_speed(&tr->axis[i]);
+        const double by_acc = LS_TIMESCALE_RD_GAIN * vp / lim->a_max[i];
+        const double by_jerk = sqrt(LS_TIMESCALE_RDD_GAIN * vp / lim->j_max[i]);
+        if (by_acc > ramp) {
+            ramp = by_acc;
+        }
+        if (by_jerk > ramp) {
+            ramp = by_jerk;
+        }
+    }
+    return ramp;
+}
+
+/* ---- time scaling -------------------------------------------------------
+ * r is driven like a double integrator: d2r/dt2 in {+-rdd_max, 0} over three
+ * phases (change speed, hold, brake), |dr/dt| <= rd_max, arriving at the
+ * target with dr/dt = 0. The ramp is planned once at ls_timescale_set and
+ * evaluated in closed form at each step, so stepping has no integration
+ * drift, r lands exactly on the target, and the clock increment is the exact
+ * integral of r. */
+
+static void ts_settle(ls_timescale_t *ts)
+{
+    ts->r = ts->r0_ = ts->target;
+    ts->rd = ts->rd0_ = 0.0;
+    ts->t_s_ = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        ts->ph_s_[k] = 0.0;
+        ts->u_[k] = 0.0;
+    }
+}
+
+void ls_timescale_init(ls_timescale_t *ts)
+{
+    if (ts == NULL) {
+        return;
+    }
+    ts->target = 1.0;
+    ts->rd_max = 0.0;
+    ts->rdd_max = 0.0;
+    ts_settle(ts);
+}
+
+/* State of the planned ramp at time t since set: r, dr/dt and the integral
+ * of r from 0 to t. */
+static void ts_eval(const ls_timescale_t *ts, double t, double *r, double *rd, double *integral)
+{
+    double x = ts->r0_, xd = ts->rd0_, in = 0.0;
+    for (int k = 0; k < 3 && t > 0.0; ++k) {
+        const double h = t < ts->ph_s_[k] ? t : ts->ph_s_[k];
+        const double u = ts->u_[k];
+        in += x * h + 0.5 * xd * h * h + u * h * h * h / 6.0;
+        x += xd * h + 0.5 * u * h * h;
+        xd += u * h;
+        t -= h;
+    }
+    if (t > 0.0) {
+        /* Past the end: at the target (rounding leaves x within ulps of it). */
+        in += ts->target * t;
+        x = ts->target;
+        xd = 0.0;
+    }
+    *r = x;
+    *rd = xd;
+    *integral = in;
+}
+
+int ls_timescale_set(ls_timescale_t *ts, double target, double ramp_s)
+{
+    if (ts == NULL || !isfinite(target) || target < 0.0 || target > 1.0 || !is_limit(ramp_s)) {
+        return LS_TRAJ_EARG;
+    }
+    const double V = LS_TIMESCALE_RD_GAIN / ramp_s;
+    double A = LS_TIMESCALE_RDD_GAIN / (ramp_s * ramp_s);
+    if (!is_limit(V) || !is_limit(A)) {
+        return LS_TRAJ_EARG; /* ramp_s so small that the limits overflow */
+    }
+    const double r0 = ts->r;
+    double w = ts->rd;
+    /* Gentler limits must still stop r before it leaves [0, 1]. */
+    if (w != 0.0) {
+        const double room = w > 0.0 ? 1.0 - r0 : r0;
+        if (room <= 0.0) {
+            w = 0.0; /* at a bound already (rounding): nothing left to brake */
+        } else if (w * w / (2.0 * A) > room) {
+            A = w * w / (2.0 * room);
+        }
+    }
+    ts->target = target;
+    ts->rd_max = V;
+    ts->rdd_max = A;
+    ts->r0_ = r0;
+    ts->rd0_ = ts->rd = w;
+    ts->t_s_ = 0.0;
+    const double v0 = ts->rd0_;
+    const double d = target - r0;
+    const double stop_disp = v0 * fabs(v0) / (2.0 * A); /* where braking now would end */
+    const double rest = d - stop_disp;
+    if (rest == 0.0 || (d == 0.0 && v0 == 0.0)) {
+        /* Braking now lands on the target (or we are already there). */
+        ts->ph_s_[0] = 0.0;
+        ts->u_[0] = 0.0;
+        ts->ph_s_[1] = 0.0;
+        ts->u_[1] = 0.0;
+        ts->ph_s_[2] = fabs(v0) / A;
+        ts->u_[2] = v0 > 0.0 ? -A : A;
+        return LS_TRAJ_OK;
+    }
+    /* Move towards the target in direction s: from speed w0 (along s) to the
+     * peak wp, hold, brake to rest. Because rest has the sign of s, the
+     * remaining distance D exceeds the braking distance from w0. */
+    const double s = rest > 0.0 ? 1.0 : -1.0;
+    const double D = s * d, w0 = s * v0;
+    double wp, hold;
+    /* Signed displacement of changing speed from w0 to V, then braking from V. */
+    const double to_V = (V >= w0 ? V * V - w0 * w0 : w0 * w0 - V * V) / (2.0 * A);
+    const double need_at_V = to_V + V * V / (2.0 * A);
+    if (need_at_V <= D) {
+        wp = V;
+        hold = (D - need_at_V) / V;
+    } else {
+        double q = A * D + 0.5 * w0 * w0;
+        wp = sqrt(q > 0.0 ? q : 0.0);
+        hold = 0.0;
+    }
+    ts->ph_s_[0] = fabs(wp - w0) / A;
+    ts->u_[0] = wp >= w0 ? s * A : -s * A;
+    ts->ph_s_[1] = hold;
+    ts->u_[1] = 0.0;
+    ts->ph_s_[2] = wp / A;
+    ts->u_[2] = -s * A;
+    return LS_TRAJ_OK;
+}
+
+double ls_timescale_step(ls_timescale_t *ts, double dt_s)
+{
+    if (ts == NULL || !isfinite(dt_s) || dt_s <= 0.0) {
+        return 0.0;
+    }
+    if (ls_timescale_settled(ts)) {
+        return ts->r * dt_s;
+    }
+    const double total = ts->ph_s_[0] + ts->ph_s_[1] + ts->ph_s_[2];
+    double r_old, rd_old, i_old, r, rd, i_new;
+    ts_eval(ts, ts->t_s_, &r_old, &rd_old, &i_old);
+    ts->t_s_ += dt_s;
+    /* The clock time is a sum of steps; a ramp that is a whole number of
+     * steps long must not need one more step for the rounding. */
+    const int done = ts->t_s_ >= total * (1.0 - SETTLE_REL_TOL);
+    ts_eval(ts, done && ts->t_s_ < total ? total : ts->t_s_, &r, &rd, &i_new);
+    double inc = i_new - i_old;
+    if (done) {
+        /* Drop the plan so the clock time does not grow without bound. */
+        ts_settle(ts);
+    } else {
+        ts->r = r < 0.0 ? 0.0 : (r > 1.0 ? 1.0 : r);
+        ts->rd = rd;
+    }
+    return inc > 0.0 ? inc : 0.0;
+}
+
+int ls_timescale_settled(const ls_timescale_t *ts)
+{
+    return ts != NULL && ts->r == ts->target && ts->rd == 0.0;
+}
