@@ -83,7 +83,7 @@ class WrongStateError(CommandError):
 
 class NotOwnerError(CommandError):
     code = pb.CMD_NOT_OWNER_ERR
-    hint = "another supervisor owns the device; wait for its release or lock first"
+    hint = "only the supervisor that locked may do this: lock first, or wait for the owner to release"
 
 
 class BusyError(CommandError):

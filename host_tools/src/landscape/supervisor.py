@@ -170,6 +170,7 @@ class Supervisor:
         self._running = False
         self.connected = False
         self.device_info: pb.ConnectRes | None = None
+        self.connect_result: ConnectResult | None = None
 
     # ------------------------------------------------------------ construction helpers
 
@@ -247,7 +248,8 @@ class Supervisor:
                                                         res.protocol_version, res.schema_hash))
         self.device_info = res
         self.connected = True
-        return ConnectResult(rv, res)
+        self.connect_result = ConnectResult(rv, res)
+        return self.connect_result
 
     def disconnect(self, **opts: Unpack[CallOptions]) -> RetVal:
         """End the session at once (an owner's disconnect runs the device's disconnect handler)."""
