@@ -1,0 +1,1 @@
+"""Artefacts generated from protocol/ (see host_tools/update_generated.sh). Do not edit."""

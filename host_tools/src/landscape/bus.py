@@ -1,0 +1,115 @@
+"""Opening a python-can bus, and the ISO-TP addressing of the protocol.
+
+The interface, channel and bitrate come from the arguments, else from
+python-can's configuration file and environment variables (CAN_INTERFACE,
+CAN_CHANNEL, CAN_BITRATE; see ``can.util.load_config``). Every failure to open
+is a BusError that names the channel and says what to check.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import can
+import isotp
+
+from ._generated import landscape_pb2 as pb
+from .errors import BusError
+
+DEFAULT_DEVICE: int = pb.DEFAULT_DEVICE_ADDRESS
+DEFAULT_HOST: int = pb.DEFAULT_HOST_ADDRESS
+FUNCTIONAL_ALL: int = pb.FUNCTIONAL_ALL_DEVICES
+PHYSICAL_BASE: int = pb.ISOTP_PHYSICAL_BASE
+FUNCTIONAL_BASE: int = pb.ISOTP_FUNCTIONAL_BASE
+SLCAN_DEFAULT_BITRATE = 1_000_000
+MAX_MESSAGE_BYTES = 4095
+
+#: ISO-TP parameters shared with the firmware (docs/protocol.md).
+ISOTP_PARAMS: dict[str, Any] = {
+    "tx_padding": 0xCC,
+    "blocksize": 8,
+    "stmin": 0,
+    "tx_data_min_length": 8,
+    "max_frame_size": MAX_MESSAGE_BYTES,
+}
+
+
+@dataclass(frozen=True)
+class BusSpec:
+    """Where to find the bus; None fields fall back to python-can's config and environment."""
+
+    interface: str | None = None
+    channel: str | None = None
+    bitrate: int | None = None
+
+    def describe(self) -> str:
+        cfg = resolve_config(self, strict=False)
+        return f"{cfg.get('interface', '?')}:{cfg.get('channel', '?')}"
+
+
+def resolve_config(spec: BusSpec, *, strict: bool = True) -> dict[str, Any]:
+    """The python-can configuration for `spec` (arguments override config file and env)."""
+    given: dict[str, Any] = {}
+    if spec.interface:
+        given["interface"] = spec.interface
+    if spec.channel:
+        given["channel"] = spec.channel
+    if spec.bitrate:
+        given["bitrate"] = spec.bitrate
+    try:
+        return dict(can.util.load_config(config=given))
+    except Exception as exc:  # python-can raises several types for a bad config
+        if not strict:
+            return given
+        raise BusError(
+            f"no usable CAN interface ({exc}): pass --interface and --channel "
+            f"(e.g. --interface slcan --channel /dev/pts/3) or set CAN_INTERFACE and CAN_CHANNEL") from None
+
+
+def _hint(cfg: dict[str, Any], exc: BaseException) -> str:
+    iface = cfg.get("interface")
+    if iface == "slcan":
+        return "is landscaped running with --link slcan:pty:PATH, and is --channel that PATH?"
+    if iface == "socketcan":
+        if isinstance(exc, OSError) and exc.errno == 97:
+            return "this kernel has no SocketCAN (AF_CAN); use --interface slcan with landscaped's pty"
+        return "does the interface exist and is it up (ip link set CHANNEL up)?"
+    return "check --interface and --channel"
+
+
+def open_bus(spec: BusSpec | None = None, **kwargs: Any) -> can.BusABC:
+    """Open the bus described by `spec`; a thread-safe bus, since the heartbeat,
+    the ISO-TP stacks and the caller all send on it. Extra kwargs go to python-can."""
+    spec = spec or BusSpec()
+    cfg = resolve_config(spec)
+    cfg.update(kwargs)
+    if cfg.get("interface") == "slcan":
+        cfg.setdefault("sleep_after_open", 0)
+        cfg.setdefault("bitrate", SLCAN_DEFAULT_BITRATE)
+    channel = cfg.get("channel")
+    try:
+        return can.ThreadSafeBus(**cfg)
+    except Exception as exc:
+        raise BusError(
+            f"cannot open CAN channel '{channel}' on interface '{cfg.get('interface')}': "
+            f"{exc}; {_hint(cfg, exc)}") from None
+
+
+def physical_address(device: int, host: int) -> isotp.Address:
+    """ISO-TP normal fixed 29-bit addressing of one supervisor <-> device pair, as seen
+    from `host` (tx 0x18DA<device><host>, rx 0x18DA<host><device>)."""
+    _check_node(device, "device")
+    _check_node(host, "source")
+    return isotp.Address(isotp.AddressingMode.NormalFixed_29bits,
+                         source_address=host, target_address=device)
+
+
+def functional_id(host: int) -> int:
+    """CAN id of a functional (broadcast) request from `host`: 0x18DBFF<host>."""
+    _check_node(host, "source")
+    return FUNCTIONAL_BASE | FUNCTIONAL_ALL << 8 | host
+
+
+def _check_node(addr: int, what: str) -> None:
+    if not 0 <= addr <= 0xFF:
+        raise BusError(f"{what} address {addr:#x} is not a node address (0x00..0xFF)")

@@ -1,0 +1,492 @@
+"""The `landscape` command-line tool.
+
+One subcommand per schema command, built from the registry at import time
+(docs/host-tool.md states the argument rule), plus `run FILE`, `shell` and
+`monitor`. Every error a user can meet ends as one line on stderr and an exit
+code:
+
+    0 success; 1 protocol or other error; 2 usage (bad arguments, unknown command);
+    3 the device answered an error or a command ended with an alarm;
+    4 bus cannot be opened or no controller answers; 5 version mismatch; 130 interrupted.
+"""
+from __future__ import annotations
+
+import json
+import logging
+import os
+import shlex
+import sys
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, NoReturn
+
+import click
+from google.protobuf.descriptor import FieldDescriptor
+
+from ._generated import landscape_pb2 as pb
+from .bus import DEFAULT_DEVICE, DEFAULT_HOST, BusSpec
+from .errors import (AlarmError, ArgumentError, BusError, CommandError, ControllerTimeoutError, LandscapeError,
+                     ProtocolError, VersionMismatchError, error_for_code)
+from .registry import COMMANDS, Command, enum_choices, is_repeated, message_to_dict, parse_enum
+from .supervisor import RetVal, Supervisor
+
+EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_COMMAND, EXIT_BUS, EXIT_VERSION, EXIT_INTERRUPTED = 0, 1, 2, 3, 4, 5, 130
+
+
+class CommandFailed(LandscapeError):
+    """A command answered an error or ended with an alarm (already reported)."""
+
+    def __init__(self, message: str, code: int = EXIT_COMMAND) -> None:
+        super().__init__(message)
+        self.code = code
+
+
+# ---------------------------------------------------------------- parameter types
+
+
+class IntType(click.ParamType):
+    name = "integer"
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> int:
+        if isinstance(value, int):
+            return value
+        try:
+            return int(str(value), 0)
+        except ValueError:
+            self.fail(f"'{value}' is not an integer (decimal or 0x hex)", param, ctx)
+
+
+class EnumType(click.ParamType):
+    def __init__(self, enum: Any) -> None:
+        self.enum = enum
+        self.name = enum.name
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> int:
+        try:
+            return parse_enum(self.enum, value)
+        except ArgumentError:
+            self.fail(f"'{value}' is not a {self.enum.name}; choose one of {enum_choices(self.enum)} "
+                      f"(any case, suffix optional)", param, ctx)
+
+    def get_metavar(self, param: click.Parameter, ctx: click.Context | None = None) -> str:
+        return self.enum.name.upper()
+
+
+class CommaNumbers(click.ParamType):
+    def __init__(self, integer: bool) -> None:
+        self.integer = integer
+        self.name = "N,N,..."
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> list[float] | list[int]:
+        if isinstance(value, list):
+            return value
+        items = [v for v in str(value).replace(" ", "").split(",") if v]
+        try:
+            return [int(v, 0) for v in items] if self.integer else [float(v) for v in items]
+        except ValueError:
+            self.fail(f"'{value}' is not a comma-separated list of numbers", param, ctx)
+
+
+class JsonObject(click.ParamType):
+    name = "JSON"
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> dict[str, Any]:
+        if isinstance(value, dict):
+            return value
+        try:
+            out = json.loads(value)
+        except json.JSONDecodeError as exc:
+            self.fail(f"'{value}' is not JSON: {exc.msg}", param, ctx)
+        if not isinstance(out, dict):
+            self.fail(f"'{value}' is not a JSON object", param, ctx)
+        return out
+
+
+_FLOATS = (FieldDescriptor.TYPE_DOUBLE, FieldDescriptor.TYPE_FLOAT)
+
+
+def _is_number(fd: FieldDescriptor) -> bool:
+    return fd.type not in (FieldDescriptor.TYPE_STRING, FieldDescriptor.TYPE_ENUM, FieldDescriptor.TYPE_MESSAGE,
+                           FieldDescriptor.TYPE_BOOL, FieldDescriptor.TYPE_BYTES)
+
+
+def cli_params(cmd: Command) -> list[click.Parameter]:
+    """The click parameters of `cmd`, derived from its request fields (docs/host-tool.md)."""
+    fields = cmd.fields()
+    positional = [f for f in fields if not is_repeated(f)
+                  and f.type in (FieldDescriptor.TYPE_STRING, FieldDescriptor.TYPE_ENUM)]
+    variadic = next((f for f in fields if is_repeated(f) and f.type in _FLOATS), None)
+    params: list[click.Parameter] = []
+    for i, f in enumerate(positional):
+        trailing_string = (i == len(positional) - 1 and variadic is None
+                           and f.type == FieldDescriptor.TYPE_STRING)
+        ptype: click.ParamType = EnumType(f.enum_type) if f.type == FieldDescriptor.TYPE_ENUM else click.STRING
+        params.append(click.Argument([f.name], type=ptype, required=not trailing_string,
+                                     default="" if trailing_string else None, metavar=f.name.upper()))
+    if variadic is not None:
+        params.append(click.Argument([variadic.name], type=float, nargs=-1, metavar=f"[{variadic.name.upper()}]..."))
+    for f in fields:
+        if f in positional or f is variadic:
+            continue
+        opt = "--" + f.name.replace("_", "-")
+        if is_repeated(f) and f.type == FieldDescriptor.TYPE_MESSAGE:
+            params.append(click.Option([opt, f.name], type=JsonObject(), multiple=True,
+                                       help=f"one {f.message_type.name} as a JSON object; repeat per item"))
+        elif is_repeated(f) and _is_number(f):
+            params.append(click.Option([opt, f.name], type=CommaNumbers(f.type not in _FLOATS), default=None,
+                                       help="comma-separated numbers"))
+        elif is_repeated(f):
+            params.append(click.Option([opt, f.name], multiple=True, help="repeat per item"))
+        elif f.type == FieldDescriptor.TYPE_BOOL:
+            params.append(click.Option([opt + "/--no-" + f.name.replace("_", "-"), f.name], default=False))
+        elif f.type == FieldDescriptor.TYPE_ENUM:  # unreachable today (enums are positional)
+            params.append(click.Option([opt, f.name], type=EnumType(f.enum_type), default=0))
+        elif f.type in _FLOATS:
+            params.append(click.Option([opt, f.name], type=float, default=0.0, show_default=True))
+        else:
+            params.append(click.Option([opt, f.name], type=IntType(), default=0, show_default=True))
+    if not cmd.blocking:
+        params.append(click.Option(["--no-wait", "_no_wait"], is_flag=True,
+                                   help="return after CMD_STARTED_OK instead of waiting for the final notice"))
+        params.append(click.Option(["--wait-timeout", "_wait_timeout"], type=float, default=60.0, show_default=True,
+                                   help="seconds to wait for the final notice"))
+    return params
+
+
+# ---------------------------------------------------------------- state shared by the subcommands
+
+
+@dataclass
+class CliState:
+    spec: BusSpec
+    device: int
+    source_address: int
+    timeout_s: float | None
+    json_out: bool
+    sup: Supervisor | None = None
+    failures: list[str] = field(default_factory=list)
+
+    def session(self) -> Supervisor:
+        """The CLI's one session: opened on first use, reconnected after a disconnect command."""
+        if self.sup is None:
+            sup = Supervisor.open_bus(self.spec, device=self.device, source_address=self.source_address,
+                                      timeout_s=self.timeout_s, client_name="landscape-cli")
+            sup.open()
+            self.sup = sup
+        elif not self.sup.connected:
+            self.sup.connect()
+        return self.sup
+
+    def close(self) -> None:
+        if self.sup is not None:
+            self.sup.close()
+            self.sup = None
+
+
+def _state(ctx: click.Context) -> CliState:
+    st = ctx.find_object(CliState)
+    if st is None:  # pragma: no cover (always set by the group)
+        raise click.UsageError("internal: no CLI state")
+    return st
+
+
+def _fmt_value(v: Any) -> str:
+    if isinstance(v, list):
+        return " ".join(_fmt_value(x) for x in v) if v else "(none)"
+    if isinstance(v, float):
+        return f"{v:g}"
+    if isinstance(v, dict):
+        return json.dumps(v)
+    return str(v)
+
+
+def _fmt_notice(n: pb.Notice) -> str:
+    kind = pb.NoticeKind.Name(n.kind)
+    extra = f" (ref {n.ref_seq})" if n.ref_seq else ""
+    if n.kind in (pb.EVENT_RSVP, pb.ALARM_RSVP):
+        extra += f" [rsvp {n.rsvp_id}: default '{n.rsvp_default}' after {n.rsvp_timeout_ms} ms]"
+    return f"  {kind} {n.event_id}" + "".join(f" {d}" for d in n.data) + extra + (" final" if n.final else "")
+
+
+def execute(ctx: click.Context, cmd: Command, fields: dict[str, Any], *, wait: bool = True,
+            wait_timeout_s: float = 60.0) -> RetVal:
+    """Run one command in the CLI's session, print its result, raise CommandFailed on failure."""
+    st = _state(ctx)
+    sup = st.session()
+    if cmd.field == "connect":
+        assert sup.connect_result is not None
+        rv = sup.connect_result.retval
+    elif cmd.field == "disconnect":
+        rv = sup.disconnect(check=False)
+    else:
+        rv = sup.request(cmd, check=False, **fields)
+    notices: list[pb.Notice] = []
+    final: pb.Notice | None = None
+    if not st.json_out:
+        click.echo(f"{cmd.cli_name}: {rv.ret_name}" + (f": {rv.ret_msg}" if rv.ret_msg else ""))
+        for k, v in rv.result.items():
+            click.echo(f"  {k}: {_fmt_value(v)}")
+    if rv.started and wait:
+        for n in sup.notices(timeout_s=wait_timeout_s):
+            notices.append(n)
+            if not st.json_out:
+                click.echo(_fmt_notice(n))
+            if n.final and n.ref_seq == rv.seq:
+                final = n
+                break
+    if st.json_out:
+        click.echo(json.dumps({
+            "command": cmd.cli_name, "ret_code": rv.ret_code, "ret_name": rv.ret_name, "ret_msg": rv.ret_msg,
+            "result": rv.result, "notices": [message_to_dict(n) for n in notices]}))
+    if rv.ret_code < 0:
+        raise CommandFailed(_one_line(error_for_code(cmd.cli_name, rv.ret_code, rv.ret_msg)))
+    if rv.started and wait:
+        if final is None:
+            raise ControllerTimeoutError(f"{cmd.cli_name}: no final notice within {wait_timeout_s:g} s "
+                                         f"(--wait-timeout); check get-motion-control-state")
+        if final.kind in (pb.ALARM, pb.ALARM_RSVP):
+            raise CommandFailed(str(AlarmError(final, cmd.cli_name)))
+    return rv
+
+
+def make_command(cmd: Command) -> click.Command:
+    """The subcommand of `cmd`. `connect` takes no arguments (the session always runs the
+    handshake first; the subcommand prints its result); `disconnect` ends the session."""
+    def callback(**kwargs: Any) -> RetVal:
+        ctx = click.get_current_context()
+        no_wait = kwargs.pop("_no_wait", False)
+        wait_timeout = kwargs.pop("_wait_timeout", 60.0)
+        fields = {k: (list(v) if isinstance(v, tuple) else v) for k, v in kwargs.items()}
+        fields = {k: v for k, v in fields.items() if v is not None}
+        return execute(ctx, cmd, fields, wait=not no_wait, wait_timeout_s=wait_timeout)
+
+    states = ", ".join(cmd.state_names)
+    kind = "blocking" if cmd.blocking else "non-blocking: waits for its final event or alarm"
+    help_text = (f"{cmd.summary}\n\nSeed command {cmd.name} ({cmd.seed_section}); valid in {states}; {kind}"
+                 + ("; owner only" if cmd.owner_only else "") + ".")
+    for f in cmd.fields():
+        if f.type == FieldDescriptor.TYPE_ENUM:
+            help_text += f"\n\n{f.name.upper()}: {' | '.join(v.name for v in f.enum_type.values)} (any case; suffix optional)"
+    params = [] if cmd.field == "connect" else cli_params(cmd)
+    if cmd.field == "connect":
+        help_text += "\n\nEvery invocation connects first; this command prints the device description."
+    has_variadic = any(isinstance(p, click.Argument) and p.nargs == -1 for p in params)
+    return click.Command(cmd.cli_name, callback=callback, params=params, help=help_text,
+                         short_help=cmd.summary,
+                         context_settings={"ignore_unknown_options": True} if has_variadic else {})
+
+
+# ---------------------------------------------------------------- the group
+
+
+def _one_line(exc: BaseException) -> str:
+    return " ".join(str(exc).split())
+
+
+class LandscapeGroup(click.Group):
+    """Maps every error to one line on stderr and an exit code (module docstring)."""
+
+    def main(self, args: Sequence[str] | None = None, prog_name: str | None = None,  # type: ignore[override]
+             complete_var: str | None = None, standalone_mode: bool = True, **extra: Any) -> Any:
+        code = self.run(args, "landscape", **extra)
+        if standalone_mode:
+            sys.exit(code)
+        return code
+
+    def run(self, args: Sequence[str] | None, prog_name: str, **extra: Any) -> int:
+        try:
+            super().main(args=list(args) if args is not None else None, prog_name=prog_name,
+                         standalone_mode=False, **extra)
+            return EXIT_OK
+        except click.exceptions.Exit as exc:
+            return exc.exit_code
+        except click.exceptions.Abort:
+            click.echo(f"{prog_name}: interrupted", err=True)
+            return EXIT_INTERRUPTED
+        except click.UsageError as exc:
+            hint = f" (try '{exc.ctx.command_path} --help')" if exc.ctx is not None else ""
+            click.echo(f"{prog_name}: error: {_one_line(exc.format_message())}{hint}", err=True)
+            return EXIT_USAGE
+        except click.ClickException as exc:
+            click.echo(f"{prog_name}: error: {_one_line(exc.format_message())}", err=True)
+            return exc.exit_code
+        except BaseException as exc:  # noqa: BLE001 (mapped below, never a traceback)
+            code, line = classify(exc)
+            if code is None:
+                raise
+            click.echo(f"{prog_name}: {line}", err=True)
+            return code
+
+
+def classify(exc: BaseException) -> tuple[int | None, str]:
+    """Exit code and one-line message of an exception (None: not ours, re-raise)."""
+    if isinstance(exc, KeyboardInterrupt):
+        return EXIT_INTERRUPTED, "interrupted"
+    if isinstance(exc, CommandFailed):
+        return exc.code, _one_line(exc)
+    if isinstance(exc, ArgumentError):
+        return EXIT_USAGE, "error: " + _one_line(exc)
+    if isinstance(exc, (CommandError, AlarmError)):
+        return EXIT_COMMAND, _one_line(exc)
+    if isinstance(exc, (BusError, ControllerTimeoutError)):
+        return EXIT_BUS, _one_line(exc)
+    if isinstance(exc, VersionMismatchError):
+        return EXIT_VERSION, "version mismatch: " + _one_line(exc)
+    if isinstance(exc, (ProtocolError, LandscapeError)):
+        return EXIT_ERROR, _one_line(exc)
+    if isinstance(exc, OSError):
+        return EXIT_ERROR, f"error: {_one_line(exc)}"
+    return None, ""
+
+
+def _addr(value: str) -> int:
+    try:
+        v = int(value, 0)
+    except ValueError:
+        raise click.BadParameter(f"'{value}' is not a node address (e.g. 0x10)") from None
+    if not 0 <= v <= 0xFF:
+        raise click.BadParameter(f"{value} is outside 0x00..0xFF")
+    return v
+
+
+@click.group(cls=LandscapeGroup, context_settings={"help_option_names": ["-h", "--help"]})
+@click.option("--interface", "-i", default=None, help="python-can interface (default: python-can config / CAN_INTERFACE)")
+@click.option("--channel", "-c", default=None, help="channel, e.g. the pty of landscaped (default: config / CAN_CHANNEL)")
+@click.option("--bitrate", "-b", type=int, default=None, help="bit rate (slcan default 1000000)")
+@click.option("--device", "-d", default=f"{DEFAULT_DEVICE:#04x}", show_default=True, callback=lambda c, p, v: _addr(v),
+              help="node address of the controller")
+@click.option("--source-address", "-s", default=f"{DEFAULT_HOST:#04x}", show_default=True,
+              callback=lambda c, p, v: _addr(v), help="node address of this supervisor")
+@click.option("--timeout", "-t", type=float, default=None,
+              help="seconds to wait for each response try (default: the command's host_timeout_ms)")
+@click.option("--json", "json_out", is_flag=True, help="print one JSON object per command")
+@click.option("--verbose", "-v", count=True, help="log protocol activity on stderr (-vv: debug)")
+@click.pass_context
+def cli(ctx: click.Context, interface: str | None, channel: str | None, bitrate: int | None, device: int,
+        source_address: int, timeout: float | None, json_out: bool, verbose: int) -> None:
+    """Command a LandScape controller (landscaped) over CAN.
+
+    Every schema command is a subcommand (landscape COMMAND --help). Exit codes: 0 ok,
+    1 protocol error, 2 usage, 3 command error or alarm, 4 bus or time-out, 5 version mismatch.
+    """
+    if verbose:
+        logging.basicConfig(level=logging.DEBUG if verbose > 1 else logging.INFO, stream=sys.stderr,
+                            format="%(name)s: %(message)s")
+    st = CliState(BusSpec(interface, channel, bitrate), device, source_address, timeout, json_out)
+    ctx.obj = st
+    ctx.call_on_close(st.close)
+
+
+for _cmd in COMMANDS.values():
+    cli.add_command(make_command(_cmd))
+
+
+# ---------------------------------------------------------------- run, shell
+
+
+def run_line(ctx: click.Context, line: str) -> None:
+    """Run one command line (shlex) in the current session; errors propagate."""
+    args = shlex.split(line, comments=True)
+    if not args:
+        return
+    name, rest = args[0], args[1:]
+    group = ctx.find_root().command
+    assert isinstance(group, click.Group)
+    sub = group.get_command(ctx, name)
+    if sub is None or name in ("run", "shell", "monitor"):
+        raise click.UsageError(f"unknown command '{name}' (landscape --help lists them)")
+    with sub.make_context(name, rest, parent=ctx.find_root()) as sub_ctx:
+        sub.invoke(sub_ctx)
+
+
+def _script_failure(exc: BaseException) -> int | None:
+    if isinstance(exc, click.UsageError):
+        return EXIT_USAGE
+    code, _ = classify(exc)
+    if code in (EXIT_USAGE, EXIT_COMMAND):
+        return code
+    return None  # bus, time-out, version: the session is gone; stop
+
+
+@cli.command("run")
+@click.argument("file", type=click.File("r"))
+@click.option("--keep-going", "-k", is_flag=True, help="run the remaining lines after a failing one")
+@click.pass_context
+def run_cmd(ctx: click.Context, file: Any, keep_going: bool) -> None:
+    """Run the commands of FILE (one per line, '#' comments) in one session."""
+    st = _state(ctx)
+    first_code = 0
+    for lineno, raw in enumerate(file, 1):
+        line = raw.strip()
+        if not line or line.startswith("#"):
+            continue
+        if not st.json_out:
+            click.echo(f"> {line}")
+        try:
+            run_line(ctx, line)
+        except BaseException as exc:  # noqa: BLE001
+            code = _script_failure(exc)
+            if code is None:
+                raise
+            msg = exc.format_message() if isinstance(exc, click.UsageError) else str(exc)
+            click.echo(f"{file.name}:{lineno}: {_one_line(msg)}", err=True)
+            first_code = first_code or code
+            if not keep_going:
+                break
+    if first_code:
+        raise CommandFailed(f"{file.name}: stopped at a failing line" if not keep_going
+                            else f"{file.name}: some lines failed", first_code)
+
+
+def _history_path() -> Path:
+    base = Path(os.environ.get("XDG_STATE_HOME") or Path.home() / ".local" / "state") / "landscape"
+    base.mkdir(parents=True, exist_ok=True)
+    return base / "history"
+
+
+@cli.command("shell")
+@click.pass_context
+def shell_cmd(ctx: click.Context) -> None:
+    """Interactive prompt: one session for every line; Tab completes command names."""
+    from prompt_toolkit import PromptSession
+    from prompt_toolkit.completion import WordCompleter
+    from prompt_toolkit.history import FileHistory
+
+    group = ctx.find_root().command
+    assert isinstance(group, click.Group)
+    names = sorted(n for n in group.list_commands(ctx) if n not in ("run", "shell", "monitor"))
+    session: PromptSession[str] = PromptSession(history=FileHistory(str(_history_path())),
+                                                completer=WordCompleter(names + ["help", "quit"], sentence=True))
+    _state(ctx).session()
+    while True:
+        try:
+            line = session.prompt("landscape> ")
+        except EOFError:
+            return
+        except KeyboardInterrupt:
+            continue
+        line = line.strip()
+        if line in ("quit", "exit"):
+            return
+        if line in ("help", "?"):
+            click.echo("commands: " + " ".join(names))
+            continue
+        try:
+            run_line(ctx, line)
+        except BaseException as exc:  # noqa: BLE001
+            if isinstance(exc, click.UsageError):
+                click.echo(f"error: {_one_line(exc.format_message())}", err=True)
+                continue
+            code, msg = classify(exc)
+            if code is None:
+                raise
+            click.echo(msg, err=True)
+            if code not in (EXIT_USAGE, EXIT_COMMAND):
+                raise
+
+
+def main(argv: Sequence[str] | None = None) -> NoReturn:
+    """Console-script entry point."""
+    cli.main(args=argv, prog_name="landscape")
+    raise SystemExit(0)  # pragma: no cover (main exits)

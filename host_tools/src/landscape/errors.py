@@ -1,0 +1,158 @@
+"""Exception hierarchy of the landscape package.
+
+Every exception derives from LandscapeError and its message says what to do
+next. Negative return codes of the device map to one CommandError subclass per
+code (``error_for_code``), so callers can catch exactly what they handle.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+from ._generated import landscape_pb2 as pb
+
+class LandscapeError(Exception):
+    """Base of every error raised by this package."""
+
+
+class BusError(LandscapeError):
+    """The CAN bus or channel could not be opened or written."""
+
+
+class ControllerTimeoutError(LandscapeError):
+    """No controller answered in time (after the retransmissions)."""
+
+
+class VersionMismatchError(LandscapeError):
+    """Host tool and firmware speak different protocol versions or schemas."""
+
+
+class ProtocolError(LandscapeError):
+    """A message from the device could not be decoded or makes no sense."""
+
+
+class AlarmError(LandscapeError):
+    """A non-blocking command ended with an alarm instead of its completion event."""
+
+    def __init__(self, notice: Any, command: str = "") -> None:
+        self.notice = notice
+        self.command = command
+        data = " ".join(notice.data)
+        what = f"{command} ended with" if command else "device raised"
+        super().__init__(
+            f"{what} alarm {notice.event_id}" + (f" ({data})" if data else "")
+            + ": read get-motion-control-state for the fault, fix it, then activate again")
+
+
+class CommandError(LandscapeError):
+    """The device answered a negative return code."""
+
+    code: int = pb.CMD_ERR
+    hint: str = ""
+
+    def __init__(self, command: str, ret_code: int, ret_msg: str) -> None:
+        self.command = command
+        self.ret_code = ret_code
+        self.ret_msg = ret_msg
+        self.ret_name = ret_name(ret_code)
+        msg = f"{command}: {self.ret_name}"
+        if ret_msg:
+            msg += f": {ret_msg}"
+        if self.hint:
+            msg += f" ({self.hint})"
+        super().__init__(msg)
+
+
+class GenericCommandError(CommandError):
+    code = pb.CMD_ERR
+
+
+class ParamError(CommandError):
+    code = pb.CMD_PARAM_ERR
+    hint = "check the arguments against `landscape COMMAND --help`"
+
+
+class ParamOutOfRangeError(CommandError):
+    code = pb.CMD_PARAM_OUT_OF_RANGE_ERR
+    hint = "the message names the parameter and its range"
+
+
+class WrongStateError(CommandError):
+    code = pb.CMD_WRONG_STATE_ERR
+    hint = "read get-motion-control-state; lock and activate as the command needs"
+
+
+class NotOwnerError(CommandError):
+    code = pb.CMD_NOT_OWNER_ERR
+    hint = "only the supervisor that locked may do this: lock first, or wait for the owner to release"
+
+
+class BusyError(CommandError):
+    code = pb.CMD_BUSY_ERR
+    hint = "a previous command is still running; wait for it or stop-motion"
+
+
+class DeviceTimeoutError(CommandError):
+    code = pb.CMD_TIMEOUT_ERR
+    hint = "a wait on the device ran out"
+
+
+class NotConnectedError(CommandError):
+    code = pb.CMD_NOT_CONNECTED_ERR
+    hint = "the session was dropped (heartbeat lost?); connect again"
+
+
+class NotImplementedByDeviceError(CommandError):
+    code = pb.CMD_NOT_IMPLEMENTED_ERR
+    hint = "this firmware does not implement it yet; see docs/conformance.md"
+
+
+class UnsupportedError(CommandError):
+    code = pb.CMD_UNSUPPORTED_ERR
+    hint = "the controller has no such hardware"
+
+
+class VersionMismatchCommandError(CommandError):
+    code = pb.CMD_VERSION_MISMATCH_ERR
+    hint = "update the host tool or the firmware so both come from one schema"
+
+
+class FaultError(CommandError):
+    code = pb.CMD_FAULT_ERR
+    hint = "a fault is latched; read get-motion-control-state"
+
+
+class UnknownCommandError(CommandError):
+    code = pb.CMD_UNKNOWN_CMD_ERR
+    hint = "the firmware's schema lacks this command; update the firmware"
+
+
+class NoResourcesError(CommandError):
+    code = pb.CMD_NO_RESOURCES_ERR
+    hint = "a table on the device is full (supervisors, paths, points); free some"
+
+
+_BY_CODE: dict[int, type[CommandError]] = {
+    cls.code: cls for cls in (
+        GenericCommandError, ParamError, ParamOutOfRangeError, WrongStateError, NotOwnerError,
+        BusyError, DeviceTimeoutError, NotConnectedError, NotImplementedByDeviceError,
+        UnsupportedError, VersionMismatchCommandError, FaultError, UnknownCommandError,
+        NoResourcesError)
+}
+
+
+def ret_name(code: int) -> str:
+    """The RetCode name of a code, or 'RET_<n>' for a code this schema does not know."""
+    try:
+        return pb.RetCode.Name(code)
+    except ValueError:
+        return f"RET_{code}"
+
+
+def error_for_code(command: str, ret_code: int, ret_msg: str) -> CommandError:
+    """The CommandError subclass instance for a negative return code."""
+    cls = _BY_CODE.get(ret_code, CommandError)
+    return cls(command, ret_code, ret_msg)
+
+
+class ArgumentError(LandscapeError, ValueError):
+    """A command was given an argument the schema does not have or cannot hold."""

@@ -1,0 +1,288 @@
+"""The command registry, derived at import time from the schema's descriptors.
+
+Nothing here lists commands: every entry comes from a field of the `Request.cmd`
+oneof and the `(ls.cmd)` CommandSpec option of its message, exactly as
+protocol/gen_registry.py derives the firmware's dispatch table. A command is
+known by three names: the oneof field (``move_absolute``), the seed's name
+(``moveAbsolute``) and the CLI name (``move-absolute``).
+
+``build_request`` is the one pure builder: it turns keyword arguments into a
+``ls.Request`` without any I/O, so it can be tested and reused by the CLI, the
+Supervisor and scripts that only want the bytes.
+"""
+from __future__ import annotations
+
+import hashlib
+import re
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from google.protobuf import json_format
+from google.protobuf.descriptor import Descriptor, EnumDescriptor, FieldDescriptor
+from google.protobuf.message import Message
+
+from ._generated import landscape_pb2 as pb
+from .errors import ArgumentError
+
+#: First 32 bits of SHA-256 over the serialized schema, as protocol/gen_registry.py computes it.
+SCHEMA_HASH: int = int.from_bytes(hashlib.sha256(pb.DESCRIPTOR.serialized_pb).digest()[:4], "big")
+PROTOCOL_VERSION: int = pb.PROTOCOL_VERSION
+
+_WORD = re.compile(r"[A-Z]+(?![a-z])|[A-Z]?[a-z0-9]+")
+
+
+def kebab(seed_name: str) -> str:
+    """CLI name of a seed name: moveAbsolute -> move-absolute, setDigitalIO -> set-digital-io."""
+    return "-".join(w.lower() for w in _WORD.findall(seed_name))
+
+
+@dataclass(frozen=True)
+class Command:
+    """One command of the schema, as its descriptors declare it."""
+
+    field: str                 # Request.cmd oneof field, e.g. "move_absolute"
+    number: int                # field number = command id on the wire
+    name: str                  # the seed's name, e.g. "moveAbsolute"
+    cli_name: str              # "move-absolute"
+    states: tuple[int, ...]    # ls.State values in which it is valid
+    blocking: bool             # False: CMD_STARTED_OK, then one final notice
+    owner_only: bool
+    host_timeout_ms: int
+    seed_section: str
+    summary: str
+    request_type: Descriptor
+    response_type: Descriptor
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        return tuple(pb.State.Name(s) for s in self.states)
+
+    def fields(self) -> tuple[FieldDescriptor, ...]:
+        """The request message's fields in schema order."""
+        return tuple(self.request_type.fields)
+
+
+def _load() -> dict[str, Command]:
+    req = pb.Request.DESCRIPTOR
+    res = pb.Response.DESCRIPTOR
+    out: dict[str, Command] = {}
+    for f in req.oneofs_by_name["cmd"].fields:
+        spec = f.message_type.GetOptions().Extensions[pb.cmd]
+        if not spec.name:
+            raise ImportError(f"landscape: schema message {f.message_type.name} has no (ls.cmd) option")
+        rf = res.fields_by_number.get(f.number)
+        if rf is None or rf.name != f.name:
+            raise ImportError(f"landscape: Response.result lacks field {f.number} '{f.name}'")
+        out[f.name] = Command(
+            field=f.name, number=f.number, name=spec.name, cli_name=kebab(spec.name),
+            states=tuple(int(s) for s in spec.states), blocking=spec.blocking,
+            owner_only=spec.owner_only, host_timeout_ms=spec.host_timeout_ms,
+            seed_section=spec.seed_section, summary=spec.summary,
+            request_type=f.message_type, response_type=rf.message_type)
+    return out
+
+
+#: Every command of the schema, keyed by its Request oneof field, in schema order.
+COMMANDS: dict[str, Command] = _load()
+_BY_ANY: dict[str, Command] = {}
+for _c in COMMANDS.values():
+    for _k in (_c.field, _c.name, _c.cli_name):
+        _BY_ANY[_k.lower()] = _c
+
+
+def lookup(name: str) -> Command:
+    """The command called `name` (oneof field, seed name or CLI name, any case)."""
+    try:
+        return _BY_ANY[name.lower()]
+    except KeyError:
+        raise ArgumentError(f"unknown command '{name}': `landscape --help` lists the commands") from None
+
+
+def by_number(number: int) -> Command | None:
+    for c in COMMANDS.values():
+        if c.number == number:
+            return c
+    return None
+
+
+# ---------------------------------------------------------------- enums
+
+
+def _common_affixes(names: list[str]) -> tuple[list[str], list[str]]:
+    parts = [n.split("_") for n in names]
+    prefix: list[str] = []
+    for toks in zip(*parts):
+        if len(set(toks)) == 1:
+            prefix.append(toks[0])
+        else:
+            break
+    suffix: list[str] = []
+    for toks in zip(*(list(reversed(p)) for p in parts)):
+        if len(set(toks)) == 1:
+            suffix.insert(0, toks[0])
+        else:
+            break
+    if len(names) < 2 or any(len(p) <= len(prefix) + len(suffix) for p in parts):
+        return [], []
+    return prefix, suffix
+
+
+def enum_aliases(enum: EnumDescriptor) -> dict[str, int]:
+    """Accepted spellings (lower case) of each value: the full name and the name
+    without the tokens every value shares (JOINT_FRAME -> joint, CB_EVENT -> event)."""
+    names = [v.name for v in enum.values]
+    prefix, suffix = _common_affixes(names)
+    out: dict[str, int] = {}
+    for v in enum.values:
+        out[v.name.lower()] = v.number
+        toks = v.name.split("_")
+        short = "_".join(toks[len(prefix):len(toks) - len(suffix)])
+        if short:
+            out.setdefault(short.lower(), v.number)
+            out.setdefault(short.lower().replace("_", "-"), v.number)
+    return out
+
+
+def parse_enum(enum: EnumDescriptor, value: Any) -> int:
+    """An enum value from its number, its name (any case) or its short name."""
+    if isinstance(value, bool):
+        raise ArgumentError(f"{enum.name}: expected one of {enum_choices(enum)}, got {value!r}")
+    if isinstance(value, int):
+        if value not in enum.values_by_number:
+            raise ArgumentError(f"{enum.name}: {value} is not a value; choose one of {enum_choices(enum)}")
+        return value
+    if isinstance(value, str):
+        got = enum_aliases(enum).get(value.strip().lower())
+        if got is not None:
+            return got
+    raise ArgumentError(f"{enum.name}: '{value}' is not a value; choose one of {enum_choices(enum)}")
+
+
+def enum_choices(enum: EnumDescriptor) -> str:
+    return ", ".join(v.name for v in enum.values)
+
+
+# ---------------------------------------------------------------- builders
+
+
+def is_repeated(fd: FieldDescriptor) -> bool:
+    """True for a repeated field (protobuf 5+ spells it is_repeated, older ones label)."""
+    flag = getattr(fd, "is_repeated", None)
+    if flag is not None:
+        return bool(flag)
+    return bool(fd.label == FieldDescriptor.LABEL_REPEATED)
+
+
+def _set_field(msg: Message, fd: FieldDescriptor, value: Any, where: str) -> None:
+    repeated = is_repeated(fd)
+    if repeated:
+        if isinstance(value, (str, bytes)) or not isinstance(value, Iterable):
+            raise ArgumentError(f"{where}.{fd.name}: expected a sequence, got {value!r}")
+        items = list(value)
+        container = getattr(msg, fd.name)
+        del container[:]
+        for item in items:
+            if fd.type == FieldDescriptor.TYPE_MESSAGE:
+                sub = container.add()
+                _fill_message(sub, item, f"{where}.{fd.name}")
+            else:
+                container.append(_scalar(fd, item, where))
+        return
+    if fd.type == FieldDescriptor.TYPE_MESSAGE:
+        _fill_message(getattr(msg, fd.name), value, f"{where}.{fd.name}")
+        return
+    setattr(msg, fd.name, _scalar(fd, value, where))
+
+
+def _scalar(fd: FieldDescriptor, value: Any, where: str) -> Any:
+    t = fd.type
+    try:
+        if t == FieldDescriptor.TYPE_ENUM:
+            return parse_enum(fd.enum_type, value)
+        if t in (FieldDescriptor.TYPE_DOUBLE, FieldDescriptor.TYPE_FLOAT):
+            if isinstance(value, bool):
+                raise TypeError
+            return float(value)
+        if t == FieldDescriptor.TYPE_BOOL:
+            if not isinstance(value, bool):
+                raise TypeError
+            return value
+        if t == FieldDescriptor.TYPE_STRING:
+            if not isinstance(value, str):
+                raise TypeError
+            return value
+        if t == FieldDescriptor.TYPE_BYTES:
+            return bytes(value)
+        # integers: accept ints and integral strings ("0x0F")
+        if isinstance(value, bool):
+            raise TypeError
+        v = int(value, 0) if isinstance(value, str) else int(value)
+        if isinstance(value, float) and v != value:
+            raise TypeError
+        unsigned = t in (FieldDescriptor.TYPE_UINT32, FieldDescriptor.TYPE_UINT64,
+                         FieldDescriptor.TYPE_FIXED32, FieldDescriptor.TYPE_FIXED64)
+        bits = 64 if t in (FieldDescriptor.TYPE_INT64, FieldDescriptor.TYPE_UINT64,
+                           FieldDescriptor.TYPE_SINT64, FieldDescriptor.TYPE_FIXED64,
+                           FieldDescriptor.TYPE_SFIXED64) else 32
+        lo, hi = (0, 2**bits - 1) if unsigned else (-(2**(bits - 1)), 2**(bits - 1) - 1)
+        if not lo <= v <= hi:
+            raise ArgumentError(f"{where}.{fd.name}: {v} is outside {lo}..{hi}")
+        return v
+    except ArgumentError:
+        raise
+    except (TypeError, ValueError):
+        raise ArgumentError(f"{where}.{fd.name}: {value!r} is not a valid {_type_name(fd)}") from None
+
+
+def _type_name(fd: FieldDescriptor) -> str:
+    if fd.type == FieldDescriptor.TYPE_ENUM:
+        return f"{fd.enum_type.name} ({enum_choices(fd.enum_type)})"
+    return {FieldDescriptor.TYPE_DOUBLE: "number", FieldDescriptor.TYPE_FLOAT: "number",
+            FieldDescriptor.TYPE_STRING: "string", FieldDescriptor.TYPE_BOOL: "bool"}.get(fd.type, "integer")
+
+
+def _fill_message(msg: Message, value: Any, where: str) -> None:
+    if isinstance(value, Message):
+        if value.DESCRIPTOR is not msg.DESCRIPTOR:
+            raise ArgumentError(f"{where}: expected {msg.DESCRIPTOR.name}, got {value.DESCRIPTOR.name}")
+        msg.CopyFrom(value)
+        return
+    if not isinstance(value, Mapping):
+        raise ArgumentError(f"{where}: expected {msg.DESCRIPTOR.name} or a dict, got {value!r}")
+    set_fields(msg, value, where)
+
+
+def set_fields(msg: Message, values: Mapping[str, Any], where: str = "") -> Message:
+    """Set `values` on `msg` by field name, checking names, types, ranges and enums."""
+    where = where or msg.DESCRIPTOR.name
+    fields = msg.DESCRIPTOR.fields_by_name
+    for key, value in values.items():
+        fd = fields.get(key)
+        if fd is None:
+            raise ArgumentError(f"{where}: no field '{key}'; it has: {', '.join(fields) or 'no fields'}")
+        if value is None:
+            continue
+        _set_field(msg, fd, value, where)
+    return msg
+
+
+def build_request(command: str | Command, seq: int = 0, **fields: Any) -> pb.Request:
+    """A ``ls.Request`` for `command` with `fields` set; pure (no I/O).
+
+    Enum fields take numbers, names or short names; repeated fields take
+    sequences; message fields take messages or dicts. Unknown fields and bad
+    values raise ArgumentError naming the field.
+    """
+    cmd = command if isinstance(command, Command) else lookup(command)
+    req = pb.Request(seq=seq)
+    sub = getattr(req, cmd.field)
+    sub.SetInParent()
+    set_fields(sub, fields, cmd.name)
+    return req
+
+
+def message_to_dict(msg: Message) -> dict[str, Any]:
+    """Every field of `msg` (defaults included) with schema field names and enum names."""
+    return json_format.MessageToDict(msg, always_print_fields_with_no_presence=True,
+                                     preserving_proto_field_name=True)

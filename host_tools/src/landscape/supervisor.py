@@ -1,0 +1,799 @@
+"""The supervisor: one session with one device over ISO-TP.
+
+A Supervisor owns one ISO-TP stack (normal fixed 29-bit addressing) on a bus
+that it may share with other supervisors and controllers through one
+python-can Notifier. Opening it connects (version and schema check) and starts
+the heartbeat; closing it disconnects and stops every thread it started.
+
+Threads: the ISO-TP stack's own two; a receiver that decodes Downlinks and
+hands responses to the waiting request; a dispatcher that runs notice
+callbacks and RSVP handlers (so a handler may itself call ``request``); the
+heartbeat sender. Telemetry callbacks run in the Notifier's thread.
+"""
+from __future__ import annotations
+
+import collections
+import logging
+import queue
+import threading
+import time
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any, TypedDict, Unpack
+
+import can
+import isotp
+from google.protobuf import message_factory
+from google.protobuf.message import DecodeError, Message
+
+from . import telemetry as tm
+from ._generated import landscape_pb2 as pb
+from .bus import DEFAULT_DEVICE, DEFAULT_HOST, ISOTP_PARAMS, MAX_MESSAGE_BYTES, BusSpec, open_bus, physical_address
+from .errors import (AlarmError, ArgumentError, BusError, ControllerTimeoutError, LandscapeError,
+                     ProtocolError, VersionMismatchError, error_for_code, ret_name)
+from .registry import PROTOCOL_VERSION, SCHEMA_HASH, Command, build_request, lookup, message_to_dict
+
+log = logging.getLogger("landscape")
+
+Enum = int | str
+"""An enum argument: its number, its name (JOINT_FRAME) or its short name (joint)."""
+
+RSVP_KINDS = (pb.EVENT_RSVP, pb.ALARM_RSVP)
+ALARM_KINDS = (pb.ALARM, pb.ALARM_RSVP)
+
+
+@dataclass
+class RetVal:
+    """What a command returned (the seed's RetVal plus the result fields)."""
+
+    command: Command
+    seq: int
+    ret_code: int
+    ret_msg: str
+    message: Message | None          # the result message, e.g. ls.GetRobotPositionRes
+    result: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def name(self) -> str:
+        return self.command.name
+
+    def __repr__(self) -> str:
+        msg = f", ret_msg={self.ret_msg!r}" if self.ret_msg else ""
+        return f"RetVal({self.name} seq={self.seq} {self.ret_name}{msg} result={self.result!r})"
+
+    @property
+    def ret_name(self) -> str:
+        return ret_name(self.ret_code)
+
+    @property
+    def ok(self) -> bool:
+        return self.ret_code >= 0
+
+    @property
+    def started(self) -> bool:
+        """True when a non-blocking command started: wait_complete() waits for its end."""
+        return self.ret_code == pb.CMD_STARTED_OK
+
+
+class CallOptions(TypedDict, total=False):
+    check: bool              # raise CommandError for a negative code (default True)
+    timeout_s: float | None  # per-try response time-out (default: the command's host_timeout_ms)
+
+
+RsvpAnswer = int | tuple[int, Sequence[str]] | pb.RsvpReply | None
+RsvpHandler = Callable[[pb.Notice], RsvpAnswer]
+NoticeCallback = Callable[[pb.Notice], None]
+TelemetryCallback = Callable[[tm.Broadcast], None]
+
+
+def notice_data(notice: pb.Notice) -> dict[str, str]:
+    """The notice's "key=value" strings as a dict (a bare word maps to "")."""
+    out: dict[str, str] = {}
+    for item in notice.data:
+        key, _, value = item.partition("=")
+        out[key] = value
+    return out
+
+
+def mismatch_message(host_version: int, host_hash: int, device_version: int, device_hash: int) -> str:
+    """What to update when host and device disagree (pure, for tests and docs)."""
+    if host_version < device_version:
+        return (f"the device speaks protocol version {device_version}, this host tool {host_version}: "
+                f"update the host tool (install the landscape package built from the firmware's tree)")
+    if host_version > device_version:
+        return (f"the device speaks protocol version {device_version}, this host tool {host_version}: "
+                f"update the firmware (flash landscaped built from this tool's tree)")
+    return (f"host and firmware were built from different schemas (host {host_hash:08X}, device "
+            f"{device_hash:08X}): install the host tool built from the firmware's tree")
+
+
+class Supervisor:
+    """One session with the device at `device`, speaking from node `source_address`.
+
+    Use as a context manager::
+
+        with Supervisor(bus) as sup:
+            sup.lock(); sup.activate()
+            sup.wait_complete(sup.move_absolute("p1", [0, 0, 0, 0, 0, 0]), timeout_s=10)
+
+    `notifier`: share one can.Notifier between every stack and listener on the
+    bus; when None the supervisor creates one and stops it on close.
+    """
+
+    def __init__(self, bus: can.BusABC, *, device: int = DEFAULT_DEVICE,
+                 source_address: int = DEFAULT_HOST, notifier: can.Notifier | None = None,
+                 client_name: str = "landscape", heartbeat_period_ms: int = 200, retries: int = 2,
+                 timeout_s: float | None = None, channel_name: str | None = None,
+                 owns_bus: bool = False) -> None:
+        if retries < 0:
+            raise ArgumentError("retries must be >= 0")
+        if heartbeat_period_ms <= 0:
+            raise ArgumentError("heartbeat_period_ms must be > 0")
+        self.bus = bus
+        self.device = device
+        self.source_address = source_address
+        self.client_name = client_name
+        self.heartbeat_period_ms = heartbeat_period_ms
+        self.retries = retries
+        self.timeout_s = timeout_s
+        self.channel_name = channel_name or str(getattr(bus, "channel_info", "") or "the bus")
+        self._address = physical_address(device, source_address)
+        self._notifier = notifier
+        self._owns_notifier = notifier is None
+        self._owns_bus = owns_bus
+
+        self._cv = threading.Condition()
+        self._req_lock = threading.Lock()
+        self._seq = 0
+        self._pending_seq: int | None = None
+        self._pending_resp: pb.Response | None = None
+        self._finals: collections.OrderedDict[int, pb.Notice] = collections.OrderedDict()
+        self._hist: collections.deque[pb.Notice] = collections.deque(maxlen=1024)
+        self._hist_base = 0          # index of _hist[0] among every notice received
+        self._read_cursor = 0        # next index notices() yields
+        self._mark = 0               # index when the last request was sent
+
+        self._notice_cbs: list[NoticeCallback] = []
+        self._rsvp_handlers: dict[str | None, RsvpHandler] = {}
+        self._telemetry_cbs: list[TelemetryCallback] = []
+        self._telemetry: dict[str, tm.Broadcast] = {}
+        self._tm_lock = threading.Lock()
+        self.device_last_seen: float | None = None
+        self.protocol_errors = 0
+
+        self._stack: isotp.NotifierBasedCanStack | None = None
+        self._threads: list[threading.Thread] = []
+        self._stop = threading.Event()
+        self._hb_stop = threading.Event()
+        self._hb_thread: threading.Thread | None = None
+        self._dispatch_q: queue.Queue[pb.Notice | None] = queue.Queue()
+        self._running = False
+        self.connected = False
+        self.device_info: pb.ConnectRes | None = None
+        self.connect_result: ConnectResult | None = None
+
+    # ------------------------------------------------------------ construction helpers
+
+    @classmethod
+    def open_bus(cls, spec: BusSpec | None = None, **kwargs: Any) -> Supervisor:
+        """A Supervisor over a bus opened from `spec` (config/env defaults apply); it
+        shuts the bus down on close. Not yet connected: use it as a context manager."""
+        spec = spec or BusSpec()
+        bus = open_bus(spec)
+        kwargs.setdefault("channel_name", spec.describe())
+        return cls(bus, owns_bus=True, **kwargs)
+
+    def __enter__(self) -> Supervisor:
+        self.open()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # ------------------------------------------------------------ life cycle
+
+    def open(self) -> ConnectResult:
+        """Start the transport, connect and start the heartbeat. Raises VersionMismatchError,
+        ControllerTimeoutError, BusError or CommandError; nothing is left running on failure."""
+        if self._running:
+            raise LandscapeError("this Supervisor is already open")
+        try:
+            self._start_transport()
+            return self.connect()
+        except BaseException:
+            self.close()
+            raise
+
+    def _start_transport(self) -> None:
+        if self._notifier is None:
+            self._notifier = can.Notifier(self.bus, [], timeout=0.05)
+        self._stop.clear()
+        self._stack = isotp.NotifierBasedCanStack(self.bus, self._notifier, address=self._address,
+                                                  params=dict(ISOTP_PARAMS),
+                                                  error_handler=self._isotp_error)
+        self._stack.start()
+        self._notifier.add_listener(self._on_frame)
+        self._running = True
+        for fn, name in ((self._rx_loop, "rx"), (self._dispatch_loop, "dispatch")):
+            t = threading.Thread(target=fn, name=f"landscape-{name}-{self.source_address:02x}", daemon=True)
+            t.start()
+            self._threads.append(t)
+
+    def connect(self) -> ConnectResult:
+        """Open a session (the handshake). Called by open(); call again after a dropped session."""
+        with self._req_lock:
+            self._seq = 0
+        with self._cv:
+            self._finals.clear()
+        self._start_heartbeat()
+        rv = self.request("connect", check=False, protocol_version=PROTOCOL_VERSION,
+                          schema_hash=SCHEMA_HASH, client_name=self.client_name,
+                          heartbeat_period_ms=self.heartbeat_period_ms)
+        res = rv.message if isinstance(rv.message, pb.ConnectRes) else None
+        if rv.ret_code == pb.CMD_VERSION_MISMATCH_ERR:
+            if res is not None and (res.protocol_version or res.schema_hash):
+                raise VersionMismatchError(mismatch_message(PROTOCOL_VERSION, SCHEMA_HASH,
+                                                            res.protocol_version, res.schema_hash))
+            raise VersionMismatchError(
+                f"the device refused the connection: {rv.ret_msg or 'protocol or schema differ'}; "
+                f"this host tool speaks protocol {PROTOCOL_VERSION}, schema {SCHEMA_HASH:08X}: update "
+                f"whichever side is older so both are built from one tree")
+        if rv.ret_code < 0:
+            raise error_for_code(rv.name, rv.ret_code, rv.ret_msg)
+        if res is None:
+            raise ProtocolError("connect answered without a ConnectRes: the firmware is broken or not landscaped")
+        if res.protocol_version != PROTOCOL_VERSION or res.schema_hash != SCHEMA_HASH:
+            self._quiet_disconnect()
+            raise VersionMismatchError(mismatch_message(PROTOCOL_VERSION, SCHEMA_HASH,
+                                                        res.protocol_version, res.schema_hash))
+        self.device_info = res
+        self.connected = True
+        self.connect_result = ConnectResult(rv, res)
+        return self.connect_result
+
+    def disconnect(self, **opts: Unpack[CallOptions]) -> RetVal:
+        """End the session at once (an owner's disconnect runs the device's disconnect handler)."""
+        rv = self.request("disconnect", **opts)
+        self.connected = False
+        self._stop_heartbeat()
+        return rv
+
+    def _quiet_disconnect(self) -> None:
+        try:
+            self.request("disconnect", check=False, timeout_s=0.3)
+        except LandscapeError:
+            pass
+        self.connected = False
+
+    def close(self) -> None:
+        """Disconnect (best effort) and stop everything this Supervisor started. Idempotent."""
+        if self.connected and self._running:
+            try:
+                self.request("disconnect", check=False, timeout_s=min(self.timeout_s or 0.5, 0.5))
+            except LandscapeError:
+                pass
+            self.connected = False
+        self._stop_heartbeat()
+        self._running = False
+        self._stop.set()
+        self._dispatch_q.put(None)
+        if self._notifier is not None:
+            try:
+                self._notifier.remove_listener(self._on_frame)
+            except ValueError:
+                pass
+        if self._stack is not None:
+            self._stack.stop()
+            self._stack = None
+        for t in self._threads:
+            if t is not threading.current_thread():
+                t.join(2.0)
+        self._threads.clear()
+        with self._cv:
+            self._cv.notify_all()
+        if self._owns_notifier and self._notifier is not None:
+            self._notifier.stop()
+            self._notifier = None
+        if self._owns_bus:
+            self.bus.shutdown()
+            self._owns_bus = False
+
+    # ------------------------------------------------------------ heartbeat
+
+    def _start_heartbeat(self) -> None:
+        if self._hb_thread is not None:
+            return
+        self._hb_stop.clear()
+        self._hb_thread = threading.Thread(target=self._hb_loop, daemon=True,
+                                           name=f"landscape-hb-{self.source_address:02x}")
+        self._hb_thread.start()
+
+    def _stop_heartbeat(self) -> None:
+        self._hb_stop.set()
+        if self._hb_thread is not None and self._hb_thread is not threading.current_thread():
+            self._hb_thread.join(2.0)
+        self._hb_thread = None
+
+    def _hb_loop(self) -> None:
+        period = self.heartbeat_period_ms / 1000.0
+        counter = 0
+        next_t = time.monotonic()
+        reported = False
+        while not self._hb_stop.is_set():
+            try:
+                self.bus.send(tm.encode("HEARTBEAT", self.source_address, hb_role=1, hb_counter=counter))
+                reported = False
+            except Exception as exc:  # keep beating: a transient bus error must not end the session
+                if not reported:
+                    log.warning("heartbeat: cannot send on %s: %s", self.channel_name, exc)
+                    reported = True
+            counter = (counter + 1) & 0xFF
+            next_t += period
+            delay = next_t - time.monotonic()
+            if delay < 0:
+                next_t = time.monotonic()
+                delay = 0
+            self._hb_stop.wait(delay)
+
+    # ------------------------------------------------------------ requests
+
+    @staticmethod
+    def build_request(command: str | Command, seq: int = 0, **fields: Any) -> pb.Request:
+        """The ls.Request for `command` (pure; see registry.build_request)."""
+        return build_request(command, seq, **fields)
+
+    def request(self, command: str | Command, /, *, check: bool = True, timeout_s: float | None = None,
+                **fields: Any) -> RetVal:
+        """Send one command and return its RetVal.
+
+        `command`: oneof field, seed name or CLI name. On a response time-out the
+        request is retransmitted with the same seq (`retries` times) before
+        ControllerTimeoutError. A negative code raises its CommandError subclass
+        unless check=False.
+        """
+        cmd = command if isinstance(command, Command) else lookup(command)
+        req = build_request(cmd, 0, **fields)
+        if not self._running:
+            raise LandscapeError("the session is not open: use `with Supervisor(bus) as sup:`")
+        if cmd.field != "connect" and cmd.field != "disconnect" and not self.connected:
+            raise LandscapeError("not connected: call connect() first (or use the Supervisor as a context manager)")
+        with self._req_lock:
+            self._seq = self._seq + 1 if self._seq < 0xFFFFFFFF else 1
+            req.seq = self._seq
+            resp = self._transact(cmd, req, timeout_s)
+        rv = self._retval(cmd, resp)
+        if check and rv.ret_code < 0:
+            raise error_for_code(cmd.name, rv.ret_code, rv.ret_msg)
+        return rv
+
+    def _transact(self, cmd: Command, req: pb.Request, timeout_s: float | None) -> pb.Response:
+        data = pb.Uplink(request=req).SerializeToString()
+        if len(data) > MAX_MESSAGE_BYTES:
+            raise ArgumentError(f"{cmd.name}: the request is {len(data)} bytes, more than one ISO-TP "
+                                f"message holds ({MAX_MESSAGE_BYTES}); split it (e.g. several path-load calls)")
+        per_try = timeout_s if timeout_s is not None else (
+            self.timeout_s if self.timeout_s is not None else cmd.host_timeout_ms / 1000.0)
+        tries = 1 + self.retries
+        with self._cv:
+            self._pending_seq = req.seq
+            self._pending_resp = None
+            self._mark = self._hist_base + len(self._hist)
+        try:
+            for attempt in range(tries):
+                if attempt:
+                    log.info("%s: no answer to seq %d, retransmitting", cmd.name, req.seq)
+                self._send(data)
+                deadline = time.monotonic() + per_try
+                with self._cv:
+                    while self._pending_resp is None and self._running:
+                        left = deadline - time.monotonic()
+                        if left <= 0:
+                            break
+                        self._cv.wait(left)
+                    if self._pending_resp is not None:
+                        return self._pending_resp
+                    if not self._running:
+                        raise LandscapeError("the session was closed while waiting for an answer")
+        finally:
+            with self._cv:
+                self._pending_seq = None
+                self._pending_resp = None
+        raise ControllerTimeoutError(
+            f"no answer from the controller at address {self.device:#04x} on {self.channel_name} to "
+            f"{cmd.name} (seq {req.seq}, {tries} tries of {per_try:g} s): is landscaped running on that "
+            f"channel with node address {self.device:#04x}?")
+
+    def _send(self, data: bytes) -> None:
+        stack = self._stack
+        if stack is None:
+            raise LandscapeError("the session is not open")
+        try:
+            stack.send(data)
+        except (RuntimeError, ValueError) as exc:
+            raise BusError(f"cannot send on {self.channel_name}: {exc}") from None
+
+    def _retval(self, cmd: Command, resp: pb.Response) -> RetVal:
+        which = resp.WhichOneof("result")
+        msg: Message | None = None
+        if which is not None:
+            if which != cmd.field:
+                raise ProtocolError(f"{cmd.name}: the device answered a '{which}' result; host tool and "
+                                    f"firmware disagree on the schema")
+            msg = getattr(resp, which)
+        elif resp.ret_code >= 0:
+            msg = message_factory.GetMessageClass(cmd.response_type)()
+        result = message_to_dict(msg) if msg is not None else {}
+        return RetVal(cmd, resp.seq, resp.ret_code, resp.ret_msg, msg, result)
+
+    def send_rsvp_reply(self, rsvp_id: int, ret_code: int = pb.CMD_EXEC_OK, data: Sequence[str] = ()) -> None:
+        """Answer an RSVP notice (no response comes back)."""
+        reply = pb.RsvpReply(rsvp_id=rsvp_id, ret_code=ret_code, data=list(data))
+        self._send(pb.Uplink(rsvp_reply=reply).SerializeToString())
+
+    # ------------------------------------------------------------ receiving
+
+    def _isotp_error(self, error: Exception) -> None:
+        log.debug("isotp %02x: %s", self.source_address, error)
+
+    def _rx_loop(self) -> None:
+        while not self._stop.is_set():
+            stack = self._stack
+            if stack is None:
+                return
+            data = stack.recv(block=True, timeout=0.05)
+            if data is None:
+                continue
+            try:
+                self._on_downlink(bytes(data))
+            except Exception:  # a bad message must never kill the receiver
+                log.exception("landscape: dropping a downlink message")
+
+    def _on_downlink(self, data: bytes) -> None:
+        dl = pb.Downlink()
+        try:
+            dl.ParseFromString(data)
+        except DecodeError:
+            self.protocol_errors += 1
+            log.warning("undecodable message from %#04x (%d bytes): is the firmware from this schema?",
+                        self.device, len(data))
+            return
+        which = dl.WhichOneof("msg")
+        if which == "response":
+            with self._cv:
+                if self._pending_seq is not None and dl.response.seq == self._pending_seq \
+                        and self._pending_resp is None:
+                    self._pending_resp = dl.response
+                    self._cv.notify_all()
+            return
+        if which == "notice":
+            n = dl.notice
+            with self._cv:
+                if len(self._hist) == self._hist.maxlen:
+                    self._hist_base += 1  # the deque drops its oldest notice
+                self._hist.append(n)
+                if n.final and n.ref_seq:
+                    self._finals[n.ref_seq] = n
+                    while len(self._finals) > 256:
+                        self._finals.popitem(last=False)
+                self._cv.notify_all()
+            self._dispatch_q.put(n)
+            return
+        self.protocol_errors += 1
+
+    @property
+    def _hist_end(self) -> int:
+        return self._hist_base + len(self._hist)
+
+    def _dispatch_loop(self) -> None:
+        while True:
+            n = self._dispatch_q.get()
+            if n is None:
+                return
+            for cb in list(self._notice_cbs):
+                try:
+                    cb(n)
+                except Exception:
+                    log.exception("notice callback %r failed", cb)
+            if n.kind in RSVP_KINDS:
+                self._answer_rsvp(n)
+
+    def _answer_rsvp(self, n: pb.Notice) -> None:
+        handler = self._rsvp_handlers.get(n.event_id) or self._rsvp_handlers.get(None)
+        if handler is None:
+            return  # the device takes rsvp_default after rsvp_timeout_ms
+        try:
+            ans = handler(n)
+            if ans is None:
+                code, data = pb.CMD_EXEC_OK, []
+            elif isinstance(ans, pb.RsvpReply):
+                code, data = ans.ret_code, list(ans.data)
+            elif isinstance(ans, tuple):
+                code, data = int(ans[0]), list(ans[1])
+            else:
+                code, data = int(ans), []
+        except Exception as exc:
+            log.exception("RSVP handler for %s failed; answering CMD_ERR", n.event_id)
+            code, data = pb.CMD_ERR, [f"error={exc}"]
+        try:
+            self.send_rsvp_reply(n.rsvp_id, code, data)
+        except LandscapeError as exc:
+            log.warning("cannot answer RSVP %d: %s", n.rsvp_id, exc)
+
+    # ------------------------------------------------------------ notices
+
+    def on_notice(self, fn: NoticeCallback) -> NoticeCallback:
+        """Call fn(notice) for every event and alarm (in the dispatcher thread). Usable as a decorator."""
+        self._notice_cbs.append(fn)
+        return fn
+
+    def remove_notice_callback(self, fn: NoticeCallback) -> None:
+        self._notice_cbs.remove(fn)
+
+    def on_rsvp(self, event_id: str | None, handler: RsvpHandler) -> RsvpHandler:
+        """Answer RSVP notices of `event_id` (None: every RSVP without its own handler).
+
+        handler(notice) returns None (CMD_EXEC_OK), a ret_code, (ret_code, data) or an
+        RsvpReply; an exception answers CMD_ERR. Without a handler the device takes
+        the notice's rsvp_default after rsvp_timeout_ms.
+        """
+        self._rsvp_handlers[event_id] = handler
+        return handler
+
+    def notices(self, timeout_s: float | None = None) -> Iterator[pb.Notice]:
+        """Yield every notice not yet yielded by any notices() iterator, in arrival order,
+        waiting for new ones; stops when `timeout_s` (total) has passed (None: never)."""
+        deadline = None if timeout_s is None else time.monotonic() + timeout_s
+        while True:
+            with self._cv:
+                while self._read_cursor >= self._hist_end and self._running:
+                    left = None if deadline is None else deadline - time.monotonic()
+                    if left is not None and left <= 0:
+                        return
+                    self._cv.wait(left if left is not None else 0.5)
+                if self._read_cursor >= self._hist_end:
+                    return
+                self._read_cursor = max(self._read_cursor, self._hist_base)
+                n = self._hist[self._read_cursor - self._hist_base]
+                self._read_cursor += 1
+            yield n
+
+    def wait_complete(self, retval: RetVal, timeout_s: float | None = None) -> pb.Notice:
+        """Wait for the notice that ends the non-blocking command `retval` and return it.
+        Raises AlarmError when it is an alarm, ControllerTimeoutError after `timeout_s`."""
+        if not retval.started:
+            raise LandscapeError(f"{retval.name} answered {retval.ret_name}: only a command that answered "
+                                 f"CMD_STARTED_OK has a completion to wait for")
+        deadline = None if timeout_s is None else time.monotonic() + timeout_s
+        with self._cv:
+            while retval.seq not in self._finals:
+                if not self._running:
+                    raise LandscapeError("the session was closed while waiting for a completion")
+                left = None if deadline is None else deadline - time.monotonic()
+                if left is not None and left <= 0:
+                    raise ControllerTimeoutError(
+                        f"{retval.name} (seq {retval.seq}) did not complete within {timeout_s:g} s: "
+                        f"check get-motion-control-state, or stop-motion")
+                self._cv.wait(left if left is not None else 0.5)
+            n = self._finals[retval.seq]
+        if n.kind in ALARM_KINDS:
+            raise AlarmError(n, retval.name)
+        return n
+
+    def wait_for_tag(self, tag_name: str, timeout_s: float | None = None) -> pb.Notice:
+        """Wait for the tag event of `tag_name` (event_id "tag", data "tag=<name>"), counting
+        tag events received since the last request was sent."""
+        deadline = None if timeout_s is None else time.monotonic() + timeout_s
+        with self._cv:
+            pos = self._mark
+            while True:
+                pos = max(pos, self._hist_base)
+                while pos < self._hist_end:
+                    n = self._hist[pos - self._hist_base]
+                    pos += 1
+                    if n.event_id == "tag":
+                        d = notice_data(n)
+                        if d.get("tag") == tag_name or d.get("tag_name") == tag_name:
+                            return n
+                if not self._running:
+                    raise LandscapeError("the session was closed while waiting for a tag")
+                left = None if deadline is None else deadline - time.monotonic()
+                if left is not None and left <= 0:
+                    raise ControllerTimeoutError(f"tag '{tag_name}' not reached within {timeout_s:g} s")
+                self._cv.wait(left if left is not None else 0.5)
+
+    # ------------------------------------------------------------ telemetry
+
+    def _on_frame(self, frame: can.Message) -> None:
+        b = tm.decode(frame)
+        if b is None or b.sender != self.device:
+            return
+        if b.name == "HEARTBEAT" and b.signals.get("hb_role", 0) != 0:
+            return
+        with self._tm_lock:
+            self._telemetry[b.name] = b
+            if b.name == "HEARTBEAT":
+                self.device_last_seen = b.timestamp
+        for cb in list(self._telemetry_cbs):
+            try:
+                cb(b)
+            except Exception:
+                log.exception("telemetry callback %r failed", cb)
+
+    def telemetry(self) -> dict[str, dict[str, Any]]:
+        """Latest decoded broadcast of the device, by DBC message name."""
+        with self._tm_lock:
+            return {k: dict(v.signals) for k, v in self._telemetry.items()}
+
+    def on_telemetry(self, fn: TelemetryCallback) -> TelemetryCallback:
+        """Call fn(broadcast) for every broadcast of the device (in the Notifier's thread: keep it short)."""
+        self._telemetry_cbs.append(fn)
+        return fn
+
+    # ------------------------------------------------------------ typed commands (one per schema command)
+    # Argument names are the schema's field names, so units are in them (speed_pct,
+    # max_timeout_s, polling_timeout_ms); tests/host checks each method against the registry.
+
+    def lock(self, **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("lock", **opts)
+
+    def release(self, **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("release", **opts)
+
+    def activate(self, **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("activate", **opts)
+
+    def deactivate(self, **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("deactivate", **opts)
+
+    def set_speed(self, speed: float, *, attribute: Enum = pb.PERCENT_SPEED, **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("set_speed", speed=speed, attribute=attribute, **opts)
+
+    def set_acceleration(self, accel: float, *, attribute: Enum = pb.PERCENT_ACCEL,
+                         **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("set_acceleration", accel=accel, attribute=attribute, **opts)
+
+    def set_tool_offset(self, offset: Sequence[float], **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("set_tool_offset", offset=offset, **opts)
+
+    def set_world_cartesian_frame(self, frame: Sequence[float], **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("set_world_cartesian_frame", frame=frame, **opts)
+
+    def set_units(self, *, linear: Enum = pb.METERS, angular: Enum = pb.RADIANS,
+                  **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("set_units", linear=linear, angular=angular, **opts)
+
+    def get_units(self, **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("get_units", **opts)
+
+    def get_velocities(self, **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("get_velocities", **opts)
+
+    def get_accelerations(self, **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("get_accelerations", **opts)
+
+    def get_max_velocities(self, **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("get_max_velocities", **opts)
+
+    def get_max_accelerations(self, **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("get_max_accelerations", **opts)
+
+    def get_tool_offsets(self, **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("get_tool_offsets", **opts)
+
+    def get_robot_position(self, **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("get_robot_position", **opts)
+
+    def get_motion_control_state(self, **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("get_motion_control_state", **opts)
+
+    def get_tag_id(self, **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("get_tag_id", **opts)
+
+    def move_relative(self, point_name: str, values: Sequence[float], *, frame: Enum = pb.JOINT_FRAME,
+                      speed_pct: float = 0.0, **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("move_relative", point_name=point_name, values=values, frame=frame,
+                            speed_pct=speed_pct, **opts)
+
+    def move_absolute(self, point_name: str, values: Sequence[float], *, frame: Enum = pb.JOINT_FRAME,
+                      speed_pct: float = 0.0, **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("move_absolute", point_name=point_name, values=values, frame=frame,
+                            speed_pct=speed_pct, **opts)
+
+    def move_arc(self, point_name: str, arc_value: Sequence[float], goal_value: Sequence[float], *,
+                 frame: Enum = pb.BASE_CARTESIAN_FRAME, offset_type: Enum = pb.ABSOLUTE_DATA,
+                 **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("move_arc", point_name=point_name, arc_value=arc_value, goal_value=goal_value,
+                            frame=frame, offset_type=offset_type, **opts)
+
+    def path_load(self, path_name: str, tags: Sequence[pb.TagPoint | Mapping[str, Any]], *,
+                  frame: Enum = pb.JOINT_FRAME, motion_type: Enum = pb.JOINT_MOTION,
+                  offset_type: Enum = pb.ABSOLUTE_DATA, number_of_points: int | None = None,
+                  **opts: Unpack[CallOptions]) -> RetVal:
+        """Append `tags` to path `path_name`; number_of_points defaults to len(tags)."""
+        n = len(tags) if number_of_points is None else number_of_points
+        return self.request("path_load", path_name=path_name, tags=tags, frame=frame, motion_type=motion_type,
+                            offset_type=offset_type, number_of_points=n, **opts)
+
+    def path_clear_path(self, path_name: str, **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("path_clear_path", path_name=path_name, **opts)
+
+    def path_move(self, path_name: str, number_of_cycles: int, **opts: Unpack[CallOptions]) -> RetVal:
+        """Run a loaded path `number_of_cycles` times (0: dry run without auxiliary commands)."""
+        return self.request("path_move", path_name=path_name, number_of_cycles=number_of_cycles, **opts)
+
+    def stop_motion(self, **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("stop_motion", **opts)
+
+    def resume_motion(self, **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("resume_motion", **opts)
+
+    def abort_motion(self, **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("abort_motion", **opts)
+
+    def get_sensor_reading(self, sensor_type: str, **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("get_sensor_reading", sensor_type=sensor_type, **opts)
+
+    def move_react(self, sensor_type: str, motion_offsets: Sequence[float], *, motion_speed_pct: float = 0.0,
+                   compliance_speed_pct: float = 0.0, thresholds: Sequence[float] = (),
+                   gains: Sequence[float] = (), envelope_min: Sequence[float] = (),
+                   envelope_max: Sequence[float] = (), **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("move_react", sensor_type=sensor_type, motion_offsets=motion_offsets,
+                            motion_speed_pct=motion_speed_pct, compliance_speed_pct=compliance_speed_pct,
+                            thresholds=thresholds, gains=gains, envelope_min=envelope_min,
+                            envelope_max=envelope_max, **opts)
+
+    def comply(self, sensor_type: str, thresholds: Sequence[float], *, max_timeout_s: float = 0.0,
+               panic_stop_code: int = 0, max_travel: Sequence[float] = (),
+               proportional_gains: Sequence[float] = (), differential_gains: Sequence[float] = (),
+               speed_pct: float = 0.0, compliance_speed_pct: float = 0.0, envelope_min: Sequence[float] = (),
+               envelope_max: Sequence[float] = (), **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("comply", sensor_type=sensor_type, thresholds=thresholds, max_timeout_s=max_timeout_s,
+                            panic_stop_code=panic_stop_code, max_travel=max_travel,
+                            proportional_gains=proportional_gains, differential_gains=differential_gains,
+                            speed_pct=speed_pct, compliance_speed_pct=compliance_speed_pct,
+                            envelope_min=envelope_min, envelope_max=envelope_max, **opts)
+
+    def manual_control(self, type: str, **opts: Unpack[CallOptions]) -> RetVal:  # noqa: A002 (schema name)
+        return self.request("manual_control", type=type, **opts)
+
+    def get_end_effector_state(self, **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("get_end_effector_state", **opts)
+
+    def get_tool(self, tool_id: str, **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("get_tool", tool_id=tool_id, **opts)
+
+    def put_tool(self, tool_id: str, **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("put_tool", tool_id=tool_id, **opts)
+
+    def activate_tool(self, tool_id: str, bit_field: int, **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("activate_tool", tool_id=tool_id, bit_field=bit_field, **opts)
+
+    def deactivate_tool(self, tool_id: str, bit_field: int, **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("deactivate_tool", tool_id=tool_id, bit_field=bit_field, **opts)
+
+    def set_digital_io(self, type: str, unit_id: int, *, bits_on: int = 0, bits_off: int = 0,  # noqa: A002
+                       description: str = "", **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("set_digital_io", type=type, unit_id=unit_id, bits_on=bits_on, bits_off=bits_off,
+                            description=description, **opts)
+
+    def get_digital_io(self, type: str, unit_id: int, *, description: str = "",  # noqa: A002
+                       **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("get_digital_io", type=type, unit_id=unit_id, description=description, **opts)
+
+    def signal_digital_io(self, type: str, unit_id: int, bit_string: int, *,  # noqa: A002
+                          polling_timeout_ms: int = 0, polling_cycle_time_ms: int = 0,
+                          callback_type: Enum = pb.CB_EVENT, **opts: Unpack[CallOptions]) -> RetVal:
+        return self.request("signal_digital_io", type=type, unit_id=unit_id, bit_string=bit_string,
+                            polling_timeout_ms=polling_timeout_ms, polling_cycle_time_ms=polling_cycle_time_ms,
+                            callback_type=callback_type, **opts)
+
+    def send_command(self, input: str, **opts: Unpack[CallOptions]) -> RetVal:  # noqa: A002 (schema name)
+        return self.request("send_command", input=input, **opts)
+
+
+@dataclass
+class ConnectResult:
+    """The connect RetVal and the device description."""
+
+    retval: RetVal
+    device: pb.ConnectRes

@@ -1,0 +1,66 @@
+"""Single-frame broadcasts described by protocol/landscape.dbc (via cantools).
+
+Ids in the DBC carry the default device address in their low byte; frames on
+the bus carry their sender's address there, so matching is on id & 0x1FFFFF00.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from functools import lru_cache
+from importlib import resources
+from typing import Any
+
+import cantools
+import cantools.database
+import can
+
+ID_MASK = 0x1FFFFF00
+
+
+@lru_cache(maxsize=1)
+def database() -> Any:
+    """The telemetry DBC shipped with the package (a copy of protocol/landscape.dbc)."""
+    text = resources.files("landscape._generated").joinpath("landscape.dbc").read_text()
+    return cantools.database.load_string(text, database_format="dbc")
+
+
+@lru_cache(maxsize=1)
+def _by_base() -> dict[int, Any]:
+    return {m.frame_id & ID_MASK: m for m in database().messages}
+
+
+def frame_id(name: str, sender: int) -> int:
+    """29-bit CAN id of broadcast `name` sent by node `sender`."""
+    return (database().get_message_by_name(name).frame_id & ID_MASK) | (sender & 0xFF)
+
+
+def encode(name: str, sender: int, **signals: float) -> can.Message:
+    """A broadcast frame; signals not given are 0."""
+    msg = database().get_message_by_name(name)
+    values = {s.name: 0 for s in msg.signals}
+    values.update(signals)
+    return can.Message(arbitration_id=frame_id(name, sender), is_extended_id=True,
+                       data=msg.encode(values), dlc=msg.length)
+
+
+@dataclass
+class Broadcast:
+    name: str
+    sender: int
+    signals: dict[str, Any]
+    timestamp: float = field(default_factory=time.monotonic)
+
+
+def decode(frame: can.Message) -> Broadcast | None:
+    """The broadcast carried by `frame`, or None when it is not one of the DBC's."""
+    if not frame.is_extended_id or frame.is_error_frame or frame.is_remote_frame:
+        return None
+    msg = _by_base().get(frame.arbitration_id & ID_MASK)
+    if msg is None or len(frame.data) < msg.length:
+        return None
+    try:
+        signals = msg.decode(bytes(frame.data[:msg.length]), decode_choices=False)
+    except Exception:
+        return None
+    return Broadcast(msg.name, frame.arbitration_id & 0xFF, dict(signals))

@@ -1,0 +1,11 @@
+#!/bin/sh
+# Regenerate the host package's copies of the protocol artefacts from protocol/.
+# Run after every change of protocol/landscape.proto or protocol/landscape.dbc;
+# tests/host/test_generated.py fails while the committed copies are stale.
+set -eu
+here=$(cd "$(dirname "$0")" && pwd)
+root=$(cd "$here/.." && pwd)
+out="$here/src/landscape/_generated"
+protoc -I"$root/protocol" -I/usr/include --python_out="$out" "$root/protocol/landscape.proto"
+cp "$root/protocol/landscape.dbc" "$out/landscape.dbc"
+echo "updated $out/landscape_pb2.py and $out/landscape.dbc"

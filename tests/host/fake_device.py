@@ -1,0 +1,294 @@
+"""A small fake landscaped for the host tests: the same wire protocol, a tiny state machine.
+
+It speaks ISO-TP (can-isotp, normal fixed 29-bit addressing) to a fixed set of
+supervisor addresses and implements: connect/disconnect with version and hash
+checks, heartbeat tracking (a session ends when its supervisor's heartbeat
+stops for longer than the time-out; an owner's lock goes with it), lock,
+release, activate, get-motion-control-state, seq caching (a retransmitted seq
+is answered from the cache, never executed twice) and one non-blocking command,
+moveAbsolute, which sends a tag event, an RSVP and then its final event or
+alarm. Every other command answers CMD_NOT_IMPLEMENTED_ERR. Test knobs:
+`drop_responses`, `silent`, `force_codes`, `version`, `schema_hash`,
+`refuse_mismatch`.
+"""
+from __future__ import annotations
+
+import threading
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import can
+import isotp
+
+from landscape import telemetry as tm
+from landscape._generated import landscape_pb2 as pb
+from landscape.bus import ISOTP_PARAMS
+from landscape.registry import PROTOCOL_VERSION, SCHEMA_HASH
+
+
+@dataclass
+class Session:
+    host: int
+    last_seq: int = 0
+    cached: bytes | None = None
+    last_heartbeat: float = 0.0
+    heartbeats: list[dict[str, Any]] = field(default_factory=list)
+    notice_seq: int = 0
+
+
+class FakeDevice:
+    def __init__(self, bus: can.BusABC, notifier: can.Notifier, *, address: int = 0x10,
+                 hosts: tuple[int, ...] = (0xF1,), heartbeat_timeout_ms: int = 1000,
+                 move_time_s: float = 0.05, rsvp_timeout_ms: int = 300) -> None:
+        self.bus = bus
+        self.notifier = notifier
+        self.address = address
+        self.heartbeat_timeout_ms = heartbeat_timeout_ms
+        self.move_time_s = move_time_s
+        self.rsvp_timeout_ms = rsvp_timeout_ms
+        # knobs
+        self.version = PROTOCOL_VERSION
+        self.schema_hash = SCHEMA_HASH
+        self.refuse_mismatch = False     # answer CMD_VERSION_MISMATCH_ERR instead of a ConnectRes
+        self.drop_responses = 0          # execute, then lose this many responses
+        self.silent = False              # never answer
+        self.force_codes: dict[str, tuple[int, str]] = {}  # field -> (ret_code, ret_msg)
+        # observable state
+        self.state = pb.IDLE
+        self.owner: int | None = None
+        self.executions: dict[str, int] = {}
+        self.sessions: dict[int, Session] = {}
+        self.heartbeats: dict[int, list[dict[str, Any]]] = {h: [] for h in hosts}
+        self.rsvp_replies: list[pb.RsvpReply] = []
+        self.requests: list[pb.Request] = []
+        self._rsvp_waiters: dict[int, threading.Event] = {}
+        self._rsvp_next = 1
+        self._lock = threading.RLock()
+        self._stop = threading.Event()
+        self.stacks: dict[int, isotp.NotifierBasedCanStack] = {}
+        for h in hosts:
+            addr = isotp.Address(isotp.AddressingMode.NormalFixed_29bits, source_address=address,
+                                 target_address=h)
+            self.stacks[h] = isotp.NotifierBasedCanStack(bus, notifier, address=addr, params=dict(ISOTP_PARAMS))
+        self._threads: list[threading.Thread] = []
+
+    # ---------------------------------------------------------------- life cycle
+
+    def start(self) -> FakeDevice:
+        for h, s in self.stacks.items():
+            s.start()
+            t = threading.Thread(target=self._serve, args=(h, s), daemon=True)
+            t.start()
+            self._threads.append(t)
+        self.notifier.add_listener(self._on_frame)
+        t = threading.Thread(target=self._housekeeping, daemon=True)
+        t.start()
+        self._threads.append(t)
+        return self
+
+    def stop(self) -> None:
+        self._stop.set()
+        try:
+            self.notifier.remove_listener(self._on_frame)
+        except ValueError:
+            pass
+        for s in self.stacks.values():
+            s.stop()
+        for t in self._threads:
+            t.join(2.0)
+
+    def __enter__(self) -> FakeDevice:
+        return self.start()
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+    # ---------------------------------------------------------------- broadcasts
+
+    def _on_frame(self, frame: can.Message) -> None:
+        b = tm.decode(frame)
+        if b is None or b.name != "HEARTBEAT" or b.signals.get("hb_role") != 1:
+            return
+        with self._lock:
+            if b.sender in self.heartbeats:
+                self.heartbeats[b.sender].append(dict(b.signals))
+            s = self.sessions.get(b.sender)
+            if s is not None:
+                s.last_heartbeat = time.monotonic()
+
+    def _housekeeping(self) -> None:
+        counter = 0
+        while not self._stop.wait(0.05):
+            with self._lock:
+                now = time.monotonic()
+                for h, s in list(self.sessions.items()):
+                    if now - s.last_heartbeat > self.heartbeat_timeout_ms / 1000.0:
+                        self._drop(h)
+                state = self.state
+                owner = self.owner or 0
+            try:
+                self.bus.send(tm.encode("HEARTBEAT", self.address, hb_role=0, hb_counter=counter & 0xFF,
+                                        hb_state=state, hb_owner=owner, hb_supervisors=len(self.sessions)))
+                self.bus.send(tm.encode("STATUS", self.address, st_state=state, st_cycle_us=1000))
+                self.bus.send(tm.encode("JOINTS_12", self.address, j1=0.5, j2=-0.25))
+            except can.CanError:
+                pass
+            counter += 1
+
+    def _drop(self, host: int) -> None:
+        self.sessions.pop(host, None)
+        if self.owner == host:
+            self.owner = None
+            self.state = pb.UNLOCKED
+        if not self.sessions:
+            self.state = pb.IDLE
+
+    # ---------------------------------------------------------------- requests
+
+    def _serve(self, host: int, stack: isotp.NotifierBasedCanStack) -> None:
+        while not self._stop.is_set():
+            data = stack.recv(block=True, timeout=0.05)
+            if data is None:
+                continue
+            up = pb.Uplink()
+            up.ParseFromString(bytes(data))
+            if up.WhichOneof("msg") == "rsvp_reply":
+                with self._lock:
+                    self.rsvp_replies.append(up.rsvp_reply)
+                    ev = self._rsvp_waiters.get(up.rsvp_reply.rsvp_id)
+                if ev is not None:
+                    ev.set()
+                continue
+            req = up.request
+            with self._lock:
+                self.requests.append(req)
+                if self.silent:
+                    continue
+                s = self.sessions.get(host)
+                if s is not None and req.seq == s.last_seq and s.cached is not None:
+                    out = s.cached  # retransmission: answer the cache, do not execute again
+                else:
+                    resp = self._execute(host, req)
+                    out = pb.Downlink(response=resp).SerializeToString()
+                    s = self.sessions.get(host)
+                    if s is not None:
+                        s.last_seq = req.seq
+                        s.cached = out
+                if self.drop_responses > 0:
+                    self.drop_responses -= 1
+                    continue
+            stack.send(out)
+
+    def _execute(self, host: int, req: pb.Request) -> pb.Response:
+        which = req.WhichOneof("cmd") or ""
+        self.executions[which] = self.executions.get(which, 0) + 1
+        resp = pb.Response(seq=req.seq)
+
+        def answer(code: int, msg: str = "") -> pb.Response:
+            resp.ret_code = code
+            resp.ret_msg = msg
+            return resp
+
+        if which in self.force_codes:
+            code, msg = self.force_codes[which]
+            return answer(code, msg)
+        if which == "connect":
+            c = req.connect
+            res = pb.ConnectRes(protocol_version=self.version, schema_hash=self.schema_hash,
+                                device_name="fake", joint_count=6, firmware_version="fake-1",
+                                heartbeat_timeout_ms=self.heartbeat_timeout_ms, state=self.state,
+                                owner=self.owner == host)
+            if self.refuse_mismatch and (c.protocol_version != self.version or c.schema_hash != self.schema_hash):
+                resp.connect.CopyFrom(res)
+                return answer(pb.CMD_VERSION_MISMATCH_ERR,
+                              f"device protocol {self.version} schema {self.schema_hash:08X}")
+            self.sessions[host] = Session(host, last_heartbeat=time.monotonic())
+            if self.state == pb.IDLE:
+                self.state = pb.UNLOCKED
+            res.state = self.state
+            resp.connect.CopyFrom(res)
+            return answer(pb.CMD_EXEC_OK)
+        if host not in self.sessions:
+            return answer(pb.CMD_NOT_CONNECTED_ERR, "send connect first")
+        if which == "disconnect":
+            self._drop(host)
+            resp.disconnect.SetInParent()
+            return answer(pb.CMD_EXEC_OK)
+        if which == "get_motion_control_state":
+            r = resp.get_motion_control_state
+            r.motion_control_state = "robot_at_rest"
+            r.control_mode = "power_on" if self.state in (pb.RESTING, pb.MOVING) else "power_off"
+            r.state = self.state
+            r.owner = self.owner == host
+            return answer(pb.CMD_EXEC_OK)
+        if which == "lock":
+            if self.owner is not None and self.owner != host:
+                return answer(pb.CMD_NOT_OWNER_ERR, f"supervisor {self.owner:#04x} owns the device")
+            if self.state != pb.UNLOCKED:
+                return answer(pb.CMD_WRONG_STATE_ERR, f"lock is valid in UNLOCKED, the device is {pb.State.Name(self.state)}")
+            self.owner, self.state = host, pb.LOCKED
+            resp.lock.SetInParent()
+            return answer(pb.CMD_EXEC_OK)
+        if which in ("release", "activate", "move_absolute"):
+            if self.owner != host:
+                return answer(pb.CMD_NOT_OWNER_ERR, "lock first")
+        if which == "release":
+            if self.state != pb.LOCKED:
+                return answer(pb.CMD_WRONG_STATE_ERR, "release is valid in LOCKED")
+            self.owner, self.state = None, pb.UNLOCKED
+            resp.release.SetInParent()
+            return answer(pb.CMD_EXEC_OK)
+        if which == "activate":
+            if self.state != pb.LOCKED:
+                return answer(pb.CMD_WRONG_STATE_ERR, "activate is valid in LOCKED")
+            self.state = pb.RESTING
+            resp.activate.SetInParent()
+            return answer(pb.CMD_EXEC_OK)
+        if which == "move_absolute":
+            if self.state != pb.RESTING:
+                return answer(pb.CMD_WRONG_STATE_ERR, "moveAbsolute is valid in RESTING: activate first")
+            m = req.move_absolute
+            if len(m.values) != 6:
+                return answer(pb.CMD_PARAM_ERR, f"values: expected 6 numbers, got {len(m.values)}")
+            self.state = pb.MOVING
+            threading.Thread(target=self._run_move, args=(host, req.seq, m.point_name, list(m.values)),
+                             daemon=True).start()
+            resp.move_absolute.SetInParent()
+            return answer(pb.CMD_STARTED_OK)
+        return answer(pb.CMD_NOT_IMPLEMENTED_ERR, f"{which} is not in the fake device")
+
+    # ---------------------------------------------------------------- the non-blocking command
+
+    def notify(self, host: int, **kw: Any) -> None:
+        with self._lock:
+            s = self.sessions.get(host)
+            if s is None:
+                return
+            s.notice_seq += 1
+            n = pb.Notice(notice_seq=s.notice_seq, **kw)
+        self.stacks[host].send(pb.Downlink(notice=n).SerializeToString())
+
+    def _run_move(self, host: int, seq: int, point: str, values: list[float]) -> None:
+        time.sleep(self.move_time_s)
+        self.notify(host, kind=pb.EVENT, event_id="tag", data=[f"tag={point}", "path="], ref_seq=seq)
+        with self._lock:
+            rsvp_id = self._rsvp_next
+            self._rsvp_next += 1
+            ev = threading.Event()
+            self._rsvp_waiters[rsvp_id] = ev
+        self.notify(host, kind=pb.EVENT_RSVP, event_id="confirmMove", data=[f"point={point}"], ref_seq=seq,
+                    rsvp_id=rsvp_id, rsvp_timeout_ms=self.rsvp_timeout_ms, rsvp_default="continue")
+        answered = ev.wait(self.rsvp_timeout_ms / 1000.0)
+        with self._lock:
+            reply = next((r for r in self.rsvp_replies if r.rsvp_id == rsvp_id), None)
+            self.state = pb.RESTING
+        if values[0] > 3.0:
+            self.notify(host, kind=pb.ALARM, event_id="jointLimit", data=["joint=1", f"value={values[0]}"],
+                        ref_seq=seq, final=True)
+        elif answered and reply is not None and reply.ret_code < 0:
+            self.notify(host, kind=pb.ALARM, event_id="moveRefused", data=list(reply.data), ref_seq=seq, final=True)
+        else:
+            how = "answered" if answered else "default"
+            self.notify(host, kind=pb.EVENT, event_id="moveComplete", data=[f"point={point}", f"rsvp={how}"],
+                        ref_seq=seq, final=True)

@@ -1,0 +1,42 @@
+"""The committed protocol artefacts of the host package equal a fresh generation from protocol/."""
+from __future__ import annotations
+
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+GEN = ROOT / "host_tools" / "src" / "landscape" / "_generated"
+FIX = "run host_tools/update_generated.sh and commit the result"
+
+
+def test_pb2_matches_fresh_protoc_output(tmp_path: Path) -> None:
+    protoc = shutil.which("protoc")
+    if protoc is None:
+        pytest.skip("protoc (Debian protobuf-compiler) is not installed")
+    subprocess.run([protoc, f"-I{ROOT / 'protocol'}", "-I/usr/include", f"--python_out={tmp_path}",
+                    str(ROOT / "protocol" / "landscape.proto")], check=True)
+    fresh = (tmp_path / "landscape_pb2.py").read_bytes()
+    assert (GEN / "landscape_pb2.py").read_bytes() == fresh, f"landscape_pb2.py is stale: {FIX}"
+
+
+def test_dbc_copy_matches_protocol() -> None:
+    assert (GEN / "landscape.dbc").read_bytes() == (ROOT / "protocol" / "landscape.dbc").read_bytes(), \
+        f"landscape.dbc is stale: {FIX}"
+
+
+def test_schema_hash_equals_gen_registry() -> None:
+    """The host's hash is computed exactly as protocol/gen_registry.py computes the firmware's."""
+    import importlib.util
+
+    from landscape._generated import landscape_pb2
+    from landscape.registry import SCHEMA_HASH
+
+    spec = importlib.util.spec_from_file_location("gen_registry", ROOT / "protocol" / "gen_registry.py")
+    assert spec is not None and spec.loader is not None
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    assert SCHEMA_HASH == mod.schema_hash(landscape_pb2)
+    assert 0 < SCHEMA_HASH < 2**32

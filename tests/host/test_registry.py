@@ -1,0 +1,139 @@
+"""The registry is derived from the schema: every Request command, its CLI command and typed method."""
+from __future__ import annotations
+
+import inspect
+
+import click
+import pytest
+from landscape import ArgumentError, Supervisor, build_request, ls
+from landscape.cli import cli
+from landscape.registry import COMMANDS, enum_aliases, is_repeated, kebab, lookup, parse_enum
+
+REQUEST_FIELDS = [f.name for f in ls.Request.DESCRIPTOR.oneofs_by_name["cmd"].fields]
+
+
+def test_registry_covers_every_request_field_in_schema_order() -> None:
+    assert list(COMMANDS) == REQUEST_FIELDS
+    assert len(COMMANDS) == 42
+    for f in ls.Request.DESCRIPTOR.oneofs_by_name["cmd"].fields:
+        c = COMMANDS[f.name]
+        spec = f.message_type.GetOptions().Extensions[ls.cmd]
+        assert (c.number, c.name, c.blocking, c.owner_only, c.host_timeout_ms, c.summary) == \
+            (f.number, spec.name, spec.blocking, spec.owner_only, spec.host_timeout_ms, spec.summary)
+        assert c.states == tuple(spec.states) and c.states
+        assert c.response_type is ls.Response.DESCRIPTOR.fields_by_number[f.number].message_type
+
+
+@pytest.mark.parametrize("seed,cli_name", [
+    ("moveAbsolute", "move-absolute"), ("setDigitalIO", "set-digital-io"), ("getTagId", "get-tag-id"),
+    ("pathClearPath", "path-clear-path"), ("lock", "lock"), ("getDigitalIO", "get-digital-io"),
+    ("setWorldCartesianFrame", "set-world-cartesian-frame"), ("signalDigitalIO", "signal-digital-io"),
+])
+def test_kebab_names(seed: str, cli_name: str) -> None:
+    assert kebab(seed) == cli_name
+
+
+def test_cli_names_are_unique_and_lookup_accepts_all_three_names() -> None:
+    names = [c.cli_name for c in COMMANDS.values()]
+    assert len(set(names)) == len(names)
+    c = COMMANDS["set_digital_io"]
+    assert lookup("set_digital_io") is c and lookup("setDigitalIO") is c and lookup("set-digital-io") is c
+    with pytest.raises(ArgumentError, match="unknown command 'fly'"):
+        lookup("fly")
+
+
+def test_every_schema_command_has_a_cli_subcommand_with_its_fields() -> None:
+    ctx = click.Context(cli)
+    for c in COMMANDS.values():
+        sub = cli.get_command(ctx, c.cli_name)
+        assert sub is not None, c.cli_name
+        if c.field == "connect":
+            continue  # the session runs the handshake; the subcommand shows its result
+        got = {p.name for p in sub.params} - {"_no_wait", "_wait_timeout", "help"}
+        assert got == {f.name for f in c.fields()}, c.cli_name
+        assert ("_no_wait" in {p.name for p in sub.params}) == (not c.blocking)
+
+
+def test_cli_argument_rule_for_move_absolute_and_set_digital_io() -> None:
+    ctx = click.Context(cli)
+    ma = cli.get_command(ctx, "move-absolute")
+    assert [(p.name, type(p).__name__, p.nargs) for p in ma.params if isinstance(p, click.Argument)] == \
+        [("point_name", "Argument", 1), ("frame", "Argument", 1), ("values", "Argument", -1)]
+    opt = {p.name: p for p in ma.params if isinstance(p, click.Option)}
+    assert opt["speed_pct"].default == 0.0 and opt["speed_pct"].opts == ["--speed-pct"]
+    sd = cli.get_command(ctx, "set-digital-io")
+    assert [p.name for p in sd.params if isinstance(p, click.Argument)] == ["type", "description"]
+    assert [p.opts[0] for p in sd.params if isinstance(p, click.Option)] == ["--unit-id", "--bits-on", "--bits-off"]
+    mr = cli.get_command(ctx, "move-react")
+    assert [p.name for p in mr.params if isinstance(p, click.Argument)] == ["sensor_type", "motion_offsets"]
+    assert "--thresholds" in [p.opts[0] for p in mr.params if isinstance(p, click.Option)]
+
+
+def test_every_typed_method_matches_its_request_fields() -> None:
+    for c in COMMANDS.values():
+        method = getattr(Supervisor, c.field, None)
+        assert callable(method), f"Supervisor has no typed method {c.field}"
+        if c.field in ("connect", "disconnect"):
+            continue
+        sig = inspect.signature(method)
+        params = [p for p in sig.parameters.values() if p.name != "self" and p.kind != p.VAR_KEYWORD]
+        assert {p.name for p in params} == {f.name for f in c.fields()}, c.field
+        for p in params:
+            if p.default is not p.empty:
+                assert p.kind == p.KEYWORD_ONLY, f"{c.field}({p.name}) optional arguments are keyword-only"
+
+
+@pytest.mark.parametrize("spelling", ["JOINT_FRAME", "joint_frame", "joint", "Joint", 0])
+def test_enum_spellings(spelling: object) -> None:
+    assert parse_enum(ls.ReferenceFrame.DESCRIPTOR, spelling) == ls.JOINT_FRAME
+
+
+def test_enum_short_names_strip_common_prefix_and_suffix() -> None:
+    assert enum_aliases(ls.CallbackType.DESCRIPTOR)["event_rsvp"] == ls.CB_EVENT_RSVP
+    assert enum_aliases(ls.SpeedType.DESCRIPTOR)["linear"] == ls.LINEAR_SPEED
+    assert enum_aliases(ls.LinearUnit.DESCRIPTOR)["millimeters"] == ls.MILLIMETERS
+    with pytest.raises(ArgumentError, match="choose one of JOINT_FRAME, BASE_CARTESIAN_FRAME"):
+        parse_enum(ls.ReferenceFrame.DESCRIPTOR, "sideways")
+    with pytest.raises(ArgumentError):
+        parse_enum(ls.ReferenceFrame.DESCRIPTOR, 9)
+
+
+def test_build_request_is_pure_and_exact() -> None:
+    req = build_request("moveAbsolute", 7, point_name="p1", values=[0.1, -0.2], frame="world_cartesian", speed_pct=50)
+    want = ls.Request(seq=7, move_absolute=ls.MoveAbsoluteReq(point_name="p1", values=[0.1, -0.2],
+                                                              frame=ls.WORLD_CARTESIAN_FRAME, speed_pct=50.0))
+    assert req == want
+    assert req.SerializeToString() == want.SerializeToString()
+    lock = build_request("lock", 1)
+    assert lock.WhichOneof("cmd") == "lock" and lock.SerializeToString() == b"\x08\x01\x92\x01\x00"
+
+
+def test_build_request_path_load_with_dict_tags() -> None:
+    req = build_request("path-load", 3, path_name="a", tags=[{"joints": [1, 2], "tag_name": "t"}],
+                        number_of_points=1)
+    assert req.path_load.tags[0] == ls.TagPoint(joints=[1.0, 2.0], tag_name="t")
+
+
+@pytest.mark.parametrize("fields,msg", [
+    ({"nope": 1}, "no field 'nope'"),
+    ({"values": 3.0}, "expected a sequence"),
+    ({"values": ["x"]}, "'x' is not a valid number"),
+    ({"point_name": 5}, "is not a valid string"),
+    ({"frame": "up"}, "'up' is not a value"),
+])
+def test_build_request_rejects_bad_fields(fields: dict[str, object], msg: str) -> None:
+    with pytest.raises(ArgumentError, match=msg):
+        build_request("move_absolute", **fields)
+
+
+def test_integer_ranges() -> None:
+    with pytest.raises(ArgumentError, match="outside 0..4294967295"):
+        build_request("set_digital_io", bits_on=-1)
+    assert build_request("set_digital_io", bits_on="0x0F").set_digital_io.bits_on == 15
+    with pytest.raises(ArgumentError, match="not a valid integer"):
+        build_request("set_digital_io", unit_id=1.5)
+
+
+def test_repeated_fields_detected() -> None:
+    f = ls.MoveAbsoluteReq.DESCRIPTOR.fields_by_name
+    assert is_repeated(f["values"]) and not is_repeated(f["point_name"])
