@@ -5,7 +5,7 @@ import re
 from pathlib import Path
 
 from landscape._generated import landscape_pb2 as pb
-from landscape.registry import all_commands
+from landscape.registry import COMMANDS
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -23,12 +23,11 @@ def test_conformance_table_matches_the_schema_and_the_firmware() -> None:
     rows = _rows()
     missing = set(re.findall(r'LS_NOT_IMPLEMENTED\(\w+, "(\w+)"\)',
                              (ROOT / "firmware" / "core" / "cmd_missing.c").read_text()))
-    names = {c.name for c in all_commands()}
+    names = {c.name for c in COMMANDS.values()}
     assert set(rows) == names
-    for cmd in all_commands():
+    for cmd in COMMANDS.values():
         section, states, blocking, owner, status, *_ = rows[cmd.name]
-        spec = cmd.spec
-        assert states == "/".join(pb.State.Name(s) for s in spec.states), cmd.name
-        assert blocking.startswith("yes" if spec.blocking else "no"), cmd.name
-        assert owner == ("yes" if spec.owner_only else "no"), cmd.name
+        assert states == "/".join(pb.State.Name(s) for s in cmd.states), cmd.name
+        assert blocking.startswith("yes" if cmd.blocking else "no"), cmd.name
+        assert owner == ("yes" if cmd.owner_only else "no"), cmd.name
         assert ("not implemented" in status) == (cmd.name in missing), cmd.name

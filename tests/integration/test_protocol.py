@@ -12,7 +12,7 @@ import pytest
 from conftest import Controller
 from landscape import errors
 from landscape._generated import landscape_pb2 as pb
-from landscape.registry import all_commands
+from landscape.registry import COMMANDS, lookup
 from landscape.supervisor import Supervisor
 
 
@@ -42,7 +42,7 @@ def test_every_command_reaches_the_firmware(bus: can.BusABC) -> None:
     with Supervisor(bus, client_name="walker") as sup:
         sup.lock()
         sup.activate()
-        for cmd in all_commands():
+        for cmd in COMMANDS.values():
             if cmd.field in ("connect", "disconnect", "deactivate", "release"):
                 continue
             rv = sup.request(cmd.name, check=False)
@@ -60,7 +60,7 @@ def test_every_command_reaches_the_firmware(bus: can.BusABC) -> None:
 def test_retransmission_is_answered_but_executed_once(bus: can.BusABC) -> None:
     with Supervisor(bus, client_name="dup") as sup:
         before = _status(sup)["session 0xF1"]
-        cmd = sup.request("getMotionControlState").command
+        cmd = lookup("getMotionControlState")
         req = Supervisor.build_request(cmd, seq=0)
         with sup._req_lock:  # the library's own retransmission path, driven by hand
             sup._seq += 1

@@ -21,9 +21,9 @@ def test_lock_state_release_in_one_session(controller: Controller, tmp_path: Pat
     r = controller.cli("--json", "run", str(script))
     assert r.returncode == 0, r.stderr
     results = _json_lines(r.stdout)
-    assert [x["command"] for x in results] == ["getMotionControlState", "lock", "getMotionControlState",
-                                                "release", "getMotionControlState"]
-    states = [x["result"].get("state") for x in results if x["command"] == "getMotionControlState"]
+    assert [x["command"] for x in results] == ["get-motion-control-state", "lock", "get-motion-control-state",
+                                                "release", "get-motion-control-state"]
+    states = [x["result"].get("state") for x in results if x["command"] == "get-motion-control-state"]
     assert states == ["UNLOCKED", "LOCKED", "UNLOCKED"]
     assert all(x["ret_code"] == 0 for x in results)
 
