@@ -25,7 +25,8 @@ int32_t ls_h_activate(struct ls_core *core, struct ls_call *call)
          * (alarm, getMotionControlState) and decides to go on. */
         core->fault[0] = '\0';
     }
-    if (core->act.enable_drives != NULL) {
+    bool have_drives = core->act.enable_drives != NULL;
+    if (have_drives) {
         int r = core->act.enable_drives(core->act.ctx, true);
         if (r < 0) {
             return ls_reply(call, ls_RetCode_CMD_UNSUPPORTED_ERR,
@@ -34,7 +35,8 @@ int32_t ls_h_activate(struct ls_core *core, struct ls_call *call)
     }
     core->state = ls_State_RESTING;
     snprintf(core->motion_state, sizeof core->motion_state, "robot_at_rest");
-    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "active: drives enabled");
+    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "%s",
+                    have_drives ? "active: drives enabled" : "active: no arm backend is composed, nothing can move");
 }
 
 int32_t ls_h_deactivate(struct ls_core *core, struct ls_call *call)
