@@ -48,9 +48,10 @@ int ls_kin_fk(const ls_robot_model_t *m, const double q[LS_N_JOINTS], double T_b
  * sin(alpha1) != 0; any other model gives LS_KIN_EARG. d2, d3 (lateral
  * shoulder offset), a3 and alpha6 may be anything.
  *
- * Order: shoulder front (q1 facing the wrist centre) before back, then the
- * two elbow branches, then wrist sin(q5) >= 0 before the flip (q4 + pi, -q5,
- * q6 + pi). Branches that coincide (within 1e-9 rad, e.g. the two elbow
+ * Order: shoulder front (q1 facing the wrist centre) before back, then elbow
+ * sin(psi) >= 0 before < 0 (psi = q3 + offset3 + atan2(-sin(alpha3) d4, a3),
+ * the angle of the virtual forearm to the upper arm), then wrist
+ * sin(q5) >= 0 before the flip (q4 + pi, -q5, q6 + pi). Branches that coincide (within 1e-9 rad, e.g. the two elbow
  * branches at full stretch) are returned once.
  *
  * Wrap: each angle is moved by multiples of 2 pi into [q_min, q_max]; when
