@@ -213,7 +213,11 @@ int hal_linux_rt_start(hal_linux_rt_t *rt, const hal_rt_config_t *cfg, hal_cycle
     }
     if (e != 0) {
         (void)sem_destroy(&rt->ready);
-        return hal_linux_msg(HAL_EIO, msg, msglen, "cannot create the control thread: %s", strerror(e));
+        return hal_linux_msg(HAL_EIO, msg, msglen, "cannot create the control thread: %s%s", strerror(e),
+                             e == EAGAIN && atomic_load(&rt->memory_locked)
+                                 ? " (memory is locked: RLIMIT_MEMLOCK may be too small for the thread stack; "
+                                   "raise LimitMEMLOCK= in the systemd unit or ulimit -l)"
+                                 : "");
     }
     while (sem_wait(&rt->ready) != 0 && errno == EINTR) {
     }

@@ -254,11 +254,7 @@ static const hal_can_ops_t sc_ops = {
 
 /* ---- rtnetlink: bitrate and controller state at open (best effort) ------- */
 
-typedef struct {
-    uint32_t bitrate;
-    bool have_state;
-    hal_can_state_t state;
-} sc_netlink_info_t;
+typedef hal_linux_socketcan_link_info_t sc_netlink_info_t;
 
 /* Walk netlink attributes without the RTA_* macros (their int arithmetic
  * trips -Wsign-conversion): the next attribute at *off, false at the end or
@@ -306,7 +302,7 @@ static void parse_can_data(const char *data, size_t len, sc_netlink_info_t *info
     }
 }
 
-static void parse_linkinfo(const char *li, size_t len, sc_netlink_info_t *info)
+static bool parse_linkinfo(const char *li, size_t len, sc_netlink_info_t *info)
 {
     bool is_can = false;
     const char *data = NULL;
@@ -325,7 +321,40 @@ static void parse_linkinfo(const char *li, size_t len, sc_netlink_info_t *info)
     }
     if (is_can && data != NULL) {
         parse_can_data(data, data_len, info);
+        return true;
     }
+    return false;
+}
+
+int hal_linux_socketcan_parse_link(const void *buf, size_t len, hal_linux_socketcan_link_info_t *info)
+{
+    if (buf == NULL || info == NULL) {
+        return HAL_EINVAL;
+    }
+    const char *base = buf;
+    int found = 0;
+    size_t off = 0;
+    while (off + sizeof(struct nlmsghdr) <= len) {
+        struct nlmsghdr nh;
+        memcpy(&nh, base + off, sizeof nh);
+        if (nh.nlmsg_len < sizeof nh || nh.nlmsg_len > len - off) {
+            break;
+        }
+        size_t hdr = NLMSG_LENGTH(NLMSG_ALIGN(sizeof(struct ifinfomsg)));
+        if (nh.nlmsg_type == RTM_NEWLINK && nh.nlmsg_len >= hdr) {
+            size_t aoff = 0;
+            unsigned short type;
+            const char *p;
+            size_t plen;
+            while (attr_next(base + off + hdr, nh.nlmsg_len - hdr, &aoff, &type, &p, &plen)) {
+                if ((type & NLA_TYPE_MASK) == IFLA_LINKINFO && parse_linkinfo(p, plen, info)) {
+                    found = 1;
+                }
+            }
+        }
+        off += NLMSG_ALIGN((size_t)nh.nlmsg_len);
+    }
+    return found;
 }
 
 static void netlink_query(int ifindex, sc_netlink_info_t *info)
@@ -351,7 +380,7 @@ static void netlink_query(int ifindex, sc_netlink_info_t *info)
         (void)close(nl);
         return;
     }
-    static _Thread_local union {
+    union {
         char buf[16384];
         struct nlmsghdr align;
     } resp;
@@ -360,23 +389,7 @@ static void netlink_query(int ifindex, sc_netlink_info_t *info)
     if (n <= 0) {
         return;
     }
-    uint32_t left = (uint32_t)n;
-    for (const struct nlmsghdr *nh = &resp.align; NLMSG_OK(nh, left); nh = NLMSG_NEXT(nh, left)) {
-        if (nh->nlmsg_type != RTM_NEWLINK || nh->nlmsg_len < NLMSG_LENGTH(sizeof(struct ifinfomsg))) {
-            continue;
-        }
-        const char *attrs = (const char *)NLMSG_DATA(nh) + NLMSG_ALIGN(sizeof(struct ifinfomsg));
-        size_t alen = nh->nlmsg_len - NLMSG_LENGTH(NLMSG_ALIGN(sizeof(struct ifinfomsg)));
-        size_t off = 0;
-        unsigned short type;
-        const char *p;
-        size_t plen;
-        while (attr_next(attrs, alen, &off, &type, &p, &plen)) {
-            if ((type & NLA_TYPE_MASK) == IFLA_LINKINFO) {
-                parse_linkinfo(p, plen, info);
-            }
-        }
-    }
+    (void)hal_linux_socketcan_parse_link(resp.buf, (size_t)n, info);
 }
 
 /* ---- open ------------------------------------------------------------------ */

@@ -20,7 +20,9 @@
 #ifndef HAL_LINUX_SOCKETCAN_H
 #define HAL_LINUX_SOCKETCAN_H
 
+#include <stdbool.h>
 #include <stddef.h>
+#include <stdint.h>
 
 #include <linux/can.h>
 
@@ -64,5 +66,20 @@ int hal_linux_socketcan_encode(const hal_can_frame_t *in, struct can_frame *out)
  * frame (CAN_ERR_FLAG) updates `st` (state, error_frames) and returns 0;
  * a frame with can_dlc > 8 returns HAL_EINVAL and counts in st->rx_dropped. */
 int hal_linux_socketcan_decode(const struct can_frame *in, hal_can_frame_t *out, hal_can_status_t *st);
+
+/* What rtnetlink says about a CAN interface. */
+typedef struct {
+    uint32_t bitrate;    /* bit/s; 0 when not reported (vcan, slcan) */
+    bool have_state;     /* the kernel reported a controller state */
+    hal_can_state_t state;
+} hal_linux_socketcan_link_info_t;
+
+/* Parse an RTM_NEWLINK answer (one or more netlink messages, `len` bytes):
+ * IFLA_LINKINFO of kind "can" -> IFLA_CAN_BITTIMING.bitrate and
+ * IFLA_CAN_STATE (stopped and sleeping count as bus-off). Returns 1 when CAN
+ * data was found, 0 when not (another link kind), HAL_EINVAL for NULL
+ * arguments. Malformed lengths end the walk; never reads outside buf.
+ * Exposed for tests and fuzzing; open uses it. */
+int hal_linux_socketcan_parse_link(const void *buf, size_t len, hal_linux_socketcan_link_info_t *info);
 
 #endif

@@ -527,6 +527,42 @@ static void test_jacobian_finite_differences(void **state)
     printf("[ info ] Jacobian vs central differences: worst deviation %.2g\n", worst);
 }
 
+/* For information only: cost of FK, Jacobian and ik_nearest. */
+static void test_print_timings(void **state)
+{
+    (void)state;
+    kt_rng_t rng = { 11 };
+    enum { N = 10000 };
+    static double qs[N][6];
+    double T[16], J[36], out[6], sink = 0.0;
+    for (int i = 0; i < N; ++i) {
+        kt_random_q(&rng, M, 0.0, qs[i]);
+    }
+    double t0 = now_s();
+    for (int i = 0; i < N; ++i) {
+        assert_int_equal(ls_kin_fk(M, qs[i], T), LS_KIN_OK);
+        sink += T[12];
+    }
+    const double t_fk = (now_s() - t0) / N;
+    t0 = now_s();
+    for (int i = 0; i < N; ++i) {
+        assert_int_equal(ls_kin_jacobian(M, qs[i], J), LS_KIN_OK);
+        sink += J[0];
+    }
+    const double t_j = (now_s() - t0) / N;
+    double t_ik = 0.0;
+    for (int i = 0; i < N; ++i) {
+        assert_int_equal(ls_kin_fk(M, qs[i], T), LS_KIN_OK);
+        t0 = now_s();
+        const int rc = ls_kin_ik_nearest(M, T, qs[i], out);
+        t_ik += now_s() - t0;
+        assert_true(rc == LS_KIN_OK || rc == LS_KIN_ESINGULAR);
+        sink += out[0];
+    }
+    printf("[ info ] per call: fk %.3f us, jacobian %.3f us, ik_nearest %.3f us (checksum %.3g)\n", 1e6 * t_fk,
+           1e6 * t_j, 1e6 * t_ik / N, sink);
+}
+
 /* ---- pose helpers ------------------------------------------------------ */
 
 static void test_rpy_axis_order(void **state)
@@ -688,6 +724,7 @@ int main(void)
         cmocka_unit_test(test_ik_wrist_singularity),
         cmocka_unit_test(test_jacobian_at_zero),
         cmocka_unit_test(test_jacobian_finite_differences),
+        cmocka_unit_test(test_print_timings),
         cmocka_unit_test(test_rpy_axis_order),
         cmocka_unit_test(test_rpy_round_trip),
         cmocka_unit_test(test_rpy_gimbal_lock),

@@ -13,4 +13,8 @@ int run_socketcan_tests(void);
 int run_gpiod_tests(void);
 int run_rt_tests(void);
 
+/* argv[1] that makes the binary run the no-privilege child instead. */
+#define RT_CHILD_ARG "--rt-child-without-privilege"
+int rt_child_without_privilege(void);
+
 #endif

@@ -4,13 +4,19 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <stdbool.h>
+#include <stdlib.h>
 #include <string.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
 #include <linux/can.h>
 #include <linux/can/error.h>
+#include <linux/can/netlink.h>
 #include <linux/can/raw.h>
+#include <linux/if_link.h>
+#include <linux/netlink.h>
+#include <linux/rtnetlink.h>
+#include <net/if.h>
 
 #include "hal_linux_socketcan.h"
 #include "test_linux.h"
@@ -356,6 +362,146 @@ static void test_pool_is_bounded_and_reused(void **state)
     }
 }
 
+/* ---- rtnetlink answer parsing --------------------------------------------- */
+
+typedef struct {
+    _Alignas(4) uint8_t b[512];
+    size_t len;
+} nlbuf_t;
+
+/* Append an attribute; returns its offset so nests can be closed. */
+static size_t put_attr(nlbuf_t *m, unsigned short type, const void *data, size_t len)
+{
+    size_t at = m->len;
+    struct rtattr a = {.rta_len = (unsigned short)RTA_LENGTH(len), .rta_type = type};
+    memcpy(m->b + at, &a, sizeof a);
+    if (len > 0) {
+        memcpy(m->b + at + RTA_LENGTH(0u), data, len);
+    }
+    m->len += RTA_ALIGN(RTA_LENGTH(len));
+    return at;
+}
+
+static void end_nest(nlbuf_t *m, size_t at)
+{
+    unsigned short l = (unsigned short)(m->len - at);
+    memcpy(m->b + at, &l, sizeof l);
+}
+
+static void build_newlink(nlbuf_t *m, const char *kind, uint32_t bitrate, int state)
+{
+    memset(m, 0, sizeof *m);
+    m->len = NLMSG_LENGTH(sizeof(struct ifinfomsg));
+    put_attr(m, IFLA_IFNAME, "can0", 5);
+    size_t li = put_attr(m, IFLA_LINKINFO, NULL, 0);
+    put_attr(m, IFLA_INFO_KIND, kind, strlen(kind) + 1);
+    size_t data = put_attr(m, IFLA_INFO_DATA, NULL, 0);
+    if (bitrate > 0) {
+        struct can_bittiming bt = {.bitrate = bitrate, .sample_point = 875};
+        put_attr(m, IFLA_CAN_BITTIMING, &bt, sizeof bt);
+    }
+    if (state >= 0) {
+        uint32_t st = (uint32_t)state;
+        put_attr(m, IFLA_CAN_STATE, &st, sizeof st);
+    }
+    end_nest(m, data);
+    end_nest(m, li);
+    struct nlmsghdr nh = {.nlmsg_len = (uint32_t)m->len, .nlmsg_type = RTM_NEWLINK};
+    memcpy(m->b, &nh, sizeof nh);
+}
+
+static void test_parse_link_reads_bitrate_and_state(void **state)
+{
+    (void)state;
+    nlbuf_t m;
+    hal_linux_socketcan_link_info_t info;
+
+    build_newlink(&m, "can", 500000, CAN_STATE_ERROR_PASSIVE);
+    memset(&info, 0, sizeof info);
+    assert_int_equal(hal_linux_socketcan_parse_link(m.b, m.len, &info), 1);
+    assert_int_equal(info.bitrate, 500000);
+    assert_true(info.have_state);
+    assert_int_equal(info.state, HAL_CAN_STATE_PASSIVE);
+
+    build_newlink(&m, "can", 1000000, CAN_STATE_STOPPED);
+    memset(&info, 0, sizeof info);
+    assert_int_equal(hal_linux_socketcan_parse_link(m.b, m.len, &info), 1);
+    assert_int_equal(info.bitrate, 1000000);
+    assert_int_equal(info.state, HAL_CAN_STATE_BUS_OFF);
+
+    build_newlink(&m, "can", 0, -1); /* a CAN device before its bitrate is set */
+    memset(&info, 0, sizeof info);
+    assert_int_equal(hal_linux_socketcan_parse_link(m.b, m.len, &info), 1);
+    assert_int_equal(info.bitrate, 0);
+    assert_false(info.have_state);
+
+    build_newlink(&m, "vcan", 500000, 0); /* only kind "can" carries CAN data */
+    memset(&info, 0, sizeof info);
+    assert_int_equal(hal_linux_socketcan_parse_link(m.b, m.len, &info), 0);
+    assert_int_equal(info.bitrate, 0);
+
+    /* Every truncation, with the header's length cut to match so the walk
+     * goes into the attributes, stays inside the bytes given (an exact-size
+     * heap copy lets ASan see any overread) and finds at most what is there. */
+    build_newlink(&m, "can", 250000, CAN_STATE_ERROR_ACTIVE);
+    int complete = 0;
+    for (size_t cut = 0; cut <= m.len; cut++) {
+        uint8_t *copy = malloc(cut > 0 ? cut : 1);
+        assert_non_null(copy);
+        memcpy(copy, m.b, cut);
+        if (cut >= sizeof(struct nlmsghdr)) {
+            uint32_t l = (uint32_t)cut;
+            memcpy(copy, &l, sizeof l);
+        }
+        memset(&info, 0, sizeof info);
+        int r = hal_linux_socketcan_parse_link(copy, cut, &info);
+        free(copy);
+        assert_in_range(r, 0, 1);
+        assert_true(info.bitrate == 0 || info.bitrate == 250000);
+        assert_true(!info.have_state || info.state == HAL_CAN_STATE_ACTIVE);
+        complete += info.have_state;
+    }
+    assert_true(complete >= 1); /* the untruncated answer, at least */
+    /* An attribute claiming more than its message holds stops the walk. */
+    build_newlink(&m, "can", 250000, CAN_STATE_ERROR_ACTIVE);
+    size_t li_at = NLMSG_LENGTH(sizeof(struct ifinfomsg)) + RTA_ALIGN(RTA_LENGTH(5u));
+    unsigned short huge = 0xFFF0;
+    memcpy(m.b + li_at, &huge, sizeof huge);
+    memset(&info, 0, sizeof info);
+    assert_int_equal(hal_linux_socketcan_parse_link(m.b, m.len, &info), 0);
+    assert_int_equal(hal_linux_socketcan_parse_link(NULL, 0, &info), HAL_EINVAL);
+}
+
+/* The kernel's own answer for the loopback interface: parsed, not CAN. */
+static void test_parse_link_on_a_real_answer(void **state)
+{
+    (void)state;
+    int nl = socket(AF_NETLINK, SOCK_RAW | SOCK_CLOEXEC, NETLINK_ROUTE);
+    assert_true(nl >= 0);
+    struct {
+        struct nlmsghdr nh;
+        struct ifinfomsg ifi;
+    } req;
+    memset(&req, 0, sizeof req);
+    req.nh.nlmsg_len = NLMSG_LENGTH(sizeof req.ifi);
+    req.nh.nlmsg_type = RTM_GETLINK;
+    req.nh.nlmsg_flags = NLM_F_REQUEST;
+    req.ifi.ifi_index = (int)if_nametoindex("lo");
+    assert_true(req.ifi.ifi_index > 0);
+    assert_int_equal(send(nl, &req, req.nh.nlmsg_len, 0), (ssize_t)req.nh.nlmsg_len);
+    static union {
+        char b[16384];
+        struct nlmsghdr align;
+    } resp;
+    ssize_t n = recv(nl, resp.b, sizeof resp.b, 0);
+    close(nl);
+    assert_true(n > (ssize_t)sizeof(struct nlmsghdr));
+    assert_int_equal(resp.align.nlmsg_type, RTM_NEWLINK);
+    hal_linux_socketcan_link_info_t info = {0};
+    assert_int_equal(hal_linux_socketcan_parse_link(resp.b, (size_t)n, &info), 0);
+    assert_int_equal(info.bitrate, 0);
+}
+
 int run_socketcan_tests(void)
 {
     const struct CMUnitTest tests[] = {
@@ -367,6 +513,8 @@ int run_socketcan_tests(void)
         cmocka_unit_test(test_link_send_full_queue_is_eagain),
         cmocka_unit_test(test_link_peer_gone_is_eio),
         cmocka_unit_test(test_pool_is_bounded_and_reused),
+        cmocka_unit_test(test_parse_link_reads_bitrate_and_state),
+        cmocka_unit_test(test_parse_link_on_a_real_answer),
     };
     return cmocka_run_group_tests_name("socketcan", tests, NULL, NULL);
 }
