@@ -163,6 +163,13 @@ static bool ik_from(const double Tt[16], const double seed[NJ], double q[NJ])
             n += e[k] * e[k];
         }
         if (n < 1e-22) {
+            /* the skew error also vanishes 180 deg away: check the real pose */
+            double T[16], dp, da;
+            fk(q, T);
+            pose_diff(Tt, T, &dp, &da);
+            if (dp > 1e-9 || da > 1e-9) {
+                return false;
+            }
             for (int j = 0; j < NJ; j++) {
                 if (q[j] < M->q_min_rad[j] || q[j] > M->q_max_rad[j]) {
                     return false;
@@ -217,7 +224,8 @@ static bool ik(const double xyzrpy[6], double q[NJ])
     double yaw = atan2(xyzrpy[1], xyzrpy[0]);
     const double seeds[][NJ] = {
         { yaw, 0.3, 0.3, 0.0, 1.2, 0.0 },  { yaw, 0.3, 0.3, 0.0, -1.2, 0.0 }, { yaw, 0.6, 0.6, 0.0, 1.0, 0.0 },
-        { yaw, 0.0, 0.8, 0.0, 0.8, 0.0 },  { yaw, 0.5, 0.0, PI, 1.0, 0.0 },   { 0.0, 0.0, 0.0, 0.0, 0.0, 0.0 },
+        { yaw, 0.0, 0.8, 0.0, 0.8, 0.0 },  { yaw, 0.5, 0.0, PI, 1.0, 0.0 },   { yaw, 0.2, 0.2, 0.0, -0.4, 0.0 },
+        { yaw, 0.2, 0.2, 0.0, 0.4, 0.0 },  { 0.0, 0.0, 0.0, 0.0, 0.0, 0.0 },
     };
     for (size_t s = 0; s < sizeof seeds / sizeof seeds[0]; s++) {
         if (ik_from(Tt, seeds[s], q)) {
@@ -598,6 +606,17 @@ static void test_tool_rack(void **state)
     for (int k = 0; k < 6; k++) {
         assert_true(fabs(w[k]) < 0.1); /* the tool's weight is tared */
     }
+    /* the tare holds in any orientation: tool horizontal, along +x */
+    const double level[6] = { 0.55, 0.0, 0.50, 0.0, PI / 2, 0.0 };
+    go_to_pose(level);
+    hold(300);
+    force(w);
+    print_message("tool level: F = %.3g %.3g %.3g N, T = %.3g %.3g %.3g Nm\n", w[0], w[1], w[2], w[3], w[4], w[5]);
+    for (int k = 0; k < 6; k++) {
+        assert_true(fabs(w[k]) < 0.1);
+    }
+    assert_true(fabs(laser() - 0.5) < 1e-12); /* nothing ahead within range */
+    go_to_pose(rack_g);
     uint32_t bits = 9;
     assert_int_equal(tool.ops->set_bits(tool.self, 1, 0), HAL_OK);
     assert_int_equal(tool.ops->get_bits(tool.self, &bits), HAL_OK);
