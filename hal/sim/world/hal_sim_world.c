@@ -552,6 +552,14 @@ int hal_sim_world_open(const hal_sim_world_config_t *cfg, char *msg, size_t msgl
     return HAL_OK;
 }
 
+int hal_sim_world_attach_thread(void)
+{
+    if (!W.open) {
+        return HAL_ENODEV;
+    }
+    return dAllocateODEDataForThread((unsigned int)dAllocateMaskAll) ? HAL_OK : HAL_EIO;
+}
+
 void hal_sim_world_close(void)
 {
     if (!W.ode_initialised) {

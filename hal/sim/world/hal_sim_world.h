@@ -8,6 +8,9 @@
  * init/shutdown and allocate (ODE bodies, joints, geoms, working memory, the
  * socket). Every device operation handed out by the getters below is meant for
  * the control loop: allocation-free and non-blocking (see "Memory" below).
+ * The world is not thread-safe: call its operations from one thread at a
+ * time (the control loop). If that thread is not the one that called open(),
+ * it calls hal_sim_world_attach_thread() once before its first cycle.
  *
  * Frames and units: SI (m, rad, kg, N, Nm, s). The base frame is the ODE world
  * frame: origin on the floor under joint 1, z up, gravity -9.81 m/s^2 along z.
@@ -173,6 +176,11 @@ typedef struct {
  * config, world already open, socket path too long or taken by a non-socket)
  * or HAL_EIO (socket/ODE failure), with a reason in msg (msglen may be 0). */
 int hal_sim_world_open(const hal_sim_world_config_t *cfg, char *msg, size_t msglen);
+
+/* ODE keeps per-thread collision data: a control-loop thread other than
+ * the one that opened the world calls this once at its start (it allocates).
+ * HAL_OK, HAL_ENODEV when not open, HAL_EIO when ODE fails. */
+int hal_sim_world_attach_thread(void);
 
 /* Tear everything down (ODE, socket, socket file). Safe when not open. The
  * device handles obtained below become invalid: their close ops do nothing,

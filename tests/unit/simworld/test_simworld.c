@@ -4,6 +4,7 @@
 #include <errno.h>
 #include <math.h>
 #include <poll.h>
+#include <pthread.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -813,6 +814,43 @@ static void test_brakes_hold_when_disabled(void **state)
     }
 }
 
+static void *loop_thread(void *arg)
+{
+    double *fz = arg;
+    if (hal_sim_world_attach_thread() != HAL_OK) {
+        *fz = NAN;
+        return NULL;
+    }
+    double w[6];
+    for (int k = 0; k < 300; k++) {
+        (void)hal_arm_command(&arm, cmd_q, NULL);
+        (void)hal_arm_step(&arm, DT);
+        (void)laser();
+    }
+    force(w);
+    *fz = w[2];
+    return NULL;
+}
+
+static void test_control_loop_on_another_thread(void **state)
+{
+    (void)state;
+    assert_int_equal(hal_sim_world_attach_thread(), HAL_ENODEV);
+    open_world(false, false, NULL);
+    assert_int_equal(hal_arm_enable(&arm, true), HAL_OK);
+    double pose[6] = { 0.50, -0.10, 0.25, PI, 0.0, 0.0 }, q[NJ];
+    assert_true(ik(pose, q));
+    move_to(q, 0.5);
+    pose[2] = 0.099; /* 1 mm into the table: about 50 N */
+    assert_true(ik(pose, q));
+    move_to(q, 0.05);
+    pthread_t th;
+    double fz = 0.0;
+    assert_int_equal(pthread_create(&th, NULL, loop_thread, &fz), 0);
+    assert_int_equal(pthread_join(th, NULL), 0);
+    assert_true(fabs(fz - 50.0) < 3.0);
+}
+
 /* ODE allocation counting: steady-state cycles must not allocate. */
 static long ode_allocs;
 static void *count_alloc(dsizeint size)
@@ -898,6 +936,7 @@ int main(void)
         cmocka_unit_test_teardown(test_dio_socket, teardown),
         cmocka_unit_test_teardown(test_joint_limits, teardown),
         cmocka_unit_test_teardown(test_brakes_hold_when_disabled, teardown),
+        cmocka_unit_test_teardown(test_control_loop_on_another_thread, teardown),
         cmocka_unit_test_teardown(test_cycles_do_not_allocate, teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
