@@ -51,7 +51,8 @@
  * fresh world starts with the command q = 0, qd = 0 (the built pose). Joint
  * trajectories are then a pure function of the command sequence, whatever the
  * number of idle cycles between host commands. Without lockstep the physics
- * always advances.
+ * always advances. step() returns 1 when it advanced the physics, 0 when
+ * lockstep held it, HAL_EINVAL for dt outside (0, 0.1] s.
  *
  * ---------------------------------------------------------------------------
  * Environment and contact

@@ -939,5 +939,10 @@ int main(void)
         cmocka_unit_test_teardown(test_control_loop_on_another_thread, teardown),
         cmocka_unit_test_teardown(test_cycles_do_not_allocate, teardown),
     };
+    /* e.g. CMOCKA_TEST_FILTER='test_dio*' to run a subset (valgrind) */
+    const char *filter = getenv("CMOCKA_TEST_FILTER");
+    if (filter != NULL) {
+        cmocka_set_test_filter(filter);
+    }
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
