@@ -736,6 +736,15 @@ static void test_dio_socket(void **state)
     assert_int_equal(hal_dio_write(&dio, 0, 0, 1u << 16), HAL_OK);
     assert_int_equal(hal_dio_read(&dio, 0, &bits), HAL_OK);
     assert_int_equal(bits, 0x8004);
+    /* a bit in both on and off ends inactive, on the socket as in write() */
+    assert_int_equal(hal_dio_write(&dio, 0, 3u << 16, 1u << 16), HAL_OK);
+    send_str(cli, path, "in 3 1");
+    assert_int_equal(hal_dio_drain_events(&dio), 1);
+    assert_int_equal(hal_dio_read(&dio, 0, &bits), HAL_OK);
+    assert_int_equal(bits, 0x28006);
+    assert_int_equal(hal_dio_write(&dio, 0, 0, 1u << 17), HAL_OK);
+    send_str(cli, path, "in 0 2");
+    assert_int_equal(hal_dio_drain_events(&dio), 1);
 
     /* manual device; a jog keeps a lockstep world running */
     double twist[6];
