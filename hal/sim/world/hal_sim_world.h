@@ -1,0 +1,217 @@
+/* The simulated world of hal/sim: an ODE model of the 6-DOF arm described by
+ * ls_robot_model_t, standing on the floor in front of a table, with a 6-axis
+ * force/torque sensor and a laser standoff sensor at the wrist, a tool rack
+ * with two tools, one simulated DIO unit and a manual jog device, the last two
+ * driven from outside the process through a Unix datagram socket.
+ *
+ * One world per process: the state is static. open() and close() run at
+ * init/shutdown and allocate (ODE bodies, joints, geoms, working memory, the
+ * socket). Every device operation handed out by the getters below is meant for
+ * the control loop: allocation-free and non-blocking (see "Memory" below).
+ * The world is not thread-safe: call its operations from one thread at a
+ * time (the control loop). If that thread is not the one that called open(),
+ * it calls hal_sim_world_attach_thread() once before its first cycle.
+ *
+ * Frames and units: SI (m, rad, kg, N, Nm, s). The base frame is the ODE world
+ * frame: origin on the floor under joint 1, z up, gravity -9.81 m/s^2 along z.
+ * Poses as x y z roll pitch yaw use R = Rz(yaw) * Ry(pitch) * Rx(roll).
+ *
+ * ---------------------------------------------------------------------------
+ * The arm
+ * ---------------------------------------------------------------------------
+ * Link i (1..6) is a rigid body whose frame is DH frame i of the model; joint
+ * i is an ODE hinge through the origin of frame i-1 about z_{i-1}. The world is
+ * built at q = 0, so the hinge angle is the joint angle q_i (the DH theta
+ * offset is already in the built geometry). ODE reports hinge angles in
+ * (-pi, pi]; the world unwraps them every step, so joints 4 and 6, whose ranges
+ * exceed +-180 deg, read continuous angles.
+ * Masses: link i carries model.link_mass_kg[i] with the inertia of a capsule
+ * of radius model.link_radius_m between the origins of frames i-1 and i (a
+ * sphere when they coincide); ODE needs the centre of mass at the body origin,
+ * so each body sits at its capsule's midpoint and keeps its DH frame as a
+ * fixed offset.
+ *
+ * Joint servo (step): each hinge is a velocity motor with
+ *     target velocity = qd_cmd + KP * (q_cmd - q),   KP = 200 1/s,
+ *     max torque      = model.torque_max_Nm,
+ * and a motor damping of 2e4 Nm s/rad (hinge CFM = 5e-5), which makes the
+ * servo a stiff PD (about 4e6 Nm/rad) rather than an infinitely stiff one, so
+ * that pressing into the table gives a finite, penetration-proportional force.
+ * The servo never drives a joint past its limit within one step (the target
+ * velocity is clamped to reach q_min/q_max exactly); ODE hinge stops at
+ * q_min/q_max back this up for joints whose range fits in (-pi, pi) (1, 2, 3, 5).
+ * Disabled drives (enable(false)) model brakes: target velocity 0 with a
+ * holding torque of 2 * torque_max, so the arm stays put unless overloaded.
+ * Integrator: dWorldStep (the exact Dantzig LCP solver), dt as the caller
+ * passes it (1 ms typically); world ERP 0.2, CFM 1e-10.
+ *
+ * Lockstep (cfg.lockstep): step() does NOT advance the physics while the joint
+ * command is bit-identical to the one of the previous step, every commanded
+ * velocity is 0 and no jog is active: the arm rests exactly where it is. A
+ * fresh world starts with the command q = 0, qd = 0 (the built pose). Joint
+ * trajectories are then a pure function of the command sequence, whatever the
+ * number of idle cycles between host commands. Without lockstep the physics
+ * always advances. step() returns 1 when it advanced the physics, 0 when
+ * lockstep held it, HAL_EINVAL for dt outside (0, 0.1] s.
+ *
+ * ---------------------------------------------------------------------------
+ * Environment and contact
+ * ---------------------------------------------------------------------------
+ * Floor: the plane z = 0. Table: a box, top at z = 0.10, x 0.35..0.85,
+ * y -0.40..0.40. Obstacle (cfg.with_obstacle): a 0.10 m cube on the table,
+ * centred at x 0.60, y 0.20 (top at z = 0.20).
+ * Only link 6 and the tool body collide, and only with the floor, table and
+ * obstacle (no self collision). Contacts are soft: a spring-damper of
+ * 5e4 N/m and 500 N s/m per touching pair of shapes (shared among the up to 8
+ * points ODE reports for a face; ERP/CFM derived from dt each step), so in
+ * steady contact the normal force is 5e4 N/m times the penetration.
+ * Friction is viscous (ODE force-dependent slip, 1e-3 m/s per N, i.e.
+ * 1000 N s/m) capped at mu 0.5 times the normal force (pyramid
+ * approximation): with a stiff position-controlled arm, stiction would lock
+ * in arbitrary lateral forces, so at rest the sensor reads only the normal
+ * push. Commanding the flange 2 mm into the table presses with about 100 N.
+ *
+ * ---------------------------------------------------------------------------
+ * Tool, force sensor, laser
+ * ---------------------------------------------------------------------------
+ * A tool body hangs on link 6 by an ODE fixed joint: the sensor. With no tool
+ * it is the flange plate (0.1 kg, a disc of radius link_radius_m and 5 mm
+ * thickness just inside the flange plane, so the flange face is its outer
+ * face; tool offset 0). A coupled tool adds its mass (a rod from the flange
+ * to the tip) and a 10 mm radius tip sphere whose far point is the tool tip.
+ * The tool frame is the flange frame moved by the tool offset.
+ *
+ * "force_sensor", 6 values Fx Fy Fz Tx Ty Tz (N, Nm), tool frame, torques
+ * about the tool tip: the wrench the tool exerts on its surroundings, i.e.
+ * minus the external (contact) wrench acting on the tool. Pressing the tip
+ * into something along tool +z (the approach direction) reads Fz > 0. It is
+ * computed from the fixed joint's dJointFeedback (force and torque the joint
+ * applies to the tool body) plus the tool body's own weight m*g, which is the
+ * tare: the weight is known from the tool mass and is removed in whatever
+ * orientation, so an unloaded tool reads ~0 at rest. Inertial forces of an
+ * accelerating tool are not removed (they are small at the tool masses here).
+ *
+ * "laser_standoff_sensor", 1 value (m): the distance from the tool tip along
+ * tool +z to the first floor/table/obstacle surface, range 0.5 m; 0.5 when
+ * nothing is hit within range, 0 when the tip is inside an object.
+ *
+ * Tool rack (flange poses, base frame, tool pointing down, i.e. flange z
+ * along -z; both reachable inside the joint limits):
+ *     "gripper"  rack flange pose x 0.30 y  0.50 z 0.35, rpy (pi, 0, 0);
+ *                offset (0, 0, 0.12, 0, 0, 0); 0.4 kg; tool bit 0 = close
+ *     "probe"    rack flange pose x 0.30 y -0.50 z 0.35, rpy (pi, 0, 0);
+ *                offset (0, 0, 0.15, 0, 0, 0); 0.2 kg; no tool bits
+ *     "none"     the flange plate: offset 0 (tool_offset only)
+ * couple(id, true) succeeds when no tool is coupled and the flange is within
+ * 2 mm and 2 deg of the tool's rack pose; couple(id, false) when `id` is the
+ * coupled tool and the flange is at its rack pose. Otherwise HAL_EINVAL and
+ * nothing changes. set_bits/get_bits hold the gripper's bit state (no
+ * gripper fingers are simulated); bits of a tool without that bit, or with no
+ * tool coupled, are HAL_EINVAL; uncoupling clears the bits.
+ *
+ * ---------------------------------------------------------------------------
+ * DIO, manual device and the control socket
+ * ---------------------------------------------------------------------------
+ * DIO: one unit (0); bits 0-15 are inputs, bits 16-31 outputs. read() gives
+ * inputs | outputs; write() of a bit outside 16-31, or to a unit other than 0,
+ * is HAL_EINVAL and changes nothing; a bit in both `on` and `off` ends
+ * inactive. Inputs change only through the socket.
+ *
+ * Control socket protocol (cfg.dio_socket_path; a Unix SOCK_DGRAM socket the
+ * world binds at open and unlinks at close; a stale socket file at that path
+ * is replaced). One command per datagram, ASCII, fields separated by spaces
+ * or tabs, an optional trailing newline, at most 255 bytes:
+ *     in <hex-on> <hex-off>    set the input bits in hex-on, then clear those
+ *                              in hex-off (hex, optional 0x, bits 0-15 only)
+ *     jog <vx> <vy> <vz> <wx> <wy> <wz>
+ *                              set the manual twist (tool frame), decimals,
+ *                              each clamped to -1..1
+ *     jog-stop                 zero the twist
+ *     buttons <hex>            set the manual button mask (32 bits)
+ * The socket queue is short (net.unix.max_dgram_qlen, often 10 datagrams): a
+ * sender whose messages are not drained blocks, or gets EAGAIN if its socket
+ * is non-blocking.
+ * Anything else (unknown word, missing or extra field, bad number, bits
+ * outside the inputs, over-long datagram) is counted in
+ * hal_sim_world_malformed_messages() and ignored. Nothing is answered.
+ * Messages take effect when the owner calls the DIO's drain_events(), which
+ * reads the pending datagrams (at most 64 per call, so a flood cannot stretch
+ * a control cycle) and returns how many changed some state; the
+ * DIO's poll_fd() is the socket (readable when a datagram is pending). The
+ * manual device's read() returns the state as of the last drain_events().
+ *     e.g.  socat - UNIX-SENDTO:/tmp/ls-sim.sock <<< 'in 5 0'
+ *
+ * ---------------------------------------------------------------------------
+ * Memory
+ * ---------------------------------------------------------------------------
+ * ODE allocates through dAlloc (malloc by default). At open the world
+ * reserves 1 MiB of step working memory (dWorldSetStepMemoryReservationPolicy;
+ * dWorldStep keeps that arena between steps and only reallocates if a step
+ * needs more, which this fixed set of bodies and at most 96 contacts does not),
+ * and fills then empties the contact joint group once with its maximum number
+ * of contact joints (ODE's joint group is an obstack whose arenas survive
+ * dJointGroupEmpty and are reused). No spaces are used: the few collision
+ * pairs are tested with dCollide into a stack array. tests/unit/simworld
+ * checks with counting allocation hooks that steady-state cycles allocate
+ * nothing.
+ */
+#ifndef HAL_SIM_WORLD_H
+#define HAL_SIM_WORLD_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "hal/hal_arm.h"
+#include "hal/hal_dio.h"
+#include "ls_robot_model.h"
+
+typedef struct {
+    const ls_robot_model_t *model; /* must outlive the world */
+    const char *dio_socket_path;   /* NULL: no external control socket */
+    bool lockstep;                 /* see "Lockstep" above */
+    bool with_obstacle;            /* a box on the table */
+} hal_sim_world_config_t;
+
+/* Build the world. Init only; allocates. Returns HAL_OK, or HAL_EINVAL (bad
+ * config, world already open, socket path too long or taken by a non-socket)
+ * or HAL_EIO (socket/ODE failure), with a reason in msg (msglen may be 0). */
+int hal_sim_world_open(const hal_sim_world_config_t *cfg, char *msg, size_t msglen);
+
+/* ODE keeps per-thread collision data: a control-loop thread other than
+ * the one that opened the world calls this once at its start (it allocates).
+ * HAL_OK, HAL_ENODEV when not open, HAL_EIO when ODE fails. */
+int hal_sim_world_attach_thread(void);
+
+/* Tear everything down (ODE, socket, socket file). Safe when not open. The
+ * device handles obtained below become invalid: their close ops do nothing,
+ * the world is closed only here. */
+void hal_sim_world_close(void);
+
+/* Device handles of the open world (static ops, self = the world). Any
+ * thread, any time after open; O(1), no allocation. When the world is not
+ * open the handles' operations answer HAL_ENODEV. */
+void hal_sim_world_get_arm(hal_arm_t *out);
+void hal_sim_world_get_dio(hal_dio_t *out);
+/* The two sensors above; *count = 2. The array is static. */
+const hal_sensor_t *hal_sim_world_sensors(size_t *count);
+void hal_sim_world_get_tool(hal_tool_t *out);
+void hal_sim_world_get_manual(hal_manual_t *out);
+
+/* Ground truth for tests: the flange pose (DH frame 6) as ODE has it,
+ * column-major 4x4, base frame. HAL_OK or HAL_ENODEV. */
+int hal_sim_world_flange_pose(double T[16]);
+
+/* Contact since open: *in_contact = link 6 or the tool touched the floor,
+ * table or obstacle in the last step; point_m = the first contact point of
+ * the first step that had any contact since open (zeros if none). Returns 1
+ * when a contact has happened since open, 0 when not, HAL_ENODEV when closed. */
+int hal_sim_world_contact(bool *in_contact, double point_m[3]);
+
+/* Name of the coupled tool ("gripper", "probe") or "none". Never NULL. */
+const char *hal_sim_world_current_tool(void);
+
+/* Control-socket messages ignored as malformed since open. */
+uint32_t hal_sim_world_malformed_messages(void);
+
+#endif
