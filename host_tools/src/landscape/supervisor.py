@@ -539,6 +539,10 @@ class Supervisor:
         self._rsvp_handlers[event_id] = handler
         return handler
 
+    def remove_rsvp_handler(self, event_id: str | None) -> None:
+        """Stop answering RSVPs of `event_id` (None: the catch-all handler)."""
+        self._rsvp_handlers.pop(event_id, None)
+
     def notices(self, timeout_s: float | None = None) -> Iterator[pb.Notice]:
         """Yield every notice not yet yielded by any notices() iterator, in arrival order,
         waiting for new ones; stops when `timeout_s` (total) has passed (None: never)."""
