@@ -170,3 +170,26 @@ def test_no_such_channel_subprocess(tmp_path: Path) -> None:
     assert "Traceback" not in p.stderr and len(p.stderr.splitlines()) == 1
     assert p.stderr.startswith(f"landscape: cannot open CAN channel '{tmp_path / 'nopty'}' on interface 'slcan'")
     assert "is landscaped running with --link slcan:pty:PATH" in p.stderr
+
+
+def test_shell_one_session_with_completion_names(channel: str, device: FakeDevice, tmp_path: Path) -> None:
+    from prompt_toolkit.application import create_app_session
+    from prompt_toolkit.input import create_pipe_input
+    from prompt_toolkit.output import DummyOutput
+
+    with create_pipe_input() as inp, create_app_session(input=inp, output=DummyOutput()):
+        inp.send_text("lock\nfly\nrelease extra\nget-motion-control-state\nquit\n")
+        r = CliRunner().invoke(cli, ["--interface", "virtual", "--channel", channel, "shell"],
+                               env={"XDG_STATE_HOME": str(tmp_path)})
+    assert r.exit_code == 0, r.stderr
+    assert "lock: CMD_EXEC_OK" in r.stdout and "  owner: True" in r.stdout
+    assert r.stderr.splitlines() == ["error: unknown command 'fly' (landscape --help lists them)",
+                                     "error: Got unexpected extra argument (extra)"]
+    assert [q.seq for q in device.requests] == [1, 2, 3, 4]
+    assert (tmp_path / "landscape" / "history").read_text().count("\n+") == 5
+
+
+def test_monitor_once_shows_telemetry(channel: str, device: FakeDevice) -> None:
+    r = run(channel, "monitor", "--once")
+    assert r.exit_code == 0, r.stderr
+    assert "UNLOCKED" in r.stdout and "+0.5000 -0.2500" in r.stdout and "supervisors" in r.stdout
