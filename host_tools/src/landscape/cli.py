@@ -280,7 +280,7 @@ def make_command(cmd: Command) -> click.Command:
 # ---------------------------------------------------------------- the group
 
 
-def _one_line(exc: BaseException) -> str:
+def _one_line(exc: object) -> str:
     return " ".join(str(exc).split())
 
 
