@@ -6,6 +6,6 @@ set -eu
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/.." && pwd)
 out="$here/src/landscape/_generated"
-protoc -I"$root/protocol" -I/usr/include --python_out="$out" "$root/protocol/landscape.proto"
+protoc -I"$root/protocol" -I/usr/include --python_out="$out" --pyi_out="$out" "$root/protocol/landscape.proto"
 cp "$root/protocol/landscape.dbc" "$out/landscape.dbc"
-echo "updated $out/landscape_pb2.py and $out/landscape.dbc"
+echo "updated $out/landscape_pb2.py(i) and $out/landscape.dbc"

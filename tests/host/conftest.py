@@ -12,10 +12,8 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 SRC = ROOT / "host_tools" / "src"
-try:
-    import landscape  # noqa: F401  (installed)
-except ImportError:
-    sys.path.insert(0, str(SRC))
+# Test the package of this tree, even when another copy is installed in the venv.
+sys.path.insert(0, str(SRC))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import can  # noqa: E402

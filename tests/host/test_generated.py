@@ -17,9 +17,10 @@ def test_pb2_matches_fresh_protoc_output(tmp_path: Path) -> None:
     if protoc is None:
         pytest.skip("protoc (Debian protobuf-compiler) is not installed")
     subprocess.run([protoc, f"-I{ROOT / 'protocol'}", "-I/usr/include", f"--python_out={tmp_path}",
-                    str(ROOT / "protocol" / "landscape.proto")], check=True)
-    fresh = (tmp_path / "landscape_pb2.py").read_bytes()
-    assert (GEN / "landscape_pb2.py").read_bytes() == fresh, f"landscape_pb2.py is stale: {FIX}"
+                    f"--pyi_out={tmp_path}", str(ROOT / "protocol" / "landscape.proto")], check=True)
+    for name in ("landscape_pb2.py", "landscape_pb2.pyi"):
+        fresh = (tmp_path / name).read_bytes()
+        assert (GEN / name).read_bytes() == fresh, f"{name} is stale: {FIX}"
 
 
 def test_dbc_copy_matches_protocol() -> None:

@@ -280,7 +280,7 @@ def make_command(cmd: Command) -> click.Command:
 # ---------------------------------------------------------------- the group
 
 
-def _one_line(exc: BaseException) -> str:
+def _one_line(exc: object) -> str:
     return " ".join(str(exc).split())
 
 
@@ -484,6 +484,83 @@ def shell_cmd(ctx: click.Context) -> None:
             click.echo(msg, err=True)
             if code not in (EXIT_USAGE, EXIT_COMMAND):
                 raise
+
+
+def _state_name(v: Any) -> str:
+    try:
+        return pb.State.Name(int(v))
+    except (ValueError, TypeError):
+        return str(v)
+
+
+def monitor_view(sup: Supervisor, last_notices: Sequence[pb.Notice]) -> Any:
+    """A rich renderable of the device's telemetry and the last notices."""
+    from rich.table import Table
+
+    t = sup.telemetry()
+    table = Table(title=f"landscape monitor: device {sup.device:#04x} on {sup.channel_name}", show_header=False)
+    table.add_column("what", style="bold")
+    table.add_column("value")
+    st = t.get("STATUS", {})
+    hb = t.get("HEARTBEAT", {})
+    motion = ["none", "running_trajectory", "robot_paused", "robot_stopped_on_error", "robot_stopped_on_command"]
+    modes = ["power_off", "power_on", "controller_error"]
+    if st:
+        m, c = int(st.get("st_motion", 0)), int(st.get("st_control_mode", 0))
+        table.add_row("state", _state_name(st.get("st_state", 0)))
+        table.add_row("motion", motion[m] if m < len(motion) else str(m))
+        table.add_row("control mode", modes[c] if c < len(modes) else str(c))
+        table.add_row("fault", str(st.get("st_fault", 0)))
+        table.add_row("cycle", f"{st.get('st_cycle_us', 0)} us, {st.get('st_overruns', 0)} overruns")
+    if hb:
+        table.add_row("owner", f"{int(hb.get('hb_owner', 0)):#04x}")
+        table.add_row("supervisors", str(hb.get("hb_supervisors", 0)))
+    joints = [t[k][f"j{i}"] for k, r in (("JOINTS_12", (1, 2)), ("JOINTS_34", (3, 4)), ("JOINTS_56", (5, 6)))
+              if k in t for i in r]
+    if joints:
+        table.add_row("joints [rad]", " ".join(f"{j:+.4f}" for j in joints))
+    if "TOOL_POS" in t:
+        p = t["TOOL_POS"]
+        table.add_row("tool xyz [m]", f"{p['tool_x']:+.4f} {p['tool_y']:+.4f} {p['tool_z']:+.4f}")
+    if "TOOL_RPY" in t:
+        r = t["TOOL_RPY"]
+        table.add_row("tool rpy [rad]", f"{r['tool_roll']:+.4f} {r['tool_pitch']:+.4f} {r['tool_yaw']:+.4f}")
+    if "DIO" in t:
+        table.add_row("DIO in/out", f"{int(t['DIO']['dio_inputs']):#010x} / {int(t['DIO']['dio_outputs']):#010x}")
+    if "EMERGENCY" in t:
+        table.add_row("EMERGENCY", str(t["EMERGENCY"]))
+    if not t:
+        table.add_row("telemetry", "(none received yet)")
+    for n in last_notices:
+        table.add_row("notice", _fmt_notice(n).strip())
+    return table
+
+
+@cli.command("monitor")
+@click.option("--duration", type=float, default=None, help="stop after this many seconds (default: Ctrl-C)")
+@click.option("--once", is_flag=True, help="print one snapshot after a short wait and exit")
+@click.pass_context
+def monitor_cmd(ctx: click.Context, duration: float | None, once: bool) -> None:
+    """Live view of state, joints, tool pose, DIO and the last notices."""
+    import collections
+    import time
+
+    from rich.console import Console
+    from rich.live import Live
+
+    sup = _state(ctx).session()
+    last: collections.deque[pb.Notice] = collections.deque(maxlen=5)
+    sup.on_notice(last.append)
+    console = Console()
+    if once:
+        time.sleep(0.5)
+        console.print(monitor_view(sup, list(last)))
+        return
+    end = None if duration is None else time.monotonic() + duration
+    with Live(monitor_view(sup, []), console=console, refresh_per_second=5) as live:
+        while end is None or time.monotonic() < end:
+            time.sleep(0.2)
+            live.update(monitor_view(sup, list(last)))
 
 
 def main(argv: Sequence[str] | None = None) -> NoReturn:

@@ -501,10 +501,12 @@ class Supervisor:
         handler = self._rsvp_handlers.get(n.event_id) or self._rsvp_handlers.get(None)
         if handler is None:
             return  # the device takes rsvp_default after rsvp_timeout_ms
+        code: int
+        data: list[str]
         try:
             ans = handler(n)
             if ans is None:
-                code, data = pb.CMD_EXEC_OK, []
+                code, data = int(pb.CMD_EXEC_OK), []
             elif isinstance(ans, pb.RsvpReply):
                 code, data = ans.ret_code, list(ans.data)
             elif isinstance(ans, tuple):
@@ -513,7 +515,7 @@ class Supervisor:
                 code, data = int(ans), []
         except Exception as exc:
             log.exception("RSVP handler for %s failed; answering CMD_ERR", n.event_id)
-            code, data = pb.CMD_ERR, [f"error={exc}"]
+            code, data = int(pb.CMD_ERR), [f"error={exc}"]
         try:
             self.send_rsvp_reply(n.rsvp_id, code, data)
         except LandscapeError as exc:
@@ -538,6 +540,10 @@ class Supervisor:
         """
         self._rsvp_handlers[event_id] = handler
         return handler
+
+    def remove_rsvp_handler(self, event_id: str | None) -> None:
+        """Stop answering RSVPs of `event_id` (None: the catch-all handler)."""
+        self._rsvp_handlers.pop(event_id, None)
 
     def notices(self, timeout_s: float | None = None) -> Iterator[pb.Notice]:
         """Yield every notice not yet yielded by any notices() iterator, in arrival order,

@@ -38,7 +38,7 @@ def frame_id(name: str, sender: int) -> int:
 def encode(name: str, sender: int, **signals: float) -> can.Message:
     """A broadcast frame; signals not given are 0."""
     msg = database().get_message_by_name(name)
-    values = {s.name: 0 for s in msg.signals}
+    values: dict[str, float] = {s.name: 0 for s in msg.signals}
     values.update(signals)
     return can.Message(arbitration_id=frame_id(name, sender), is_extended_id=True,
                        data=msg.encode(values), dlc=msg.length)

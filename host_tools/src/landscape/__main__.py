@@ -1,0 +1,4 @@
+"""python -m landscape: the CLI."""
+from .cli import main
+
+main()

@@ -1,0 +1,195 @@
+"""The landscape CLI against the fake device (in-process via CliRunner, plus one real subprocess)."""
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner, Result
+from fake_device import FakeDevice
+from landscape import ls
+from landscape.cli import cli
+
+SRC = Path(__file__).resolve().parents[2] / "host_tools" / "src"
+
+
+def run(channel: str, *args: str) -> Result:
+    return CliRunner().invoke(cli, ["--interface", "virtual", "--channel", channel, *args])
+
+
+def one_line_error(r: Result) -> str:
+    assert r.exception is None or isinstance(r.exception, SystemExit), r.exception
+    assert "Traceback" not in r.stderr and "Traceback" not in r.stdout
+    lines = r.stderr.splitlines()
+    assert len(lines) == 1, r.stderr
+    return lines[0]
+
+
+def test_text_output(channel: str, device: FakeDevice) -> None:
+    r = run(channel, "get-motion-control-state")
+    assert r.exit_code == 0, r.stderr
+    assert r.stdout.splitlines() == [
+        "get-motion-control-state: CMD_EXEC_OK", "  motion_control_state: robot_at_rest",
+        "  control_mode: power_off", "  state: UNLOCKED", "  fault: ", "  owner: False"]
+    assert device.sessions == {}  # the CLI disconnected on exit
+
+
+def test_json_output_parses(channel: str, device: FakeDevice) -> None:
+    r = run(channel, "--json", "lock")
+    assert r.exit_code == 0
+    assert json.loads(r.stdout) == {"command": "lock", "ret_code": 0, "ret_name": "CMD_EXEC_OK", "ret_msg": "",
+                                    "result": {}, "notices": []}
+
+
+def test_connect_prints_device_description(channel: str, device: FakeDevice) -> None:
+    r = run(channel, "--json", "connect")
+    out = json.loads(r.stdout)
+    assert out["result"]["device_name"] == "fake" and out["result"]["joint_count"] == 6
+
+
+def test_command_error_exit_3_one_line(channel: str, device: FakeDevice) -> None:
+    r = run(channel, "release")
+    assert r.exit_code == 3
+    assert one_line_error(r).startswith("landscape: release: CMD_NOT_OWNER_ERR: lock first (")
+    assert r.stdout == "release: CMD_NOT_OWNER_ERR: lock first\n"
+
+
+def test_non_blocking_waits_and_prints_notices(channel: str, device: FakeDevice, tmp_path: Path) -> None:
+    script = tmp_path / "move.ls"
+    script.write_text("# a move\nlock\n\nactivate\nmove-absolute p1 joint 0 -0.5 0 0 0 0 --speed-pct 20\n")
+    r = run(channel, "run", str(script))
+    assert r.exit_code == 0, r.stderr
+    lines = r.stdout.splitlines()
+    assert lines[:4] == ["> lock", "lock: CMD_EXEC_OK", "> activate", "activate: CMD_EXEC_OK"]
+    assert lines[4] == "> move-absolute p1 joint 0 -0.5 0 0 0 0 --speed-pct 20"
+    assert lines[5] == "move-absolute: CMD_STARTED_OK"
+    assert lines[6].startswith("  EVENT tag tag=p1 path= (ref 4)")
+    assert lines[7].startswith("  EVENT_RSVP confirmMove point=p1 (ref 4) [rsvp 1: default 'continue'")
+    assert lines[8] == "  EVENT moveComplete point=p1 rsvp=default (ref 4) final"
+    move = [q for q in device.requests if q.WhichOneof("cmd") == "move_absolute"][0]
+    assert move.move_absolute == ls.MoveAbsoluteReq(point_name="p1", frame=ls.JOINT_FRAME,
+                                                    values=[0, -0.5, 0, 0, 0, 0], speed_pct=20)
+    assert [q.seq for q in device.requests] == [1, 2, 3, 4, 5]  # one session for the whole file
+
+
+def test_json_non_blocking_with_notices_and_alarm(channel: str, device: FakeDevice, tmp_path: Path) -> None:
+    script = tmp_path / "alarm.ls"
+    script.write_text("lock\nactivate\nmove-absolute far JOINT_FRAME 4 0 0 0 0 0\n")
+    r = run(channel, "--json", "run", str(script))
+    assert r.exit_code == 3
+    objs = [json.loads(line) for line in r.stdout.splitlines()]
+    assert [o["command"] for o in objs] == ["lock", "activate", "move-absolute"]
+    assert [n["event_id"] for n in objs[2]["notices"]] == ["tag", "confirmMove", "jointLimit"]
+    assert objs[2]["notices"][2]["kind"] == "ALARM" and objs[2]["notices"][2]["final"] is True
+    assert "alarm.ls:3: move-absolute ended with alarm jointLimit" in r.stderr
+
+
+def test_no_wait(channel: str, device: FakeDevice, tmp_path: Path) -> None:
+    script = tmp_path / "nowait.ls"
+    script.write_text("lock\nactivate\nmove-absolute p tool 0 0 0 0 0 0 --no-wait\n")
+    r = run(channel, "run", str(script))
+    assert r.exit_code == 0
+    assert r.stdout.splitlines()[-1] == "move-absolute: CMD_STARTED_OK"
+
+
+def test_run_stops_at_first_error(channel: str, device: FakeDevice, tmp_path: Path) -> None:
+    script = tmp_path / "bad.ls"
+    script.write_text("release\nlock\n")
+    r = run(channel, "run", str(script))
+    assert r.exit_code == 3
+    assert [q.WhichOneof("cmd") for q in device.requests] == ["connect", "release", "disconnect"]
+    assert r.stderr.splitlines()[0].startswith(f"{script}:1: release: CMD_NOT_OWNER_ERR")
+
+
+def test_run_keep_going(channel: str, device: FakeDevice, tmp_path: Path) -> None:
+    script = tmp_path / "bad.ls"
+    script.write_text("release\nfly away\nmove-absolute p sideways 1\nlock\n")
+    r = run(channel, "run", "--keep-going", str(script))
+    assert r.exit_code == 3
+    assert [q.WhichOneof("cmd") for q in device.requests] == ["connect", "release", "lock", "disconnect"]
+    err = r.stderr.splitlines()
+    assert err[1] == f"{script}:2: unknown command 'fly' (landscape --help lists them)"
+    assert err[2].startswith(f"{script}:3: Invalid value for 'FRAME': 'sideways' is not a ReferenceFrame")
+    assert r.stdout.splitlines()[-1] == "lock: CMD_EXEC_OK"
+
+
+def test_run_all_ok_exit_0(channel: str, device: FakeDevice, tmp_path: Path) -> None:
+    script = tmp_path / "ok.ls"
+    script.write_text("lock   # take control\nget-motion-control-state\nrelease\n")
+    r = run(channel, "run", str(script))
+    assert r.exit_code == 0, r.stderr
+    assert r.stdout.count("CMD_EXEC_OK") == 3 and "  owner: True" in r.stdout and r.stderr == ""
+    assert device.owner is None
+
+
+@pytest.mark.parametrize("args,code,start", [
+    (["fly"], 2, "landscape: error: No such command 'fly'."),
+    (["move-absolute", "p", "sideways"], 2, "landscape: error: Invalid value for 'FRAME': 'sideways'"),
+    (["move-absolute", "p", "joint", "1", "x"], 2, "landscape: error: Invalid value for '[VALUES]...': 'x'"),
+    (["set-speed", "--speed", "fast"], 2, "landscape: error: Invalid value for '--speed': 'fast'"),
+    (["lock", "extra"], 2, "landscape: error: Got unexpected extra argument (extra)"),
+])
+def test_usage_errors_one_line_exit_2(channel: str, args: list[str], code: int, start: str) -> None:
+    r = run(channel, *args)
+    assert r.exit_code == code
+    assert one_line_error(r).startswith(start)
+
+
+def test_time_out_one_line_exit_4(channel: str) -> None:
+    r = run(channel, "--timeout", "0.05", "lock")
+    assert r.exit_code == 4
+    assert one_line_error(r) == (
+        f"landscape: no answer from the controller at address 0x10 on virtual:{channel} to connect "
+        f"(seq 1, 3 tries of 0.05 s): is landscaped running on that channel with node address 0x10?")
+
+
+def test_device_address_option(channel: str) -> None:
+    r = run(channel, "--timeout", "0.05", "--device", "0x22", "lock")
+    assert r.exit_code == 4 and "at address 0x22" in r.stderr
+    r = run(channel, "--device", "0x123", "lock")
+    assert r.exit_code == 2 and one_line_error(r).startswith("landscape: error: Invalid value for '--device'")
+
+
+def test_version_mismatch_exit_5(channel: str, device: FakeDevice) -> None:
+    device.schema_hash ^= 1
+    r = run(channel, "lock")
+    assert r.exit_code == 5
+    assert one_line_error(r).startswith("landscape: version mismatch: host and firmware were built from "
+                                        "different schemas")
+
+
+def test_no_such_channel_subprocess(tmp_path: Path) -> None:
+    env = dict(os.environ, PYTHONPATH=str(SRC))
+    env.pop("CAN_INTERFACE", None)
+    p = subprocess.run([sys.executable, "-m", "landscape", "--interface", "slcan", "--channel",
+                        str(tmp_path / "nopty"), "lock"], capture_output=True, text=True, env=env, timeout=60)
+    assert p.returncode == 4
+    assert "Traceback" not in p.stderr and len(p.stderr.splitlines()) == 1
+    assert p.stderr.startswith(f"landscape: cannot open CAN channel '{tmp_path / 'nopty'}' on interface 'slcan'")
+    assert "is landscaped running with --link slcan:pty:PATH" in p.stderr
+
+
+def test_shell_one_session_with_completion_names(channel: str, device: FakeDevice, tmp_path: Path) -> None:
+    from prompt_toolkit.application import create_app_session
+    from prompt_toolkit.input import create_pipe_input
+    from prompt_toolkit.output import DummyOutput
+
+    with create_pipe_input() as inp, create_app_session(input=inp, output=DummyOutput()):
+        inp.send_text("lock\nfly\nrelease extra\nget-motion-control-state\nquit\n")
+        r = CliRunner().invoke(cli, ["--interface", "virtual", "--channel", channel, "shell"],
+                               env={"XDG_STATE_HOME": str(tmp_path)})
+    assert r.exit_code == 0, r.stderr
+    assert "lock: CMD_EXEC_OK" in r.stdout and "  owner: True" in r.stdout
+    assert r.stderr.splitlines() == ["error: unknown command 'fly' (landscape --help lists them)",
+                                     "error: Got unexpected extra argument (extra)"]
+    assert [q.seq for q in device.requests] == [1, 2, 3, 4]
+    assert (tmp_path / "landscape" / "history").read_text().count("\n+") == 5
+
+
+def test_monitor_once_shows_telemetry(channel: str, device: FakeDevice) -> None:
+    r = run(channel, "monitor", "--once")
+    assert r.exit_code == 0, r.stderr
+    assert "UNLOCKED" in r.stdout and "+0.5000 -0.2500" in r.stdout and "supervisors" in r.stdout
