@@ -47,6 +47,8 @@ const char *ls_core_ret_name(int32_t code)
     }
 }
 
+static int find_session(const ls_core_t *core, uint8_t addr);
+
 void ls_core_init(ls_core_t *core, const ls_core_config_t *cfg, const ls_core_io_t *io, const ls_core_actions_t *act)
 {
     memset(core, 0, sizeof *core);
@@ -58,6 +60,18 @@ void ls_core_init(ls_core_t *core, const ls_core_config_t *cfg, const ls_core_io
     core->state = ls_State_IDLE;
     core->owner = -1;
     snprintf(core->motion_state, sizeof core->motion_state, "robot_at_rest");
+    core->settings.speed_pct = 25.0;
+    core->settings.accel_pct = 50.0;
+    core->settings.linear_speed_m_s = 0.25;
+    core->settings.angular_speed_rad_s = 1.0;
+    core->settings.linear_accel_m_s2 = 1.0;
+    core->settings.angular_accel_rad_s2 = 4.0;
+    core->rsvp_next_id = 1;
+}
+
+int ls_core_session_of(const ls_core_t *core, uint8_t addr)
+{
+    return find_session(core, addr);
 }
 
 int32_t ls_reply(ls_call_t *call, int32_t code, const char *fmt, ...)
@@ -198,8 +212,79 @@ void ls_core_on_heartbeat(ls_core_t *core, uint8_t addr, uint64_t now_us)
     }
 }
 
+static void rsvp_tick(ls_core_t *core, uint64_t now_us)
+{
+    for (int i = 0; i < LS_MAX_RSVP; i++) {
+        ls_rsvp_t *r = &core->rsvp[i];
+        if (r->used && now_us >= r->deadline_us) {
+            r->used = false;
+            r->done(core, r->ctx, ls_RetCode_CMD_TIMEOUT_ERR, true);
+        }
+    }
+}
+
+static void rsvp_on_reply(ls_core_t *core, uint8_t addr, const ls_RsvpReply *reply)
+{
+    for (int i = 0; i < LS_MAX_RSVP; i++) {
+        ls_rsvp_t *r = &core->rsvp[i];
+        if (r->used && r->id == reply->rsvp_id && r->addr == addr) {
+            r->used = false;
+            r->done(core, r->ctx, reply->ret_code, false);
+            return;
+        }
+    }
+    /* A late or unknown reply: the default action was already taken. */
+}
+
+int32_t ls_core_rsvp(ls_core_t *core, int sup, ls_NoticeKind kind, const char *event_id, const char *const *data,
+                     size_t n_data, uint32_t timeout_ms, const char *default_action, ls_rsvp_done_fn done, void *ctx,
+                     uint64_t now_us)
+{
+    if (sup < 0 || sup >= LS_MAX_SUPERVISORS || !core->sessions[sup].connected || done == NULL) {
+        return -1;
+    }
+    ls_rsvp_t *slot = NULL;
+    for (int i = 0; i < LS_MAX_RSVP; i++) {
+        if (!core->rsvp[i].used) {
+            slot = &core->rsvp[i];
+            break;
+        }
+    }
+    if (slot == NULL) {
+        return -1;
+    }
+    uint32_t id = core->rsvp_next_id++;
+    if (core->rsvp_next_id == 0) {
+        core->rsvp_next_id = 1;
+    }
+    ls_session_t *s = &core->sessions[sup];
+    memset(&core->down, 0, sizeof core->down);
+    core->down.which_msg = ls_Downlink_notice_tag;
+    ls_Notice *n = &core->down.msg.notice;
+    n->kind = kind;
+    snprintf(n->event_id, sizeof n->event_id, "%s", event_id);
+    n->rsvp_id = id;
+    n->rsvp_timeout_ms = timeout_ms;
+    snprintf(n->rsvp_default, sizeof n->rsvp_default, "%s", default_action);
+    n->notice_seq = ++s->notice_seq;
+    size_t cap = sizeof n->data / sizeof n->data[0];
+    for (size_t k = 0; k < n_data && k < cap; k++) {
+        snprintf(n->data[k], sizeof n->data[k], "%s", data[k]);
+        n->data_count++;
+    }
+    size_t len = encode_downlink(core);
+    if (len == 0) {
+        return -1;
+    }
+    *slot = (ls_rsvp_t){ .used = true, .id = id, .addr = s->addr,
+                         .deadline_us = now_us + (uint64_t)timeout_ms * 1000u, .done = done, .ctx = ctx };
+    send_bytes(core, s->addr, core->enc, len);
+    return (int32_t)id;
+}
+
 void ls_core_tick(ls_core_t *core, uint64_t now_us)
 {
+    rsvp_tick(core, now_us);
     uint64_t limit = (uint64_t)core->cfg.heartbeat_timeout_ms * 1000u;
     for (int i = 0; i < LS_MAX_SUPERVISORS; i++) {
         ls_session_t *s = &core->sessions[i];
@@ -417,6 +502,7 @@ static void on_request(ls_core_t *core, uint8_t addr, const ls_Request *rq, uint
     if (code == LS_CALL_DEFERRED) {
         if (s != NULL) {
             s->last_pending = true;
+            s->pending_tag = rq->which_cmd;
         }
         return;
     }
@@ -425,6 +511,25 @@ static void on_request(ls_core_t *core, uint8_t addr, const ls_Request *rq, uint
         res->which_result = 0; /* no result on errors */
     }
     send_response(core, s, addr);
+}
+
+void ls_core_finish_deferred(ls_core_t *core, int sup, int32_t code, const char *msg)
+{
+    if (sup < 0 || sup >= LS_MAX_SUPERVISORS) {
+        return;
+    }
+    ls_session_t *s = &core->sessions[sup];
+    if (!s->connected || !s->last_pending) {
+        return;
+    }
+    memset(&core->down, 0, sizeof core->down);
+    core->down.which_msg = ls_Downlink_response_tag;
+    ls_Response *res = &core->down.msg.response;
+    res->seq = s->last_seq;
+    res->ret_code = code;
+    res->which_result = code >= 0 ? s->pending_tag : 0;
+    snprintf(res->ret_msg, sizeof res->ret_msg, "%s", msg);
+    send_response(core, s, s->addr);
 }
 
 void ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t len, uint64_t now_us)
@@ -450,7 +555,7 @@ void ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t
         if (sup >= 0) {
             core->sessions[sup].last_heard_us = now_us;
         }
-        /* RSVP waits are owned by the feature that asked (DIO, paths); none is pending here. */
+        rsvp_on_reply(core, addr, &core->up.msg.rsvp_reply);
     } else {
         core->rx_malformed++;
     }

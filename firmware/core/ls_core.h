@@ -10,14 +10,19 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "hal/hal_arm.h"
 #include "landscape.pb.h"
 #include "ls_cmd_table.h"
+#include "ls_robot_model.h"
+
+struct ls_control;
 
 #define LS_MAX_SUPERVISORS 4
 #define LS_DOWNLINK_MAX ls_Downlink_size
 #define LS_UPLINK_MAX 4095u
 #define LS_CALL_DEFERRED INT32_MIN /* a handler will answer later */
 #define LS_FAULT_LOG_LEN 16
+#define LS_MAX_RSVP 8
 
 /* How the core talks to the bus: implemented by the network layer (or a test). */
 typedef struct {
@@ -41,7 +46,36 @@ typedef struct {
     size_t last_resp_len;
     uint32_t notice_seq;
     uint32_t executed;        /* requests executed (not answered from the cache) */
+    pb_size_t pending_tag;    /* command id of the deferred request (last_pending) */
 } ls_session_t;
+
+/* Settings of seed 3.2, always in SI (m, rad, s) inside the firmware; the
+ * handlers convert from and to the units chosen with setUnits. */
+typedef struct {
+    ls_LinearUnit linear;
+    ls_AngularUnit angular;
+    double speed_pct;              /* PERCENT_SPEED, (0, 100] */
+    double accel_pct;              /* PERCENT_ACCEL, (0, 100] */
+    double linear_speed_m_s;       /* LINEAR_SPEED, Cartesian moves */
+    double angular_speed_rad_s;    /* ANGULAR_SPEED, Cartesian moves */
+    double linear_accel_m_s2;
+    double angular_accel_rad_s2;
+    double tool_offset[6];         /* flange -> tool tip: x y z roll pitch yaw */
+    double world_frame[6];         /* base -> world: x y z roll pitch yaw */
+} ls_settings_t;
+
+struct ls_core;
+/* Outcome of an RSVP: the supervisor's ret_code, or timed_out with the default taken. */
+typedef void (*ls_rsvp_done_fn)(struct ls_core *core, void *ctx, int32_t ret_code, bool timed_out);
+
+typedef struct {
+    bool used;
+    uint32_t id;
+    uint8_t addr;
+    uint64_t deadline_us;
+    ls_rsvp_done_fn done;
+    void *ctx;
+} ls_rsvp_t;
 
 typedef struct {
     uint64_t at_us;
@@ -69,6 +103,16 @@ typedef struct ls_core {
     ls_core_config_t cfg;
     ls_core_io_t io;
     ls_core_actions_t act;
+    /* devices and the control loop (NULL when not composed) */
+    const ls_robot_model_t *model;
+    struct ls_control *ctl;
+    const hal_sensor_t *sensors;
+    size_t n_sensors;
+    hal_tool_t *tool;
+    hal_manual_t *manual;
+    ls_settings_t settings;
+    ls_rsvp_t rsvp[LS_MAX_RSVP];
+    uint32_t rsvp_next_id;
     ls_State state;
     int owner;                 /* index in sessions[], -1 when unlocked */
     ls_session_t sessions[LS_MAX_SUPERVISORS];
@@ -111,6 +155,21 @@ void ls_core_notify(ls_core_t *core, int sup, ls_NoticeKind kind, const char *ev
 
 /* Latch a fault: stop, deactivate, record it and raise an alarm to everyone. */
 void ls_core_fault(ls_core_t *core, const char *text, uint64_t now_us);
+
+/* Answer a request that a handler deferred (LS_CALL_DEFERRED) for session
+ * `sup`: the response carries the deferred request's seq and command id. */
+void ls_core_finish_deferred(ls_core_t *core, int sup, int32_t code, const char *msg);
+
+/* Send an RSVP notice to session `sup` and wait (without blocking) for its
+ * reply; `done` runs once: with the reply's ret_code, or after timeout_ms with
+ * timed_out = true (then the caller takes `default_action`, which the notice
+ * announces). Returns the rsvp id (> 0), or -1 when the table is full. */
+int32_t ls_core_rsvp(ls_core_t *core, int sup, ls_NoticeKind kind, const char *event_id, const char *const *data,
+                     size_t n_data, uint32_t timeout_ms, const char *default_action, ls_rsvp_done_fn done, void *ctx,
+                     uint64_t now_us);
+
+/* Index of the connected session of `addr`, or -1. */
+int ls_core_session_of(const ls_core_t *core, uint8_t addr);
 
 const char *ls_core_state_name(ls_State s);
 const char *ls_core_ret_name(int32_t code);

@@ -1,0 +1,142 @@
+/* The control loop and its glue to the comms thread.
+ *
+ * The loop (ls_control_cycle) runs at a fixed rate on the HAL's periodic
+ * runner (hal/linux real-time thread; in simulation the same runner with
+ * real-time or lockstep time). Each cycle: take commands, run the motion
+ * executor, command the arm, step the simulated world, read feedback,
+ * sensors and DIO, check faults, publish a snapshot and events.
+ *
+ * Between the threads there is no lock: commands and events travel through
+ * single-producer single-consumer rings, state through a seqlock snapshot,
+ * and motion plans through one plan slot handed over by a flag. Nothing in
+ * the loop allocates or blocks.
+ *
+ * Comms thread API: ls_control_post, ls_control_plan_slot/ls_control_start_plan,
+ * ls_control_snapshot, ls_control_next_event. */
+#ifndef LS_CONTROL_H
+#define LS_CONTROL_H
+
+#include <stdatomic.h>
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "hal/hal_arm.h"
+#include "hal/hal_clock.h"
+#include "hal/hal_dio.h"
+#include "ls_motion.h"
+#include "ls_robot_model.h"
+
+#define LS_CTL_QUEUE_LEN 32u   /* power of two */
+#define LS_CTL_MAX_DIO_UNITS 4
+
+typedef enum {
+    LS_CTL_ENABLE = 1,   /* drives on: hold the measured position */
+    LS_CTL_DISABLE,      /* abort any motion, drives off */
+    LS_CTL_START,        /* start the plan in the plan slot */
+    LS_CTL_STOP,         /* decelerate along the path and pause */
+    LS_CTL_RESUME,
+    LS_CTL_ABORT,
+    LS_CTL_DIO_WRITE,    /* dio.unit, dio.on, dio.off */
+    LS_CTL_AUX_DONE,     /* a path auxiliary command finished: continue */
+    LS_CTL_ESTOP_LINE,   /* dio.unit, dio.on = input bit that means e-stop when active (0: none) */
+} ls_ctl_kind_t;
+
+typedef struct {
+    ls_ctl_kind_t kind;
+    uint32_t ref_seq;
+    struct {
+        uint16_t unit;
+        uint32_t on, off;
+    } dio;
+} ls_ctl_cmd_t;
+
+typedef enum {
+    LS_CEV_MOTION = 1,   /* motion: a motion executor event */
+    LS_CEV_FAULT,        /* text: the loop disabled the drives (e-stop input, overrun, HAL error) */
+    LS_CEV_DIO_CHANGED,  /* dio.unit, dio.on = new levels, dio.off = bits that changed */
+    LS_CEV_CMD_FAILED,   /* ref_seq, text: a command the loop could not carry out */
+} ls_cev_kind_t;
+
+typedef struct {
+    ls_cev_kind_t kind;
+    uint32_t ref_seq;
+    ls_motion_event_t motion;
+    char text[64];
+    struct {
+        uint16_t unit;
+        uint32_t on, off;
+    } dio;
+} ls_ctl_event_t;
+
+/* What the comms thread may read at any time (copied under a seqlock). */
+typedef struct {
+    uint64_t cycle;
+    uint64_t t_us;
+    bool enabled;
+    ls_motion_phase_t phase;
+    double q_rad[LS_N_JOINTS];
+    double qd_rad_s[LS_N_JOINTS];
+    double q_cmd_rad[LS_N_JOINTS];
+    uint32_t dio[LS_CTL_MAX_DIO_UNITS];
+    /* sensors in the order of ls_control_config_t.sensors, SI, tool frame */
+    double sensor[HAL_MAX_SENSORS][HAL_SENSOR_MAX_VALUES];
+    double flange_pose[16];   /* FK of q_rad, base frame, column-major */
+    uint32_t events_lost;
+    uint32_t max_cycle_us;
+} ls_ctl_snapshot_t;
+
+typedef struct {
+    const ls_robot_model_t *model;
+    hal_arm_t *arm;           /* may be NULL: no arm backend (nothing moves) */
+    hal_dio_t *dio;           /* may be NULL */
+    const hal_sensor_t *sensors; /* read every cycle into the snapshot */
+    size_t n_sensors;
+    uint32_t rate_hz;
+} ls_control_config_t;
+
+typedef struct ls_control {
+    ls_control_config_t cfg;
+    double dt_s;
+    /* comms -> loop */
+    ls_ctl_cmd_t cmd_ring[LS_CTL_QUEUE_LEN];
+    atomic_uint cmd_head, cmd_tail;
+    ls_motion_plan_t plan_slot;
+    atomic_bool plan_slot_busy; /* set by the comms thread when filled, cleared by the loop when taken */
+    /* loop -> comms */
+    ls_ctl_event_t ev_ring[LS_CTL_QUEUE_LEN];
+    atomic_uint ev_head, ev_tail;
+    atomic_uint events_lost;
+    /* snapshot */
+    atomic_uint snap_seq;
+    ls_ctl_snapshot_t snap;
+    /* loop-private */
+    ls_motion_t motion;
+    bool enabled;
+    double q[LS_N_JOINTS], qd[LS_N_JOINTS], q_cmd[LS_N_JOINTS], qd_cmd[LS_N_JOINTS];
+    uint32_t dio_levels[LS_CTL_MAX_DIO_UNITS];
+    uint16_t estop_unit;
+    uint32_t estop_bit;
+    uint64_t cycles;
+    uint32_t max_cycle_us;
+} ls_control_t;
+
+/* Init-time. Reads the arm once so the first set-point equals the measured position. */
+void ls_control_init(ls_control_t *c, const ls_control_config_t *cfg);
+
+/* The loop body: call once per period with the runner's time. */
+void ls_control_cycle(ls_control_t *c, uint64_t now_us);
+
+/* --- comms thread --- */
+
+/* Queue a command; false when the ring is full (the caller answers CMD_BUSY_ERR). */
+bool ls_control_post(ls_control_t *c, const ls_ctl_cmd_t *cmd);
+/* The plan slot to fill, or NULL while the loop has not taken the previous plan. */
+ls_motion_plan_t *ls_control_plan_slot(ls_control_t *c);
+/* Hand the filled slot over and queue LS_CTL_START. */
+bool ls_control_start_plan(ls_control_t *c, uint32_t ref_seq);
+/* A consistent copy of the loop's state. */
+void ls_control_snapshot(ls_control_t *c, ls_ctl_snapshot_t *out);
+/* Take the next event; false when none. */
+bool ls_control_next_event(ls_control_t *c, ls_ctl_event_t *out);
+
+#endif
