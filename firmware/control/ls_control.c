@@ -160,6 +160,7 @@ static void handle_command(ls_control_t *c, const ls_ctl_cmd_t *cmd)
 {
     switch (cmd->kind) {
     case LS_CTL_ENABLE:
+        c->disable_pending = false;
         if (c->cfg.arm == NULL || hal_arm_enable(c->cfg.arm, true) < 0) {
             cmd_failed(c, cmd->ref_seq, "the drives could not be enabled");
             return;
@@ -170,6 +171,12 @@ static void handle_command(ls_control_t *c, const ls_ctl_cmd_t *cmd)
         c->enabled = true;
         return;
     case LS_CTL_DISABLE:
+        if (c->enabled && (c->motion.phase == LS_MOTION_RUNNING || c->motion.phase == LS_MOTION_STOPPING)) {
+            /* Braking a moving arm is a jolt: decelerate along the path, then disable. */
+            ls_motion_stop(&c->motion);
+            c->disable_pending = true;
+            return;
+        }
         ls_motion_abort(&c->motion);
         (void)hal_arm_enable(c->cfg.arm, false);
         c->enabled = false;
@@ -246,6 +253,12 @@ void ls_control_cycle(ls_control_t *c, uint64_t now_us)
             fault(c, "arm command failed");
         }
     }
+    if (c->disable_pending && c->motion.phase != LS_MOTION_RUNNING && c->motion.phase != LS_MOTION_STOPPING) {
+        ls_motion_abort(&c->motion);
+        (void)hal_arm_enable(c->cfg.arm, false);
+        c->enabled = false;
+        c->disable_pending = false;
+    }
     (void)hal_arm_step(c->cfg.arm, c->dt_s); /* physics advances with the drives off too (brakes) */
     read_feedback(c);
     for (uint8_t i = 0; i < mev.n; i++) {
@@ -271,7 +284,7 @@ void ls_control_cycle(ls_control_t *c, uint64_t now_us)
     memcpy(s.q_cmd_rad, c->enabled ? c->q_cmd : c->q, sizeof s.q_cmd_rad);
     memcpy(s.dio, c->dio_levels, sizeof s.dio);
     memset(s.sensor, 0, sizeof s.sensor);
-    for (size_t i = 0; i < c->cfg.n_sensors && i < HAL_MAX_SENSORS; i++) {
+    for (size_t i = 0; i < c->cfg.n_sensors && i < (size_t)HAL_MAX_SENSORS; i++) {
         (void)c->cfg.sensors[i].read(c->cfg.sensors[i].self, s.sensor[i]);
     }
     (void)ls_kin_fk(c->cfg.model, c->q, s.flange_pose);
