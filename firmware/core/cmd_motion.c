@@ -16,11 +16,12 @@
 
 #include "ls_control.h"
 #include "ls_core.h"
+#include "ls_core_events.h"
 #include "ls_kin.h"
 #include "ls_motion.h"
 
-/* Called by the comms loop (declared for the lead's glue; see the report). */
-void ls_core_on_motion_event(ls_core_t *core, const ls_motion_event_t *ev);
+/* Polls the DIO inputs of a `wait` auxiliary command: call every comms loop
+ * turn (next to ls_core_tick). Not in ls_core_events.h yet. */
 void ls_core_motion_tick(ls_core_t *core, uint64_t now_us);
 
 #define PI 3.14159265358979323846
@@ -560,15 +561,23 @@ static int parse_aux(const char *text, aux_t *a, char *why, size_t whylen)
 {
     char buf[LS_MOTION_AUX_LEN];
     snprintf(buf, sizeof buf, "%s", text);
-    char *save = NULL;
     char *tok[5] = { 0 };
     int n = 0;
-    for (char *t = strtok_r(buf, " \t", &save); t != NULL; t = strtok_r(NULL, " \t", &save)) {
-        if (n == 5) {
-            n = 6;
+    for (char *c = buf; *c != '\0';) {
+        while (*c == ' ' || *c == '\t') {
+            *c++ = '\0';
+        }
+        if (*c == '\0') {
             break;
         }
-        tok[n++] = t;
+        if (n == 5) {
+            n = 6; /* too many words */
+            break;
+        }
+        tok[n++] = c;
+        while (*c != '\0' && *c != ' ' && *c != '\t') {
+            c++;
+        }
     }
     memset(a, 0, sizeof *a);
     uint32_t unit = 0;
@@ -705,7 +714,7 @@ static void run_aux(ls_core_t *core, const ls_motion_event_t *ev)
         g_run.wait_unit = a.unit;
         g_run.wait_mask = a.on;
         g_run.wait_deadline_us = g_now_us + (uint64_t)(a.timeout_s * 1e6);
-        snprintf(g_run.wait_text, sizeof g_run.wait_text, "%s", ev->text);
+        snprintf(g_run.wait_text, sizeof g_run.wait_text, "%.*s", (int)sizeof g_run.wait_text - 1, ev->text);
         ls_core_motion_tick(core, g_now_us);
         return;
     case AUX_EVENT:
@@ -816,7 +825,7 @@ void ls_core_on_motion_event(ls_core_t *core, const ls_motion_event_t *ev)
         return;
     }
     case LS_MEV_TAG: {
-        snprintf(g_tag_path, sizeof g_tag_path, "%s", ev->text);
+        snprintf(g_tag_path, sizeof g_tag_path, "%.*s", (int)sizeof g_tag_path - 1, ev->text);
         snprintf(g_tag_last, sizeof g_tag_last, "%s", ev->name);
         if (!g_run.active) {
             return;
@@ -825,7 +834,7 @@ void ls_core_on_motion_event(ls_core_t *core, const ls_motion_event_t *ev)
         snprintf(d1, sizeof d1, "tag=%s", ev->name);
         snprintf(d2, sizeof d2, "index=%d", (int)ev->index);
         snprintf(d3, sizeof d3, "cycle=%d", (int)ev->cycle);
-        snprintf(d4, sizeof d4, "path=%s", ev->text);
+        snprintf(d4, sizeof d4, "path=%.31s", ev->text);
         const char *data[] = { d1, d2, d3, d4 };
         ls_core_notify(core, g_run.sup, ls_NoticeKind_EVENT, "tag", g_run.ref_seq, false, data, 4);
         return;
