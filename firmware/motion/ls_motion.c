@@ -253,6 +253,19 @@ static int explain_ik(const ls_robot_model_t *model, const ls_motion_seg_t *s, d
                   T[12], T[13], T[14]);
 }
 
+static int check_box(const ls_robot_model_t *model, const double T[16], char *why, unsigned whylen)
+{
+    for (int i = 0; i < 3; i++) {
+        const double pi = T[12 + i];
+        if (pi < model->workspace_min_m[i] || pi > model->workspace_max_m[i]) {
+            return refuse(why, whylen, LS_MOTION_ERANGE,
+                          "axis %s: %.4g m beyond the workspace limit %.4g m (base frame, tool tip)", axis_name[i], pi,
+                          pi < model->workspace_min_m[i] ? model->workspace_min_m[i] : model->workspace_max_m[i]);
+        }
+    }
+    return LS_MOTION_OK;
+}
+
 /* Time the segment over s in [0, 1] with the slower of the linear and the
  * angular limits, then sample it: workspace box, IK, joint limits and joint
  * velocities. Fills traj, stop ramp and q1. */
@@ -284,6 +297,20 @@ static int cart_time_and_check(ls_motion_seg_t *s, const ls_robot_model_t *model
     double ramp = ls_traj_stop_ramp_s(&s->traj, &tl);
     s->stop_ramp_s = fmax(MIN_STOP_RAMP_S, STOP_RAMP_MARGIN * (ramp > 0.0 ? ramp : 0.0));
 
+    /* The target first, so an unreachable goal is reported as such rather
+     * than as the velocity blow-up on the way to the edge of the reach. */
+    {
+        double F[16], sols[LS_KIN_MAX_BRANCHES][LS_N_JOINTS];
+        int n_sol = 0;
+        if (check_box(model, s->P1, why, whylen) < 0) {
+            return LS_MOTION_ERANGE;
+        }
+        ls_pose_mul(s->P1, s->tool_inv, F);
+        const int ks = ls_kin_ik_all(model, F, sols, &n_sol);
+        if (ks != LS_KIN_OK && ks != LS_KIN_ESINGULAR && ks != LS_KIN_ELIMITS) {
+            return explain_ik(model, s, 1.0, s->q0, ks, why, whylen);
+        }
+    }
     /* Sample densely enough for 1 mm, 0.5 deg and 10 ms. */
     double n_d = fmax(fmax(L / SAMPLE_STEP_M, A / SAMPLE_STEP_RAD), s->traj.duration_s / SAMPLE_STEP_S);
     int n = (int)fmin(ceil(n_d), (double)MAX_SAMPLES);
@@ -297,14 +324,9 @@ static int cart_time_and_check(ls_motion_seg_t *s, const ls_robot_model_t *model
         const double x = (double)k / (double)n;
         double T[16];
         seg_tip_pose(s, x, T);
-        for (int i = 0; i < 3; i++) {
-            const double pi = T[12 + i];
-            if (pi < model->workspace_min_m[i] || pi > model->workspace_max_m[i]) {
-                return refuse(why, whylen, LS_MOTION_ERANGE,
-                              "axis %s: %.4g m beyond the workspace limit %.4g m (base frame, tool tip)",
-                              axis_name[i], pi,
-                              pi < model->workspace_min_m[i] ? model->workspace_min_m[i] : model->workspace_max_m[i]);
-            }
+        int r = check_box(model, T, why, whylen);
+        if (r < 0) {
+            return r;
         }
         double q[LS_N_JOINTS];
         int ks = seg_ik(model, s, x, q_prev, q);
@@ -318,7 +340,7 @@ static int cart_time_and_check(ls_motion_seg_t *s, const ls_robot_model_t *model
                 const double qd_lim = model->qd_max_rad_s[jn] * lim->joint_speed_frac;
                 if (qd > qd_lim) {
                     return refuse(why, whylen, LS_MOTION_ERANGE,
-                                  "joint %d: velocity %.3g rad/s beyond its limit %.3g rad/s near tip (%.4g, %.4g, "
+                                  "joint %d: velocity %.4g rad/s beyond its limit %.4g rad/s near tip (%.4g, %.4g, "
                                   "%.4g) m: lower the speed or use a joint move",
                                   jn + 1, qd, qd_lim, T[12], T[13], T[14]);
                 }
