@@ -23,6 +23,10 @@
 /* Polls the DIO inputs of a `wait` auxiliary command: call every comms loop
  * turn (next to ls_core_tick). Not in ls_core_events.h yet. */
 void ls_core_motion_tick(ls_core_t *core, uint64_t now_us);
+/* The loop could not carry out the motion `ref_seq` (LS_CEV_CMD_FAILED), or
+ * faulted (LS_CEV_FAULT, ref_seq 0 = whatever runs): send the motion's one
+ * final notice (an alarm) and leave MOVING/PAUSED. Not in ls_core_events.h yet. */
+void ls_core_motion_failed(ls_core_t *core, uint32_t ref_seq, const char *text);
 
 #define PI 3.14159265358979323846
 #define LS_PATH_MAX 8
@@ -750,6 +754,18 @@ void ls_core_motion_tick(ls_core_t *core, uint64_t now_us)
                  (unsigned)g_run.wait_mask, (unsigned)g_run.wait_unit);
         ls_core_fault(core, t, now_us);
         motion_failed(core, t);
+    }
+}
+
+void ls_core_motion_failed(ls_core_t *core, uint32_t ref_seq, const char *text)
+{
+    if (!g_run.active || (ref_seq != 0 && ref_seq != g_run.ref_seq)) {
+        return;
+    }
+    motion_failed(core, text);
+    if (core->state == ls_State_MOVING || core->state == ls_State_PAUSED) {
+        core->state = ls_State_RESTING;
+        snprintf(core->motion_state, sizeof core->motion_state, "robot_stopped_on_error");
     }
 }
 
