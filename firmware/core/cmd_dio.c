@@ -16,6 +16,7 @@
 
 #include "ls_control.h"
 #include "ls_core.h"
+#include "ls_core_events.h"
 
 _Static_assert(LS_CORE_MAX_DIO_UNITS == LS_CTL_MAX_DIO_UNITS, "the core and the loop must agree on DIO units");
 

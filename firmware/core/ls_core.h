@@ -24,7 +24,7 @@ struct ls_control;
 #define LS_CALL_DEFERRED INT32_MIN /* a handler will answer later */
 #define LS_FAULT_LOG_LEN 16
 #define LS_MAX_RSVP 8
-#define LS_CORE_MAX_DIO_UNITS 4 /* equals LS_CTL_MAX_DIO_UNITS (checked in cmd_dio.c) */
+#define LS_CORE_MAX_DIO_UNITS 4
 #define LS_MAX_DIO_WATCHES 8
 
 /* How the core talks to the bus: implemented by the network layer (or a test). */
@@ -147,9 +147,9 @@ typedef struct ls_core {
     size_t n_sensors;
     hal_tool_t *tool;
     hal_manual_t *manual;
-    hal_dio_unit_info_t dio_info[LS_CORE_MAX_DIO_UNITS]; /* filled at start from hal_dio_describe */
-    uint16_t dio_units;                                  /* 0: no DIO */
-    ls_dio_state_t dio;
+    hal_dio_unit_info_t dio_info[LS_CORE_MAX_DIO_UNITS]; /* input/output masks per unit */
+    uint16_t dio_units;
+    ls_dio_state_t dio;                                  /* signalDigitalIO watches, setDigitalIO in flight */
     ls_settings_t settings;
     ls_rsvp_t rsvp[LS_MAX_RSVP];
     uint32_t rsvp_next_id;
@@ -207,15 +207,6 @@ void ls_core_finish_deferred(ls_core_t *core, int sup, int32_t code, const char 
 int32_t ls_core_rsvp(ls_core_t *core, int sup, ls_NoticeKind kind, const char *event_id, const char *const *data,
                      size_t n_data, uint32_t timeout_ms, const char *default_action, ls_rsvp_done_fn done, void *ctx,
                      uint64_t now_us);
-
-/* A DIO change reported by the control loop (LS_CEV_DIO_CHANGED): fires the
- * signalDigitalIO watches of `unit` that check on changes. Comms thread. */
-void ls_core_on_dio_event(ls_core_t *core, uint16_t unit, uint32_t levels, uint32_t changed, uint64_t now_us);
-
-/* signalDigitalIO polling and time-outs, setDigitalIO completions and the end
- * of watches whose session ended. Comms thread, every loop turn; O(watches),
- * one control-loop snapshot when something is due. */
-void ls_dio_tick(ls_core_t *core, uint64_t now_us);
 
 /* Index of the connected session of `addr`, or -1. */
 int ls_core_session_of(const ls_core_t *core, uint8_t addr);

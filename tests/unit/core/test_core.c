@@ -17,6 +17,7 @@
 
 #include "ls_control.h"
 #include "ls_core.h"
+#include "ls_core_events.h"
 #include "ls_kin.h"
 #include "ls_units.h"
 
