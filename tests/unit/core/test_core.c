@@ -1,9 +1,10 @@
 /* The controller core, black box: encoded uplinks in, decoded downlinks out.
  *
  * The io captures every downlink and decodes it with nanopb. There is no
- * control loop: the two functions of its comms-thread API that the core calls
- * (ls_control_snapshot, ls_control_post) are defined here, so a test sets the
- * snapshot (joints, DIO levels, sensors, cycle) and sees what was posted. */
+ * control loop: the core's calls of ls_control_snapshot and ls_control_post
+ * are redirected here at link time (-Wl,--wrap, see CMakeLists.txt), so a
+ * test sets the snapshot (joints, DIO levels, sensors, cycle) and sees what
+ * was posted, whether or not the real ls_control is linked too. */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -46,13 +47,16 @@ static ls_ctl_cmd_t g_posted[16];
 static size_t g_nposted;
 static bool g_post_ok;
 
-void ls_control_snapshot(ls_control_t *c, ls_ctl_snapshot_t *out)
+void __wrap_ls_control_snapshot(ls_control_t *c, ls_ctl_snapshot_t *out);
+bool __wrap_ls_control_post(ls_control_t *c, const ls_ctl_cmd_t *cmd);
+
+void __wrap_ls_control_snapshot(ls_control_t *c, ls_ctl_snapshot_t *out)
 {
     assert_ptr_equal(c, &g_ctl);
     *out = g_snap;
 }
 
-bool ls_control_post(ls_control_t *c, const ls_ctl_cmd_t *cmd)
+bool __wrap_ls_control_post(ls_control_t *c, const ls_ctl_cmd_t *cmd)
 {
     assert_ptr_equal(c, &g_ctl);
     if (!g_post_ok || g_nposted >= sizeof g_posted / sizeof g_posted[0]) {
