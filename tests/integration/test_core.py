@@ -21,6 +21,7 @@ import pytest
 from conftest import ROOT, Controller, start_controller
 from landscape import errors
 from landscape._generated import landscape_pb2 as pb
+from landscape.registry import lookup
 from landscape.supervisor import Supervisor, notice_data
 
 # ls_robot_model_default (firmware/model/ls_robot_model.c)
@@ -89,6 +90,21 @@ def two(bus: can.BusABC) -> Iterator[tuple[Supervisor, Supervisor]]:
         notifier.stop()
 
 
+def _raw(sup: Supervisor, command: str, **fields: object) -> pb.Response:
+    """Send a request the host library would refuse to build (an enum value
+    outside the schema), through the library's own transaction path."""
+    cmd = lookup(command)
+    req = pb.Request()
+    sub = getattr(req, cmd.field)
+    sub.SetInParent()
+    for k, v in fields.items():
+        setattr(sub, k, v)
+    with sup._req_lock:
+        sup._seq += 1
+        req.seq = sup._seq
+        return sup._transact(cmd, req, 2.0)
+
+
 def _wait_notice(sup: Supervisor, match: Callable[[pb.Notice], bool], timeout_s: float) -> pb.Notice | None:
     for n in sup.notices(timeout_s=timeout_s):
         if match(n):
@@ -140,8 +156,8 @@ def test_speed_and_acceleration_settings(two: tuple[Supervisor, Supervisor]) -> 
     assert "ANGULAR_ACCEL -1 degrees/s^2: allowed (0, 687.549]" in str(ei.value)
     with pytest.raises(errors.ParamError):
         owner.set_speed(math.nan, attribute="PERCENT_SPEED")
-    with pytest.raises(errors.ParamError):
-        owner.request("setSpeed", speed=10.0, attribute=7)
+    rsp = _raw(owner, "setSpeed", speed=10.0, attribute=7)
+    assert rsp.ret_code == pb.CMD_PARAM_ERR and "attribute 7 is not a SpeedType" in rsp.ret_msg
     v = observer.get_velocities().result
     assert v["percent_velocity"] == 40.0
     assert v["world_linear_velocity"] == pytest.approx(500.0, abs=1e-9)
@@ -172,8 +188,8 @@ def test_units_round_trip_of_the_tool_offset(two: tuple[Supervisor, Supervisor])
     assert "takes 6 values" in str(ei.value)
     with pytest.raises(errors.ParamError):
         owner.set_world_cartesian_frame([0.0, 0.0, math.inf, 0.0, 0.0, 0.0])
-    with pytest.raises(errors.ParamError):
-        owner.request("setUnits", linear=9, angular=0)
+    rsp = _raw(owner, "setUnits", linear=9, angular=0)
+    assert rsp.ret_code == pb.CMD_PARAM_ERR and "linear unit 9" in rsp.ret_msg
     assert observer.get_units().result == {"linear_units": "feet", "angular_units": "degrees"}
 
     owner.activate()  # set commands are valid at rest too
@@ -187,6 +203,17 @@ def _norm(v: list[float]) -> float:
     return math.sqrt(sum(x * x for x in v))
 
 
+def _rot(rpy: list[float]) -> list[float]:
+    """R = Rz(yaw) Ry(pitch) Rx(roll), row-major: orientations compared as
+    matrices, since at pitch +-90 deg (the arm's rest pose) roll and yaw alone
+    are not defined."""
+    r, p, y = rpy
+    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
+    return [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr,
+            sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr,
+            -sp, cp * sr, cp * cr]
+
+
 def test_robot_position_follows_world_frame_and_tool(two: tuple[Supervisor, Supervisor]) -> None:
     owner, observer = two
     p0 = observer.get_robot_position().result
@@ -194,18 +221,24 @@ def test_robot_position_follows_world_frame_and_tool(two: tuple[Supervisor, Supe
     owner.set_world_cartesian_frame([0.5, 0.0, 0.0, 0.0, 0.0, 0.0])
     p1 = observer.get_robot_position().result
     assert p1["joints"] == pytest.approx(p0["joints"], abs=1e-6)  # the arm rests
-    assert p1["world_pose"][0] == pytest.approx(p0["world_pose"][0] - 0.5, abs=1e-6)
-    assert p1["world_pose"][1:] == pytest.approx(p0["world_pose"][1:], abs=1e-6)
+    assert p1["world_pose"][:3] == pytest.approx([p0["world_pose"][0] - 0.5, *p0["world_pose"][1:3]], abs=1e-6)
+    assert _rot(p1["world_pose"][3:]) == pytest.approx(_rot(p0["world_pose"][3:]), abs=1e-5)
+    owner.set_world_cartesian_frame([0.0, 0.0, 0.0, 0.0, 0.0, math.pi / 2])  # base +y is world -x
+    p1 = observer.get_robot_position().result
+    assert p1["world_pose"][:3] == pytest.approx([p0["world_pose"][1], -p0["world_pose"][0], p0["world_pose"][2]],
+                                                 abs=1e-6)
     owner.set_world_cartesian_frame([0.0] * 6)
     owner.set_tool_offset([0.0, 0.0, 0.1, 0.0, 0.0, 0.0])
     p2 = observer.get_robot_position().result
-    moved = [a - b for a, b in zip(p2["world_pose"][:3], p0["world_pose"][:3])]
-    assert _norm(moved) == pytest.approx(0.1, abs=1e-6)  # 0.1 m along the flange z axis
+    z_axis = _rot(p0["world_pose"][3:])[2::3]  # the flange z axis in the base frame
+    assert p2["world_pose"][:3] == pytest.approx([a + 0.1 * z for a, z in zip(p0["world_pose"][:3], z_axis)],
+                                                 abs=1e-5)
     owner.set_units(linear="MILLIMETERS", angular="DEGREES")
     p3 = observer.get_robot_position().result
     assert p3["joints"] == pytest.approx([math.degrees(q) for q in p2["joints"]], abs=1e-4)
     assert p3["world_pose"][:3] == pytest.approx([1000 * x for x in p2["world_pose"][:3]], abs=1e-3)
-    assert p3["world_pose"][3:] == pytest.approx([math.degrees(x) for x in p2["world_pose"][3:]], abs=1e-4)
+    assert _rot([math.radians(a) for a in p3["world_pose"][3:]]) == pytest.approx(_rot(p2["world_pose"][3:]),
+                                                                               abs=1e-5)
 
 
 def test_sensor_readings(two: tuple[Supervisor, Supervisor]) -> None:
