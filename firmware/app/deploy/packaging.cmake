@@ -33,7 +33,7 @@ install(CODE "
 install(FILES ${LS_DEPLOY_DIR}/landscaped.service DESTINATION lib/systemd/system)
 install(FILES ${LS_DEPLOY_DIR}/landscape.sysusers DESTINATION lib/sysusers.d RENAME landscape.conf)
 install(FILES ${LS_DEPLOY_DIR}/60-landscape-gpio.rules DESTINATION lib/udev/rules.d)
-file(GLOB LS_DOC_FILES ${PROJECT_SOURCE_DIR}/docs/*.md)
+file(GLOB LS_DOC_FILES CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/docs/*.md)
 install(FILES ${LS_DOC_FILES} DESTINATION share/doc/landscape)
 
 # ---- CPack: one Debian package ------------------------------------------------
