@@ -420,11 +420,18 @@ static char *ini_reader_fn(char *str, int num, void *stream)
     }
     c->line++;
     size_t n = strlen(str);
-    if (n > 0 && str[n - 1] != '\n' && !feof(c->f)) {
-        ctx_error(c, "line longer than %d characters", num - 3);
+    if ((n == 0 || str[n - 1] != '\n') && !feof(c->f)) {
+        if (n + 1 < (size_t)num) {
+            ctx_error(c, "a NUL byte in the line: this is not a text file");
+        } else {
+            ctx_error(c, "line longer than %d characters", num - 3);
+        }
         return NULL;
     }
     char *start = str;
+    if (c->line == 1 && strncmp(start, "\xEF\xBB\xBF", 3) == 0) {
+        start += 3; /* UTF-8 byte order mark */
+    }
     while (*start == ' ' || *start == '\t') {
         start++;
     }

@@ -356,6 +356,25 @@ static void test_line_too_long(void **state)
     refused(*state, text, "2: line longer than 197 characters");
 }
 
+static void test_byte_order_mark_and_nul(void **state)
+{
+    fx_t *f = *state;
+    refused(f, "\xEF\xBB\xBF[motors]\n", "1: unknown section [motors]; expected [device], [hal], [control] or [dio]");
+    unlink(f->path);
+    assert_int_equal(load(f, "\xEF\xBB\xBF[device]\nnode = 7\n"), 0);
+    assert_int_equal(f->cfg.node, 7);
+    unlink(f->path);
+    static const char bin[] = "[device]\nna\0me = x\n";
+    tc_write_file(f->path, sizeof f->path, "");
+    FILE *fp = fopen(f->path, "w");
+    assert_non_null(fp);
+    assert_int_equal(fwrite(bin, 1, sizeof bin - 1, fp), sizeof bin - 1);
+    fclose(fp);
+    assert_int_equal(ls_config_load_file(&f->cfg, f->path, f->msg, sizeof f->msg), -1);
+    snprintf(f->want, sizeof f->want, "%s:2: a NUL byte in the line: this is not a text file", f->path);
+    assert_string_equal(f->msg, f->want);
+}
+
 /* ---- options ------------------------------------------------------------ */
 
 static void test_skeleton_options_keep_working(void **state)
@@ -582,6 +601,7 @@ int tc_run_config_tests(void)
         cmocka_unit_test_setup_teardown(test_syntax_error, setup, teardown),
         cmocka_unit_test_setup_teardown(test_first_error_wins, setup, teardown),
         cmocka_unit_test_setup_teardown(test_line_too_long, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_byte_order_mark_and_nul, setup, teardown),
         cmocka_unit_test_setup_teardown(test_skeleton_options_keep_working, setup, teardown),
         cmocka_unit_test_setup_teardown(test_every_option, setup, teardown),
         cmocka_unit_test_setup_teardown(test_options_override_the_file, setup, teardown),
