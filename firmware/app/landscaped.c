@@ -5,7 +5,6 @@
  * Threads: this comms thread (links, ISO-TP, dispatcher, telemetry). Logs go
  * to stderr with a level prefix that journald understands. */
 #include <errno.h>
-#include <getopt.h>
 #include <inttypes.h>
 #include <poll.h>
 #include <signal.h>
@@ -23,6 +22,7 @@
 #include "hal_linux_socketcan.h"
 #include "hal_sim_world.h"
 #include "landscape.h" /* cantools: DBC pack functions */
+#include "ls_check.h"
 #include "ls_config.h"
 #include "ls_control.h"
 #include "ls_core.h"
@@ -64,209 +64,6 @@ static uint64_t mono_us(void)
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (uint64_t)ts.tv_sec * 1000000u + (uint64_t)ts.tv_nsec / 1000u;
-}
-
-static void usage(FILE *f)
-{
-    fprintf(f,
-            "usage: landscaped --hal sim --link SPEC [--link SPEC ...] [options]\n"
-            "\n"
-            "  --hal sim                 simulated controller: --arm sim --dio sim --clock realtime\n"
-            "  --link slcan:pty:PATH     SLCAN on a new pseudo-terminal; PATH becomes a symlink to it\n"
-            "  --link socketcan:IFNAME   a SocketCAN interface (can0, vcan0)\n"
-            "                            (--link is repeatable: every link is one segment of the same bus)\n"
-            "  --arm sim|none            the arm backend (default none; --hal sim: sim)\n"
-            "  --dio sim|gpiod:CHIP|none digital I/O backend (gpiod lines: --inputs, --outputs)\n"
-            "  --inputs N,N,...          gpiod line offsets of the inputs (bits 0..15)\n"
-            "  --outputs N,N,...         gpiod line offsets of the outputs (bits 16..31)\n"
-            "  --dio-socket PATH         sim: Unix datagram socket that drives sim inputs and the jog device\n"
-            "  --clock realtime|lockstep lockstep: exact virtual time, the sim arm rests while idle\n"
-            "  --rate HZ                 control loop rate (default 1000)\n"
-            "  --telemetry-hz HZ         broadcast rate of joints/tool/status/DIO (default 50, 0 = off)\n"
-            "  --rt-priority N           SCHED_FIFO priority of the control thread (0 = normal thread)\n"
-            "  --estop-input BIT         DIO unit 0 input bit that stops everything when active\n"
-            "  --node ADDR               node address on the bus (default 0x10)\n"
-            "  --heartbeat-timeout MS    drop a supervisor after MS without heartbeat (default 1000)\n"
-            "  --name NAME               device name reported at connect (default landscape-sim)\n"
-            "  -h, --help                this text\n");
-}
-
-static int parse_uint(const char *s, unsigned max, unsigned *out)
-{
-    char *end = NULL;
-    errno = 0;
-    unsigned long v = strtoul(s, &end, 0);
-    if (errno != 0 || end == s || *end != '\0' || v > max) {
-        return -1;
-    }
-    *out = (unsigned)v;
-    return 0;
-}
-
-static int parse_lines(const char *s, unsigned *out, uint8_t *n)
-{
-    char buf[128];
-    snprintf(buf, sizeof buf, "%s", s);
-    *n = 0;
-    for (char *tok = strtok(buf, ","); tok != NULL; tok = strtok(NULL, ",")) {
-        unsigned v = 0;
-        if (*n >= 16 || parse_uint(tok, 511, &v) != 0) {
-            return -1;
-        }
-        out[(*n)++] = v;
-    }
-    return 0;
-}
-
-static void copy(char *dst, size_t cap, const char *src)
-{
-    snprintf(dst, cap, "%s", src);
-}
-
-static int parse_options(int argc, char **argv, ls_config_t *o)
-{
-    static const struct option longopts[] = {
-        { "hal", required_argument, NULL, 'H' },
-        { "link", required_argument, NULL, 'l' },
-        { "node", required_argument, NULL, 'n' },
-        { "heartbeat-timeout", required_argument, NULL, 't' },
-        { "name", required_argument, NULL, 'N' },
-        { "arm", required_argument, NULL, 'a' },
-        { "dio", required_argument, NULL, 'd' },
-        { "dio-socket", required_argument, NULL, 'S' },
-        { "inputs", required_argument, NULL, 'I' },
-        { "outputs", required_argument, NULL, 'O' },
-        { "clock", required_argument, NULL, 'c' },
-        { "rate", required_argument, NULL, 'r' },
-        { "telemetry-hz", required_argument, NULL, 'T' },
-        { "rt-priority", required_argument, NULL, 'p' },
-        { "estop-input", required_argument, NULL, 'e' },
-        { "help", no_argument, NULL, 'h' },
-        { NULL, 0, NULL, 0 },
-    };
-    memset(o, 0, sizeof *o);
-    o->node = 0x10;
-    o->heartbeat_timeout_ms = 1000;
-    o->rate_hz = 1000;
-    o->telemetry_hz = 50;
-    o->estop_input = -1;
-    o->rt_cpu = -1;
-    copy(o->name, sizeof o->name, "landscape-sim");
-    copy(o->arm, sizeof o->arm, "none");
-    copy(o->dio, sizeof o->dio, "none");
-    copy(o->clock, sizeof o->clock, "realtime");
-    bool arm_set = false, dio_set = false;
-    unsigned v = 0;
-    int c;
-    while ((c = getopt_long(argc, argv, "h", longopts, NULL)) != -1) {
-        switch (c) {
-        case 'H':
-            if (strcmp(optarg, "sim") != 0) {
-                LOG_ERR("--hal %s: expected --hal sim (or compose with --arm/--dio/--link)", optarg);
-                return -1;
-            }
-            o->hal_sim = true;
-            break;
-        case 'l':
-            if (o->n_links >= LS_CONFIG_MAX_LINKS) {
-                LOG_ERR("at most %d --link options", LS_CONFIG_MAX_LINKS);
-                return -1;
-            }
-            copy(o->links[o->n_links++], sizeof o->links[0], optarg);
-            break;
-        case 'n':
-            if (parse_uint(optarg, 0xFE, &v) != 0 || v == 0) {
-                LOG_ERR("--node %s: expected an address 1..0xFE (0xFF is the broadcast address)", optarg);
-                return -1;
-            }
-            o->node = (uint8_t)v;
-            break;
-        case 't':
-            if (parse_uint(optarg, 600000, &o->heartbeat_timeout_ms) != 0 || o->heartbeat_timeout_ms < 50) {
-                LOG_ERR("--heartbeat-timeout %s: expected milliseconds 50..600000", optarg);
-                return -1;
-            }
-            break;
-        case 'N': copy(o->name, sizeof o->name, optarg); break;
-        case 'a': copy(o->arm, sizeof o->arm, optarg); arm_set = true; break;
-        case 'd': copy(o->dio, sizeof o->dio, optarg); dio_set = true; break;
-        case 'S': copy(o->dio_socket, sizeof o->dio_socket, optarg); break;
-        case 'I':
-            if (parse_lines(optarg, o->input_offsets, &o->n_inputs) != 0) {
-                LOG_ERR("--inputs %s: expected up to 16 comma-separated line offsets", optarg);
-                return -1;
-            }
-            break;
-        case 'O':
-            if (parse_lines(optarg, o->output_offsets, &o->n_outputs) != 0) {
-                LOG_ERR("--outputs %s: expected up to 16 comma-separated line offsets", optarg);
-                return -1;
-            }
-            break;
-        case 'c': copy(o->clock, sizeof o->clock, optarg); break;
-        case 'r':
-            if (parse_uint(optarg, 10000, &o->rate_hz) != 0 || o->rate_hz < 100) {
-                LOG_ERR("--rate %s: expected 100..10000 Hz", optarg);
-                return -1;
-            }
-            break;
-        case 'T':
-            if (parse_uint(optarg, 200, &o->telemetry_hz) != 0) {
-                LOG_ERR("--telemetry-hz %s: expected 0..200", optarg);
-                return -1;
-            }
-            break;
-        case 'p':
-            if (parse_uint(optarg, 99, &v) != 0) {
-                LOG_ERR("--rt-priority %s: expected 0 (normal thread) or 1..99 (SCHED_FIFO)", optarg);
-                return -1;
-            }
-            o->rt_priority = (int)v;
-            break;
-        case 'e':
-            if (parse_uint(optarg, 15, &v) != 0) {
-                LOG_ERR("--estop-input %s: expected an input bit 0..15", optarg);
-                return -1;
-            }
-            o->estop_input = (int)v;
-            break;
-        case 'h': usage(stdout); exit(0);
-        default: usage(stderr); return -1;
-        }
-    }
-    if (optind < argc) {
-        LOG_ERR("unexpected argument '%s' (see --help)", argv[optind]);
-        return -1;
-    }
-    if (o->hal_sim) {
-        if (!arm_set) {
-            copy(o->arm, sizeof o->arm, "sim");
-        }
-        if (!dio_set) {
-            copy(o->dio, sizeof o->dio, "sim");
-        }
-    }
-    if (strcmp(o->arm, "sim") != 0 && strcmp(o->arm, "none") != 0) {
-        LOG_ERR("--arm %s: expected sim or none", o->arm);
-        return -1;
-    }
-    if (strcmp(o->dio, "sim") != 0 && strcmp(o->dio, "none") != 0 && strncmp(o->dio, "gpiod:", 6) != 0) {
-        LOG_ERR("--dio %s: expected sim, gpiod:CHIP or none", o->dio);
-        return -1;
-    }
-    if (strcmp(o->dio, "sim") == 0 && strcmp(o->arm, "sim") != 0) {
-        LOG_ERR("--dio sim needs --arm sim (the simulated DIO lives in the simulated world)");
-        return -1;
-    }
-    if (strcmp(o->clock, "realtime") != 0 && strcmp(o->clock, "lockstep") != 0) {
-        LOG_ERR("--clock %s: expected realtime or lockstep", o->clock);
-        return -1;
-    }
-    if (o->n_links == 0) {
-        LOG_ERR("no --link given: add e.g. --link slcan:pty:/tmp/landscape0");
-        return -1;
-    }
-    return 0;
 }
 
 static int open_link(const char *spec, hal_can_link_t *out)
@@ -499,7 +296,7 @@ static int compose(const ls_config_t *o)
         (void)ls_control_post(&g_ctl, &cmd);
     }
     hal_rt_config_t rc = { .rate_hz = o->rate_hz, .priority = o->rt_priority, .cpu = o->rt_cpu,
-                           .lock_memory = o->rt_priority > 0, .lockstep = strcmp(o->clock, "lockstep") == 0 };
+                           .lock_memory = o->lock_memory, .lockstep = strcmp(o->clock, "lockstep") == 0 };
     if (hal_linux_rt_start(&g_rt, &rc, control_cycle, &g_ctl, msg, sizeof msg) < 0) {
         LOG_ERR("control thread: %s", msg);
         return -1;
@@ -512,8 +309,25 @@ static int compose(const ls_config_t *o)
 int main(int argc, char **argv)
 {
     static ls_config_t opt;
-    if (parse_options(argc, argv, &opt) != 0) {
-        return 2;
+    char cmsg[512];
+    ls_config_defaults(&opt);
+    int cr = ls_config_from_args(&opt, argc, argv, cmsg, sizeof cmsg);
+    if (cr == 1) {
+        return LS_EXIT_OK; /* --help */
+    }
+    if (cr < 0) {
+        if (opt.check) {
+            return ls_check_config_error(cmsg, stdout);
+        }
+        LOG_ERR("%s", cmsg);
+        return LS_EXIT_BAD_CONFIG;
+    }
+    if (opt.check) {
+        return ls_check_run(&opt, stdout);
+    }
+    if (ls_config_validate(&opt, cmsg, sizeof cmsg) != 0) {
+        LOG_ERR("%s", cmsg);
+        return LS_EXIT_BAD_CONFIG;
     }
     struct sigaction sa;
     memset(&sa, 0, sizeof sa);

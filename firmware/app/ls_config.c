@@ -318,8 +318,8 @@ static const key_def_t KEYS[] = {
     { "control", "rt_priority", "rt-priority", false, set_rt_priority },
     { "control", "rt_cpu", "rt-cpu", false, set_rt_cpu },
     { "control", "lock_memory", NULL, false, set_lock_memory },
-    { "dio", "inputs", NULL, false, set_inputs },
-    { "dio", "outputs", NULL, false, set_outputs },
+    { "dio", "inputs", "inputs", false, set_inputs },
+    { "dio", "outputs", "outputs", false, set_outputs },
     { "dio", "estop_input", "estop-input", false, set_estop },
 };
 #define N_KEYS (sizeof KEYS / sizeof KEYS[0])
@@ -692,6 +692,10 @@ int ls_config_validate(const ls_config_t *cfg, char *msg, size_t msglen)
         }
     }
     bool gpiod = strncmp(cfg->dio, "gpiod:", 6) == 0;
+    if (strcmp(cfg->dio, "sim") == 0 && strcmp(cfg->arm, "sim") != 0) {
+        return opt_error(msg, msglen, "[hal] dio = sim needs arm = sim: the simulated DIO lives in the simulated "
+                         "world (use dio = gpiod:CHIP or none)");
+    }
     if (cfg->estop_input >= 0) {
         if (strcmp(cfg->dio, "none") == 0) {
             return opt_error(msg, msglen, "[dio] estop_input = %d needs a DIO backend but [hal] dio = none",
