@@ -145,13 +145,17 @@ static void drain_control_events(uint64_t now)
     while (ls_control_next_event(&g_ctl, &ev)) {
         switch (ev.kind) {
         case LS_CEV_MOTION: ls_core_on_motion_event(&g_core, &ev.motion); break;
-        case LS_CEV_FAULT: ls_core_fault(&g_core, ev.text, now); break;
+        case LS_CEV_FAULT:
+            ls_core_fault(&g_core, ev.text, now);
+            ls_core_motion_failed(&g_core, 0, ev.text);
+            break;
         case LS_CEV_DIO_CHANGED: ls_core_on_dio_event(&g_core, ev.dio.unit, ev.dio.on, ev.dio.off, now); break;
         case LS_CEV_CMD_FAILED: {
             char d[80];
             snprintf(d, sizeof d, "reason=%s", ev.text);
             const char *data[] = { d };
             ls_core_notify(&g_core, g_core.owner, ls_NoticeKind_ALARM, "commandFailed", ev.ref_seq, false, data, 1);
+            ls_core_motion_failed(&g_core, ev.ref_seq, ev.text);
             LOG_WARN("control loop: %s", ev.text);
             break;
         }
@@ -387,6 +391,7 @@ int main(int argc, char **argv)
         drain_control_events(now);
         ls_core_tick(&g_core, now);
         ls_dio_tick(&g_core, now);
+        ls_core_motion_tick(&g_core, now);
         if (now >= next_hb) {
             send_heartbeat(&g_net, &g_core, hb_counter++);
             next_hb = now + 200000u;

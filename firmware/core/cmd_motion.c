@@ -20,13 +20,6 @@
 #include "ls_kin.h"
 #include "ls_motion.h"
 
-/* Polls the DIO inputs of a `wait` auxiliary command: call every comms loop
- * turn (next to ls_core_tick). Not in ls_core_events.h yet. */
-void ls_core_motion_tick(ls_core_t *core, uint64_t now_us);
-/* The loop could not carry out the motion `ref_seq` (LS_CEV_CMD_FAILED), or
- * faulted (LS_CEV_FAULT, ref_seq 0 = whatever runs): send the motion's one
- * final notice (an alarm) and leave MOVING/PAUSED. Not in ls_core_events.h yet. */
-void ls_core_motion_failed(ls_core_t *core, uint32_t ref_seq, const char *text);
 
 #define PI 3.14159265358979323846
 #define LS_PATH_MAX 8

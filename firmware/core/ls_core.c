@@ -102,13 +102,18 @@ static int connected_count(const ls_core_t *core)
     return n;
 }
 
-static size_t encode_downlink(ls_core_t *core)
+static size_t encode_msg(const ls_Downlink *msg, uint8_t *buf, size_t cap)
 {
-    pb_ostream_t os = pb_ostream_from_buffer(core->enc, sizeof core->enc);
-    if (!pb_encode(&os, ls_Downlink_fields, &core->down)) {
+    pb_ostream_t os = pb_ostream_from_buffer(buf, cap);
+    if (!pb_encode(&os, ls_Downlink_fields, msg)) {
         return 0;
     }
     return os.bytes_written;
+}
+
+static size_t encode_downlink(ls_core_t *core)
+{
+    return encode_msg(&core->down, core->enc, sizeof core->enc);
 }
 
 static void send_bytes(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t len)
@@ -126,9 +131,9 @@ void ls_core_notify(ls_core_t *core, int sup, ls_NoticeKind kind, const char *ev
         if (!s->connected || (sup >= 0 && i != sup)) {
             continue;
         }
-        memset(&core->down, 0, sizeof core->down);
-        core->down.which_msg = ls_Downlink_notice_tag;
-        ls_Notice *n = &core->down.msg.notice;
+        memset(&core->note, 0, sizeof core->note);
+        core->note.which_msg = ls_Downlink_notice_tag;
+        ls_Notice *n = &core->note.msg.notice;
         n->kind = kind;
         snprintf(n->event_id, sizeof n->event_id, "%s", event_id);
         n->ref_seq = ref_seq;
@@ -139,9 +144,9 @@ void ls_core_notify(ls_core_t *core, int sup, ls_NoticeKind kind, const char *ev
             snprintf(n->data[k], sizeof n->data[k], "%s", data[k]);
             n->data_count++;
         }
-        size_t len = encode_downlink(core);
+        size_t len = encode_msg(&core->note, core->note_enc, sizeof core->note_enc);
         if (len > 0) {
-            send_bytes(core, s->addr, core->enc, len);
+            send_bytes(core, s->addr, core->note_enc, len);
         }
     }
 }
@@ -258,9 +263,9 @@ int32_t ls_core_rsvp(ls_core_t *core, int sup, ls_NoticeKind kind, const char *e
         core->rsvp_next_id = 1;
     }
     ls_session_t *s = &core->sessions[sup];
-    memset(&core->down, 0, sizeof core->down);
-    core->down.which_msg = ls_Downlink_notice_tag;
-    ls_Notice *n = &core->down.msg.notice;
+    memset(&core->note, 0, sizeof core->note);
+    core->note.which_msg = ls_Downlink_notice_tag;
+    ls_Notice *n = &core->note.msg.notice;
     n->kind = kind;
     snprintf(n->event_id, sizeof n->event_id, "%s", event_id);
     n->rsvp_id = id;
@@ -272,13 +277,13 @@ int32_t ls_core_rsvp(ls_core_t *core, int sup, ls_NoticeKind kind, const char *e
         snprintf(n->data[k], sizeof n->data[k], "%s", data[k]);
         n->data_count++;
     }
-    size_t len = encode_downlink(core);
+    size_t len = encode_msg(&core->note, core->note_enc, sizeof core->note_enc);
     if (len == 0) {
         return -1;
     }
     *slot = (ls_rsvp_t){ .used = true, .id = id, .addr = s->addr,
                          .deadline_us = now_us + (uint64_t)timeout_ms * 1000u, .done = done, .ctx = ctx };
-    send_bytes(core, s->addr, core->enc, len);
+    send_bytes(core, s->addr, core->note_enc, len);
     return (int32_t)id;
 }
 

@@ -165,8 +165,10 @@ typedef struct ls_core {
     uint32_t sessions_dropped; /* heartbeat time-outs */
     /* scratch (kept here, not on the stack: the messages are large) */
     ls_Uplink up;
-    ls_Downlink down;
+    ls_Downlink down;             /* the response being built (handlers write into it) */
     uint8_t enc[LS_DOWNLINK_MAX];
+    ls_Downlink note;             /* notices: separate, so a handler may notify while answering */
+    uint8_t note_enc[LS_DOWNLINK_MAX];
 } ls_core_t;
 
 /* One command being dispatched. */
