@@ -11,6 +11,7 @@
 #include <stdint.h>
 
 #include "hal/hal_arm.h"
+#include "hal/hal_dio.h"
 #include "landscape.pb.h"
 #include "ls_cmd_table.h"
 #include "ls_robot_model.h"
@@ -23,6 +24,7 @@ struct ls_control;
 #define LS_CALL_DEFERRED INT32_MIN /* a handler will answer later */
 #define LS_FAULT_LOG_LEN 16
 #define LS_MAX_RSVP 8
+#define LS_CORE_MAX_DIO_UNITS 4
 
 /* How the core talks to the bus: implemented by the network layer (or a test). */
 typedef struct {
@@ -110,6 +112,8 @@ typedef struct ls_core {
     size_t n_sensors;
     hal_tool_t *tool;
     hal_manual_t *manual;
+    hal_dio_unit_info_t dio_info[LS_CORE_MAX_DIO_UNITS]; /* input/output masks per unit */
+    uint16_t dio_units;
     ls_settings_t settings;
     ls_rsvp_t rsvp[LS_MAX_RSVP];
     uint32_t rsvp_next_id;

@@ -96,6 +96,9 @@ void ls_motion_abort(ls_motion_t *m); /* drop the motion at once: hold the curre
 void ls_motion_step(ls_motion_t *m, double dt_s, const double q_meas[LS_N_JOINTS], double q_cmd[LS_N_JOINTS],
                     double qd_cmd[LS_N_JOINTS], ls_motion_events_t *ev);
 
+/* The comms thread finished the pending auxiliary command: continue the path. */
+void ls_motion_aux_done(ls_motion_t *m);
+
 /* Set the held set-point (at start-up and when the drives are enabled, so
  * the arm does not jump to a stale command). */
 void ls_motion_hold(ls_motion_t *m, const double q[LS_N_JOINTS]);
