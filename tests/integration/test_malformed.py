@@ -400,3 +400,15 @@ def test_status_counts_transport_drops(bus: can.BusABC, sup: Supervisor) -> None
     st = status(sup)
     assert int(st["isotp_unexp_pdu"]) >= 1
     assert int(st["isotp_buffer_ovflw"]) >= 1
+
+
+@pytest.mark.xfail(strict=True, reason="firmware/core/ls_core.c names command id 0 (nanopb dropped the unknown "
+                   "field); the fix finds the field number in the raw request (report of issue 3)")
+@pytest.mark.parametrize("number", [58, 100], ids=lambda n: f"field{n}")
+def test_unknown_command_error_names_the_command_id(sup: Supervisor, reader: Reader, number: int) -> None:
+    reader.drain()
+    seq = sup._seq + 1
+    raw_request(sup, field_bytes(1, b"\x08" + varint(seq) + field_bytes(number, b"")))
+    res = reader.response(seq)
+    assert res.ret_code == pb.CMD_UNKNOWN_CMD_ERR
+    assert res.ret_msg.startswith(f"command id {number} is not in this firmware's schema")
