@@ -265,3 +265,30 @@ def test_two_supervisors_issue_50_requests_each_at_the_same_time(bus: can.BusABC
         assert executed(b, OTHER) - before[OTHER] == n + 1
         assert a.protocol_errors == 0 and b.protocol_errors == 0
         assert elapsed < 30
+
+
+def test_stop_all_during_a_move_pauses_it(bus: can.BusABC, notifier: can.Notifier, sniffer: Sniffer) -> None:
+    with Supervisor(bus, notifier=notifier, source_address=OWNER, client_name="owner") as sup:
+        sup.lock()
+        sup.activate()
+        assert sup.move_absolute("far", [1.0, 0.5, 0.5, 1.0, 1.0, 1.0], speed_pct=10).started
+        time.sleep(0.2)
+        assert sup.get_motion_control_state().result["state"] == "MOVING"
+        sniffer.responses(0.05)
+        sup.stop_all()
+        deadline = time.monotonic() + 10.0  # stopMotion answers once the arm has decelerated on its path
+        res = None
+        while res is None and time.monotonic() < deadline:
+            for r in sniffer.responses(0.2):
+                if r.seq == sup._seq:
+                    res = r
+        assert res is not None, "the functional stopMotion was not answered"
+        assert res.ret_code == pb.CMD_EXEC_OK
+        assert res.ret_msg.startswith("paused on the planned path")
+        state = sup.get_motion_control_state().result
+        assert state["state"] == "PAUSED" and state["motion_control_state"] == "robot_paused"
+        a = sup.get_robot_position().result["joints"]
+        time.sleep(0.2)
+        b = sup.get_robot_position().result["joints"]
+        assert b == pytest.approx(a, abs=1e-4), "the arm still moves after the stop"
+        assert a != pytest.approx([0.0] * 6, abs=1e-3), "the arm had not moved before the stop"
