@@ -611,8 +611,8 @@ void ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t
         bool scanned = scan_request(buf, len, &seq, &cmd);
         const ls_cmd_desc_t *d = scanned ? ls_cmd_find((pb_size_t)cmd) : NULL;
         answer_bad_request(core, addr, ls_RetCode_CMD_PARAM_ERR, seq,
-                           "%s did not decode (%s): a value may exceed the firmware's limits "
-                           "(protocol/landscape.options) or host and firmware use different schemas",
+                           "%s did not decode (%s): a value exceeds the firmware's limits "
+                           "(protocol/landscape.options) or the schemas differ",
                            d != NULL ? d->name : "the message", PB_GET_ERROR(&is));
         return;
     }
@@ -620,11 +620,11 @@ void ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t
         (void)scan_request(buf, len, &seq, &cmd);
         if (cmd != 0u) {
             answer_bad_request(core, addr, ls_RetCode_CMD_UNKNOWN_CMD_ERR, core->up.msg.request.seq,
-                               "command id %u is not in this firmware's schema: update the firmware or use the "
-                               "host tool built with it", (unsigned)cmd);
+                               "command id %u is not in this firmware's schema: update the firmware or the "
+                               "host tool (they must come from the same tree)", (unsigned)cmd);
         } else {
-            answer_bad_request(core, addr, ls_RetCode_CMD_PARAM_ERR, core->up.msg.request.seq,
-                               "the request carries no command");
+            answer_bad_request(core, addr, ls_RetCode_CMD_UNKNOWN_CMD_ERR, core->up.msg.request.seq,
+                               "the request carries no command: the host tool must set one");
         }
         return;
     }

@@ -253,6 +253,7 @@ def echo(s: Setup, payload: bytes) -> None:
 
     # The echo completed, so the host's transfer did too; wait for the last
     # log lines and frames (stdout and the pty are read by other threads).
+    settle(lambda: len(s.peer.log.messages) >= 1, "the peer's message log")
     with s.peer.log.lock:
         assert s.peer.log.messages == [n]
     settle(lambda: len(s.recorder.frames) >= iso_data_frames(n) + iso_flow_controls(n, s.block_size),

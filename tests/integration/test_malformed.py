@@ -273,9 +273,6 @@ def test_consecutive_frame_with_a_wrong_sequence_number_aborts_the_message(bus: 
     assert sup.send_command("version").ok
 
 
-@pytest.mark.xfail(strict=True, reason="firmware/net/ls_net.c routes a whole batch of frames before it takes "
-                   "the completed message: the second SF finds the receiver full (N_BUFFER_OVFLW). Fix: take "
-                   "the message right after ls_isotp_on_frame in route() (report of issue 3)")
 def test_back_to_back_single_frames_in_one_read_are_both_served(bus: can.BusABC, notifier: can.Notifier,
                                                                 sup: Supervisor) -> None:
     """Two complete single frames of one sender that reach the device in one
@@ -303,10 +300,10 @@ def test_uplink_that_does_not_decode_is_answered_with_param_err(sup: Supervisor,
     reader.drain()
     for garbage in (b"\xff\xff\xff\xff\x01", bytes(range(256)) * 16, b"\x0a\x80"):
         sup._send(garbage[:4095])
-        res = reader.response(0)
+        res = reader.response(0)  # not even the seq could be read
         assert res.ret_code == pb.CMD_PARAM_ERR
-        assert res.ret_msg.startswith("message did not decode (")
-        assert "same schema" in res.ret_msg
+        assert "did not decode (" in res.ret_msg
+        assert "schemas differ" in res.ret_msg
     assert int(status(sup)["rx_malformed"]) - before == 3
 
 
@@ -354,11 +351,17 @@ def test_request_over_the_static_sizes_is_answered_with_param_err(sup: Superviso
     payload = pb.Uplink(request=request_).SerializeToString()
     assert len(payload) <= 4095
     raw_request(sup, payload)
-    res = reader.response(0)  # did not decode: seq unknown (with the ls_core.c fix of issue 3: request_.seq)
+    res = reader.response(request_.seq)  # the seq is recovered from the raw bytes
     assert res.ret_code == pb.CMD_PARAM_ERR
-    assert res.ret_msg.startswith("message did not decode (")
+    assert "did not decode (" in res.ret_msg
+    assert res.ret_msg.startswith(registry_name(request_))
     assert int(status(sup)["rx_malformed"]) - before == 1
     assert sup.get_motion_control_state().ok
+
+
+def registry_name(request_: pb.Request) -> str:
+    from landscape.registry import lookup
+    return lookup(request_.WhichOneof("cmd")).name
 
 
 # ---------------------------------------------------------------- noise
@@ -391,8 +394,6 @@ def test_random_frames_and_slcan_lines_do_not_hurt(bus: can.BusABC, sup: Supervi
     assert st["state"] == "UNLOCKED"
 
 
-@pytest.mark.xfail(strict=True, reason="sendCommand status has no transport counters yet: the lead adds "
-                   "ISO-TP and link drop counts (see the report of issue 3)")
 def test_status_counts_transport_drops(bus: can.BusABC, sup: Supervisor) -> None:
     bus.send(frame(phys_id(DEVICE, HOST), bytes([0x21, 1, 2, 3, 4, 5, 6, 7])))
     bus.send(frame(phys_id(DEVICE, 0xF3), bytes([0x10, 0x00, 0x00, 0x00, 0x13, 0x88, 0, 0])))
@@ -402,8 +403,6 @@ def test_status_counts_transport_drops(bus: can.BusABC, sup: Supervisor) -> None
     assert int(st["isotp_buffer_ovflw"]) >= 1
 
 
-@pytest.mark.xfail(strict=True, reason="firmware/core/ls_core.c names command id 0 (nanopb dropped the unknown "
-                   "field); the fix finds the field number in the raw request (report of issue 3)")
 @pytest.mark.parametrize("number", [58, 100], ids=lambda n: f"field{n}")
 def test_unknown_command_error_names_the_command_id(sup: Supervisor, reader: Reader, number: int) -> None:
     reader.drain()
@@ -414,9 +413,6 @@ def test_unknown_command_error_names_the_command_id(sup: Supervisor, reader: Rea
     assert res.ret_msg.startswith(f"command id {number} is not in this firmware's schema")
 
 
-@pytest.mark.xfail(strict=True, reason="firmware/core/ls_core.c answers a request that does not decode with seq 0, "
-                   "so the Supervisor cannot match it and times out; the fix recovers the seq from the raw bytes "
-                   "(report of issue 3)")
 def test_oversize_request_through_the_library_gets_param_err_not_a_timeout(sup: Supervisor) -> None:
     t0 = time.monotonic()
     rv = sup.move_absolute("p" * 200, [0.0] * 6, check=False, timeout_s=0.5)
