@@ -636,6 +636,9 @@ class Supervisor:
         self._telemetry_cbs.append(fn)
         return fn
 
+    def remove_telemetry_callback(self, fn: TelemetryCallback) -> None:
+        self._telemetry_cbs.remove(fn)
+
     # ------------------------------------------------------------ typed commands (one per schema command)
     # Argument names are the schema's field names, so units are in them (speed_pct,
     # max_timeout_s, polling_timeout_ms); tests/host checks each method against the registry.
