@@ -420,11 +420,18 @@ def _addr(value: str) -> int:
               callback=lambda c, p, v: _addr(v), help="node address of this supervisor")
 @click.option("--timeout", "-t", type=float, default=None,
               help="seconds to wait for each response try (default: the command's host_timeout_ms)")
+@click.option("--can-context", default=None, metavar="NAME",
+              help="python-can config context: section [NAME] of the config file, CAN_INTERFACE_NAME ...")
+@click.option("--can-config", default=None, metavar="FILE",
+              help="python-can config file to read instead of ~/can.conf, /etc/can.conf, ~/.can, ~/.canrc")
+@click.option("--no-session", is_flag=True,
+              help="open a session of our own even when a background session (landscape session start) runs")
 @click.option("--json", "json_out", is_flag=True, help="print one JSON object per command")
 @click.option("--verbose", "-v", count=True, help="log protocol activity on stderr (-vv: debug)")
 @click.pass_context
 def cli(ctx: click.Context, interface: str | None, channel: str | None, bitrate: int | None, device: int,
-        source_address: int, timeout: float | None, json_out: bool, verbose: int) -> None:
+        source_address: int, timeout: float | None, can_context: str | None, can_config: str | None,
+        no_session: bool, json_out: bool, verbose: int) -> None:
     """Command a LandScape controller (landscaped) over CAN.
 
     Every schema command is a subcommand (landscape COMMAND --help). Exit codes: 0 ok,
@@ -433,7 +440,8 @@ def cli(ctx: click.Context, interface: str | None, channel: str | None, bitrate:
     if verbose:
         logging.basicConfig(level=logging.DEBUG if verbose > 1 else logging.INFO, stream=sys.stderr,
                             format="%(name)s: %(message)s")
-    st = CliState(BusSpec(interface, channel, bitrate), device, source_address, timeout, json_out)
+    st = CliState(BusSpec(interface, channel, bitrate, can_context, can_config), device, source_address, timeout,
+                  json_out, no_session=no_session)
     ctx.obj = st
     ctx.call_on_close(st.close)
 
@@ -445,6 +453,10 @@ for _cmd in COMMANDS.values():
 # ---------------------------------------------------------------- run, shell
 
 
+#: Subcommands a `run` file or the shell cannot use (they hold the terminal or the session).
+NOT_IN_SCRIPTS = ("run", "shell", "monitor", "record", "plot", "demo", "session")
+
+
 def run_line(ctx: click.Context, line: str) -> None:
     """Run one command line (shlex) in the current session; errors propagate."""
     args = shlex.split(line, comments=True)
@@ -454,7 +466,7 @@ def run_line(ctx: click.Context, line: str) -> None:
     group = ctx.find_root().command
     assert isinstance(group, click.Group)
     sub = group.get_command(ctx, name)
-    if sub is None or name in ("run", "shell", "monitor"):
+    if sub is None or name in NOT_IN_SCRIPTS:
         raise click.UsageError(f"unknown command '{name}' (landscape --help lists them)")
     with sub.make_context(name, rest, parent=ctx.find_root()) as sub_ctx:
         sub.invoke(sub_ctx)
@@ -515,10 +527,10 @@ def shell_cmd(ctx: click.Context) -> None:
 
     group = ctx.find_root().command
     assert isinstance(group, click.Group)
-    names = sorted(n for n in group.list_commands(ctx) if n not in ("run", "shell", "monitor"))
+    names = sorted(n for n in group.list_commands(ctx) if n not in NOT_IN_SCRIPTS)
     session: PromptSession[str] = PromptSession(history=FileHistory(str(_history_path())),
                                                 completer=WordCompleter(names + ["help", "quit"], sentence=True))
-    _state(ctx).session()
+    _state(ctx).backend()
     while True:
         try:
             line = session.prompt("landscape> ")
@@ -621,6 +633,9 @@ def monitor_cmd(ctx: click.Context, duration: float | None, once: bool) -> None:
         while end is None or time.monotonic() < end:
             time.sleep(0.2)
             live.update(monitor_view(sup, list(last)))
+
+
+from . import cli_tools  # noqa: E402,F401  (registers path, record, plot, demo, session)
 
 
 def main(argv: Sequence[str] | None = None) -> NoReturn:
