@@ -385,7 +385,8 @@ class SessionClient:
         cmd = command if isinstance(command, Command) else lookup(command)
         self._send({"op": "request", "command": cmd.field, "fields": _jsonable(fields), "timeout_s": timeout_s,
                     "wait_s": wait_s})
-        rv = retval_from_dict(self._read(self._read_timeout_s + 3 * (timeout_s or cmd.host_timeout_ms / 1000)))
+        answer = self._read(self._read_timeout_s + 3 * (timeout_s or cmd.host_timeout_ms / 1000))
+        rv = retval_from_dict(answer["retval"])
         self._open_stream = True
         if not (rv.started and wait_s is not None):
             self._drain()
