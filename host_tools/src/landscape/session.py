@@ -164,16 +164,28 @@ class SessionServer:
         self._stop.set()
 
     def status(self) -> dict[str, Any]:
+        """The session's description; owner and state as the device answers them now
+        (getMotionControlState), else from its last HEARTBEAT, else None."""
         sup = self.sup
-        t = sup.telemetry()
-        hb = t.get("HEARTBEAT", {})
-        state = hb.get("hb_state")
+        owner: bool | None = None
+        state: str | None = None
+        if sup.connected:
+            with self._cmd_lock:
+                try:
+                    rv = sup.get_motion_control_state(check=False, timeout_s=1.0)
+                    if rv.ok:
+                        owner, state = bool(rv.result.get("owner")), str(rv.result.get("state"))
+                except LandscapeError:
+                    pass
+        if state is None:
+            hb = sup.telemetry().get("HEARTBEAT", {})
+            if hb:
+                owner = int(hb.get("hb_owner", -1)) == sup.source_address
+                value = int(hb.get("hb_state", -1))
+                state = pb.State.Name(value) if value in pb.State.values() else None
         info = sup.device_info
         return {"pid": os.getpid(), "socket": str(self.path), "device": sup.device, "channel": self.channel,
-                "source_address": sup.source_address, "connected": sup.connected,
-                "owner": int(hb.get("hb_owner", -1)) == sup.source_address if hb else None,
-                "state": pb.State.Name(int(state)) if state is not None and int(state) in pb.State.values()
-                else None,
+                "source_address": sup.source_address, "connected": sup.connected, "owner": owner, "state": state,
                 "device_name": info.device_name if info is not None else None,
                 "requests": self.requests, "started_at": self.started_at}
 
