@@ -28,7 +28,7 @@ from ._generated import landscape_pb2 as pb
 from .bus import DEFAULT_DEVICE, DEFAULT_HOST, BusSpec
 from .errors import (AlarmError, ArgumentError, BusError, CommandError, ControllerTimeoutError, LandscapeError,
                      ProtocolError, VersionMismatchError, error_for_code)
-from .registry import COMMANDS, Command, enum_choices, is_repeated, message_to_dict, parse_enum
+from .registry import COMMANDS, Command, enum_choices, host_default, is_repeated, message_to_dict, parse_enum
 from .session import SessionClient, socket_path
 from .supervisor import RetVal, Supervisor
 
@@ -144,9 +144,12 @@ def cli_params(cmd: Command) -> list[click.Parameter]:
         elif f.type == FieldDescriptor.TYPE_ENUM:  # unreachable today (enums are positional)
             params.append(click.Option([opt, f.name], type=EnumType(f.enum_type), default=0))
         elif f.type in _FLOATS:
-            params.append(click.Option([opt, f.name], type=float, default=0.0, show_default=True))
+            d = host_default(f)
+            params.append(click.Option([opt, f.name], type=float, default=0.0 if d is None else d, show_default=True))
         else:
-            params.append(click.Option([opt, f.name], type=IntType(), default=0, show_default=True))
+            d = host_default(f)
+            params.append(click.Option([opt, f.name], type=IntType(), default=0 if d is None else d,
+                                       show_default=True))
     if not cmd.blocking:
         params.append(click.Option(["--no-wait", "_no_wait"], is_flag=True,
                                    help="return after CMD_STARTED_OK instead of waiting for the final notice"))

@@ -781,8 +781,9 @@ class Supervisor:
     def path_clear_path(self, path_name: str, **opts: Unpack[CallOptions]) -> RetVal:
         return self.request("path_clear_path", path_name=path_name, **opts)
 
-    def path_move(self, path_name: str, number_of_cycles: int, **opts: Unpack[CallOptions]) -> RetVal:
-        """Run a loaded path `number_of_cycles` times (0: dry run without auxiliary commands)."""
+    def path_move(self, path_name: str, *, number_of_cycles: int = 1, **opts: Unpack[CallOptions]) -> RetVal:
+        """Run a loaded path `number_of_cycles` times (seed: 1 when omitted; 0: dry run without
+        auxiliary commands)."""
         return self.request("path_move", path_name=path_name, number_of_cycles=number_of_cycles, **opts)
 
     def stop_motion(self, **opts: Unpack[CallOptions]) -> RetVal:
