@@ -80,12 +80,13 @@ def label(path: str) -> str:
     if "libc_nano" in path or "libm" in path or "libgcc" in path:
         return "newlib-nano / libm / libgcc"
     name = Path(path).name
-    for key, lab in (("ls_core", "firmware/core"), ("cmd_", "firmware/core"), ("ls_net", "firmware/net"),
+    for key, lab in (("ls_cmd_table", "generated dispatch table"), ("ls_core", "firmware/core"),
+                     ("cmd_", "firmware/core"), ("ls_net", "firmware/net"),
                      ("ls_isotp", "firmware/isotp"), ("ls_traj", "firmware/motion/ls_traj.c"),
                      ("ls_robot_model", "firmware/model"), ("pb_", "nanopb runtime"),
-                     ("landscape.pb", "generated nanopb codecs"), ("ls_cmd_table", "generated dispatch table"),
+                     ("landscape.pb", "generated nanopb codecs"),
                      ("dbc_landscape", "generated DBC code (cantools)"), ("hal.", "hal wrappers"),
-                     ("fw_main", "bench main + HAL stubs")):
+                     ("fw_main", "bench main + HAL stubs, with the static ls_core_t and ls_net_t")):
         if key in name:
             return lab
     return name
@@ -146,7 +147,7 @@ def bench_footprint(quick: bool) -> Section:
                         ("pulled in by " + "; ".join(pulled) + "; _sbrk stubbed to fail: no heap region")
                         if linked_allocs else "no allocator in the image"))
     sec.details.append(
-        f"`{CC} {' '.join(CFLAGS)}`, linked with `{' '.join(LDFLAGS)} -Wl,--gc-sections -lm`. Sources: "
+        f"`{CC} {' '.join(CFLAGS)}`, linked with `{' '.join(LDFLAGS)} -lm`. Sources: "
         "firmware/core/*.c, firmware/net, firmware/isotp, firmware/motion/ls_traj.c, firmware/model, hal/hal.c, "
         "the generated nanopb codecs, dispatch table and cantools DBC code (from build-bench), and nanopb "
         f"{npb.name.split('-')[-1]}'s runtime (pb_encode.c, pb_decode.c, pb_common.c from Debian's source package: "
