@@ -20,10 +20,14 @@ CASE_TEXT = {
     "motion_joint": "executor, joint move (ls_motion_step)",
     "motion_line": "executor, Cartesian line with IK (ls_motion_step)",
     "motion_path": "executor, 4-point path with blends (ls_motion_step)",
+    "control_hold": "whole loop body holding (ls_control_cycle, ideal arm)",
+    "control_joint": "whole loop body, joint move (ls_control_cycle, ideal arm)",
+    "control_line": "whole loop body, Cartesian line with IK (ls_control_cycle, ideal arm)",
 }
 MISSING = {
-    "motion_hold / motion_joint": "firmware/motion/ls_motion.c is not in this tree yet (merge main)",
-    "comply": "no compliance mode in firmware/motion yet",
+    "motion_hold": ("executor cases", "firmware/motion/ls_motion.c is not in this tree"),
+    "control_hold": ("whole loop body cases", "firmware/control/ls_control.c is not in this tree"),
+    "": ("comply", "no compliance mode in firmware/motion or firmware/control yet"),
 }
 
 
@@ -68,17 +72,19 @@ def bench_cycle(quick: bool) -> Section:
                                 f"{per:,.0f} instructions/cycle; {allocs:g} allocations/cycle",
                                 "machine-independent count", "", "",
                                 f"({total:,} - {base:,}) / {n}; allocations goal 0"))
-    for what, why in MISSING.items():
-        if what.startswith("motion_hold") and "motion_hold" in cases:
-            continue
-        sec.rows.append(Row(f"5. cycle: {what}", f"not measured: {why}"))
+    for case, (what, why) in MISSING.items():
+        if case not in cases:
+            sec.rows.append(Row(f"5. cycle: {what}", f"not measured: {why}"))
     sec.details.append(
         "`bench/cycle.c` runs N cycles (dt 1 ms) of one case after its set-up (planning is set-up and is "
         "subtracted). Instructions per cycle = (callgrind total of an N-cycle run - total of a set-up-only run) "
         f"/ N with N = {n}; allocations per cycle the same difference of memcheck's `total heap usage` "
-        "(catches malloc, calloc, realloc and C++ new anywhere, libraries included). The motion executor cases "
-        "appear when firmware/motion/ls_motion.c is in the tree; the Cartesian and path cases when its header "
-        "has the Cartesian planners.")
+        "(catches malloc, calloc, realloc and C++ new anywhere, libraries included). Executor cases run "
+        "`ls_motion_step` alone, with the measured position equal to the command; `control_*` cases run the "
+        "whole `ls_control_cycle` (command ring, executor, arm command/read, FK for the snapshot, seqlock "
+        "publish, event ring drained each cycle) on an ideal in-driver arm, so the ODE world's physics (a "
+        "simulator cost, not the firmware's) is not counted. Moves are planned long enough that all N cycles "
+        "move. Counts are x86-64 instructions of the Release build (-O3 by CMake's default).")
     sec.commands.append("valgrind --tool=callgrind build-bench/bench/bench_cycle cart_ik 2000   # and ... cart_ik 0")
     sec.commands.append("valgrind build-bench/bench/bench_cycle cart_ik 2000 2>&1 | grep 'total heap usage'")
     return sec

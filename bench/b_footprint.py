@@ -13,9 +13,16 @@ from pathlib import Path
 from common import BUILD, ROOT, BenchSkipped, Row, Section
 
 CC = "arm-none-eabi-gcc"
-CFLAGS = ["-std=c11", "-Os", "-mcpu=cortex-m4", "-mthumb", "-mfpu=fpv4-sp-d16", "-mfloat-abi=hard",
-          "-ffunction-sections", "-fdata-sections", "-Wall", "-Wextra"]
-LDFLAGS = ["--specs=nano.specs", "-nostartfiles", "-Wl,--gc-sections"]
+CXX = "arm-none-eabi-g++"
+TARGET = ["-Os", "-mcpu=cortex-m4", "-mthumb", "-mfpu=fpv4-sp-d16", "-mfloat-abi=hard", "-ffunction-sections",
+          "-fdata-sections", "-DNDEBUG", "-Wall", "-Wextra", "-Werror=implicit-function-declaration"]
+CFLAGS = ["-std=c11", *TARGET]
+# The kinematics as the main build compiles it (firmware/kinematics/CMakeLists.txt); needs
+# libstdc++-arm-none-eabi-newlib for <cmath>.
+CXXFLAGS = ["-std=c++17", *TARGET, "-fno-exceptions", "-fno-rtti", "-DEIGEN_NO_MALLOC", "-DEIGEN_MPL2_ONLY"]
+# nosys.specs: newlib's system-call stubs (fail with ENOSYS). newlib's strtod (used by the core) can reach
+# __assert_func -> fiprintf -> stdio -> _write/_close/...; fw_main.c's own _sbrk wins over nosys's.
+LDFLAGS = ["--specs=nano.specs", "--specs=nosys.specs", "-nostartfiles", "-Wl,--gc-sections"]
 ALLOCATORS = {"malloc", "free", "calloc", "realloc", "_malloc_r", "_free_r", "_calloc_r", "_realloc_r", "_sbrk",
               "_sbrk_r", "aligned_alloc", "posix_memalign", "memalign", "_Znwj", "_Znaj", "_ZdlPv", "_ZdaPv"}
 NANOPB_RUNTIME = ("pb_encode.c", "pb_decode.c", "pb_common.c")
@@ -81,7 +88,8 @@ def label(path: str) -> str:
         return "newlib-nano / libm / libgcc"
     name = Path(path).name
     for key, lab in (("ls_cmd_table", "generated dispatch table"), ("ls_core", "firmware/core"),
-                     ("cmd_", "firmware/core"), ("ls_net", "firmware/net"),
+                     ("cmd_", "firmware/core"), ("ls_units", "firmware/core"), ("ls_kin", "firmware/kinematics"),
+                     ("ls_motion", "firmware/motion/ls_motion.c"), ("ls_control", "firmware/control"), ("ls_net", "firmware/net"),
                      ("ls_isotp", "firmware/isotp"), ("ls_traj", "firmware/motion/ls_traj.c"),
                      ("ls_robot_model", "firmware/model"), ("pb_", "nanopb runtime"),
                      ("landscape.pb", "generated nanopb codecs"),
@@ -102,18 +110,25 @@ def bench_footprint(quick: bool) -> Section:
         raise BenchSkipped(f"generated sources missing under {gen}: build with bench/run.py first")
     npb = nanopb_runtime()
     fw = ROOT / "firmware"
-    sources = sorted((fw / "core").glob("*.c")) + [
+    optional = [fw / "motion" / "ls_motion.c", fw / "control" / "ls_control.c", fw / "kinematics" / "ls_kin.cpp"]
+    sources = sorted((fw / "core").glob("*.c")) + [p for p in optional if p.is_file()] + [
         fw / "net" / "ls_net.c", fw / "isotp" / "ls_isotp.c", fw / "motion" / "ls_traj.c",
         fw / "model" / "ls_robot_model.c", ROOT / "hal" / "hal.c", gen / "landscape.pb.c", gen / "ls_cmd_table.c",
         gen / "dbc" / "landscape.c", *(npb / f for f in NANOPB_RUNTIME), ROOT / "bench" / "footprint" / "fw_main.c"]
     includes = [npb, gen, gen / "dbc", fw / "core", fw / "net", fw / "isotp", fw / "motion", fw / "model",
-                fw / "control", ROOT / "hal" / "include"]
+                fw / "control", fw / "kinematics", ROOT / "hal" / "include"]
     with tempfile.TemporaryDirectory(prefix="lsbench-fp-") as tmpdir:
         tmp = Path(tmpdir)
         objs, firmware_allocs = [], set()
         for i, src in enumerate(sources):
             obj = tmp / f"{i:02d}_{src.stem.replace('landscape', 'dbc_landscape' if 'dbc' in str(src) else 'landscape')}.o"
-            cc = run([CC, *CFLAGS, *(f"-I{p}" for p in includes), "-c", str(src), "-o", str(obj)])
+            if src.suffix == ".cpp":
+                if shutil.which(CXX) is None:
+                    raise BenchSkipped(f"{CXX} is missing for {src.name}: apt-get install gcc-arm-none-eabi")
+                cmd = [CXX, *CXXFLAGS, "-I/usr/include/eigen3"]
+            else:
+                cmd = [CC, *CFLAGS]
+            cc = run([*cmd, *(f"-I{p}" for p in includes), "-c", str(src), "-o", str(obj)])
             if cc.returncode != 0:
                 raise BenchSkipped(f"cross-compiling {src.name} failed: {cc.stderr.strip()[-300:]}")
             undefined = set(run(["arm-none-eabi-nm", "-u", str(obj)]).stdout.split()) - {"U"}
@@ -128,7 +143,7 @@ def bench_footprint(quick: bool) -> Section:
         syms = run(["arm-none-eabi-nm", "-S", "--size-sort", str(elf)]).stdout.splitlines()
         linked_allocs = sorted({line.split()[-1] for line in syms} & ALLOCATORS)
         map_text = mapf.read_text()
-        why = re.findall(r"\((lib_a-[\w-]+\.o)\)\s*\n?\s+\S*\((lib_a-[\w-]+\.o)\) \((_(?:malloc|realloc|free)_r)\)",
+        why = re.findall(r"\((lib_a-[\w-]+\.o)\)\s*\n?\s+\S*\((lib_a-[\w-]+\.o)\) \((_(?:malloc|realloc|free|calloc)_r|malloc|free|calloc)\)",
                          map_text)
         breakdown: dict[str, dict[str, int]] = defaultdict(lambda: {"flash": 0, "ram": 0})
         for path, sizes in map_breakdown(map_text).items():
@@ -147,16 +162,17 @@ def bench_footprint(quick: bool) -> Section:
                         ("pulled in by " + "; ".join(pulled) + "; _sbrk stubbed to fail: no heap region")
                         if linked_allocs else "no allocator in the image"))
     sec.details.append(
-        f"`{CC} {' '.join(CFLAGS)}`, linked with `{' '.join(LDFLAGS)} -lm`. Sources: "
-        "firmware/core/*.c, firmware/net, firmware/isotp, firmware/motion/ls_traj.c, firmware/model, hal/hal.c, "
+        f"`{CC} {' '.join(CFLAGS)}` (C++: `{CXX} {' '.join(CXXFLAGS)}`), linked with `{' '.join(LDFLAGS)} -lm`. Sources: "
+        "firmware/core/*.c, firmware/net, firmware/isotp, firmware/motion (ls_traj.c, ls_motion.c), "
+        "firmware/control, firmware/kinematics (C++17 + Eigen, which the core now needs), firmware/model, hal/hal.c, "
         "the generated nanopb codecs, dispatch table and cantools DBC code (from build-bench), and nanopb "
         f"{npb.name.split('-')[-1]}'s runtime (pb_encode.c, pb_decode.c, pb_common.c from Debian's source package: "
         "the PyPI `nanopb` sdist/wheel ship only the generator, libnanopb-dev only an x86 archive). "
-        "`bench/footprint/fw_main.c` is the minimal main (core + net on one CAN link, the heartbeat, one trajectory "
-        "plan and sample per turn), the CAN HAL as volatile mailbox registers, an entry point that zeroes .bss, and "
-        "an `_sbrk` that always fails. Excluded: kinematics (C++/Eigen), control-loop glue and motion executor "
-        "(not composed into landscaped yet), the sim and Linux HAL backends, a board's vector table and linker "
-        "script.")
+        "`bench/footprint/fw_main.c` is landscaped's composition without the OS (core + net on one CAN link, the "
+        "control loop on a 1 ms tick with its events drained into the core, the heartbeat, one trajectory plan and "
+        "sample per turn), CAN and arm HALs as volatile registers, an entry point that zeroes .bss, and an `_sbrk` "
+        "that always fails. Not included: the sim and Linux HAL backends, telemetry broadcasts, landscaped's "
+        "process glue, a board's vector table and linker script. -DNDEBUG as in a release build.")
     rows = sorted(breakdown.items(), key=lambda kv: -(kv[1]["flash"] + kv[1]["ram"]))
     sec.details.append("Per part (from the linker map; flash includes initialised data):\n\n"
                        "| part | flash B | RAM B |\n|---|---:|---:|\n" +
@@ -164,10 +180,12 @@ def bench_footprint(quick: bool) -> Section:
     if linked_allocs:
         sec.details.append(
             "Heap: the firmware's own objects reference no allocator (checked with `arm-none-eabi-nm -u` on each "
-            "object). newlib-nano's `vsnprintf` (used by the core to format answers) references `_realloc_r` for "
-            "its growing-string mode (`asprintf`), which a fixed-buffer `snprintf` never takes; the linker still "
-            "keeps it and newlib's malloc with it. With `_sbrk` failing, that code can never obtain memory. To have "
-            "no allocator in the image at all, the core would need a formatter of its own (or none).")
+            "object). The allocator comes from newlib-nano itself: `vsnprintf` (the core formats answers with it) "
+            "references `_realloc_r` for its growing-string mode (`asprintf`), which a fixed-buffer `snprintf` "
+            "never takes, and `strtod` (firmware/core/cmd_motion.c) uses gdtoa's big-number helpers, which call "
+            "`_calloc_r`/`_malloc_r` for long inputs and can reach `__assert_func` -> `fiprintf` -> stdio (hence the "
+            "nosys stubs). With `_sbrk` failing, that code can never obtain memory (strtod then fails on such input). "
+            "To have no allocator in the image at all, the core would need its own formatter and number parser.")
     sec.commands.append(f"{CC} {' '.join(CFLAGS)} -I... <sources> {' '.join(LDFLAGS)} -Wl,-Map=fw.map -o fw.elf -lm")
     sec.commands.append("arm-none-eabi-size fw.elf; arm-none-eabi-nm fw.elf | grep -E ' (malloc|free|_sbrk)'")
     return sec

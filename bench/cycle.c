@@ -11,6 +11,9 @@
  *   motion_hold, motion_joint            ls_motion_step (executor; when built with it)
  *   motion_line, motion_path             a Cartesian line with IK per cycle; a 4-point path with
  *                                        joint blends (executor with Cartesian planners)
+ *   control_hold, control_joint, control_line   the whole loop body (ls_control_cycle: command ring,
+ *                                        executor, arm I/O, FK, seqlock snapshot) on an ideal arm
+ *                                        (reads back what it was commanded; no physics)
  * Prints "cases" to list the cases this build has; otherwise one line with a
  * checksum of the set-points so no cycle can be optimised away. */
 #include <math.h>
@@ -23,6 +26,9 @@
 #include "ls_traj.h"
 #if BENCH_HAVE_MOTION
 #include "ls_motion.h"
+#endif
+#if BENCH_HAVE_CONTROL
+#include "ls_control.h"
 #endif
 
 #define DT_S 1e-3
@@ -186,12 +192,104 @@ static int run_motion(const char *which, long n)
 }
 #endif
 
+
+#if BENCH_HAVE_CONTROL
+/* An ideal arm: it is where it was commanded, at once. */
+static double arm_q[LS_N_JOINTS], arm_qd[LS_N_JOINTS];
+static int arm_enable(void *self, bool on)
+{
+    (void)self;
+    (void)on;
+    return 0;
+}
+static int arm_command(void *self, const double *q, const double *qd)
+{
+    (void)self;
+    memcpy(arm_q, q, sizeof arm_q);
+    memcpy(arm_qd, qd, sizeof arm_qd);
+    return 0;
+}
+static int arm_read(void *self, double *q, double *qd)
+{
+    (void)self;
+    memcpy(q, arm_q, sizeof arm_q);
+    if (qd != NULL) {
+        memcpy(qd, arm_qd, sizeof arm_qd);
+    }
+    return 0;
+}
+static int arm_step(void *self, double dt_s)
+{
+    (void)self;
+    (void)dt_s;
+    return 0;
+}
+static const hal_arm_ops_t arm_ops = {NULL, arm_enable, arm_command, arm_read, arm_step, NULL};
+static hal_arm_t arm = {&arm_ops, NULL, "ideal"};
+static ls_control_t ctl;
+
+static int run_control(const char *which, long n)
+{
+    const ls_robot_model_t *m = &ls_robot_model_default;
+    memcpy(arm_q, q_home, sizeof arm_q);
+    ls_control_config_t cfg = {.model = m, .arm = &arm, .rate_hz = 1000};
+    ls_control_init(&ctl, &cfg);
+    ls_ctl_cmd_t en = {.kind = LS_CTL_ENABLE};
+    if (!ls_control_post(&ctl, &en)) {
+        return -1;
+    }
+    uint64_t t_us = 0;
+    ls_control_cycle(&ctl, t_us += 1000u);
+    int moving = strcmp(which, "control_hold") != 0;
+    if (moving) {
+        char why[128] = "";
+        ls_motion_plan_t *slot = ls_control_plan_slot(&ctl);
+        int rc = slot == NULL ? -1 : ls_motion_plan_joint(slot, m, q_home, q_goal, 0.2, 0.2, why, sizeof why);
+#if BENCH_HAVE_MOTION_CART
+        if (slot != NULL && strcmp(which, "control_line") == 0) {
+            static const double tool[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0.05, 1};
+            const ls_motion_cart_limits_t lim = {0.05, 0.5, 5.0, 0.3, 1.0, 10.0, 0.5};
+            double F[16], tip[16];
+            ls_kin_fk(m, q_home, F);
+            ls_pose_mul(F, tool, tip);
+            tip[12] += 0.10;
+            tip[14] -= 0.05;
+            rc = ls_motion_plan_line(slot, m, q_home, tool, tip, &lim, why, sizeof why);
+        }
+#endif
+        if (rc != 0 || !ls_control_start_plan(&ctl, 1)) {
+            fprintf(stderr, "bench_cycle: %s: planning failed: %s\n", which, why);
+            return -1;
+        }
+        ls_control_cycle(&ctl, t_us += 1000u);
+    }
+    ls_ctl_event_t ev;
+    for (long k = 0; k < n; k++) {
+        ls_control_cycle(&ctl, t_us += 1000u);
+        while (ls_control_next_event(&ctl, &ev)) {
+        }
+        absorb(ctl.q_cmd);
+    }
+    if (!ctl.enabled) {
+        fprintf(stderr, "bench_cycle: %s: the loop disabled the drives\n", which);
+        return -1;
+    }
+    return moving && n > 0 && ctl.motion.phase != LS_MOTION_RUNNING ? 1 : 0;
+}
+#endif
+
 static const char *const cases[] = {
     "traj", "fk", "cart_ik",
 #if BENCH_HAVE_MOTION
     "motion_hold", "motion_joint",
 #if BENCH_HAVE_MOTION_CART
     "motion_line", "motion_path",
+#endif
+#endif
+#if BENCH_HAVE_CONTROL
+    "control_hold", "control_joint",
+#if BENCH_HAVE_MOTION_CART
+    "control_line",
 #endif
 #endif
 };
@@ -221,6 +319,11 @@ int main(int argc, char **argv)
 #if BENCH_HAVE_MOTION
     else if (strncmp(argv[1], "motion_", 7) == 0) {
         rc = run_motion(argv[1], n);
+    }
+#endif
+#if BENCH_HAVE_CONTROL
+    else if (strncmp(argv[1], "control_", 8) == 0) {
+        rc = run_control(argv[1], n);
     }
 #endif
     else {

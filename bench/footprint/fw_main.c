@@ -1,16 +1,16 @@
 /* Footprint build (bench 7): the portable firmware on a bare Cortex-M4F,
- * no OS. A minimal composition like landscaped's: core + network layer on
- * one CAN link, the heartbeat broadcast (cantools DBC code), and one
- * trajectory plan/sample per loop turn (what the control loop does), so
- * the linker keeps everything those reach and drops the rest
+ * no OS. The composition of landscaped without its OS parts: core +
+ * network layer on one CAN link, the control loop (executor, kinematics)
+ * run once per millisecond tick, its events drained into the core, the
+ * heartbeat broadcast (cantools DBC code), and one trajectory plan/sample
+ * per turn. The linker keeps everything those reach and drops the rest
  * (-ffunction-sections -Wl,--gc-sections).
  *
- * The HAL is stubbed: the CAN link reads and writes a memory-mapped
- * "controller" (volatile registers at a fixed address, as a driver would),
- * and time is a free-running counter. Excluded (not portable or not in the
- * firmware's portable part): the kinematics (C++/Eigen), the control loop
- * glue and motion executor (not composed into landscaped yet), the sim and
- * Linux HAL backends. */
+ * The HAL is stubbed: the CAN link and the arm read and write a
+ * memory-mapped "controller" (volatile registers at a fixed address, as a
+ * driver would), and time is a free-running counter. Not included: the sim
+ * and Linux HAL backends, telemetry broadcasts and the process glue of
+ * landscaped (options, logging, signals, threads). */
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -18,7 +18,9 @@
 
 #include "hal/hal_can.h"
 #include "landscape.h"
+#include "ls_control.h"
 #include "ls_core.h"
+#include "ls_core_events.h"
 #include "ls_net.h"
 #include "ls_traj.h"
 
@@ -27,6 +29,7 @@ typedef struct {
     volatile uint32_t status, rx_id, rx_len, rx_data[2];
     volatile uint32_t tx_id, tx_len, tx_data[2], tx_go;
     volatile uint32_t timer_us_lo, timer_us_hi;
+    volatile int32_t joint_pos_urad[LS_N_JOINTS], joint_cmd_urad[LS_N_JOINTS], drive_enable;
 } can_regs_t;
 #define CAN0 ((can_regs_t *)0x40006400u)
 
@@ -83,6 +86,38 @@ static void can_close(void *self) { (void)self; }
 
 static const hal_can_ops_t can_ops = {can_send, can_recv, can_poll_fd, can_status, can_close};
 
+static int arm_enable(void *self, bool on)
+{
+    (void)self;
+    CAN0->drive_enable = on ? 1 : 0;
+    return HAL_OK;
+}
+
+static int arm_command(void *self, const double *q_rad, const double *qd_rad_s)
+{
+    (void)self;
+    (void)qd_rad_s;
+    for (int i = 0; i < LS_N_JOINTS; i++) {
+        CAN0->joint_cmd_urad[i] = (int32_t)(q_rad[i] * 1e6);
+    }
+    return HAL_OK;
+}
+
+static int arm_read(void *self, double *q_rad, double *qd_rad_s)
+{
+    (void)self;
+    for (int i = 0; i < LS_N_JOINTS; i++) {
+        q_rad[i] = (double)CAN0->joint_pos_urad[i] * 1e-6;
+        if (qd_rad_s != NULL) {
+            qd_rad_s[i] = 0.0;
+        }
+    }
+    return HAL_OK;
+}
+
+static const hal_arm_ops_t arm_ops = {NULL, arm_enable, arm_command, arm_read, NULL, NULL};
+static hal_arm_t g_arm = {&arm_ops, NULL, "arm0"};
+
 static uint64_t now_us(void)
 {
     return ((uint64_t)CAN0->timer_us_hi << 32) | CAN0->timer_us_lo;
@@ -91,6 +126,35 @@ static uint64_t now_us(void)
 static ls_core_t g_core;
 static ls_net_t g_net;
 static ls_traj_t g_traj;
+static ls_control_t g_ctl;
+
+static int act_enable(void *ctx, bool on)
+{
+    ls_ctl_cmd_t cmd = {.kind = on ? LS_CTL_ENABLE : LS_CTL_DISABLE};
+    return ls_control_post((ls_control_t *)ctx, &cmd) ? 0 : HAL_EAGAIN;
+}
+
+static void act_stop(void *ctx)
+{
+    ls_ctl_cmd_t cmd = {.kind = LS_CTL_STOP};
+    (void)ls_control_post((ls_control_t *)ctx, &cmd);
+}
+
+static void drain_control_events(uint64_t now)
+{
+    ls_ctl_event_t ev;
+    while (ls_control_next_event(&g_ctl, &ev)) {
+        switch (ev.kind) {
+        case LS_CEV_MOTION: ls_core_on_motion_event(&g_core, &ev.motion); break;
+        case LS_CEV_FAULT:
+            ls_core_fault(&g_core, ev.text, now);
+            ls_core_motion_failed(&g_core, 0, ev.text);
+            break;
+        case LS_CEV_DIO_CHANGED: ls_core_on_dio_event(&g_core, ev.dio.unit, ev.dio.on, ev.dio.off, now); break;
+        case LS_CEV_CMD_FAILED: ls_core_motion_failed(&g_core, ev.ref_seq, ev.text); break;
+        }
+    }
+}
 
 int main(void)
 {
@@ -102,12 +166,17 @@ int main(void)
         .heartbeat_timeout_ms = 1000,
     };
     ls_core_io_t io = {.send_downlink = ls_net_send_downlink, .ctx = &g_net};
-    ls_core_init(&g_core, &cfg, &io, NULL);
+    ls_core_actions_t act = {.enable_drives = act_enable, .stop_motion = act_stop, .ctx = &g_ctl};
+    ls_core_init(&g_core, &cfg, &io, &act);
     ls_net_init(&g_net, 0x10, &g_core);
     hal_can_link_t link = {.ops = &can_ops, .self = NULL, .name = "can0"};
     (void)ls_net_add_link(&g_net, &link);
 
     const ls_robot_model_t *m = &ls_robot_model_default;
+    g_core.model = m;
+    ls_control_config_t cc = {.model = m, .arm = &g_arm, .rate_hz = 1000};
+    ls_control_init(&g_ctl, &cc);
+    g_core.ctl = &g_ctl;
     ls_traj_limits_t lim;
     for (int i = 0; i < LS_N_JOINTS; i++) {
         lim.v_max[i] = m->qd_max_rad_s[i];
@@ -116,11 +185,17 @@ int main(void)
     }
     double q0[LS_N_JOINTS] = {0}, q1[LS_N_JOINTS] = {0}, q[LS_N_JOINTS];
     uint8_t hb_counter = 0;
-    uint64_t next_hb = 0;
+    uint64_t next_hb = 0, next_cycle = 0;
     for (;;) {
         uint64_t t = now_us();
+        if (t >= next_cycle) { /* on a board: a 1 kHz timer interrupt */
+            ls_control_cycle(&g_ctl, t);
+            next_cycle = t + 1000u;
+        }
         ls_net_poll(&g_net, t);
+        drain_control_events(t);
         ls_core_tick(&g_core, t);
+        ls_core_motion_tick(&g_core, t);
         if (t >= next_hb) {
             struct landscape_heartbeat_t hb = {.hb_counter = hb_counter++, .hb_state = (uint8_t)g_core.state};
             hal_can_frame_t f = {.id = LS_ID_HEARTBEAT | 0x10u, .flags = HAL_CAN_F_EXT, .len = 8};
