@@ -15,6 +15,7 @@ import isotp
 from common import BIN, PYTHON, ROOT, BenchSkipped, Row, Section, fmt_ratio, median, need, percentile, pty_peer
 
 MAX_LEN = 4095
+PY_RETRIES: list[int] = []  # lengths whose reference transfer was repeated (see py_frames)
 
 
 def iso_min_frames(length: int) -> int:
@@ -52,23 +53,41 @@ def py_frames(block_size: int) -> dict[int, int]:
     b = isotp.CanStack(b_bus, address=isotp.Address(isotp.AddressingMode.NormalFixed_29bits,
                                                     source_address=0x10, target_address=0xF1), params=params)
     frames: dict[int, int] = {}
+    retried: list[int] = []
+
+    def attempt(data: bytes) -> int | None:
+        """Frames of one transfer, or None when it failed (can-isotp's timers run on wall-clock time:
+        a stall of the machine longer than N_Bs/N_Cr, 1 s, aborts a transfer)."""
+        a.send(data)
+        got = None
+        for _ in range(200000):
+            a.process()
+            b.process()
+            if b.available():
+                got = b.recv()
+                break
+        count = 0
+        while monitor.recv(0) is not None:
+            count += 1
+        return count if got == data else None
+
     try:
         for n in range(1, MAX_LEN + 1):
             data = bytes((i * 37 + n) & 0xFF for i in range(n))
-            a.send(data)
-            got = None
-            for _ in range(200000):
-                a.process()
-                b.process()
-                if b.available():
-                    got = b.recv()
+            for k in range(3):
+                count = attempt(data)
+                if count is not None:
                     break
-            if got != data:
-                raise BenchSkipped(f"can-isotp reference: transfer of {n} bytes failed on the virtual bus")
-            count = 0
-            while monitor.recv(0) is not None:
-                count += 1
+                retried.append(n)
+                a.reset()
+                b.reset()
+                while monitor.recv(0) is not None:
+                    pass
+            if count is None:
+                raise BenchSkipped(f"can-isotp reference: transfer of {n} bytes failed 3 times on the virtual bus")
             frames[n] = count
+        if retried:
+            PY_RETRIES.extend(retried)
     finally:
         for bus in buses:
             bus.shutdown()
@@ -100,6 +119,10 @@ def bench_frames(quick: bool) -> Section:
                             f"min {o_min:.2f} / mean {o_mean:.3f} / max {o_max:.2f} (max at {o_worst} B)",
                             ref_txt, ref_fig, ratio, "goal 1.00" if bs == 0 else "BS 8: one FC per 8 CFs"))
         sec.details.append(f"BS {bs}: 4095 B takes {ours[4095]} frames (minimum {iso_min_frames(4095)}).")
+    if PY_RETRIES:
+        sec.details.append(f"The reference repeated {len(PY_RETRIES)} transfer(s) that can-isotp aborted on a "
+                           f"wall-clock timeout while the machine stalled (lengths {sorted(set(PY_RETRIES))}); "
+                           "the frames of the successful attempt are counted.")
     sec.commands.append("build-bench/bench/bench_isotp_frames 0   # '<len> <frames>' per length")
     return sec
 

@@ -65,7 +65,10 @@ def machine() -> str:
                 break
     except OSError:
         pass
-    return f"{cpu}, {os.cpu_count()} cores, Linux {platform.release()}, Python {platform.python_version()}"
+    load = ", ".join(f"{x:.1f}" for x in os.getloadavg())
+    return (f"{cpu}, {os.cpu_count()} cores, Linux {platform.release()}, Python {platform.python_version()}; "
+            f"load average at the end {load} (other work shares the machine: timing figures are noisy, the "
+            f"side-by-side ratios less so)")
 
 
 def esc(text: str) -> str:
@@ -75,6 +78,10 @@ def esc(text: str) -> str:
 def render(sections: list[Section], total_s: float) -> str:
     commit = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True,
                             text=True).stdout.strip() or "unknown"
+    dirty = subprocess.run(["git", "-C", str(ROOT), "status", "--porcelain", "--", "bench", "firmware", "hal",
+                            "protocol", "host_tools"], capture_output=True, text=True).stdout.strip()
+    if dirty:
+        commit += " + uncommitted changes"
     out = [
         "# Performance",
         "",
