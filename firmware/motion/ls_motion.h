@@ -30,7 +30,12 @@
 #define LS_MOTION_MAX_EVENTS 4 /* per cycle */
 #define LS_MOTION_AUX_PER_POINT 4
 #define LS_MOTION_AUX_LEN 48
-#define LS_MOTION_MAX_SEGS 257 /* a path of 256 points plus the segment that closes a cycle */
+/* Points of one path. It sizes static tables in several translation units:
+ * change it for the whole build only (cmake -DCMAKE_C_FLAGS=-DLS_PATH_MAX_POINTS=64). */
+#ifndef LS_PATH_MAX_POINTS
+#define LS_PATH_MAX_POINTS 256
+#endif
+#define LS_MOTION_MAX_SEGS (LS_PATH_MAX_POINTS + 1) /* a path plus the segment that closes a cycle */
 #define LS_MOTION_FOLLOWING_ERROR_RAD 0.05
 
 /* Planner statuses (negative = refused; `why` says which joint/axis and limit). */
