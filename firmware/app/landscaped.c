@@ -9,6 +9,8 @@
 #include <inttypes.h>
 #include <poll.h>
 #include <signal.h>
+#include <stdatomic.h>
+#include <stdbool.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -16,8 +18,16 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "hal_linux_gpiod.h"
+#include "hal_linux_rt.h"
+#include "hal_linux_socketcan.h"
+#include "hal_sim_world.h"
 #include "landscape.h" /* cantools: DBC pack functions */
+#include "ls_config.h"
+#include "ls_control.h"
 #include "ls_core.h"
+#include "ls_core_events.h"
+#include "ls_kin.h"
 #include "ls_net.h"
 #include "slcan_pty.h"
 
@@ -56,23 +66,25 @@ static uint64_t mono_us(void)
     return (uint64_t)ts.tv_sec * 1000000u + (uint64_t)ts.tv_nsec / 1000u;
 }
 
-typedef struct {
-    const char *hal;
-    const char *links[LS_NET_MAX_LINKS];
-    size_t n_links;
-    unsigned node;
-    unsigned heartbeat_timeout_ms;
-    const char *name;
-} options_t;
-
 static void usage(FILE *f)
 {
     fprintf(f,
             "usage: landscaped --hal sim --link SPEC [--link SPEC ...] [options]\n"
             "\n"
-            "  --hal sim                 simulated controller (the only HAL composition so far)\n"
+            "  --hal sim                 simulated controller: --arm sim --dio sim --clock realtime\n"
             "  --link slcan:pty:PATH     SLCAN on a new pseudo-terminal; PATH becomes a symlink to it\n"
-            "                            (repeatable: every link is one segment of the same bus)\n"
+            "  --link socketcan:IFNAME   a SocketCAN interface (can0, vcan0)\n"
+            "                            (--link is repeatable: every link is one segment of the same bus)\n"
+            "  --arm sim|none            the arm backend (default none; --hal sim: sim)\n"
+            "  --dio sim|gpiod:CHIP|none digital I/O backend (gpiod lines: --inputs, --outputs)\n"
+            "  --inputs N,N,...          gpiod line offsets of the inputs (bits 0..15)\n"
+            "  --outputs N,N,...         gpiod line offsets of the outputs (bits 16..31)\n"
+            "  --dio-socket PATH         sim: Unix datagram socket that drives sim inputs and the jog device\n"
+            "  --clock realtime|lockstep lockstep: exact virtual time, the sim arm rests while idle\n"
+            "  --rate HZ                 control loop rate (default 1000)\n"
+            "  --telemetry-hz HZ         broadcast rate of joints/tool/status/DIO (default 50, 0 = off)\n"
+            "  --rt-priority N           SCHED_FIFO priority of the control thread (0 = normal thread)\n"
+            "  --estop-input BIT         DIO unit 0 input bit that stops everything when active\n"
             "  --node ADDR               node address on the bus (default 0x10)\n"
             "  --heartbeat-timeout MS    drop a supervisor after MS without heartbeat (default 1000)\n"
             "  --name NAME               device name reported at connect (default landscape-sim)\n"
@@ -91,7 +103,27 @@ static int parse_uint(const char *s, unsigned max, unsigned *out)
     return 0;
 }
 
-static int parse_options(int argc, char **argv, options_t *o)
+static int parse_lines(const char *s, unsigned *out, uint8_t *n)
+{
+    char buf[128];
+    snprintf(buf, sizeof buf, "%s", s);
+    *n = 0;
+    for (char *tok = strtok(buf, ","); tok != NULL; tok = strtok(NULL, ",")) {
+        unsigned v = 0;
+        if (*n >= 16 || parse_uint(tok, 511, &v) != 0) {
+            return -1;
+        }
+        out[(*n)++] = v;
+    }
+    return 0;
+}
+
+static void copy(char *dst, size_t cap, const char *src)
+{
+    snprintf(dst, cap, "%s", src);
+}
+
+static int parse_options(int argc, char **argv, ls_config_t *o)
 {
     static const struct option longopts[] = {
         { "hal", required_argument, NULL, 'H' },
@@ -99,29 +131,55 @@ static int parse_options(int argc, char **argv, options_t *o)
         { "node", required_argument, NULL, 'n' },
         { "heartbeat-timeout", required_argument, NULL, 't' },
         { "name", required_argument, NULL, 'N' },
+        { "arm", required_argument, NULL, 'a' },
+        { "dio", required_argument, NULL, 'd' },
+        { "dio-socket", required_argument, NULL, 'S' },
+        { "inputs", required_argument, NULL, 'I' },
+        { "outputs", required_argument, NULL, 'O' },
+        { "clock", required_argument, NULL, 'c' },
+        { "rate", required_argument, NULL, 'r' },
+        { "telemetry-hz", required_argument, NULL, 'T' },
+        { "rt-priority", required_argument, NULL, 'p' },
+        { "estop-input", required_argument, NULL, 'e' },
         { "help", no_argument, NULL, 'h' },
         { NULL, 0, NULL, 0 },
     };
     memset(o, 0, sizeof *o);
     o->node = 0x10;
     o->heartbeat_timeout_ms = 1000;
-    o->name = "landscape-sim";
+    o->rate_hz = 1000;
+    o->telemetry_hz = 50;
+    o->estop_input = -1;
+    o->rt_cpu = -1;
+    copy(o->name, sizeof o->name, "landscape-sim");
+    copy(o->arm, sizeof o->arm, "none");
+    copy(o->dio, sizeof o->dio, "none");
+    copy(o->clock, sizeof o->clock, "realtime");
+    bool arm_set = false, dio_set = false;
+    unsigned v = 0;
     int c;
     while ((c = getopt_long(argc, argv, "h", longopts, NULL)) != -1) {
         switch (c) {
-        case 'H': o->hal = optarg; break;
-        case 'l':
-            if (o->n_links >= LS_NET_MAX_LINKS) {
-                LOG_ERR("at most %d --link options", LS_NET_MAX_LINKS);
+        case 'H':
+            if (strcmp(optarg, "sim") != 0) {
+                LOG_ERR("--hal %s: expected --hal sim (or compose with --arm/--dio/--link)", optarg);
                 return -1;
             }
-            o->links[o->n_links++] = optarg;
+            o->hal_sim = true;
+            break;
+        case 'l':
+            if (o->n_links >= LS_CONFIG_MAX_LINKS) {
+                LOG_ERR("at most %d --link options", LS_CONFIG_MAX_LINKS);
+                return -1;
+            }
+            copy(o->links[o->n_links++], sizeof o->links[0], optarg);
             break;
         case 'n':
-            if (parse_uint(optarg, 0xFE, &o->node) != 0 || o->node == 0) {
+            if (parse_uint(optarg, 0xFE, &v) != 0 || v == 0) {
                 LOG_ERR("--node %s: expected an address 1..0xFE (0xFF is the broadcast address)", optarg);
                 return -1;
             }
+            o->node = (uint8_t)v;
             break;
         case 't':
             if (parse_uint(optarg, 600000, &o->heartbeat_timeout_ms) != 0 || o->heartbeat_timeout_ms < 50) {
@@ -129,7 +187,49 @@ static int parse_options(int argc, char **argv, options_t *o)
                 return -1;
             }
             break;
-        case 'N': o->name = optarg; break;
+        case 'N': copy(o->name, sizeof o->name, optarg); break;
+        case 'a': copy(o->arm, sizeof o->arm, optarg); arm_set = true; break;
+        case 'd': copy(o->dio, sizeof o->dio, optarg); dio_set = true; break;
+        case 'S': copy(o->dio_socket, sizeof o->dio_socket, optarg); break;
+        case 'I':
+            if (parse_lines(optarg, o->input_offsets, &o->n_inputs) != 0) {
+                LOG_ERR("--inputs %s: expected up to 16 comma-separated line offsets", optarg);
+                return -1;
+            }
+            break;
+        case 'O':
+            if (parse_lines(optarg, o->output_offsets, &o->n_outputs) != 0) {
+                LOG_ERR("--outputs %s: expected up to 16 comma-separated line offsets", optarg);
+                return -1;
+            }
+            break;
+        case 'c': copy(o->clock, sizeof o->clock, optarg); break;
+        case 'r':
+            if (parse_uint(optarg, 10000, &o->rate_hz) != 0 || o->rate_hz < 100) {
+                LOG_ERR("--rate %s: expected 100..10000 Hz", optarg);
+                return -1;
+            }
+            break;
+        case 'T':
+            if (parse_uint(optarg, 200, &o->telemetry_hz) != 0) {
+                LOG_ERR("--telemetry-hz %s: expected 0..200", optarg);
+                return -1;
+            }
+            break;
+        case 'p':
+            if (parse_uint(optarg, 99, &v) != 0) {
+                LOG_ERR("--rt-priority %s: expected 0 (normal thread) or 1..99 (SCHED_FIFO)", optarg);
+                return -1;
+            }
+            o->rt_priority = (int)v;
+            break;
+        case 'e':
+            if (parse_uint(optarg, 15, &v) != 0) {
+                LOG_ERR("--estop-input %s: expected an input bit 0..15", optarg);
+                return -1;
+            }
+            o->estop_input = (int)v;
+            break;
         case 'h': usage(stdout); exit(0);
         default: usage(stderr); return -1;
         }
@@ -138,8 +238,28 @@ static int parse_options(int argc, char **argv, options_t *o)
         LOG_ERR("unexpected argument '%s' (see --help)", argv[optind]);
         return -1;
     }
-    if (o->hal == NULL || strcmp(o->hal, "sim") != 0) {
-        LOG_ERR("--hal %s: expected --hal sim", o->hal != NULL ? o->hal : "(missing)");
+    if (o->hal_sim) {
+        if (!arm_set) {
+            copy(o->arm, sizeof o->arm, "sim");
+        }
+        if (!dio_set) {
+            copy(o->dio, sizeof o->dio, "sim");
+        }
+    }
+    if (strcmp(o->arm, "sim") != 0 && strcmp(o->arm, "none") != 0) {
+        LOG_ERR("--arm %s: expected sim or none", o->arm);
+        return -1;
+    }
+    if (strcmp(o->dio, "sim") != 0 && strcmp(o->dio, "none") != 0 && strncmp(o->dio, "gpiod:", 6) != 0) {
+        LOG_ERR("--dio %s: expected sim, gpiod:CHIP or none", o->dio);
+        return -1;
+    }
+    if (strcmp(o->dio, "sim") == 0 && strcmp(o->arm, "sim") != 0) {
+        LOG_ERR("--dio sim needs --arm sim (the simulated DIO lives in the simulated world)");
+        return -1;
+    }
+    if (strcmp(o->clock, "realtime") != 0 && strcmp(o->clock, "lockstep") != 0) {
+        LOG_ERR("--clock %s: expected realtime or lockstep", o->clock);
         return -1;
     }
     if (o->n_links == 0) {
@@ -152,16 +272,20 @@ static int parse_options(int argc, char **argv, options_t *o)
 static int open_link(const char *spec, hal_can_link_t *out)
 {
     char msg[256] = "";
+    int r;
     if (strncmp(spec, "slcan:pty:", 10) == 0) {
-        int r = hal_sim_slcan_pty_open(out, spec + 10, msg, sizeof msg);
-        if (r < 0) {
-            LOG_ERR("--link %s: %s", spec, msg);
-            return -1;
-        }
-        return 0;
+        r = hal_sim_slcan_pty_open(out, spec + 10, msg, sizeof msg);
+    } else if (strncmp(spec, "socketcan:", 10) == 0) {
+        r = hal_linux_socketcan_open(out, spec + 10, msg, sizeof msg);
+    } else {
+        LOG_ERR("--link %s: unknown link kind; expected slcan:pty:PATH or socketcan:IFNAME", spec);
+        return -1;
     }
-    LOG_ERR("--link %s: unknown link kind; expected slcan:pty:PATH", spec);
-    return -1;
+    if (r < 0) {
+        LOG_ERR("--link %s: %s", spec, msg);
+        return -1;
+    }
+    return 0;
 }
 
 static void send_heartbeat(ls_net_t *net, const ls_core_t *core, uint8_t counter)
@@ -185,10 +309,209 @@ static void send_heartbeat(ls_net_t *net, const ls_core_t *core, uint8_t counter
 
 static ls_core_t g_core;
 static ls_net_t g_net;
+static ls_control_t g_ctl;
+static hal_linux_rt_t g_rt;
+static hal_arm_t g_arm;
+static hal_dio_t g_dio;
+static hal_tool_t g_tool;
+static hal_manual_t g_manual;
+static bool g_world_open;
+static _Atomic bool g_loop_attached;
+
+/* The control thread's body. */
+static void control_cycle(void *arg, uint64_t now_us, uint64_t cycle)
+{
+    (void)cycle;
+    if (g_world_open && !atomic_load_explicit(&g_loop_attached, memory_order_relaxed)) {
+        (void)hal_sim_world_attach_thread(); /* ODE keeps per-thread collision data */
+        atomic_store_explicit(&g_loop_attached, true, memory_order_relaxed);
+    }
+    ls_control_cycle((ls_control_t *)arg, now_us);
+}
+
+/* Core actions run through the loop's command ring. */
+static int act_enable(void *ctx, bool on)
+{
+    ls_ctl_cmd_t cmd = { .kind = on ? LS_CTL_ENABLE : LS_CTL_DISABLE };
+    return ls_control_post((ls_control_t *)ctx, &cmd) ? 0 : HAL_EAGAIN;
+}
+
+static void act_stop(void *ctx)
+{
+    ls_ctl_cmd_t cmd = { .kind = LS_CTL_STOP };
+    (void)ls_control_post((ls_control_t *)ctx, &cmd);
+}
+
+static void drain_control_events(uint64_t now)
+{
+    ls_ctl_event_t ev;
+    while (ls_control_next_event(&g_ctl, &ev)) {
+        switch (ev.kind) {
+        case LS_CEV_MOTION: ls_core_on_motion_event(&g_core, &ev.motion); break;
+        case LS_CEV_FAULT: ls_core_fault(&g_core, ev.text, now); break;
+        case LS_CEV_DIO_CHANGED: ls_core_on_dio_event(&g_core, ev.dio.unit, ev.dio.on, ev.dio.off, now); break;
+        case LS_CEV_CMD_FAILED: {
+            char d[80];
+            snprintf(d, sizeof d, "reason=%s", ev.text);
+            const char *data[] = { d };
+            ls_core_notify(&g_core, g_core.owner, ls_NoticeKind_ALARM, "commandFailed", ev.ref_seq, false, data, 1);
+            LOG_WARN("control loop: %s", ev.text);
+            break;
+        }
+        }
+    }
+}
+
+static void send_frame(uint32_t base, const uint8_t *data)
+{
+    hal_can_frame_t f = { .id = base | g_net.node, .flags = HAL_CAN_F_EXT, .len = 8 };
+    memcpy(f.data, data, 8);
+    (void)ls_net_send_frame(&g_net, &f);
+}
+
+/* Telemetry broadcasts of protocol/landscape.dbc (SI units). */
+static void send_telemetry(void)
+{
+    ls_ctl_snapshot_t s;
+    ls_control_snapshot(&g_ctl, &s);
+    uint8_t d[8];
+    struct landscape_status_t st = {
+        .st_state = (uint8_t)g_core.state,
+        .st_motion = (uint8_t)(s.phase == LS_MOTION_RUNNING || s.phase == LS_MOTION_STOPPING ? 1
+                               : s.phase == LS_MOTION_PAUSED                              ? 2
+                               : g_core.fault[0] != '\0'                                  ? 3
+                                                                                          : 0),
+        .st_control_mode = (uint8_t)(g_core.fault[0] != '\0' ? 2 : (s.enabled ? 1 : 0)),
+        .st_fault = g_core.fault[0] != '\0' ? 1u : 0u,
+        .st_overruns = 0,
+        .st_cycle_us = 0,
+    };
+    hal_rt_stats_t rs;
+    hal_linux_rt_stats(&g_rt, &rs);
+    st.st_overruns = (uint16_t)(rs.overruns > 0xFFFFu ? 0xFFFFu : rs.overruns);
+    st.st_cycle_us = (uint16_t)(rs.max_cycle_us > 0xFFFFu ? 0xFFFFu : rs.max_cycle_us);
+    if (landscape_status_pack(d, &st, sizeof d) == 8) {
+        send_frame(0x1CFF1000u, d);
+    }
+    struct landscape_joints_12_t j12 = { landscape_joints_12_j1_encode(s.q_rad[0]), landscape_joints_12_j2_encode(s.q_rad[1]) };
+    struct landscape_joints_34_t j34 = { landscape_joints_34_j3_encode(s.q_rad[2]), landscape_joints_34_j4_encode(s.q_rad[3]) };
+    struct landscape_joints_56_t j56 = { landscape_joints_56_j5_encode(s.q_rad[4]), landscape_joints_56_j6_encode(s.q_rad[5]) };
+    if (landscape_joints_12_pack(d, &j12, sizeof d) == 8) {
+        send_frame(0x1CFF1100u, d);
+    }
+    if (landscape_joints_34_pack(d, &j34, sizeof d) == 8) {
+        send_frame(0x1CFF1200u, d);
+    }
+    if (landscape_joints_56_pack(d, &j56, sizeof d) == 8) {
+        send_frame(0x1CFF1300u, d);
+    }
+    double tool[16], tip[16], xyzrpy[6];
+    ls_pose_from_xyzrpy(g_core.settings.tool_offset, tool);
+    ls_pose_mul(s.flange_pose, tool, tip);
+    ls_pose_to_xyzrpy(tip, xyzrpy);
+    struct landscape_tool_pos_t tp = {
+        .tool_x = landscape_tool_pos_tool_x_encode(xyzrpy[0]),
+        .tool_y = landscape_tool_pos_tool_y_encode(xyzrpy[1]),
+        .tool_z = landscape_tool_pos_tool_z_encode(xyzrpy[2]),
+        .tool_time_ms = (uint16_t)((s.t_us / 1000u) & 0xFFFFu),
+    };
+    struct landscape_tool_rpy_t tr = {
+        .tool_roll = landscape_tool_rpy_tool_roll_encode(xyzrpy[3]),
+        .tool_pitch = landscape_tool_rpy_tool_pitch_encode(xyzrpy[4]),
+        .tool_yaw = landscape_tool_rpy_tool_yaw_encode(xyzrpy[5]),
+    };
+    if (landscape_tool_pos_pack(d, &tp, sizeof d) == 8) {
+        send_frame(0x1CFF1400u, d);
+    }
+    if (landscape_tool_rpy_pack(d, &tr, sizeof d) == 8) {
+        send_frame(0x1CFF1500u, d);
+    }
+    if (g_core.dio_units > 0) {
+        struct landscape_dio_t dio = {
+            .dio_inputs = s.dio[0] & g_core.dio_info[0].input_mask,
+            .dio_outputs = s.dio[0] & g_core.dio_info[0].output_mask,
+        };
+        if (landscape_dio_pack(d, &dio, sizeof d) == 8) {
+            send_frame(0x1CFF1600u, d);
+        }
+    }
+}
+
+static int compose(const ls_config_t *o)
+{
+    char msg[256] = "";
+    hal_arm_t *arm = NULL;
+    hal_dio_t *dio = NULL;
+    const hal_sensor_t *sensors = NULL;
+    size_t n_sensors = 0;
+    if (strcmp(o->arm, "sim") == 0) {
+        hal_sim_world_config_t wc = {
+            .model = &ls_robot_model_default,
+            .dio_socket_path = o->dio_socket[0] != '\0' ? o->dio_socket : NULL,
+            .lockstep = strcmp(o->clock, "lockstep") == 0,
+            .with_obstacle = true,
+        };
+        if (hal_sim_world_open(&wc, msg, sizeof msg) < 0) {
+            LOG_ERR("--arm sim: %s", msg);
+            return -1;
+        }
+        g_world_open = true;
+        hal_sim_world_get_arm(&g_arm);
+        hal_sim_world_get_tool(&g_tool);
+        hal_sim_world_get_manual(&g_manual);
+        sensors = hal_sim_world_sensors(&n_sensors);
+        arm = &g_arm;
+        g_core.tool = &g_tool;
+        g_core.manual = &g_manual;
+        if (strcmp(o->dio, "sim") == 0) {
+            hal_sim_world_get_dio(&g_dio);
+            dio = &g_dio;
+        }
+    }
+    if (strncmp(o->dio, "gpiod:", 6) == 0) {
+        hal_linux_gpiod_config_t gc;
+        memset(&gc, 0, sizeof gc);
+        gc.chip = o->dio + 6;
+        gc.n_inputs = o->n_inputs;
+        gc.n_outputs = o->n_outputs;
+        memcpy(gc.input_offsets, o->input_offsets, sizeof o->input_offsets);
+        memcpy(gc.output_offsets, o->output_offsets, sizeof o->output_offsets);
+        if (hal_linux_gpiod_open(&g_dio, &gc, msg, sizeof msg) < 0) {
+            LOG_ERR("--dio %s: %s", o->dio, msg);
+            return -1;
+        }
+        dio = &g_dio;
+    }
+    g_core.model = &ls_robot_model_default;
+    g_core.sensors = sensors;
+    g_core.n_sensors = n_sensors;
+    int units = dio != NULL ? hal_dio_unit_count(dio) : 0;
+    for (int u = 0; u < units && u < LS_CTL_MAX_DIO_UNITS; u++) {
+        (void)hal_dio_describe(dio, (uint16_t)u, &g_core.dio_info[u]);
+        g_core.dio_units = (uint16_t)(u + 1);
+    }
+    ls_control_config_t cc = { .model = &ls_robot_model_default, .arm = arm, .dio = dio, .sensors = sensors,
+                               .n_sensors = n_sensors, .rate_hz = o->rate_hz };
+    ls_control_init(&g_ctl, &cc);
+    g_core.ctl = &g_ctl;
+    if (o->estop_input >= 0) {
+        ls_ctl_cmd_t cmd = { .kind = LS_CTL_ESTOP_LINE, .dio = { 0, 1u << (unsigned)o->estop_input, 0 } };
+        (void)ls_control_post(&g_ctl, &cmd);
+    }
+    hal_rt_config_t rc = { .rate_hz = o->rate_hz, .priority = o->rt_priority, .cpu = o->rt_cpu,
+                           .lock_memory = o->rt_priority > 0, .lockstep = strcmp(o->clock, "lockstep") == 0 };
+    if (hal_linux_rt_start(&g_rt, &rc, control_cycle, &g_ctl, msg, sizeof msg) < 0) {
+        LOG_ERR("control thread: %s", msg);
+        return -1;
+    }
+    LOG_INFO("control loop at %u Hz (%s clock), arm %s, dio %s, %zu sensors", (unsigned)o->rate_hz, o->clock,
+             o->arm, o->dio, n_sensors);
+    return 0;
+}
 
 int main(int argc, char **argv)
 {
-    options_t opt;
+    static ls_config_t opt;
     if (parse_options(argc, argv, &opt) != 0) {
         return 2;
     }
@@ -202,13 +525,14 @@ int main(int argc, char **argv)
     ls_core_config_t cfg = {
         .device_name = opt.name,
         .firmware_version = LS_FIRMWARE_VERSION,
-        .node_addr = (uint8_t)opt.node,
-        .joint_count = 6,
+        .node_addr = opt.node,
+        .joint_count = LS_N_JOINTS,
         .heartbeat_timeout_ms = opt.heartbeat_timeout_ms,
     };
     ls_core_io_t io = { .send_downlink = ls_net_send_downlink, .ctx = &g_net };
-    ls_core_init(&g_core, &cfg, &io, NULL);
-    ls_net_init(&g_net, (uint8_t)opt.node, &g_core);
+    ls_core_actions_t act = { .enable_drives = act_enable, .stop_motion = act_stop, .ctx = &g_ctl };
+    ls_core_init(&g_core, &cfg, &io, &act);
+    ls_net_init(&g_net, opt.node, &g_core);
 
     int rc = 0;
     for (size_t i = 0; i < opt.n_links; i++) {
@@ -220,11 +544,16 @@ int main(int argc, char **argv)
         (void)ls_net_add_link(&g_net, &link);
         LOG_INFO("link %s up", link.name);
     }
+    if (rc == 0 && compose(&opt) != 0) {
+        rc = 1;
+    }
     if (rc == 0) {
         LOG_INFO("%s ready: node 0x%02X, firmware %s, schema %08X", opt.name, opt.node, LS_FIRMWARE_VERSION,
                  (unsigned)LS_SCHEMA_HASH);
     }
     uint64_t next_hb = mono_us();
+    uint64_t next_tm = next_hb;
+    uint64_t tm_period = opt.telemetry_hz > 0 ? 1000000u / opt.telemetry_hz : 0;
     uint8_t hb_counter = 0;
     while (rc == 0 && !g_stop) {
         struct pollfd fds[LS_NET_MAX_LINKS];
@@ -241,13 +570,29 @@ int main(int argc, char **argv)
         (void)poll(fds, n, 1);
         uint64_t now = mono_us();
         ls_net_poll(&g_net, now);
+        drain_control_events(now);
         ls_core_tick(&g_core, now);
+        ls_dio_tick(&g_core, now);
         if (now >= next_hb) {
             send_heartbeat(&g_net, &g_core, hb_counter++);
             next_hb = now + 200000u;
         }
+        if (tm_period > 0 && now >= next_tm) {
+            send_telemetry();
+            next_tm = now + tm_period;
+        }
     }
     LOG_INFO("shutting down");
+    hal_linux_rt_stop(&g_rt);
+    if (g_core.ctl != NULL) {
+        (void)hal_arm_enable(&g_arm, false);
+    }
+    if (g_world_open) {
+        hal_sim_world_close();
+    }
+    if (g_dio.ops != NULL && !g_world_open) {
+        hal_dio_close(&g_dio);
+    }
     ls_net_close(&g_net);
     return rc;
 }

@@ -18,6 +18,7 @@
 
 #include <stdatomic.h>
 #include <stdbool.h>
+#include <stddef.h>
 #include <stdint.h>
 
 #include "hal/hal_arm.h"
@@ -31,7 +32,7 @@
 
 typedef enum {
     LS_CTL_ENABLE = 1,   /* drives on: hold the measured position */
-    LS_CTL_DISABLE,      /* abort any motion, drives off */
+    LS_CTL_DISABLE,      /* drives off; a running motion first stops along its path */
     LS_CTL_START,        /* start the plan in the plan slot */
     LS_CTL_STOP,         /* decelerate along the path and pause */
     LS_CTL_RESUME,
@@ -112,6 +113,7 @@ typedef struct ls_control {
     /* loop-private */
     ls_motion_t motion;
     bool enabled;
+    bool disable_pending;     /* DISABLE while moving: stop along the path first */
     double q[LS_N_JOINTS], qd[LS_N_JOINTS], q_cmd[LS_N_JOINTS], qd_cmd[LS_N_JOINTS];
     uint32_t dio_levels[LS_CTL_MAX_DIO_UNITS];
     uint16_t estop_unit;

@@ -1,0 +1,294 @@
+/* Control loop glue: lock-free rings, plan hand-over, seqlock snapshot. */
+#include "ls_control.h"
+
+#include <string.h>
+
+#include "ls_kin.h"
+
+/* --- SPSC rings: the producer writes the slot then publishes head (release);
+ * the consumer reads head (acquire), copies the slot, then publishes tail. */
+
+static bool cmd_push(ls_control_t *c, const ls_ctl_cmd_t *cmd)
+{
+    unsigned head = atomic_load_explicit(&c->cmd_head, memory_order_relaxed);
+    unsigned tail = atomic_load_explicit(&c->cmd_tail, memory_order_acquire);
+    if (head - tail >= LS_CTL_QUEUE_LEN) {
+        return false;
+    }
+    c->cmd_ring[head % LS_CTL_QUEUE_LEN] = *cmd;
+    atomic_store_explicit(&c->cmd_head, head + 1u, memory_order_release);
+    return true;
+}
+
+static bool cmd_pop(ls_control_t *c, ls_ctl_cmd_t *out)
+{
+    unsigned tail = atomic_load_explicit(&c->cmd_tail, memory_order_relaxed);
+    unsigned head = atomic_load_explicit(&c->cmd_head, memory_order_acquire);
+    if (tail == head) {
+        return false;
+    }
+    *out = c->cmd_ring[tail % LS_CTL_QUEUE_LEN];
+    atomic_store_explicit(&c->cmd_tail, tail + 1u, memory_order_release);
+    return true;
+}
+
+static void ev_push(ls_control_t *c, const ls_ctl_event_t *ev)
+{
+    unsigned head = atomic_load_explicit(&c->ev_head, memory_order_relaxed);
+    unsigned tail = atomic_load_explicit(&c->ev_tail, memory_order_acquire);
+    if (head - tail >= LS_CTL_QUEUE_LEN) {
+        /* The comms thread drains every millisecond; a full ring means it is
+         * stuck. Count it: the loop must not wait. */
+        atomic_fetch_add_explicit(&c->events_lost, 1u, memory_order_relaxed);
+        return;
+    }
+    c->ev_ring[head % LS_CTL_QUEUE_LEN] = *ev;
+    atomic_store_explicit(&c->ev_head, head + 1u, memory_order_release);
+}
+
+bool ls_control_next_event(ls_control_t *c, ls_ctl_event_t *out)
+{
+    unsigned tail = atomic_load_explicit(&c->ev_tail, memory_order_relaxed);
+    unsigned head = atomic_load_explicit(&c->ev_head, memory_order_acquire);
+    if (tail == head) {
+        return false;
+    }
+    *out = c->ev_ring[tail % LS_CTL_QUEUE_LEN];
+    atomic_store_explicit(&c->ev_tail, tail + 1u, memory_order_release);
+    return true;
+}
+
+bool ls_control_post(ls_control_t *c, const ls_ctl_cmd_t *cmd)
+{
+    return cmd_push(c, cmd);
+}
+
+ls_motion_plan_t *ls_control_plan_slot(ls_control_t *c)
+{
+    return atomic_load_explicit(&c->plan_slot_busy, memory_order_acquire) ? NULL : &c->plan_slot;
+}
+
+bool ls_control_start_plan(ls_control_t *c, uint32_t ref_seq)
+{
+    atomic_store_explicit(&c->plan_slot_busy, true, memory_order_release);
+    ls_ctl_cmd_t cmd = { .kind = LS_CTL_START, .ref_seq = ref_seq };
+    if (!cmd_push(c, &cmd)) {
+        atomic_store_explicit(&c->plan_slot_busy, false, memory_order_release);
+        return false;
+    }
+    return true;
+}
+
+/* --- seqlock snapshot: odd sequence while the loop writes. */
+
+static void publish(ls_control_t *c, const ls_ctl_snapshot_t *s)
+{
+    unsigned seq = atomic_load_explicit(&c->snap_seq, memory_order_relaxed);
+    atomic_store_explicit(&c->snap_seq, seq + 1u, memory_order_relaxed);
+    atomic_thread_fence(memory_order_release);
+    c->snap = *s;
+    atomic_store_explicit(&c->snap_seq, seq + 2u, memory_order_release);
+}
+
+void ls_control_snapshot(ls_control_t *c, ls_ctl_snapshot_t *out)
+{
+    for (;;) {
+        unsigned s1 = atomic_load_explicit(&c->snap_seq, memory_order_acquire);
+        if ((s1 & 1u) != 0u) {
+            continue;
+        }
+        *out = c->snap;
+        atomic_thread_fence(memory_order_acquire);
+        unsigned s2 = atomic_load_explicit(&c->snap_seq, memory_order_relaxed);
+        if (s1 == s2) {
+            return;
+        }
+    }
+}
+
+/* --- the loop */
+
+static void fault(ls_control_t *c, const char *text)
+{
+    ls_motion_abort(&c->motion);
+    if (c->enabled) {
+        (void)hal_arm_enable(c->cfg.arm, false);
+        c->enabled = false;
+    }
+    ls_ctl_event_t ev;
+    memset(&ev, 0, sizeof ev);
+    ev.kind = LS_CEV_FAULT;
+    strncpy(ev.text, text, sizeof ev.text - 1u);
+    ev_push(c, &ev);
+}
+
+static void cmd_failed(ls_control_t *c, uint32_t ref_seq, const char *text)
+{
+    ls_ctl_event_t ev;
+    memset(&ev, 0, sizeof ev);
+    ev.kind = LS_CEV_CMD_FAILED;
+    ev.ref_seq = ref_seq;
+    strncpy(ev.text, text, sizeof ev.text - 1u);
+    ev_push(c, &ev);
+}
+
+static void read_feedback(ls_control_t *c)
+{
+    if (c->cfg.arm != NULL && hal_arm_read(c->cfg.arm, c->q, c->qd) < 0) {
+        fault(c, "arm feedback failed");
+    }
+}
+
+void ls_control_init(ls_control_t *c, const ls_control_config_t *cfg)
+{
+    memset(c, 0, sizeof *c);
+    c->cfg = *cfg;
+    c->dt_s = 1.0 / (double)(cfg->rate_hz != 0u ? cfg->rate_hz : 1000u);
+    ls_motion_init(&c->motion, cfg->model);
+    read_feedback(c);
+    memcpy(c->q_cmd, c->q, sizeof c->q_cmd);
+    ls_motion_hold(&c->motion, c->q);
+    ls_ctl_snapshot_t s;
+    memset(&s, 0, sizeof s);
+    memcpy(s.q_rad, c->q, sizeof s.q_rad);
+    memcpy(s.q_cmd_rad, c->q, sizeof s.q_cmd_rad);
+    (void)ls_kin_fk(cfg->model, c->q, s.flange_pose);
+    publish(c, &s);
+}
+
+static void handle_command(ls_control_t *c, const ls_ctl_cmd_t *cmd)
+{
+    switch (cmd->kind) {
+    case LS_CTL_ENABLE:
+        c->disable_pending = false;
+        if (c->cfg.arm == NULL || hal_arm_enable(c->cfg.arm, true) < 0) {
+            cmd_failed(c, cmd->ref_seq, "the drives could not be enabled");
+            return;
+        }
+        /* Hold where the arm is, not where an old command pointed. */
+        ls_motion_hold(&c->motion, c->q);
+        memcpy(c->q_cmd, c->q, sizeof c->q_cmd);
+        c->enabled = true;
+        return;
+    case LS_CTL_DISABLE:
+        if (c->enabled && (c->motion.phase == LS_MOTION_RUNNING || c->motion.phase == LS_MOTION_STOPPING)) {
+            /* Braking a moving arm is a jolt: decelerate along the path, then disable. */
+            ls_motion_stop(&c->motion);
+            c->disable_pending = true;
+            return;
+        }
+        ls_motion_abort(&c->motion);
+        (void)hal_arm_enable(c->cfg.arm, false);
+        c->enabled = false;
+        return;
+    case LS_CTL_START:
+        if (!c->enabled || ls_motion_start(&c->motion, &c->plan_slot) != 0) {
+            cmd_failed(c, cmd->ref_seq, c->enabled ? "a motion is already running" : "the drives are off");
+        }
+        atomic_store_explicit(&c->plan_slot_busy, false, memory_order_release);
+        return;
+    case LS_CTL_STOP: ls_motion_stop(&c->motion); return;
+    case LS_CTL_RESUME:
+        if (ls_motion_resume(&c->motion) != 0) {
+            cmd_failed(c, cmd->ref_seq, "no paused motion to resume");
+        }
+        return;
+    case LS_CTL_ABORT: ls_motion_abort(&c->motion); return;
+    case LS_CTL_DIO_WRITE:
+        if (hal_dio_write(c->cfg.dio, cmd->dio.unit, cmd->dio.on, cmd->dio.off) < 0) {
+            cmd_failed(c, cmd->ref_seq, "DIO write refused by the backend");
+        }
+        return;
+    case LS_CTL_AUX_DONE: ls_motion_aux_done(&c->motion); return;
+    case LS_CTL_ESTOP_LINE:
+        c->estop_unit = cmd->dio.unit;
+        c->estop_bit = cmd->dio.on;
+        return;
+    }
+}
+
+static void read_dio(ls_control_t *c)
+{
+    if (c->cfg.dio == NULL) {
+        return;
+    }
+    if (hal_dio_poll_fd(c->cfg.dio) >= 0) {
+        (void)hal_dio_drain_events(c->cfg.dio);
+    }
+    int units = hal_dio_unit_count(c->cfg.dio);
+    for (int u = 0; u < units && u < LS_CTL_MAX_DIO_UNITS; u++) {
+        uint32_t bits = 0;
+        if (hal_dio_read(c->cfg.dio, (uint16_t)u, &bits) < 0) {
+            continue;
+        }
+        uint32_t changed = bits ^ c->dio_levels[u];
+        c->dio_levels[u] = bits;
+        if (changed != 0u) {
+            ls_ctl_event_t ev;
+            memset(&ev, 0, sizeof ev);
+            ev.kind = LS_CEV_DIO_CHANGED;
+            ev.dio.unit = (uint16_t)u;
+            ev.dio.on = bits;
+            ev.dio.off = changed;
+            ev_push(c, &ev);
+        }
+        if (c->estop_bit != 0u && (unsigned)u == c->estop_unit && (bits & c->estop_bit) != 0u && c->enabled) {
+            fault(c, "e-stop input active");
+        }
+    }
+}
+
+void ls_control_cycle(ls_control_t *c, uint64_t now_us)
+{
+    ls_ctl_cmd_t cmd;
+    while (cmd_pop(c, &cmd)) {
+        handle_command(c, &cmd);
+    }
+    read_dio(c);
+    ls_motion_events_t mev;
+    mev.n = 0;
+    if (c->enabled) {
+        ls_motion_step(&c->motion, c->dt_s, c->q, c->q_cmd, c->qd_cmd, &mev);
+        if (hal_arm_command(c->cfg.arm, c->q_cmd, c->qd_cmd) < 0) {
+            fault(c, "arm command failed");
+        }
+    }
+    if (c->disable_pending && c->motion.phase != LS_MOTION_RUNNING && c->motion.phase != LS_MOTION_STOPPING) {
+        ls_motion_abort(&c->motion);
+        (void)hal_arm_enable(c->cfg.arm, false);
+        c->enabled = false;
+        c->disable_pending = false;
+    }
+    (void)hal_arm_step(c->cfg.arm, c->dt_s); /* physics advances with the drives off too (brakes) */
+    read_feedback(c);
+    for (uint8_t i = 0; i < mev.n; i++) {
+        ls_ctl_event_t ev;
+        memset(&ev, 0, sizeof ev);
+        ev.kind = LS_CEV_MOTION;
+        ev.ref_seq = mev.ev[i].ref_seq;
+        ev.motion = mev.ev[i];
+        ev_push(c, &ev);
+        if (mev.ev[i].kind == LS_MEV_FAULT && c->enabled) {
+            (void)hal_arm_enable(c->cfg.arm, false);
+            c->enabled = false;
+        }
+    }
+    c->cycles++;
+    ls_ctl_snapshot_t s;
+    s.cycle = c->cycles;
+    s.t_us = now_us;
+    s.enabled = c->enabled;
+    s.phase = c->motion.phase;
+    memcpy(s.q_rad, c->q, sizeof s.q_rad);
+    memcpy(s.qd_rad_s, c->qd, sizeof s.qd_rad_s);
+    memcpy(s.q_cmd_rad, c->enabled ? c->q_cmd : c->q, sizeof s.q_cmd_rad);
+    memcpy(s.dio, c->dio_levels, sizeof s.dio);
+    memset(s.sensor, 0, sizeof s.sensor);
+    for (size_t i = 0; i < c->cfg.n_sensors && i < (size_t)HAL_MAX_SENSORS; i++) {
+        (void)c->cfg.sensors[i].read(c->cfg.sensors[i].self, s.sensor[i]);
+    }
+    (void)ls_kin_fk(c->cfg.model, c->q, s.flange_pose);
+    s.events_lost = atomic_load_explicit(&c->events_lost, memory_order_relaxed);
+    s.max_cycle_us = c->max_cycle_us;
+    publish(c, &s);
+}
