@@ -42,7 +42,7 @@ PATH=$venv/bin:$PATH setsid "$venv/bin/vng" --run "$kimg" --user root --disable-
 pid=$!
 
 elapsed_ms() { echo $(( $(now_ms) - t0 )); }
-secs() { printf '%d.%d' $(( $1 / 1000 )) $(( $1 % 1000 / 100 )); }
+secs() { local ms=$(( $1 < 0 ? 0 : $1 )); printf '%d.%d' $(( ms / 1000 )) $(( ms % 1000 / 100 )); }
 t_boot=""
 status=""
 while kill -0 "$pid" 2>/dev/null; do
