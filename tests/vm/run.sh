@@ -81,7 +81,12 @@ fi
 
 if [ -f "$out/pytest.rc" ]; then
   rc=$(cat "$out/pytest.rc")
-  [ "$rc" = 0 ] && echo "vm: passed" || echo "vm: FAILED: guest pytest exited with $rc"
+  if [ "$rc" = 0 ]; then
+    echo "vm: passed"
+    rm -rf "$out"
+  else
+    echo "vm: FAILED: guest pytest exited with $rc (logs of landscaped and the console in $out)"
+  fi
   exit "$rc"
 fi
 echo "== guest console (last 40 lines) =="
