@@ -303,10 +303,10 @@ def test_uplink_that_does_not_decode_is_answered_with_param_err(sup: Supervisor,
     reader.drain()
     for garbage in (b"\xff\xff\xff\xff\x01", bytes(range(256)) * 16, b"\x0a\x80"):
         sup._send(garbage[:4095])
-        res = reader.response(0)
+        res = reader.response(0)  # no seq can be read from garbage
         assert res.ret_code == pb.CMD_PARAM_ERR
-        assert res.ret_msg.startswith("message did not decode (")
-        assert "same schema" in res.ret_msg
+        assert res.ret_msg.startswith("the message did not decode (")
+        assert "(protocol/landscape.options) or host and firmware use different schema" in res.ret_msg
     assert int(status(sup)["rx_malformed"]) - before == 3
 
 
@@ -328,35 +328,39 @@ def test_unknown_command_id_is_answered_with_unknown_cmd(sup: Supervisor, reader
     assert raw_request(sup, field_bytes(1, request)) == seq
     res = reader.response(seq)
     assert res.ret_code == pb.CMD_UNKNOWN_CMD_ERR
-    assert "update the firmware or the host tool" in res.ret_msg
+    assert res.ret_msg == (f"command id {number} is not in this firmware's schema: update the firmware or use "
+                           f"the host tool built with it")
     assert res.WhichOneof("result") is None
 
 
-def test_request_without_a_command_is_answered_with_unknown_cmd(sup: Supervisor, reader: Reader) -> None:
+def test_request_without_a_command_is_answered_with_param_err(sup: Supervisor, reader: Reader) -> None:
     reader.drain()
     seq = sup._seq + 1
     assert raw_request(sup, pb.Uplink(request=pb.Request(seq=seq)).SerializeToString()) == seq
-    assert reader.response(seq).ret_code == pb.CMD_UNKNOWN_CMD_ERR
+    res = reader.response(seq)
+    assert res.ret_code == pb.CMD_PARAM_ERR
+    assert res.ret_msg == "the request carries no command"
 
 
-@pytest.mark.parametrize("request_", [
-    pb.Request(move_absolute=pb.MoveAbsoluteReq(point_name="p" * 200, values=[0] * 6)),
-    pb.Request(move_absolute=pb.MoveAbsoluteReq(point_name="p1", values=[0.0] * 100)),
-    pb.Request(send_command=pb.SendCommandReq(input="s" * 3000)),
-    pb.Request(path_load=pb.PathLoadReq(path_name="p", tags=[pb.TagPoint(joints=[0] * 6)] * 40)),
-    pb.Request(connect=pb.ConnectReq(client_name="c" * 33)),
+@pytest.mark.parametrize("request_,name", [
+    (pb.Request(move_absolute=pb.MoveAbsoluteReq(point_name="p" * 200, values=[0] * 6)), "moveAbsolute"),
+    (pb.Request(move_absolute=pb.MoveAbsoluteReq(point_name="p1", values=[0.0] * 100)), "moveAbsolute"),
+    (pb.Request(send_command=pb.SendCommandReq(input="s" * 3000)), "sendCommand"),
+    (pb.Request(path_load=pb.PathLoadReq(path_name="p", tags=[pb.TagPoint(joints=[0] * 6)] * 40)), "pathLoad"),
+    (pb.Request(connect=pb.ConnectReq(client_name="c" * 33)), "connect"),
 ], ids=["point_name-200", "values-100", "input-3000", "tags-40", "client_name-33"])
 def test_request_over_the_static_sizes_is_answered_with_param_err(sup: Supervisor, reader: Reader,
-                                                                  request_: pb.Request) -> None:
+                                                                  request_: pb.Request, name: str) -> None:
     before = int(status(sup)["rx_malformed"])
     reader.drain()
     request_.seq = sup._seq + 1
     payload = pb.Uplink(request=request_).SerializeToString()
     assert len(payload) <= 4095
     raw_request(sup, payload)
-    res = reader.response(0)  # did not decode: seq unknown (with the ls_core.c fix of issue 3: request_.seq)
+    res = reader.response(request_.seq)  # read from the raw bytes although the request did not decode
     assert res.ret_code == pb.CMD_PARAM_ERR
-    assert res.ret_msg.startswith("message did not decode (")
+    assert res.ret_msg.startswith(f"{name} did not decode (")
+    assert "protocol/landscape.options" in res.ret_msg
     assert int(status(sup)["rx_malformed"]) - before == 1
     assert sup.get_motion_control_state().ok
 
@@ -402,24 +406,9 @@ def test_status_counts_transport_drops(bus: can.BusABC, sup: Supervisor) -> None
     assert int(st["isotp_buffer_ovflw"]) >= 1
 
 
-@pytest.mark.xfail(strict=True, reason="firmware/core/ls_core.c names command id 0 (nanopb dropped the unknown "
-                   "field); the fix finds the field number in the raw request (report of issue 3)")
-@pytest.mark.parametrize("number", [58, 100], ids=lambda n: f"field{n}")
-def test_unknown_command_error_names_the_command_id(sup: Supervisor, reader: Reader, number: int) -> None:
-    reader.drain()
-    seq = sup._seq + 1
-    raw_request(sup, field_bytes(1, b"\x08" + varint(seq) + field_bytes(number, b"")))
-    res = reader.response(seq)
-    assert res.ret_code == pb.CMD_UNKNOWN_CMD_ERR
-    assert res.ret_msg.startswith(f"command id {number} is not in this firmware's schema")
-
-
-@pytest.mark.xfail(strict=True, reason="firmware/core/ls_core.c answers a request that does not decode with seq 0, "
-                   "so the Supervisor cannot match it and times out; the fix recovers the seq from the raw bytes "
-                   "(report of issue 3)")
 def test_oversize_request_through_the_library_gets_param_err_not_a_timeout(sup: Supervisor) -> None:
     t0 = time.monotonic()
     rv = sup.move_absolute("p" * 200, [0.0] * 6, check=False, timeout_s=0.5)
     assert rv.ret_code == pb.CMD_PARAM_ERR
-    assert "did not decode" in rv.ret_msg
+    assert rv.ret_msg.startswith("moveAbsolute did not decode (")
     assert time.monotonic() - t0 < 0.5
