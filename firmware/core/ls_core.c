@@ -490,6 +490,24 @@ static void on_request(ls_core_t *core, uint8_t addr, const ls_Request *rq, uint
         }
         return;
     }
+    if (s != NULL && s->last_pending && rq->which_cmd != ls_Request_connect_tag &&
+        rq->which_cmd != ls_Request_disconnect_tag) {
+        /* One request in flight per session: the deferred one keeps its
+         * answer slot; this one is refused without running. */
+        const ls_cmd_desc_t *pd = ls_cmd_find(s->pending_tag);
+        memset(&core->down, 0, sizeof core->down);
+        core->down.which_msg = ls_Downlink_response_tag;
+        ls_Response *busy = &core->down.msg.response;
+        busy->seq = rq->seq;
+        busy->ret_code = ls_RetCode_CMD_BUSY_ERR;
+        snprintf(busy->ret_msg, sizeof busy->ret_msg, "%s (seq %u) is still running: wait for its answer",
+                 pd != NULL ? pd->name : "a blocking command", (unsigned)s->last_seq);
+        size_t len = encode_downlink(core);
+        if (len > 0) {
+            send_bytes(core, addr, core->enc, len);
+        }
+        return;
+    }
     memset(&core->down, 0, sizeof core->down);
     core->down.which_msg = ls_Downlink_response_tag;
     ls_Response *res = &core->down.msg.response;
