@@ -7,7 +7,7 @@
 
 #include "ls_kin.h"
 
-enum { PH_RUN = 1, PH_BRAKE, PH_RETURN, PH_SETTLE, PH_SEEK };
+enum { PH_RUN = 1, PH_BRAKE, PH_RETURN, PH_SETTLE, PH_SEEK, PH_CONTACT };
 
 #define SETTLE_AFTER_RETURN_S 0.05
 #define DERIV_FILTER_TAU_S 0.01
@@ -314,6 +314,7 @@ void ls_react_step(ls_react_t *r, double dt_s, const double q_meas[LS_N_JOINTS],
             return;
         }
     }
+    save_reading(r, reading);
     if (r->paused) {
         return;
     }
@@ -339,7 +340,8 @@ void ls_react_step(ls_react_t *r, double dt_s, const double q_meas[LS_N_JOINTS],
                 r->end_ = LS_REACT_END_THRESHOLD;
             }
             if (r->end_ != 0) {
-                save_reading(r, reading);
+                r->report.triggered = true;
+                r->report.trigger = r->end_ == LS_REACT_END_ENVELOPE ? env : reading[p->component];
                 r->s_trigger_ = r->s_;
                 r->phase_ = PH_BRAKE;
                 r->v_ = toward_zero(r->v_, p->a_stop_m_s2, dt_s);
@@ -349,7 +351,6 @@ void ls_react_step(ls_react_t *r, double dt_s, const double q_meas[LS_N_JOINTS],
             if (p->dist_m - r->s_ <= 1e-9 || (r->v_ < 1e-9 && r->s_ > 0.0)) {
                 r->s_ = p->dist_m;
                 r->v_ = 0.0;
-                save_reading(r, reading);
                 r->end_ = LS_REACT_END_MAX_DISTANCE;
                 r->phase_ = PH_SETTLE;
                 r->t_ = 0.0;
@@ -390,13 +391,11 @@ void ls_react_step(ls_react_t *r, double dt_s, const double q_meas[LS_N_JOINTS],
         if (r->phase_ != PH_BRAKE) {
             if (env > p->panic_N) {
                 /* Panic: stop at once, no braking ramp (comply speeds are low). */
-                save_reading(r, reading);
                 r->v_ = r->vc_ = 0.0;
                 finish(r, LS_REACT_END_PANIC, q_meas, ev);
                 return;
             }
             if (r->t_ > p->timeout_s) {
-                save_reading(r, reading);
                 r->end_ = LS_REACT_END_TIMEOUT;
                 r->phase_ = PH_BRAKE;
             }
@@ -416,6 +415,16 @@ void ls_react_step(ls_react_t *r, double dt_s, const double q_meas[LS_N_JOINTS],
         }
         switch (r->phase_) {
         case PH_SEEK:
+            /* No contact yet: approach at the correction speed (the PD's
+             * output for the whole target would be slow with a stable gain). */
+            if ((p->f_target_N > 0.0 ? fn : -fn) >= LS_REACT_SEEK_FRACTION * fabs(p->f_target_N)) {
+                r->phase_ = PH_CONTACT;
+                r->vc_ = vc;
+            } else {
+                r->vc_ = p->f_target_N > 0.0 ? p->vc_max_m_s : -p->vc_max_m_s;
+            }
+            break;
+        case PH_CONTACT:
             r->vc_ = vc;
             if (fabs(e) <= LS_REACT_CONTACT_BAND * fabs(p->f_target_N)) {
                 r->phase_ = PH_RUN;
@@ -434,7 +443,6 @@ void ls_react_step(ls_react_t *r, double dt_s, const double q_meas[LS_N_JOINTS],
             if (p->dist_m - r->s_ <= 1e-9 || (r->v_ < 1e-9 && r->s_ > 0.0)) {
                 r->s_ = p->dist_m;
                 r->v_ = 0.0;
-                save_reading(r, reading);
                 finish(r, LS_REACT_END_MAX_DISTANCE, q_meas, ev);
                 return;
             }
@@ -473,7 +481,6 @@ void ls_react_step(ls_react_t *r, double dt_s, const double q_meas[LS_N_JOINTS],
     double q_new[LS_N_JOINTS];
     char why[64];
     if (solve(r->model, P, r->tool_inv_, r->q_cmd_, dt_s, q_new, why, sizeof why) != 0) {
-        save_reading(r, reading);
         r->v_ = r->vc_ = 0.0;
         finish(r, LS_REACT_END_UNREACHABLE, q_meas, ev);
         return;

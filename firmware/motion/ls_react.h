@@ -36,8 +36,12 @@
 
 #define LS_REACT_MAX_VALUES 8
 #define LS_REACT_SENSOR_NAME_LEN 32
-/* A compliant move starts travelling once the force error first falls within
- * this fraction of the target (contact established). */
+/* A compliant move first approaches along its compliance direction at the
+ * correction speed bound until the force reaches this fraction of the target,
+ * then the PD law takes over; it starts travelling once the force error
+ * first falls within LS_REACT_CONTACT_BAND of the target (contact
+ * established). */
+#define LS_REACT_SEEK_FRACTION 0.5
 #define LS_REACT_CONTACT_BAND 0.2
 /* Force statistics of a compliant move skip this long after travel starts
  * (the friction transient of the first lateral motion). */
@@ -89,8 +93,10 @@ typedef struct {
 /* Filled when a guarded or compliant move ends (before LS_MEV_REACT_END). */
 typedef struct {
     ls_react_end_t end;
-    double reading[LS_REACT_MAX_VALUES]; /* the reading that ended it (last reading otherwise) */
+    double reading[LS_REACT_MAX_VALUES]; /* the last reading (after the return and settling) */
     uint8_t n_values;
+    bool triggered;            /* guarded: threshold or envelope: */
+    double trigger;            /* the watched component's value (envelope: the force) when it crossed */
     double travelled_m;        /* along the direction of travel */
     double fn_mean_N, fn_min_N, fn_max_N; /* comply: F . n during the travel after settling */
     uint32_t fn_samples;
