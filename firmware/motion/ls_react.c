@@ -116,7 +116,7 @@ static int solve(const ls_robot_model_t *m, const double P[16], const double too
     }
     for (int j = 0; j < LS_N_JOINTS; j++) {
         if (fabs(q_out[j] - q_prev[j]) > m->qd_max_rad_s[j] * dt_s) {
-            snprintf(why, len, "joint %d speed limit (near a singularity)", j + 1);
+            snprintf(why, len, "joint %d would jump: a joint limit or singularity ahead", j + 1);
             return -1;
         }
     }
