@@ -58,6 +58,11 @@ typedef enum {
     LS_MEV_FAULT,    /* following error, IK failure: text; the executor is idle afterwards */
     LS_MEV_AUX,      /* a path auxiliary command is due: text = the command, index = point,
                         cycle; the executor waits until ls_motion_aux_done() */
+    /* Reported by the sensor-guided executor and the control loop (ls_react.h,
+     * ls_control.h); the path executor never emits them. */
+    LS_MEV_REACT_END, /* a guarded or compliant move ended: index = ls_react_end_t, q_rad = measured */
+    LS_MEV_JOG,       /* jogging: stopped at a limit (text), or became possible (drives on) */
+    LS_MEV_TOOL,      /* a tool command ran in the loop: name = tool, index = HAL status */
 } ls_motion_event_kind_t;
 
 typedef struct {
