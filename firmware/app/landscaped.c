@@ -22,6 +22,7 @@
 #include "hal_linux_socketcan.h"
 #include "hal_sim_world.h"
 #include "landscape.h" /* cantools: DBC pack functions */
+#include "cmd_sensor.h"
 #include "ls_check.h"
 #include "ls_config.h"
 #include "ls_control.h"
@@ -295,6 +296,7 @@ static int compose(const ls_config_t *o)
                                .n_sensors = n_sensors, .rate_hz = o->rate_hz };
     ls_control_init(&g_ctl, &cc);
     g_core.ctl = &g_ctl;
+    ls_core_sensor_attach(&g_core); /* the sensor/tool handlers see their loop events from the start */
     if (o->estop_input >= 0) {
         ls_ctl_cmd_t cmd = { .kind = LS_CTL_ESTOP_LINE, .dio = { 0, 1u << (unsigned)o->estop_input, 0 } };
         (void)ls_control_post(&g_ctl, &cmd);

@@ -257,7 +257,9 @@ static int32_t no_arm(ls_call_t *call, const char *what)
 static ls_motion_plan_t *take_slot(ls_core_t *core, ls_call_t *call, const char *what, int32_t *code)
 {
     ls_motion_plan_t *slot = ls_control_plan_slot(core->ctl);
-    if (slot == NULL) {
+    if (slot == NULL && ls_control_manual_on(core->ctl)) {
+        *code = ls_reply(call, ls_RetCode_CMD_BUSY_ERR, "%s: manualControl is on: send manualControl off first", what);
+    } else if (slot == NULL) {
         *code = ls_reply(call, ls_RetCode_CMD_BUSY_ERR,
                          "%s: the control loop has not taken the previous motion yet; try again", what);
     }

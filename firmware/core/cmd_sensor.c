@@ -552,6 +552,21 @@ int32_t ls_h_manual_control(struct ls_core *core, struct ls_call *call)
     return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "manual control off");
 }
 
+void ls_core_manual_off(ls_core_t *core)
+{
+    if (g_manual_sup < 0 && strcmp(g_manual, "off") == 0) {
+        return;
+    }
+    if (core->ctl != NULL) {
+        (void)ls_control_set_manual(core->ctl, NULL, NULL, 0);
+    }
+    snprintf(g_manual, sizeof g_manual, "off");
+    g_manual_sup = -1;
+    if (strncmp(core->motion_state, "manual_", 7) == 0) {
+        snprintf(core->motion_state, sizeof core->motion_state, "robot_at_rest");
+    }
+}
+
 /* ------------------------------------------------------------- loop events */
 
 static void rest(ls_core_t *core)

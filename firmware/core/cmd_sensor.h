@@ -23,6 +23,10 @@ void ls_core_sensor_attach(ls_core_t *core);
  * ends a tool change in progress). */
 bool ls_core_tool_on_event(ls_core_t *core, const ls_ctl_event_t *ev);
 
+/* Manual control ends with the owner's control of the device (release, or
+ * the owner lost): the next owner must switch it on itself. */
+void ls_core_manual_off(ls_core_t *core);
+
 /* cmd_tool.c: the name of the held tool, "none" when none. */
 const char *ls_core_tool_held(void);
 

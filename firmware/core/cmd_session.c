@@ -1,5 +1,6 @@
 /* Seed 3.1: lock, release, activate, deactivate. The dispatcher has already
  * checked the state and the owner. */
+#include "cmd_sensor.h"
 #include "ls_core.h"
 
 #include <stdio.h>
@@ -13,6 +14,7 @@ int32_t ls_h_lock(struct ls_core *core, struct ls_call *call)
 
 int32_t ls_h_release(struct ls_core *core, struct ls_call *call)
 {
+    ls_core_manual_off(core);
     core->owner = -1;
     core->state = ls_State_UNLOCKED;
     return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "released: the device is under local control");

@@ -34,7 +34,6 @@
 #define RACK_SPEED_M_S 0.05
 /* Tool names the error message for an unknown tool offers, when the tool
  * changer knows them (hal_tool_ops_t has no enumeration yet). */
-static const char *const k_tool_names[] = { "gripper", "probe" };
 
 enum { STEP_APPROACH = 1, STEP_IN, STEP_COUPLE, STEP_OUT };
 
@@ -85,11 +84,11 @@ static int32_t unknown_tool(ls_core_t *core, ls_call_t *call, const char *what, 
 {
     char list[96] = "";
     size_t n = 0;
-    double p[6];
-    for (size_t i = 0; i < sizeof k_tool_names / sizeof k_tool_names[0] && n < sizeof list; i++) {
-        if (core->tool->ops->rack_pose(core->tool->self, k_tool_names[i], p) == HAL_OK) {
-            n += (size_t)snprintf(list + n, sizeof list - n, "%s%s", n ? ", " : "", k_tool_names[i]);
-        }
+    const char *name = NULL;
+    for (int i = 0; core->tool->ops->name != NULL && n < sizeof list &&
+                    (name = core->tool->ops->name(core->tool->self, i)) != NULL;
+         i++) {
+        n += (size_t)snprintf(list + n, sizeof list - n, "%s%s", n ? ", " : "", name);
     }
     return ls_reply(call, ls_RetCode_CMD_PARAM_ERR, "%s: unknown tool '%s'; the rack holds %s", what, id,
                     n > 0 ? list : "tools whose names this firmware cannot list");

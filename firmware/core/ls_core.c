@@ -3,6 +3,8 @@
  * those checks). */
 #include "ls_core.h"
 
+#include "cmd_sensor.h"
+
 #include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
@@ -192,6 +194,7 @@ static void drop_session(ls_core_t *core, int i, const char *why, uint64_t now_u
                 (void)core->act.enable_drives(core->act.ctx, false);
             }
         }
+        ls_core_manual_off(core);
         core->owner = -1;
         core->state = ls_State_UNLOCKED;
         char d1[40], d2[64];

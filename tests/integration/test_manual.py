@@ -98,3 +98,22 @@ def test_unknown_manual_type(rig: Rig) -> None:
     with pytest.raises(errors.ParamError) as ei:
         rig.sup.manual_control("joystick")
     assert "teachpendant, spaceball or off" in str(ei.value)
+
+
+def test_manual_control_ends_with_the_owners_control(rig: Rig) -> None:
+    """release ends jogging: the next owner must switch it on itself."""
+    sup = rig.sup
+    sup.manual_control("teachpendant")
+    assert sup.get_motion_control_state().result["motion_control_state"] == "manual_teachpendant"
+    sup.deactivate()
+    sup.release()
+    assert sup.get_motion_control_state().result["motion_control_state"] == "robot_at_rest"
+    sup.lock()
+    sup.activate()
+    p0 = sup.get_robot_position().result["world_pose"]
+    rig.send("jog 0 0 1 0 0 0")
+    time.sleep(0.4)
+    rig.send("jog-stop")
+    assert sup.get_robot_position().result["world_pose"] == pytest.approx(p0, abs=1e-4)  # nothing jogged
+    rv = sup.move_relative("x", [0.02, 0, 0, 0, 0, 0])  # and motion commands are accepted again
+    sup.wait_complete(rv, timeout_s=20)

@@ -53,6 +53,9 @@ typedef struct {
 
 /* Tool changer: the rack and the tool's output bits (a gripper in sim). */
 typedef struct {
+    /* The name of rack slot `index` (0..), or NULL past the last slot.
+     * Called from the comms thread: constant data only. */
+    const char *(*name)(void *self, int index);
     /* Where tool `index` sits in the rack: flange pose to approach, base frame. */
     int (*rack_pose)(void *self, const char *tool_id, double xyzrpy[6]);
     /* Tool offset (flange -> tool tip) of a tool, x y z roll pitch yaw. */

@@ -798,6 +798,12 @@ static int find_tool(const char *id)
     return strcmp(id, "none") == 0 ? -1 : -2;
 }
 
+static const char *tool_name(void *self, int index)
+{
+    (void)self;
+    return index >= 0 && index < N_TOOLS ? k_tools[index].id : NULL;
+}
+
 static int tool_rack_pose(void *self, const char *tool_id, double xyzrpy[6])
 {
     (void)self;
@@ -887,6 +893,7 @@ static int tool_get_bits(void *self, uint32_t *bits)
 }
 
 static const hal_tool_ops_t k_tool_ops = {
+    .name = tool_name,
     .rack_pose = tool_rack_pose,
     .tool_offset = tool_offset,
     .couple = tool_couple,
