@@ -140,6 +140,37 @@ static void act_stop(void *ctx)
     (void)ls_control_post((ls_control_t *)ctx, &cmd);
 }
 
+static const ls_config_t *g_cfg_running;
+
+static void describe_rt(void *ctx, char *buf, size_t cap)
+{
+    ls_ctl_snapshot_t s;
+    ls_control_snapshot((ls_control_t *)ctx, &s);
+    hal_rt_stats_t rs;
+    hal_linux_rt_stats(&g_rt, &rs);
+    snprintf(buf, cap,
+             "cycles=%llu\noverruns=%llu\nmax_late_us=%u\nmax_cycle_us=%u\nrealtime=%s\nmemory_locked=%s\n"
+             "events_lost=%u\n",
+             (unsigned long long)rs.cycles, (unsigned long long)rs.overruns, (unsigned)rs.max_late_us,
+             (unsigned)rs.max_cycle_us, rs.realtime ? "yes" : "no", rs.memory_locked ? "yes" : "no",
+             (unsigned)s.events_lost);
+}
+
+static void describe_config(void *ctx, char *buf, size_t cap)
+{
+    (void)ctx;
+    const ls_config_t *o = g_cfg_running;
+    int n = snprintf(buf, cap,
+                     "config=%s\nname=%s\nnode=0x%02X\nheartbeat_timeout_ms=%u\narm=%s\ndio=%s\nclock=%s\n"
+                     "rate_hz=%u\ntelemetry_hz=%u\nrt_priority=%d\nestop_input=%d\n",
+                     o->config_path[0] != '\0' ? o->config_path : "(options only)", o->name, (unsigned)o->node,
+                     (unsigned)o->heartbeat_timeout_ms, o->arm, o->dio, o->clock, (unsigned)o->rate_hz,
+                     (unsigned)o->telemetry_hz, o->rt_priority, o->estop_input);
+    for (size_t i = 0; i < o->n_links && n > 0 && (size_t)n < cap; i++) {
+        n += snprintf(buf + n, cap - (size_t)n, "link=%s\n", o->links[i]);
+    }
+}
+
 static void drain_control_events(uint64_t now)
 {
     ls_ctl_event_t ev;
@@ -350,7 +381,9 @@ int main(int argc, char **argv)
         .heartbeat_timeout_ms = opt.heartbeat_timeout_ms,
     };
     ls_core_io_t io = { .send_downlink = ls_net_send_downlink, .describe = ls_net_describe, .ctx = &g_net };
-    ls_core_actions_t act = { .enable_drives = act_enable, .stop_motion = act_stop, .ctx = &g_ctl };
+    g_cfg_running = &opt;
+    ls_core_actions_t act = { .enable_drives = act_enable, .stop_motion = act_stop, .describe_rt = describe_rt,
+                              .describe_config = describe_config, .ctx = &g_ctl };
     ls_core_init(&g_core, &cfg, &io, &act);
     ls_net_init(&g_net, opt.node, &g_core);
 

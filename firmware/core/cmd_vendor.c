@@ -3,6 +3,8 @@
  *   version  firmware version, protocol version, schema hash
  *   status   state, owner, sessions and their counters
  *   faults   the fault log (oldest first)
+ *   rtstats  the control loop: cycles, overruns, worst latency and cycle time, SCHED_FIFO, memory lock
+ *   config   the running configuration (file and options merged)
  * Output is plain text, one item per line, at most 1 KiB. */
 #include <stdarg.h>
 #include <stdio.h>
@@ -36,7 +38,7 @@ int32_t ls_h_send_command(struct ls_core *core, struct ls_call *call)
     ls_SendCommandRes *r = &call->res->result.send_command;
     out_t o = { r->result, sizeof r->result, 0 };
     if (strcmp(in, "help") == 0 || in[0] == '\0') {
-        put(&o, "help\nversion\nstatus\nfaults\n");
+        put(&o, "help\nversion\nstatus\nfaults\nrtstats\nconfig\n");
     } else if (strcmp(in, "version") == 0) {
         put(&o, "firmware=%s\nprotocol=%u\nschema=%08X\n", core->cfg.firmware_version,
             (unsigned)ls_Protocol_PROTOCOL_VERSION, (unsigned)LS_SCHEMA_HASH);
@@ -69,6 +71,13 @@ int32_t ls_h_send_command(struct ls_core *core, struct ls_call *call)
         if (n == 0) {
             put(&o, "no faults\n");
         }
+    } else if (strcmp(in, "rtstats") == 0 || strcmp(in, "config") == 0) {
+        void (*fn)(void *, char *, size_t) = in[0] == 'r' ? core->act.describe_rt : core->act.describe_config;
+        if (fn == NULL) {
+            return ls_reply(call, ls_RetCode_CMD_UNSUPPORTED_ERR, "sendCommand %s: this controller has no %s", in,
+                            in[0] == 'r' ? "control loop" : "configuration to show");
+        }
+        fn(core->act.ctx, o.buf, o.cap);
     } else {
         return ls_reply(call, ls_RetCode_CMD_PARAM_ERR, "sendCommand '%.40s': unknown; try 'help'", in);
     }

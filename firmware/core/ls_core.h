@@ -135,6 +135,10 @@ typedef struct {
     int (*enable_drives)(void *ctx, bool on);
     /* Stop any motion at once along its path (used by the disconnect handler). */
     void (*stop_motion)(void *ctx);
+    /* Optional, for sendCommand: the control loop's real-time statistics and
+     * the running configuration, as key=value lines. */
+    void (*describe_rt)(void *ctx, char *buf, size_t cap);
+    void (*describe_config)(void *ctx, char *buf, size_t cap);
     void *ctx;
 } ls_core_actions_t;
 

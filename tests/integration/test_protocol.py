@@ -141,3 +141,16 @@ def test_owner_heartbeat_loss_deactivates_and_releases(bus: can.BusABC) -> None:
             owner.close()
     finally:
         notifier.stop()
+
+
+def test_send_command_vendor_hooks(bus: can.BusABC) -> None:
+    with Supervisor(bus, client_name="vendor") as sup:
+        helps = sup.request("sendCommand", input="help").result["result"].split()
+        assert helps == ["help", "version", "status", "faults", "rtstats", "config"]
+        rt = dict(line.split("=", 1) for line in sup.request("sendCommand", input="rtstats").result["result"].split())
+        assert int(rt["cycles"]) > 0 and rt["realtime"] in ("yes", "no")
+        cfg = sup.request("sendCommand", input="config").result["result"]
+        assert "arm=sim" in cfg and "link=slcan:pty:" in cfg
+        assert "no faults" in sup.request("sendCommand", input="faults").result["result"]
+        with pytest.raises(errors.ParamError):
+            sup.request("sendCommand", input="reboot")
