@@ -529,11 +529,11 @@ int hal_sim_fault_parse(const char *spec, hal_sim_fault_config_t *cfg, char *msg
         msg[0] = '\0';
     }
     if (spec == NULL || cfg == NULL) {
-        return fail(msg, msglen, "link faults: no spec given");
+        return fail(msg, msglen, "no spec given");
     }
     memset(cfg, 0, sizeof *cfg);
     if (spec[0] == '\0') {
-        return fail(msg, msglen, "link faults: empty spec: expected KEY=VALUE[,KEY=VALUE...], e.g. drop=0.05,seed=1");
+        return fail(msg, msglen, "empty spec: expected KEY=VALUE[,KEY=VALUE...], e.g. drop=0.05,seed=1");
     }
     unsigned seen[K_COUNT] = { 0 }; /* bit d: given with direction d (0 both, 1 tx, 2 rx) */
     const char *p = spec;
@@ -542,16 +542,16 @@ int hal_sim_fault_parse(const char *spec, hal_sim_fault_config_t *cfg, char *msg
         size_t len = comma != NULL ? (size_t)(comma - p) : strlen(p);
         char tok[64];
         if (len == 0) {
-            return fail(msg, msglen, "link faults: item %d is empty (two commas, or a comma at either end)", item);
+            return fail(msg, msglen, "item %d is empty (two commas, or a comma at either end)", item);
         }
         if (len >= sizeof tok) {
-            return fail(msg, msglen, "link faults: item %d is longer than %zu characters", item, sizeof tok - 1);
+            return fail(msg, msglen, "item %d is longer than %zu characters", item, sizeof tok - 1);
         }
         memcpy(tok, p, len);
         tok[len] = '\0';
         char *eq = strchr(tok, '=');
         if (eq == NULL) {
-            return fail(msg, msglen, "link faults: '%s': expected KEY=VALUE", tok);
+            return fail(msg, msglen, "'%s': expected KEY=VALUE", tok);
         }
         *eq = '\0';
         const char *name = tok;
@@ -572,19 +572,19 @@ int hal_sim_fault_parse(const char *spec, hal_sim_fault_config_t *cfg, char *msg
         }
         if (key < 0) {
             return fail(msg, msglen,
-                        "link faults: unknown key '%s%s': expected drop, dup, corrupt, reorder, delay (each "
+                        "unknown key '%s%s': expected drop, dup, corrupt, reorder, delay (each "
                         "optionally with a tx. or rx. prefix), busoff or seed",
                         dirs[dir], name);
         }
         if ((key == K_BUSOFF || key == K_SEED) && dir != 0) {
-            return fail(msg, msglen, "link faults: %s applies to the whole link: drop the '%s' prefix", name, dirs[dir]);
+            return fail(msg, msglen, "%s applies to the whole link: drop the '%s' prefix", name, dirs[dir]);
         }
         if (seen[key] & (1u << dir)) {
-            return fail(msg, msglen, "link faults: '%s%s' given twice", dirs[dir], name);
+            return fail(msg, msglen, "'%s%s' given twice", dirs[dir], name);
         }
         if (dir == 0 && (seen[key] & 6u) != 0) {
             return fail(msg, msglen,
-                        "link faults: bare '%s' after a tx./rx. '%s' would override it: give the bare key first",
+                        "bare '%s' after a tx./rx. '%s' would override it: give the bare key first",
                         name, name);
         }
         seen[key] |= 1u << dir;
@@ -598,11 +598,11 @@ int hal_sim_fault_parse(const char *spec, hal_sim_fault_config_t *cfg, char *msg
             if (plus == NULL || !parse_time(val, LS_FAULT_MAX_BUSOFF_US, &every) ||
                 !parse_time(plus + 1, LS_FAULT_MAX_BUSOFF_US, &dur)) {
                 return fail(msg, msglen,
-                            "link faults: busoff: expected EVERY+FOR with units, e.g. busoff=30s+2s (off for 2 s "
+                            "busoff: expected EVERY+FOR with units, e.g. busoff=30s+2s (off for 2 s "
                             "every 30 s)");
             }
             if (dur >= every) {
-                return fail(msg, msglen, "link faults: busoff: FOR must be shorter than EVERY (got %s+%s)", val,
+                return fail(msg, msglen, "busoff: FOR must be shorter than EVERY (got %s+%s)", val,
                             plus + 1);
             }
             cfg->busoff_every_us = every;
@@ -611,7 +611,7 @@ int hal_sim_fault_parse(const char *spec, hal_sim_fault_config_t *cfg, char *msg
         }
         case K_SEED:
             if (!parse_seed(val, &cfg->seed)) {
-                return fail(msg, msglen, "link faults: seed '%s': expected an unsigned 64-bit integer (e.g. 1 or 0x2A)",
+                return fail(msg, msglen, "seed '%s': expected an unsigned 64-bit integer (e.g. 1 or 0x2A)",
                             val);
             }
             break;
@@ -624,7 +624,7 @@ int hal_sim_fault_parse(const char *spec, hal_sim_fault_config_t *cfg, char *msg
             }
             if (colon == NULL || !parse_rate(val, &rate) || !parse_time(colon + 1, LS_FAULT_MAX_DELAY_US, &us)) {
                 return fail(msg, msglen,
-                            "link faults: %sdelay: expected RATE:TIME, RATE 0..1 or a percentage, TIME 1us..60s, "
+                            "%sdelay: expected RATE:TIME, RATE 0..1 or a percentage, TIME 1us..60s, "
                             "e.g. delay=0.02:5ms",
                             dirs[dir]);
             }
@@ -635,7 +635,7 @@ int hal_sim_fault_parse(const char *spec, hal_sim_fault_config_t *cfg, char *msg
             double rate = 0.0;
             if (!parse_rate(val, &rate)) {
                 return fail(msg, msglen,
-                            "link faults: %s%s '%s': expected a probability 0..1 or a percentage, e.g. 0.05 or 5%%",
+                            "%s%s '%s': expected a probability 0..1 or a percentage, e.g. 0.05 or 5%%",
                             dirs[dir], name, val);
             }
             set_rate(cfg, key, dir, rate, 0);

@@ -87,7 +87,8 @@ int hal_sim_faulty_wrap(hal_can_link_t *out, const hal_can_link_t *inner, const 
  * both directions, or to one with a "tx." / "rx." prefix ("rx.drop=0.2"),
  * which may refine a bare key given earlier; the same key twice is an error.
  * `cfg` is reset first (clock zeroed: the caller sets it). Returns HAL_OK or
- * HAL_EINVAL with `msg` naming the item and what is allowed. Any thread; no
+ * HAL_EINVAL with `msg` naming the item and what is allowed (the caller adds
+ * where the spec came from, e.g. "--link-faults: "). Any thread; no
  * allocation; linear in the length of `spec`. */
 int hal_sim_fault_parse(const char *spec, hal_sim_fault_config_t *cfg, char *msg, size_t msglen);
 

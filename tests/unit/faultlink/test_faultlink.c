@@ -814,7 +814,7 @@ static void test_parse_errors_say_what_is_wrong(void **state)
         hal_sim_fault_config_t c;
         char msg[256] = "x";
         int r = hal_sim_fault_parse(cases[i].spec, &c, msg, sizeof msg);
-        if (r != HAL_EINVAL || strstr(msg, cases[i].expect) == NULL || strncmp(msg, "link faults: ", 13) != 0) {
+        if (r != HAL_EINVAL || strstr(msg, cases[i].expect) == NULL || msg[0] == '\0') {
             fail_msg("'%s': r=%d msg='%s', expected '%s'", cases[i].spec, r, msg, cases[i].expect);
         }
     }
@@ -823,7 +823,7 @@ static void test_parse_errors_say_what_is_wrong(void **state)
     assert_int_equal(hal_sim_fault_parse("drop=0.1", NULL, NULL, 0), HAL_EINVAL);
     char tiny[8];
     assert_int_equal(hal_sim_fault_parse("lose=1", &c, tiny, sizeof tiny), HAL_EINVAL);
-    assert_string_equal(tiny, "link fa"); /* truncated, terminated */
+    assert_string_equal(tiny, "unknown"); /* truncated, terminated */
 }
 
 int main(void)
