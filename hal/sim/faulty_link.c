@@ -30,6 +30,7 @@ typedef struct {
     hal_clock_t clock;
     uint64_t start_us;
     uint64_t busoff_every_us, busoff_for_us;
+    uint64_t window_after_us, window_for_us;
     uint64_t last_window; /* index of the last window counted */
     uint32_t busoff_windows;
     dir_t tx, rx;
@@ -138,7 +139,7 @@ typedef struct {
 
 /* Every frame consumes exactly six draws, so one fault decision never shifts
  * the decisions for the frames after it. */
-static verdict_t judge(dir_t *d)
+static verdict_t judge(const faulty_t *f, dir_t *d, uint64_t now)
 {
     verdict_t v;
     d->cnt.frames++;
@@ -148,6 +149,12 @@ static verdict_t judge(dir_t *d)
     v.corrupt = draw(d) < d->th_corrupt;
     v.dup = draw(d) < d->th_dup;
     v.bit = draw(d);
+    if (f->window_for_us > 0) {
+        uint64_t t = now - f->start_us;
+        if (now < f->start_us || t < f->window_after_us || t - f->window_after_us >= f->window_for_us) {
+            v.drop = v.delay = v.reorder = v.corrupt = v.dup = false;
+        }
+    }
     return v;
 }
 
@@ -198,7 +205,7 @@ static int f_send(void *self, const hal_can_frame_t *frame)
         return HAL_EBUSOFF;
     }
     pump_tx(f, now);
-    verdict_t v = judge(&f->tx);
+    verdict_t v = judge(f, &f->tx, now);
     hal_can_frame_t fr = *frame;
     if (!apply(&f->tx, &v, &fr, now)) {
         return HAL_OK; /* lost or held on the wire: the sender cannot tell */
@@ -240,7 +247,7 @@ static int f_recv(void *self, hal_can_frame_t *out)
         if (r != 1) {
             return r;
         }
-        verdict_t v = judge(&f->rx);
+        verdict_t v = judge(f, &f->rx, now);
         if (!apply(&f->rx, &v, &fr, now)) {
             continue;
         }
@@ -315,7 +322,10 @@ int hal_sim_faulty_wrap(hal_can_link_t *out, const hal_can_link_t *inner, const 
     if (busoff && (cfg->busoff_for_us == 0 || cfg->busoff_for_us >= cfg->busoff_every_us)) {
         return HAL_EINVAL;
     }
-    bool timed = busoff || cfg->tx.delay > 0.0 || cfg->rx.delay > 0.0 || cfg->tx.reorder > 0.0 ||
+    if (cfg->window_after_us > 0 && cfg->window_for_us == 0) {
+        return HAL_EINVAL;
+    }
+    bool timed = busoff || cfg->window_for_us > 0 || cfg->tx.delay > 0.0 || cfg->rx.delay > 0.0 || cfg->tx.reorder > 0.0 ||
                  cfg->rx.reorder > 0.0;
     if (timed && cfg->clock.now_us == NULL) {
         return HAL_EINVAL;
@@ -336,6 +346,8 @@ int hal_sim_faulty_wrap(hal_can_link_t *out, const hal_can_link_t *inner, const 
     f->clock = cfg->clock;
     f->busoff_every_us = cfg->busoff_every_us;
     f->busoff_for_us = cfg->busoff_for_us;
+    f->window_after_us = cfg->window_after_us;
+    f->window_for_us = cfg->window_for_us;
     /* Two streams, so the faults of one direction do not depend on the
      * traffic of the other. */
     dir_init(&f->tx, &cfg->tx, cfg->seed);
@@ -401,8 +413,8 @@ int hal_sim_faulty_format(const hal_can_link_t *link, char *buf, size_t buflen)
 
 /* ------------------------------------------------------------------ spec parser */
 
-enum { K_DROP, K_DUP, K_CORRUPT, K_REORDER, K_DELAY, K_BUSOFF, K_SEED, K_COUNT };
-static const char *const g_keys[K_COUNT] = { "drop", "dup", "corrupt", "reorder", "delay", "busoff", "seed" };
+enum { K_DROP, K_DUP, K_CORRUPT, K_REORDER, K_DELAY, K_BUSOFF, K_WINDOW, K_SEED, K_COUNT };
+static const char *const g_keys[K_COUNT] = { "drop", "dup", "corrupt", "reorder", "delay", "busoff", "window", "seed" };
 
 static int fail(char *msg, size_t msglen, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 static int fail(char *msg, size_t msglen, const char *fmt, ...)
@@ -573,10 +585,10 @@ int hal_sim_fault_parse(const char *spec, hal_sim_fault_config_t *cfg, char *msg
         if (key < 0) {
             return fail(msg, msglen,
                         "unknown key '%s%s': expected drop, dup, corrupt, reorder, delay (each "
-                        "optionally with a tx. or rx. prefix), busoff or seed",
+                        "optionally with a tx. or rx. prefix), busoff, window or seed",
                         dirs[dir], name);
         }
-        if ((key == K_BUSOFF || key == K_SEED) && dir != 0) {
+        if ((key == K_BUSOFF || key == K_WINDOW || key == K_SEED) && dir != 0) {
             return fail(msg, msglen, "%s applies to the whole link: drop the '%s' prefix", name, dirs[dir]);
         }
         if (seen[key] & (1u << dir)) {
@@ -607,6 +619,24 @@ int hal_sim_fault_parse(const char *spec, hal_sim_fault_config_t *cfg, char *msg
             }
             cfg->busoff_every_us = every;
             cfg->busoff_for_us = dur;
+            break;
+        }
+        case K_WINDOW: {
+            char *plus = strchr(val, '+');
+            uint64_t after = 0, dur = 0;
+            if (plus != NULL) {
+                *plus = '\0';
+            }
+            /* AFTER may be 0 ("0s"): parse it with a floor of 0 by hand */
+            bool after_ok = plus != NULL && (strcmp(val, "0") == 0 || strcmp(val, "0s") == 0 ||
+                                             parse_time(val, LS_FAULT_MAX_BUSOFF_US, &after));
+            if (!after_ok || !parse_time(plus + 1, LS_FAULT_MAX_BUSOFF_US, &dur)) {
+                return fail(msg, msglen,
+                            "window: expected AFTER+FOR with units, e.g. window=2s+30s (faults from 2 s after start "
+                            "for 30 s)");
+            }
+            cfg->window_after_us = after;
+            cfg->window_for_us = dur;
             break;
         }
         case K_SEED:

@@ -50,6 +50,12 @@ typedef struct {
      * frames that fall due are lost, status reports HAL_CAN_STATE_BUS_OFF. */
     uint64_t busoff_every_us;
     uint64_t busoff_for_us;
+    /* Frame faults (not bus-off) apply only in [window_after_us,
+     * window_after_us + window_for_us) after wrap; both 0 = always. Lets a
+     * test connect on a clean bus, run under faults, then read counters on a
+     * clean bus again. Frames outside the window still consume their draws. */
+    uint64_t window_after_us;
+    uint64_t window_for_us;
     uint64_t seed;
     /* Needed when a delay, a reorder or bus-off is configured; not set by
      * hal_sim_fault_parse(). */
@@ -75,14 +81,16 @@ typedef struct {
 /* Wrap `inner` (copied; the decorator owns it from now on and closes it with
  * itself). `cfg` is copied. Init-time only. Returns HAL_OK; HAL_EINVAL for a
  * NULL argument, a rate outside 0..1, a delay rate without delay_us, busoff_for
- * >= busoff_every, or a time-dependent fault without a clock; HAL_EAGAIN when
+ * >= busoff_every, a window with for = 0, or a time-dependent fault (delay,
+ * reorder, bus-off, window) without a clock; HAL_EAGAIN when
  * all HAL_SIM_FAULTY_MAX_LINKS slots are in use. O(1), no allocation. */
 int hal_sim_faulty_wrap(hal_can_link_t *out, const hal_can_link_t *inner, const hal_sim_fault_config_t *cfg);
 
 /* Parse a fault spec, e.g.
  *   "drop=0.05,dup=0.01,corrupt=0.01,reorder=0.01,delay=0.02:5ms,busoff=30s+2s,seed=1"
  * Keys: drop, dup, corrupt, reorder (RATE), delay (RATE:TIME), busoff
- * (EVERY+FOR), seed (integer, decimal or 0x hex). RATE is 0..1 or a
+ * (EVERY+FOR), window (AFTER+FOR: frame faults only then), seed (integer,
+ * decimal or 0x hex). RATE is 0..1 or a
  * percentage ("5%"); TIME is a number with us, ms or s. A rate key applies to
  * both directions, or to one with a "tx." / "rx." prefix ("rx.drop=0.2"),
  * which may refine a bare key given earlier; the same key twice is an error.

@@ -198,6 +198,10 @@ static void test_wrap_rejects_bad_arguments(void **state)
     assert_int_equal(hal_sim_faulty_wrap(&link_, &inner, &cfg), HAL_EINVAL);
     cfg.busoff_for_us = 0;
     assert_int_equal(hal_sim_faulty_wrap(&link_, &inner, &cfg), HAL_EINVAL);
+    memset(&cfg, 0, sizeof cfg);
+    cfg.clock.now_us = fake_now;
+    cfg.window_after_us = 1000; /* a window that never closes must say so with for > 0 */
+    assert_int_equal(hal_sim_faulty_wrap(&link_, &inner, &cfg), HAL_EINVAL);
     /* time-dependent faults need a clock */
     memset(&cfg, 0, sizeof cfg);
     cfg.tx.reorder = 0.1;
@@ -695,6 +699,73 @@ static void test_busoff_windows(void **state)
     assert_int_equal(counters().busoff_windows, 3); /* windows 2 and 5 seen; 3 and 4 passed unseen */
 }
 
+static void test_window_limits_frame_faults_in_time(void **state)
+{
+    (void)state;
+    wrap("drop=1,window=1s+500ms,seed=1");
+    uint64_t t0 = g_now_us;
+    hal_can_frame_t a = frame_n(1), got;
+    assert_int_equal(hal_can_send(&link_, &a), HAL_OK);
+    fake_push_rx(&a);
+    assert_int_equal(hal_can_recv(&link_, &got), 1); /* before the window: clean */
+    assert_int_equal(fake.n_sent, 1);
+    g_now_us = t0 + 1000000;
+    assert_int_equal(hal_can_send(&link_, &a), HAL_OK);
+    fake_push_rx(&a);
+    assert_int_equal(hal_can_recv(&link_, &got), HAL_EAGAIN); /* in it: everything dropped */
+    g_now_us = t0 + 1499999;
+    assert_int_equal(hal_can_send(&link_, &a), HAL_OK);
+    assert_int_equal(fake.n_sent, 1);
+    g_now_us = t0 + 1500000; /* after it: clean again */
+    assert_int_equal(hal_can_send(&link_, &a), HAL_OK);
+    fake_push_rx(&a);
+    assert_int_equal(hal_can_recv(&link_, &got), 1);
+    assert_int_equal(fake.n_sent, 2);
+    hal_sim_fault_counters_t c = counters();
+    assert_int_equal(c.tx.frames, 4);
+    assert_int_equal(c.tx.dropped, 2);
+    assert_int_equal(c.rx.frames, 3);
+    assert_int_equal(c.rx.dropped, 1);
+}
+
+static void test_window_keeps_the_decision_stream(void **state)
+{
+    (void)state;
+    /* the same seed with and without a window: frames inside the window meet
+     * the same fate (each frame consumes its draws either way) */
+    static uint32_t kept_always[2000];
+    size_t n_always = 0;
+    wrap("drop=0.3,seed=5");
+    for (uint32_t i = 0; i < 2000; i++) {
+        hal_can_frame_t f = frame_n(i);
+        assert_int_equal(hal_can_send(&link_, &f), HAL_OK);
+    }
+    for (size_t j = 0; j < fake.n_sent; j++) {
+        kept_always[n_always++] = frame_index(&fake.sent[j]);
+    }
+    teardown(NULL);
+    setup(NULL);
+    wrap("drop=0.3,window=1ms+1000ms,seed=5");
+    for (uint32_t i = 0; i < 2000; i++) {
+        hal_can_frame_t f = frame_n(i);
+        assert_int_equal(hal_can_send(&link_, &f), HAL_OK);
+        g_now_us += 1000; /* frame i at i ms: 1..1000 inside the window */
+    }
+    size_t j = 0, k = 0;
+    for (uint32_t i = 0; i < 2000; i++) {
+        bool in_window = i >= 1 && i <= 1000;
+        bool kept_a = k < n_always && kept_always[k] == i;
+        bool kept_w = j < fake.n_sent && frame_index(&fake.sent[j]) == i;
+        k += kept_a ? 1u : 0u;
+        j += kept_w ? 1u : 0u;
+        if (in_window) {
+            assert_int_equal(kept_a, kept_w);
+        } else {
+            assert_true(kept_w);
+        }
+    }
+}
+
 static void test_format_names_every_counter(void **state)
 {
     (void)state;
@@ -761,6 +832,12 @@ static void test_parse_units_percentages_and_directions(void **state)
     assert_int_equal(c.busoff_every_us, 500000);
     assert_int_equal(c.busoff_for_us, 1000);
     assert_true(c.tx.drop == 0.0);
+    assert_int_equal(hal_sim_fault_parse("window=2s+30s", &c, msg, sizeof msg), HAL_OK);
+    assert_int_equal(c.window_after_us, 2000000);
+    assert_int_equal(c.window_for_us, 30000000);
+    assert_int_equal(hal_sim_fault_parse("window=0+1s", &c, msg, sizeof msg), HAL_OK);
+    assert_int_equal(c.window_after_us, 0);
+    assert_int_equal(c.window_for_us, 1000000);
     assert_int_equal(hal_sim_fault_parse("seed=18446744073709551615", &c, msg, sizeof msg), HAL_OK);
     assert_true(c.seed == UINT64_MAX);
 }
@@ -799,6 +876,10 @@ static void test_parse_errors_say_what_is_wrong(void **state)
         { "busoff=1s+5s", "FOR must be shorter than EVERY" },
         { "rx.busoff=30s+2s", "busoff applies to the whole link: drop the 'rx.' prefix" },
         { "tx.seed=1", "seed applies to the whole link" },
+        { "window=2s", "window: expected AFTER+FOR" },
+        { "window=2s+0s", "window: expected AFTER+FOR" },
+        { "window=x+1s", "window: expected AFTER+FOR" },
+        { "rx.window=0+1s", "window applies to the whole link" },
         { "seed=-1", "seed '-1': expected an unsigned 64-bit integer" },
         { "seed=18446744073709551616", "seed '18446744073709551616'" },
         { "seed=0x", "seed '0x'" },
@@ -844,6 +925,8 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_hold_queue_overflow_passes_frames_unchanged, setup, teardown),
         cmocka_unit_test_setup_teardown(test_inner_send_error_is_returned_and_nothing_is_sent_twice, setup, teardown),
         cmocka_unit_test_setup_teardown(test_busoff_windows, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_window_limits_frame_faults_in_time, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_window_keeps_the_decision_stream, setup, teardown),
         cmocka_unit_test_setup_teardown(test_format_names_every_counter, setup, teardown),
         cmocka_unit_test(test_parse_full_spec),
         cmocka_unit_test(test_parse_units_percentages_and_directions),
