@@ -5,10 +5,11 @@
  * Threads: this comms thread (links, ISO-TP, dispatcher, telemetry). Logs go
  * to stderr with a level prefix that journald understands. */
 #include <errno.h>
-#include <getopt.h>
 #include <inttypes.h>
 #include <poll.h>
 #include <signal.h>
+#include <stdatomic.h>
+#include <stdbool.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -16,8 +17,17 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "hal_linux_gpiod.h"
+#include "hal_linux_rt.h"
+#include "hal_linux_socketcan.h"
+#include "hal_sim_world.h"
 #include "landscape.h" /* cantools: DBC pack functions */
+#include "ls_check.h"
+#include "ls_config.h"
+#include "ls_control.h"
 #include "ls_core.h"
+#include "ls_core_events.h"
+#include "ls_kin.h"
 #include "ls_net.h"
 #include "slcan_pty.h"
 
@@ -56,112 +66,23 @@ static uint64_t mono_us(void)
     return (uint64_t)ts.tv_sec * 1000000u + (uint64_t)ts.tv_nsec / 1000u;
 }
 
-typedef struct {
-    const char *hal;
-    const char *links[LS_NET_MAX_LINKS];
-    size_t n_links;
-    unsigned node;
-    unsigned heartbeat_timeout_ms;
-    const char *name;
-} options_t;
-
-static void usage(FILE *f)
-{
-    fprintf(f,
-            "usage: landscaped --hal sim --link SPEC [--link SPEC ...] [options]\n"
-            "\n"
-            "  --hal sim                 simulated controller (the only HAL composition so far)\n"
-            "  --link slcan:pty:PATH     SLCAN on a new pseudo-terminal; PATH becomes a symlink to it\n"
-            "                            (repeatable: every link is one segment of the same bus)\n"
-            "  --node ADDR               node address on the bus (default 0x10)\n"
-            "  --heartbeat-timeout MS    drop a supervisor after MS without heartbeat (default 1000)\n"
-            "  --name NAME               device name reported at connect (default landscape-sim)\n"
-            "  -h, --help                this text\n");
-}
-
-static int parse_uint(const char *s, unsigned max, unsigned *out)
-{
-    char *end = NULL;
-    errno = 0;
-    unsigned long v = strtoul(s, &end, 0);
-    if (errno != 0 || end == s || *end != '\0' || v > max) {
-        return -1;
-    }
-    *out = (unsigned)v;
-    return 0;
-}
-
-static int parse_options(int argc, char **argv, options_t *o)
-{
-    static const struct option longopts[] = {
-        { "hal", required_argument, NULL, 'H' },
-        { "link", required_argument, NULL, 'l' },
-        { "node", required_argument, NULL, 'n' },
-        { "heartbeat-timeout", required_argument, NULL, 't' },
-        { "name", required_argument, NULL, 'N' },
-        { "help", no_argument, NULL, 'h' },
-        { NULL, 0, NULL, 0 },
-    };
-    memset(o, 0, sizeof *o);
-    o->node = 0x10;
-    o->heartbeat_timeout_ms = 1000;
-    o->name = "landscape-sim";
-    int c;
-    while ((c = getopt_long(argc, argv, "h", longopts, NULL)) != -1) {
-        switch (c) {
-        case 'H': o->hal = optarg; break;
-        case 'l':
-            if (o->n_links >= LS_NET_MAX_LINKS) {
-                LOG_ERR("at most %d --link options", LS_NET_MAX_LINKS);
-                return -1;
-            }
-            o->links[o->n_links++] = optarg;
-            break;
-        case 'n':
-            if (parse_uint(optarg, 0xFE, &o->node) != 0 || o->node == 0) {
-                LOG_ERR("--node %s: expected an address 1..0xFE (0xFF is the broadcast address)", optarg);
-                return -1;
-            }
-            break;
-        case 't':
-            if (parse_uint(optarg, 600000, &o->heartbeat_timeout_ms) != 0 || o->heartbeat_timeout_ms < 50) {
-                LOG_ERR("--heartbeat-timeout %s: expected milliseconds 50..600000", optarg);
-                return -1;
-            }
-            break;
-        case 'N': o->name = optarg; break;
-        case 'h': usage(stdout); exit(0);
-        default: usage(stderr); return -1;
-        }
-    }
-    if (optind < argc) {
-        LOG_ERR("unexpected argument '%s' (see --help)", argv[optind]);
-        return -1;
-    }
-    if (o->hal == NULL || strcmp(o->hal, "sim") != 0) {
-        LOG_ERR("--hal %s: expected --hal sim", o->hal != NULL ? o->hal : "(missing)");
-        return -1;
-    }
-    if (o->n_links == 0) {
-        LOG_ERR("no --link given: add e.g. --link slcan:pty:/tmp/landscape0");
-        return -1;
-    }
-    return 0;
-}
-
 static int open_link(const char *spec, hal_can_link_t *out)
 {
     char msg[256] = "";
+    int r;
     if (strncmp(spec, "slcan:pty:", 10) == 0) {
-        int r = hal_sim_slcan_pty_open(out, spec + 10, msg, sizeof msg);
-        if (r < 0) {
-            LOG_ERR("--link %s: %s", spec, msg);
-            return -1;
-        }
-        return 0;
+        r = hal_sim_slcan_pty_open(out, spec + 10, msg, sizeof msg);
+    } else if (strncmp(spec, "socketcan:", 10) == 0) {
+        r = hal_linux_socketcan_open(out, spec + 10, msg, sizeof msg);
+    } else {
+        LOG_ERR("--link %s: unknown link kind; expected slcan:pty:PATH or socketcan:IFNAME", spec);
+        return -1;
     }
-    LOG_ERR("--link %s: unknown link kind; expected slcan:pty:PATH", spec);
-    return -1;
+    if (r < 0) {
+        LOG_ERR("--link %s: %s", spec, msg);
+        return -1;
+    }
+    return 0;
 }
 
 static void send_heartbeat(ls_net_t *net, const ls_core_t *core, uint8_t counter)
@@ -185,12 +106,232 @@ static void send_heartbeat(ls_net_t *net, const ls_core_t *core, uint8_t counter
 
 static ls_core_t g_core;
 static ls_net_t g_net;
+static ls_control_t g_ctl;
+static hal_linux_rt_t g_rt;
+static hal_arm_t g_arm;
+static hal_dio_t g_dio;
+static hal_tool_t g_tool;
+static hal_manual_t g_manual;
+static bool g_world_open;
+static _Atomic bool g_loop_attached;
+
+/* The control thread's body. */
+static void control_cycle(void *arg, uint64_t now_us, uint64_t cycle)
+{
+    (void)cycle;
+    if (g_world_open && !atomic_load_explicit(&g_loop_attached, memory_order_relaxed)) {
+        (void)hal_sim_world_attach_thread(); /* ODE keeps per-thread collision data */
+        atomic_store_explicit(&g_loop_attached, true, memory_order_relaxed);
+    }
+    ls_control_cycle((ls_control_t *)arg, now_us);
+}
+
+/* Core actions run through the loop's command ring. */
+static int act_enable(void *ctx, bool on)
+{
+    ls_ctl_cmd_t cmd = { .kind = on ? LS_CTL_ENABLE : LS_CTL_DISABLE };
+    return ls_control_post((ls_control_t *)ctx, &cmd) ? 0 : HAL_EAGAIN;
+}
+
+static void act_stop(void *ctx)
+{
+    ls_ctl_cmd_t cmd = { .kind = LS_CTL_STOP };
+    (void)ls_control_post((ls_control_t *)ctx, &cmd);
+}
+
+static void drain_control_events(uint64_t now)
+{
+    ls_ctl_event_t ev;
+    while (ls_control_next_event(&g_ctl, &ev)) {
+        switch (ev.kind) {
+        case LS_CEV_MOTION: ls_core_on_motion_event(&g_core, &ev.motion); break;
+        case LS_CEV_FAULT:
+            ls_core_fault(&g_core, ev.text, now);
+            ls_core_motion_failed(&g_core, 0, ev.text);
+            break;
+        case LS_CEV_DIO_CHANGED: ls_core_on_dio_event(&g_core, ev.dio.unit, ev.dio.on, ev.dio.off, now); break;
+        case LS_CEV_CMD_FAILED: {
+            char d[80];
+            snprintf(d, sizeof d, "reason=%s", ev.text);
+            const char *data[] = { d };
+            ls_core_notify(&g_core, g_core.owner, ls_NoticeKind_ALARM, "commandFailed", ev.ref_seq, false, data, 1);
+            ls_core_motion_failed(&g_core, ev.ref_seq, ev.text);
+            LOG_WARN("control loop: %s", ev.text);
+            break;
+        }
+        }
+    }
+}
+
+static void send_frame(uint32_t base, const uint8_t *data)
+{
+    hal_can_frame_t f = { .id = base | g_net.node, .flags = HAL_CAN_F_EXT, .len = 8 };
+    memcpy(f.data, data, 8);
+    (void)ls_net_send_frame(&g_net, &f);
+}
+
+/* Telemetry broadcasts of protocol/landscape.dbc (SI units). */
+static void send_telemetry(void)
+{
+    ls_ctl_snapshot_t s;
+    ls_control_snapshot(&g_ctl, &s);
+    uint8_t d[8];
+    struct landscape_status_t st = {
+        .st_state = (uint8_t)g_core.state,
+        .st_motion = (uint8_t)(s.phase == LS_MOTION_RUNNING || s.phase == LS_MOTION_STOPPING ? 1
+                               : s.phase == LS_MOTION_PAUSED                              ? 2
+                               : g_core.fault[0] != '\0'                                  ? 3
+                                                                                          : 0),
+        .st_control_mode = (uint8_t)(g_core.fault[0] != '\0' ? 2 : (s.enabled ? 1 : 0)),
+        .st_fault = g_core.fault[0] != '\0' ? 1u : 0u,
+        .st_overruns = 0,
+        .st_cycle_us = 0,
+    };
+    hal_rt_stats_t rs;
+    hal_linux_rt_stats(&g_rt, &rs);
+    st.st_overruns = (uint16_t)(rs.overruns > 0xFFFFu ? 0xFFFFu : rs.overruns);
+    st.st_cycle_us = (uint16_t)(rs.max_cycle_us > 0xFFFFu ? 0xFFFFu : rs.max_cycle_us);
+    if (landscape_status_pack(d, &st, sizeof d) == 8) {
+        send_frame(0x1CFF1000u, d);
+    }
+    struct landscape_joints_12_t j12 = { landscape_joints_12_j1_encode(s.q_rad[0]), landscape_joints_12_j2_encode(s.q_rad[1]) };
+    struct landscape_joints_34_t j34 = { landscape_joints_34_j3_encode(s.q_rad[2]), landscape_joints_34_j4_encode(s.q_rad[3]) };
+    struct landscape_joints_56_t j56 = { landscape_joints_56_j5_encode(s.q_rad[4]), landscape_joints_56_j6_encode(s.q_rad[5]) };
+    if (landscape_joints_12_pack(d, &j12, sizeof d) == 8) {
+        send_frame(0x1CFF1100u, d);
+    }
+    if (landscape_joints_34_pack(d, &j34, sizeof d) == 8) {
+        send_frame(0x1CFF1200u, d);
+    }
+    if (landscape_joints_56_pack(d, &j56, sizeof d) == 8) {
+        send_frame(0x1CFF1300u, d);
+    }
+    double tool[16], tip[16], xyzrpy[6];
+    ls_pose_from_xyzrpy(g_core.settings.tool_offset, tool);
+    ls_pose_mul(s.flange_pose, tool, tip);
+    ls_pose_to_xyzrpy(tip, xyzrpy);
+    struct landscape_tool_pos_t tp = {
+        .tool_x = landscape_tool_pos_tool_x_encode(xyzrpy[0]),
+        .tool_y = landscape_tool_pos_tool_y_encode(xyzrpy[1]),
+        .tool_z = landscape_tool_pos_tool_z_encode(xyzrpy[2]),
+        .tool_time_ms = (uint16_t)((s.t_us / 1000u) & 0xFFFFu),
+    };
+    struct landscape_tool_rpy_t tr = {
+        .tool_roll = landscape_tool_rpy_tool_roll_encode(xyzrpy[3]),
+        .tool_pitch = landscape_tool_rpy_tool_pitch_encode(xyzrpy[4]),
+        .tool_yaw = landscape_tool_rpy_tool_yaw_encode(xyzrpy[5]),
+    };
+    if (landscape_tool_pos_pack(d, &tp, sizeof d) == 8) {
+        send_frame(0x1CFF1400u, d);
+    }
+    if (landscape_tool_rpy_pack(d, &tr, sizeof d) == 8) {
+        send_frame(0x1CFF1500u, d);
+    }
+    if (g_core.dio_units > 0) {
+        struct landscape_dio_t dio = {
+            .dio_inputs = s.dio[0] & g_core.dio_info[0].input_mask,
+            .dio_outputs = s.dio[0] & g_core.dio_info[0].output_mask,
+        };
+        if (landscape_dio_pack(d, &dio, sizeof d) == 8) {
+            send_frame(0x1CFF1600u, d);
+        }
+    }
+}
+
+static int compose(const ls_config_t *o)
+{
+    char msg[256] = "";
+    hal_arm_t *arm = NULL;
+    hal_dio_t *dio = NULL;
+    const hal_sensor_t *sensors = NULL;
+    size_t n_sensors = 0;
+    if (strcmp(o->arm, "sim") == 0) {
+        hal_sim_world_config_t wc = {
+            .model = &ls_robot_model_default,
+            .dio_socket_path = o->dio_socket[0] != '\0' ? o->dio_socket : NULL,
+            .lockstep = strcmp(o->clock, "lockstep") == 0,
+            .with_obstacle = true,
+        };
+        if (hal_sim_world_open(&wc, msg, sizeof msg) < 0) {
+            LOG_ERR("--arm sim: %s", msg);
+            return -1;
+        }
+        g_world_open = true;
+        hal_sim_world_get_arm(&g_arm);
+        hal_sim_world_get_tool(&g_tool);
+        hal_sim_world_get_manual(&g_manual);
+        sensors = hal_sim_world_sensors(&n_sensors);
+        arm = &g_arm;
+        g_core.tool = &g_tool;
+        g_core.manual = &g_manual;
+        if (strcmp(o->dio, "sim") == 0) {
+            hal_sim_world_get_dio(&g_dio);
+            dio = &g_dio;
+        }
+    }
+    if (strncmp(o->dio, "gpiod:", 6) == 0) {
+        hal_linux_gpiod_config_t gc;
+        memset(&gc, 0, sizeof gc);
+        gc.chip = o->dio + 6;
+        gc.n_inputs = o->n_inputs;
+        gc.n_outputs = o->n_outputs;
+        memcpy(gc.input_offsets, o->input_offsets, sizeof o->input_offsets);
+        memcpy(gc.output_offsets, o->output_offsets, sizeof o->output_offsets);
+        if (hal_linux_gpiod_open(&g_dio, &gc, msg, sizeof msg) < 0) {
+            LOG_ERR("--dio %s: %s", o->dio, msg);
+            return -1;
+        }
+        dio = &g_dio;
+    }
+    g_core.model = &ls_robot_model_default;
+    g_core.sensors = sensors;
+    g_core.n_sensors = n_sensors;
+    int units = dio != NULL ? hal_dio_unit_count(dio) : 0;
+    for (int u = 0; u < units && u < LS_CTL_MAX_DIO_UNITS; u++) {
+        (void)hal_dio_describe(dio, (uint16_t)u, &g_core.dio_info[u]);
+        g_core.dio_units = (uint16_t)(u + 1);
+    }
+    ls_control_config_t cc = { .model = &ls_robot_model_default, .arm = arm, .dio = dio, .sensors = sensors,
+                               .n_sensors = n_sensors, .rate_hz = o->rate_hz };
+    ls_control_init(&g_ctl, &cc);
+    g_core.ctl = &g_ctl;
+    if (o->estop_input >= 0) {
+        ls_ctl_cmd_t cmd = { .kind = LS_CTL_ESTOP_LINE, .dio = { 0, 1u << (unsigned)o->estop_input, 0 } };
+        (void)ls_control_post(&g_ctl, &cmd);
+    }
+    hal_rt_config_t rc = { .rate_hz = o->rate_hz, .priority = o->rt_priority, .cpu = o->rt_cpu,
+                           .lock_memory = o->lock_memory, .lockstep = strcmp(o->clock, "lockstep") == 0 };
+    if (hal_linux_rt_start(&g_rt, &rc, control_cycle, &g_ctl, msg, sizeof msg) < 0) {
+        LOG_ERR("control thread: %s", msg);
+        return -1;
+    }
+    LOG_INFO("control loop at %u Hz (%s clock), arm %s, dio %s, %zu sensors", (unsigned)o->rate_hz, o->clock,
+             o->arm, o->dio, n_sensors);
+    return 0;
+}
 
 int main(int argc, char **argv)
 {
-    options_t opt;
-    if (parse_options(argc, argv, &opt) != 0) {
-        return 2;
+    static ls_config_t opt;
+    char cmsg[512];
+    ls_config_defaults(&opt);
+    int cr = ls_config_from_args(&opt, argc, argv, cmsg, sizeof cmsg);
+    if (cr == 1) {
+        return LS_EXIT_OK; /* --help */
+    }
+    if (cr < 0) {
+        if (opt.check) {
+            return ls_check_config_error(cmsg, stdout);
+        }
+        LOG_ERR("%s", cmsg);
+        return LS_EXIT_BAD_CONFIG;
+    }
+    if (opt.check) {
+        return ls_check_run(&opt, stdout);
+    }
+    if (ls_config_validate(&opt, cmsg, sizeof cmsg) != 0) {
+        LOG_ERR("%s", cmsg);
+        return LS_EXIT_BAD_CONFIG;
     }
     struct sigaction sa;
     memset(&sa, 0, sizeof sa);
@@ -202,13 +343,14 @@ int main(int argc, char **argv)
     ls_core_config_t cfg = {
         .device_name = opt.name,
         .firmware_version = LS_FIRMWARE_VERSION,
-        .node_addr = (uint8_t)opt.node,
-        .joint_count = 6,
+        .node_addr = opt.node,
+        .joint_count = LS_N_JOINTS,
         .heartbeat_timeout_ms = opt.heartbeat_timeout_ms,
     };
     ls_core_io_t io = { .send_downlink = ls_net_send_downlink, .ctx = &g_net };
-    ls_core_init(&g_core, &cfg, &io, NULL);
-    ls_net_init(&g_net, (uint8_t)opt.node, &g_core);
+    ls_core_actions_t act = { .enable_drives = act_enable, .stop_motion = act_stop, .ctx = &g_ctl };
+    ls_core_init(&g_core, &cfg, &io, &act);
+    ls_net_init(&g_net, opt.node, &g_core);
 
     int rc = 0;
     for (size_t i = 0; i < opt.n_links; i++) {
@@ -220,11 +362,16 @@ int main(int argc, char **argv)
         (void)ls_net_add_link(&g_net, &link);
         LOG_INFO("link %s up", link.name);
     }
+    if (rc == 0 && compose(&opt) != 0) {
+        rc = 1;
+    }
     if (rc == 0) {
         LOG_INFO("%s ready: node 0x%02X, firmware %s, schema %08X", opt.name, opt.node, LS_FIRMWARE_VERSION,
                  (unsigned)LS_SCHEMA_HASH);
     }
     uint64_t next_hb = mono_us();
+    uint64_t next_tm = next_hb;
+    uint64_t tm_period = opt.telemetry_hz > 0 ? 1000000u / opt.telemetry_hz : 0;
     uint8_t hb_counter = 0;
     while (rc == 0 && !g_stop) {
         struct pollfd fds[LS_NET_MAX_LINKS];
@@ -241,13 +388,30 @@ int main(int argc, char **argv)
         (void)poll(fds, n, 1);
         uint64_t now = mono_us();
         ls_net_poll(&g_net, now);
+        drain_control_events(now);
         ls_core_tick(&g_core, now);
+        ls_dio_tick(&g_core, now);
+        ls_core_motion_tick(&g_core, now);
         if (now >= next_hb) {
             send_heartbeat(&g_net, &g_core, hb_counter++);
             next_hb = now + 200000u;
         }
+        if (tm_period > 0 && now >= next_tm) {
+            send_telemetry();
+            next_tm = now + tm_period;
+        }
     }
     LOG_INFO("shutting down");
+    hal_linux_rt_stop(&g_rt);
+    if (g_core.ctl != NULL) {
+        (void)hal_arm_enable(&g_arm, false);
+    }
+    if (g_world_open) {
+        hal_sim_world_close();
+    }
+    if (g_dio.ops != NULL && !g_world_open) {
+        hal_dio_close(&g_dio);
+    }
     ls_net_close(&g_net);
     return rc;
 }

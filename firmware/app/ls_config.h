@@ -1,59 +1,86 @@
 /* landscaped's configuration: one INI file (read with inih) and command-line
  * options that override it. Every key is validated at start; an error names
- * the file, the key and the allowed values. docs/deploy.md lists the keys. */
+ * the file, the line, the key, the value and what is allowed:
+ *
+ *   /etc/landscape/landscaped.conf:12: [control] rate_hz: got '5', expected 100..10000 (control cycles per second)
+ *   --node: got '0x1FF', expected 1..0xFE (node address; 0xFF is the broadcast address)
+ *
+ * docs/deploy.md lists the keys. All functions here run at init only: they
+ * use stdio and the C library (inih reads the file line by line on the
+ * stack), never the control loop. The caller owns the ls_config_t. */
 #ifndef LS_CONFIG_H
 #define LS_CONFIG_H
 
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 
 #define LS_CONFIG_MAX_LINKS 4
 #define LS_CONFIG_MAX_LINES 16
+#define LS_CONFIG_MAX_OFFSET 1023u   /* highest gpiod line offset accepted in inputs/outputs */
+#define LS_CONFIG_DEFAULT_PATH "/etc/landscape/landscaped.conf"
 
 typedef struct {
     char config_path[256];       /* --config FILE ("" = none) */
     /* [device] */
-    char name[32];               /* name = landscape-sim */
+    char name[32];               /* name = landscape-sim (1..31 printable characters) */
     uint8_t node;                /* node = 0x10 (1..0xFE) */
     uint32_t heartbeat_timeout_ms; /* heartbeat_timeout_ms = 1000 (50..600000) */
     /* [hal] */
     char links[LS_CONFIG_MAX_LINKS][128]; /* link = slcan:pty:PATH | socketcan:IFNAME (repeatable) */
     size_t n_links;
-    char arm[16];                /* arm = sim | none */
-    char dio[128];               /* dio = sim | gpiod:CHIP | none */
+    char arm[16];                /* arm = sim | none (default sim) */
+    char dio[128];               /* dio = sim | gpiod:CHIP | none (default sim) */
     char dio_socket[128];        /* dio_socket = PATH (sim DIO/jog control socket; "" = none) */
-    char clock[16];              /* clock = realtime | lockstep */
+    char clock[16];              /* clock = realtime | lockstep (default realtime) */
     /* [control] */
     uint32_t rate_hz;            /* rate_hz = 1000 (100..10000) */
-    uint32_t telemetry_hz;       /* telemetry_hz = 50 (0..200; 0 = off) */
+    uint32_t telemetry_hz;       /* telemetry_hz = 50 (0..200, <= rate_hz; 0 = off) */
     int rt_priority;             /* rt_priority = 80 (0 = normal thread, 1..99 SCHED_FIFO) */
-    int rt_cpu;                  /* rt_cpu = -1 (no pinning) */
+    int rt_cpu;                  /* rt_cpu = -1 (no pinning; else 0..1023) */
     bool lock_memory;            /* lock_memory = true */
-    /* [dio] gpiod line offsets and roles */
+    /* [dio] gpiod line offsets and roles (used by dio = gpiod:CHIP only, so that
+     * --hal sim can run a gpiod configuration on a bench) */
     uint8_t n_inputs;
-    unsigned input_offsets[LS_CONFIG_MAX_LINES];   /* inputs = 0,1,2 */
+    unsigned input_offsets[LS_CONFIG_MAX_LINES];   /* inputs = 0,1,2 (default none) */
     uint8_t n_outputs;
-    unsigned output_offsets[LS_CONFIG_MAX_LINES];  /* outputs = 8,9 */
-    int estop_input;             /* estop_input = -1 (input bit index that stops everything when active) */
+    unsigned output_offsets[LS_CONFIG_MAX_LINES];  /* outputs = 8,9 (default none) */
+    int estop_input;             /* estop_input = -1 (input bit index 0..15 that stops everything when active) */
     /* modes */
     bool check;                  /* --check: self-check and exit */
     bool hal_sim;                /* --hal sim: the skeleton's shorthand for arm=sim dio=sim clock=realtime */
 } ls_config_t;
 
-/* Defaults above. */
+/* Defaults above. Never fails. */
 void ls_config_defaults(ls_config_t *cfg);
 
-/* Apply argv: --config FILE is read first, then every other option overrides
- * the file. Returns 0; 1 when --help was printed (exit 0); -1 with `msg`
- * naming the option or file:key and what is allowed. */
+/* Apply argv on top of what cfg holds (call ls_config_defaults first):
+ * --config FILE is read first, then every other option overrides the file
+ * in argv order (a --link on the command line replaces the file's links).
+ * --check and --config are recorded even when a later step fails, so the
+ * caller can tell a failed --check apart. Returns 0; 1 when --help was
+ * printed to stdout (exit 0); -1 with `msg` (one line, no newline) naming
+ * the option or FILE:LINE: [section] key, the value and what is allowed.
+ * Does not call ls_config_validate. Uses getopt_long (resets optind). */
 int ls_config_from_args(ls_config_t *cfg, int argc, char **argv, char *msg, size_t msglen);
 
-/* Read one INI file into cfg (keys override what cfg holds). -1 with msg
- * "FILE:LINE: key 'k': expected ..." on the first error. */
+/* Read one INI file into cfg (keys override what cfg holds; the file's first
+ * `link` replaces cfg's links, later ones add). Refuses, with msg
+ * "FILE:LINE: [section] key: got 'v', expected ...", the first of: a missing
+ * or unreadable file (no line), a syntax error, an unknown section or key, a
+ * key outside any section, a value of the wrong type or out of range, a
+ * non-repeatable key given twice, a line longer than the parser takes.
+ * Returns 0 or -1; on -1 cfg may hold the keys read before the error. */
 int ls_config_load_file(ls_config_t *cfg, const char *path, char *msg, size_t msglen);
 
-/* Whole-configuration checks (e.g. at least one link). */
+/* Whole-configuration checks the single keys cannot make: at least one
+ * link, telemetry_hz <= rate_hz, inputs and outputs disjoint, estop_input
+ * within the configured inputs and a DIO backend present for it. 0 or -1
+ * with msg. */
 int ls_config_validate(const ls_config_t *cfg, char *msg, size_t msglen);
+
+/* The --help text. */
+void ls_config_usage(FILE *f);
 
 #endif

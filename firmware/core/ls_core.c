@@ -102,13 +102,18 @@ static int connected_count(const ls_core_t *core)
     return n;
 }
 
-static size_t encode_downlink(ls_core_t *core)
+static size_t encode_msg(const ls_Downlink *msg, uint8_t *buf, size_t cap)
 {
-    pb_ostream_t os = pb_ostream_from_buffer(core->enc, sizeof core->enc);
-    if (!pb_encode(&os, ls_Downlink_fields, &core->down)) {
+    pb_ostream_t os = pb_ostream_from_buffer(buf, cap);
+    if (!pb_encode(&os, ls_Downlink_fields, msg)) {
         return 0;
     }
     return os.bytes_written;
+}
+
+static size_t encode_downlink(ls_core_t *core)
+{
+    return encode_msg(&core->down, core->enc, sizeof core->enc);
 }
 
 static void send_bytes(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t len)
@@ -126,9 +131,9 @@ void ls_core_notify(ls_core_t *core, int sup, ls_NoticeKind kind, const char *ev
         if (!s->connected || (sup >= 0 && i != sup)) {
             continue;
         }
-        memset(&core->down, 0, sizeof core->down);
-        core->down.which_msg = ls_Downlink_notice_tag;
-        ls_Notice *n = &core->down.msg.notice;
+        memset(&core->note, 0, sizeof core->note);
+        core->note.which_msg = ls_Downlink_notice_tag;
+        ls_Notice *n = &core->note.msg.notice;
         n->kind = kind;
         snprintf(n->event_id, sizeof n->event_id, "%s", event_id);
         n->ref_seq = ref_seq;
@@ -139,9 +144,9 @@ void ls_core_notify(ls_core_t *core, int sup, ls_NoticeKind kind, const char *ev
             snprintf(n->data[k], sizeof n->data[k], "%s", data[k]);
             n->data_count++;
         }
-        size_t len = encode_downlink(core);
+        size_t len = encode_msg(&core->note, core->note_enc, sizeof core->note_enc);
         if (len > 0) {
-            send_bytes(core, s->addr, core->enc, len);
+            send_bytes(core, s->addr, core->note_enc, len);
         }
     }
 }
@@ -258,9 +263,9 @@ int32_t ls_core_rsvp(ls_core_t *core, int sup, ls_NoticeKind kind, const char *e
         core->rsvp_next_id = 1;
     }
     ls_session_t *s = &core->sessions[sup];
-    memset(&core->down, 0, sizeof core->down);
-    core->down.which_msg = ls_Downlink_notice_tag;
-    ls_Notice *n = &core->down.msg.notice;
+    memset(&core->note, 0, sizeof core->note);
+    core->note.which_msg = ls_Downlink_notice_tag;
+    ls_Notice *n = &core->note.msg.notice;
     n->kind = kind;
     snprintf(n->event_id, sizeof n->event_id, "%s", event_id);
     n->rsvp_id = id;
@@ -272,13 +277,13 @@ int32_t ls_core_rsvp(ls_core_t *core, int sup, ls_NoticeKind kind, const char *e
         snprintf(n->data[k], sizeof n->data[k], "%s", data[k]);
         n->data_count++;
     }
-    size_t len = encode_downlink(core);
+    size_t len = encode_msg(&core->note, core->note_enc, sizeof core->note_enc);
     if (len == 0) {
         return -1;
     }
     *slot = (ls_rsvp_t){ .used = true, .id = id, .addr = s->addr,
                          .deadline_us = now_us + (uint64_t)timeout_ms * 1000u, .done = done, .ctx = ctx };
-    send_bytes(core, s->addr, core->enc, len);
+    send_bytes(core, s->addr, core->note_enc, len);
     return (int32_t)id;
 }
 
@@ -532,20 +537,95 @@ void ls_core_finish_deferred(ls_core_t *core, int sup, int32_t code, const char 
     send_response(core, s, s->addr);
 }
 
+/* Read the seq and the command's field number of an ls.Uplink without
+ * decoding it: used when the full decode failed (an oversize value) or the
+ * command is unknown to this schema (nanopb drops unknown fields), so that
+ * the answer still carries the request's seq and names the command. */
+static bool scan_request(const uint8_t *buf, size_t len, uint32_t *seq, uint32_t *cmd)
+{
+    pb_istream_t s = pb_istream_from_buffer(buf, len);
+    *seq = 0;
+    *cmd = 0;
+    for (;;) {
+        pb_wire_type_t wt;
+        uint32_t tag;
+        bool eof = false;
+        if (!pb_decode_tag(&s, &wt, &tag, &eof)) {
+            return false;
+        }
+        if (tag == ls_Uplink_request_tag && wt == PB_WT_STRING) {
+            pb_istream_t sub;
+            if (!pb_make_string_substream(&s, &sub)) {
+                return false;
+            }
+            bool ok = true;
+            while (ok && sub.bytes_left > 0) {
+                ok = pb_decode_tag(&sub, &wt, &tag, &eof);
+                if (!ok) {
+                    break;
+                }
+                if (tag == ls_Request_seq_tag && wt == PB_WT_VARINT) {
+                    uint64_t v = 0;
+                    ok = pb_decode_varint(&sub, &v);
+                    *seq = (uint32_t)v;
+                } else {
+                    if (*cmd == 0u) {
+                        *cmd = tag;
+                    }
+                    ok = pb_skip_field(&sub, wt);
+                }
+            }
+            (void)pb_close_string_substream(&s, &sub);
+            return true;
+        }
+        if (!pb_skip_field(&s, wt)) {
+            return false;
+        }
+    }
+}
+
+static void answer_bad_request(ls_core_t *core, uint8_t addr, int32_t code, uint32_t seq, const char *fmt, ...)
+    __attribute__((format(printf, 5, 6)));
+static void answer_bad_request(ls_core_t *core, uint8_t addr, int32_t code, uint32_t seq, const char *fmt, ...)
+{
+    memset(&core->down, 0, sizeof core->down);
+    core->down.which_msg = ls_Downlink_response_tag;
+    ls_Response *res = &core->down.msg.response;
+    res->seq = seq;
+    res->ret_code = code;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(res->ret_msg, sizeof res->ret_msg, fmt, ap);
+    va_end(ap);
+    send_response(core, NULL, addr);
+}
+
 void ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t len, uint64_t now_us)
 {
     memset(&core->up, 0, sizeof core->up);
     pb_istream_t is = pb_istream_from_buffer(buf, len);
+    uint32_t seq = 0, cmd = 0;
     if (!pb_decode(&is, ls_Uplink_fields, &core->up)) {
         core->rx_malformed++;
-        /* Answer so the host does not wait for a time-out; seq is unknown (0). */
-        memset(&core->down, 0, sizeof core->down);
-        core->down.which_msg = ls_Downlink_response_tag;
-        ls_Response *res = &core->down.msg.response;
-        res->ret_code = ls_RetCode_CMD_PARAM_ERR;
-        snprintf(res->ret_msg, sizeof res->ret_msg, "message did not decode (%s): check that host and firmware "
-                 "use the same schema", PB_GET_ERROR(&is));
-        send_response(core, NULL, addr);
+        /* Answer so the host does not wait for a time-out. */
+        bool scanned = scan_request(buf, len, &seq, &cmd);
+        const ls_cmd_desc_t *d = scanned ? ls_cmd_find((pb_size_t)cmd) : NULL;
+        answer_bad_request(core, addr, ls_RetCode_CMD_PARAM_ERR, seq,
+                           "%s did not decode (%s): a value may exceed the firmware's limits "
+                           "(protocol/landscape.options) or host and firmware use different schemas",
+                           d != NULL ? d->name : "the message", PB_GET_ERROR(&is));
+        return;
+    }
+    if (core->up.which_msg == ls_Uplink_request_tag && core->up.msg.request.which_cmd == 0) {
+        (void)scan_request(buf, len, &seq, &cmd);
+        if (cmd != 0u) {
+            answer_bad_request(core, addr, ls_RetCode_CMD_UNKNOWN_CMD_ERR, core->up.msg.request.seq,
+                               "command id %u is not in this firmware's schema: update the firmware or use the "
+                               "host tool built with it", (unsigned)cmd);
+        } else {
+            answer_bad_request(core, addr, ls_RetCode_CMD_PARAM_ERR, core->up.msg.request.seq,
+                               "the request carries no command");
+        }
         return;
     }
     if (core->up.which_msg == ls_Uplink_request_tag) {

@@ -25,6 +25,7 @@ struct ls_control;
 #define LS_FAULT_LOG_LEN 16
 #define LS_MAX_RSVP 8
 #define LS_CORE_MAX_DIO_UNITS 4
+#define LS_MAX_DIO_WATCHES 8
 
 /* How the core talks to the bus: implemented by the network layer (or a test). */
 typedef struct {
@@ -84,6 +85,40 @@ typedef struct {
     char text[80];
 } ls_fault_entry_t;
 
+/* signalDigitalIO watches and setDigitalIO writes in flight (firmware/core/cmd_dio.c). */
+typedef enum { LS_WATCH_FREE = 0, LS_WATCH_ARMED, LS_WATCH_AWAIT_RSVP } ls_watch_phase_t;
+
+typedef struct {
+    ls_watch_phase_t phase;
+    uint32_t id;
+    int sup;                  /* the session that asked; the watch ends with it */
+    uint8_t addr;
+    uint32_t ref_seq;         /* seq of the signalDigitalIO request */
+    uint16_t unit;
+    uint32_t bits;
+    ls_CallbackType cb;
+    uint64_t deadline_us;     /* 0: no time-out */
+    uint64_t period_us;       /* 0: checked on every DIO change */
+    uint64_t next_check_us;
+    bool check_now;           /* first check at the next ls_dio_tick (after the answer went out) */
+} ls_dio_watch_t;
+
+typedef struct {
+    bool pending;
+    uint64_t cycle0;          /* control-loop cycle when the write was posted */
+    uint64_t deadline_us;
+    uint16_t unit;
+    uint32_t on, off;
+} ls_dio_write_wait_t;
+
+typedef struct {
+    ls_dio_watch_t watch[LS_MAX_DIO_WATCHES];
+    uint32_t next_id;
+    ls_dio_write_wait_t write_wait[LS_MAX_SUPERVISORS];
+    uint32_t rsvp_replied, rsvp_timed_out;
+    int32_t rsvp_last_code;
+} ls_dio_state_t;
+
 typedef struct {
     const char *device_name;
     const char *firmware_version;
@@ -114,6 +149,7 @@ typedef struct ls_core {
     hal_manual_t *manual;
     hal_dio_unit_info_t dio_info[LS_CORE_MAX_DIO_UNITS]; /* input/output masks per unit */
     uint16_t dio_units;
+    ls_dio_state_t dio;                                  /* signalDigitalIO watches, setDigitalIO in flight */
     ls_settings_t settings;
     ls_rsvp_t rsvp[LS_MAX_RSVP];
     uint32_t rsvp_next_id;
@@ -129,8 +165,10 @@ typedef struct ls_core {
     uint32_t sessions_dropped; /* heartbeat time-outs */
     /* scratch (kept here, not on the stack: the messages are large) */
     ls_Uplink up;
-    ls_Downlink down;
+    ls_Downlink down;             /* the response being built (handlers write into it) */
     uint8_t enc[LS_DOWNLINK_MAX];
+    ls_Downlink note;             /* notices: separate, so a handler may notify while answering */
+    uint8_t note_enc[LS_DOWNLINK_MAX];
 } ls_core_t;
 
 /* One command being dispatched. */

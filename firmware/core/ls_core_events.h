@@ -9,6 +9,12 @@
 #include "ls_motion.h"
 
 void ls_core_on_motion_event(ls_core_t *core, const ls_motion_event_t *ev);
+/* Polls the DIO inputs of a path's `wait` auxiliary command: every comms loop turn. */
+void ls_core_motion_tick(ls_core_t *core, uint64_t now_us);
+/* The loop could not carry out the motion `ref_seq` (LS_CEV_CMD_FAILED), or
+ * faulted (LS_CEV_FAULT, ref_seq 0 = whatever runs): send the motion's one
+ * final notice (an alarm) and leave MOVING/PAUSED. */
+void ls_core_motion_failed(ls_core_t *core, uint32_t ref_seq, const char *text);
 void ls_core_on_dio_event(ls_core_t *core, uint16_t unit, uint32_t levels, uint32_t changed, uint64_t now_us);
 /* Polling time-outs and cycle times of signalDigitalIO watches. */
 void ls_dio_tick(ls_core_t *core, uint64_t now_us);

@@ -1,15 +1,22 @@
 /* The motion executor: plans (made outside the control loop by the planners
  * below) and their execution, one control cycle at a time, in the loop.
  *
- * Planning: ls_motion_plan_* run in the comms thread (they may search, run
- * IK, check limits) and fill an ls_motion_plan_t. Refusals name the joint or
- * axis and the limit in `why`.
- * Execution: ls_motion_start/stop/resume/abort and ls_motion_step run in the
- * control loop: O(1) per cycle apart from one IK per Cartesian cycle, no
- * allocation, no blocking.
+ * Planning: ls_motion_plan_* and ls_motion_seg_* run in the comms thread
+ * (they sample the whole motion, run IK, check limits) and fill an
+ * ls_motion_plan_t or the segments of an ls_motion_program_t. Refusals name
+ * the joint or axis and the limit in `why` and return a negative status.
+ * Execution: ls_motion_start/stop/resume/abort/aux_done and ls_motion_step
+ * run in the control loop: O(1) per cycle apart from one IK (about 3 us) per
+ * Cartesian cycle, no allocation, no blocking.
+ *
+ * A plan is a list of segments run one after the other, `cycles` times
+ * (single moves: one segment, one cycle). Each segment ends at a point where
+ * the executor reports the tag, runs the auxiliary commands and dwells; it
+ * blends into the next segment instead of stopping when the planner gave it
+ * an overlap (joint segments only, see ls_motion_seg_blend).
  *
  * Units: SI everywhere (m, rad, s); conversion from the user's units happens
- * in the command handlers. */
+ * in the command handlers. Poses are 4x4 column-major (ls_kin.h). */
 #ifndef LS_MOTION_H
 #define LS_MOTION_H
 
@@ -21,6 +28,16 @@
 
 #define LS_MOTION_NAME_LEN 32
 #define LS_MOTION_MAX_EVENTS 4 /* per cycle */
+#define LS_MOTION_AUX_PER_POINT 4
+#define LS_MOTION_AUX_LEN 48
+#define LS_MOTION_MAX_SEGS 257 /* a path of 256 points plus the segment that closes a cycle */
+#define LS_MOTION_FOLLOWING_ERROR_RAD 0.05
+
+/* Planner statuses (negative = refused; `why` says which joint/axis and limit). */
+#define LS_MOTION_OK 0
+#define LS_MOTION_EARG (-1)    /* NULL, non-finite value, fraction outside (0, 1] */
+#define LS_MOTION_ERANGE (-2)  /* a joint/velocity/workspace limit, or unreachable */
+#define LS_MOTION_EGEOM (-3)   /* degenerate geometry: collinear arc points */
 
 typedef enum {
     LS_MOTION_IDLE = 0,
@@ -30,12 +47,12 @@ typedef enum {
 } ls_motion_phase_t;
 
 typedef enum {
-    LS_MEV_DONE = 1, /* the plan finished: name = point or path name */
-    LS_MEV_TAG,      /* a tagged path point was reached: name, index, cycle */
+    LS_MEV_DONE = 1, /* the plan finished: name = point or path name, q_rad = final set-point */
+    LS_MEV_TAG,      /* a tagged path point was reached: name = tag, text = path, index, cycle */
     LS_MEV_PAUSED,   /* a stop finished decelerating */
-    LS_MEV_FAULT,    /* following error, limit: text; the executor is idle afterwards */
-    LS_MEV_AUX,      /* a path auxiliary command is due: text = the command; executor waits
-                        until ls_motion_aux_done() */
+    LS_MEV_FAULT,    /* following error, IK failure: text; the executor is idle afterwards */
+    LS_MEV_AUX,      /* a path auxiliary command is due: text = the command, index = point,
+                        cycle; the executor waits until ls_motion_aux_done() */
 } ls_motion_event_kind_t;
 
 typedef struct {
@@ -53,54 +70,156 @@ typedef struct {
     uint8_t n;
 } ls_motion_events_t;
 
+typedef enum { LS_SEG_JOINT = 1, LS_SEG_LINE, LS_SEG_ARC } ls_seg_kind_t;
+
+/* One segment: a rest-to-rest motion from q0 to q1 and the point it ends at.
+ * Plain data, filled by the ls_motion_seg_* planners (path attributes by
+ * the caller). */
+typedef struct {
+    ls_seg_kind_t kind;
+    ls_traj_t traj;            /* JOINT: 6 joints; LINE/ARC: 1 axis, the path parameter s from 0 to 1 */
+    double stop_ramp_s;        /* time-scale ramp that stops it within its limits */
+    double q0[LS_N_JOINTS], q1[LS_N_JOINTS];
+    double P0[16], P1[16];     /* LINE/ARC: tool-tip poses at s = 0 and 1, base frame */
+    double tool_inv[16];       /* LINE/ARC: flange = tip * tool_inv */
+    double centre_m[3], u[3], v[3], radius_m, angle_rad; /* ARC: p(s) = c + r (cos(a s) u + sin(a s) v) */
+    double length_m, turn_rad; /* LINE/ARC: path length and rotation, for reports */
+    /* the point at the end of the segment (paths) */
+    char tag[LS_MOTION_NAME_LEN]; /* empty: no tag event */
+    int32_t tag_index;
+    int32_t point;             /* index of the point in its path */
+    double delay_s;            /* dwell after arriving (after the auxiliary commands) */
+    double overlap_s;          /* > 0: the next segment starts this long before this one ends */
+    uint8_t n_aux;
+    char aux[LS_MOTION_AUX_PER_POINT][LS_MOTION_AUX_LEN];
+} ls_motion_seg_t;
+
+/* The segments of a path: seg[0..n-1] for the first cycle; seg[n] leads
+ * from the last point back to the first and replaces seg[0] from the second
+ * cycle on (filled when the program runs more than one cycle). Owned by the
+ * caller, who must not change it while a plan that points to it runs. */
+typedef struct {
+    uint16_t n;
+    ls_motion_seg_t seg[LS_MOTION_MAX_SEGS];
+} ls_motion_program_t;
+
 /* A planned motion. Filled by a planner, copied into the executor by
- * ls_motion_start. The motion module may add fields; callers only use the
- * planners and read `ref_seq` and `name`. */
-typedef enum { LS_PLAN_NONE = 0, LS_PLAN_JOINT } ls_plan_kind_t;
+ * ls_motion_start. Callers read `ref_seq` and `name`. */
+typedef enum { LS_PLAN_NONE = 0, LS_PLAN_JOINT, LS_PLAN_LINE, LS_PLAN_ARC, LS_PLAN_PATH } ls_plan_kind_t;
 
 typedef struct {
     ls_plan_kind_t kind;
     uint32_t ref_seq;                 /* request that started it (notice ref_seq) */
-    char name[LS_MOTION_NAME_LEN];    /* point name */
-    ls_traj_t traj;                   /* LS_PLAN_JOINT: joint space, rest to rest */
+    char name[LS_MOTION_NAME_LEN];    /* point name, or path name */
+    ls_motion_seg_t one;              /* single moves */
+    const ls_motion_program_t *prog;  /* LS_PLAN_PATH */
+    int32_t cycles;                   /* LS_PLAN_PATH: >= 1 */
+    bool dry_run;                     /* LS_PLAN_PATH: skip the auxiliary commands */
 } ls_motion_plan_t;
+
+/* Limits of a Cartesian move, SI, all > 0. The tool tip moves at most at
+ * v_lin (m/s) and turns at most at v_ang (rad/s); the slower of the two
+ * sets the time. Joint velocities are checked against joint_speed_frac of
+ * the model's limits. */
+typedef struct {
+    double v_lin_m_s, a_lin_m_s2, j_lin_m_s3;
+    double v_ang_rad_s, a_ang_rad_s2, j_ang_rad_s3;
+    double joint_speed_frac;
+} ls_motion_cart_limits_t;
 
 typedef struct {
     const ls_robot_model_t *model;
     ls_motion_phase_t phase;
     ls_motion_plan_t plan;
-    double t_s;                       /* trajectory clock */
+    double t_s;                       /* trajectory clock of the current segment */
     ls_timescale_t ts;
     double following_error_max_rad;
     double q_cmd[LS_N_JOINTS];
+    /* private to ls_motion.c */
+    uint16_t seg_i_;
+    int32_t cycle_;
+    bool blending_;
+    double t_next_s_;
+    int sub_;                         /* moving, auxiliary commands, dwell */
+    uint8_t aux_k_;
+    bool aux_wait_;
+    double dwell_left_s_;
 } ls_motion_t;
 
+/* Init-time: idle, holding q = 0 until ls_motion_hold. */
 void ls_motion_init(ls_motion_t *m, const ls_robot_model_t *model);
 
-/* Planner: a joint move from q0 to q1 at `speed_frac` (0..1] of the joint
- * velocity limits and `accel_frac` of the acceleration limits. Returns 0, or
- * -1 with `why` ("joint 3: 2.9 rad beyond its limit 2.62 rad"). */
+/* ---- planners (comms thread; cost: joint O(1), Cartesian one IK per sample,
+ * samples every 1 mm / 0.5 deg / 10 ms of the motion, at most 20000) ---- */
+
+/* A joint move from q0 to q1 at `speed_frac` (0..1] of the joint velocity
+ * limits and `accel_frac` of the acceleration and jerk limits. Returns 0, or
+ * negative with `why` ("joint 3: 2.9 rad beyond its limit 2.62 rad"). */
 int ls_motion_plan_joint(ls_motion_plan_t *p, const ls_robot_model_t *model, const double q0[LS_N_JOINTS],
                          const double q1[LS_N_JOINTS], double speed_frac, double accel_frac, char *why,
                          unsigned whylen);
 
-/* Control loop: start a plan from the current commanded position. Returns 0,
- * or -1 when a motion is already running (nothing changes). */
+/* A straight line of the tool tip from its pose at q0 (FK(q0) * tool) to
+ * `tip1` (base frame): position linear, orientation slerped. `tool` is the
+ * flange -> tip transform. Refused when a sampled point leaves the model's
+ * workspace box, has no IK solution, or needs a joint beyond its position or
+ * velocity limit. */
+int ls_motion_plan_line(ls_motion_plan_t *p, const ls_robot_model_t *model, const double q0[LS_N_JOINTS],
+                        const double tool[16], const double tip1[16], const ls_motion_cart_limits_t *lim, char *why,
+                        unsigned whylen);
+
+/* A circular arc of the tool tip from its pose at q0 through the position of
+ * `tip_via` to `tip1`; orientation slerped from start to `tip1`. Collinear
+ * (or coincident) points: LS_MOTION_EGEOM. Other refusals as for lines. */
+int ls_motion_plan_arc(ls_motion_plan_t *p, const ls_robot_model_t *model, const double q0[LS_N_JOINTS],
+                       const double tool[16], const double tip_via[16], const double tip1[16],
+                       const ls_motion_cart_limits_t *lim, char *why, unsigned whylen);
+
+/* A path program: `prog` must hold prog->n >= 1 segments (and seg[n] when
+ * cycles > 1). dry_run skips the auxiliary commands. */
+int ls_motion_plan_path(ls_motion_plan_t *p, const ls_motion_program_t *prog, int32_t cycles, bool dry_run,
+                        const char *name);
+
+/* Segment planners behind the plan_* functions (for path programs). They
+ * fill the motion fields only and leave the point attributes alone. */
+int ls_motion_seg_joint(ls_motion_seg_t *s, const ls_robot_model_t *model, const double q0[LS_N_JOINTS],
+                        const double q1[LS_N_JOINTS], double speed_frac, double accel_frac, char *why,
+                        unsigned whylen);
+int ls_motion_seg_line(ls_motion_seg_t *s, const ls_robot_model_t *model, const double q0[LS_N_JOINTS],
+                       const double tool[16], const double tip1[16], const ls_motion_cart_limits_t *lim, char *why,
+                       unsigned whylen);
+int ls_motion_seg_arc(ls_motion_seg_t *s, const ls_robot_model_t *model, const double q0[LS_N_JOINTS],
+                      const double tool[16], const double tip_via[16], const double tip1[16],
+                      const ls_motion_cart_limits_t *lim, char *why, unsigned whylen);
+
+/* Blend `a` into the following segment `b` (both JOINT, a without auxiliary
+ * commands or dwell): b starts `frac` (0..1] of min(a's braking time, b's
+ * accelerating time) before a ends, and the two motions are added (b's
+ * displacement from its start on top of a), so the velocity is continuous
+ * and the arm passes near the point without stopping. Sets a->overlap_s
+ * (0 when the blend does not apply). */
+void ls_motion_seg_blend(ls_motion_seg_t *a, const ls_motion_seg_t *b, double frac);
+
+/* ---- executor (control loop) ---- */
+
+/* Start a plan from the current commanded position. Returns 0, -1 when a
+ * motion is already running, -2 when the plan does not start within 1e-3 rad
+ * of the held set-point (nothing changes). Copies the plan (not a program). */
 int ls_motion_start(ls_motion_t *m, const ls_motion_plan_t *p);
 void ls_motion_stop(ls_motion_t *m);   /* decelerate along the path, then LS_MEV_PAUSED */
 int ls_motion_resume(ls_motion_t *m); /* from PAUSED; -1 otherwise */
 void ls_motion_abort(ls_motion_t *m); /* drop the motion at once: hold the current set-point */
+/* The auxiliary command announced by LS_MEV_AUX finished: go on. */
+void ls_motion_aux_done(ls_motion_t *m);
 
 /* One control cycle: produce the set-point from the plan; check following
- * error against q_meas; append events. When idle, holds q_cmd. */
+ * error against q_meas; append events (ev may be NULL). When idle or paused,
+ * holds q_cmd. */
 void ls_motion_step(ls_motion_t *m, double dt_s, const double q_meas[LS_N_JOINTS], double q_cmd[LS_N_JOINTS],
                     double qd_cmd[LS_N_JOINTS], ls_motion_events_t *ev);
 
-/* The comms thread finished the pending auxiliary command: continue the path. */
-void ls_motion_aux_done(ls_motion_t *m);
-
 /* Set the held set-point (at start-up and when the drives are enabled, so
- * the arm does not jump to a stale command). */
+ * the arm does not jump to a stale command); drops any motion. */
 void ls_motion_hold(ls_motion_t *m, const double q[LS_N_JOINTS]);
 
 #endif

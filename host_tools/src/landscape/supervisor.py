@@ -28,7 +28,8 @@ from google.protobuf.message import DecodeError, Message
 
 from . import telemetry as tm
 from ._generated import landscape_pb2 as pb
-from .bus import DEFAULT_DEVICE, DEFAULT_HOST, ISOTP_PARAMS, MAX_MESSAGE_BYTES, BusSpec, open_bus, physical_address
+from .bus import (DEFAULT_DEVICE, DEFAULT_HOST, ISOTP_PARAMS, MAX_MESSAGE_BYTES, BusSpec, functional_id, open_bus,
+                  physical_address)
 from .errors import (AlarmError, ArgumentError, BusError, ControllerTimeoutError, LandscapeError,
                      ProtocolError, VersionMismatchError, error_for_code, ret_name)
 from .registry import PROTOCOL_VERSION, SCHEMA_HASH, Command, build_request, lookup, message_to_dict
@@ -424,6 +425,27 @@ class Supervisor:
             msg = message_factory.GetMessageClass(cmd.response_type)()
         result = message_to_dict(msg) if msg is not None else {}
         return RetVal(cmd, resp.seq, resp.ret_code, resp.ret_msg, msg, result)
+
+    def stop_all(self) -> None:
+        """Ask every device on the bus to stopMotion: one functional ISO-TP single frame
+        to 0x18DBFF<source>. Each device answers physically (its Response is not awaited:
+        a device where nothing moves answers CMD_WRONG_STATE_ERR, which is fine).
+
+        The request must fit one single frame (7 bytes), so its seq is 1..127: the next
+        seq while that is small, else a small value that differs from the seqs around it
+        (the device only compares a seq with the previous one, to spot retransmissions)."""
+        if not self._running:
+            raise LandscapeError("the session is not open: use `with Supervisor(bus) as sup:`")
+        with self._req_lock:
+            self._seq = self._seq + 1 if self._seq < 0xFFFFFFFF else 1
+            seq = self._seq if self._seq < 128 else 1 + self._seq % 127
+            payload = pb.Uplink(request=pb.Request(seq=seq, stop_motion=pb.StopMotionReq())).SerializeToString()
+            frame = bytes([len(payload)]) + payload + b"\xcc" * (7 - len(payload))
+            try:
+                self.bus.send(can.Message(arbitration_id=functional_id(self.source_address),
+                                          is_extended_id=True, data=frame))
+            except can.CanError as exc:
+                raise BusError(f"cannot send stop-all on {self.channel_name}: {exc}") from None
 
     def send_rsvp_reply(self, rsvp_id: int, ret_code: int = pb.CMD_EXEC_OK, data: Sequence[str] = ()) -> None:
         """Answer an RSVP notice (no response comes back)."""

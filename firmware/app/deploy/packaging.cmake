@@ -1,0 +1,68 @@
+# Installation layout and the Debian package of the controller (issue 12).
+# Included at the end of the top CMakeLists.txt, after every target exists.
+#
+#   cmake --install build --prefix X   X/bin/landscaped, X/etc/landscape/landscaped.conf,
+#                                      X/lib/systemd/system/landscaped.service,
+#                                      X/lib/sysusers.d/landscape.conf,
+#                                      X/lib/udev/rules.d/60-landscape-gpio.rules,
+#                                      X/share/doc/landscape/*.md
+#   cd build && cpack -G DEB           landscape-controller_<version>_<arch>.deb
+#
+# With the prefix /usr (the package, or a system install) the configuration
+# goes to /etc, as GNUInstallDirs does it: /usr/etc is read by nobody.
+set(LS_DEPLOY_DIR ${CMAKE_CURRENT_LIST_DIR})
+set(LS_DEB_MAINTAINER "LandScape-over-CAN maintainers <landscape@localhost>"
+    CACHE STRING "Maintainer field of the Debian package: who answers for this build")
+
+if(NOT TARGET landscaped)
+  message(FATAL_ERROR "packaging.cmake: include it after the landscaped target is defined")
+endif()
+
+install(TARGETS landscaped RUNTIME DESTINATION bin)
+
+install(CODE "
+  if(CMAKE_INSTALL_PREFIX STREQUAL \"/usr\")
+    set(_ls_etc \"/etc/landscape\")
+  else()
+    set(_ls_etc \"\${CMAKE_INSTALL_PREFIX}/etc/landscape\")
+  endif()
+  file(INSTALL DESTINATION \"\${_ls_etc}\" TYPE FILE PERMISSIONS OWNER_READ OWNER_WRITE GROUP_READ WORLD_READ
+       FILES \"${LS_DEPLOY_DIR}/landscaped.conf\")
+")
+
+install(FILES ${LS_DEPLOY_DIR}/landscaped.service DESTINATION lib/systemd/system)
+install(FILES ${LS_DEPLOY_DIR}/landscape.sysusers DESTINATION lib/sysusers.d RENAME landscape.conf)
+install(FILES ${LS_DEPLOY_DIR}/60-landscape-gpio.rules DESTINATION lib/udev/rules.d)
+file(GLOB LS_DOC_FILES CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/docs/*.md)
+install(FILES ${LS_DOC_FILES} DESTINATION share/doc/landscape)
+
+# ---- CPack: one Debian package ------------------------------------------------
+set(CPACK_GENERATOR DEB)
+set(CPACK_PACKAGE_NAME landscape-controller)
+set(CPACK_PACKAGE_VERSION ${PROJECT_VERSION})
+set(CPACK_PACKAGE_VENDOR "LandScape-over-CAN")
+set(CPACK_PACKAGE_CONTACT "${LS_DEB_MAINTAINER}")
+set(CPACK_PACKAGE_DESCRIPTION_SUMMARY "LandScape robot controller daemon (landscaped) over CAN")
+string(CONCAT CPACK_PACKAGE_DESCRIPTION
+    "landscaped runs the LandScape command set over CAN (SocketCAN or SLCAN) with a fixed-rate\n"
+    "control loop, digital I/O through libgpiod and a simulated 6-DOF arm. Includes the systemd\n"
+    "unit, the landscape user and a udev rule for /dev/gpiochip*.")
+# The package installs under /usr; DESTDIR staging lets the configuration
+# rule above place /etc/landscape (an absolute path) into the package.
+set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
+set(CPACK_INSTALL_PREFIX /usr)
+set(CPACK_SET_DESTDIR ON)
+set(CPACK_STRIP_FILES ON)
+set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
+set(CPACK_DEBIAN_PACKAGE_MAINTAINER "${LS_DEB_MAINTAINER}")
+set(CPACK_DEBIAN_PACKAGE_SECTION misc)
+set(CPACK_DEBIAN_PACKAGE_PRIORITY optional)
+# Named explicitly (the controller loads them, whatever the linker kept) and
+# completed by dpkg-shlibdeps (libc6, libstdc++6, ...).
+set(CPACK_DEBIAN_PACKAGE_DEPENDS "libode8, libgpiod2, libinih1")
+set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
+set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "can-utils, gpiod")
+set(CPACK_DEBIAN_PACKAGE_CONTROL_EXTRA
+    ${LS_DEPLOY_DIR}/conffiles ${LS_DEPLOY_DIR}/postinst ${LS_DEPLOY_DIR}/prerm ${LS_DEPLOY_DIR}/postrm)
+set(CPACK_DEBIAN_PACKAGE_CONTROL_STRICT_PERMISSION ON)
+include(CPack)

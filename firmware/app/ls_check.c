@@ -1,0 +1,350 @@
+/* landscaped --check: each check tries the real thing the controller will do
+ * (open the socket, request the lines, raise the priority, lock memory) and
+ * undoes it, so a PASS means the start will get past that step. */
+#include "ls_check.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <limits.h>
+#include <linux/can.h>
+#include <pthread.h>
+#include <sched.h>
+#include <stdarg.h>
+#include <stdbool.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/mman.h>
+#include <sys/resource.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "hal/hal_dio.h"
+#include "hal/hal_status.h"
+#include "hal_linux_gpiod.h"
+#include "hal_linux_socketcan.h"
+
+typedef struct {
+    FILE *out;
+    unsigned n[3]; /* by ls_check_level_t */
+} report_t;
+
+static void report(report_t *r, ls_check_level_t level, const char *what, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+static void report(report_t *r, ls_check_level_t level, const char *what, const char *fmt, ...)
+{
+    static const char *names[] = { "PASS", "WARN", "FAIL" };
+    r->n[level]++;
+    fprintf(r->out, "%s  %s: ", names[level], what);
+    va_list ap;
+    va_start(ap, fmt);
+    vfprintf(r->out, fmt, ap);
+    va_end(ap);
+    fputc('\n', r->out);
+}
+
+static int summary(report_t *r)
+{
+    fprintf(r->out, "%s: %u FAIL, %u WARN, %u PASS\n",
+            r->n[LS_CHECK_FAIL] > 0 ? "landscaped cannot run with this configuration"
+                                    : "landscaped can run with this configuration",
+            r->n[LS_CHECK_FAIL], r->n[LS_CHECK_WARN], r->n[LS_CHECK_PASS]);
+    fflush(r->out);
+    return r->n[LS_CHECK_FAIL] > 0 ? LS_EXIT_CHECK_FAILED : LS_EXIT_OK;
+}
+
+/* ---- configuration ---------------------------------------------------- */
+
+static void check_config(report_t *r, const ls_config_t *cfg)
+{
+    char msg[512];
+    const char *src = cfg->config_path[0] != '\0' ? cfg->config_path : "(command line only)";
+    if (ls_config_validate(cfg, msg, sizeof msg) != 0) {
+        report(r, LS_CHECK_FAIL, "configuration", "%s: %s", src, msg);
+        return;
+    }
+    report(r, LS_CHECK_PASS, "configuration", "%s: node 0x%02X, %zu link(s), arm %s, dio %s, clock %s, %u Hz", src,
+           (unsigned)cfg->node, cfg->n_links, cfg->arm, cfg->dio, cfg->clock, (unsigned)cfg->rate_hz);
+}
+
+/* ---- CAN ----------------------------------------------------------------- */
+
+static bool has_socketcan_link(const ls_config_t *cfg)
+{
+    for (size_t i = 0; i < cfg->n_links; i++) {
+        if (strncmp(cfg->links[i], "socketcan:", 10) == 0) {
+            return true;
+        }
+    }
+    return false;
+}
+
+static void check_afcan(report_t *r, const ls_config_t *cfg)
+{
+    bool needed = has_socketcan_link(cfg);
+    int fd = socket(PF_CAN, SOCK_RAW | SOCK_CLOEXEC, CAN_RAW);
+    if (fd >= 0) {
+        close(fd);
+        report(r, LS_CHECK_PASS, "AF_CAN", "the kernel opens CAN_RAW sockets");
+        return;
+    }
+    int e = errno;
+    const char *fix = NULL;
+    if (e == EAFNOSUPPORT) {
+        fix = "the kernel has no CAN sockets; fix: modprobe can can-raw (a kernel with CONFIG_CAN and CONFIG_CAN_RAW)";
+    } else if (e == EPROTONOSUPPORT) {
+        fix = "the kernel has AF_CAN but no CAN_RAW; fix: modprobe can-raw (CONFIG_CAN_RAW)";
+    } else if (e == EPERM || e == EACCES) {
+        fix = "CAN sockets are forbidden to this process; fix: allow AF_CAN (systemd RestrictAddressFamilies=, "
+              "seccomp or LSM policy)";
+    } else {
+        fix = "unexpected error; fix: check the kernel log (dmesg)";
+    }
+    if (needed) {
+        report(r, LS_CHECK_FAIL, "AF_CAN", "socket(AF_CAN, SOCK_RAW, CAN_RAW): %s: %s", strerror(e), fix);
+    } else {
+        report(r, LS_CHECK_WARN, "AF_CAN",
+               "socket(AF_CAN, SOCK_RAW, CAN_RAW): %s: %s (not needed by this configuration: no socketcan link)",
+               strerror(e), fix);
+    }
+}
+
+/* The directory that will hold `path` (a pty symlink or a socket) must exist
+ * and be writable by this user. */
+static int parent_writable(const char *path, char *dir, size_t dirlen)
+{
+    snprintf(dir, dirlen, "%s", path);
+    char *slash = strrchr(dir, '/');
+    if (slash == NULL) {
+        snprintf(dir, dirlen, ".");
+    } else if (slash == dir) {
+        dir[1] = '\0';
+    } else {
+        *slash = '\0';
+    }
+    return access(dir, W_OK | X_OK);
+}
+
+static void check_slcan_pty(report_t *r, const char *spec, const char *path)
+{
+    char what[160];
+    snprintf(what, sizeof what, "link %s", spec);
+    int fd = posix_openpt(O_RDWR | O_NOCTTY | O_CLOEXEC);
+    if (fd < 0) {
+        report(r, LS_CHECK_FAIL, what, "cannot open a pseudo-terminal (/dev/ptmx): %s; fix: mount devpts and "
+               "allow /dev/ptmx (systemd: DeviceAllow=/dev/ptmx rw and char-pts rw)", strerror(errno));
+        return;
+    }
+    close(fd);
+    char dir[256];
+    if (parent_writable(path, dir, sizeof dir) != 0) {
+        report(r, LS_CHECK_FAIL, what, "cannot create the symlink in %s: %s; fix: create the directory or choose "
+               "a writable one (the service may write to /run/landscape)", dir, strerror(errno));
+        return;
+    }
+    struct stat sb;
+    if (lstat(path, &sb) == 0 && !S_ISLNK(sb.st_mode)) {
+        report(r, LS_CHECK_FAIL, what, "%s exists and is not a symlink; fix: choose another path for the pty link",
+               path);
+        return;
+    }
+    report(r, LS_CHECK_PASS, what, "pseudo-terminals available, %s writable", dir);
+}
+
+static void check_links(report_t *r, const ls_config_t *cfg)
+{
+    for (size_t i = 0; i < cfg->n_links; i++) {
+        const char *spec = cfg->links[i];
+        if (strncmp(spec, "socketcan:", 10) == 0) {
+            char msg[512];
+            char what[160];
+            snprintf(what, sizeof what, "link %s", spec);
+            int rc = hal_linux_socketcan_probe(spec + 10, msg, sizeof msg);
+            if (rc == HAL_OK) {
+                report(r, LS_CHECK_PASS, what, "%s", msg);
+            } else {
+                report(r, LS_CHECK_FAIL, what, "%s", msg);
+            }
+        } else if (strncmp(spec, "slcan:pty:", 10) == 0) {
+            check_slcan_pty(r, spec, spec + 10);
+        }
+    }
+}
+
+/* ---- digital I/O ---------------------------------------------------------- */
+
+static void format_offsets(const unsigned *offs, uint8_t n, char *out, size_t outlen)
+{
+    size_t used = 0;
+    out[0] = '\0';
+    for (uint8_t i = 0; i < n && used < outlen; i++) {
+        int w = snprintf(out + used, outlen - used, "%s%u", i > 0 ? "," : "", offs[i]);
+        used += w > 0 ? (size_t)w : 0u;
+    }
+    if (n == 0) {
+        snprintf(out, outlen, "none");
+    }
+}
+
+static void check_gpiod(report_t *r, const ls_config_t *cfg, const char *chip)
+{
+    char msg[512];
+    char what[384];
+    snprintf(what, sizeof what, "gpio chip %s", chip);
+    int rc = hal_linux_gpiod_probe(chip, msg, sizeof msg);
+    if (rc != HAL_OK) {
+        report(r, LS_CHECK_FAIL, what, "%s", msg);
+        return;
+    }
+    report(r, LS_CHECK_PASS, what, "%s", msg);
+
+    hal_linux_gpiod_config_t gc;
+    memset(&gc, 0, sizeof gc);
+    gc.chip = chip;
+    gc.n_inputs = cfg->n_inputs;
+    gc.n_outputs = cfg->n_outputs;
+    memcpy(gc.input_offsets, cfg->input_offsets, sizeof cfg->input_offsets);
+    memcpy(gc.output_offsets, cfg->output_offsets, sizeof cfg->output_offsets);
+    char ins[96];
+    char outs[96];
+    format_offsets(cfg->input_offsets, cfg->n_inputs, ins, sizeof ins);
+    format_offsets(cfg->output_offsets, cfg->n_outputs, outs, sizeof outs);
+    snprintf(what, sizeof what, "gpio lines %s (inputs %s, outputs %s)", chip, ins, outs);
+    hal_dio_t dio;
+    rc = hal_linux_gpiod_open(&dio, &gc, msg, sizeof msg);
+    if (rc != HAL_OK) {
+        report(r, LS_CHECK_FAIL, what, "%s", msg);
+        return;
+    }
+    hal_dio_close(&dio);
+    report(r, LS_CHECK_PASS, what, "requested and released");
+}
+
+static void check_dio(report_t *r, const ls_config_t *cfg)
+{
+    if (strncmp(cfg->dio, "gpiod:", 6) == 0) {
+        check_gpiod(r, cfg, cfg->dio + 6);
+    } else {
+        report(r, LS_CHECK_PASS, "dio", "%s backend, no GPIO chip needed", cfg->dio);
+    }
+    if (cfg->dio_socket[0] != '\0') {
+        char dir[256];
+        if (parent_writable(cfg->dio_socket, dir, sizeof dir) != 0) {
+            report(r, LS_CHECK_FAIL, "dio_socket", "cannot create %s in %s: %s; fix: create the directory or choose "
+                   "a writable one (the service may write to /run/landscape)", cfg->dio_socket, dir,
+                   strerror(errno));
+        } else {
+            report(r, LS_CHECK_PASS, "dio_socket", "%s writable", dir);
+        }
+    }
+}
+
+/* ---- real time -------------------------------------------------------------- */
+
+typedef struct {
+    int priority;
+    int err;
+} rt_trial_t;
+
+static void *rt_trial_thread(void *arg)
+{
+    rt_trial_t *t = arg;
+    struct sched_param sp = { .sched_priority = t->priority };
+    t->err = pthread_setschedparam(pthread_self(), SCHED_FIFO, &sp);
+    return NULL;
+}
+
+static void check_realtime(report_t *r, const ls_config_t *cfg)
+{
+    if (cfg->rt_priority == 0) {
+        report(r, LS_CHECK_PASS, "real-time", "not requested (rt_priority = 0): the control loop is a normal thread");
+    } else {
+        rt_trial_t t = { .priority = cfg->rt_priority, .err = 0 };
+        pthread_t th;
+        int e = pthread_create(&th, NULL, rt_trial_thread, &t);
+        if (e == 0) {
+            pthread_join(th, NULL);
+            e = t.err;
+        }
+        struct rlimit rl;
+        char limit[64] = "unknown";
+        if (getrlimit(RLIMIT_RTPRIO, &rl) == 0) {
+            if (rl.rlim_cur == RLIM_INFINITY) {
+                snprintf(limit, sizeof limit, "unlimited");
+            } else {
+                snprintf(limit, sizeof limit, "%llu", (unsigned long long)rl.rlim_cur);
+            }
+        }
+        if (e == 0) {
+            report(r, LS_CHECK_PASS, "real-time", "SCHED_FIFO priority %d granted to a test thread (RLIMIT_RTPRIO %s)",
+                   cfg->rt_priority, limit);
+        } else {
+            report(r, LS_CHECK_WARN, "real-time",
+                   "SCHED_FIFO priority %d refused (%s; RLIMIT_RTPRIO %s): the control loop would run as a normal "
+                   "thread with more jitter; fix: run as the landscaped service (LimitRTPRIO=99, "
+                   "AmbientCapabilities=CAP_SYS_NICE), raise rtprio in /etc/security/limits.d, or set rt_priority = 0",
+                   cfg->rt_priority, strerror(e), limit);
+        }
+    }
+    if (cfg->rt_cpu >= 0) {
+        cpu_set_t set;
+        CPU_ZERO(&set);
+        if (sched_getaffinity(0, sizeof set, &set) != 0) {
+            report(r, LS_CHECK_WARN, "rt_cpu", "cannot read the allowed CPUs: %s", strerror(errno));
+        } else if (cfg->rt_cpu >= CPU_SETSIZE || !CPU_ISSET((size_t)cfg->rt_cpu, &set)) {
+            report(r, LS_CHECK_FAIL, "rt_cpu", "CPU %d is not one this process may run on (%d allowed); fix: set "
+                   "rt_cpu to an online CPU (nproc, taskset -p $$) or -1", cfg->rt_cpu, CPU_COUNT(&set));
+        } else {
+            report(r, LS_CHECK_PASS, "rt_cpu", "CPU %d is available", cfg->rt_cpu);
+        }
+    }
+}
+
+static void check_memlock(report_t *r, const ls_config_t *cfg)
+{
+    if (!cfg->lock_memory) {
+        report(r, LS_CHECK_PASS, "memory locking", "not requested (lock_memory = false)");
+        return;
+    }
+    struct rlimit rl;
+    char limit[64] = "unknown";
+    if (getrlimit(RLIMIT_MEMLOCK, &rl) == 0) {
+        if (rl.rlim_cur == RLIM_INFINITY) {
+            snprintf(limit, sizeof limit, "unlimited");
+        } else {
+            snprintf(limit, sizeof limit, "%llu KiB", (unsigned long long)rl.rlim_cur / 1024u);
+        }
+    }
+    if (mlockall(MCL_CURRENT) == 0) {
+        munlockall();
+        report(r, LS_CHECK_PASS, "memory locking", "mlockall works (RLIMIT_MEMLOCK %s)", limit);
+        return;
+    }
+    int e = errno;
+    report(r, LS_CHECK_WARN, "memory locking",
+           "mlockall refused (%s; RLIMIT_MEMLOCK %s): the control loop may take page faults; fix: run as the "
+           "landscaped service (LimitMEMLOCK=infinity, AmbientCapabilities=CAP_IPC_LOCK), raise memlock in "
+           "/etc/security/limits.d, or set lock_memory = false",
+           strerror(e), limit);
+}
+
+int ls_check_run(const ls_config_t *cfg, FILE *out)
+{
+    report_t r = { .out = out, .n = { 0, 0, 0 } };
+    check_config(&r, cfg);
+    check_afcan(&r, cfg);
+    check_links(&r, cfg);
+    check_dio(&r, cfg);
+    check_realtime(&r, cfg);
+    check_memlock(&r, cfg);
+    return summary(&r);
+}
+
+int ls_check_config_error(const char *msg, FILE *out)
+{
+    report_t r = { .out = out, .n = { 0, 0, 0 } };
+    report(&r, LS_CHECK_FAIL, "configuration", "%s", msg);
+    (void)summary(&r);
+    return LS_EXIT_BAD_CONFIG;
+}

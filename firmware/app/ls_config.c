@@ -1,0 +1,710 @@
+/* landscaped's configuration: INI file (inih) + getopt_long options, one key
+ * table for both so a key and its option cannot disagree on what they accept. */
+#include "ls_config.h"
+
+#include <ctype.h>
+#include <errno.h>
+#include <getopt.h>
+#include <ini.h>
+#include <limits.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+/* ---- value parsers: 0 or -1; `why` gets the "expected ..." text ------- */
+
+static int copy_str(char *dst, size_t size, const char *src)
+{
+    size_t n = strlen(src);
+    if (n >= size) {
+        return -1;
+    }
+    memcpy(dst, src, n + 1);
+    return 0;
+}
+
+/* Unsigned with C prefixes (0x10, 16); no sign, no blanks, no trailing junk. */
+static int parse_u32(const char *s, uint32_t lo, uint32_t hi, uint32_t *out)
+{
+    if (!isdigit((unsigned char)s[0])) {
+        return -1;
+    }
+    char *end = NULL;
+    errno = 0;
+    unsigned long long v = strtoull(s, &end, 0);
+    if (errno != 0 || *end != '\0' || v < lo || v > hi) {
+        return -1;
+    }
+    *out = (uint32_t)v;
+    return 0;
+}
+
+static int parse_int(const char *s, long lo, long hi, int *out)
+{
+    const char *p = s[0] == '-' ? s + 1 : s;
+    if (!isdigit((unsigned char)p[0])) {
+        return -1;
+    }
+    char *end = NULL;
+    errno = 0;
+    long v = strtol(s, &end, 10);
+    if (errno != 0 || *end != '\0' || v < lo || v > hi) {
+        return -1;
+    }
+    *out = (int)v;
+    return 0;
+}
+
+static int parse_bool(const char *s, bool *out)
+{
+    static const char *yes[] = { "true", "yes", "on", "1" };
+    static const char *no[] = { "false", "no", "off", "0" };
+    for (size_t i = 0; i < 4; i++) {
+        if (strcasecmp(s, yes[i]) == 0) {
+            *out = true;
+            return 0;
+        }
+        if (strcasecmp(s, no[i]) == 0) {
+            *out = false;
+            return 0;
+        }
+    }
+    return -1;
+}
+
+/* "0,1, 2" -> offsets; "" -> none. */
+static int parse_offsets(const char *s, unsigned *offs, uint8_t *n_out, char *why, size_t whylen)
+{
+    static const char *expected = "a comma-separated list of at most 16 distinct line offsets 0..1023, e.g. 0,1,2";
+    uint8_t n = 0;
+    const char *p = s;
+    while (*p == ' ' || *p == '\t') {
+        p++;
+    }
+    while (*p != '\0') {
+        if (!isdigit((unsigned char)*p)) {
+            snprintf(why, whylen, "%s", expected);
+            return -1;
+        }
+        char *end = NULL;
+        errno = 0;
+        unsigned long v = strtoul(p, &end, 10);
+        if (errno != 0 || v > LS_CONFIG_MAX_OFFSET || n >= LS_CONFIG_MAX_LINES) {
+            snprintf(why, whylen, "%s", expected);
+            return -1;
+        }
+        for (uint8_t i = 0; i < n; i++) {
+            if (offs[i] == v) {
+                snprintf(why, whylen, "%s (%lu is listed twice)", expected, v);
+                return -1;
+            }
+        }
+        offs[n++] = (unsigned)v;
+        p = end;
+        while (*p == ' ' || *p == '\t') {
+            p++;
+        }
+        if (*p == ',') {
+            p++;
+            while (*p == ' ' || *p == '\t') {
+                p++;
+            }
+            if (*p == '\0') {
+                snprintf(why, whylen, "%s", expected);
+                return -1;
+            }
+        } else if (*p != '\0') {
+            snprintf(why, whylen, "%s", expected);
+            return -1;
+        }
+    }
+    *n_out = n;
+    return 0;
+}
+
+/* ---- one setter per key ------------------------------------------------ */
+
+typedef int (*setter_fn)(ls_config_t *cfg, const char *v, char *why, size_t whylen);
+
+#define EXPECT(...) (snprintf(why, whylen, __VA_ARGS__), -1)
+
+static int set_name(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    size_t n = strlen(v);
+    bool printable = n > 0;
+    for (size_t i = 0; i < n; i++) {
+        printable = printable && isprint((unsigned char)v[i]);
+    }
+    if (!printable || copy_str(cfg->name, sizeof cfg->name, v) != 0) {
+        return EXPECT("1..%zu printable characters (device name reported at connect)", sizeof cfg->name - 1);
+    }
+    return 0;
+}
+
+static int set_node(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    uint32_t x;
+    if (parse_u32(v, 1, 0xFE, &x) != 0) {
+        return EXPECT("1..0xFE (node address; 0xFF is the broadcast address)");
+    }
+    cfg->node = (uint8_t)x;
+    return 0;
+}
+
+static int set_heartbeat(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    if (parse_u32(v, 50, 600000, &cfg->heartbeat_timeout_ms) != 0) {
+        return EXPECT("milliseconds 50..600000 (drop a supervisor after this long without heartbeat)");
+    }
+    return 0;
+}
+
+static int set_link(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    static const char *forms = "slcan:pty:PATH or socketcan:IFNAME";
+    if (strncmp(v, "slcan:pty:", 10) == 0) {
+        if (v[10] == '\0') {
+            return EXPECT("%s (slcan:pty: needs the PATH of the symlink to create)", forms);
+        }
+    } else if (strncmp(v, "socketcan:", 10) == 0) {
+        const char *ifn = v + 10;
+        size_t n = strlen(ifn);
+        bool ok = n > 0 && n < 16 && strcmp(ifn, ".") != 0 && strcmp(ifn, "..") != 0;
+        for (size_t i = 0; ok && i < n; i++) {
+            ok = isgraph((unsigned char)ifn[i]) && ifn[i] != '/' && ifn[i] != ':';
+        }
+        if (!ok) {
+            return EXPECT("%s (IFNAME is a network interface name of 1..15 characters, e.g. can0)", forms);
+        }
+    } else {
+        return EXPECT("%s (unknown link kind)", forms);
+    }
+    for (size_t i = 0; i < cfg->n_links; i++) {
+        if (strcmp(cfg->links[i], v) == 0) {
+            return EXPECT("%s, each link once (this one is already listed)", forms);
+        }
+    }
+    if (cfg->n_links >= LS_CONFIG_MAX_LINKS) {
+        return EXPECT("%s, at most %d links", forms, LS_CONFIG_MAX_LINKS);
+    }
+    if (copy_str(cfg->links[cfg->n_links], sizeof cfg->links[0], v) != 0) {
+        return EXPECT("%s of at most %zu characters", forms, sizeof cfg->links[0] - 1);
+    }
+    cfg->n_links++;
+    return 0;
+}
+
+static int set_arm(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    if (strcmp(v, "sim") != 0 && strcmp(v, "none") != 0) {
+        return EXPECT("sim or none (the ODE-simulated arm, or no arm)");
+    }
+    (void)copy_str(cfg->arm, sizeof cfg->arm, v);
+    return 0;
+}
+
+static int set_dio(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    bool ok = strcmp(v, "sim") == 0 || strcmp(v, "none") == 0 || (strncmp(v, "gpiod:", 6) == 0 && v[6] != '\0');
+    if (!ok || copy_str(cfg->dio, sizeof cfg->dio, v) != 0) {
+        return EXPECT("sim, none or gpiod:CHIP (CHIP as gpiochip0, 0, /dev/gpiochip0 or a chip label)");
+    }
+    return 0;
+}
+
+static int set_dio_socket(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    if (copy_str(cfg->dio_socket, sizeof cfg->dio_socket, v) != 0) {
+        return EXPECT("a socket path of at most %zu characters, or nothing for none", sizeof cfg->dio_socket - 1);
+    }
+    return 0;
+}
+
+static int set_clock(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    if (strcmp(v, "realtime") != 0 && strcmp(v, "lockstep") != 0) {
+        return EXPECT("realtime or lockstep (lockstep: virtual time advancing exactly one period per cycle)");
+    }
+    (void)copy_str(cfg->clock, sizeof cfg->clock, v);
+    return 0;
+}
+
+static int set_rate(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    if (parse_u32(v, 100, 10000, &cfg->rate_hz) != 0) {
+        return EXPECT("100..10000 (control cycles per second)");
+    }
+    return 0;
+}
+
+static int set_telemetry(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    if (parse_u32(v, 0, 200, &cfg->telemetry_hz) != 0) {
+        return EXPECT("0..200 (telemetry frames per second; 0 = off)");
+    }
+    return 0;
+}
+
+static int set_rt_priority(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    if (parse_int(v, 0, 99, &cfg->rt_priority) != 0) {
+        return EXPECT("0..99 (SCHED_FIFO priority of the control thread; 0 = normal thread)");
+    }
+    return 0;
+}
+
+static int set_rt_cpu(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    if (parse_int(v, -1, 1023, &cfg->rt_cpu) != 0) {
+        return EXPECT("-1..1023 (CPU to pin the control thread to; -1 = no pinning)");
+    }
+    return 0;
+}
+
+static int set_lock_memory(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    if (parse_bool(v, &cfg->lock_memory) != 0) {
+        return EXPECT("true or false (also yes/no, on/off, 1/0)");
+    }
+    return 0;
+}
+
+static int set_inputs(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    return parse_offsets(v, cfg->input_offsets, &cfg->n_inputs, why, whylen);
+}
+
+static int set_outputs(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    return parse_offsets(v, cfg->output_offsets, &cfg->n_outputs, why, whylen);
+}
+
+static int set_estop(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    if (parse_int(v, -1, LS_CONFIG_MAX_LINES - 1, &cfg->estop_input) != 0) {
+        return EXPECT("-1..%d (input bit index that stops everything when active; -1 = none)",
+                      LS_CONFIG_MAX_LINES - 1);
+    }
+    return 0;
+}
+
+#undef EXPECT
+
+/* ---- the key table ----------------------------------------------------- */
+
+typedef struct {
+    const char *section;
+    const char *key;
+    const char *option; /* long option taking the value; NULL when file-only */
+    bool repeatable;
+    setter_fn set;
+} key_def_t;
+
+enum { KEY_LINK = 3 };
+
+static const key_def_t KEYS[] = {
+    { "device", "name", "name", false, set_name },
+    { "device", "node", "node", false, set_node },
+    { "device", "heartbeat_timeout_ms", "heartbeat-timeout", false, set_heartbeat },
+    { "hal", "link", "link", true, set_link }, /* KEY_LINK */
+    { "hal", "arm", "arm", false, set_arm },
+    { "hal", "dio", "dio", false, set_dio },
+    { "hal", "dio_socket", "dio-socket", false, set_dio_socket },
+    { "hal", "clock", "clock", false, set_clock },
+    { "control", "rate_hz", "rate", false, set_rate },
+    { "control", "telemetry_hz", "telemetry-hz", false, set_telemetry },
+    { "control", "rt_priority", "rt-priority", false, set_rt_priority },
+    { "control", "rt_cpu", "rt-cpu", false, set_rt_cpu },
+    { "control", "lock_memory", NULL, false, set_lock_memory },
+    { "dio", "inputs", "inputs", false, set_inputs },
+    { "dio", "outputs", "outputs", false, set_outputs },
+    { "dio", "estop_input", "estop-input", false, set_estop },
+};
+#define N_KEYS (sizeof KEYS / sizeof KEYS[0])
+
+static const char *SECTIONS = "[device], [hal], [control] or [dio]";
+
+static bool known_section(const char *s)
+{
+    for (size_t i = 0; i < N_KEYS; i++) {
+        if (strcmp(KEYS[i].section, s) == 0) {
+            return true;
+        }
+    }
+    return false;
+}
+
+/* "name, node, heartbeat_timeout_ms" for the section. */
+static void keys_of(const char *section, char *out, size_t outlen)
+{
+    size_t used = 0;
+    out[0] = '\0';
+    for (size_t i = 0; i < N_KEYS; i++) {
+        if (strcmp(KEYS[i].section, section) == 0 && used < outlen) {
+            int w = snprintf(out + used, outlen - used, "%s%s", used > 0 ? ", " : "", KEYS[i].key);
+            used += w > 0 ? (size_t)w : 0u;
+        }
+    }
+}
+
+void ls_config_defaults(ls_config_t *cfg)
+{
+    memset(cfg, 0, sizeof *cfg);
+    (void)copy_str(cfg->name, sizeof cfg->name, "landscape-sim");
+    cfg->node = 0x10;
+    cfg->heartbeat_timeout_ms = 1000;
+    (void)copy_str(cfg->arm, sizeof cfg->arm, "sim");
+    (void)copy_str(cfg->dio, sizeof cfg->dio, "sim");
+    (void)copy_str(cfg->clock, sizeof cfg->clock, "realtime");
+    cfg->rate_hz = 1000;
+    cfg->telemetry_hz = 50;
+    cfg->rt_priority = 80;
+    cfg->rt_cpu = -1;
+    cfg->lock_memory = true;
+    cfg->estop_input = -1;
+}
+
+/* ---- INI file ---------------------------------------------------------- */
+
+typedef struct {
+    ls_config_t *cfg;
+    const char *path;
+    FILE *f;
+    int line;             /* lines handed to inih so far = the line being parsed */
+    int error_line;       /* 0 = no error yet */
+    char *msg;
+    size_t msglen;
+    int seen_line[N_KEYS]; /* first line of each key in this file */
+    bool links_started;
+} ini_ctx_t;
+
+static void ctx_error(ini_ctx_t *c, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void ctx_error(ini_ctx_t *c, const char *fmt, ...)
+{
+    if (c->error_line != 0) {
+        return;
+    }
+    c->error_line = c->line;
+    int w = snprintf(c->msg, c->msglen, "%s:%d: ", c->path, c->line);
+    if (w >= 0 && (size_t)w < c->msglen) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(c->msg + w, c->msglen - (size_t)w, fmt, ap);
+        va_end(ap);
+    }
+}
+
+static char *trim(char *s)
+{
+    while (isspace((unsigned char)*s)) {
+        s++;
+    }
+    size_t n = strlen(s);
+    while (n > 0 && isspace((unsigned char)s[n - 1])) {
+        s[--n] = '\0';
+    }
+    return s;
+}
+
+/* fgets for inih that counts lines, catches what inih would silently take
+ * apart (over-long lines, unknown [sections]) and stops at the first error.
+ * Leading blanks are dropped so that inih never reads an indented line as a
+ * continuation of the previous value: every key is on its own line. */
+static char *ini_reader_fn(char *str, int num, void *stream)
+{
+    ini_ctx_t *c = stream;
+    if (c->error_line != 0 || fgets(str, num, c->f) == NULL) {
+        return NULL;
+    }
+    c->line++;
+    size_t n = strlen(str);
+    if ((n == 0 || str[n - 1] != '\n') && !feof(c->f)) {
+        if (n + 1 < (size_t)num) {
+            ctx_error(c, "a NUL byte in the line: this is not a text file");
+        } else {
+            ctx_error(c, "line longer than %d characters", num - 3);
+        }
+        return NULL;
+    }
+    char *start = str;
+    if (c->line == 1 && strncmp(start, "\xEF\xBB\xBF", 3) == 0) {
+        start += 3; /* UTF-8 byte order mark */
+    }
+    while (*start == ' ' || *start == '\t') {
+        start++;
+    }
+    if (start != str) {
+        memmove(str, start, strlen(start) + 1);
+    }
+    if (str[0] == '[') {
+        char tmp[256];
+        (void)copy_str(tmp, sizeof tmp, str);
+        char *end = strchr(tmp, ']');
+        if (end != NULL) {
+            *end = '\0';
+            char *name = trim(tmp + 1);
+            if (!known_section(name)) {
+                ctx_error(c, "unknown section [%s]; expected %s", name, SECTIONS);
+                return NULL;
+            }
+        }
+    }
+    return str;
+}
+
+static int ini_handler_fn(void *user, const char *section, const char *name, const char *value)
+{
+    ini_ctx_t *c = user;
+    if (c->error_line != 0) {
+        return 0;
+    }
+    if (section[0] == '\0') {
+        ctx_error(c, "key '%s' outside any section: put it under %s", name, SECTIONS);
+        return 0;
+    }
+    size_t k = 0;
+    while (k < N_KEYS && !(strcmp(KEYS[k].section, section) == 0 && strcmp(KEYS[k].key, name) == 0)) {
+        k++;
+    }
+    if (k == N_KEYS) {
+        char keys[256];
+        keys_of(section, keys, sizeof keys);
+        ctx_error(c, "[%s] %s: unknown key; expected one of %s", section, name, keys);
+        return 0;
+    }
+    if (c->seen_line[k] != 0 && !KEYS[k].repeatable) {
+        ctx_error(c, "[%s] %s: given twice (first on line %d); keep one", section, name, c->seen_line[k]);
+        return 0;
+    }
+    if (c->seen_line[k] == 0) {
+        c->seen_line[k] = c->line;
+    }
+    if (k == KEY_LINK && !c->links_started) {
+        c->links_started = true;
+        c->cfg->n_links = 0;
+    }
+    char why[256];
+    if (KEYS[k].set(c->cfg, value, why, sizeof why) != 0) {
+        ctx_error(c, "[%s] %s: got '%s', expected %s", section, name, value, why);
+        return 0;
+    }
+    return 1;
+}
+
+int ls_config_load_file(ls_config_t *cfg, const char *path, char *msg, size_t msglen)
+{
+    ini_ctx_t c;
+    memset(&c, 0, sizeof c);
+    c.cfg = cfg;
+    c.path = path;
+    c.msg = msg;
+    c.msglen = msglen;
+    c.f = fopen(path, "r");
+    if (c.f == NULL) {
+        snprintf(msg, msglen, "%s: cannot read the configuration file: %s (give an existing file with --config FILE)",
+                 path, strerror(errno));
+        return -1;
+    }
+    int r = ini_parse_stream(ini_reader_fn, &c, ini_handler_fn, &c);
+    int read_error = ferror(c.f);
+    fclose(c.f);
+    if (c.error_line != 0) {
+        /* inih reports earlier syntax errors too: keep whichever came first */
+        if (r > 0 && r < c.error_line) {
+            snprintf(msg, msglen, "%s:%d: syntax error: expected '[section]', 'key = value' or a ; or # comment",
+                     path, r);
+        }
+        return -1;
+    }
+    if (read_error) {
+        snprintf(msg, msglen, "%s: read error after line %d", path, c.line);
+        return -1;
+    }
+    if (r > 0) {
+        snprintf(msg, msglen, "%s:%d: syntax error: expected '[section]', 'key = value' or a ; or # comment", path,
+                 r);
+        return -1;
+    }
+    if (r < 0) {
+        snprintf(msg, msglen, "%s: the INI parser failed (%d)", path, r);
+        return -1;
+    }
+    return 0;
+}
+
+/* ---- command line ------------------------------------------------------ */
+
+enum {
+    OPT_CONFIG = 1000,
+    OPT_HAL,
+    OPT_CHECK,
+    OPT_NO_LOCK,
+    OPT_KEY0 = 2000, /* OPT_KEY0 + index into KEYS */
+};
+
+void ls_config_usage(FILE *f)
+{
+    fprintf(f,
+            "usage: landscaped [--config FILE] [--hal sim] --link SPEC [--link SPEC ...] [options]\n"
+            "       landscaped --config FILE --check\n"
+            "\n"
+            "Options override the keys of the --config file (%s for the service):\n"
+            "  --config FILE             INI configuration file (docs/deploy.md lists the keys)\n"
+            "  --check                   self-check this machine for this configuration and exit\n"
+            "                            (exit 0: can run; 1: a check failed; 2: bad configuration)\n"
+            "  --hal sim                 shorthand for --arm sim --dio sim --clock realtime\n"
+            "  --link SPEC               [hal] link: slcan:pty:PATH (SLCAN on a new pseudo-terminal; PATH\n"
+            "                            becomes a symlink to it) or socketcan:IFNAME (e.g. socketcan:can0);\n"
+            "                            repeatable: every link is one segment of the same bus\n"
+            "  --arm sim|none            [hal] arm (default sim)\n"
+            "  --dio sim|none|gpiod:CHIP [hal] dio: digital I/O backend (default sim)\n"
+            "  --dio-socket PATH         [hal] dio_socket: sim DIO/jog control socket\n"
+            "  --clock realtime|lockstep [hal] clock (default realtime)\n"
+            "  --node ADDR               [device] node: node address 1..0xFE on the bus (default 0x10)\n"
+            "  --heartbeat-timeout MS    [device] heartbeat_timeout_ms: drop a supervisor after MS\n"
+            "                            without heartbeat, 50..600000 (default 1000)\n"
+            "  --name NAME               [device] name reported at connect (default landscape-sim)\n"
+            "  --rate HZ                 [control] rate_hz: control cycles per second, 100..10000 (default 1000)\n"
+            "  --telemetry-hz HZ         [control] telemetry_hz: 0..200, 0 = off (default 50)\n"
+            "  --rt-priority N           [control] rt_priority: SCHED_FIFO 1..99, 0 = normal (default 80)\n"
+            "  --rt-cpu N                [control] rt_cpu: pin the control thread, -1 = no (default -1)\n"
+            "  --no-lock-memory          [control] lock_memory = false\n"
+            "  --estop-input N           [dio] estop_input: input bit that stops everything, -1 = none\n"
+            "  -h, --help                this text\n",
+            LS_CONFIG_DEFAULT_PATH);
+}
+
+static int opt_error(char *msg, size_t msglen, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+static int opt_error(char *msg, size_t msglen, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, msglen, fmt, ap);
+    va_end(ap);
+    return -1;
+}
+
+int ls_config_from_args(ls_config_t *cfg, int argc, char **argv, char *msg, size_t msglen)
+{
+    struct option longopts[N_KEYS + 6];
+    size_t n = 0;
+    longopts[n++] = (struct option){ "config", required_argument, NULL, OPT_CONFIG };
+    longopts[n++] = (struct option){ "hal", required_argument, NULL, OPT_HAL };
+    longopts[n++] = (struct option){ "check", no_argument, NULL, OPT_CHECK };
+    longopts[n++] = (struct option){ "no-lock-memory", no_argument, NULL, OPT_NO_LOCK };
+    longopts[n++] = (struct option){ "help", no_argument, NULL, 'h' };
+    for (size_t k = 0; k < N_KEYS; k++) {
+        if (KEYS[k].option != NULL) {
+            longopts[n++] = (struct option){ KEYS[k].option, required_argument, NULL, OPT_KEY0 + (int)k };
+        }
+    }
+    longopts[n] = (struct option){ NULL, 0, NULL, 0 };
+
+    /* Pass 1: --config, --check, --help and syntax; pass 2 applies the rest
+     * in argv order on top of the file. */
+    const char *config = NULL;
+    bool help = false;
+    opterr = 0;
+    optind = 0; /* glibc: 0 re-initialises getopt completely */
+    int o;
+    while ((o = getopt_long(argc, argv, ":h", longopts, NULL)) != -1) {
+        switch (o) {
+        case OPT_CONFIG:
+            if (config != NULL) {
+                return opt_error(msg, msglen, "--config given twice ('%s' and '%s'): give one file", config, optarg);
+            }
+            config = optarg;
+            break;
+        case OPT_CHECK: cfg->check = true; break;
+        case 'h': help = true; break;
+        case ':':
+            return opt_error(msg, msglen, "%s: missing value (see --help)", argv[optind - 1]);
+        case '?':
+            return opt_error(msg, msglen, "unknown option '%s' (see --help)", argv[optind - 1]);
+        default: break;
+        }
+    }
+    if (optind < argc) {
+        return opt_error(msg, msglen, "unexpected argument '%s' (see --help)", argv[optind]);
+    }
+    if (help) {
+        ls_config_usage(stdout);
+        return 1;
+    }
+    if (config != NULL) {
+        if (copy_str(cfg->config_path, sizeof cfg->config_path, config) != 0) {
+            return opt_error(msg, msglen, "--config: path longer than %zu characters", sizeof cfg->config_path - 1);
+        }
+        if (ls_config_load_file(cfg, config, msg, msglen) != 0) {
+            return -1;
+        }
+    }
+
+    bool links_started = false;
+    optind = 0;
+    while ((o = getopt_long(argc, argv, ":h", longopts, NULL)) != -1) {
+        if (o == OPT_HAL) {
+            if (strcmp(optarg, "sim") != 0) {
+                return opt_error(msg, msglen, "--hal: got '%s', expected sim (or set --arm, --dio, --clock)", optarg);
+            }
+            cfg->hal_sim = true;
+            (void)copy_str(cfg->arm, sizeof cfg->arm, "sim");
+            (void)copy_str(cfg->dio, sizeof cfg->dio, "sim");
+            (void)copy_str(cfg->clock, sizeof cfg->clock, "realtime");
+        } else if (o == OPT_NO_LOCK) {
+            cfg->lock_memory = false;
+        } else if (o >= OPT_KEY0) {
+            size_t k = (size_t)(o - OPT_KEY0);
+            if (k == KEY_LINK && !links_started) {
+                links_started = true;
+                cfg->n_links = 0;
+            }
+            char why[256];
+            if (KEYS[k].set(cfg, optarg, why, sizeof why) != 0) {
+                return opt_error(msg, msglen, "--%s: got '%s', expected %s", KEYS[k].option, optarg, why);
+            }
+        }
+    }
+    return 0;
+}
+
+/* ---- whole configuration ----------------------------------------------- */
+
+int ls_config_validate(const ls_config_t *cfg, char *msg, size_t msglen)
+{
+    if (cfg->n_links == 0) {
+        return opt_error(msg, msglen,
+                         "no link configured: give --link SPEC or 'link = SPEC' under [hal] "
+                         "(e.g. slcan:pty:/tmp/landscape0 or socketcan:can0)");
+    }
+    if (cfg->telemetry_hz > cfg->rate_hz) {
+        return opt_error(msg, msglen, "[control] telemetry_hz = %u is above rate_hz = %u: telemetry is sent from "
+                         "control cycles; lower telemetry_hz", (unsigned)cfg->telemetry_hz, (unsigned)cfg->rate_hz);
+    }
+    for (uint8_t i = 0; i < cfg->n_inputs; i++) {
+        for (uint8_t j = 0; j < cfg->n_outputs; j++) {
+            if (cfg->input_offsets[i] == cfg->output_offsets[j]) {
+                return opt_error(msg, msglen, "[dio] line %u is both in inputs and in outputs: a line has one role",
+                                 cfg->input_offsets[i]);
+            }
+        }
+    }
+    bool gpiod = strncmp(cfg->dio, "gpiod:", 6) == 0;
+    if (strcmp(cfg->dio, "sim") == 0 && strcmp(cfg->arm, "sim") != 0) {
+        return opt_error(msg, msglen, "[hal] dio = sim needs arm = sim: the simulated DIO lives in the simulated "
+                         "world (use dio = gpiod:CHIP or none)");
+    }
+    if (cfg->estop_input >= 0) {
+        if (strcmp(cfg->dio, "none") == 0) {
+            return opt_error(msg, msglen, "[dio] estop_input = %d needs a DIO backend but [hal] dio = none",
+                             cfg->estop_input);
+        }
+        if (gpiod && cfg->estop_input >= (int)cfg->n_inputs) {
+            return opt_error(msg, msglen, "[dio] estop_input = %d but only %u inputs are configured: use an input "
+                             "bit 0..%d or -1", cfg->estop_input, (unsigned)cfg->n_inputs, (int)cfg->n_inputs - 1);
+        }
+    }
+    return 0;
+}

@@ -1,0 +1,848 @@
+/* The motion executor and its planners. See ls_motion.h. */
+#include "ls_motion.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "ls_kin.h"
+
+#define PI 3.14159265358979323846
+#define START_TOL_RAD 1e-3
+#define MIN_STOP_RAMP_S 0.05
+/* Stop ramps are this many times the shortest one that keeps the ramp's own
+ * terms within the limits: stopping while the path itself brakes adds both
+ * (ls_traj.h), so the doubled ramp keeps the sum within 1.5 x a_max at worst
+ * and within a_max during cruise. */
+#define STOP_RAMP_MARGIN 2.0
+#define SAMPLE_STEP_M 1e-3
+#define SAMPLE_STEP_RAD (0.5 * PI / 180.0)
+#define SAMPLE_STEP_S 0.01
+#define MAX_SAMPLES 20000
+
+enum { SUB_MOVE = 0, SUB_AUX, SUB_DWELL };
+
+static int refuse(char *why, unsigned whylen, int code, const char *fmt, ...) __attribute__((format(printf, 4, 5)));
+
+static int refuse(char *why, unsigned whylen, int code, const char *fmt, ...)
+{
+    if (why != NULL && whylen > 0) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(why, whylen, fmt, ap);
+        va_end(ap);
+    }
+    return code;
+}
+
+static bool finite_n(const double *v, int n)
+{
+    for (int i = 0; i < n; i++) {
+        if (!isfinite(v[i])) {
+            return false;
+        }
+    }
+    return true;
+}
+
+static bool frac_ok(double f)
+{
+    return isfinite(f) && f > 0.0 && f <= 1.0;
+}
+
+/* ------------------------------------------------------------------ init */
+
+static void ts_zero(ls_timescale_t *ts)
+{
+    ls_timescale_init(ts);
+    ts->r = 0.0;
+    ts->target = 0.0;
+}
+
+void ls_motion_init(ls_motion_t *m, const ls_robot_model_t *model)
+{
+    memset(m, 0, sizeof *m);
+    m->model = model;
+    m->phase = LS_MOTION_IDLE;
+    m->following_error_max_rad = LS_MOTION_FOLLOWING_ERROR_RAD;
+    ls_timescale_init(&m->ts);
+}
+
+void ls_motion_hold(ls_motion_t *m, const double q[LS_N_JOINTS])
+{
+    memcpy(m->q_cmd, q, sizeof m->q_cmd);
+    m->phase = LS_MOTION_IDLE;
+    m->blending_ = false;
+    m->sub_ = SUB_MOVE;
+}
+
+/* -------------------------------------------------------------- planners */
+
+static int check_joint_limits(const ls_robot_model_t *model, const double q[LS_N_JOINTS], char *why,
+                              unsigned whylen)
+{
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        if (q[j] > model->q_max_rad[j]) {
+            return refuse(why, whylen, LS_MOTION_ERANGE, "joint %d: %.4g rad beyond its limit %.4g rad", j + 1, q[j],
+                          model->q_max_rad[j]);
+        }
+        if (q[j] < model->q_min_rad[j]) {
+            return refuse(why, whylen, LS_MOTION_ERANGE, "joint %d: %.4g rad beyond its limit %.4g rad", j + 1, q[j],
+                          model->q_min_rad[j]);
+        }
+    }
+    return LS_MOTION_OK;
+}
+
+static void seg_clear_motion(ls_motion_seg_t *s, ls_seg_kind_t kind)
+{
+    /* Point attributes (tag, aux, delay) belong to the caller: keep them. */
+    s->kind = kind;
+    memset(&s->traj, 0, sizeof s->traj);
+    s->stop_ramp_s = MIN_STOP_RAMP_S;
+    s->radius_m = s->angle_rad = s->length_m = s->turn_rad = 0.0;
+    s->overlap_s = 0.0;
+}
+
+int ls_motion_seg_joint(ls_motion_seg_t *s, const ls_robot_model_t *model, const double q0[LS_N_JOINTS],
+                        const double q1[LS_N_JOINTS], double speed_frac, double accel_frac, char *why,
+                        unsigned whylen)
+{
+    if (s == NULL || model == NULL || q0 == NULL || q1 == NULL || !finite_n(q0, LS_N_JOINTS) ||
+        !finite_n(q1, LS_N_JOINTS)) {
+        return refuse(why, whylen, LS_MOTION_EARG, "joint move: missing or non-finite joint values");
+    }
+    if (!frac_ok(speed_frac) || !frac_ok(accel_frac)) {
+        return refuse(why, whylen, LS_MOTION_EARG, "speed %.4g and acceleration %.4g must be in (0, 1] of the maxima",
+                      speed_frac, accel_frac);
+    }
+    int r = check_joint_limits(model, q1, why, whylen);
+    if (r < 0) {
+        return r;
+    }
+    ls_traj_limits_t lim;
+    memset(&lim, 0, sizeof lim);
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        lim.v_max[j] = model->qd_max_rad_s[j] * speed_frac;
+        lim.a_max[j] = model->qdd_max_rad_s2[j] * accel_frac;
+        lim.j_max[j] = model->qddd_max_rad_s3[j] * accel_frac;
+    }
+    ls_traj_t tr;
+    if (ls_traj_plan(&tr, LS_N_JOINTS, q0, q1, &lim) != LS_TRAJ_OK) {
+        return refuse(why, whylen, LS_MOTION_EARG, "joint move: the trajectory could not be planned");
+    }
+    seg_clear_motion(s, LS_SEG_JOINT);
+    s->traj = tr;
+    memcpy(s->q0, q0, sizeof s->q0);
+    memcpy(s->q1, q1, sizeof s->q1);
+    double ramp = ls_traj_stop_ramp_s(&tr, &lim);
+    s->stop_ramp_s = fmax(MIN_STOP_RAMP_S, STOP_RAMP_MARGIN * (ramp > 0.0 ? ramp : 0.0));
+    return LS_MOTION_OK;
+}
+
+static void plan_init(ls_motion_plan_t *p, ls_plan_kind_t kind)
+{
+    p->kind = kind;
+    p->prog = NULL;
+    p->cycles = 1;
+    p->dry_run = false;
+    memset(p->one.tag, 0, sizeof p->one.tag);
+    p->one.tag_index = 0;
+    p->one.point = 0;
+    p->one.delay_s = 0.0;
+    p->one.n_aux = 0;
+}
+
+int ls_motion_plan_joint(ls_motion_plan_t *p, const ls_robot_model_t *model, const double q0[LS_N_JOINTS],
+                         const double q1[LS_N_JOINTS], double speed_frac, double accel_frac, char *why,
+                         unsigned whylen)
+{
+    if (p == NULL) {
+        return refuse(why, whylen, LS_MOTION_EARG, "no plan");
+    }
+    plan_init(p, LS_PLAN_JOINT);
+    int r = ls_motion_seg_joint(&p->one, model, q0, q1, speed_frac, accel_frac, why, whylen);
+    if (r < 0) {
+        p->kind = LS_PLAN_NONE;
+    }
+    return r;
+}
+
+/* ---- Cartesian geometry ---- */
+
+static void v3_sub(const double a[3], const double b[3], double out[3])
+{
+    for (int i = 0; i < 3; i++) {
+        out[i] = a[i] - b[i];
+    }
+}
+static double v3_dot(const double a[3], const double b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+static void v3_cross(const double a[3], const double b[3], double out[3])
+{
+    double c[3] = { a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0] };
+    memcpy(out, c, sizeof c);
+}
+static double v3_norm(const double a[3])
+{
+    return sqrt(v3_dot(a, a));
+}
+
+/* Tool-tip pose of the segment at s in [0, 1], base frame. */
+static void seg_tip_pose(const ls_motion_seg_t *s, double x, double T[16])
+{
+    ls_pose_interp(s->P0, s->P1, x, T);
+    if (s->kind == LS_SEG_ARC) {
+        const double a = s->angle_rad * x;
+        const double c = cos(a), sn = sin(a);
+        for (int i = 0; i < 3; i++) {
+            T[12 + i] = s->centre_m[i] + s->radius_m * (c * s->u[i] + sn * s->v[i]);
+        }
+    } else if (x >= 1.0) {
+        memcpy(T, s->P1, 16 * sizeof(double));
+    }
+}
+
+/* Joint solution for the tip pose at s, nearest `seed`. */
+static int seg_ik(const ls_robot_model_t *model, const ls_motion_seg_t *s, double x, const double seed[LS_N_JOINTS],
+                  double q[LS_N_JOINTS])
+{
+    double T[16], F[16];
+    seg_tip_pose(s, x, T);
+    ls_pose_mul(T, s->tool_inv, F);
+    return ls_kin_ik_nearest(model, F, seed, q);
+}
+
+static const char *const axis_name[3] = { "x", "y", "z" };
+
+/* Explain an IK failure at tip pose T: a joint beyond its limit (solved with
+ * the limits opened), a singularity, or out of reach. */
+static int explain_ik(const ls_robot_model_t *model, const ls_motion_seg_t *s, double x, const double seed[LS_N_JOINTS],
+                      int kin_status, char *why, unsigned whylen)
+{
+    double T[16], F[16];
+    seg_tip_pose(s, x, T);
+    ls_pose_mul(T, s->tool_inv, F);
+    if (kin_status == LS_KIN_ELIMITS) {
+        ls_robot_model_t wide = *model;
+        for (int j = 0; j < LS_N_JOINTS; j++) {
+            wide.q_min_rad[j] = -4.0 * PI;
+            wide.q_max_rad[j] = 4.0 * PI;
+        }
+        double q[LS_N_JOINTS];
+        if (ls_kin_ik_nearest(&wide, F, seed, q) == LS_KIN_OK) {
+            char tmp[96];
+            if (check_joint_limits(model, q, tmp, sizeof tmp) < 0) {
+                return refuse(why, whylen, LS_MOTION_ERANGE, "%s at tip (%.4g, %.4g, %.4g) m", tmp, T[12], T[13],
+                              T[14]);
+            }
+        }
+        return refuse(why, whylen, LS_MOTION_ERANGE,
+                      "no joint solution within the joint limits at tip (%.4g, %.4g, %.4g) m", T[12], T[13], T[14]);
+    }
+    if (kin_status == LS_KIN_ESINGULAR) {
+        return refuse(why, whylen, LS_MOTION_ERANGE,
+                      "shoulder singularity (wrist centre on the joint 1 axis) at tip (%.4g, %.4g, %.4g) m: "
+                      "use a joint move",
+                      T[12], T[13], T[14]);
+    }
+    return refuse(why, whylen, LS_MOTION_ERANGE, "unreachable: tip (%.4g, %.4g, %.4g) m is out of the arm's reach",
+                  T[12], T[13], T[14]);
+}
+
+static int check_box(const ls_robot_model_t *model, const double T[16], char *why, unsigned whylen)
+{
+    for (int i = 0; i < 3; i++) {
+        const double pi = T[12 + i];
+        if (pi < model->workspace_min_m[i] || pi > model->workspace_max_m[i]) {
+            return refuse(why, whylen, LS_MOTION_ERANGE,
+                          "axis %s: %.4g m beyond the workspace limit %.4g m (base frame, tool tip)", axis_name[i], pi,
+                          pi < model->workspace_min_m[i] ? model->workspace_min_m[i] : model->workspace_max_m[i]);
+        }
+    }
+    return LS_MOTION_OK;
+}
+
+/* Time the segment over s in [0, 1] with the slower of the linear and the
+ * angular limits, then sample it: workspace box, IK, joint limits and joint
+ * velocities. Fills traj, stop ramp and q1. */
+static int cart_time_and_check(ls_motion_seg_t *s, const ls_robot_model_t *model, const ls_motion_cart_limits_t *lim,
+                               char *why, unsigned whylen)
+{
+    const double L = s->length_m, A = s->turn_rad;
+    double v = INFINITY, a = INFINITY, j = INFINITY;
+    if (L > 1e-9) {
+        v = fmin(v, lim->v_lin_m_s / L);
+        a = fmin(a, lim->a_lin_m_s2 / L);
+        j = fmin(j, lim->j_lin_m_s3 / L);
+    }
+    if (A > 1e-9) {
+        v = fmin(v, lim->v_ang_rad_s / A);
+        a = fmin(a, lim->a_ang_rad_s2 / A);
+        j = fmin(j, lim->j_ang_rad_s3 / A);
+    }
+    const bool still = !(L > 1e-9 || A > 1e-9);
+    ls_traj_limits_t tl;
+    memset(&tl, 0, sizeof tl);
+    tl.v_max[0] = still ? 1.0 : v;
+    tl.a_max[0] = still ? 1.0 : a;
+    tl.j_max[0] = still ? 1.0 : j;
+    const double p0 = 0.0, p1 = still ? 0.0 : 1.0;
+    if (ls_traj_plan(&s->traj, 1, &p0, &p1, &tl) != LS_TRAJ_OK) {
+        return refuse(why, whylen, LS_MOTION_EARG, "Cartesian move: the profile could not be planned");
+    }
+    double ramp = ls_traj_stop_ramp_s(&s->traj, &tl);
+    s->stop_ramp_s = fmax(MIN_STOP_RAMP_S, STOP_RAMP_MARGIN * (ramp > 0.0 ? ramp : 0.0));
+
+    /* The target first, so an unreachable goal is reported as such rather
+     * than as the velocity blow-up on the way to the edge of the reach. */
+    {
+        double F[16], sols[LS_KIN_MAX_BRANCHES][LS_N_JOINTS];
+        int n_sol = 0;
+        if (check_box(model, s->P1, why, whylen) < 0) {
+            return LS_MOTION_ERANGE;
+        }
+        ls_pose_mul(s->P1, s->tool_inv, F);
+        const int ks = ls_kin_ik_all(model, F, sols, &n_sol);
+        if (ks != LS_KIN_OK && ks != LS_KIN_ESINGULAR && ks != LS_KIN_ELIMITS) {
+            return explain_ik(model, s, 1.0, s->q0, ks, why, whylen);
+        }
+    }
+    /* Sample densely enough for 1 mm, 0.5 deg and 10 ms. */
+    double n_d = fmax(fmax(L / SAMPLE_STEP_M, A / SAMPLE_STEP_RAD), s->traj.duration_s / SAMPLE_STEP_S);
+    int n = (int)fmin(ceil(n_d), (double)MAX_SAMPLES);
+    if (n < 1) {
+        n = 1;
+    }
+    const double sd_peak = still ? 0.0 : v; /* |ds/dt| never exceeds the profile's v_max */
+    double q_prev[LS_N_JOINTS];
+    memcpy(q_prev, s->q0, sizeof q_prev);
+    for (int k = 0; k <= n; k++) {
+        const double x = (double)k / (double)n;
+        double T[16];
+        seg_tip_pose(s, x, T);
+        int r = check_box(model, T, why, whylen);
+        if (r < 0) {
+            return r;
+        }
+        double q[LS_N_JOINTS];
+        int ks = seg_ik(model, s, x, q_prev, q);
+        if (ks != LS_KIN_OK) {
+            return explain_ik(model, s, x, q_prev, ks, why, whylen);
+        }
+        if (k > 0 && sd_peak > 0.0) {
+            const double ds = 1.0 / (double)n;
+            for (int jn = 0; jn < LS_N_JOINTS; jn++) {
+                const double qd = fabs(q[jn] - q_prev[jn]) / ds * sd_peak;
+                const double qd_lim = model->qd_max_rad_s[jn] * lim->joint_speed_frac;
+                if (qd > qd_lim) {
+                    return refuse(why, whylen, LS_MOTION_ERANGE,
+                                  "joint %d: velocity %.4g rad/s beyond its limit %.4g rad/s near tip (%.4g, %.4g, "
+                                  "%.4g) m: lower the speed or use a joint move",
+                                  jn + 1, qd, qd_lim, T[12], T[13], T[14]);
+                }
+            }
+        }
+        memcpy(q_prev, q, sizeof q_prev);
+    }
+    memcpy(s->q1, q_prev, sizeof s->q1);
+    return LS_MOTION_OK;
+}
+
+static bool cart_lim_ok(const ls_motion_cart_limits_t *l)
+{
+    return l != NULL && isfinite(l->v_lin_m_s) && l->v_lin_m_s > 0.0 && isfinite(l->a_lin_m_s2) &&
+           l->a_lin_m_s2 > 0.0 && isfinite(l->j_lin_m_s3) && l->j_lin_m_s3 > 0.0 && isfinite(l->v_ang_rad_s) &&
+           l->v_ang_rad_s > 0.0 && isfinite(l->a_ang_rad_s2) && l->a_ang_rad_s2 > 0.0 && isfinite(l->j_ang_rad_s3) &&
+           l->j_ang_rad_s3 > 0.0 && frac_ok(l->joint_speed_frac);
+}
+
+static int cart_start(ls_motion_seg_t *s, ls_seg_kind_t kind, const ls_robot_model_t *model,
+                      const double q0[LS_N_JOINTS], const double tool[16], const double tip1[16],
+                      const ls_motion_cart_limits_t *lim, char *why, unsigned whylen)
+{
+    if (s == NULL || model == NULL || q0 == NULL || tool == NULL || tip1 == NULL || !finite_n(q0, LS_N_JOINTS) ||
+        !finite_n(tool, 16) || !finite_n(tip1, 16)) {
+        return refuse(why, whylen, LS_MOTION_EARG, "Cartesian move: missing or non-finite values");
+    }
+    if (!cart_lim_ok(lim)) {
+        return refuse(why, whylen, LS_MOTION_EARG, "Cartesian move: speed and acceleration limits must be > 0");
+    }
+    seg_clear_motion(s, kind);
+    memcpy(s->q0, q0, sizeof s->q0);
+    double F0[16];
+    ls_kin_fk(model, q0, F0);
+    ls_pose_mul(F0, tool, s->P0);
+    memcpy(s->P1, tip1, sizeof s->P1);
+    ls_pose_inv(tool, s->tool_inv);
+    s->turn_rad = ls_pose_angle(s->P0, s->P1);
+    return LS_MOTION_OK;
+}
+
+int ls_motion_seg_line(ls_motion_seg_t *s, const ls_robot_model_t *model, const double q0[LS_N_JOINTS],
+                       const double tool[16], const double tip1[16], const ls_motion_cart_limits_t *lim, char *why,
+                       unsigned whylen)
+{
+    int r = cart_start(s, LS_SEG_LINE, model, q0, tool, tip1, lim, why, whylen);
+    if (r < 0) {
+        return r;
+    }
+    s->length_m = ls_pose_dist(s->P0, s->P1);
+    return cart_time_and_check(s, model, lim, why, whylen);
+}
+
+int ls_motion_seg_arc(ls_motion_seg_t *s, const ls_robot_model_t *model, const double q0[LS_N_JOINTS],
+                      const double tool[16], const double tip_via[16], const double tip1[16],
+                      const ls_motion_cart_limits_t *lim, char *why, unsigned whylen)
+{
+    if (tip_via == NULL || !finite_n(tip_via, 16)) {
+        return refuse(why, whylen, LS_MOTION_EARG, "arc: missing or non-finite arc point");
+    }
+    int r = cart_start(s, LS_SEG_ARC, model, q0, tool, tip1, lim, why, whylen);
+    if (r < 0) {
+        return r;
+    }
+    /* Circumcircle of p0, pv, p1 (the circle through the three points). */
+    const double *p0 = &s->P0[12], *pv = &tip_via[12], *p1 = &s->P1[12];
+    double a[3], b[3], n[3];
+    v3_sub(pv, p0, a);
+    v3_sub(p1, p0, b);
+    v3_cross(a, b, n);
+    const double nn = v3_norm(n), la = v3_norm(a), lb = v3_norm(b);
+    double c[3];
+    v3_sub(p1, pv, c);
+    const double lc = v3_norm(c);
+    if (la < 1e-6 || lb < 1e-6 || lc < 1e-6 || nn < 1e-6 * la * lb) {
+        return refuse(why, whylen, LS_MOTION_EGEOM,
+                      "arc: start, arc point and goal are collinear or coincide (no unique circle); use a line");
+    }
+    /* centre = p0 + (|a|^2 (b x n) + |b|^2 (n x a)) / (2 |n|^2) */
+    double bxn[3], nxa[3];
+    v3_cross(b, n, bxn);
+    v3_cross(n, a, nxa);
+    for (int i = 0; i < 3; i++) {
+        s->centre_m[i] = p0[i] + (la * la * bxn[i] + lb * lb * nxa[i]) / (2.0 * nn * nn);
+    }
+    double r0[3], r1[3], w[3];
+    v3_sub(p0, s->centre_m, r0);
+    v3_sub(p1, s->centre_m, r1);
+    s->radius_m = v3_norm(r0);
+    for (int i = 0; i < 3; i++) {
+        s->u[i] = r0[i] / s->radius_m;
+        w[i] = n[i] / nn;
+    }
+    v3_cross(w, s->u, s->v); /* in-plane, 90 degrees ahead of u in the direction p0 -> pv -> p1 */
+    double ang = atan2(v3_dot(r1, s->v), v3_dot(r1, s->u));
+    if (ang <= 0.0) {
+        ang += 2.0 * PI;
+    }
+    s->angle_rad = ang;
+    s->length_m = s->radius_m * ang;
+    return cart_time_and_check(s, model, lim, why, whylen);
+}
+
+int ls_motion_plan_line(ls_motion_plan_t *p, const ls_robot_model_t *model, const double q0[LS_N_JOINTS],
+                        const double tool[16], const double tip1[16], const ls_motion_cart_limits_t *lim, char *why,
+                        unsigned whylen)
+{
+    if (p == NULL) {
+        return refuse(why, whylen, LS_MOTION_EARG, "no plan");
+    }
+    plan_init(p, LS_PLAN_LINE);
+    int r = ls_motion_seg_line(&p->one, model, q0, tool, tip1, lim, why, whylen);
+    if (r < 0) {
+        p->kind = LS_PLAN_NONE;
+    }
+    return r;
+}
+
+int ls_motion_plan_arc(ls_motion_plan_t *p, const ls_robot_model_t *model, const double q0[LS_N_JOINTS],
+                       const double tool[16], const double tip_via[16], const double tip1[16],
+                       const ls_motion_cart_limits_t *lim, char *why, unsigned whylen)
+{
+    if (p == NULL) {
+        return refuse(why, whylen, LS_MOTION_EARG, "no plan");
+    }
+    plan_init(p, LS_PLAN_ARC);
+    int r = ls_motion_seg_arc(&p->one, model, q0, tool, tip_via, tip1, lim, why, whylen);
+    if (r < 0) {
+        p->kind = LS_PLAN_NONE;
+    }
+    return r;
+}
+
+int ls_motion_plan_path(ls_motion_plan_t *p, const ls_motion_program_t *prog, int32_t cycles, bool dry_run,
+                        const char *name)
+{
+    if (p == NULL || prog == NULL || prog->n < 1 || prog->n >= LS_MOTION_MAX_SEGS || cycles < 1) {
+        return LS_MOTION_EARG;
+    }
+    plan_init(p, LS_PLAN_PATH);
+    p->prog = prog;
+    p->cycles = cycles;
+    p->dry_run = dry_run;
+    snprintf(p->name, sizeof p->name, "%s", name != NULL ? name : "");
+    return LS_MOTION_OK;
+}
+
+/* The braking time of a synchronised joint profile (its last three phases)
+ * and its accelerating time (the first three), the shortest over the moving
+ * joints. */
+static double traj_phase_time(const ls_traj_t *tr, bool braking)
+{
+    double best = INFINITY;
+    for (int j = 0; j < tr->n; j++) {
+        const ls_traj_axis_t *ax = &tr->axis[j];
+        if (ax->dist == 0.0) {
+            continue;
+        }
+        const double t = braking ? ax->t[4] + ax->t[5] + ax->t[6] : ax->t[0] + ax->t[1] + ax->t[2];
+        best = fmin(best, t);
+    }
+    return isfinite(best) ? best : 0.0;
+}
+
+void ls_motion_seg_blend(ls_motion_seg_t *a, const ls_motion_seg_t *b, double frac)
+{
+    if (a == NULL) {
+        return;
+    }
+    a->overlap_s = 0.0;
+    if (b == NULL || !(frac > 0.0) || a->kind != LS_SEG_JOINT || b->kind != LS_SEG_JOINT || a->n_aux > 0 ||
+        a->delay_s > 0.0) {
+        return;
+    }
+    const double f = frac > 1.0 ? 1.0 : frac;
+    a->overlap_s = f * fmin(traj_phase_time(&a->traj, true), traj_phase_time(&b->traj, false));
+}
+
+/* -------------------------------------------------------------- executor */
+
+static uint16_t plan_nsegs(const ls_motion_plan_t *p)
+{
+    return p->kind == LS_PLAN_PATH ? p->prog->n : 1;
+}
+
+static const ls_motion_seg_t *plan_seg(const ls_motion_plan_t *p, uint16_t i, int32_t cycle)
+{
+    if (p->kind != LS_PLAN_PATH) {
+        return &p->one;
+    }
+    if (i == 0 && cycle > 1) {
+        return &p->prog->seg[p->prog->n];
+    }
+    return &p->prog->seg[i];
+}
+
+/* The segment after (i, cycle), or NULL at the end of the plan. */
+static const ls_motion_seg_t *next_seg(const ls_motion_t *m)
+{
+    uint16_t n = plan_nsegs(&m->plan);
+    if (m->seg_i_ + 1 < n) {
+        return plan_seg(&m->plan, (uint16_t)(m->seg_i_ + 1), m->cycle_);
+    }
+    if (m->cycle_ < m->plan.cycles) {
+        return plan_seg(&m->plan, 0, m->cycle_ + 1);
+    }
+    return NULL;
+}
+
+static ls_motion_event_t *push_event(ls_motion_t *m, ls_motion_events_t *ev, ls_motion_event_kind_t kind)
+{
+    if (ev == NULL || ev->n >= LS_MOTION_MAX_EVENTS) {
+        return NULL;
+    }
+    ls_motion_event_t *e = &ev->ev[ev->n++];
+    memset(e, 0, sizeof *e);
+    e->kind = kind;
+    e->ref_seq = m->plan.ref_seq;
+    memcpy(e->name, m->plan.name, sizeof e->name);
+    e->index = m->seg_i_;
+    e->cycle = m->cycle_;
+    memcpy(e->q_rad, m->q_cmd, sizeof e->q_rad);
+    return e;
+}
+
+static void fault(ls_motion_t *m, ls_motion_events_t *ev, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+
+static void fault(ls_motion_t *m, ls_motion_events_t *ev, const char *fmt, ...)
+{
+    ls_motion_event_t *e = push_event(m, ev, LS_MEV_FAULT);
+    if (e != NULL) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(e->text, sizeof e->text, fmt, ap);
+        va_end(ap);
+    }
+    m->phase = LS_MOTION_IDLE;
+    m->blending_ = false;
+    m->sub_ = SUB_MOVE;
+}
+
+int ls_motion_start(ls_motion_t *m, const ls_motion_plan_t *p)
+{
+    if (m->phase != LS_MOTION_IDLE) {
+        return -1;
+    }
+    if (p == NULL || p->kind == LS_PLAN_NONE || (p->kind == LS_PLAN_PATH && (p->prog == NULL || p->cycles < 1))) {
+        return -2;
+    }
+    const ls_motion_seg_t *first = plan_seg(p, 0, 1);
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        if (fabs(first->q0[j] - m->q_cmd[j]) > START_TOL_RAD) {
+            return -2;
+        }
+    }
+    m->plan = *p;
+    m->seg_i_ = 0;
+    m->cycle_ = 1;
+    m->t_s = 0.0;
+    m->blending_ = false;
+    m->t_next_s_ = 0.0;
+    m->sub_ = SUB_MOVE;
+    m->aux_wait_ = false;
+    ls_timescale_init(&m->ts);
+    m->phase = LS_MOTION_RUNNING;
+    return 0;
+}
+
+static double current_stop_ramp(const ls_motion_t *m)
+{
+    double r = plan_seg(&m->plan, m->seg_i_, m->cycle_)->stop_ramp_s;
+    if (m->blending_) {
+        const ls_motion_seg_t *nx = next_seg(m);
+        if (nx != NULL) {
+            r = fmax(r, nx->stop_ramp_s);
+        }
+    }
+    return r;
+}
+
+void ls_motion_stop(ls_motion_t *m)
+{
+    if (m->phase != LS_MOTION_RUNNING) {
+        return;
+    }
+    m->phase = LS_MOTION_STOPPING;
+    if (m->sub_ == SUB_MOVE) {
+        (void)ls_timescale_set(&m->ts, 0.0, current_stop_ramp(m));
+    }
+    /* At a point (auxiliary command, dwell) the arm is at rest already: the
+     * next step reports the pause. */
+}
+
+int ls_motion_resume(ls_motion_t *m)
+{
+    if (m->phase != LS_MOTION_PAUSED) {
+        return -1;
+    }
+    m->phase = LS_MOTION_RUNNING;
+    (void)ls_timescale_set(&m->ts, 1.0, current_stop_ramp(m));
+    return 0;
+}
+
+void ls_motion_abort(ls_motion_t *m)
+{
+    m->phase = LS_MOTION_IDLE;
+    m->blending_ = false;
+    m->sub_ = SUB_MOVE;
+    m->aux_wait_ = false;
+    ls_timescale_init(&m->ts);
+}
+
+void ls_motion_aux_done(ls_motion_t *m)
+{
+    m->aux_wait_ = false;
+}
+
+static void pause_now(ls_motion_t *m, ls_motion_events_t *ev)
+{
+    m->phase = LS_MOTION_PAUSED;
+    ts_zero(&m->ts);
+    (void)push_event(m, ev, LS_MEV_PAUSED);
+}
+
+/* Position of segment s at its clock t (joint: sampled; Cartesian: IK
+ * seeded by the last set-point). Returns an ls_kin status. */
+static int seg_position(const ls_motion_t *m, const ls_motion_seg_t *s, double t, double q[LS_N_JOINTS],
+                        double qd[LS_N_JOINTS])
+{
+    if (s->kind == LS_SEG_JOINT) {
+        ls_traj_sample(&s->traj, t, q, qd, NULL);
+        return LS_KIN_OK;
+    }
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        qd[j] = 0.0; /* filled by the caller from the set-point difference */
+    }
+    if (t >= s->traj.duration_s) {
+        memcpy(q, s->q1, LS_N_JOINTS * sizeof(double));
+        return LS_KIN_OK;
+    }
+    double x;
+    ls_traj_sample_axis(&s->traj.axis[0], t, &x, NULL, NULL);
+    return seg_ik(m->model, s, x, m->q_cmd, q);
+}
+
+/* Move on to the next point of the plan. at_rest: no blend in progress, so
+ * a pending stop pauses here. */
+static void advance(ls_motion_t *m, ls_motion_events_t *ev, bool at_rest)
+{
+    uint16_t n = plan_nsegs(&m->plan);
+    if (m->seg_i_ + 1 < n) {
+        m->seg_i_++;
+    } else if (m->cycle_ < m->plan.cycles) {
+        m->seg_i_ = 0;
+        m->cycle_++;
+    } else {
+        m->phase = LS_MOTION_IDLE;
+        (void)push_event(m, ev, LS_MEV_DONE);
+        return;
+    }
+    m->t_s = 0.0;
+    m->sub_ = SUB_MOVE;
+    if (at_rest && m->phase == LS_MOTION_STOPPING) {
+        pause_now(m, ev);
+    }
+}
+
+/* After the point's auxiliary commands: dwell, or go on. */
+static void after_aux(ls_motion_t *m, const ls_motion_seg_t *s, ls_motion_events_t *ev)
+{
+    if (s->delay_s > 0.0) {
+        m->sub_ = SUB_DWELL;
+        m->dwell_left_s_ = s->delay_s;
+    } else {
+        advance(m, ev, true);
+    }
+}
+
+static void announce_aux(ls_motion_t *m, const ls_motion_seg_t *s, ls_motion_events_t *ev)
+{
+    ls_motion_event_t *e = push_event(m, ev, LS_MEV_AUX);
+    if (e != NULL) {
+        snprintf(e->text, sizeof e->text, "%s", s->aux[m->aux_k_]);
+        e->index = s->point;
+    }
+    m->aux_wait_ = true;
+}
+
+static void arrive(ls_motion_t *m, const ls_motion_seg_t *s, ls_motion_events_t *ev)
+{
+    if (s->tag[0] != '\0') {
+        ls_motion_event_t *e = push_event(m, ev, LS_MEV_TAG);
+        if (e != NULL) {
+            memcpy(e->name, s->tag, sizeof e->name);
+            snprintf(e->text, sizeof e->text, "%s", m->plan.name);
+            e->index = s->tag_index;
+        }
+    }
+}
+
+void ls_motion_step(ls_motion_t *m, double dt_s, const double q_meas[LS_N_JOINTS], double q_cmd[LS_N_JOINTS],
+                    double qd_cmd[LS_N_JOINTS], ls_motion_events_t *ev)
+{
+    double qd[LS_N_JOINTS] = { 0 };
+    if (m->phase != LS_MOTION_IDLE && m->phase != LS_MOTION_PAUSED && q_meas != NULL) {
+        for (int j = 0; j < LS_N_JOINTS; j++) {
+            const double e = q_meas[j] - m->q_cmd[j];
+            if (fabs(e) > m->following_error_max_rad) {
+                fault(m, ev, "following error joint %d: %.4g rad", j + 1, e);
+                break;
+            }
+        }
+    }
+    if ((m->phase == LS_MOTION_RUNNING || m->phase == LS_MOTION_STOPPING) && dt_s > 0.0) {
+        const ls_motion_seg_t *s = plan_seg(&m->plan, m->seg_i_, m->cycle_);
+        if (m->sub_ == SUB_MOVE) {
+            const double dtau = ls_timescale_step(&m->ts, dt_s);
+            const ls_motion_seg_t *nx = NULL;
+            m->t_s += dtau;
+            if (m->blending_) {
+                m->t_next_s_ += dtau;
+                nx = next_seg(m);
+            } else if (s->overlap_s > 0.0 && m->t_s >= s->traj.duration_s - s->overlap_s) {
+                nx = next_seg(m);
+                if (nx != NULL) {
+                    m->blending_ = true;
+                    m->t_next_s_ = m->t_s - (s->traj.duration_s - s->overlap_s);
+                }
+            }
+            double q[LS_N_JOINTS];
+            int ks = seg_position(m, s, m->t_s, q, qd);
+            if (ks == LS_KIN_OK && m->blending_ && nx != NULL) {
+                double q2[LS_N_JOINTS], qd2[LS_N_JOINTS];
+                ks = seg_position(m, nx, m->t_next_s_, q2, qd2);
+                for (int j = 0; j < LS_N_JOINTS; j++) {
+                    q[j] += q2[j] - nx->q0[j];
+                    qd[j] += qd2[j];
+                }
+            }
+            if (ks != LS_KIN_OK) {
+                fault(m, ev, "no joint solution on the planned path (IK status %d): stopped", ks);
+            } else {
+                if (s->kind == LS_SEG_JOINT) {
+                    for (int j = 0; j < LS_N_JOINTS; j++) {
+                        qd[j] *= m->ts.r;
+                    }
+                } else {
+                    for (int j = 0; j < LS_N_JOINTS; j++) {
+                        qd[j] = (q[j] - m->q_cmd[j]) / dt_s;
+                    }
+                }
+                memcpy(m->q_cmd, q, sizeof m->q_cmd);
+                if (m->t_s >= s->traj.duration_s) {
+                    arrive(m, s, ev);
+                    if (m->blending_) {
+                        /* The next segment is under way: make it the current one. */
+                        const double t_next = m->t_next_s_;
+                        m->blending_ = false;
+                        advance(m, ev, false);
+                        m->t_s = t_next;
+                    } else if (s->n_aux > 0 && !m->plan.dry_run) {
+                        m->sub_ = SUB_AUX;
+                        m->aux_k_ = 0;
+                        for (int j = 0; j < LS_N_JOINTS; j++) {
+                            qd[j] = 0.0;
+                        }
+                        announce_aux(m, s, ev);
+                    } else {
+                        for (int j = 0; j < LS_N_JOINTS; j++) {
+                            qd[j] = 0.0;
+                        }
+                        after_aux(m, s, ev);
+                    }
+                }
+                if (m->phase == LS_MOTION_STOPPING && m->sub_ == SUB_MOVE && ls_timescale_settled(&m->ts) &&
+                    m->ts.r == 0.0) {
+                    for (int j = 0; j < LS_N_JOINTS; j++) {
+                        qd[j] = 0.0;
+                    }
+                    pause_now(m, ev);
+                }
+            }
+        } else if (m->phase == LS_MOTION_STOPPING) {
+            pause_now(m, ev); /* at rest at a point */
+        } else if (m->sub_ == SUB_AUX) {
+            if (!m->aux_wait_) {
+                m->aux_k_++;
+                if (m->aux_k_ < s->n_aux) {
+                    announce_aux(m, s, ev);
+                } else {
+                    after_aux(m, s, ev);
+                }
+            }
+        } else { /* SUB_DWELL */
+            m->dwell_left_s_ -= dt_s;
+            if (m->dwell_left_s_ <= 1e-12) {
+                advance(m, ev, true);
+            }
+        }
+    }
+    memcpy(q_cmd, m->q_cmd, sizeof m->q_cmd);
+    if (qd_cmd != NULL) {
+        memcpy(qd_cmd, qd, sizeof qd);
+    }
+}

@@ -1,0 +1,243 @@
+"""Every broadcast the firmware sends, decoded with cantools and
+protocol/landscape.dbc (the source file, not the host package's copy).
+
+Frames are captured from the running controller with a session open, in the
+states a supervisor walks through (UNLOCKED, LOCKED, RESTING with the drives
+active). Every frame that is not ISO-TP (0x18DA/0x18DB) must be a DBC
+message, 8 bytes long, with every signal inside its DBC range; the heartbeat
+must agree with what getMotionControlState reports."""
+from __future__ import annotations
+
+import math
+import threading
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass
+from typing import Any
+
+import can
+import cantools
+import cantools.database
+import pytest
+
+from conftest import ROOT, Controller
+from landscape import telemetry as tm
+from landscape._generated import landscape_pb2 as pb
+from landscape.supervisor import Supervisor
+
+DEVICE = 0x10
+HOST = 0xF1
+ID_MASK = 0x1FFFFF00
+HEARTBEAT_PERIOD_S = 0.2
+CAPTURE_S = 1.2
+TELEMETRY = ("STATUS", "JOINTS_12", "JOINTS_34", "JOINTS_56", "TOOL_POS", "TOOL_RPY", "DIO")
+
+
+@pytest.fixture(scope="module")
+def db() -> Any:
+    return cantools.database.load_file(str(ROOT / "protocol" / "landscape.dbc"), database_format="dbc")
+
+
+def is_isotp(can_id: int) -> bool:
+    return can_id & 0x1FFF0000 in (0x18DA0000, 0x18DB0000)
+
+
+@dataclass
+class Seen:
+    t: float
+    msg: can.Message
+
+
+class Capture(can.Listener):
+    def __init__(self) -> None:
+        self.lock = threading.Lock()
+        self.frames: list[Seen] = []
+
+    def on_message_received(self, msg: can.Message) -> None:
+        with self.lock:
+            self.frames.append(Seen(time.monotonic(), msg))
+
+    def take(self) -> list[Seen]:
+        with self.lock:
+            out, self.frames = self.frames, []
+        return out
+
+
+@dataclass
+class Bench:
+    bus: can.BusABC
+    notifier: can.Notifier
+    capture: Capture
+    sup: Supervisor
+
+
+@pytest.fixture
+def bench(controller: Controller) -> Iterator[Bench]:
+    bus = can.Bus(interface="slcan", channel=controller.pty, bitrate=1000000, sleep_after_open=0)
+    capture = Capture()
+    notifier = can.Notifier(bus, [capture], timeout=0.01)
+    try:
+        with Supervisor(bus, notifier=notifier, source_address=HOST, client_name="listener") as sup:
+            yield Bench(bus, notifier, capture, sup)
+    finally:
+        notifier.stop()
+        bus.shutdown()
+
+
+def device_broadcasts(frames: list[Seen], db: Any) -> list[tuple[float, str, dict[str, Any]]]:
+    """Decode every non-ISO-TP frame; assert each is a well-formed DBC message in range.
+    Returns the device's broadcasts as (time, name, signals)."""
+    out = []
+    for seen in frames:
+        m = seen.msg
+        assert m.is_extended_id and not m.is_remote_frame and not m.is_error_frame, m
+        if is_isotp(m.arbitration_id):
+            continue
+        try:
+            spec = db.get_message_by_frame_id((m.arbitration_id & ID_MASK) | DEVICE)
+        except KeyError:
+            raise AssertionError(f"frame {m.arbitration_id:08X} is neither ISO-TP nor a DBC message") from None
+        assert len(m.data) == spec.length, f"{spec.name}: {len(m.data)} bytes, the DBC says {spec.length}"
+        signals = spec.decode(bytes(m.data), decode_choices=False, scaling=True)
+        for s in spec.signals:
+            v = signals[s.name]
+            assert s.minimum <= v <= s.maximum, f"{spec.name}.{s.name} = {v} outside [{s.minimum}, {s.maximum}]"
+        if m.arbitration_id & 0xFF == DEVICE:
+            out.append((seen.t, spec.name, signals))
+        else:
+            # a supervisor's frame: only its heartbeat and the e-stop are allowed
+            assert spec.name in ("HEARTBEAT", "EMERGENCY"), f"{spec.name} from {m.arbitration_id & 0xFF:#04x}"
+    return out
+
+
+def capture_in_state(b: Bench, db: Any, expected_state: str) -> list[tuple[float, str, dict[str, Any]]]:
+    rv = b.sup.get_motion_control_state()
+    assert rv.result["state"] == expected_state
+    b.capture.take()
+    time.sleep(CAPTURE_S)
+    frames = b.capture.take()
+    rv_after = b.sup.get_motion_control_state()
+    assert rv_after.result["state"] == expected_state
+    return device_broadcasts(frames, db)
+
+
+def check_heartbeats(found: list[tuple[float, str, dict[str, Any]]], state: str, owner: int,
+                     supervisors: int) -> None:
+    hbs = [(t, s) for t, name, s in found if name == "HEARTBEAT"]
+    # one every 200 ms: a capture of 1.2 s holds 5..7 of them
+    assert int(CAPTURE_S / HEARTBEAT_PERIOD_S) - 1 <= len(hbs) <= int(CAPTURE_S / HEARTBEAT_PERIOD_S) + 1, hbs
+    for (_, a), (_, b) in zip(hbs, hbs[1:]):
+        assert b["hb_counter"] == (a["hb_counter"] + 1) % 256
+    gaps = [tb - ta for (ta, _), (tb, _) in zip(hbs, hbs[1:])]
+    assert all(0.1 < g < 0.3 for g in gaps), gaps
+    for _, s in hbs:
+        assert s["hb_state"] == pb.State.Value(state)
+        assert s["hb_role"] == 0
+        assert s["hb_owner"] == owner
+        assert s["hb_fault"] == 0
+        assert s["hb_supervisors"] == supervisors
+
+
+def test_every_broadcast_decodes_and_the_heartbeat_tells_the_state(bench: Bench, db: Any) -> None:
+    found = capture_in_state(bench, db, "UNLOCKED")
+    check_heartbeats(found, "UNLOCKED", owner=0, supervisors=1)
+
+    bench.sup.lock()
+    found = capture_in_state(bench, db, "LOCKED")
+    check_heartbeats(found, "LOCKED", owner=HOST, supervisors=1)
+
+    bench.sup.activate()
+    with Supervisor(bench.bus, notifier=bench.notifier, source_address=0xF2, client_name="second"):
+        found = capture_in_state(bench, db, "RESTING")
+        check_heartbeats(found, "RESTING", owner=HOST, supervisors=2)
+    names = {name for _, name, _ in found}
+    assert "HEARTBEAT" in names
+    assert names <= {m.name for m in db.messages} - {"EMERGENCY"}
+    bench.sup.deactivate()
+
+
+def test_supervisor_heartbeat_decodes_with_the_source_dbc(db: Any) -> None:
+    """The host encodes its heartbeat with its packaged copy of the DBC; the source file agrees."""
+    msg = tm.encode("HEARTBEAT", HOST, hb_role=1, hb_counter=7)
+    assert msg.arbitration_id == 0x14FF0100 | HOST and len(msg.data) == 8
+    assert db.get_message_by_name("HEARTBEAT").decode(bytes(msg.data)) == {
+        "hb_counter": 7, "hb_state": 0, "hb_role": 1, "hb_owner": 0, "hb_fault": 0, "hb_supervisors": 0}
+
+
+def test_dbc_ids_follow_the_documented_layout(db: Any) -> None:
+    """docs/protocol.md: EMERGENCY 0x00FF00SA, HEARTBEAT 0x14FF01SA, telemetry 0x1CFF10SA..0x1CFF16SA,
+    all 8-byte extended frames carrying the default device address."""
+    ids = {m.name: m.frame_id for m in db.messages}
+    assert ids == {"EMERGENCY": 0x00FF0010, "HEARTBEAT": 0x14FF0110, "STATUS": 0x1CFF1010,
+                   "JOINTS_12": 0x1CFF1110, "JOINTS_34": 0x1CFF1210, "JOINTS_56": 0x1CFF1310,
+                   "TOOL_POS": 0x1CFF1410, "TOOL_RPY": 0x1CFF1510, "DIO": 0x1CFF1610}
+    assert all(m.is_extended_frame and m.length == 8 for m in db.messages)
+
+
+def rpy_matrix(r: float, p: float, y: float) -> list[list[float]]:
+    """Rz(y) Ry(p) Rx(r): compared as matrices because roll and yaw are not unique at pitch +-90 deg."""
+    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
+    return [[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+            [-sp, cp * sr, cp * cr]]
+
+
+def latest(found: list[tuple[float, str, dict[str, Any]]]) -> dict[str, dict[str, Any]]:
+    return {name: s for _, name, s in found}
+
+
+def test_telemetry_is_broadcast_and_agrees_with_the_queries(bench: Bench, db: Any) -> None:
+    bench.sup.lock()
+    bench.sup.activate()
+    found = capture_in_state(bench, db, "RESTING")
+    names = [name for _, name, _ in found]
+    for name in TELEMETRY:
+        # 50 Hz by default: a 1.2 s capture holds about 60 of each
+        assert 30 <= names.count(name) <= 70, (name, names.count(name))
+    last = latest(found)
+    position = bench.sup.get_robot_position().result
+    broadcast = [last["JOINTS_12"]["j1"], last["JOINTS_12"]["j2"], last["JOINTS_34"]["j3"],
+                 last["JOINTS_34"]["j4"], last["JOINTS_56"]["j5"], last["JOINTS_56"]["j6"]]
+    # the arm rests: broadcast and query agree within the DBC's scale (1e-6 rad) and the sim's settling
+    assert broadcast == pytest.approx(position["joints"][:6], abs=1e-5)
+    # no world frame is set, so the tool pose in the base frame is the world pose (scale 1e-4)
+    tool = last["TOOL_POS"]
+    assert [tool["tool_x"], tool["tool_y"], tool["tool_z"]] == pytest.approx(position["world_pose"][:3], abs=1.5e-4)
+    rpy = last["TOOL_RPY"]
+    got = rpy_matrix(rpy["tool_roll"], rpy["tool_pitch"], rpy["tool_yaw"])
+    want = rpy_matrix(*position["world_pose"][3:6])
+    for row_got, row_want in zip(got, want):
+        assert row_got == pytest.approx(row_want, abs=5e-4)
+    status = last["STATUS"]
+    assert status["st_state"] == pb.RESTING and status["st_motion"] == 0
+    assert status["st_control_mode"] == 1 and status["st_fault"] == 0
+    assert last["DIO"]["dio_outputs"] | last["DIO"]["dio_inputs"] == \
+        bench.sup.get_digital_io("digital", 0).result.get("bits_on", 0)
+    bench.sup.set_digital_io("digital", 0, bits_on=0x00050000)
+    time.sleep(0.1)
+    bench.capture.take()
+    time.sleep(0.1)
+    dio = [s for _, name, s in device_broadcasts(bench.capture.take(), db) if name == "DIO"]
+    assert dio and dio[-1]["dio_outputs"] & 0xFFFF0000 == 0x00050000
+    assert dio[-1]["dio_outputs"] | dio[-1]["dio_inputs"] == bench.sup.get_digital_io("digital", 0).result["bits_on"]
+    bench.sup.deactivate()
+    found = capture_in_state(bench, db, "LOCKED")
+    last = latest(found)
+    assert last["STATUS"]["st_state"] == pb.LOCKED and last["STATUS"]["st_control_mode"] == 0
+
+
+def test_joint_broadcasts_follow_a_move(bench: Bench, db: Any) -> None:
+    bench.sup.lock()
+    bench.sup.activate()
+    bench.capture.take()
+    rv = bench.sup.move_absolute("j1", [0.3, 0.0, 0.0, 0.0, 0.0, 0.0], speed_pct=50)
+    bench.sup.wait_complete(rv, timeout_s=10)
+    time.sleep(0.1)
+    found = device_broadcasts(bench.capture.take(), db)
+    j1 = [s["j1"] for _, name, s in found if name == "JOINTS_12"]
+    moving = [s for _, name, s in found if name == "STATUS" and s["st_state"] == pb.MOVING]
+    assert moving and all(s["st_motion"] == 1 for s in moving)
+    assert j1[0] == pytest.approx(0.0, abs=1e-3) and j1[-1] == pytest.approx(0.3, abs=1e-3)
+    assert all(b >= a - 1e-5 for a, b in zip(j1, j1[1:])), "j1 rises monotonically on a joint move"
+    assert j1[-1] == pytest.approx(bench.sup.get_robot_position().result["joints"][0], abs=1e-5)
+    bench.sup.deactivate()

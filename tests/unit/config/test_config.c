@@ -1,0 +1,616 @@
+/* ls_config: defaults, INI files (good and each kind of refusal, with the
+ * exact message), options over the file, whole-configuration validation. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <fcntl.h>
+#include <unistd.h>
+
+#include "ls_config.h"
+#include "test_config.h"
+
+#ifndef LS_DEPLOY_CONF
+#error "LS_DEPLOY_CONF must name firmware/app/deploy/landscaped.conf"
+#endif
+
+typedef struct {
+    ls_config_t cfg;
+    char path[64];
+    char msg[512];
+    char want[512];
+} fx_t;
+
+static int setup(void **state)
+{
+    fx_t *f = calloc(1, sizeof *f);
+    ls_config_defaults(&f->cfg);
+    *state = f;
+    return 0;
+}
+
+static int teardown(void **state)
+{
+    fx_t *f = *state;
+    if (f->path[0] != '\0') {
+        unlink(f->path);
+    }
+    free(f);
+    return 0;
+}
+
+static int load(fx_t *f, const char *text)
+{
+    tc_write_file(f->path, sizeof f->path, text);
+    return ls_config_load_file(&f->cfg, f->path, f->msg, sizeof f->msg);
+}
+
+/* Expect a refusal of `text` with "PATH:<tail>". */
+static void refused(fx_t *f, const char *text, const char *tail)
+{
+    assert_int_equal(load(f, text), -1);
+    snprintf(f->want, sizeof f->want, "%s:%s", f->path, tail);
+    assert_string_equal(f->msg, f->want);
+}
+
+static int args(fx_t *f, int argc, const char **argv)
+{
+    return ls_config_from_args(&f->cfg, argc, (char **)argv, f->msg, sizeof f->msg);
+}
+
+#define ARGS(f, ...)                                                                                                 \
+    args((f), (int)(sizeof((const char *[]){ "landscaped", __VA_ARGS__ }) / sizeof(const char *)),                   \
+         (const char *[]){ "landscaped", __VA_ARGS__ })
+
+/* ---- defaults and good files ------------------------------------------- */
+
+static void test_defaults(void **state)
+{
+    fx_t *f = *state;
+    const ls_config_t *c = &f->cfg;
+    assert_string_equal(c->config_path, "");
+    assert_string_equal(c->name, "landscape-sim");
+    assert_int_equal(c->node, 0x10);
+    assert_int_equal(c->heartbeat_timeout_ms, 1000);
+    assert_int_equal(c->n_links, 0);
+    assert_string_equal(c->arm, "sim");
+    assert_string_equal(c->dio, "sim");
+    assert_string_equal(c->dio_socket, "");
+    assert_string_equal(c->clock, "realtime");
+    assert_int_equal(c->rate_hz, 1000);
+    assert_int_equal(c->telemetry_hz, 50);
+    assert_int_equal(c->rt_priority, 80);
+    assert_int_equal(c->rt_cpu, -1);
+    assert_true(c->lock_memory);
+    assert_int_equal(c->n_inputs, 0);
+    assert_int_equal(c->n_outputs, 0);
+    assert_int_equal(c->estop_input, -1);
+    assert_false(c->check);
+    assert_false(c->hal_sim);
+    /* defaults alone lack a link */
+    assert_int_equal(ls_config_validate(c, f->msg, sizeof f->msg), -1);
+    assert_string_equal(f->msg, "no link configured: give --link SPEC or 'link = SPEC' under [hal] "
+                                "(e.g. slcan:pty:/tmp/landscape0 or socketcan:can0)");
+}
+
+static void test_good_file_sets_every_key(void **state)
+{
+    fx_t *f = *state;
+    assert_int_equal(load(f, "; full configuration\n"
+                             "[device]\n"
+                             "name = cell 4 arm\n"
+                             "node = 0x22\n"
+                             "heartbeat_timeout_ms = 250\n"
+                             "\n"
+                             "[hal]\n"
+                             "link = socketcan:can0\n"
+                             "link = slcan:pty:/run/landscape/ls0\n"
+                             "arm = none\n"
+                             "dio = gpiod:gpiochip1\n"
+                             "dio_socket = /run/landscape/dio.sock\n"
+                             "clock = lockstep\n"
+                             "[control]\n"
+                             "rate_hz = 2000 ; inline comment\n"
+                             "telemetry_hz = 0\n"
+                             "rt_priority = 90\n"
+                             "rt_cpu = 1\n"
+                             "lock_memory = off\n"
+                             "# hash comment\n"
+                             "[dio]\n"
+                             "inputs = 0, 1,2 ,7\n"
+                             "outputs = 8,9\n"
+                             "estop_input = 3\n"),
+                     0);
+    const ls_config_t *c = &f->cfg;
+    assert_string_equal(c->name, "cell 4 arm");
+    assert_int_equal(c->node, 0x22);
+    assert_int_equal(c->heartbeat_timeout_ms, 250);
+    assert_int_equal(c->n_links, 2);
+    assert_string_equal(c->links[0], "socketcan:can0");
+    assert_string_equal(c->links[1], "slcan:pty:/run/landscape/ls0");
+    assert_string_equal(c->arm, "none");
+    assert_string_equal(c->dio, "gpiod:gpiochip1");
+    assert_string_equal(c->dio_socket, "/run/landscape/dio.sock");
+    assert_string_equal(c->clock, "lockstep");
+    assert_int_equal(c->rate_hz, 2000);
+    assert_int_equal(c->telemetry_hz, 0);
+    assert_int_equal(c->rt_priority, 90);
+    assert_int_equal(c->rt_cpu, 1);
+    assert_false(c->lock_memory);
+    assert_int_equal(c->n_inputs, 4);
+    assert_int_equal(c->input_offsets[0], 0);
+    assert_int_equal(c->input_offsets[1], 1);
+    assert_int_equal(c->input_offsets[2], 2);
+    assert_int_equal(c->input_offsets[3], 7);
+    assert_int_equal(c->n_outputs, 2);
+    assert_int_equal(c->output_offsets[0], 8);
+    assert_int_equal(c->output_offsets[1], 9);
+    assert_int_equal(c->estop_input, 3);
+    assert_int_equal(ls_config_validate(c, f->msg, sizeof f->msg), 0);
+}
+
+static void test_shipped_config_is_valid(void **state)
+{
+    fx_t *f = *state;
+    assert_int_equal(ls_config_load_file(&f->cfg, LS_DEPLOY_CONF, f->msg, sizeof f->msg), 0);
+    assert_int_equal(ls_config_validate(&f->cfg, f->msg, sizeof f->msg), 0);
+    assert_int_equal(f->cfg.n_links, 1);
+    assert_string_equal(f->cfg.links[0], "socketcan:can0");
+    assert_string_equal(f->cfg.dio, "gpiod:gpiochip0");
+    assert_string_equal(f->cfg.dio_socket, "");
+    assert_int_equal(f->cfg.estop_input, 0);
+}
+
+static void test_bool_and_number_spellings(void **state)
+{
+    fx_t *f = *state;
+    static const char *yes[] = { "true", "YES", "On", "1" };
+    static const char *no[] = { "false", "no", "OFF", "0" };
+    char text[128];
+    for (size_t i = 0; i < 4; i++) {
+        snprintf(text, sizeof text, "[control]\nlock_memory = %s\n", no[i]);
+        assert_int_equal(load(f, text), 0);
+        assert_false(f->cfg.lock_memory);
+        unlink(f->path);
+        snprintf(text, sizeof text, "[control]\nlock_memory = %s\n", yes[i]);
+        assert_int_equal(load(f, text), 0);
+        assert_true(f->cfg.lock_memory);
+        unlink(f->path);
+    }
+    assert_int_equal(load(f, "[device]\nnode = 254\n"), 0);
+    assert_int_equal(f->cfg.node, 0xFE);
+    unlink(f->path);
+    assert_int_equal(load(f, "[device]\nnode = 0x1\n[control]\nrt_cpu = -1\ntelemetry_hz = 200\n"), 0);
+    assert_int_equal(f->cfg.node, 1);
+    assert_int_equal(f->cfg.telemetry_hz, 200);
+    unlink(f->path);
+    assert_int_equal(load(f, "[dio]\ninputs =\noutputs = 15\n"), 0);
+    assert_int_equal(f->cfg.n_inputs, 0);
+    assert_int_equal(f->cfg.n_outputs, 1);
+}
+
+/* An indented line is a key of its own, not a continuation of the value
+ * above (inih's multi-line values would otherwise swallow it). */
+static void test_indented_line_is_its_own_key(void **state)
+{
+    fx_t *f = *state;
+    assert_int_equal(load(f, "[control]\nrate_hz = 500\n    telemetry_hz = 20\n"), 0);
+    assert_int_equal(f->cfg.rate_hz, 500);
+    assert_int_equal(f->cfg.telemetry_hz, 20);
+}
+
+/* ---- refusals: file, line, key, value, what is allowed ----------------- */
+
+static void test_unknown_key(void **state)
+{
+    refused(*state, "[control]\nrate_hz = 500\nrate = 100\n",
+            "3: [control] rate: unknown key; expected one of rate_hz, telemetry_hz, rt_priority, rt_cpu, lock_memory");
+}
+
+static void test_key_in_wrong_section(void **state)
+{
+    refused(*state, "[device]\nrate_hz = 500\n",
+            "2: [device] rate_hz: unknown key; expected one of name, node, heartbeat_timeout_ms");
+}
+
+static void test_unknown_section(void **state)
+{
+    refused(*state, "[device]\nnode = 3\n[motors]\n", "3: unknown section [motors]; expected [device], [hal], "
+                                                       "[control] or [dio]");
+}
+
+static void test_key_outside_section(void **state)
+{
+    refused(*state, "# no section yet\nnode = 3\n",
+            "2: key 'node' outside any section: put it under [device], [hal], [control] or [dio]");
+}
+
+static void test_wrong_type(void **state)
+{
+    refused(*state, "[device]\nname = x\nnode = abc\n",
+            "3: [device] node: got 'abc', expected 1..0xFE (node address; 0xFF is the broadcast address)");
+}
+
+static void test_wrong_types_of_each_kind(void **state)
+{
+    fx_t *f = *state;
+    refused(f, "[control]\nlock_memory = maybe\n",
+            "2: [control] lock_memory: got 'maybe', expected true or false (also yes/no, on/off, 1/0)");
+    unlink(f->path);
+    refused(f, "[hal]\nclock = wallclock\n", "2: [hal] clock: got 'wallclock', expected realtime or lockstep "
+                                             "(lockstep: virtual time advancing exactly one period per cycle)");
+    unlink(f->path);
+    refused(f, "[hal]\ndio = gpio:0\n", "2: [hal] dio: got 'gpio:0', expected sim, none or gpiod:CHIP (CHIP as "
+                                        "gpiochip0, 0, /dev/gpiochip0 or a chip label)");
+    unlink(f->path);
+    refused(f, "[hal]\nlink = can0\n",
+            "2: [hal] link: got 'can0', expected slcan:pty:PATH or socketcan:IFNAME (unknown link kind)");
+    unlink(f->path);
+    refused(f, "[hal]\nlink = socketcan:averyveryverylongname\n",
+            "2: [hal] link: got 'socketcan:averyveryverylongname', expected slcan:pty:PATH or socketcan:IFNAME "
+            "(IFNAME is a network interface name of 1..15 characters, e.g. can0)");
+    unlink(f->path);
+    refused(f, "[dio]\ninputs = 1,,2\n", "2: [dio] inputs: got '1,,2', expected a comma-separated list of at most "
+                                         "16 distinct line offsets 0..1023, e.g. 0,1,2");
+    unlink(f->path);
+    refused(f, "[dio]\noutputs = 4,5,4\n", "2: [dio] outputs: got '4,5,4', expected a comma-separated list of at "
+                                           "most 16 distinct line offsets 0..1023, e.g. 0,1,2 (4 is listed twice)");
+    unlink(f->path);
+    refused(f, "[device]\nnode = -3\n",
+            "2: [device] node: got '-3', expected 1..0xFE (node address; 0xFF is the broadcast address)");
+    unlink(f->path);
+    refused(f, "[device]\nname =\n", "2: [device] name: got '', expected 1..31 printable characters (device name "
+                                     "reported at connect)");
+}
+
+static void test_out_of_range(void **state)
+{
+    fx_t *f = *state;
+    refused(f, "[control]\nrate_hz = 5\n", "2: [control] rate_hz: got '5', expected 100..10000 (control cycles "
+                                           "per second)");
+    unlink(f->path);
+    refused(f, "[control]\nrate_hz = 10001\n", "2: [control] rate_hz: got '10001', expected 100..10000 (control "
+                                               "cycles per second)");
+    unlink(f->path);
+    refused(f, "[device]\nnode = 0xFF\n",
+            "2: [device] node: got '0xFF', expected 1..0xFE (node address; 0xFF is the broadcast address)");
+    unlink(f->path);
+    refused(f, "[device]\nheartbeat_timeout_ms = 49\n", "2: [device] heartbeat_timeout_ms: got '49', expected "
+            "milliseconds 50..600000 (drop a supervisor after this long without heartbeat)");
+    unlink(f->path);
+    refused(f, "[control]\nrt_priority = 100\n", "2: [control] rt_priority: got '100', expected 0..99 (SCHED_FIFO "
+                                                 "priority of the control thread; 0 = normal thread)");
+    unlink(f->path);
+    refused(f, "[control]\ntelemetry_hz = 201\n",
+            "2: [control] telemetry_hz: got '201', expected 0..200 (telemetry frames per second; 0 = off)");
+    unlink(f->path);
+    refused(f, "[dio]\nestop_input = 16\n", "2: [dio] estop_input: got '16', expected -1..15 (input bit index that "
+                                            "stops everything when active; -1 = none)");
+    unlink(f->path);
+    refused(f, "[dio]\ninputs = 1024\n", "2: [dio] inputs: got '1024', expected a comma-separated list of at most "
+                                         "16 distinct line offsets 0..1023, e.g. 0,1,2");
+    unlink(f->path);
+    refused(f, "[dio]\ninputs = 0,1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16\n",
+            "2: [dio] inputs: got '0,1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16', expected a comma-separated list of "
+            "at most 16 distinct line offsets 0..1023, e.g. 0,1,2");
+}
+
+static void test_duplicate_key(void **state)
+{
+    refused(*state, "[control]\nrate_hz = 500\ntelemetry_hz = 10\nrate_hz = 600\n",
+            "4: [control] rate_hz: given twice (first on line 2); keep one");
+}
+
+static void test_duplicate_key_across_repeated_section(void **state)
+{
+    refused(*state, "[device]\nnode = 3\n[hal]\narm = sim\n[device]\nnode = 4\n",
+            "6: [device] node: given twice (first on line 2); keep one");
+}
+
+static void test_links_repeat_up_to_four(void **state)
+{
+    fx_t *f = *state;
+    f->cfg.n_links = 1; /* the file's first link replaces what cfg held */
+    strcpy(f->cfg.links[0], "slcan:pty:/tmp/old");
+    assert_int_equal(load(f, "[hal]\nlink = socketcan:can0\nlink = socketcan:can1\n"), 0);
+    assert_int_equal(f->cfg.n_links, 2);
+    assert_string_equal(f->cfg.links[0], "socketcan:can0");
+    assert_string_equal(f->cfg.links[1], "socketcan:can1");
+    unlink(f->path);
+    refused(f, "[hal]\nlink = socketcan:can0\nlink = socketcan:can0\n",
+            "3: [hal] link: got 'socketcan:can0', expected slcan:pty:PATH or socketcan:IFNAME, each link once "
+            "(this one is already listed)");
+    unlink(f->path);
+    refused(f, "[hal]\nlink = socketcan:can0\nlink = socketcan:can1\nlink = socketcan:can2\nlink = socketcan:can3\n"
+               "link = socketcan:can4\n",
+            "6: [hal] link: got 'socketcan:can4', expected slcan:pty:PATH or socketcan:IFNAME, at most 4 links");
+}
+
+static void test_missing_file(void **state)
+{
+    fx_t *f = *state;
+    assert_int_equal(ls_config_load_file(&f->cfg, "/nonexistent/landscaped.conf", f->msg, sizeof f->msg), -1);
+    assert_string_equal(f->msg, "/nonexistent/landscaped.conf: cannot read the configuration file: No such file or "
+                                "directory (give an existing file with --config FILE)");
+}
+
+static void test_syntax_error(void **state)
+{
+    refused(*state, "[device]\nnode 3\n",
+            "2: syntax error: expected '[section]', 'key = value' or a ; or # comment");
+}
+
+/* A syntax error before a bad value: the first one is reported. */
+static void test_first_error_wins(void **state)
+{
+    refused(*state, "[device]\nthis is not ini\nnode = abc\n",
+            "2: syntax error: expected '[section]', 'key = value' or a ; or # comment");
+}
+
+static void test_line_too_long(void **state)
+{
+    char text[400];
+    memset(text, 0, sizeof text);
+    strcpy(text, "[device]\nname = ");
+    memset(text + strlen(text), 'x', 250);
+    strcat(text, "\n");
+    refused(*state, text, "2: line longer than 197 characters");
+}
+
+static void test_byte_order_mark_and_nul(void **state)
+{
+    fx_t *f = *state;
+    refused(f, "\xEF\xBB\xBF[motors]\n", "1: unknown section [motors]; expected [device], [hal], [control] or [dio]");
+    unlink(f->path);
+    assert_int_equal(load(f, "\xEF\xBB\xBF[device]\nnode = 7\n"), 0);
+    assert_int_equal(f->cfg.node, 7);
+    unlink(f->path);
+    static const char bin[] = "[device]\nna\0me = x\n";
+    tc_write_file(f->path, sizeof f->path, "");
+    FILE *fp = fopen(f->path, "w");
+    assert_non_null(fp);
+    assert_int_equal(fwrite(bin, 1, sizeof bin - 1, fp), sizeof bin - 1);
+    fclose(fp);
+    assert_int_equal(ls_config_load_file(&f->cfg, f->path, f->msg, sizeof f->msg), -1);
+    snprintf(f->want, sizeof f->want, "%s:2: a NUL byte in the line: this is not a text file", f->path);
+    assert_string_equal(f->msg, f->want);
+}
+
+/* ---- options ------------------------------------------------------------ */
+
+static void test_skeleton_options_keep_working(void **state)
+{
+    fx_t *f = *state;
+    assert_int_equal(ARGS(f, "--hal", "sim", "--link", "slcan:pty:/tmp/a", "--link", "slcan:pty:/tmp/b", "--node",
+                          "0x20", "--heartbeat-timeout", "200", "--name", "bench"),
+                     0);
+    const ls_config_t *c = &f->cfg;
+    assert_true(c->hal_sim);
+    assert_string_equal(c->arm, "sim");
+    assert_string_equal(c->dio, "sim");
+    assert_string_equal(c->clock, "realtime");
+    assert_int_equal(c->n_links, 2);
+    assert_string_equal(c->links[0], "slcan:pty:/tmp/a");
+    assert_string_equal(c->links[1], "slcan:pty:/tmp/b");
+    assert_int_equal(c->node, 0x20);
+    assert_int_equal(c->heartbeat_timeout_ms, 200);
+    assert_string_equal(c->name, "bench");
+    assert_false(c->check);
+    assert_int_equal(ls_config_validate(c, f->msg, sizeof f->msg), 0);
+}
+
+static void test_every_option(void **state)
+{
+    fx_t *f = *state;
+    assert_int_equal(ARGS(f, "--link", "socketcan:vcan0", "--arm", "none", "--dio", "gpiod:0", "--dio-socket",
+                          "/run/x.sock", "--clock", "lockstep", "--rate", "500", "--telemetry-hz", "25",
+                          "--rt-priority", "0", "--rt-cpu", "0", "--no-lock-memory", "--estop-input", "2",
+                          "--check"),
+                     0);
+    const ls_config_t *c = &f->cfg;
+    assert_false(c->hal_sim);
+    assert_int_equal(c->n_links, 1);
+    assert_string_equal(c->links[0], "socketcan:vcan0");
+    assert_string_equal(c->arm, "none");
+    assert_string_equal(c->dio, "gpiod:0");
+    assert_string_equal(c->dio_socket, "/run/x.sock");
+    assert_string_equal(c->clock, "lockstep");
+    assert_int_equal(c->rate_hz, 500);
+    assert_int_equal(c->telemetry_hz, 25);
+    assert_int_equal(c->rt_priority, 0);
+    assert_int_equal(c->rt_cpu, 0);
+    assert_false(c->lock_memory);
+    assert_int_equal(c->estop_input, 2);
+    assert_true(c->check);
+}
+
+static void test_options_override_the_file(void **state)
+{
+    fx_t *f = *state;
+    tc_write_file(f->path, sizeof f->path,
+                  "[device]\nname = from-file\nnode = 0x30\n[hal]\nlink = socketcan:can0\nlink = socketcan:can1\n"
+                  "dio = gpiod:gpiochip0\n[control]\nrate_hz = 500\ntelemetry_hz = 10\nlock_memory = true\n");
+    /* --config comes last on purpose: the file is read first wherever it is */
+    assert_int_equal(ARGS(f, "--rate", "2000", "--link", "slcan:pty:/tmp/x", "--hal", "sim", "--no-lock-memory",
+                          "--config", f->path),
+                     0);
+    const ls_config_t *c = &f->cfg;
+    assert_string_equal(c->config_path, f->path);
+    assert_string_equal(c->name, "from-file");     /* file, no option */
+    assert_int_equal(c->node, 0x30);               /* file */
+    assert_int_equal(c->telemetry_hz, 10);         /* file */
+    assert_int_equal(c->rate_hz, 2000);            /* option over file */
+    assert_int_equal(c->n_links, 1);               /* --link replaces the file's links */
+    assert_string_equal(c->links[0], "slcan:pty:/tmp/x");
+    assert_string_equal(c->dio, "sim");            /* --hal sim over dio = gpiod:... */
+    assert_false(c->lock_memory);
+}
+
+static void test_later_option_wins(void **state)
+{
+    fx_t *f = *state;
+    assert_int_equal(ARGS(f, "--hal", "sim", "--dio", "none", "--rate", "300", "--rate", "400", "--link",
+                          "slcan:pty:/tmp/a"),
+                     0);
+    assert_string_equal(f->cfg.dio, "none");
+    assert_int_equal(f->cfg.rate_hz, 400);
+}
+
+static void test_option_errors(void **state)
+{
+    fx_t *f = *state;
+    assert_int_equal(ARGS(f, "--hal", "sim", "--link", "slcan:pty:/tmp/x", "--node", "0x1FF"), -1);
+    assert_string_equal(f->msg, "--node: got '0x1FF', expected 1..0xFE (node address; 0xFF is the broadcast address)");
+    assert_int_equal(ARGS(f, "--hal", "real", "--link", "slcan:pty:/tmp/x"), -1);
+    assert_string_equal(f->msg, "--hal: got 'real', expected sim (or set --arm, --dio, --clock)");
+    assert_int_equal(ARGS(f, "--hal", "sim", "--link", "bogus:x"), -1);
+    assert_string_equal(f->msg, "--link: got 'bogus:x', expected slcan:pty:PATH or socketcan:IFNAME (unknown link kind)");
+    assert_int_equal(ARGS(f, "--rate", "5"), -1);
+    assert_string_equal(f->msg, "--rate: got '5', expected 100..10000 (control cycles per second)");
+    assert_int_equal(ARGS(f, "--heartbeat-timeout", "10"), -1);
+    assert_string_equal(f->msg, "--heartbeat-timeout: got '10', expected milliseconds 50..600000 (drop a supervisor "
+                                "after this long without heartbeat)");
+    assert_int_equal(ARGS(f, "--frobnicate"), -1);
+    assert_string_equal(f->msg, "unknown option '--frobnicate' (see --help)");
+    assert_int_equal(ARGS(f, "--rate"), -1);
+    assert_string_equal(f->msg, "--rate: missing value (see --help)");
+    assert_int_equal(ARGS(f, "--rate", "100", "extra"), -1);
+    assert_string_equal(f->msg, "unexpected argument 'extra' (see --help)");
+    assert_int_equal(ARGS(f, "--config", "/a", "--config", "/b"), -1);
+    assert_string_equal(f->msg, "--config given twice ('/a' and '/b'): give one file");
+}
+
+static void test_config_error_through_args_keeps_check(void **state)
+{
+    fx_t *f = *state;
+    tc_write_file(f->path, sizeof f->path, "[control]\nrate_hz = 5\n");
+    assert_int_equal(ARGS(f, "--check", "--config", f->path), -1);
+    snprintf(f->want, sizeof f->want, "%s:2: [control] rate_hz: got '5', expected 100..10000 (control cycles per "
+             "second)", f->path);
+    assert_string_equal(f->msg, f->want);
+    assert_true(f->cfg.check);
+    assert_string_equal(f->cfg.config_path, f->path);
+}
+
+static void test_missing_config_through_args(void **state)
+{
+    fx_t *f = *state;
+    assert_int_equal(ARGS(f, "--config", "/nonexistent/x.conf", "--hal", "sim"), -1);
+    assert_string_equal(f->msg, "/nonexistent/x.conf: cannot read the configuration file: No such file or directory "
+                                "(give an existing file with --config FILE)");
+}
+
+static void test_help(void **state)
+{
+    fx_t *f = *state;
+    /* --help prints to stdout: send that to /dev/null here */
+    fflush(stdout);
+    int saved = dup(STDOUT_FILENO);
+    int null = open("/dev/null", O_WRONLY);
+    assert_true(saved >= 0 && null >= 0);
+    dup2(null, STDOUT_FILENO);
+    /* --help wins over everything else, even a bad value */
+    int r1 = ARGS(f, "--rate", "5", "-h");
+    int r2 = ARGS(f, "--help");
+    fflush(stdout);
+    dup2(saved, STDOUT_FILENO);
+    close(saved);
+    close(null);
+    assert_int_equal(r1, 1);
+    assert_int_equal(r2, 1);
+
+    char *buf = NULL;
+    size_t len = 0;
+    FILE *m = open_memstream(&buf, &len);
+    ls_config_usage(m);
+    fclose(m);
+    /* every option of the key table is documented */
+    static const char *opts[] = { "--config FILE", "--check", "--hal sim", "--link SPEC", "--arm", "--dio sim",
+                                  "--dio-socket", "--clock", "--node", "--heartbeat-timeout", "--name", "--rate",
+                                  "--telemetry-hz", "--rt-priority", "--rt-cpu", "--no-lock-memory",
+                                  "--estop-input", "-h, --help" };
+    for (size_t i = 0; i < sizeof opts / sizeof opts[0]; i++) {
+        if (strstr(buf, opts[i]) == NULL) {
+            fail_msg("--help does not mention %s", opts[i]);
+        }
+    }
+    free(buf);
+}
+
+/* ---- whole-configuration validation ------------------------------------- */
+
+static void invalid(fx_t *f, const char *want)
+{
+    assert_int_equal(ls_config_validate(&f->cfg, f->msg, sizeof f->msg), -1);
+    assert_string_equal(f->msg, want);
+}
+
+static void test_validate(void **state)
+{
+    fx_t *f = *state;
+    ls_config_t *c = &f->cfg;
+    c->n_links = 1;
+    strcpy(c->links[0], "slcan:pty:/tmp/a");
+    assert_int_equal(ls_config_validate(c, f->msg, sizeof f->msg), 0);
+
+    c->rate_hz = 100;
+    c->telemetry_hz = 150;
+    invalid(f, "[control] telemetry_hz = 150 is above rate_hz = 100: telemetry is sent from control cycles; lower "
+               "telemetry_hz");
+    c->telemetry_hz = 100;
+    assert_int_equal(ls_config_validate(c, f->msg, sizeof f->msg), 0);
+
+    c->n_inputs = 2;
+    c->input_offsets[0] = 4;
+    c->input_offsets[1] = 5;
+    assert_int_equal(ls_config_validate(c, f->msg, sizeof f->msg), 0); /* ignored by dio = sim */
+    strcpy(c->dio, "gpiod:gpiochip0");
+    c->n_outputs = 1;
+    c->output_offsets[0] = 5;
+    invalid(f, "[dio] line 5 is both in inputs and in outputs: a line has one role");
+    c->output_offsets[0] = 6;
+    c->estop_input = 2;
+    invalid(f, "[dio] estop_input = 2 but only 2 inputs are configured: use an input bit 0..1 or -1");
+    c->estop_input = 1;
+    assert_int_equal(ls_config_validate(c, f->msg, sizeof f->msg), 0);
+
+    strcpy(c->dio, "none");
+    c->n_inputs = 0;
+    c->n_outputs = 0;
+    invalid(f, "[dio] estop_input = 1 needs a DIO backend but [hal] dio = none");
+}
+
+int tc_run_config_tests(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test_setup_teardown(test_defaults, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_good_file_sets_every_key, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_shipped_config_is_valid, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_bool_and_number_spellings, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_indented_line_is_its_own_key, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_unknown_key, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_key_in_wrong_section, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_unknown_section, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_key_outside_section, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_wrong_type, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_wrong_types_of_each_kind, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_out_of_range, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_duplicate_key, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_duplicate_key_across_repeated_section, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_links_repeat_up_to_four, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_missing_file, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_syntax_error, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_first_error_wins, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_line_too_long, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_byte_order_mark_and_nul, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_skeleton_options_keep_working, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_every_option, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_options_override_the_file, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_later_option_wins, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_option_errors, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_config_error_through_args_keeps_check, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_missing_config_through_args, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_help, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_validate, setup, teardown),
+    };
+    return cmocka_run_group_tests_name("config", tests, NULL, NULL);
+}

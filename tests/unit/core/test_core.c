@@ -1,0 +1,1035 @@
+/* The controller core, black box: encoded uplinks in, decoded downlinks out.
+ *
+ * The io captures every downlink and decodes it with nanopb. There is no
+ * control loop: the core's calls of ls_control_snapshot and ls_control_post
+ * are redirected here at link time (-Wl,--wrap, see CMakeLists.txt), so a
+ * test sets the snapshot (joints, DIO levels, sensors, cycle) and sees what
+ * was posted, whether or not the real ls_control is linked too. */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <string.h>
+
+#include <cmocka.h>
+#include <pb_decode.h>
+#include <pb_encode.h>
+
+#include "ls_control.h"
+#include "ls_core.h"
+#include "ls_core_events.h"
+#include "ls_kin.h"
+#include "ls_units.h"
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
+/* cmocka's assert_float_equal works in float: too coarse for these values. */
+#define assert_near(a, b, eps) assert_near_((a), (b), (eps), #a, __FILE__, __LINE__)
+static void assert_near_(double a, double b, double eps, const char *expr, const char *file, int line)
+{
+    if (!(fabs(a - b) <= eps)) {
+        fail_msg("%s:%d: %s = %.17g, expected %.17g (+- %g)", file, line, expr, a, b, eps);
+    }
+}
+
+#define HOST_A 0x21
+#define HOST_B 0x22
+#define MAX_RX 64
+
+/* ---------------------------------------------------------------- fake control-loop API */
+
+static ls_control_t g_ctl;
+static ls_ctl_snapshot_t g_snap;
+static ls_ctl_cmd_t g_posted[16];
+static size_t g_nposted;
+static bool g_post_ok;
+
+void __wrap_ls_control_snapshot(ls_control_t *c, ls_ctl_snapshot_t *out);
+bool __wrap_ls_control_post(ls_control_t *c, const ls_ctl_cmd_t *cmd);
+
+void __wrap_ls_control_snapshot(ls_control_t *c, ls_ctl_snapshot_t *out)
+{
+    assert_ptr_equal(c, &g_ctl);
+    *out = g_snap;
+}
+
+bool __wrap_ls_control_post(ls_control_t *c, const ls_ctl_cmd_t *cmd)
+{
+    assert_ptr_equal(c, &g_ctl);
+    if (!g_post_ok || g_nposted >= sizeof g_posted / sizeof g_posted[0]) {
+        return false;
+    }
+    g_posted[g_nposted++] = *cmd;
+    return true;
+}
+
+/* ---------------------------------------------------------------- fake io */
+
+static ls_core_t g_core;
+static ls_Downlink g_rx[MAX_RX];
+static uint8_t g_rx_addr[MAX_RX];
+static size_t g_nrx;
+static uint64_t g_now;
+static uint32_t g_seq;
+static ls_Request g_rq;
+static ls_Uplink g_up;
+static uint8_t g_buf[LS_UPLINK_MAX + 64];
+
+static int fake_send(void *ctx, uint8_t addr, const uint8_t *buf, size_t len)
+{
+    (void)ctx;
+    assert_true(g_nrx < MAX_RX);
+    pb_istream_t is = pb_istream_from_buffer(buf, len);
+    memset(&g_rx[g_nrx], 0, sizeof g_rx[g_nrx]);
+    assert_true(pb_decode(&is, ls_Downlink_fields, &g_rx[g_nrx]));
+    g_rx_addr[g_nrx] = addr;
+    g_nrx++;
+    return 0;
+}
+
+static const hal_sensor_t g_sensors[2] = {
+    { .name = "force_sensor", .n_values = 6 },
+    { .name = "laser_standoff_sensor", .n_values = 1 },
+};
+
+static ls_Request *req(pb_size_t tag)
+{
+    memset(&g_rq, 0, sizeof g_rq);
+    g_rq.which_cmd = tag;
+    return &g_rq;
+}
+
+static void send_uplink(uint8_t addr)
+{
+    pb_ostream_t os = pb_ostream_from_buffer(g_buf, sizeof g_buf);
+    assert_true(pb_encode(&os, ls_Uplink_fields, &g_up));
+    ls_core_on_uplink(&g_core, addr, g_buf, os.bytes_written, g_now);
+}
+
+/* Send g_rq from addr; the response to it, or NULL when none came (deferred). */
+static const ls_Response *send_req(uint8_t addr)
+{
+    g_rq.seq = ++g_seq;
+    memset(&g_up, 0, sizeof g_up);
+    g_up.which_msg = ls_Uplink_request_tag;
+    g_up.msg.request = g_rq;
+    size_t before = g_nrx;
+    send_uplink(addr);
+    for (size_t i = before; i < g_nrx; i++) {
+        if (g_rx[i].which_msg == ls_Downlink_response_tag && g_rx[i].msg.response.seq == g_seq && g_rx_addr[i] == addr) {
+            return &g_rx[i].msg.response;
+        }
+    }
+    return NULL;
+}
+
+static const ls_Response *must(uint8_t addr)
+{
+    const ls_Response *r = send_req(addr);
+    assert_non_null(r);
+    return r;
+}
+
+static void send_rsvp_reply(uint8_t addr, uint32_t id, int32_t code)
+{
+    memset(&g_up, 0, sizeof g_up);
+    g_up.which_msg = ls_Uplink_rsvp_reply_tag;
+    g_up.msg.rsvp_reply.rsvp_id = id;
+    g_up.msg.rsvp_reply.ret_code = code;
+    send_uplink(addr);
+}
+
+static void connect_host(uint8_t addr)
+{
+    ls_ConnectReq *c = &req(ls_Request_connect_tag)->cmd.connect;
+    c->protocol_version = ls_Protocol_PROTOCOL_VERSION;
+    c->schema_hash = LS_SCHEMA_HASH;
+    snprintf(c->client_name, sizeof c->client_name, "test-%02X", addr);
+    assert_int_equal(must(addr)->ret_code, ls_RetCode_CMD_EXEC_OK);
+}
+
+/* A core with HOST_A connected and owning the device in `state`, HOST_B connected. */
+static void setup_core(ls_State state)
+{
+    static const ls_core_config_t cfg = { .device_name = "test", .firmware_version = "0", .node_addr = 0x10,
+                                          .joint_count = 6, .heartbeat_timeout_ms = 600000 };
+    const ls_core_io_t io = { .send_downlink = fake_send, .ctx = NULL };
+    ls_core_init(&g_core, &cfg, &io, NULL);
+    g_core.model = &ls_robot_model_default;
+    g_core.ctl = &g_ctl;
+    g_core.sensors = g_sensors;
+    g_core.n_sensors = 2;
+    g_core.dio_units = 1;
+    g_core.dio_info[0] = (hal_dio_unit_info_t){ .input_mask = 0x0000FFFFu, .output_mask = 0xFFFF0000u };
+    memset(&g_snap, 0, sizeof g_snap);
+    g_snap.cycle = 100;
+    g_nposted = 0;
+    g_post_ok = true;
+    g_nrx = 0;
+    g_now = 1000000;
+    connect_host(HOST_A);
+    connect_host(HOST_B);
+    g_core.owner = 0;
+    g_core.state = state;
+    g_nrx = 0;
+}
+
+static int setup_locked(void **state)
+{
+    (void)state;
+    setup_core(ls_State_LOCKED);
+    return 0;
+}
+
+static const ls_Notice *nth_notice(size_t from, size_t k)
+{
+    for (size_t i = from; i < g_nrx; i++) {
+        if (g_rx[i].which_msg == ls_Downlink_notice_tag && k-- == 0) {
+            return &g_rx[i].msg.notice;
+        }
+    }
+    return NULL;
+}
+
+static size_t count_notices(size_t from)
+{
+    size_t n = 0;
+    for (size_t i = from; i < g_nrx; i++) {
+        n += g_rx[i].which_msg == ls_Downlink_notice_tag ? 1u : 0u;
+    }
+    return n;
+}
+
+/* ---------------------------------------------------------------- 1, 2: states and owner, every command */
+
+static const ls_State k_states[] = { ls_State_IDLE, ls_State_UNLOCKED, ls_State_LOCKED,
+                                     ls_State_RESTING, ls_State_MOVING, ls_State_PAUSED };
+
+static void test_every_command_in_every_state(void **state)
+{
+    (void)state;
+    for (size_t c = 0; c < LS_CMD_COUNT; c++) {
+        const ls_cmd_desc_t *d = &ls_cmd_table[c];
+        for (size_t s = 0; s < sizeof k_states / sizeof k_states[0]; s++) {
+            setup_core(k_states[s]);
+            req(d->tag);
+            if (d->tag == ls_Request_connect_tag) {
+                g_rq.cmd.connect.protocol_version = ls_Protocol_PROTOCOL_VERSION;
+                g_rq.cmd.connect.schema_hash = LS_SCHEMA_HASH;
+            }
+            const ls_Response *r = send_req(HOST_A);
+            bool valid = (d->states & (uint8_t)k_states[s]) != 0u;
+            if (r == NULL) {
+                /* only a deferred answer may be missing, and only in a valid state */
+                assert_true(valid);
+                continue;
+            }
+            if (valid) {
+                if (r->ret_code == ls_RetCode_CMD_WRONG_STATE_ERR) {
+                    fail_msg("%s in %s: %s", d->name, ls_core_state_name(k_states[s]), r->ret_msg);
+                }
+            } else {
+                if (r->ret_code != ls_RetCode_CMD_WRONG_STATE_ERR) {
+                    fail_msg("%s in %s answered %d (%s), expected CMD_WRONG_STATE_ERR", d->name,
+                             ls_core_state_name(k_states[s]), (int)r->ret_code, r->ret_msg);
+                }
+                assert_non_null(strstr(r->ret_msg, d->name));
+            }
+        }
+    }
+}
+
+static void test_owner_only_commands_refuse_non_owners(void **state)
+{
+    (void)state;
+    for (size_t c = 0; c < LS_CMD_COUNT; c++) {
+        const ls_cmd_desc_t *d = &ls_cmd_table[c];
+        for (size_t s = 0; s < sizeof k_states / sizeof k_states[0]; s++) {
+            if ((d->states & (uint8_t)k_states[s]) == 0u) {
+                continue;
+            }
+            for (int owner_is_a = 0; owner_is_a < 2; owner_is_a++) {
+                setup_core(k_states[s]);
+                g_core.owner = owner_is_a ? 0 : 1;
+                req(d->tag);
+                if (d->tag == ls_Request_connect_tag) {
+                    g_rq.cmd.connect.protocol_version = ls_Protocol_PROTOCOL_VERSION;
+                    g_rq.cmd.connect.schema_hash = LS_SCHEMA_HASH;
+                }
+                const ls_Response *r = send_req(HOST_A);
+                int32_t code = r != NULL ? r->ret_code : LS_CALL_DEFERRED;
+                bool refuse = !owner_is_a && (d->flags & LS_CMD_F_OWNER_ONLY) != 0u;
+                if (refuse && code != ls_RetCode_CMD_NOT_OWNER_ERR) {
+                    fail_msg("%s from a non-owner in %s answered %d", d->name, ls_core_state_name(k_states[s]),
+                             (int)code);
+                }
+                if (!refuse && code == ls_RetCode_CMD_NOT_OWNER_ERR) {
+                    fail_msg("%s (owner %s) in %s answered CMD_NOT_OWNER_ERR: %s", d->name,
+                             owner_is_a ? "caller" : "other", ls_core_state_name(k_states[s]), r->ret_msg);
+                }
+                if (refuse) {
+                    assert_non_null(strstr(r->ret_msg, "0x22")); /* names the owner */
+                }
+            }
+        }
+    }
+}
+
+/* ---------------------------------------------------------------- units */
+
+static void test_units_conversions(void **state)
+{
+    (void)state;
+    assert_true(ls_units_to_si_linear(ls_LinearUnit_MILLIMETERS, 1500.0) == 1.5);
+    assert_true(ls_units_to_si_linear(ls_LinearUnit_CENTIMETERS, 250.0) == 2.5);
+    assert_true(ls_units_to_si_linear(ls_LinearUnit_INCHES, 10.0) == 0.254);
+    assert_true(ls_units_to_si_linear(ls_LinearUnit_FEET, 2.0) == 0.6096);
+    assert_true(ls_units_to_si_linear(ls_LinearUnit_METERS, 0.125) == 0.125);
+    assert_true(ls_units_from_si_linear(ls_LinearUnit_INCHES, 0.0254) == 1.0);
+    assert_true(ls_units_from_si_linear(ls_LinearUnit_FEET, 0.9144) == 3.0);
+    assert_true(ls_units_to_si_angular(ls_AngularUnit_DEGREES, 180.0) == M_PI);
+    assert_true(ls_units_from_si_angular(ls_AngularUnit_DEGREES, M_PI / 2) == 90.0);
+    assert_true(ls_units_from_si_angular(ls_AngularUnit_RADIANS, 0.5) == 0.5);
+    assert_string_equal(ls_units_linear_name(ls_LinearUnit_METERS), "meters");
+    assert_string_equal(ls_units_linear_name(ls_LinearUnit_MILLIMETERS), "millimeters");
+    assert_string_equal(ls_units_linear_name(ls_LinearUnit_CENTIMETERS), "centimeters");
+    assert_string_equal(ls_units_linear_name(ls_LinearUnit_INCHES), "inches");
+    assert_string_equal(ls_units_linear_name(ls_LinearUnit_FEET), "feet");
+    assert_string_equal(ls_units_linear_name((ls_LinearUnit)7), "unknown");
+    assert_string_equal(ls_units_angular_name(ls_AngularUnit_RADIANS), "radians");
+    assert_string_equal(ls_units_angular_name(ls_AngularUnit_DEGREES), "degrees");
+    assert_string_equal(ls_units_angular_name((ls_AngularUnit)2), "unknown");
+    assert_true(isnan(ls_units_to_si_linear((ls_LinearUnit)9, 1.0)));
+    assert_true(isnan(ls_units_to_si_angular((ls_AngularUnit)-1, 1.0)));
+    assert_false(ls_units_linear_valid((ls_LinearUnit)5));
+    assert_true(ls_units_linear_valid(ls_LinearUnit_FEET));
+    assert_false(ls_units_angular_valid((ls_AngularUnit)2));
+
+    double p[6] = { 100.0, -200.0, 50.0, 90.0, -45.0, 180.0 }, si[6], back[6];
+    ls_units_pose_to_si(ls_LinearUnit_MILLIMETERS, ls_AngularUnit_DEGREES, p, si);
+    assert_true(si[0] == 0.1 && si[1] == -0.2 && si[2] == 0.05);
+    assert_true(si[3] == M_PI / 2 && si[4] == -M_PI / 4 && si[5] == M_PI);
+    ls_units_pose_from_si(ls_LinearUnit_MILLIMETERS, ls_AngularUnit_DEGREES, si, back);
+    for (int i = 0; i < 6; i++) {
+        assert_near(back[i], p[i], 1e-12);
+    }
+    ls_units_pose_to_si(ls_LinearUnit_INCHES, ls_AngularUnit_RADIANS, p, p); /* in place */
+    assert_true(p[0] == 2.54 && p[3] == 90.0);
+}
+
+static void set_units(ls_LinearUnit lu, ls_AngularUnit au)
+{
+    ls_SetUnitsReq *u = &req(ls_Request_set_units_tag)->cmd.set_units;
+    u->linear = lu;
+    u->angular = au;
+    assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
+}
+
+static void test_units_round_trip(void **state)
+{
+    (void)state;
+    set_units(ls_LinearUnit_MILLIMETERS, ls_AngularUnit_DEGREES);
+
+    req(ls_Request_get_units_tag);
+    const ls_Response *r = must(HOST_B); /* any supervisor reads the units */
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_EXEC_OK);
+    assert_string_equal(r->result.get_units.linear_units, "millimeters");
+    assert_string_equal(r->result.get_units.angular_units, "degrees");
+
+    ls_SetToolOffsetReq *t = &req(ls_Request_set_tool_offset_tag)->cmd.set_tool_offset;
+    t->offset_count = 6;
+    const double off[6] = { 10.0, -20.0, 150.0, 90.0, 0.0, -30.0 };
+    memcpy(t->offset, off, sizeof off);
+    assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
+    assert_near(g_core.settings.tool_offset[2], 0.15, 1e-15);
+    assert_near(g_core.settings.tool_offset[3], M_PI / 2, 1e-15);
+
+    req(ls_Request_get_tool_offsets_tag);
+    r = must(HOST_B);
+    assert_int_equal(r->result.get_tool_offsets.offset_count, 6);
+    for (int i = 0; i < 6; i++) {
+        assert_near(r->result.get_tool_offsets.offset[i], off[i], 1e-9);
+    }
+
+    ls_SetSpeedReq *sp = &req(ls_Request_set_speed_tag)->cmd.set_speed;
+    sp->attribute = ls_SpeedType_LINEAR_SPEED;
+    sp->speed = 500.0; /* mm/s */
+    assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
+    sp = &req(ls_Request_set_speed_tag)->cmd.set_speed;
+    sp->attribute = ls_SpeedType_ANGULAR_SPEED;
+    sp->speed = 90.0; /* deg/s */
+    assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
+    sp = &req(ls_Request_set_speed_tag)->cmd.set_speed;
+    sp->attribute = ls_SpeedType_PERCENT_SPEED;
+    sp->speed = 40.0;
+    assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
+    assert_near(g_core.settings.linear_speed_m_s, 0.5, 1e-15);
+    assert_near(g_core.settings.angular_speed_rad_s, M_PI / 2, 1e-15);
+
+    req(ls_Request_get_velocities_tag);
+    r = must(HOST_B);
+    const ls_GetVelocitiesRes *v = &r->result.get_velocities;
+    assert_near(v->percent_velocity, 40.0, 0);
+    assert_near(v->world_linear_velocity, 500.0, 1e-9);
+    assert_near(v->world_angular_velocity, 90.0, 1e-9);
+    assert_int_equal(v->joint_velocities_count, 6);
+    /* joint 1: 40 % of 2.5 rad/s = 1 rad/s */
+    assert_near(v->joint_velocities[0], 180.0 / M_PI, 1e-9);
+    assert_near(v->joint_velocities[5], 0.4 * 6.0 * 180.0 / M_PI, 1e-9);
+
+    ls_SetAccelerationReq *ac = &req(ls_Request_set_acceleration_tag)->cmd.set_acceleration;
+    ac->attribute = ls_AccelType_LINEAR_ACCEL;
+    ac->accel = 2000.0; /* mm/s^2 */
+    assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
+    ac = &req(ls_Request_set_acceleration_tag)->cmd.set_acceleration;
+    ac->attribute = ls_AccelType_ANGULAR_ACCEL;
+    ac->accel = 360.0; /* deg/s^2 */
+    assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
+    ac = &req(ls_Request_set_acceleration_tag)->cmd.set_acceleration;
+    ac->attribute = ls_AccelType_PERCENT_ACCEL;
+    ac->accel = 100.0;
+    assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
+    req(ls_Request_get_accelerations_tag);
+    const ls_GetAccelerationsRes *a = &must(HOST_B)->result.get_accelerations;
+    assert_near(a->percent_accel, 100.0, 0);
+    assert_near(a->world_linear_accel, 2000.0, 1e-9);
+    assert_near(a->world_angular_accel, 360.0, 1e-9);
+    assert_near(a->joint_accels[0], 8.0 * 180.0 / M_PI, 1e-9);
+
+    req(ls_Request_get_max_velocities_tag);
+    const ls_GetMaxVelocitiesRes *mv = &must(HOST_B)->result.get_max_velocities;
+    assert_near(mv->max_world_linear_velocity, 1000.0, 1e-9);
+    assert_near(mv->max_world_angular_velocity, 3.0 * 180.0 / M_PI, 1e-9);
+    assert_int_equal(mv->max_joint_velocities_count, 6);
+    assert_near(mv->max_joint_velocities[2], 3.0 * 180.0 / M_PI, 1e-9);
+    req(ls_Request_get_max_accelerations_tag);
+    const ls_GetMaxAccelerationsRes *ma = &must(HOST_B)->result.get_max_accelerations;
+    assert_near(ma->max_world_linear_accel, 4000.0, 1e-9);
+    assert_near(ma->max_world_angular_accel, 12.0 * 180.0 / M_PI, 1e-9);
+    assert_near(ma->max_joint_accels[5], 20.0 * 180.0 / M_PI, 1e-9);
+
+    /* back to inches: the same SI settings read in the new unit */
+    set_units(ls_LinearUnit_INCHES, ls_AngularUnit_RADIANS);
+    req(ls_Request_get_tool_offsets_tag);
+    r = must(HOST_B);
+    assert_near(r->result.get_tool_offsets.offset[2], 0.15 / 0.0254, 1e-9);
+    assert_near(r->result.get_tool_offsets.offset[3], M_PI / 2, 1e-12);
+    req(ls_Request_get_velocities_tag);
+    assert_near(must(HOST_B)->result.get_velocities.world_linear_velocity, 0.5 / 0.0254, 1e-9);
+}
+
+/* ---------------------------------------------------------------- out-of-range and malformed */
+
+static int32_t set_speed(ls_SpeedType t, double v, const char **msg)
+{
+    ls_SetSpeedReq *sp = &req(ls_Request_set_speed_tag)->cmd.set_speed;
+    sp->attribute = t;
+    sp->speed = v;
+    const ls_Response *r = must(HOST_A);
+    *msg = r->ret_msg;
+    return r->ret_code;
+}
+
+static int32_t set_accel(ls_AccelType t, double v, const char **msg)
+{
+    ls_SetAccelerationReq *a = &req(ls_Request_set_acceleration_tag)->cmd.set_acceleration;
+    a->attribute = t;
+    a->accel = v;
+    const ls_Response *r = must(HOST_A);
+    *msg = r->ret_msg;
+    return r->ret_code;
+}
+
+static void test_set_refusals_name_value_and_range(void **state)
+{
+    (void)state;
+    const ls_settings_t before = g_core.settings;
+    const char *msg;
+    assert_int_equal(set_speed(ls_SpeedType_PERCENT_SPEED, 150.0, &msg), ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    assert_string_equal(msg, "PERCENT_SPEED 150 %: allowed (0, 100]");
+    assert_int_equal(set_speed(ls_SpeedType_PERCENT_SPEED, 0.0, &msg), ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    assert_int_equal(set_speed(ls_SpeedType_PERCENT_SPEED, -5.0, &msg), ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    assert_int_equal(set_speed(ls_SpeedType_LINEAR_SPEED, 1.5, &msg), ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    assert_string_equal(msg, "LINEAR_SPEED 1.5 meters/s: allowed (0, 1]");
+    assert_int_equal(set_speed(ls_SpeedType_ANGULAR_SPEED, 3.5, &msg), ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    assert_string_equal(msg, "ANGULAR_SPEED 3.5 radians/s: allowed (0, 3]");
+    assert_int_equal(set_speed(ls_SpeedType_PERCENT_SPEED, NAN, &msg), ls_RetCode_CMD_PARAM_ERR);
+    assert_int_equal(set_speed(ls_SpeedType_LINEAR_SPEED, INFINITY, &msg), ls_RetCode_CMD_PARAM_ERR);
+    assert_int_equal(set_speed((ls_SpeedType)3, 10.0, &msg), ls_RetCode_CMD_PARAM_ERR);
+    assert_non_null(strstr(msg, "PERCENT_SPEED (0), LINEAR_SPEED (1), ANGULAR_SPEED (2)"));
+
+    assert_int_equal(set_accel(ls_AccelType_PERCENT_ACCEL, 100.5, &msg), ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    assert_string_equal(msg, "PERCENT_ACCEL 100.5 %: allowed (0, 100]");
+    assert_int_equal(set_accel(ls_AccelType_LINEAR_ACCEL, 5.0, &msg), ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    assert_string_equal(msg, "LINEAR_ACCEL 5 meters/s^2: allowed (0, 4]");
+    assert_int_equal(set_accel(ls_AccelType_ANGULAR_ACCEL, 0.0, &msg), ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    assert_string_equal(msg, "ANGULAR_ACCEL 0 radians/s^2: allowed (0, 12]");
+    assert_int_equal(set_accel(ls_AccelType_ANGULAR_ACCEL, -INFINITY, &msg), ls_RetCode_CMD_PARAM_ERR);
+    assert_int_equal(set_accel((ls_AccelType)-1, 10.0, &msg), ls_RetCode_CMD_PARAM_ERR);
+
+    ls_SetToolOffsetReq *t = &req(ls_Request_set_tool_offset_tag)->cmd.set_tool_offset;
+    t->offset_count = 5;
+    const ls_Response *r = must(HOST_A);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_ERR);
+    assert_string_equal(r->ret_msg, "setToolOffset takes 6 values (x y z roll pitch yaw), got 5");
+    t = &req(ls_Request_set_tool_offset_tag)->cmd.set_tool_offset;
+    t->offset_count = 6;
+    t->offset[0] = 0.1;
+    t->offset[4] = NAN;
+    r = must(HOST_A);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_ERR);
+    assert_non_null(strstr(r->ret_msg, "pitch"));
+    ls_SetWorldCartesianFrameReq *w = &req(ls_Request_set_world_cartesian_frame_tag)->cmd.set_world_cartesian_frame;
+    w->frame_count = 0;
+    r = must(HOST_A);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_ERR);
+    assert_string_equal(r->ret_msg, "setWorldCartesianFrame takes 6 values (x y z roll pitch yaw), got 0");
+    w = &req(ls_Request_set_world_cartesian_frame_tag)->cmd.set_world_cartesian_frame;
+    w->frame_count = 6;
+    w->frame[1] = -INFINITY;
+    assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_PARAM_ERR);
+
+    ls_SetUnitsReq *u = &req(ls_Request_set_units_tag)->cmd.set_units;
+    u->linear = (ls_LinearUnit)5;
+    r = must(HOST_A);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_ERR);
+    assert_non_null(strstr(r->ret_msg, "linear unit 5"));
+    u = &req(ls_Request_set_units_tag)->cmd.set_units;
+    u->linear = ls_LinearUnit_MILLIMETERS;
+    u->angular = (ls_AngularUnit)2;
+    assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_PARAM_ERR);
+
+    /* all-or-nothing: nothing above changed a setting (the half-valid setUnits included) */
+    assert_memory_equal(&g_core.settings, &before, sizeof before);
+
+    /* the range follows the units */
+    set_units(ls_LinearUnit_MILLIMETERS, ls_AngularUnit_DEGREES);
+    assert_int_equal(set_speed(ls_SpeedType_LINEAR_SPEED, 2000.0, &msg), ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    assert_string_equal(msg, "LINEAR_SPEED 2000 millimeters/s: allowed (0, 1000]");
+    assert_int_equal(set_speed(ls_SpeedType_LINEAR_SPEED, 1000.0, &msg), ls_RetCode_CMD_EXEC_OK);
+    assert_true(g_core.settings.linear_speed_m_s == 1.0);
+    assert_int_equal(set_speed(ls_SpeedType_ANGULAR_SPEED, 171.0, &msg), ls_RetCode_CMD_EXEC_OK);
+    assert_int_equal(set_speed(ls_SpeedType_ANGULAR_SPEED, 173.0, &msg), ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    assert_string_equal(msg, "ANGULAR_SPEED 173 degrees/s: allowed (0, 171.887]");
+    assert_int_equal(set_accel(ls_AccelType_LINEAR_ACCEL, 4000.5, &msg), ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    assert_string_equal(msg, "LINEAR_ACCEL 4000.5 millimeters/s^2: allowed (0, 4000]");
+}
+
+static void test_set_commands_in_resting_too(void **state)
+{
+    (void)state;
+    g_core.state = ls_State_RESTING;
+    const char *msg;
+    assert_int_equal(set_speed(ls_SpeedType_PERCENT_SPEED, 100.0, &msg), ls_RetCode_CMD_EXEC_OK);
+    assert_true(g_core.settings.speed_pct == 100.0);
+    g_core.state = ls_State_MOVING;
+    assert_int_equal(set_speed(ls_SpeedType_PERCENT_SPEED, 10.0, &msg), ls_RetCode_CMD_WRONG_STATE_ERR);
+    assert_true(g_core.settings.speed_pct == 100.0);
+}
+
+/* ---------------------------------------------------------------- robot position, sensors */
+
+static void test_robot_position_is_the_tool_tip_in_the_world(void **state)
+{
+    (void)state;
+    const double q[6] = { 0.3, -0.4, 0.8, 0.1, 0.6, -0.2 };
+    memcpy(g_snap.q_rad, q, sizeof q);
+    /* world frame 0.5 m along the base x axis, tool 0.1 m along the flange z axis */
+    g_core.settings.world_frame[0] = 0.5;
+    g_core.settings.tool_offset[2] = 0.1;
+    set_units(ls_LinearUnit_MILLIMETERS, ls_AngularUnit_DEGREES);
+
+    req(ls_Request_get_robot_position_tag);
+    const ls_Response *r = must(HOST_B);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_EXEC_OK);
+    const ls_GetRobotPositionRes *p = &r->result.get_robot_position;
+    assert_int_equal(p->joints_count, 6);
+    for (int j = 0; j < 6; j++) {
+        assert_near(p->joints[j], q[j] * 180.0 / M_PI, 1e-9);
+    }
+    double F[16], flange[6];
+    assert_int_equal(ls_kin_fk(&ls_robot_model_default, q, F), LS_KIN_OK);
+    ls_pose_to_xyzrpy(F, flange);
+    /* tip = flange origin + 0.1 * flange z axis (third column), minus the world origin */
+    const double tip[3] = { F[12] + 0.1 * F[8] - 0.5, F[13] + 0.1 * F[9], F[14] + 0.1 * F[10] };
+    assert_int_equal(p->world_pose_count, 6);
+    for (int i = 0; i < 3; i++) {
+        assert_near(p->world_pose[i], tip[i] * 1000.0, 1e-9);
+        assert_near(p->world_pose[i + 3], flange[i + 3] * 180.0 / M_PI, 1e-9);
+    }
+
+    /* a rotated world frame: yaw 90 deg maps base +y to world -x */
+    g_core.settings.world_frame[0] = 0.0;
+    g_core.settings.world_frame[5] = M_PI / 2;
+    g_core.settings.tool_offset[2] = 0.0;
+    req(ls_Request_get_robot_position_tag);
+    p = &must(HOST_B)->result.get_robot_position;
+    assert_near(p->world_pose[0], F[13] * 1000.0, 1e-9);
+    assert_near(p->world_pose[1], -F[12] * 1000.0, 1e-9);
+    assert_near(p->world_pose[2], F[14] * 1000.0, 1e-9);
+
+    g_core.ctl = NULL;
+    req(ls_Request_get_robot_position_tag);
+    r = must(HOST_B);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_UNSUPPORTED_ERR);
+    assert_non_null(strstr(r->ret_msg, "no arm backend"));
+}
+
+static void test_sensor_reading(void **state)
+{
+    (void)state;
+    const double ft[6] = { 1.5, -2.0, 30.0, 0.25, -0.5, 0.125 };
+    memcpy(g_snap.sensor[0], ft, sizeof ft);
+    g_snap.sensor[1][0] = 0.2375;
+    set_units(ls_LinearUnit_MILLIMETERS, ls_AngularUnit_DEGREES);
+
+    ls_GetSensorReadingReq *s = &req(ls_Request_get_sensor_reading_tag)->cmd.get_sensor_reading;
+    snprintf(s->sensor_type, sizeof s->sensor_type, "force_sensor");
+    const ls_Response *r = must(HOST_B);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_EXEC_OK);
+    assert_int_equal(r->result.get_sensor_reading.current_data_count, 6);
+    for (int i = 0; i < 6; i++) {
+        assert_true(r->result.get_sensor_reading.current_data[i] == ft[i]); /* N and Nm, unscaled */
+    }
+    s = &req(ls_Request_get_sensor_reading_tag)->cmd.get_sensor_reading;
+    snprintf(s->sensor_type, sizeof s->sensor_type, "laser_standoff_sensor");
+    r = must(HOST_B);
+    assert_int_equal(r->result.get_sensor_reading.current_data_count, 1);
+    assert_near(r->result.get_sensor_reading.current_data[0], 237.5, 1e-9);
+
+    s = &req(ls_Request_get_sensor_reading_tag)->cmd.get_sensor_reading;
+    snprintf(s->sensor_type, sizeof s->sensor_type, "sonar");
+    r = must(HOST_B);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_UNSUPPORTED_ERR);
+    assert_string_equal(r->ret_msg, "no sensor 'sonar': this controller has force_sensor, laser_standoff_sensor");
+    g_core.n_sensors = 0;
+    req(ls_Request_get_sensor_reading_tag);
+    r = must(HOST_B);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_UNSUPPORTED_ERR);
+    assert_string_equal(r->ret_msg, "no sensor '': this controller has no sensors");
+}
+
+/* ---------------------------------------------------------------- DIO */
+
+static const ls_Response *set_dio(const char *type, int32_t unit, uint32_t on, uint32_t off)
+{
+    ls_SetDigitalIOReq *d = &req(ls_Request_set_digital_io_tag)->cmd.set_digital_io;
+    snprintf(d->type, sizeof d->type, "%s", type);
+    d->unit_id = unit;
+    d->bits_on = on;
+    d->bits_off = off;
+    return send_req(HOST_A);
+}
+
+static void test_set_digital_io_refusals(void **state)
+{
+    (void)state;
+    const ls_Response *r = set_dio("analog", 0, 0x10000, 0);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_ERR);
+    assert_string_equal(r->ret_msg, "setDigitalIO: type 'analog' is not supported: the allowed type is 'digital'");
+    r = set_dio("digital", 1, 0x10000, 0);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    assert_string_equal(r->ret_msg, "setDigitalIO: unit 1: allowed 0..0");
+    r = set_dio("digital", -1, 0x10000, 0);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    r = set_dio("digital", 0, 0x30000, 0x20000);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_ERR);
+    assert_string_equal(r->ret_msg, "setDigitalIO: bits 0x20000 are in both bitsON and bitsOFF: name each bit once");
+    r = set_dio("digital", 0, 0x10003, 0);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    assert_string_equal(r->ret_msg, "setDigitalIO: bits 0x3 of unit 0 are not outputs: the outputs are 0xFFFF0000");
+    assert_int_equal(g_nposted, 0);
+    g_post_ok = false;
+    r = set_dio("digital", 0, 0x10000, 0);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_BUSY_ERR);
+    g_core.ctl = NULL;
+    r = set_dio("digital", 0, 0x10000, 0);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_UNSUPPORTED_ERR);
+    assert_string_equal(r->ret_msg, "setDigitalIO: this controller has no digital I/O");
+}
+
+static void test_set_digital_io_answers_when_applied(void **state)
+{
+    (void)state;
+    g_snap.dio[0] = 0x00000005u;
+    assert_null(set_dio("digital", 0, 0x00030000u, 0x00400000u)); /* deferred */
+    assert_int_equal(g_nposted, 1);
+    assert_int_equal(g_posted[0].kind, LS_CTL_DIO_WRITE);
+    assert_int_equal(g_posted[0].dio.unit, 0);
+    assert_int_equal(g_posted[0].dio.on, 0x00030000u);
+    assert_int_equal(g_posted[0].dio.off, 0x00400000u);
+    assert_int_equal(g_posted[0].ref_seq, g_seq);
+
+    size_t before = g_nrx;
+    g_snap.cycle = 101; /* the cycle running at the post may have taken its commands already */
+    g_snap.dio[0] = 0x00030005u;
+    ls_dio_tick(&g_core, g_now += 1000);
+    assert_int_equal(g_nrx, before);
+    g_snap.cycle = 102;
+    ls_dio_tick(&g_core, g_now += 1000);
+    assert_int_equal(g_nrx, before + 1);
+    assert_int_equal(g_rx[before].msg.response.seq, g_seq);
+    assert_int_equal(g_rx[before].msg.response.ret_code, ls_RetCode_CMD_EXEC_OK);
+    assert_int_equal(g_rx[before].msg.response.which_result, ls_Response_set_digital_io_tag);
+    assert_string_equal(g_rx[before].msg.response.ret_msg, "unit 0: levels now 0x00030005");
+
+    ls_GetDigitalIOReq *g = &req(ls_Request_get_digital_io_tag)->cmd.get_digital_io;
+    snprintf(g->type, sizeof g->type, "digital");
+    const ls_Response *r = must(HOST_B);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_EXEC_OK);
+    assert_int_equal(r->result.get_digital_io.bits_on, 0x00030005u);
+    g = &req(ls_Request_get_digital_io_tag)->cmd.get_digital_io;
+    snprintf(g->type, sizeof g->type, "digital");
+    g->unit_id = 3;
+    assert_int_equal(must(HOST_B)->ret_code, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    req(ls_Request_get_digital_io_tag);
+    assert_int_equal(must(HOST_B)->ret_code, ls_RetCode_CMD_PARAM_ERR); /* type "" */
+
+    /* a write the backend refused: the levels do not follow */
+    assert_null(set_dio("digital", 0, 0x00800000u, 0));
+    before = g_nrx;
+    g_snap.cycle = 104;
+    ls_dio_tick(&g_core, g_now += 1000);
+    assert_int_equal(g_nrx, before + 1);
+    assert_int_equal(g_rx[before].msg.response.ret_code, ls_RetCode_CMD_ERR);
+    assert_int_equal(g_rx[before].msg.response.which_result, 0);
+
+    /* a loop that does not run: time-out after 500 ms */
+    assert_null(set_dio("digital", 0, 0x00010000u, 0));
+    before = g_nrx;
+    ls_dio_tick(&g_core, g_now + 499999);
+    assert_int_equal(g_nrx, before);
+    ls_dio_tick(&g_core, g_now + 500000);
+    assert_int_equal(g_nrx, before + 1);
+    assert_int_equal(g_rx[before].msg.response.ret_code, ls_RetCode_CMD_TIMEOUT_ERR);
+}
+
+static uint32_t signal_dio(uint8_t addr, uint32_t bits, int32_t timeout_ms, int32_t cycle_ms, ls_CallbackType cb,
+                           int32_t *code)
+{
+    ls_SignalDigitalIOReq *s = &req(ls_Request_signal_digital_io_tag)->cmd.signal_digital_io;
+    snprintf(s->type, sizeof s->type, "digital");
+    s->bit_string = bits;
+    s->polling_timeout_ms = timeout_ms;
+    s->polling_cycle_time_ms = cycle_ms;
+    s->callback_type = cb;
+    const ls_Response *r = must(addr);
+    *code = r->ret_code;
+    return r->ret_code == ls_RetCode_CMD_EXEC_OK ? r->result.signal_digital_io.watch_id : 0u;
+}
+
+static void assert_data(const ls_Notice *n, const char *d0, const char *d1, const char *d2, const char *d3)
+{
+    assert_int_equal(n->data_count, 4);
+    assert_string_equal(n->data[0], d0);
+    assert_string_equal(n->data[1], d1);
+    assert_string_equal(n->data[2], d2);
+    assert_string_equal(n->data[3], d3);
+}
+
+static void test_signal_event_and_alarm_on_change(void **state)
+{
+    (void)state;
+    int32_t code;
+    /* HOST_B is not the owner: any connected supervisor may watch */
+    uint32_t w1 = signal_dio(HOST_B, 0x5u, 0, 0, ls_CallbackType_CB_EVENT, &code);
+    assert_int_equal(code, ls_RetCode_CMD_EXEC_OK);
+    uint32_t w2 = signal_dio(HOST_A, 0x4u, 0, 0, ls_CallbackType_CB_ALARM, &code);
+    assert_int_equal(code, ls_RetCode_CMD_EXEC_OK);
+    assert_int_not_equal(w1, w2);
+    size_t before = g_nrx;
+    ls_dio_tick(&g_core, g_now += 1000); /* first check: nothing set yet */
+    assert_int_equal(g_nrx, before);
+
+    ls_core_on_dio_event(&g_core, 0, 0x1u, 0x1u, g_now += 1000); /* only bit 0 of 0x5 */
+    assert_int_equal(g_nrx, before);
+    ls_core_on_dio_event(&g_core, 0, 0x5u, 0x4u, g_now += 1000);
+    assert_int_equal(count_notices(before), 2);
+    const ls_Notice *n = nth_notice(before, 0);
+    assert_int_equal(n->kind, ls_NoticeKind_EVENT);
+    assert_string_equal(n->event_id, "dioSignal");
+    char wid[24];
+    snprintf(wid, sizeof wid, "watch=%u", (unsigned)w1);
+    assert_data(n, "unit=0", "bits=0x5", "levels=0x5", wid);
+    assert_int_equal(g_rx_addr[before], HOST_B);
+    n = nth_notice(before, 1);
+    assert_int_equal(n->kind, ls_NoticeKind_ALARM);
+    assert_int_equal(g_rx_addr[before + 1], HOST_A);
+    snprintf(wid, sizeof wid, "watch=%u", (unsigned)w2);
+    assert_data(n, "unit=0", "bits=0x4", "levels=0x5", wid);
+
+    /* once only */
+    before = g_nrx;
+    ls_core_on_dio_event(&g_core, 0, 0x0u, 0x5u, g_now += 1000);
+    ls_core_on_dio_event(&g_core, 0, 0x5u, 0x5u, g_now += 1000);
+    ls_dio_tick(&g_core, g_now += 1000);
+    assert_int_equal(g_nrx, before);
+    for (int i = 0; i < LS_MAX_DIO_WATCHES; i++) {
+        assert_int_equal(g_core.dio.watch[i].phase, LS_WATCH_FREE);
+    }
+}
+
+static void test_signal_fires_at_once_when_bits_are_already_set(void **state)
+{
+    (void)state;
+    g_snap.dio[0] = 0x3u;
+    int32_t code;
+    size_t before = g_nrx;
+    uint32_t w = signal_dio(HOST_A, 0x2u, 0, 0, ls_CallbackType_CB_EVENT, &code);
+    assert_int_equal(count_notices(before), 0); /* not before the answer carrying the watch id */
+    ls_dio_tick(&g_core, g_now += 1000);
+    assert_int_equal(count_notices(before), 1);
+    char wid[24];
+    snprintf(wid, sizeof wid, "watch=%u", (unsigned)w);
+    assert_data(nth_notice(before, 0), "unit=0", "bits=0x2", "levels=0x3", wid);
+}
+
+static void test_signal_polling_cycle_and_timeout(void **state)
+{
+    (void)state;
+    int32_t code;
+    uint64_t t0 = g_now;
+    uint32_t w = signal_dio(HOST_A, 0x8u, 100, 20, ls_CallbackType_CB_EVENT, &code);
+    assert_int_equal(code, ls_RetCode_CMD_EXEC_OK);
+    size_t before = g_nrx;
+    ls_dio_tick(&g_core, t0 + 1000);
+    /* polled: a change event does not fire it, the next poll does */
+    ls_core_on_dio_event(&g_core, 0, 0x8u, 0x8u, t0 + 5000);
+    assert_int_equal(count_notices(before), 0);
+    g_snap.dio[0] = 0x8u;
+    ls_dio_tick(&g_core, t0 + 19999);
+    assert_int_equal(count_notices(before), 0);
+    ls_dio_tick(&g_core, t0 + 20000);
+    assert_int_equal(count_notices(before), 1);
+    assert_string_equal(nth_notice(before, 0)->event_id, "dioSignal");
+
+    /* time-out: kind follows the callback (alarm), the watch ends */
+    g_snap.dio[0] = 0x0u;
+    t0 = g_now = t0 + 30000;
+    w = signal_dio(HOST_A, 0x8u, 100, 0, ls_CallbackType_CB_ALARM_RSVP, &code);
+    before = g_nrx;
+    ls_dio_tick(&g_core, t0 + 99999);
+    assert_int_equal(count_notices(before), 0);
+    g_snap.dio[0] = 0x1u;
+    ls_dio_tick(&g_core, t0 + 100000);
+    assert_int_equal(count_notices(before), 1);
+    const ls_Notice *n = nth_notice(before, 0);
+    assert_int_equal(n->kind, ls_NoticeKind_ALARM);
+    assert_string_equal(n->event_id, "dioSignalTimeout");
+    char wid[24];
+    snprintf(wid, sizeof wid, "watch=%u", (unsigned)w);
+    assert_data(n, "unit=0", "bits=0x8", "levels=0x1", wid);
+    ls_core_on_dio_event(&g_core, 0, 0x8u, 0x8u, t0 + 200000);
+    assert_int_equal(count_notices(before), 1);
+
+    /* an event-kind time-out */
+    t0 = g_now = t0 + 300000;
+    signal_dio(HOST_A, 0x8u, 50, 0, ls_CallbackType_CB_EVENT_RSVP, &code);
+    before = g_nrx;
+    ls_dio_tick(&g_core, t0 + 50000);
+    assert_int_equal(nth_notice(before, 0)->kind, ls_NoticeKind_EVENT);
+    assert_string_equal(nth_notice(before, 0)->event_id, "dioSignalTimeout");
+}
+
+static void test_signal_refusals_and_table_full(void **state)
+{
+    (void)state;
+    int32_t code;
+    signal_dio(HOST_A, 0x0u, 0, 0, ls_CallbackType_CB_EVENT, &code);
+    assert_int_equal(code, ls_RetCode_CMD_PARAM_ERR);
+    ls_SignalDigitalIOReq *s = &req(ls_Request_signal_digital_io_tag)->cmd.signal_digital_io;
+    snprintf(s->type, sizeof s->type, "digital");
+    s->bit_string = 1;
+    s->polling_timeout_ms = -1;
+    const ls_Response *r = must(HOST_A);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    assert_string_equal(r->ret_msg, "signalDigitalIO: pollingTimeOut -1 ms: allowed 0 (no time-out) or more");
+    s = &req(ls_Request_signal_digital_io_tag)->cmd.signal_digital_io;
+    snprintf(s->type, sizeof s->type, "digital");
+    s->bit_string = 1;
+    s->polling_cycle_time_ms = -5;
+    assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    signal_dio(HOST_A, 0x1u, 0, 0, (ls_CallbackType)4, &code);
+    assert_int_equal(code, ls_RetCode_CMD_PARAM_ERR);
+    g_core.dio_info[0].output_mask = 0x00FF0000u;
+    s = &req(ls_Request_signal_digital_io_tag)->cmd.signal_digital_io;
+    snprintf(s->type, sizeof s->type, "digital");
+    s->bit_string = 0x01000001u;
+    r = must(HOST_A);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    assert_string_equal(r->ret_msg, "signalDigitalIO: bits 0x1000000 are not lines of unit 0: its lines are 0x00FFFFFF");
+    s = &req(ls_Request_signal_digital_io_tag)->cmd.signal_digital_io;
+    snprintf(s->type, sizeof s->type, "dig");
+    s->bit_string = 1;
+    assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_PARAM_ERR);
+
+    for (int i = 0; i < LS_MAX_DIO_WATCHES; i++) {
+        assert_int_equal(signal_dio(HOST_A, 0x1u, 0, 0, ls_CallbackType_CB_EVENT, &code), (uint32_t)i + 1u);
+    }
+    signal_dio(HOST_B, 0x1u, 0, 0, ls_CallbackType_CB_EVENT, &code);
+    assert_int_equal(code, ls_RetCode_CMD_NO_RESOURCES_ERR);
+}
+
+static void test_watches_end_with_their_session(void **state)
+{
+    (void)state;
+    int32_t code;
+    signal_dio(HOST_B, 0x1u, 0, 0, ls_CallbackType_CB_EVENT, &code);
+    signal_dio(HOST_A, 0x2u, 0, 0, ls_CallbackType_CB_EVENT, &code);
+    req(ls_Request_disconnect_tag);
+    assert_int_equal(must(HOST_B)->ret_code, ls_RetCode_CMD_EXEC_OK);
+    ls_dio_tick(&g_core, g_now += 1000);
+    int armed = 0;
+    for (int i = 0; i < LS_MAX_DIO_WATCHES; i++) {
+        armed += g_core.dio.watch[i].phase == LS_WATCH_ARMED ? 1 : 0;
+    }
+    assert_int_equal(armed, 1);
+    /* HOST_B comes back: its old watch does not fire for it */
+    connect_host(HOST_B);
+    size_t before = g_nrx;
+    ls_core_on_dio_event(&g_core, 0, 0x3u, 0x3u, g_now += 1000);
+    assert_int_equal(count_notices(before), 1);
+    assert_int_equal(g_rx_addr[before], HOST_A);
+}
+
+/* ---------------------------------------------------------------- RSVP */
+
+static int32_t g_done_code;
+static bool g_done_timed_out;
+static int g_done_calls;
+
+static void done_cb(ls_core_t *core, void *ctx, int32_t ret_code, bool timed_out)
+{
+    assert_ptr_equal(core, &g_core);
+    assert_ptr_equal(ctx, &g_done_calls);
+    g_done_code = ret_code;
+    g_done_timed_out = timed_out;
+    g_done_calls++;
+}
+
+static void test_rsvp_reply_and_timeout(void **state)
+{
+    (void)state;
+    g_done_calls = 0;
+    const char *data[] = { "k=v" };
+    size_t before = g_nrx;
+    int32_t id = ls_core_rsvp(&g_core, 1, ls_NoticeKind_EVENT_RSVP, "ask", data, 1, 300, "continue", done_cb,
+                              &g_done_calls, g_now);
+    assert_true(id > 0);
+    const ls_Notice *n = nth_notice(before, 0);
+    assert_int_equal(n->rsvp_id, (uint32_t)id);
+    assert_int_equal(n->rsvp_timeout_ms, 300);
+    assert_string_equal(n->rsvp_default, "continue");
+    assert_int_equal(g_rx_addr[before], HOST_B);
+    send_rsvp_reply(HOST_A, (uint32_t)id, -7); /* another supervisor cannot answer it */
+    assert_int_equal(g_done_calls, 0);
+    send_rsvp_reply(HOST_B, (uint32_t)id, -2);
+    assert_int_equal(g_done_calls, 1);
+    assert_int_equal(g_done_code, -2);
+    assert_false(g_done_timed_out);
+    ls_core_tick(&g_core, g_now + 400000);
+    assert_int_equal(g_done_calls, 1);
+
+    id = ls_core_rsvp(&g_core, 0, ls_NoticeKind_ALARM_RSVP, "ask", data, 1, 300, "abort", done_cb, &g_done_calls,
+                      g_now);
+    ls_core_tick(&g_core, g_now + 299999);
+    assert_int_equal(g_done_calls, 1);
+    ls_core_tick(&g_core, g_now + 300000);
+    assert_int_equal(g_done_calls, 2);
+    assert_true(g_done_timed_out);
+    assert_int_equal(g_done_code, ls_RetCode_CMD_TIMEOUT_ERR);
+    send_rsvp_reply(HOST_A, (uint32_t)id, 0); /* late: ignored */
+    assert_int_equal(g_done_calls, 2);
+}
+
+static void test_signal_rsvp_reply_before_timeout(void **state)
+{
+    (void)state;
+    int32_t code;
+    uint32_t w = signal_dio(HOST_B, 0x1u, 0, 0, ls_CallbackType_CB_EVENT_RSVP, &code);
+    size_t before = g_nrx;
+    ls_core_on_dio_event(&g_core, 0, 0x1u, 0x1u, g_now += 1000);
+    const ls_Notice *n = nth_notice(before, 0);
+    assert_non_null(n);
+    assert_int_equal(n->kind, ls_NoticeKind_EVENT_RSVP);
+    assert_string_equal(n->event_id, "dioSignal");
+    assert_string_equal(n->rsvp_default, "continue");
+    assert_int_equal(n->rsvp_timeout_ms, 2000);
+    char wid[24];
+    snprintf(wid, sizeof wid, "watch=%u", (unsigned)w);
+    assert_data(n, "unit=0", "bits=0x1", "levels=0x1", wid);
+    uint32_t rid = n->rsvp_id;
+    /* the slot stays taken until the answer */
+    int busy = 0;
+    for (int i = 0; i < LS_MAX_DIO_WATCHES; i++) {
+        busy += g_core.dio.watch[i].phase == LS_WATCH_AWAIT_RSVP ? 1 : 0;
+    }
+    assert_int_equal(busy, 1);
+    before = g_nrx;
+    send_rsvp_reply(HOST_B, rid, ls_RetCode_CMD_EXEC_OK);
+    assert_int_equal(g_core.dio.rsvp_replied, 1);
+    assert_int_equal(g_core.dio.rsvp_timed_out, 0);
+    assert_int_equal(g_core.dio.rsvp_last_code, 0);
+    ls_core_tick(&g_core, g_now + 3000000);
+    assert_int_equal(count_notices(before), 0);
+    for (int i = 0; i < LS_MAX_DIO_WATCHES; i++) {
+        assert_int_equal(g_core.dio.watch[i].phase, LS_WATCH_FREE);
+    }
+}
+
+static void test_signal_rsvp_unanswered_takes_the_default(void **state)
+{
+    (void)state;
+    int32_t code;
+    uint32_t w = signal_dio(HOST_A, 0x1u, 0, 0, ls_CallbackType_CB_ALARM_RSVP, &code);
+    size_t before = g_nrx;
+    uint64_t t = g_now += 1000;
+    ls_core_on_dio_event(&g_core, 0, 0x1u, 0x1u, t);
+    assert_int_equal(nth_notice(before, 0)->kind, ls_NoticeKind_ALARM_RSVP);
+    before = g_nrx;
+    ls_core_tick(&g_core, t + 1999999);
+    assert_int_equal(count_notices(before), 0);
+    ls_core_tick(&g_core, t + 2000000);
+    assert_int_equal(g_core.dio.rsvp_timed_out, 1);
+    assert_int_equal(g_core.dio.rsvp_last_code, ls_RetCode_CMD_TIMEOUT_ERR);
+    assert_int_equal(count_notices(before), 1);
+    const ls_Notice *n = nth_notice(before, 0);
+    assert_int_equal(n->kind, ls_NoticeKind_ALARM);
+    assert_string_equal(n->event_id, "dioSignalRsvpTimeout");
+    char wid[24];
+    snprintf(wid, sizeof wid, "watch=%u", (unsigned)w);
+    assert_int_equal(n->data_count, 2);
+    assert_string_equal(n->data[0], wid);
+    assert_string_equal(n->data[1], "action=continue");
+    for (int i = 0; i < LS_MAX_DIO_WATCHES; i++) {
+        assert_int_equal(g_core.dio.watch[i].phase, LS_WATCH_FREE);
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_every_command_in_every_state),
+        cmocka_unit_test(test_owner_only_commands_refuse_non_owners),
+        cmocka_unit_test(test_units_conversions),
+        cmocka_unit_test_setup(test_units_round_trip, setup_locked),
+        cmocka_unit_test_setup(test_set_refusals_name_value_and_range, setup_locked),
+        cmocka_unit_test_setup(test_set_commands_in_resting_too, setup_locked),
+        cmocka_unit_test_setup(test_robot_position_is_the_tool_tip_in_the_world, setup_locked),
+        cmocka_unit_test_setup(test_sensor_reading, setup_locked),
+        cmocka_unit_test_setup(test_set_digital_io_refusals, setup_locked),
+        cmocka_unit_test_setup(test_set_digital_io_answers_when_applied, setup_locked),
+        cmocka_unit_test_setup(test_signal_event_and_alarm_on_change, setup_locked),
+        cmocka_unit_test_setup(test_signal_fires_at_once_when_bits_are_already_set, setup_locked),
+        cmocka_unit_test_setup(test_signal_polling_cycle_and_timeout, setup_locked),
+        cmocka_unit_test_setup(test_signal_refusals_and_table_full, setup_locked),
+        cmocka_unit_test_setup(test_watches_end_with_their_session, setup_locked),
+        cmocka_unit_test_setup(test_rsvp_reply_and_timeout, setup_locked),
+        cmocka_unit_test_setup(test_signal_rsvp_reply_before_timeout, setup_locked),
+        cmocka_unit_test_setup(test_signal_rsvp_unanswered_takes_the_default, setup_locked),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
