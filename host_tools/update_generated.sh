@@ -1,6 +1,6 @@
 #!/bin/sh
 # Regenerate the host package's copies of the protocol artefacts from protocol/.
-# Run after every change of protocol/landscape.proto or protocol/landscape.dbc;
+# Run after every change of protocol/landscape.proto, .dbc or .options;
 # tests/host/test_generated.py fails while the committed copies are stale.
 set -eu
 here=$(cd "$(dirname "$0")" && pwd)
@@ -8,4 +8,5 @@ root=$(cd "$here/.." && pwd)
 out="$here/src/landscape/_generated"
 protoc -I"$root/protocol" -I/usr/include --python_out="$out" --pyi_out="$out" "$root/protocol/landscape.proto"
 cp "$root/protocol/landscape.dbc" "$out/landscape.dbc"
-echo "updated $out/landscape_pb2.py(i) and $out/landscape.dbc"
+cp "$root/protocol/landscape.options" "$out/landscape.options"
+echo "updated $out/landscape_pb2.py(i), $out/landscape.dbc and $out/landscape.options"

@@ -347,7 +347,7 @@ int main(int argc, char **argv)
         .joint_count = LS_N_JOINTS,
         .heartbeat_timeout_ms = opt.heartbeat_timeout_ms,
     };
-    ls_core_io_t io = { .send_downlink = ls_net_send_downlink, .ctx = &g_net };
+    ls_core_io_t io = { .send_downlink = ls_net_send_downlink, .describe = ls_net_describe, .ctx = &g_net };
     ls_core_actions_t act = { .enable_drives = act_enable, .stop_motion = act_stop, .ctx = &g_ctl };
     ls_core_init(&g_core, &cfg, &io, &act);
     ls_net_init(&g_net, opt.node, &g_core);

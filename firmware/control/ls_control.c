@@ -1,6 +1,7 @@
 /* Control loop glue: lock-free rings, plan hand-over, seqlock snapshot. */
 #include "ls_control.h"
 
+#include <stdio.h>
 #include <string.h>
 
 #include "ls_kin.h"
@@ -48,14 +49,24 @@ static void ev_push(ls_control_t *c, const ls_ctl_event_t *ev)
 
 bool ls_control_next_event(ls_control_t *c, ls_ctl_event_t *out)
 {
-    unsigned tail = atomic_load_explicit(&c->ev_tail, memory_order_relaxed);
-    unsigned head = atomic_load_explicit(&c->ev_head, memory_order_acquire);
-    if (tail == head) {
-        return false;
+    for (;;) {
+        unsigned tail = atomic_load_explicit(&c->ev_tail, memory_order_relaxed);
+        unsigned head = atomic_load_explicit(&c->ev_head, memory_order_acquire);
+        if (tail == head) {
+            return false;
+        }
+        *out = c->ev_ring[tail % LS_CTL_QUEUE_LEN];
+        atomic_store_explicit(&c->ev_tail, tail + 1u, memory_order_release);
+        if (c->filter == NULL || !c->filter(c->filter_ctx, out)) {
+            return true;
+        }
     }
-    *out = c->ev_ring[tail % LS_CTL_QUEUE_LEN];
-    atomic_store_explicit(&c->ev_tail, tail + 1u, memory_order_release);
-    return true;
+}
+
+void ls_control_set_event_filter(ls_control_t *c, ls_control_event_filter_t fn, void *ctx)
+{
+    c->filter_ctx = ctx;
+    c->filter = fn;
 }
 
 bool ls_control_post(ls_control_t *c, const ls_ctl_cmd_t *cmd)
@@ -65,7 +76,55 @@ bool ls_control_post(ls_control_t *c, const ls_ctl_cmd_t *cmd)
 
 ls_motion_plan_t *ls_control_plan_slot(ls_control_t *c)
 {
+    if (atomic_load_explicit(&c->manual_on, memory_order_acquire)) {
+        return NULL;
+    }
     return atomic_load_explicit(&c->plan_slot_busy, memory_order_acquire) ? NULL : &c->plan_slot;
+}
+
+ls_react_plan_t *ls_control_react_slot(ls_control_t *c)
+{
+    if (atomic_load_explicit(&c->manual_on, memory_order_acquire)) {
+        return NULL;
+    }
+    return atomic_load_explicit(&c->react_slot_busy, memory_order_acquire) ? NULL : &c->react_slot;
+}
+
+bool ls_control_start_react(ls_control_t *c, uint32_t ref_seq)
+{
+    atomic_store_explicit(&c->react_slot_busy, true, memory_order_release);
+    ls_ctl_cmd_t cmd;
+    memset(&cmd, 0, sizeof cmd);
+    cmd.kind = LS_CTL_REACT_START;
+    cmd.ref_seq = ref_seq;
+    if (!cmd_push(c, &cmd)) {
+        atomic_store_explicit(&c->react_slot_busy, false, memory_order_release);
+        return false;
+    }
+    return true;
+}
+
+bool ls_control_set_manual(ls_control_t *c, const hal_manual_t *dev, const ls_jog_config_t *jog, uint32_t ref_seq)
+{
+    ls_ctl_cmd_t cmd;
+    memset(&cmd, 0, sizeof cmd);
+    cmd.kind = LS_CTL_MANUAL;
+    cmd.ref_seq = ref_seq;
+    bool on = dev != NULL && jog != NULL;
+    if (on) {
+        cmd.manual.dev = dev;
+        cmd.manual.jog = *jog;
+    }
+    if (!cmd_push(c, &cmd)) {
+        return false;
+    }
+    atomic_store_explicit(&c->manual_on, on, memory_order_release);
+    return true;
+}
+
+bool ls_control_manual_on(ls_control_t *c)
+{
+    return atomic_load_explicit(&c->manual_on, memory_order_acquire);
 }
 
 bool ls_control_start_plan(ls_control_t *c, uint32_t ref_seq)
@@ -111,6 +170,9 @@ void ls_control_snapshot(ls_control_t *c, ls_ctl_snapshot_t *out)
 static void fault(ls_control_t *c, const char *text)
 {
     ls_motion_abort(&c->motion);
+    /* The core ends whatever ran with its final alarm on LS_CEV_FAULT. */
+    ls_react_abort(&c->react, c->q, NULL);
+    ls_react_jog_halt(&c->react);
     if (c->enabled) {
         (void)hal_arm_enable(c->cfg.arm, false);
         c->enabled = false;
@@ -139,13 +201,81 @@ static void read_feedback(ls_control_t *c)
     }
 }
 
+static void read_sensors(ls_control_t *c)
+{
+    for (size_t i = 0; i < c->cfg.n_sensors && i < (size_t)HAL_MAX_SENSORS; i++) {
+        if (c->cfg.sensors[i].read == NULL || c->cfg.sensors[i].read(c->cfg.sensors[i].self, c->sens[i]) < 0) {
+            memset(c->sens[i], 0, sizeof c->sens[i]);
+        }
+    }
+}
+
+/* Index of the sensor called `name`, or -1. */
+static int sensor_index(const ls_control_t *c, const char *name)
+{
+    for (size_t i = 0; i < c->cfg.n_sensors && i < (size_t)HAL_MAX_SENSORS; i++) {
+        if (c->cfg.sensors[i].name != NULL && strcmp(c->cfg.sensors[i].name, name) == 0) {
+            return (int)i;
+        }
+    }
+    return -1;
+}
+
+static void tool_event(ls_control_t *c, const ls_ctl_cmd_t *cmd, int status, uint32_t bits)
+{
+    ls_ctl_event_t ev;
+    memset(&ev, 0, sizeof ev);
+    ev.kind = LS_CEV_MOTION;
+    ev.ref_seq = cmd->ref_seq;
+    ev.motion.kind = LS_MEV_TOOL;
+    ev.motion.ref_seq = cmd->ref_seq;
+    ev.motion.index = status;
+    snprintf(ev.motion.name, sizeof ev.motion.name, "%s", cmd->tool.id);
+    snprintf(ev.motion.text, sizeof ev.motion.text, "%s",
+             cmd->kind == LS_CTL_TOOL_COUPLE ? (cmd->tool.attach ? "couple" : "uncouple") : "bits");
+    memcpy(ev.motion.q_rad, c->q, sizeof ev.motion.q_rad);
+    ev.dio.on = bits;
+    ev_push(c, &ev);
+}
+
+static void run_tool(ls_control_t *c, const ls_ctl_cmd_t *cmd)
+{
+    const hal_tool_t *t = cmd->tool.dev;
+    int st = HAL_EUNSUPPORTED;
+    uint32_t bits = 0;
+    if (t == NULL || t->ops == NULL) {
+        tool_event(c, cmd, HAL_ENODEV, 0);
+        return;
+    }
+    if (cmd->kind == LS_CTL_TOOL_COUPLE) {
+        if (t->ops->couple != NULL) {
+            st = t->ops->couple(t->self, cmd->tool.id, cmd->tool.attach);
+        }
+    } else if (t->ops->set_bits != NULL) {
+        st = t->ops->set_bits(t->self, cmd->tool.on, cmd->tool.off);
+    }
+    if (t->ops->get_bits != NULL) {
+        (void)t->ops->get_bits(t->self, &bits);
+    }
+    tool_event(c, cmd, st, bits);
+}
+
+/* A motion of either executor is under way (running, stopping or paused). */
+static bool busy(const ls_control_t *c)
+{
+    return c->react.active || c->motion.phase != LS_MOTION_IDLE;
+}
+
 void ls_control_init(ls_control_t *c, const ls_control_config_t *cfg)
 {
     memset(c, 0, sizeof *c);
     c->cfg = *cfg;
     c->dt_s = 1.0 / (double)(cfg->rate_hz != 0u ? cfg->rate_hz : 1000u);
     ls_motion_init(&c->motion, cfg->model);
+    ls_react_init(&c->react, cfg->model);
+    c->react_sensor = -1;
     read_feedback(c);
+    read_sensors(c);
     memcpy(c->q_cmd, c->q, sizeof c->q_cmd);
     ls_motion_hold(&c->motion, c->q);
     ls_ctl_snapshot_t s;
@@ -154,6 +284,53 @@ void ls_control_init(ls_control_t *c, const ls_control_config_t *cfg)
     memcpy(s.q_cmd_rad, c->q, sizeof s.q_cmd_rad);
     (void)ls_kin_fk(cfg->model, c->q, s.flange_pose);
     publish(c, &s);
+}
+
+/* Executor events -> control events (REACT_END carries the report). */
+static void motion_events(ls_control_t *c, const ls_motion_events_t *mev)
+{
+    for (uint8_t i = 0; i < mev->n; i++) {
+        ls_ctl_event_t ev;
+        memset(&ev, 0, sizeof ev);
+        ev.kind = LS_CEV_MOTION;
+        ev.ref_seq = mev->ev[i].ref_seq;
+        ev.motion = mev->ev[i];
+        if (mev->ev[i].kind == LS_MEV_REACT_END) {
+            ev.react = c->react.report;
+        }
+        ev_push(c, &ev);
+        if (mev->ev[i].kind == LS_MEV_FAULT && c->enabled) {
+            (void)hal_arm_enable(c->cfg.arm, false);
+            c->enabled = false;
+        }
+    }
+}
+
+/* Abort a guarded/compliant move: its one LS_MEV_REACT_END (aborted). */
+static void react_abort(ls_control_t *c)
+{
+    if (!c->react.active) {
+        return;
+    }
+    ls_motion_events_t mev;
+    mev.n = 0;
+    ls_react_abort(&c->react, c->q, &mev);
+    ls_motion_hold(&c->motion, c->q_cmd);
+    motion_events(c, &mev);
+}
+
+/* Jogging is possible now (manual on and drives on): LS_MEV_JOG index 0. */
+static void jog_ready(ls_control_t *c, uint32_t ref_seq)
+{
+    ls_motion_events_t mev;
+    mev.n = 1;
+    memset(&mev.ev[0], 0, sizeof mev.ev[0]);
+    mev.ev[0].kind = LS_MEV_JOG;
+    mev.ev[0].ref_seq = ref_seq;
+    mev.ev[0].index = 0;
+    snprintf(mev.ev[0].text, sizeof mev.ev[0].text, "ready");
+    memcpy(mev.ev[0].q_rad, c->q_cmd, sizeof mev.ev[0].q_rad);
+    motion_events(c, &mev);
 }
 
 static void handle_command(ls_control_t *c, const ls_ctl_cmd_t *cmd)
@@ -169,6 +346,10 @@ static void handle_command(ls_control_t *c, const ls_ctl_cmd_t *cmd)
         ls_motion_hold(&c->motion, c->q);
         memcpy(c->q_cmd, c->q, sizeof c->q_cmd);
         c->enabled = true;
+        if (c->manual != NULL) {
+            ls_react_jog_halt(&c->react);
+            jog_ready(c, cmd->ref_seq);
+        }
         return;
     case LS_CTL_DISABLE:
         if (c->enabled && (c->motion.phase == LS_MOTION_RUNNING || c->motion.phase == LS_MOTION_STOPPING)) {
@@ -177,23 +358,70 @@ static void handle_command(ls_control_t *c, const ls_ctl_cmd_t *cmd)
             c->disable_pending = true;
             return;
         }
+        if (c->enabled && ls_react_moving(&c->react)) {
+            ls_react_stop(&c->react);
+            c->disable_pending = true;
+            return;
+        }
         ls_motion_abort(&c->motion);
+        react_abort(c);
         (void)hal_arm_enable(c->cfg.arm, false);
         c->enabled = false;
         return;
     case LS_CTL_START:
-        if (!c->enabled || ls_motion_start(&c->motion, &c->plan_slot) != 0) {
-            cmd_failed(c, cmd->ref_seq, c->enabled ? "a motion is already running" : "the drives are off");
+        if (!c->enabled || c->react.active || c->manual != NULL || ls_motion_start(&c->motion, &c->plan_slot) != 0) {
+            cmd_failed(c, cmd->ref_seq, !c->enabled ? "the drives are off"
+                                        : c->manual != NULL ? "manualControl is on: switch it off first"
+                                                            : "a motion is already running");
         }
         atomic_store_explicit(&c->plan_slot_busy, false, memory_order_release);
         return;
-    case LS_CTL_STOP: ls_motion_stop(&c->motion); return;
+    case LS_CTL_REACT_START: {
+        int si = sensor_index(c, c->react_slot.sensor);
+        if (!c->enabled || busy(c) || c->manual != NULL || si < 0 ||
+            ls_react_start(&c->react, &c->react_slot, c->q_cmd, c->cfg.sensors[si].n_values) != 0) {
+            cmd_failed(c, cmd->ref_seq, !c->enabled ? "the drives are off"
+                                        : busy(c) ? "a motion is already running"
+                                        : c->manual != NULL ? "manualControl is on: switch it off first"
+                                        : si < 0 ? "the move's sensor is not composed"
+                                                 : "the sensor-guided move was refused");
+        } else {
+            c->react_sensor = si;
+        }
+        atomic_store_explicit(&c->react_slot_busy, false, memory_order_release);
+        return;
+    }
+    case LS_CTL_STOP:
+        if (c->react.active) {
+            ls_react_stop(&c->react);
+        } else {
+            ls_motion_stop(&c->motion);
+        }
+        return;
     case LS_CTL_RESUME:
-        if (ls_motion_resume(&c->motion) != 0) {
+        if (c->react.active ? ls_react_resume(&c->react) != 0 : ls_motion_resume(&c->motion) != 0) {
             cmd_failed(c, cmd->ref_seq, "no paused motion to resume");
         }
         return;
-    case LS_CTL_ABORT: ls_motion_abort(&c->motion); return;
+    case LS_CTL_ABORT:
+        ls_motion_abort(&c->motion);
+        react_abort(c);
+        return;
+    case LS_CTL_MANUAL:
+        c->manual = cmd->manual.dev;
+        ls_react_jog_config(&c->react, c->manual != NULL ? &cmd->manual.jog : NULL);
+        if (c->manual != NULL && c->enabled) {
+            jog_ready(c, cmd->ref_seq);
+        }
+        return;
+    case LS_CTL_TOOL_COUPLE:
+    case LS_CTL_TOOL_BITS:
+        if (cmd->kind == LS_CTL_TOOL_COUPLE && busy(c)) {
+            tool_event(c, cmd, HAL_EAGAIN, 0);
+            return;
+        }
+        run_tool(c, cmd);
+        return;
     case LS_CTL_DIO_WRITE:
         if (hal_dio_write(c->cfg.dio, cmd->dio.unit, cmd->dio.on, cmd->dio.off) < 0) {
             cmd_failed(c, cmd->ref_seq, "DIO write refused by the backend");
@@ -247,46 +475,52 @@ void ls_control_cycle(ls_control_t *c, uint64_t now_us)
     read_dio(c);
     ls_motion_events_t mev;
     mev.n = 0;
+    c->jogging = false;
     if (c->enabled) {
-        ls_motion_step(&c->motion, c->dt_s, c->q, c->q_cmd, c->qd_cmd, &mev);
+        if (c->react.active) {
+            ls_react_step(&c->react, c->dt_s, c->q, c->react_sensor >= 0 ? c->sens[c->react_sensor] : NULL,
+                          c->q_cmd, c->qd_cmd, &mev);
+            /* The path executor holds where the guarded move is (or ended). */
+            ls_motion_hold(&c->motion, c->q_cmd);
+        } else if (c->motion.phase == LS_MOTION_IDLE && c->manual != NULL) {
+            double twist[6];
+            uint32_t buttons = 0;
+            bool have = c->manual->read != NULL && c->manual->read(c->manual->self, twist, &buttons) >= 0;
+            c->jogging = ls_react_jog_step(&c->react, c->dt_s, have ? twist : NULL, c->q_cmd, c->qd_cmd, &mev);
+            ls_motion_hold(&c->motion, c->q_cmd);
+        } else {
+            ls_motion_step(&c->motion, c->dt_s, c->q, c->q_cmd, c->qd_cmd, &mev);
+        }
         if (hal_arm_command(c->cfg.arm, c->q_cmd, c->qd_cmd) < 0) {
             fault(c, "arm command failed");
         }
     }
-    if (c->disable_pending && c->motion.phase != LS_MOTION_RUNNING && c->motion.phase != LS_MOTION_STOPPING) {
+    if (c->disable_pending && c->motion.phase != LS_MOTION_RUNNING && c->motion.phase != LS_MOTION_STOPPING &&
+        !ls_react_moving(&c->react)) {
         ls_motion_abort(&c->motion);
+        ls_react_abort(&c->react, c->q, &mev);
         (void)hal_arm_enable(c->cfg.arm, false);
         c->enabled = false;
         c->disable_pending = false;
     }
     (void)hal_arm_step(c->cfg.arm, c->dt_s); /* physics advances with the drives off too (brakes) */
     read_feedback(c);
-    for (uint8_t i = 0; i < mev.n; i++) {
-        ls_ctl_event_t ev;
-        memset(&ev, 0, sizeof ev);
-        ev.kind = LS_CEV_MOTION;
-        ev.ref_seq = mev.ev[i].ref_seq;
-        ev.motion = mev.ev[i];
-        ev_push(c, &ev);
-        if (mev.ev[i].kind == LS_MEV_FAULT && c->enabled) {
-            (void)hal_arm_enable(c->cfg.arm, false);
-            c->enabled = false;
-        }
-    }
+    read_sensors(c);
+    motion_events(c, &mev);
     c->cycles++;
     ls_ctl_snapshot_t s;
     s.cycle = c->cycles;
     s.t_us = now_us;
     s.enabled = c->enabled;
-    s.phase = c->motion.phase;
+    s.phase = c->react.active ? (c->react.paused ? LS_MOTION_PAUSED : LS_MOTION_RUNNING) : c->motion.phase;
+    s.react_active = c->react.active;
+    s.manual_on = c->manual != NULL;
+    s.jogging = c->jogging;
     memcpy(s.q_rad, c->q, sizeof s.q_rad);
     memcpy(s.qd_rad_s, c->qd, sizeof s.qd_rad_s);
     memcpy(s.q_cmd_rad, c->enabled ? c->q_cmd : c->q, sizeof s.q_cmd_rad);
     memcpy(s.dio, c->dio_levels, sizeof s.dio);
-    memset(s.sensor, 0, sizeof s.sensor);
-    for (size_t i = 0; i < c->cfg.n_sensors && i < (size_t)HAL_MAX_SENSORS; i++) {
-        (void)c->cfg.sensors[i].read(c->cfg.sensors[i].self, s.sensor[i]);
-    }
+    memcpy(s.sensor, c->sens, sizeof s.sensor);
     (void)ls_kin_fk(c->cfg.model, c->q, s.flange_pose);
     s.events_lost = atomic_load_explicit(&c->events_lost, memory_order_relaxed);
     s.max_cycle_us = c->max_cycle_us;

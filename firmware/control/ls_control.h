@@ -11,8 +11,17 @@
  * and motion plans through one plan slot handed over by a flag. Nothing in
  * the loop allocates or blocks.
  *
+ * Besides planned motions (ls_motion), the loop runs the sensor-guided moves
+ * and the jogging of ls_react: a guarded or compliant move is handed over in
+ * a react slot like a plan (ls_control_react_slot/ls_control_start_react);
+ * jogging is switched with ls_control_set_manual and then follows the manual
+ * device's twist whenever the drives are on and nothing else moves; tool
+ * coupling and tool bits run in the loop too (LS_CTL_TOOL_*), because the
+ * devices are the loop's (the simulated world is single-threaded).
+ *
  * Comms thread API: ls_control_post, ls_control_plan_slot/ls_control_start_plan,
- * ls_control_snapshot, ls_control_next_event. */
+ * ls_control_react_slot/ls_control_start_react, ls_control_set_manual,
+ * ls_control_set_event_filter, ls_control_snapshot, ls_control_next_event. */
 #ifndef LS_CONTROL_H
 #define LS_CONTROL_H
 
@@ -25,6 +34,7 @@
 #include "hal/hal_clock.h"
 #include "hal/hal_dio.h"
 #include "ls_motion.h"
+#include "ls_react.h"
 #include "ls_robot_model.h"
 
 #define LS_CTL_QUEUE_LEN 32u   /* power of two */
@@ -40,7 +50,13 @@ typedef enum {
     LS_CTL_DIO_WRITE,    /* dio.unit, dio.on, dio.off */
     LS_CTL_AUX_DONE,     /* a path auxiliary command finished: continue */
     LS_CTL_ESTOP_LINE,   /* dio.unit, dio.on = input bit that means e-stop when active (0: none) */
+    LS_CTL_REACT_START,  /* start the guarded/compliant move in the react slot */
+    LS_CTL_MANUAL,       /* manual: jogging on (dev, jog) or off (dev NULL); use ls_control_set_manual */
+    LS_CTL_TOOL_COUPLE,  /* tool.dev, tool.id, tool.attach: LS_MEV_TOOL reports the HAL status */
+    LS_CTL_TOOL_BITS,    /* tool.dev, tool.on, tool.off: LS_MEV_TOOL reports the status, dio.on the bits */
 } ls_ctl_kind_t;
+
+#define LS_CTL_TOOL_ID_LEN 32
 
 typedef struct {
     ls_ctl_kind_t kind;
@@ -49,6 +65,16 @@ typedef struct {
         uint16_t unit;
         uint32_t on, off;
     } dio;
+    struct {
+        const hal_tool_t *dev;
+        char id[LS_CTL_TOOL_ID_LEN];
+        bool attach;
+        uint32_t on, off;
+    } tool;
+    struct {
+        const hal_manual_t *dev; /* NULL: jogging off */
+        ls_jog_config_t jog;
+    } manual;
 } ls_ctl_cmd_t;
 
 typedef enum {
@@ -67,7 +93,12 @@ typedef struct {
         uint16_t unit;
         uint32_t on, off;
     } dio;
+    ls_react_report_t react; /* LS_MEV_REACT_END: the reading and the force statistics */
 } ls_ctl_event_t;
+
+/* Comms thread: sees every event before ls_control_next_event returns it;
+ * returning true consumes it (next_event then goes on to the next one). */
+typedef bool (*ls_control_event_filter_t)(void *ctx, const ls_ctl_event_t *ev);
 
 /* What the comms thread may read at any time (copied under a seqlock). */
 typedef struct {
@@ -84,6 +115,9 @@ typedef struct {
     double flange_pose[16];   /* FK of q_rad, base frame, column-major */
     uint32_t events_lost;
     uint32_t max_cycle_us;
+    bool react_active;        /* a guarded/compliant move runs or is paused */
+    bool manual_on;           /* jogging is switched on */
+    bool jogging;             /* the set-point moved by jogging this cycle */
 } ls_ctl_snapshot_t;
 
 typedef struct {
@@ -103,6 +137,11 @@ typedef struct ls_control {
     atomic_uint cmd_head, cmd_tail;
     ls_motion_plan_t plan_slot;
     atomic_bool plan_slot_busy; /* set by the comms thread when filled, cleared by the loop when taken */
+    ls_react_plan_t react_slot;
+    atomic_bool react_slot_busy;
+    atomic_bool manual_on;      /* written by ls_control_set_manual: plans are refused meanwhile */
+    ls_control_event_filter_t filter;
+    void *filter_ctx;
     /* loop -> comms */
     ls_ctl_event_t ev_ring[LS_CTL_QUEUE_LEN];
     atomic_uint ev_head, ev_tail;
@@ -112,6 +151,11 @@ typedef struct ls_control {
     ls_ctl_snapshot_t snap;
     /* loop-private */
     ls_motion_t motion;
+    ls_react_t react;
+    int react_sensor;         /* index of the running move's sensor, -1: none */
+    const hal_manual_t *manual;
+    double sens[HAL_MAX_SENSORS][HAL_SENSOR_MAX_VALUES]; /* last reading, SI */
+    bool jogging;
     bool enabled;
     bool disable_pending;     /* DISABLE while moving: stop along the path first */
     double q[LS_N_JOINTS], qd[LS_N_JOINTS], q_cmd[LS_N_JOINTS], qd_cmd[LS_N_JOINTS];
@@ -132,10 +176,23 @@ void ls_control_cycle(ls_control_t *c, uint64_t now_us);
 
 /* Queue a command; false when the ring is full (the caller answers CMD_BUSY_ERR). */
 bool ls_control_post(ls_control_t *c, const ls_ctl_cmd_t *cmd);
-/* The plan slot to fill, or NULL while the loop has not taken the previous plan. */
+/* The plan slot to fill, or NULL while the loop has not taken the previous
+ * plan, or while jogging is switched on (ls_control_manual_on tells which). */
 ls_motion_plan_t *ls_control_plan_slot(ls_control_t *c);
 /* Hand the filled slot over and queue LS_CTL_START. */
 bool ls_control_start_plan(ls_control_t *c, uint32_t ref_seq);
+/* The react slot to fill (SI plan, ls_react.h), or NULL while the loop has
+ * not taken the previous one or jogging is on. */
+ls_react_plan_t *ls_control_react_slot(ls_control_t *c);
+/* Hand the filled react slot over and queue LS_CTL_REACT_START. The loop
+ * answers LS_CEV_CMD_FAILED when it cannot start it (drives off, a motion
+ * runs), else the move ends with one LS_MEV_REACT_END (or LS_MEV_FAULT). */
+bool ls_control_start_react(ls_control_t *c, uint32_t ref_seq);
+/* Jogging on (dev and jog non-NULL) or off (dev NULL). false when the queue is full. */
+bool ls_control_set_manual(ls_control_t *c, const hal_manual_t *dev, const ls_jog_config_t *jog, uint32_t ref_seq);
+bool ls_control_manual_on(ls_control_t *c);
+/* Install the comms thread's event filter (NULL: none). Call from the comms thread. */
+void ls_control_set_event_filter(ls_control_t *c, ls_control_event_filter_t fn, void *ctx);
 /* A consistent copy of the loop's state. */
 void ls_control_snapshot(ls_control_t *c, ls_ctl_snapshot_t *out);
 /* Take the next event; false when none. */

@@ -22,8 +22,13 @@
 
 
 #define PI 3.14159265358979323846
+/* Path storage is the firmware's largest static table (about 8 x 256 x 360 B
+ * here). A board with little SRAM builds with smaller values, e.g.
+ * -DLS_PATH_MAX=2 -DLS_PATH_MAX_POINTS=64 for the whole build (docs/performance.md). */
+#ifndef LS_PATH_MAX
 #define LS_PATH_MAX 8
-#define LS_PATH_MAX_POINTS 256
+#endif
+
 
 /* ------------------------------------------------------------- units */
 

@@ -49,6 +49,10 @@ int32_t ls_h_send_command(struct ls_core *core, struct ls_call *call)
         }
         put(&o, "fault=%s\nrx_malformed=%u\ntx_lost=%u\nsessions_dropped=%u\n", core->fault,
             (unsigned)core->rx_malformed, (unsigned)core->tx_lost, (unsigned)core->sessions_dropped);
+        if (core->io.describe != NULL && o.len < o.cap) {
+            core->io.describe(core->io.ctx, o.buf + o.len, o.cap - o.len);
+            o.len += strlen(o.buf + o.len);
+        }
         for (int i = 0; i < LS_MAX_SUPERVISORS; i++) {
             const ls_session_t *s = &core->sessions[i];
             if (s->connected) {

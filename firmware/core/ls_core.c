@@ -490,6 +490,24 @@ static void on_request(ls_core_t *core, uint8_t addr, const ls_Request *rq, uint
         }
         return;
     }
+    if (s != NULL && s->last_pending && rq->which_cmd != ls_Request_connect_tag &&
+        rq->which_cmd != ls_Request_disconnect_tag) {
+        /* One request in flight per session: the deferred one keeps its
+         * answer slot; this one is refused without running. */
+        const ls_cmd_desc_t *pd = ls_cmd_find(s->pending_tag);
+        memset(&core->down, 0, sizeof core->down);
+        core->down.which_msg = ls_Downlink_response_tag;
+        ls_Response *busy = &core->down.msg.response;
+        busy->seq = rq->seq;
+        busy->ret_code = ls_RetCode_CMD_BUSY_ERR;
+        snprintf(busy->ret_msg, sizeof busy->ret_msg, "%s (seq %u) is still running: wait for its answer",
+                 pd != NULL ? pd->name : "a blocking command", (unsigned)s->last_seq);
+        size_t len = encode_downlink(core);
+        if (len > 0) {
+            send_bytes(core, addr, core->enc, len);
+        }
+        return;
+    }
     memset(&core->down, 0, sizeof core->down);
     core->down.which_msg = ls_Downlink_response_tag;
     ls_Response *res = &core->down.msg.response;
@@ -611,8 +629,8 @@ void ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t
         bool scanned = scan_request(buf, len, &seq, &cmd);
         const ls_cmd_desc_t *d = scanned ? ls_cmd_find((pb_size_t)cmd) : NULL;
         answer_bad_request(core, addr, ls_RetCode_CMD_PARAM_ERR, seq,
-                           "%s did not decode (%s): a value may exceed the firmware's limits "
-                           "(protocol/landscape.options) or host and firmware use different schemas",
+                           "%s did not decode (%s): a value exceeds the firmware's limits "
+                           "(protocol/landscape.options) or the schemas differ",
                            d != NULL ? d->name : "the message", PB_GET_ERROR(&is));
         return;
     }
@@ -620,11 +638,11 @@ void ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t
         (void)scan_request(buf, len, &seq, &cmd);
         if (cmd != 0u) {
             answer_bad_request(core, addr, ls_RetCode_CMD_UNKNOWN_CMD_ERR, core->up.msg.request.seq,
-                               "command id %u is not in this firmware's schema: update the firmware or use the "
-                               "host tool built with it", (unsigned)cmd);
+                               "command id %u is not in this firmware's schema: update the firmware or the "
+                               "host tool (they must come from the same tree)", (unsigned)cmd);
         } else {
-            answer_bad_request(core, addr, ls_RetCode_CMD_PARAM_ERR, core->up.msg.request.seq,
-                               "the request carries no command");
+            answer_bad_request(core, addr, ls_RetCode_CMD_UNKNOWN_CMD_ERR, core->up.msg.request.seq,
+                               "the request carries no command: the host tool must set one");
         }
         return;
     }

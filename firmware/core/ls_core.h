@@ -32,6 +32,8 @@ typedef struct {
     /* Queue one encoded ls.Downlink for the supervisor at `addr`. Returns 0,
      * or negative when its queue is full (the message is then lost and counted). */
     int (*send_downlink)(void *ctx, uint8_t addr, const uint8_t *buf, size_t len);
+    /* Optional: the transport's counters as key=value lines (sendCommand status). */
+    void (*describe)(void *ctx, char *buf, size_t cap);
     void *ctx;
 } ls_core_io_t;
 

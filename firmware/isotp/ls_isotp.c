@@ -309,8 +309,8 @@ static void on_ff(ls_isotp_link_t *l, const uint8_t *d, uint8_t len, uint64_t no
         queue_fc(l, FS_OVFLW, now_us);
         return;
     }
-    if (!rx_may_start(l)) {
-        return;
+    if (l->rx_state == LS_ISOTP_RX_RECEIVING) {
+        rx_abort(l, LS_ISOTP_N_UNEXP_PDU);
     }
     if (msg_len == 0 || msg_len > LS_ISOTP_MAX_PAYLOAD) {
         count_rx(l, LS_ISOTP_N_BUFFER_OVFLW);

@@ -133,7 +133,8 @@ void ls_isotp_poll(ls_isotp_link_t *l, uint64_t now_us);
 
 /* When a whole message was received: copy it to `out` (cap >= its length),
  * return its length and free the receiver. Else return 0. A message longer
- * than `cap` is dropped and counted as N_BUFFER_OVFLW; returns 0. */
+ * than `cap` is dropped and counted as N_BUFFER_OVFLW; returns 0. A NULL `out`
+ * returns 0 and leaves the message in place. Never writes past out[cap-1]. */
 size_t ls_isotp_take_rx(ls_isotp_link_t *l, uint8_t *out, size_t cap);
 
 bool ls_isotp_tx_busy(const ls_isotp_link_t *l);

@@ -30,7 +30,12 @@
 #define LS_MOTION_MAX_EVENTS 4 /* per cycle */
 #define LS_MOTION_AUX_PER_POINT 4
 #define LS_MOTION_AUX_LEN 48
-#define LS_MOTION_MAX_SEGS 257 /* a path of 256 points plus the segment that closes a cycle */
+/* Points of one path. It sizes static tables in several translation units:
+ * change it for the whole build only (cmake -DCMAKE_C_FLAGS=-DLS_PATH_MAX_POINTS=64). */
+#ifndef LS_PATH_MAX_POINTS
+#define LS_PATH_MAX_POINTS 256
+#endif
+#define LS_MOTION_MAX_SEGS (LS_PATH_MAX_POINTS + 1) /* a path plus the segment that closes a cycle */
 #define LS_MOTION_FOLLOWING_ERROR_RAD 0.05
 
 /* Planner statuses (negative = refused; `why` says which joint/axis and limit). */
@@ -53,6 +58,11 @@ typedef enum {
     LS_MEV_FAULT,    /* following error, IK failure: text; the executor is idle afterwards */
     LS_MEV_AUX,      /* a path auxiliary command is due: text = the command, index = point,
                         cycle; the executor waits until ls_motion_aux_done() */
+    /* Reported by the sensor-guided executor and the control loop (ls_react.h,
+     * ls_control.h); the path executor never emits them. */
+    LS_MEV_REACT_END, /* a guarded or compliant move ended: index = ls_react_end_t, q_rad = measured */
+    LS_MEV_JOG,       /* jogging: stopped at a limit (text), or became possible (drives on) */
+    LS_MEV_TOOL,      /* a tool command ran in the loop: name = tool, index = HAL status */
 } ls_motion_event_kind_t;
 
 typedef struct {

@@ -1,5 +1,6 @@
 #include "ls_net.h"
 
+#include <stdio.h>
 #include <string.h>
 
 static int isotp_send_frame(void *ctx, uint32_t can_id, const uint8_t *data, uint8_t len)
@@ -87,6 +88,10 @@ static ls_net_peer_t *get_peer(ls_net_t *net, uint8_t addr)
     }
     if (victim->used) {
         net->peers_evicted++;
+        for (int r = 0; r < LS_ISOTP_N_RESULT_COUNT; r++) {
+            net->rx_results_gone[r] += victim->isotp.rx_results[r];
+            net->tx_results_gone[r] += victim->isotp.tx_results[r];
+        }
     }
     memset(victim, 0, sizeof *victim);
     victim->used = true;
@@ -129,6 +134,12 @@ static void route(ls_net_t *net, const hal_can_frame_t *f)
         if (p != NULL) {
             p->last_used_us = net->now_us;
             ls_isotp_on_frame(&p->isotp, f->data, f->len, net->now_us);
+            /* Take a completed message at once: the next frame of this
+             * batch may already be the sender's next request. */
+            size_t n = ls_isotp_take_rx(&p->isotp, net->rxbuf, sizeof net->rxbuf);
+            if (n > 0) {
+                ls_core_on_uplink(net->core, p->addr, net->rxbuf, n, net->now_us);
+            }
         }
     } else if (pf == LS_ID_ISOTP_FUNC && (target == LS_ADDR_ALL || target == net->node)) {
         uint8_t payload[8];
@@ -198,4 +209,50 @@ void ls_net_close(ls_net_t *net)
         hal_can_close(&net->links[i]);
     }
     net->n_links = 0;
+}
+
+void ls_net_describe(void *ctx, char *buf, size_t cap)
+{
+    ls_net_t *net = ctx;
+    uint32_t rx[LS_ISOTP_N_RESULT_COUNT], tx[LS_ISOTP_N_RESULT_COUNT];
+    for (int r = 0; r < LS_ISOTP_N_RESULT_COUNT; r++) {
+        rx[r] = net->rx_results_gone[r];
+        tx[r] = net->tx_results_gone[r];
+    }
+    for (size_t i = 0; i < LS_NET_MAX_PEERS; i++) {
+        if (net->peers[i].used) {
+            for (int r = 0; r < LS_ISOTP_N_RESULT_COUNT; r++) {
+                rx[r] += net->peers[i].isotp.rx_results[r];
+                tx[r] += net->peers[i].isotp.tx_results[r];
+            }
+        }
+    }
+    uint32_t link_rx_dropped = 0, link_tx_dropped = 0;
+    for (size_t i = 0; i < net->n_links; i++) {
+        hal_can_status_t st;
+        if (hal_can_status(&net->links[i], &st) >= 0) {
+            link_rx_dropped += st.rx_dropped;
+            link_tx_dropped += st.tx_dropped;
+        }
+    }
+    size_t n = 0;
+    int w = snprintf(buf, cap, "frames_in=%u\nframes_out=%u\ntx_full=%u\nlink_rx_dropped=%u\nlink_tx_dropped=%u\n"
+                     "peers_evicted=%u\n", (unsigned)net->frames_in, (unsigned)net->frames_out,
+                     (unsigned)net->tx_full, (unsigned)link_rx_dropped, (unsigned)link_tx_dropped,
+                     (unsigned)net->peers_evicted);
+    n = w > 0 ? (size_t)w : 0u;
+    for (int r = 0; r < LS_ISOTP_N_RESULT_COUNT && n < cap; r++) {
+        /* e.g. isotp_unexp_pdu=1: receive and send outcomes together, by ISO name */
+        const char *name = ls_isotp_result_name((ls_isotp_result_t)r);
+        char lower[32];
+        size_t k = 0;
+        for (; name[k] != '\0' && k + 1 < sizeof lower; k++) {
+            char ch = name[k];
+            lower[k] = (char)(ch >= 'A' && ch <= 'Z' ? ch - 'A' + 'a' : ch);
+        }
+        lower[k] = '\0';
+        const char *suffix = strncmp(lower, "n_", 2) == 0 ? lower + 2 : lower;
+        w = snprintf(buf + n, cap - n, "isotp_%s=%u\n", suffix, (unsigned)(rx[r] + tx[r]));
+        n += w > 0 ? (size_t)w : 0u;
+    }
 }

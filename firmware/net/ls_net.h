@@ -57,6 +57,8 @@ typedef struct ls_net {
     ls_isotp_config_t isotp_cfg;
     uint64_t now_us;
     uint32_t frames_in, frames_out, frames_bridged, tx_full, peers_evicted;
+    uint32_t rx_results_gone[LS_ISOTP_N_RESULT_COUNT]; /* counters of evicted peers */
+    uint32_t tx_results_gone[LS_ISOTP_N_RESULT_COUNT];
     uint8_t rxbuf[LS_ISOTP_MAX_PAYLOAD];
 } ls_net_t;
 
@@ -73,5 +75,7 @@ int ls_net_send_downlink(void *net, uint8_t addr, const uint8_t *buf, size_t len
 /* Earliest ISO-TP deadline, for the caller's poll timeout. */
 uint64_t ls_net_next_deadline_us(const ls_net_t *net);
 void ls_net_close(ls_net_t *net);
+/* Transport counters as key=value lines (the ls_core_io_t.describe hook). */
+void ls_net_describe(void *net, char *buf, size_t cap);
 
 #endif

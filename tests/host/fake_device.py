@@ -4,12 +4,16 @@ It speaks ISO-TP (can-isotp, normal fixed 29-bit addressing) to a fixed set of
 supervisor addresses and implements: connect/disconnect with version and hash
 checks, heartbeat tracking (a session ends when its supervisor's heartbeat
 stops for longer than the time-out; an owner's lock goes with it), lock,
-release, activate, get-motion-control-state, seq caching (a retransmitted seq
-is answered from the cache, never executed twice) and one non-blocking command,
-moveAbsolute, which sends a tag event, an RSVP and then its final event or
-alarm. Every other command answers CMD_NOT_IMPLEMENTED_ERR. Test knobs:
+release, activate, deactivate, get-motion-control-state, seq caching (a
+retransmitted seq is answered from the cache, never executed twice), pathLoad
+and pathClearPath (named paths, at most 32 points per message as the firmware)
+and two non-blocking commands: moveAbsolute, which sends a tag event, an RSVP
+and then its final event or alarm, and pathMove, which sends one tag event per
+tagged point and cycle, then pathComplete. It broadcasts HEARTBEAT, STATUS,
+JOINTS_12/34/56, TOOL_POS (with a device time stamp), TOOL_RPY and DIO every
+50 ms. Every other command answers CMD_NOT_IMPLEMENTED_ERR. Test knobs:
 `drop_responses`, `silent`, `force_codes`, `version`, `schema_hash`,
-`refuse_mismatch`.
+`refuse_mismatch`, `point_time_s`.
 """
 from __future__ import annotations
 
@@ -62,6 +66,10 @@ class FakeDevice:
         self.heartbeats: dict[int, list[dict[str, Any]]] = {h: [] for h in hosts}
         self.rsvp_replies: list[pb.RsvpReply] = []
         self.requests: list[pb.Request] = []
+        self.uplink_sizes: list[int] = []   # bytes of every request message received
+        self.paths: dict[str, list[pb.TagPoint]] = {}
+        self.point_time_s = 0.01
+        self._t0 = time.monotonic()
         self._rsvp_waiters: dict[int, threading.Event] = {}
         self._rsvp_next = 1
         self._lock = threading.RLock()
@@ -132,6 +140,14 @@ class FakeDevice:
                                         hb_state=state, hb_owner=owner, hb_supervisors=len(self.sessions)))
                 self.bus.send(tm.encode("STATUS", self.address, st_state=state, st_cycle_us=1000))
                 self.bus.send(tm.encode("JOINTS_12", self.address, j1=0.5, j2=-0.25))
+                k = counter % 100
+                self.bus.send(tm.encode("JOINTS_34", self.address, j3=0.01 * k, j4=-0.02 * k))
+                self.bus.send(tm.encode("JOINTS_56", self.address, j5=0.3, j6=0.001 * k))
+                now_ms = int((time.monotonic() - self._t0) * 1000) & 0xFFFF
+                self.bus.send(tm.encode("TOOL_POS", self.address, tool_x=0.4 + 0.001 * k, tool_y=0.002 * k,
+                                        tool_z=0.6 - 0.001 * k, tool_time_ms=now_ms))
+                self.bus.send(tm.encode("TOOL_RPY", self.address, tool_roll=0.1, tool_pitch=0.2, tool_yaw=0.3))
+                self.bus.send(tm.encode("DIO", self.address, dio_inputs=0x5, dio_outputs=0xA0))
             except can.CanError:
                 pass
             counter += 1
@@ -163,6 +179,7 @@ class FakeDevice:
             req = up.request
             with self._lock:
                 self.requests.append(req)
+                self.uplink_sizes.append(len(data))
                 if self.silent:
                     continue
                 s = self.sessions.get(host)
@@ -230,7 +247,8 @@ class FakeDevice:
             self.owner, self.state = host, pb.LOCKED
             resp.lock.SetInParent()
             return answer(pb.CMD_EXEC_OK)
-        if which in ("release", "activate", "move_absolute"):
+        if which in ("release", "activate", "deactivate", "move_absolute", "path_load", "path_clear_path",
+                     "path_move"):
             if self.owner != host:
                 return answer(pb.CMD_NOT_OWNER_ERR, "lock first")
         if which == "release":
@@ -245,6 +263,45 @@ class FakeDevice:
             self.state = pb.RESTING
             resp.activate.SetInParent()
             return answer(pb.CMD_EXEC_OK)
+        if which == "deactivate":
+            if self.state != pb.RESTING:
+                return answer(pb.CMD_WRONG_STATE_ERR, "deactivate is valid in RESTING")
+            self.state = pb.LOCKED
+            resp.deactivate.SetInParent()
+            return answer(pb.CMD_EXEC_OK)
+        if which == "path_load":
+            pl = req.path_load
+            if self.state not in (pb.LOCKED, pb.RESTING):
+                return answer(pb.CMD_WRONG_STATE_ERR, "pathLoad is valid in LOCKED and RESTING")
+            if not pl.path_name:
+                return answer(pb.CMD_PARAM_ERR, "path_name: empty")
+            if len(pl.tags) > 32:
+                return answer(pb.CMD_PARAM_ERR, f"tags: {len(pl.tags)} points, at most 32 per message")
+            if pl.number_of_points != len(pl.tags):
+                return answer(pb.CMD_PARAM_ERR, f"number_of_points {pl.number_of_points} != {len(pl.tags)} tags")
+            if len(self.paths.get(pl.path_name, [])) + len(pl.tags) > 1000:
+                return answer(pb.CMD_NO_RESOURCES_ERR, "a path holds at most 1000 points")
+            self.paths.setdefault(pl.path_name, []).extend(pl.tags)
+            resp.path_load.points_in_path = len(self.paths[pl.path_name])
+            return answer(pb.CMD_EXEC_OK)
+        if which == "path_clear_path":
+            if self.paths.pop(req.path_clear_path.path_name, None) is None:
+                return answer(pb.CMD_PARAM_ERR, f"no path '{req.path_clear_path.path_name}'")
+            resp.path_clear_path.SetInParent()
+            return answer(pb.CMD_EXEC_OK)
+        if which == "path_move":
+            pm = req.path_move
+            if self.state != pb.RESTING:
+                return answer(pb.CMD_WRONG_STATE_ERR, "pathMove is valid in RESTING: activate first")
+            if pm.path_name not in self.paths:
+                return answer(pb.CMD_PARAM_ERR, f"no path '{pm.path_name}': pathLoad it first")
+            if pm.number_of_cycles < 0:
+                return answer(pb.CMD_PARAM_OUT_OF_RANGE_ERR, "number_of_cycles: must be >= 0")
+            self.state = pb.MOVING
+            threading.Thread(target=self._run_path, args=(host, req.seq, pm.path_name, pm.number_of_cycles,
+                                                          list(self.paths[pm.path_name])), daemon=True).start()
+            resp.path_move.SetInParent()
+            return answer(pb.CMD_STARTED_OK)
         if which == "move_absolute":
             if self.state != pb.RESTING:
                 return answer(pb.CMD_WRONG_STATE_ERR, "moveAbsolute is valid in RESTING: activate first")
@@ -268,6 +325,18 @@ class FakeDevice:
             s.notice_seq += 1
             n = pb.Notice(notice_seq=s.notice_seq, **kw)
         self.stacks[host].send(pb.Downlink(notice=n).SerializeToString())
+
+    def _run_path(self, host: int, seq: int, path: str, cycles: int, points: list[pb.TagPoint]) -> None:
+        for cycle in range(1, max(cycles, 1) + 1):
+            for i, p in enumerate(points):
+                time.sleep(self.point_time_s)
+                if p.tag_name:
+                    self.notify(host, kind=pb.EVENT, event_id="tag", ref_seq=seq,
+                                data=[f"tag={p.tag_name}", f"index={p.tag_index}", f"cycle={cycle}", f"path={path}"])
+        with self._lock:
+            self.state = pb.RESTING
+        self.notify(host, kind=pb.EVENT, event_id="pathComplete", data=[f"path={path}", f"cycles={cycles}"],
+                    ref_seq=seq, final=True)
 
     def _run_move(self, host: int, seq: int, point: str, values: list[float]) -> None:
         time.sleep(self.move_time_s)

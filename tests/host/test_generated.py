@@ -41,3 +41,8 @@ def test_schema_hash_equals_gen_registry() -> None:
     spec.loader.exec_module(mod)
     assert SCHEMA_HASH == mod.schema_hash(landscape_pb2)
     assert 0 < SCHEMA_HASH < 2**32
+
+
+def test_options_copy_matches_protocol() -> None:
+    assert (GEN / "landscape.options").read_bytes() == (ROOT / "protocol" / "landscape.options").read_bytes(), \
+        f"landscape.options is stale: {FIX}"

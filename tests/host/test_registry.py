@@ -137,3 +137,10 @@ def test_integer_ranges() -> None:
 def test_repeated_fields_detected() -> None:
     f = ls.MoveAbsoluteReq.DESCRIPTOR.fields_by_name
     assert is_repeated(f["values"]) and not is_repeated(f["point_name"])
+
+
+def test_host_default_fills_fields_the_caller_leaves_out() -> None:
+    from landscape.registry import build_request
+    assert build_request("pathMove", path_name="p").path_move.number_of_cycles == 1
+    assert build_request("pathMove", path_name="p", number_of_cycles=0).path_move.number_of_cycles == 0
+    assert build_request("moveAbsolute", point_name="p").move_absolute.speed_pct == 0.0

@@ -248,11 +248,17 @@ def echo(s: Setup, payload: bytes) -> None:
     s.host_sent.clear()
     s.stack.send(payload)
     got = s.stack.recv(block=True, timeout=TRANSFER_TIMEOUT_S)
-    assert got is not None, f"no echo of a {n}-byte message; peer: {s.peer.log.errors}"
+    if got is None:
+        with s.peer.log.lock:
+            detail = (f"peer received {len(s.peer.log.rx)} frames, sent {len(s.peer.log.tx)}, messages "
+                      f"{s.peer.log.messages}, errors {s.peer.log.errors}; host sent {len(s.host_sent)}, "
+                      f"saw {len(s.recorder.frames)}")
+        raise AssertionError(f"no echo of a {n}-byte message within {TRANSFER_TIMEOUT_S} s: {detail}")
     assert bytes(got) == payload
 
     # The echo completed, so the host's transfer did too; wait for the last
     # log lines and frames (stdout and the pty are read by other threads).
+    settle(lambda: len(s.peer.log.messages) >= 1, "the peer's message log")
     with s.peer.log.lock:
         assert s.peer.log.messages == [n]
     settle(lambda: len(s.recorder.frames) >= iso_data_frames(n) + iso_flow_controls(n, s.block_size),

@@ -273,9 +273,6 @@ def test_consecutive_frame_with_a_wrong_sequence_number_aborts_the_message(bus: 
     assert sup.send_command("version").ok
 
 
-@pytest.mark.xfail(strict=True, reason="firmware/net/ls_net.c routes a whole batch of frames before it takes "
-                   "the completed message: the second SF finds the receiver full (N_BUFFER_OVFLW). Fix: take "
-                   "the message right after ls_isotp_on_frame in route() (report of issue 3)")
 def test_back_to_back_single_frames_in_one_read_are_both_served(bus: can.BusABC, notifier: can.Notifier,
                                                                 sup: Supervisor) -> None:
     """Two complete single frames of one sender that reach the device in one
@@ -303,10 +300,10 @@ def test_uplink_that_does_not_decode_is_answered_with_param_err(sup: Supervisor,
     reader.drain()
     for garbage in (b"\xff\xff\xff\xff\x01", bytes(range(256)) * 16, b"\x0a\x80"):
         sup._send(garbage[:4095])
-        res = reader.response(0)
+        res = reader.response(0)  # not even the seq could be read
         assert res.ret_code == pb.CMD_PARAM_ERR
-        assert res.ret_msg.startswith("message did not decode (")
-        assert "same schema" in res.ret_msg
+        assert "did not decode (" in res.ret_msg
+        assert "schemas differ" in res.ret_msg
     assert int(status(sup)["rx_malformed"]) - before == 3
 
 
@@ -328,7 +325,8 @@ def test_unknown_command_id_is_answered_with_unknown_cmd(sup: Supervisor, reader
     assert raw_request(sup, field_bytes(1, request)) == seq
     res = reader.response(seq)
     assert res.ret_code == pb.CMD_UNKNOWN_CMD_ERR
-    assert "update the firmware or the host tool" in res.ret_msg
+    assert res.ret_msg == (f"command id {number} is not in this firmware's schema: update the firmware or the "
+                           f"host tool (they must come from the same tree)")
     assert res.WhichOneof("result") is None
 
 
@@ -336,29 +334,37 @@ def test_request_without_a_command_is_answered_with_unknown_cmd(sup: Supervisor,
     reader.drain()
     seq = sup._seq + 1
     assert raw_request(sup, pb.Uplink(request=pb.Request(seq=seq)).SerializeToString()) == seq
-    assert reader.response(seq).ret_code == pb.CMD_UNKNOWN_CMD_ERR
+    res = reader.response(seq)
+    assert res.ret_code == pb.CMD_UNKNOWN_CMD_ERR
+    assert res.ret_msg.startswith("the request carries no command")
 
 
-@pytest.mark.parametrize("request_", [
-    pb.Request(move_absolute=pb.MoveAbsoluteReq(point_name="p" * 200, values=[0] * 6)),
-    pb.Request(move_absolute=pb.MoveAbsoluteReq(point_name="p1", values=[0.0] * 100)),
-    pb.Request(send_command=pb.SendCommandReq(input="s" * 3000)),
-    pb.Request(path_load=pb.PathLoadReq(path_name="p", tags=[pb.TagPoint(joints=[0] * 6)] * 40)),
-    pb.Request(connect=pb.ConnectReq(client_name="c" * 33)),
+@pytest.mark.parametrize("request_,name", [
+    (pb.Request(move_absolute=pb.MoveAbsoluteReq(point_name="p" * 200, values=[0] * 6)), "moveAbsolute"),
+    (pb.Request(move_absolute=pb.MoveAbsoluteReq(point_name="p1", values=[0.0] * 100)), "moveAbsolute"),
+    (pb.Request(send_command=pb.SendCommandReq(input="s" * 3000)), "sendCommand"),
+    (pb.Request(path_load=pb.PathLoadReq(path_name="p", tags=[pb.TagPoint(joints=[0] * 6)] * 40)), "pathLoad"),
+    (pb.Request(connect=pb.ConnectReq(client_name="c" * 33)), "connect"),
 ], ids=["point_name-200", "values-100", "input-3000", "tags-40", "client_name-33"])
 def test_request_over_the_static_sizes_is_answered_with_param_err(sup: Supervisor, reader: Reader,
-                                                                  request_: pb.Request) -> None:
+                                                                  request_: pb.Request, name: str) -> None:
     before = int(status(sup)["rx_malformed"])
     reader.drain()
     request_.seq = sup._seq + 1
     payload = pb.Uplink(request=request_).SerializeToString()
     assert len(payload) <= 4095
     raw_request(sup, payload)
-    res = reader.response(0)  # did not decode: seq unknown (with the ls_core.c fix of issue 3: request_.seq)
+    res = reader.response(request_.seq)  # the seq is recovered from the raw bytes
     assert res.ret_code == pb.CMD_PARAM_ERR
-    assert res.ret_msg.startswith("message did not decode (")
+    assert "did not decode (" in res.ret_msg
+    assert res.ret_msg.startswith(registry_name(request_))
     assert int(status(sup)["rx_malformed"]) - before == 1
     assert sup.get_motion_control_state().ok
+
+
+def registry_name(request_: pb.Request) -> str:
+    from landscape.registry import lookup
+    return lookup(request_.WhichOneof("cmd")).name
 
 
 # ---------------------------------------------------------------- noise
@@ -391,8 +397,6 @@ def test_random_frames_and_slcan_lines_do_not_hurt(bus: can.BusABC, sup: Supervi
     assert st["state"] == "UNLOCKED"
 
 
-@pytest.mark.xfail(strict=True, reason="sendCommand status has no transport counters yet: the lead adds "
-                   "ISO-TP and link drop counts (see the report of issue 3)")
 def test_status_counts_transport_drops(bus: can.BusABC, sup: Supervisor) -> None:
     bus.send(frame(phys_id(DEVICE, HOST), bytes([0x21, 1, 2, 3, 4, 5, 6, 7])))
     bus.send(frame(phys_id(DEVICE, 0xF3), bytes([0x10, 0x00, 0x00, 0x00, 0x13, 0x88, 0, 0])))
@@ -402,24 +406,33 @@ def test_status_counts_transport_drops(bus: can.BusABC, sup: Supervisor) -> None
     assert int(st["isotp_buffer_ovflw"]) >= 1
 
 
-@pytest.mark.xfail(strict=True, reason="firmware/core/ls_core.c names command id 0 (nanopb dropped the unknown "
-                   "field); the fix finds the field number in the raw request (report of issue 3)")
-@pytest.mark.parametrize("number", [58, 100], ids=lambda n: f"field{n}")
-def test_unknown_command_error_names_the_command_id(sup: Supervisor, reader: Reader, number: int) -> None:
-    reader.drain()
-    seq = sup._seq + 1
-    raw_request(sup, field_bytes(1, b"\x08" + varint(seq) + field_bytes(number, b"")))
-    res = reader.response(seq)
-    assert res.ret_code == pb.CMD_UNKNOWN_CMD_ERR
-    assert res.ret_msg.startswith(f"command id {number} is not in this firmware's schema")
-
-
-@pytest.mark.xfail(strict=True, reason="firmware/core/ls_core.c answers a request that does not decode with seq 0, "
-                   "so the Supervisor cannot match it and times out; the fix recovers the seq from the raw bytes "
-                   "(report of issue 3)")
 def test_oversize_request_through_the_library_gets_param_err_not_a_timeout(sup: Supervisor) -> None:
     t0 = time.monotonic()
     rv = sup.move_absolute("p" * 200, [0.0] * 6, check=False, timeout_s=0.5)
     assert rv.ret_code == pb.CMD_PARAM_ERR
-    assert "did not decode" in rv.ret_msg
+    assert rv.ret_msg.startswith("moveAbsolute did not decode (")
     assert time.monotonic() - t0 < 0.5
+
+
+def test_a_request_while_a_blocking_one_runs_is_refused_and_the_first_still_answers(
+        sup: Supervisor, reader: Reader) -> None:
+    """One request in flight per session: a second request while stopMotion is
+    still decelerating (a deferred answer) gets CMD_BUSY_ERR and does not run;
+    the stop's own answer still arrives."""
+    sup.lock()
+    sup.activate()
+    sup.move_absolute("far", [1.2, 0.3, 0.2, 0.5, 0.4, 1.0], speed_pct=20)
+    time.sleep(0.3)
+    reader.drain(0.05)
+    stop_seq = raw_request(sup, pb.Uplink(request=pb.Request(seq=sup._seq + 1, stop_motion={})).SerializeToString())
+    query_seq = raw_request(sup, pb.Uplink(request=pb.Request(
+        seq=sup._seq + 1, get_motion_control_state={})).SerializeToString())
+    busy = reader.response(query_seq)
+    assert busy.ret_code == pb.CMD_BUSY_ERR
+    assert busy.ret_msg.startswith(f"stopMotion (seq {stop_seq}) is still running")
+    stopped = reader.response(stop_seq)
+    assert stopped.ret_code == pb.CMD_EXEC_OK
+    assert sup.get_motion_control_state().result["state"] == "PAUSED"
+    sup.abort_motion()
+    sup.deactivate()
+    sup.release()

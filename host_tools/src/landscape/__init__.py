@@ -11,6 +11,7 @@ from .errors import (AlarmError, ArgumentError, BusError, BusyError, CommandErro
                      NotConnectedError, NotImplementedByDeviceError, NotOwnerError, ParamError,
                      ParamOutOfRangeError, ProtocolError, UnknownCommandError, UnsupportedError,
                      VersionMismatchCommandError, VersionMismatchError, WrongStateError, error_for_code)
+from .paths import PathFile, PathFileError, build_path_load_requests, load_path_file, parse_path_text
 from .registry import COMMANDS, PROTOCOL_VERSION, SCHEMA_HASH, Command, build_request, lookup
 from .supervisor import ConnectResult, RetVal, Supervisor, mismatch_message, notice_data
 
@@ -22,5 +23,6 @@ __all__ = [
     "WrongStateError", "NotOwnerError", "BusyError", "DeviceTimeoutError", "NotConnectedError",
     "NotImplementedByDeviceError", "UnsupportedError", "VersionMismatchCommandError", "FaultError",
     "UnknownCommandError", "NoResourcesError",
+    "PathFile", "PathFileError", "build_path_load_requests", "load_path_file", "parse_path_text",
 ]
 __version__ = "0.1.0"

@@ -1,13 +1,17 @@
 """Opening a python-can bus, and the ISO-TP addressing of the protocol.
 
 The interface, channel and bitrate come from the arguments, else from
-python-can's configuration file and environment variables (CAN_INTERFACE,
-CAN_CHANNEL, CAN_BITRATE; see ``can.util.load_config``). Every failure to open
-is a BusError that names the channel and says what to check.
+python-can's environment variables (CAN_INTERFACE, CAN_CHANNEL, CAN_BITRATE,
+CAN_CONFIG; with a context NAME first the ones suffixed _NAME), else from its
+configuration file (section [NAME], then [default], of the file given or of
+~/can.conf, /etc/can.conf, ~/.can, ~/.canrc on Linux); see
+``can.util.load_config``. Every failure to open is a BusError that names the
+channel and says what to check.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import can
@@ -41,6 +45,8 @@ class BusSpec:
     interface: str | None = None
     channel: str | None = None
     bitrate: int | None = None
+    context: str | None = None       # python-can config context: section and env suffix
+    config_file: str | None = None   # a python-can config file instead of the default ones
 
     def describe(self) -> str:
         cfg = resolve_config(self, strict=False)
@@ -57,13 +63,16 @@ def resolve_config(spec: BusSpec, *, strict: bool = True) -> dict[str, Any]:
     if spec.bitrate:
         given["bitrate"] = spec.bitrate
     try:
-        return dict(can.util.load_config(config=given))
+        if spec.config_file is not None and not Path(spec.config_file).is_file():
+            raise FileNotFoundError(f"config file {spec.config_file} does not exist")
+        return dict(can.util.load_config(path=spec.config_file, config=given, context=spec.context))
     except Exception as exc:  # python-can raises several types for a bad config
         if not strict:
             return given
         raise BusError(
             f"no usable CAN interface ({exc}): pass --interface and --channel "
-            f"(e.g. --interface slcan --channel /dev/pts/3) or set CAN_INTERFACE and CAN_CHANNEL") from None
+            f"(e.g. --interface slcan --channel /dev/pts/3), set CAN_INTERFACE and CAN_CHANNEL, or write them "
+            f"in ~/.canrc ([default] interface = ..., channel = ...)") from None
 
 
 def _hint(cfg: dict[str, Any], exc: BaseException) -> str:

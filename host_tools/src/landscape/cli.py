@@ -16,10 +16,10 @@ import logging
 import os
 import shlex
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import Any, NoReturn, Union
 
 import click
 from google.protobuf.descriptor import FieldDescriptor
@@ -28,7 +28,8 @@ from ._generated import landscape_pb2 as pb
 from .bus import DEFAULT_DEVICE, DEFAULT_HOST, BusSpec
 from .errors import (AlarmError, ArgumentError, BusError, CommandError, ControllerTimeoutError, LandscapeError,
                      ProtocolError, VersionMismatchError, error_for_code)
-from .registry import COMMANDS, Command, enum_choices, is_repeated, message_to_dict, parse_enum
+from .registry import COMMANDS, Command, enum_choices, host_default, is_repeated, message_to_dict, parse_enum
+from .session import SessionClient, socket_path
 from .supervisor import RetVal, Supervisor
 
 EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_COMMAND, EXIT_BUS, EXIT_VERSION, EXIT_INTERRUPTED = 0, 1, 2, 3, 4, 5, 130
@@ -143,9 +144,12 @@ def cli_params(cmd: Command) -> list[click.Parameter]:
         elif f.type == FieldDescriptor.TYPE_ENUM:  # unreachable today (enums are positional)
             params.append(click.Option([opt, f.name], type=EnumType(f.enum_type), default=0))
         elif f.type in _FLOATS:
-            params.append(click.Option([opt, f.name], type=float, default=0.0, show_default=True))
+            d = host_default(f)
+            params.append(click.Option([opt, f.name], type=float, default=0.0 if d is None else d, show_default=True))
         else:
-            params.append(click.Option([opt, f.name], type=IntType(), default=0, show_default=True))
+            d = host_default(f)
+            params.append(click.Option([opt, f.name], type=IntType(), default=0 if d is None else d,
+                                       show_default=True))
     if not cmd.blocking:
         params.append(click.Option(["--no-wait", "_no_wait"], is_flag=True,
                                    help="return after CMD_STARTED_OK instead of waiting for the final notice"))
@@ -157,6 +161,10 @@ def cli_params(cmd: Command) -> list[click.Parameter]:
 # ---------------------------------------------------------------- state shared by the subcommands
 
 
+Backend = Union[Supervisor, SessionClient]
+"""Where a command goes: the invocation's own session, or a background session's socket."""
+
+
 @dataclass
 class CliState:
     spec: BusSpec
@@ -164,11 +172,16 @@ class CliState:
     source_address: int
     timeout_s: float | None
     json_out: bool
+    no_session: bool = False
     sup: Supervisor | None = None
+    client: SessionClient | None = None
     failures: list[str] = field(default_factory=list)
 
+    def socket_path(self) -> Path:
+        return socket_path(self.spec, self.device, self.source_address)
+
     def session(self) -> Supervisor:
-        """The CLI's one session: opened on first use, reconnected after a disconnect command."""
+        """The invocation's own session: opened on first use, reconnected after a disconnect command."""
         if self.sup is None:
             sup = Supervisor.open_bus(self.spec, device=self.device, source_address=self.source_address,
                                       timeout_s=self.timeout_s, client_name="landscape-cli")
@@ -178,7 +191,24 @@ class CliState:
             self.sup.connect()
         return self.sup
 
+    def background(self) -> SessionClient | None:
+        """A client of the background session of this bus and device, if one runs (and
+        --no-session is not given). A stale socket file is removed with a message."""
+        if self.no_session or self.sup is not None:
+            return None
+        if self.client is None:
+            self.client = SessionClient.attach(
+                self.socket_path(), on_stale=lambda msg: click.echo(f"landscape: {msg}", err=True))
+        return self.client
+
+    def backend(self) -> Backend:
+        """Where commands go: the background session when one runs, else our own session."""
+        return self.background() or self.session()
+
     def close(self) -> None:
+        if self.client is not None:
+            self.client.close()
+            self.client = None
         if self.sup is not None:
             self.sup.close()
             self.sup = None
@@ -209,36 +239,70 @@ def _fmt_notice(n: pb.Notice) -> str:
     return f"  {kind} {n.event_id}" + "".join(f" {d}" for d in n.data) + extra + (" final" if n.final else "")
 
 
+def send(backend: Backend, cmd: Command, fields: dict[str, Any], *, wait_s: float | None) -> RetVal:
+    """Send one command through `backend` (never raises for a negative code). With a
+    background session, `wait_s` asks it to stream the notices up to the final one."""
+    if isinstance(backend, SessionClient):
+        return backend.request(cmd, wait_s=wait_s, **fields)
+    if cmd.field == "connect":
+        assert backend.connect_result is not None
+        return backend.connect_result.retval
+    if cmd.field == "disconnect":
+        return backend.disconnect(check=False)
+    return backend.request(cmd, check=False, **fields)
+
+
+def collect(backend: Backend, rv: RetVal, *, wait_timeout_s: float,
+            on_notice: Callable[[pb.Notice], None] | None = None) -> tuple[list[pb.Notice], pb.Notice | None]:
+    """The notices of a started command up to its final one (on_notice sees each as it arrives)."""
+    notices: list[pb.Notice] = []
+    if not rv.started:
+        return notices, None
+    for n in backend.notices(timeout_s=wait_timeout_s):
+        notices.append(n)
+        if on_notice is not None:
+            on_notice(n)
+        if n.final and n.ref_seq == rv.seq:
+            return notices, n
+    return notices, None
+
+
+def call(backend: Backend, cmd: Command, fields: dict[str, Any], *, wait: bool, wait_timeout_s: float,
+         on_notice: Callable[[pb.Notice], None] | None = None) -> tuple[RetVal, list[pb.Notice], pb.Notice | None]:
+    """send() then, when `wait`, collect()."""
+    rv = send(backend, cmd, fields, wait_s=wait_timeout_s if wait else None)
+    if not wait:
+        return rv, [], None
+    notices, final = collect(backend, rv, wait_timeout_s=wait_timeout_s, on_notice=on_notice)
+    return rv, notices, final
+
+
 def execute(ctx: click.Context, cmd: Command, fields: dict[str, Any], *, wait: bool = True,
             wait_timeout_s: float = 60.0) -> RetVal:
-    """Run one command in the CLI's session, print its result, raise CommandFailed on failure."""
+    """Run one command in the CLI's session, print its result, then its notices as they
+    arrive; raise CommandFailed on failure."""
     st = _state(ctx)
-    sup = st.session()
-    if cmd.field == "connect":
-        assert sup.connect_result is not None
-        rv = sup.connect_result.retval
-    elif cmd.field == "disconnect":
-        rv = sup.disconnect(check=False)
-    else:
-        rv = sup.request(cmd, check=False, **fields)
-    notices: list[pb.Notice] = []
-    final: pb.Notice | None = None
+    backend = st.backend()
+    rv = send(backend, cmd, fields, wait_s=wait_timeout_s if wait else None)
     if not st.json_out:
         click.echo(f"{cmd.cli_name}: {rv.ret_name}" + (f": {rv.ret_msg}" if rv.ret_msg else ""))
         for k, v in rv.result.items():
             click.echo(f"  {k}: {_fmt_value(v)}")
-    if rv.started and wait:
-        for n in sup.notices(timeout_s=wait_timeout_s):
-            notices.append(n)
-            if not st.json_out:
-                click.echo(_fmt_notice(n))
-            if n.final and n.ref_seq == rv.seq:
-                final = n
-                break
+    notices: list[pb.Notice] = []
+    final: pb.Notice | None = None
+    if wait:
+        notices, final = collect(backend, rv, wait_timeout_s=wait_timeout_s,
+                                 on_notice=None if st.json_out else (lambda n: click.echo(_fmt_notice(n))))
     if st.json_out:
         click.echo(json.dumps({
             "command": cmd.cli_name, "ret_code": rv.ret_code, "ret_name": rv.ret_name, "ret_msg": rv.ret_msg,
             "result": rv.result, "notices": [message_to_dict(n) for n in notices]}))
+    check_outcome(cmd, rv, final, wait=wait, wait_timeout_s=wait_timeout_s)
+    return rv
+
+
+def check_outcome(cmd: Command, rv: RetVal, final: pb.Notice | None, *, wait: bool, wait_timeout_s: float) -> None:
+    """Raise CommandFailed (negative code, alarm) or ControllerTimeoutError (no final notice)."""
     if rv.ret_code < 0:
         raise CommandFailed(_one_line(error_for_code(cmd.cli_name, rv.ret_code, rv.ret_msg)))
     if rv.started and wait:
@@ -247,7 +311,6 @@ def execute(ctx: click.Context, cmd: Command, fields: dict[str, Any], *, wait: b
                                          f"(--wait-timeout); check get-motion-control-state")
         if final.kind in (pb.ALARM, pb.ALARM_RSVP):
             raise CommandFailed(str(AlarmError(final, cmd.cli_name)))
-    return rv
 
 
 def make_command(cmd: Command) -> click.Command:
@@ -360,11 +423,18 @@ def _addr(value: str) -> int:
               callback=lambda c, p, v: _addr(v), help="node address of this supervisor")
 @click.option("--timeout", "-t", type=float, default=None,
               help="seconds to wait for each response try (default: the command's host_timeout_ms)")
+@click.option("--can-context", default=None, metavar="NAME",
+              help="python-can config context: section [NAME] of the config file, CAN_INTERFACE_NAME ...")
+@click.option("--can-config", default=None, metavar="FILE",
+              help="python-can config file to read instead of ~/can.conf, /etc/can.conf, ~/.can, ~/.canrc")
+@click.option("--no-session", is_flag=True,
+              help="open a session of our own even when a background session (landscape session start) runs")
 @click.option("--json", "json_out", is_flag=True, help="print one JSON object per command")
 @click.option("--verbose", "-v", count=True, help="log protocol activity on stderr (-vv: debug)")
 @click.pass_context
 def cli(ctx: click.Context, interface: str | None, channel: str | None, bitrate: int | None, device: int,
-        source_address: int, timeout: float | None, json_out: bool, verbose: int) -> None:
+        source_address: int, timeout: float | None, can_context: str | None, can_config: str | None,
+        no_session: bool, json_out: bool, verbose: int) -> None:
     """Command a LandScape controller (landscaped) over CAN.
 
     Every schema command is a subcommand (landscape COMMAND --help). Exit codes: 0 ok,
@@ -373,7 +443,8 @@ def cli(ctx: click.Context, interface: str | None, channel: str | None, bitrate:
     if verbose:
         logging.basicConfig(level=logging.DEBUG if verbose > 1 else logging.INFO, stream=sys.stderr,
                             format="%(name)s: %(message)s")
-    st = CliState(BusSpec(interface, channel, bitrate), device, source_address, timeout, json_out)
+    st = CliState(BusSpec(interface, channel, bitrate, can_context, can_config), device, source_address, timeout,
+                  json_out, no_session=no_session)
     ctx.obj = st
     ctx.call_on_close(st.close)
 
@@ -385,6 +456,10 @@ for _cmd in COMMANDS.values():
 # ---------------------------------------------------------------- run, shell
 
 
+#: Subcommands a `run` file or the shell cannot use (they hold the terminal or the session).
+NOT_IN_SCRIPTS = ("run", "shell", "monitor", "record", "plot", "demo", "session")
+
+
 def run_line(ctx: click.Context, line: str) -> None:
     """Run one command line (shlex) in the current session; errors propagate."""
     args = shlex.split(line, comments=True)
@@ -394,7 +469,7 @@ def run_line(ctx: click.Context, line: str) -> None:
     group = ctx.find_root().command
     assert isinstance(group, click.Group)
     sub = group.get_command(ctx, name)
-    if sub is None or name in ("run", "shell", "monitor"):
+    if sub is None or name in NOT_IN_SCRIPTS:
         raise click.UsageError(f"unknown command '{name}' (landscape --help lists them)")
     with sub.make_context(name, rest, parent=ctx.find_root()) as sub_ctx:
         sub.invoke(sub_ctx)
@@ -455,10 +530,10 @@ def shell_cmd(ctx: click.Context) -> None:
 
     group = ctx.find_root().command
     assert isinstance(group, click.Group)
-    names = sorted(n for n in group.list_commands(ctx) if n not in ("run", "shell", "monitor"))
+    names = sorted(n for n in group.list_commands(ctx) if n not in NOT_IN_SCRIPTS)
     session: PromptSession[str] = PromptSession(history=FileHistory(str(_history_path())),
                                                 completer=WordCompleter(names + ["help", "quit"], sentence=True))
-    _state(ctx).session()
+    _state(ctx).backend()
     while True:
         try:
             line = session.prompt("landscape> ")
@@ -561,6 +636,9 @@ def monitor_cmd(ctx: click.Context, duration: float | None, once: bool) -> None:
         while end is None or time.monotonic() < end:
             time.sleep(0.2)
             live.update(monitor_view(sup, list(last)))
+
+
+from . import cli_tools  # noqa: E402,F401  (registers path, record, plot, demo, session)
 
 
 def main(argv: Sequence[str] | None = None) -> NoReturn:

@@ -267,17 +267,29 @@ def set_fields(msg: Message, values: Mapping[str, Any], where: str = "") -> Mess
     return msg
 
 
+def host_default(fd: FieldDescriptor) -> Any:
+    """The schema's (ls.host_default) of a scalar field, parsed to its type, or None."""
+    text = fd.GetOptions().Extensions[pb.host_default]
+    if not text:
+        return None
+    return float(text) if fd.type in (FieldDescriptor.TYPE_DOUBLE, FieldDescriptor.TYPE_FLOAT) else int(text, 0)
+
+
 def build_request(command: str | Command, seq: int = 0, **fields: Any) -> pb.Request:
     """A ``ls.Request`` for `command` with `fields` set; pure (no I/O).
 
     Enum fields take numbers, names or short names; repeated fields take
     sequences; message fields take messages or dicts. Unknown fields and bad
-    values raise ArgumentError naming the field.
+    values raise ArgumentError naming the field. A field the caller leaves
+    out takes its schema host_default when it has one (pathMove cycles: 1).
     """
     cmd = command if isinstance(command, Command) else lookup(command)
     req = pb.Request(seq=seq)
     sub = getattr(req, cmd.field)
     sub.SetInParent()
+    for fd in cmd.fields():
+        if fd.name not in fields and host_default(fd) is not None:
+            fields[fd.name] = host_default(fd)
     set_fields(sub, fields, cmd.name)
     return req
 

@@ -32,6 +32,7 @@ from .bus import (DEFAULT_DEVICE, DEFAULT_HOST, ISOTP_PARAMS, MAX_MESSAGE_BYTES,
                   physical_address)
 from .errors import (AlarmError, ArgumentError, BusError, ControllerTimeoutError, LandscapeError,
                      ProtocolError, VersionMismatchError, error_for_code, ret_name)
+from .paths import build_path_load_requests, request_fields
 from .registry import PROTOCOL_VERSION, SCHEMA_HASH, Command, build_request, lookup, message_to_dict
 
 log = logging.getLogger("landscape")
@@ -657,6 +658,9 @@ class Supervisor:
         self._telemetry_cbs.append(fn)
         return fn
 
+    def remove_telemetry_callback(self, fn: TelemetryCallback) -> None:
+        self._telemetry_cbs.remove(fn)
+
     # ------------------------------------------------------------ typed commands (one per schema command)
     # Argument names are the schema's field names, so units are in them (speed_pct,
     # max_timeout_s, polling_timeout_ms); tests/host checks each method against the registry.
@@ -742,11 +746,44 @@ class Supervisor:
         return self.request("path_load", path_name=path_name, tags=tags, frame=frame, motion_type=motion_type,
                             offset_type=offset_type, number_of_points=n, **opts)
 
+    def path_load_points(self, path_name: str, points: Sequence[pb.TagPoint | Mapping[str, Any]], *,
+                         frame: Enum = pb.JOINT_FRAME, motion_type: Enum = pb.JOINT_MOTION,
+                         offset_type: Enum = pb.ABSOLUTE_DATA,
+                         progress: Callable[[int, int], None] | None = None,
+                         **opts: Unpack[CallOptions]) -> RetVal:
+        """Append any number of `points` to path `path_name`, split into as many pathLoad
+        messages as needed (paths.build_path_load_requests), sent in order.
+
+        progress(points_sent, points_total) is called after each message. Returns the last
+        RetVal (result["points_in_path"]). When a message is refused the error (or, with
+        check=False, its RetVal) says how many points were already loaded: pathClearPath
+        starts over."""
+        reqs = build_path_load_requests(path_name, points, frame=frame, motion_type=motion_type,
+                                        offset_type=offset_type)
+        check = opts.pop("check", True)
+        total = sum(len(r.path_load.tags) for r in reqs)
+        sent = 0
+        rv: RetVal | None = None
+        for i, req in enumerate(reqs):
+            rv = self.request("path_load", check=False, **opts, **request_fields(req))
+            if rv.ret_code < 0:
+                rv.ret_msg = (f"{rv.ret_msg} (message {i + 1} of {len(reqs)}; {sent} of {total} points were "
+                              f"loaded: pathClearPath {path_name} to start over)").lstrip()
+                if check:
+                    raise error_for_code(rv.name, rv.ret_code, rv.ret_msg)
+                return rv
+            sent += len(req.path_load.tags)
+            if progress is not None:
+                progress(sent, total)
+        assert rv is not None  # build_path_load_requests returns at least one request
+        return rv
+
     def path_clear_path(self, path_name: str, **opts: Unpack[CallOptions]) -> RetVal:
         return self.request("path_clear_path", path_name=path_name, **opts)
 
-    def path_move(self, path_name: str, number_of_cycles: int, **opts: Unpack[CallOptions]) -> RetVal:
-        """Run a loaded path `number_of_cycles` times (0: dry run without auxiliary commands)."""
+    def path_move(self, path_name: str, *, number_of_cycles: int = 1, **opts: Unpack[CallOptions]) -> RetVal:
+        """Run a loaded path `number_of_cycles` times (seed: 1 when omitted; 0: dry run without
+        auxiliary commands)."""
         return self.request("path_move", path_name=path_name, number_of_cycles=number_of_cycles, **opts)
 
     def stop_motion(self, **opts: Unpack[CallOptions]) -> RetVal:

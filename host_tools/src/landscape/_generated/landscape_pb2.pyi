@@ -42,6 +42,7 @@ EVENT: NoticeKind
 EVENT_RSVP: NoticeKind
 FEET: LinearUnit
 FUNCTIONAL_ALL_DEVICES: NodeAddress
+HOST_DEFAULT_FIELD_NUMBER: _ClassVar[int]
 IDLE: State
 INCHES: LinearUnit
 ISOTP_FUNCTIONAL_BASE: IsotpId
@@ -71,6 +72,7 @@ TOOL_FRAME: ReferenceFrame
 UNLOCKED: State
 WORLD_CARTESIAN_FRAME: ReferenceFrame
 cmd: _descriptor.FieldDescriptor
+host_default: _descriptor.FieldDescriptor
 
 class AbortMotionReq(_message.Message):
     __slots__ = []

@@ -1,0 +1,90 @@
+"""Benchmark 5: control cycle cost in instructions (valgrind callgrind) and
+allocations per cycle (valgrind memcheck's heap summary), both as the
+difference between an N-cycle run and a set-up-only run, divided by N."""
+
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+import tempfile
+from pathlib import Path
+
+from common import BIN, BenchSkipped, Row, Section, need
+
+CASE_TEXT = {
+    "traj": "joint move: ls_traj_sample, 6 axes",
+    "fk": "hold: ls_kin_fk of the measured position",
+    "cart_ik": "Cartesian line: pose interp + ls_kin_ik_nearest",
+    "motion_hold": "executor holding (ls_motion_step)",
+    "motion_joint": "executor, joint move (ls_motion_step)",
+    "motion_line": "executor, Cartesian line with IK (ls_motion_step)",
+    "motion_path": "executor, 4-point path with blends (ls_motion_step)",
+    "control_hold": "whole loop body holding (ls_control_cycle, ideal arm)",
+    "control_joint": "whole loop body, joint move (ls_control_cycle, ideal arm)",
+    "control_line": "whole loop body, Cartesian line with IK (ls_control_cycle, ideal arm)",
+}
+MISSING = {
+    "motion_hold": ("executor cases", "firmware/motion/ls_motion.c is not in this tree"),
+    "control_hold": ("whole loop body cases", "firmware/control/ls_control.c is not in this tree"),
+    "": ("comply", "no compliance mode in firmware/motion or firmware/control yet"),
+}
+
+
+def callgrind_ir(exe: Path, case: str, n: int, tmp: Path) -> int:
+    out = tmp / f"cg.{case}.{n}"
+    run = subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", str(exe), case, str(n)],
+                         capture_output=True, text=True, timeout=600)
+    if run.returncode != 0:
+        raise BenchSkipped(f"bench_cycle {case} {n} under callgrind failed: {run.stderr.strip()[-300:]}")
+    for line in out.read_text().splitlines():
+        if line.startswith(("totals:", "summary:")):
+            return int(line.split()[1])
+    raise BenchSkipped(f"no totals in callgrind's output for {case}")
+
+
+def heap_allocs(exe: Path, case: str, n: int) -> int:
+    run = subprocess.run(["valgrind", "--tool=memcheck", str(exe), case, str(n)], capture_output=True, text=True,
+                         timeout=600)
+    if run.returncode != 0:
+        raise BenchSkipped(f"bench_cycle {case} {n} under memcheck failed: {run.stderr.strip()[-300:]}")
+    m = re.search(r"total heap usage: ([\d,]+) allocs", run.stderr)
+    if m is None:
+        raise BenchSkipped(f"no heap summary from memcheck for {case}")
+    return int(m.group(1).replace(",", ""))
+
+
+def bench_cycle(quick: bool) -> Section:
+    sec = Section(5, "Control cycle cost: instructions and allocations per cycle (valgrind)")
+    if shutil.which("valgrind") is None:
+        raise BenchSkipped("valgrind is not installed (apt-get install valgrind)")
+    exe = need(BIN / "bench_cycle", "cycle driver")
+    cases = subprocess.run([str(exe), "cases"], capture_output=True, text=True, check=True).stdout.split()
+    n = 500 if quick else 2000
+    with tempfile.TemporaryDirectory(prefix="lsbench-") as tmpdir:
+        tmp = Path(tmpdir)
+        for case in cases:
+            base = callgrind_ir(exe, case, 0, tmp)
+            total = callgrind_ir(exe, case, n, tmp)
+            allocs = (heap_allocs(exe, case, n) - heap_allocs(exe, case, 0)) / n
+            per = (total - base) / n
+            sec.rows.append(Row(f"5. cycle: {CASE_TEXT.get(case, case)}",
+                                f"{per:,.0f} instructions/cycle; {allocs:g} allocations/cycle",
+                                "machine-independent count", "", "",
+                                f"({total:,} - {base:,}) / {n}; allocations goal 0"))
+    for case, (what, why) in MISSING.items():
+        if case not in cases:
+            sec.rows.append(Row(f"5. cycle: {what}", f"not measured: {why}"))
+    sec.details.append(
+        "`bench/cycle.c` runs N cycles (dt 1 ms) of one case after its set-up (planning is set-up and is "
+        "subtracted). Instructions per cycle = (callgrind total of an N-cycle run - total of a set-up-only run) "
+        f"/ N with N = {n}; allocations per cycle the same difference of memcheck's `total heap usage` "
+        "(catches malloc, calloc, realloc and C++ new anywhere, libraries included). Executor cases run "
+        "`ls_motion_step` alone, with the measured position equal to the command; `control_*` cases run the "
+        "whole `ls_control_cycle` (command ring, executor, arm command/read, FK for the snapshot, seqlock "
+        "publish, event ring drained each cycle) on an ideal in-driver arm, so the ODE world's physics (a "
+        "simulator cost, not the firmware's) is not counted. Moves are planned long enough that all N cycles "
+        "move. Counts are x86-64 instructions of the Release build (-O3 by CMake's default).")
+    sec.commands.append("valgrind --tool=callgrind build-bench/bench/bench_cycle cart_ik 2000   # and ... cart_ik 0")
+    sec.commands.append("valgrind build-bench/bench/bench_cycle cart_ik 2000 2>&1 | grep 'total heap usage'")
+    return sec

@@ -1,0 +1,191 @@
+"""Benchmark 7: footprint of the portable firmware cross-built for a
+Cortex-M4F (flash, RAM) and proof of no heap."""
+
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+import tempfile
+from collections import defaultdict
+from pathlib import Path
+
+from common import BUILD, ROOT, BenchSkipped, Row, Section
+
+CC = "arm-none-eabi-gcc"
+CXX = "arm-none-eabi-g++"
+TARGET = ["-Os", "-mcpu=cortex-m4", "-mthumb", "-mfpu=fpv4-sp-d16", "-mfloat-abi=hard", "-ffunction-sections",
+          "-fdata-sections", "-DNDEBUG", "-Wall", "-Wextra", "-Werror=implicit-function-declaration"]
+CFLAGS = ["-std=c11", *TARGET]
+# The kinematics as the main build compiles it (firmware/kinematics/CMakeLists.txt); needs
+# libstdc++-arm-none-eabi-newlib for <cmath>.
+CXXFLAGS = ["-std=c++17", *TARGET, "-fno-exceptions", "-fno-rtti", "-DEIGEN_NO_MALLOC", "-DEIGEN_MPL2_ONLY"]
+# nosys.specs: newlib's system-call stubs (fail with ENOSYS). newlib's strtod (used by the core) can reach
+# __assert_func -> fiprintf -> stdio -> _write/_close/...; fw_main.c's own _sbrk wins over nosys's.
+LDFLAGS = ["--specs=nano.specs", "--specs=nosys.specs", "-nostartfiles", "-Wl,--gc-sections"]
+ALLOCATORS = {"malloc", "free", "calloc", "realloc", "_malloc_r", "_free_r", "_calloc_r", "_realloc_r", "_sbrk",
+              "_sbrk_r", "aligned_alloc", "posix_memalign", "memalign", "_Znwj", "_Znaj", "_ZdlPv", "_ZdaPv"}
+NANOPB_RUNTIME = ("pb_encode.c", "pb_decode.c", "pb_common.c")
+
+
+def run(cmd: list[str], **kw: object) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(cmd, capture_output=True, text=True, timeout=300, **kw)  # type: ignore[call-overload]
+
+
+def nanopb_runtime() -> Path:
+    """Debian's nanopb source package (the runtime matching Debian's generator), fetched once
+    into build-bench/nanopb-src with a private apt configuration (the system's own apt sources,
+    as deb-src; nothing of the system's apt state changes). The PyPI `nanopb` sdist and wheel
+    carry the generator only, and libnanopb-dev only an x86 archive."""
+    version = run(["dpkg-query", "-W", "-f=${Version}", "nanopb"]).stdout.strip()
+    if not version:
+        raise BenchSkipped("Debian's nanopb is not installed (its generator made the codecs): run .ci/setup")
+    upstream = version.split("-")[0].split(":")[-1]
+    dest = BUILD / "nanopb-src"
+    src = dest / f"nanopb-{upstream}"
+    if all((src / f).is_file() for f in NANOPB_RUNTIME):
+        return src
+    system = [p for p in [Path("/etc/apt/sources.list.d/debian.sources")] if p.is_file()]
+    if not system:
+        raise BenchSkipped("no /etc/apt/sources.list.d/debian.sources to derive a deb-src entry from; "
+                           "put nanopb's pb_encode.c/pb_decode.c/pb_common.c into build-bench/nanopb-src/"
+                           f"nanopb-{upstream}/")
+    apt = dest / "apt"
+    for d in ("parts", "lists/partial", "cache/archives/partial"):
+        (apt / d).mkdir(parents=True, exist_ok=True)
+    text = system[0].read_text()
+    (apt / "parts" / "src.sources").write_text(re.sub(r"^Types:.*$", "Types: deb-src", text, flags=re.M))
+    opts = ["-o", "Dir::Etc::SourceList=/dev/null", "-o", f"Dir::Etc::SourceParts={apt / 'parts'}",
+            "-o", f"Dir::State::Lists={apt / 'lists'}", "-o", f"Dir::Cache={apt / 'cache'}"]
+    up = run(["apt-get", *opts, "update"])
+    got = run(["apt-get", *opts, "source", f"nanopb={version}"], cwd=dest) if up.returncode == 0 else up
+    if not all((src / f).is_file() for f in NANOPB_RUNTIME):
+        raise BenchSkipped(f"cannot fetch Debian's nanopb {version} source package: "
+                           f"{(got.stderr or got.stdout).strip()[-200:]}")
+    return src
+
+
+def map_breakdown(map_text: str) -> dict[str, dict[str, int]]:
+    """Bytes per input file and kind (flash / ram) from the linker map's kept input sections."""
+    out: dict[str, dict[str, int]] = defaultdict(lambda: {"flash": 0, "ram": 0})
+    discarded = map_text.find("Discarded input sections")
+    memmap = map_text.find("Linker script and memory map")
+    body = map_text[memmap:] if memmap >= 0 else map_text[discarded:]
+    pat = re.compile(r"^ (\.(?:text|rodata|data|bss)[^\s]*)?\s*\n?\s+0x([0-9a-f]+)\s+0x([0-9a-f]+)\s+(\S+)$", re.M)
+    for m in pat.finditer(body):
+        name, size, path = m.group(1) or "", int(m.group(3), 16), m.group(4)
+        if size == 0 or not name:
+            continue
+        kind = "ram" if name.startswith(".bss") else "flash"
+        if name.startswith(".data"):
+            out[path]["ram"] += size
+        out[path][kind] += size
+    return out
+
+
+def label(path: str) -> str:
+    if "libc_nano" in path or "libm" in path or "libgcc" in path:
+        return "newlib-nano / libm / libgcc"
+    name = Path(path).name
+    for key, lab in (("ls_cmd_table", "generated dispatch table"), ("ls_core", "firmware/core"),
+                     ("cmd_", "firmware/core"), ("ls_units", "firmware/core"), ("ls_kin", "firmware/kinematics"),
+                     ("ls_motion", "firmware/motion/ls_motion.c"), ("ls_control", "firmware/control"), ("ls_net", "firmware/net"),
+                     ("ls_isotp", "firmware/isotp"), ("ls_traj", "firmware/motion/ls_traj.c"),
+                     ("ls_robot_model", "firmware/model"), ("pb_", "nanopb runtime"),
+                     ("landscape.pb", "generated nanopb codecs"),
+                     ("dbc_landscape", "generated DBC code (cantools)"), ("hal.", "hal wrappers"),
+                     ("fw_main", "bench main + HAL stubs, with the static ls_core_t and ls_net_t")):
+        if key in name:
+            return lab
+    return name
+
+
+def bench_footprint(quick: bool) -> Section:
+    del quick
+    sec = Section(7, "Footprint on a Cortex-M4F (arm-none-eabi-gcc -Os, newlib-nano)")
+    if shutil.which(CC) is None:
+        raise BenchSkipped("arm-none-eabi-gcc is missing: apt-get install gcc-arm-none-eabi libnewlib-arm-none-eabi")
+    gen = BUILD / "ls" / "protocol" / "gen"
+    if not (gen / "ls_cmd_table.c").is_file() or not (gen / "dbc" / "landscape.c").is_file():
+        raise BenchSkipped(f"generated sources missing under {gen}: build with bench/run.py first")
+    npb = nanopb_runtime()
+    fw = ROOT / "firmware"
+    optional = [fw / "motion" / "ls_motion.c", fw / "control" / "ls_control.c", fw / "kinematics" / "ls_kin.cpp"]
+    sources = sorted((fw / "core").glob("*.c")) + [p for p in optional if p.is_file()] + [
+        fw / "net" / "ls_net.c", fw / "isotp" / "ls_isotp.c", fw / "motion" / "ls_traj.c",
+        fw / "model" / "ls_robot_model.c", ROOT / "hal" / "hal.c", gen / "landscape.pb.c", gen / "ls_cmd_table.c",
+        gen / "dbc" / "landscape.c", *(npb / f for f in NANOPB_RUNTIME), ROOT / "bench" / "footprint" / "fw_main.c"]
+    includes = [npb, gen, gen / "dbc", fw / "core", fw / "net", fw / "isotp", fw / "motion", fw / "model",
+                fw / "control", fw / "kinematics", ROOT / "hal" / "include"]
+    with tempfile.TemporaryDirectory(prefix="lsbench-fp-") as tmpdir:
+        tmp = Path(tmpdir)
+        objs, firmware_allocs = [], set()
+        for i, src in enumerate(sources):
+            obj = tmp / f"{i:02d}_{src.stem.replace('landscape', 'dbc_landscape' if 'dbc' in str(src) else 'landscape')}.o"
+            if src.suffix == ".cpp":
+                if shutil.which(CXX) is None:
+                    raise BenchSkipped(f"{CXX} is missing for {src.name}: apt-get install gcc-arm-none-eabi")
+                cmd = [CXX, *CXXFLAGS, "-I/usr/include/eigen3"]
+            else:
+                cmd = [CC, *CFLAGS]
+            cc = run([*cmd, *(f"-I{p}" for p in includes), "-c", str(src), "-o", str(obj)])
+            if cc.returncode != 0:
+                raise BenchSkipped(f"cross-compiling {src.name} failed: {cc.stderr.strip()[-300:]}")
+            undefined = set(run(["arm-none-eabi-nm", "-u", str(obj)]).stdout.split()) - {"U"}
+            if "fw_main" not in obj.name:
+                firmware_allocs |= {f"{src.name}: {s}" for s in undefined & ALLOCATORS}
+            objs.append(obj)
+        elf, mapf = tmp / "fw.elf", tmp / "fw.map"
+        ld = run([CC, *CFLAGS, *LDFLAGS, *map(str, objs), f"-Wl,-Map={mapf}", "-o", str(elf), "-lm"])
+        if ld.returncode != 0:
+            raise BenchSkipped(f"linking the Cortex-M4F image failed: {ld.stderr.strip()[-400:]}")
+        text, data, bss = (int(x) for x in run(["arm-none-eabi-size", str(elf)]).stdout.splitlines()[1].split()[:3])
+        syms = run(["arm-none-eabi-nm", "-S", "--size-sort", str(elf)]).stdout.splitlines()
+        linked_allocs = sorted({line.split()[-1] for line in syms} & ALLOCATORS)
+        map_text = mapf.read_text()
+        why = re.findall(r"\((lib_a-[\w-]+\.o)\)\s*\n?\s+\S*\((lib_a-[\w-]+\.o)\) \((_(?:malloc|realloc|free|calloc)_r|malloc|free|calloc)\)",
+                         map_text)
+        breakdown: dict[str, dict[str, int]] = defaultdict(lambda: {"flash": 0, "ram": 0})
+        for path, sizes in map_breakdown(map_text).items():
+            for k, v in sizes.items():
+                breakdown[label(path)][k] += v
+        big_ram = [line.split() for line in syms if line.split()[2] in "bBdD"][-4:]
+    sec.rows.append(Row("7a. flash (text + data)", f"{(text + data) / 1024:.1f} KiB ({text + data} B)",
+                        "machine-independent count", "", "", "portable firmware + nanopb + newlib-nano"))
+    sec.rows.append(Row("7b. RAM (data + bss), static", f"{(data + bss) / 1024:.1f} KiB ({data + bss} B)",
+                        "machine-independent count", "", "",
+                        "largest: " + ", ".join(f"{s[3]} {int(s[1], 16)} B" for s in reversed(big_ram))))
+    heap = ("no firmware object references an allocator" if not firmware_allocs
+            else "firmware objects reference: " + ", ".join(sorted(firmware_allocs)))
+    pulled = sorted({f"{b} -> {sym}" for _, b, sym in why}) or []
+    sec.rows.append(Row("7c. heap", heap, "linked from the C library", ", ".join(linked_allocs) or "none", "",
+                        ("pulled in by " + "; ".join(pulled) + "; _sbrk stubbed to fail: no heap region")
+                        if linked_allocs else "no allocator in the image"))
+    sec.details.append(
+        f"`{CC} {' '.join(CFLAGS)}` (C++: `{CXX} {' '.join(CXXFLAGS)}`), linked with `{' '.join(LDFLAGS)} -lm`. Sources: "
+        "firmware/core/*.c, firmware/net, firmware/isotp, firmware/motion (ls_traj.c, ls_motion.c), "
+        "firmware/control, firmware/kinematics (C++17 + Eigen, which the core now needs), firmware/model, hal/hal.c, "
+        "the generated nanopb codecs, dispatch table and cantools DBC code (from build-bench), and nanopb "
+        f"{npb.name.split('-')[-1]}'s runtime (pb_encode.c, pb_decode.c, pb_common.c from Debian's source package: "
+        "the PyPI `nanopb` sdist/wheel ship only the generator, libnanopb-dev only an x86 archive). "
+        "`bench/footprint/fw_main.c` is landscaped's composition without the OS (core + net on one CAN link, the "
+        "control loop on a 1 ms tick with its events drained into the core, the heartbeat, one trajectory plan and "
+        "sample per turn), CAN and arm HALs as volatile registers, an entry point that zeroes .bss, and an `_sbrk` "
+        "that always fails. Not included: the sim and Linux HAL backends, telemetry broadcasts, landscaped's "
+        "process glue, a board's vector table and linker script. -DNDEBUG as in a release build.")
+    rows = sorted(breakdown.items(), key=lambda kv: -(kv[1]["flash"] + kv[1]["ram"]))
+    sec.details.append("Per part (from the linker map; flash includes initialised data):\n\n"
+                       "| part | flash B | RAM B |\n|---|---:|---:|\n" +
+                       "\n".join(f"| {k} | {v['flash']} | {v['ram']} |" for k, v in rows))
+    if linked_allocs:
+        sec.details.append(
+            "Heap: the firmware's own objects reference no allocator (checked with `arm-none-eabi-nm -u` on each "
+            "object). The allocator comes from newlib-nano itself: `vsnprintf` (the core formats answers with it) "
+            "references `_realloc_r` for its growing-string mode (`asprintf`), which a fixed-buffer `snprintf` "
+            "never takes, and `strtod` (firmware/core/cmd_motion.c) uses gdtoa's big-number helpers, which call "
+            "`_calloc_r`/`_malloc_r` for long inputs and can reach `__assert_func` -> `fiprintf` -> stdio (hence the "
+            "nosys stubs). With `_sbrk` failing, that code can never obtain memory (strtod then fails on such input). "
+            "To have no allocator in the image at all, the core would need its own formatter and number parser.")
+    sec.commands.append(f"{CC} {' '.join(CFLAGS)} -I... <sources> {' '.join(LDFLAGS)} -Wl,-Map=fw.map -o fw.elf -lm")
+    sec.commands.append("arm-none-eabi-size fw.elf; arm-none-eabi-nm fw.elf | grep -E ' (malloc|free|_sbrk)'")
+    return sec

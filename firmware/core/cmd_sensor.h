@@ -1,0 +1,29 @@
+/* Seed 3.7.2-3.8: the comms-thread side of sensor-guided motion, manual
+ * control (firmware/core/cmd_sensor.c) and the end effector
+ * (firmware/core/cmd_tool.c). Private to the core.
+ *
+ * Their completions come back from the control loop as events. The handlers
+ * install one event filter on the loop (ls_control_set_event_filter) the
+ * first time any of them runs, so the loop's events for the moves, jogs and
+ * tool changes they started reach them before landscaped hands the rest to
+ * the other handlers. Everything here runs in the comms thread. */
+#ifndef LS_CMD_SENSOR_H
+#define LS_CMD_SENSOR_H
+
+#include <stdbool.h>
+
+#include "ls_control.h"
+#include "ls_core.h"
+
+/* Install the event filter on core->ctl (idempotent; no-op without a loop). */
+void ls_core_sensor_attach(ls_core_t *core);
+
+/* cmd_tool.c: an event of the loop; true when it was the tool code's own
+ * (consumed), false to pass it on (it may still have acted on it: a fault
+ * ends a tool change in progress). */
+bool ls_core_tool_on_event(ls_core_t *core, const ls_ctl_event_t *ev);
+
+/* cmd_tool.c: the name of the held tool, "none" when none. */
+const char *ls_core_tool_held(void);
+
+#endif

@@ -1,0 +1,69 @@
+"""The landscape CLI against the running simulated controller (issue 8): a
+background session that locks, activates, loads a path from a CSV file, runs
+it and prints the tag events; --json output; record and plot."""
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+from typing import Iterator
+
+import pytest
+
+from conftest import Controller
+
+
+@pytest.fixture
+def session(controller: Controller, tmp_path: Path) -> Iterator[Controller]:
+    os.environ["XDG_RUNTIME_DIR"] = str(tmp_path)  # the session socket lives in this test's directory
+    r = controller.cli("session", "start")
+    assert r.returncode == 0, r.stderr
+    try:
+        yield controller
+    finally:
+        controller.cli("session", "stop")
+        os.environ.pop("XDG_RUNTIME_DIR", None)
+
+
+def test_session_locks_activates_loads_a_csv_path_and_prints_its_tags(session: Controller, tmp_path: Path) -> None:
+    for cmd in (["lock"], ["activate"], ["move-absolute", "ready", "JOINT_FRAME", "0", "-0.3", "0.6", "0", "0.9", "0"]):
+        r = session.cli(*cmd)
+        assert r.returncode == 0, (cmd, r.stdout, r.stderr)
+    csv = tmp_path / "square.csv"
+    csv.write_text("x,y,z,roll,pitch,yaw,tag_name,tag_index\n"
+                   "0.02,0,0,0,0,0,a,1\n0,0.02,0,0,0,0,b,2\n-0.02,0,0,0,0,0,c,3\n0,-0.02,0,0,0,0,d,4\n")
+    r = session.cli("path", "load", str(csv), "--name", "sq", "--frame", "BASE_CARTESIAN_FRAME",
+                    "--motion-type", "STRAIGHT_MOTION", "--offset-type", "RELATIVE_DATA")
+    assert r.returncode == 0, r.stderr
+    r = session.cli("path", "run", "sq", "--cycles", "2")
+    assert r.returncode == 0, r.stderr
+    tags = [line for line in r.stdout.splitlines() if "tag=" in line]
+    assert [t.split("tag=")[1].split()[0] for t in tags] == ["a", "b", "c", "d"] * 2
+    assert "pathMoveComplete" in r.stdout
+    # the lock lives on in the background session, across invocations
+    r = session.cli("--json", "get-motion-control-state")
+    result = json.loads(r.stdout.splitlines()[0])["result"]
+    assert result["state"] == "RESTING" and result["owner"] is True
+    for cmd in (["deactivate"], ["release"]):
+        assert session.cli(*cmd).returncode == 0
+
+
+def test_json_output_parses_for_every_query(controller: Controller) -> None:
+    for cmd in ("get-units", "get-velocities", "get-max-accelerations", "get-robot-position", "get-tool-offsets"):
+        r = controller.cli("--json", cmd)
+        assert r.returncode == 0, r.stderr
+        obj = json.loads(r.stdout.splitlines()[0])
+        assert obj["ret_code"] == 0 and obj["ret_name"] == "CMD_EXEC_OK" and isinstance(obj["result"], dict)
+
+
+def test_demo_records_and_plots_the_path(controller: Controller, tmp_path: Path) -> None:
+    rec, png = tmp_path / "demo.csv", tmp_path / "demo.png"
+    r = controller.cli("demo", "--record", str(rec), "--plot", str(png), timeout=180)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "0 failed" in r.stdout
+    import matplotlib.image as mpimg
+    for picture in (png, tmp_path / "demo-path.png"):
+        img = mpimg.imread(picture)
+        assert img.shape[0] > 200 and img.shape[1] > 200
+        assert float(img.std()) > 0.01  # not a blank canvas
+    assert len(rec.read_text().splitlines()) > 50

@@ -1,0 +1,516 @@
+"""VM tier checks, run inside the QEMU guest by tests/vm/guest.sh.
+
+The guest has a real SocketCAN bus (vcan0 with the kernel's CAN_RAW and
+CAN_ISOTP) and a real GPIO chip (gpio-sim, 8 lines). guest.sh exports:
+  LS_VM_CAN_IF      the CAN interface (vcan0)
+  LS_VM_GPIO_CHIP   the gpio-sim chip (gpiochipN)
+  LS_VM_GPIO_SYSFS  its sysfs dir (.../gpio-sim.N/gpiochipN with sim_gpioK/{value,pull})
+  LS_BUILD_DIR      the build tree (bin/isotp_socketcan_echo, bin/landscaped)
+Guest code runs ~20x slower than on the host (TCG): time-outs are generous and
+the checks few and end to end.
+"""
+from __future__ import annotations
+
+import os
+import re
+import socket
+import struct
+import subprocess
+import sys
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import pytest
+
+from landscape import BusSpec, Supervisor
+from landscape.supervisor import notice_data
+
+CAN_IF = os.environ.get("LS_VM_CAN_IF", "vcan0")
+GPIO_CHIP = os.environ.get("LS_VM_GPIO_CHIP", "")
+GPIO_SYSFS = Path(os.environ.get("LS_VM_GPIO_SYSFS", "/nonexistent"))
+ROOT = Path(__file__).resolve().parents[2]
+BUILD = Path(os.environ.get("LS_BUILD_DIR", ROOT / "build"))
+ECHO = BUILD / "bin" / "isotp_socketcan_echo"
+
+# ISO-TP normal fixed 29-bit addressing, device 0x10, host 0xF1.
+HOST_TO_DEV = 0x18DA10F1
+DEV_TO_HOST = 0x18DAF110
+
+# Linux <linux/can/isotp.h>: socket options Python does not name.
+SOL_CAN_ISOTP = 100 + socket.CAN_ISOTP  # SOL_CAN_BASE + CAN_ISOTP
+CAN_ISOTP_RECV_FC = 2
+
+pytestmark = pytest.mark.skipif(not hasattr(socket, "AF_CAN"), reason="not a Linux Python")
+
+
+def payload(n: int, seed: int = 0) -> bytes:
+    return bytes((seed + 7 * i) & 0xFF for i in range(n))
+
+
+# ---------------------------------------------------------------- the guest itself
+
+
+def test_vcan_carries_raw_frames() -> None:
+    """The bus the other checks rely on: a raw 29-bit frame sent on vcan0 by
+    one socket is received by another."""
+    with socket.socket(socket.AF_CAN, socket.SOCK_RAW, socket.CAN_RAW) as rx, \
+            socket.socket(socket.AF_CAN, socket.SOCK_RAW, socket.CAN_RAW) as tx:
+        rx.bind((CAN_IF,))
+        rx.settimeout(5)
+        tx.bind((CAN_IF,))
+        tx.send(struct.pack("=IB3x8s", 0x1ABCDE01 | socket.CAN_EFF_FLAG, 3, b"\x01\x02\x03"))
+        can_id, dlc, data = struct.unpack("=IB3x8s", rx.recv(16))
+        assert (can_id, dlc, data[:dlc]) == (0x1ABCDE01 | socket.CAN_EFF_FLAG, 3, b"\x01\x02\x03")
+
+
+def test_gpio_sim_lines_follow_gpioset_and_pulls() -> None:
+    """gpio-sim works with the libgpiod tools: a line driven by gpioset shows
+    in sysfs, a pull set in sysfs shows in gpioget."""
+    assert GPIO_CHIP, "guest.sh did not export LS_VM_GPIO_CHIP"
+    out = subprocess.run(["gpiodetect"], capture_output=True, text=True, timeout=30, check=True).stdout
+    assert re.search(rf"^{GPIO_CHIP} \[.*\] \(8 lines\)$", out, re.M), out
+    # gpioset (libgpiod v1) holds the line until it exits; --mode=signal keeps it.
+    p = subprocess.Popen(["gpioset", "--mode=signal", GPIO_CHIP, "5=1"])
+    try:
+        value = GPIO_SYSFS / "sim_gpio5" / "value"
+        deadline = time.monotonic() + 20
+        while value.read_text().strip() != "1" and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert value.read_text().strip() == "1"
+    finally:
+        p.terminate()
+        p.wait(timeout=20)
+    (GPIO_SYSFS / "sim_gpio2" / "pull").write_text("pull-up")
+    up = subprocess.run(["gpioget", GPIO_CHIP, "2"], capture_output=True, text=True, timeout=30, check=True)
+    (GPIO_SYSFS / "sim_gpio2" / "pull").write_text("pull-down")
+    down = subprocess.run(["gpioget", GPIO_CHIP, "2"], capture_output=True, text=True, timeout=30, check=True)
+    assert (up.stdout.strip(), down.stdout.strip()) == ("1", "0")
+
+
+def linux_hal_groups() -> list[dict[str, bool]]:
+    """Runs the Linux HAL's CMocka tests (test_linux_hal); returns per group
+    (socketcan, gpiod, rt: the order of test_linux_main.c) each test's outcome."""
+    exe = BUILD / "bin" / "test_linux_hal"
+    assert exe.exists(), f"{exe} missing: build first"
+    r = subprocess.run([str(exe)], capture_output=True, text=True, timeout=240)
+    groups: list[dict[str, bool]] = []
+    for chunk in r.stdout.split("[==========] Running")[1:]:
+        outcome = {m[1]: m[0] == "OK" for m in re.findall(r"^\[ +(OK|FAILED) +\] (\w+)$", chunk, re.M)}
+        groups.append(outcome)
+    assert len(groups) == 3, f"expected 3 test groups (socketcan, gpiod, rt):\n{r.stdout}{r.stderr}"
+    assert (r.returncode == 0) == all(all(g.values()) for g in groups), r.stdout + r.stderr
+    return groups
+
+
+@pytest.fixture(scope="module")
+def hal_groups() -> list[dict[str, bool]]:
+    return linux_hal_groups()
+
+
+def test_linux_hal_socketcan_and_gpiod_tests_with_real_kernel_support(hal_groups: list[dict[str, bool]]) -> None:
+    """The Linux HAL's CMocka tests, here on a kernel with AF_CAN and GPIO."""
+    socketcan, gpiod, _ = hal_groups
+    assert len(socketcan) == 10 and len(gpiod) == 4, hal_groups
+    failed = [name for g in (socketcan, gpiod) for name, ok in g.items() if not ok]
+    assert failed == []
+
+
+@pytest.mark.xfail(reason="TCG emulation: a 1 ms SCHED_FIFO loop overruns in the guest (timing tests of "
+                          "hal_linux_rt assume real hardware); tracked, not a HAL defect", strict=False)
+def test_linux_hal_rt_tests_under_emulation(hal_groups: list[dict[str, bool]]) -> None:
+    rt = hal_groups[2]
+    assert [name for name, ok in rt.items() if not ok] == []
+
+
+# ---------------------------------------------------------------- ISO-TP interop
+
+
+class EchoPeer:
+    """isotp_socketcan_echo: the firmware's ls_isotp over the Linux HAL's SocketCAN link."""
+
+    def __init__(self) -> None:
+        assert ECHO.exists(), f"{ECHO} missing: build first (bash .ci/build)"
+        self.proc = subprocess.Popen([str(ECHO), CAN_IF, "-t", "200"], stdout=subprocess.PIPE,
+                                     stderr=subprocess.PIPE, text=True)
+        assert self.proc.stdout is not None
+        first = self.proc.stdout.readline()
+        if first.strip() != f"ready socketcan:{CAN_IF}":
+            self.proc.kill()
+            _, err = self.proc.communicate(timeout=20)
+            raise AssertionError(f"isotp_socketcan_echo did not start: {first!r} {err}")
+
+    def stop(self) -> tuple[list[str], str]:
+        """Stops the peer; returns its 'echo N' lines and its summary line."""
+        if self.proc.poll() is None:
+            self.proc.terminate()
+        out, err = self.proc.communicate(timeout=30)
+        assert self.proc.returncode == 0, err
+        return out.split("\n")[:-1], err.strip()
+
+
+@pytest.fixture
+def echo_peer() -> Iterator[EchoPeer]:
+    peer = EchoPeer()
+    try:
+        yield peer
+    finally:
+        if peer.proc.poll() is None:
+            peer.proc.kill()
+            peer.proc.wait(timeout=30)
+
+
+def hex_words(data: bytes) -> str:
+    return " ".join(f"{b:02X}" for b in data)
+
+
+def wait_blocked_in_read(pid: int, timeout_s: float = 30.0) -> None:
+    """Waits until process `pid` sits in read(2) (x86-64 syscall 0): isotprecv
+    has bound its socket and waits for a message, so nothing sent later is lost."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        try:
+            if Path(f"/proc/{pid}/syscall").read_text().split()[0] == "0":
+                return
+        except (OSError, IndexError):
+            pass
+        time.sleep(0.02)
+    raise AssertionError(f"process {pid} did not block in read() within {timeout_s} s")
+
+
+@pytest.mark.parametrize("size", [5, 200])
+def test_can_utils_isotpsend_isotprecv_echo(echo_peer: EchoPeer, size: int) -> None:
+    """can-utils (kernel CAN_ISOTP) sends a single-frame (5 B) or a
+    multi-frame (200 B) message; the firmware's ISO-TP echoes it back."""
+    data = payload(size, seed=size)
+    ids = ["-s", f"{HOST_TO_DEV:08X}", "-d", f"{DEV_TO_HOST:08X}"]  # 8 digits: extended ids
+    recv = subprocess.Popen(["isotprecv", *ids, CAN_IF], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        wait_blocked_in_read(recv.pid)
+        send = subprocess.run(["isotpsend", *ids, CAN_IF], input=hex_words(data), capture_output=True, text=True,
+                              timeout=60)
+        assert send.returncode == 0, send.stderr
+        out, err = recv.communicate(timeout=60)
+    finally:
+        if recv.poll() is None:
+            recv.kill()
+            recv.wait()
+    assert recv.returncode == 0, err
+    assert bytes.fromhex(out) == data
+    lines, summary = echo_peer.stop()
+    assert lines == [f"echo {size}"]
+    assert f"echoed 1, rx ok 1, tx ok 1" in summary, summary
+
+
+def isotp_socket(bs: int | None = None, stmin: int | None = None) -> socket.socket:
+    s = socket.socket(socket.AF_CAN, socket.SOCK_DGRAM, socket.CAN_ISOTP)
+    if bs is not None and stmin is not None:
+        # Flow control this socket sends as a receiver: block size, STmin, max FC.WAIT.
+        s.setsockopt(SOL_CAN_ISOTP, CAN_ISOTP_RECV_FC, struct.pack("=BBB", bs, stmin, 0))
+    s.bind((CAN_IF, DEV_TO_HOST | socket.CAN_EFF_FLAG, HOST_TO_DEV | socket.CAN_EFF_FLAG))
+    s.settimeout(30)
+    return s
+
+
+def test_python_isotp_socket_echo_of_every_frame_shape(echo_peer: EchoPeer) -> None:
+    """A Python CAN_ISOTP socket exchanges messages of 1 B, 7 B (largest
+    single frame), 8 B (smallest first frame), 200 B and 4095 B (largest)."""
+    sizes = [1, 7, 8, 200, 4095]
+    with isotp_socket() as s:
+        for i, n in enumerate(sizes):
+            data = payload(n, seed=i)
+            s.send(data)
+            assert s.recv(4096) == data, f"echo of {n} bytes differs"
+    lines, summary = echo_peer.stop()
+    assert lines == [f"echo {n}" for n in sizes]
+    assert f"echoed {len(sizes)}, rx ok {len(sizes)}, tx ok {len(sizes)}, last error N_OK" in summary, summary
+
+
+def test_firmware_sender_honours_kernel_flow_control(echo_peer: EchoPeer) -> None:
+    """The kernel receiver asks for block size 4 and STmin 10 ms: the firmware's
+    sender waits for each flow control and keeps 10 ms between the consecutive
+    frames of a block (the first CF of a block goes at once, ls_isotp.h).
+    200 B = first frame + 28 CFs = 7 blocks of 4, so at least 7 x 3 gaps."""
+    data = payload(200, seed=9)
+    with isotp_socket(bs=4, stmin=10) as s:
+        s.send(data)
+        t0 = time.monotonic()
+        got = s.recv(4096)
+        elapsed = time.monotonic() - t0
+    assert got == data
+    assert elapsed >= 21 * 0.010, f"echo took {elapsed * 1000:.1f} ms: STmin 10 ms was not honoured"
+    _, summary = echo_peer.stop()
+    assert "echoed 1, rx ok 1, tx ok 1, last error N_OK" in summary, summary
+
+
+# ---------------------------------------------------------------- landscaped on vcan0 + gpio-sim
+#
+# Feature probes: these checks need landscaped options that land on main in
+# steps. A missing feature skips its checks with a reason naming it, so the
+# summary (-rs) shows what waits; a missing binary fails them.
+
+LANDSCAPED = BUILD / "bin" / "landscaped"
+CLI = Path(sys.executable).parent / "landscape"
+INPUT_LINES = [0, 1, 2, 3]    # gpio-sim lines read as DIO inputs, bits 0..3
+OUTPUT_LINES = [4, 5, 6, 7]   # gpio-sim lines driven as DIO outputs, bits 16..19
+
+
+def _landscaped_help() -> str:
+    if not LANDSCAPED.exists():
+        return ""
+    r = subprocess.run([str(LANDSCAPED), "--help"], capture_output=True, text=True, timeout=60)
+    return r.stdout + r.stderr
+
+
+HELP = _landscaped_help()
+
+
+def needs(feature: str, probe: str) -> pytest.MarkDecorator:
+    """Skip when the built landscaped exists but its --help lacks `probe`."""
+    return pytest.mark.skipif(bool(HELP) and probe not in HELP,
+                              reason=f"waits for landscaped {feature} ('{probe}' not in landscaped --help)")
+
+
+needs_socketcan = needs("--link socketcan:IFNAME", "socketcan:IFNAME")
+needs_gpiod = needs("--dio gpiod:CHIP", "gpiod:CHIP")
+
+
+def landscaped_args(tmp: Path, node: int, dio: str, rt_priority: int = 50) -> list[str]:
+    """Options for one controller on vcan0, by default with the real-time
+    (SCHED_FIFO) control thread. Under TCG the simulated arm's loop takes most
+    of a vCPU even at 100 Hz, and SCHED_FIFO leaves normal threads 5 %: two
+    real-time controllers on the guest's 2 vCPUs starve the host tool, so a
+    second controller runs a normal thread. Telemetry is 2 Hz: at 50 Hz (7
+    frames each) the emulated host tool cannot keep up with the bus and
+    misses its ISO-TP time-outs. The heartbeat time-out is 10 s: the emulated
+    host tool's 200 ms heartbeats arrive more than 1 s apart at times. The DIO line offsets are options in early
+    landscaped builds (--inputs, --outputs) and [dio] keys of a --config file
+    later (docs/deploy.md)."""
+    args = ["--link", f"socketcan:{CAN_IF}", "--arm", "sim", "--node", f"{node:#04x}",
+            "--rt-priority", str(rt_priority), "--rate", "100", "--telemetry-hz", "2",
+            "--heartbeat-timeout", "10000", "--name", f"vm-{node:02x}"]
+    if dio.startswith("gpiod:"):
+        ins, outs = ",".join(map(str, INPUT_LINES)), ",".join(map(str, OUTPUT_LINES))
+        if "--inputs" in HELP:
+            args += ["--dio", dio, "--inputs", ins, "--outputs", outs]
+        else:
+            conf = tmp / f"landscaped-{node:02x}.conf"
+            conf.write_text(f"[hal]\ndio = {dio}\n[dio]\ninputs = {ins}\noutputs = {outs}\n")
+            args = ["--config", str(conf), *args]
+    else:
+        args += ["--dio", dio]
+    return args
+
+
+class Landscaped:
+    def __init__(self, tmp: Path, node: int, dio: str, rt_priority: int = 50) -> None:
+        assert LANDSCAPED.exists(), f"{LANDSCAPED} missing: build first (bash .ci/build)"
+        self.node = node
+        self.log = tmp / f"landscaped-{node:02x}.log"
+        with self.log.open("w") as f:
+            self.proc = subprocess.Popen([str(LANDSCAPED), *landscaped_args(tmp, node, dio, rt_priority)],
+                                         stdout=subprocess.DEVNULL, stderr=f)
+        deadline = time.monotonic() + 60
+        while f"ready: node 0x{node:02X}" not in self.log.read_text():
+            if self.proc.poll() is not None or time.monotonic() > deadline:
+                self.stop()
+                raise AssertionError(f"landscaped --node {node:#04x} did not get ready:\n{self.log.read_text()}")
+            time.sleep(0.1)
+
+    def stop(self) -> int:
+        if self.proc.poll() is None:
+            self.proc.terminate()
+        try:
+            return self.proc.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            self.proc.wait()
+            raise AssertionError(f"landscaped --node {self.node:#04x} did not stop within 30 s of SIGTERM")
+
+
+def sysfs_line(n: int, attr: str) -> Path:
+    return GPIO_SYSFS / f"sim_gpio{n}" / attr
+
+
+def set_pulls(pull: str) -> None:
+    for n in INPUT_LINES:
+        sysfs_line(n, "pull").write_text(pull)
+
+
+def wait_for(pred: Callable[[], bool], timeout_s: float, what: str) -> None:
+    deadline = time.monotonic() + timeout_s
+    while not pred():
+        assert time.monotonic() < deadline, f"{what} within {timeout_s} s"
+        time.sleep(0.05)
+
+
+def log_dir(tmp: Path) -> Path:
+    """Where landscaped's logs go: the host-visible output dir when there is one."""
+    out = os.environ.get("LS_VM_OUT")
+    return Path(out) if out else tmp
+
+
+@pytest.fixture
+def controller(tmp_path: Path) -> Iterator[Landscaped]:
+    """Node 0x10 with gpio-sim DIO, one per test: it holds the DIO lines, which
+    the --check tests need free, and no state leaks from one test to the next."""
+    set_pulls("pull-down")
+    c = Landscaped(log_dir(tmp_path), 0x10, f"gpiod:{GPIO_CHIP}")
+    try:
+        yield c
+    finally:
+        rc = c.stop()
+        assert rc == 0, f"landscaped exited with {rc}:\n{c.log.read_text()}"
+
+
+def supervisor(device: int, source: int, name: str) -> Supervisor:
+    return Supervisor.open_bus(BusSpec("socketcan", CAN_IF), device=device, source_address=source,
+                               client_name=name, timeout_s=5.0)
+
+
+@needs_socketcan
+@needs_gpiod
+def test_cli_session_moves_the_arm_over_socketcan(controller: Landscaped, tmp_path: Path) -> None:
+    """The host CLI on python-can's socketcan interface: connect, lock,
+    activate, a joint move to completion, deactivate, release, in one run."""
+    script = tmp_path / "session.lsc"
+    script.write_text("connect\nlock\nactivate\n"
+                      "move-absolute p1 JOINT_FRAME 0.2 -0.3 0.25 0 0.1 0 --speed-pct 50\n"
+                      "get-motion-control-state\ndeactivate\nrelease\n")
+    r = subprocess.run([str(CLI), "--interface", "socketcan", "--channel", CAN_IF, "--device", "0x10",
+                        "run", str(script)], capture_output=True, text=True, timeout=240)
+    assert r.returncode == 0, f"exit {r.returncode}\n{r.stdout}\n{r.stderr}"
+    out = r.stdout
+    for cmd in ("lock", "activate", "deactivate", "release"):
+        assert f"\n{cmd}: CMD_EXEC_OK" in out, out
+    assert "\nmove-absolute: CMD_STARTED_OK" in out, out
+    done = re.search(r"EVENT moveAbsoluteComplete point=p1 joints=(\S+) .*final", out)
+    assert done, out
+    joints = [float(v) for v in done[1].split(",")]
+    assert joints == pytest.approx([0.2, -0.3, 0.25, 0, 0.1, 0], abs=2e-3)
+
+
+@needs_socketcan
+@needs_gpiod
+def test_set_digital_io_drives_gpio_sim_lines(controller: Landscaped) -> None:
+    """setDigitalIO output bits 16 and 18 are gpio-sim lines 4 and 6: their
+    values in sysfs follow, the other outputs stay low."""
+    with supervisor(0x10, 0xF1, "vm-dio") as sup:
+        sup.lock()
+        values = lambda: [sysfs_line(n, "value").read_text().strip() for n in OUTPUT_LINES]  # noqa: E731
+        wait_for(lambda: values() == ["0", "0", "0", "0"], 10, "outputs not all low at start")
+        sup.set_digital_io("digital", 0, bits_on=0x00050000)
+        wait_for(lambda: values() == ["1", "0", "1", "0"], 10, "lines 4 and 6 did not go high")
+        assert sup.get_digital_io("digital", 0).result["bits_on"] & 0xFFFF0000 == 0x00050000
+        sup.set_digital_io("digital", 0, bits_off=0x00010000)
+        wait_for(lambda: values() == ["0", "0", "1", "0"], 10, "line 4 did not go low")
+        sup.set_digital_io("digital", 0, bits_off=0x00040000)
+        wait_for(lambda: values() == ["0", "0", "0", "0"], 10, "line 6 did not go low")
+        sup.release()
+
+
+@needs_socketcan
+@needs_gpiod
+def test_pull_on_gpio_sim_input_signals_the_host(controller: Landscaped) -> None:
+    """A pull-up on gpio-sim lines 1 and 2 (DIO inputs 1 and 2) fires a
+    signalDigitalIO watch on bits 0x6: one dioSignal event at the host, and
+    getDigitalIO reads the levels."""
+    set_pulls("pull-down")
+    with supervisor(0x10, 0xF2, "vm-watch") as sup:
+        wait_for(lambda: sup.get_digital_io("digital", 0).result["bits_on"] & 0xF == 0, 10, "inputs not low")
+        watch = sup.signal_digital_io("digital", 0, 0x0006).result["watch_id"]
+        assert watch > 0
+        sysfs_line(1, "pull").write_text("pull-up")
+        assert not [n for n in sup.notices(timeout_s=1.0) if n.event_id == "dioSignal"], "fired on one of two bits"
+        sysfs_line(2, "pull").write_text("pull-up")
+        got = [n for n in sup.notices(timeout_s=10.0) if n.event_id == "dioSignal"]
+        assert len(got) == 1, got
+        d = notice_data(got[0])
+        assert (d["unit"], d["bits"], d["watch"]) == ("0", "0x6", str(watch))
+        assert sup.get_digital_io("digital", 0).result["bits_on"] & 0xF == 0x6
+    set_pulls("pull-down")
+
+
+@needs_socketcan
+def test_two_controllers_and_two_supervisors_on_one_bus(controller: Landscaped, tmp_path: Path) -> None:
+    """Nodes 0x10 and 0x11 on vcan0, each owned by its own supervisor (0xF1,
+    0xF3) sharing one socket and Notifier (the library's documented way):
+    both move at once and each owner gets its own completion."""
+    import can
+    second = Landscaped(log_dir(tmp_path), 0x11, "none", rt_priority=0)
+    bus = can.Bus(interface="socketcan", channel=CAN_IF)
+    notifier = can.Notifier(bus, [])
+    try:
+        with Supervisor(bus, notifier=notifier, device=0x10, source_address=0xF1, client_name="vm-a",
+                        timeout_s=5.0) as a, \
+             Supervisor(bus, notifier=notifier, device=0x11, source_address=0xF3, client_name="vm-b",
+                        timeout_s=5.0) as b:
+            a.lock()
+            b.lock()
+            a.activate()
+            b.activate()
+            ra = a.move_absolute("pa", [0.1, 0, 0, 0, 0, 0], speed_pct=50)
+            rb = b.move_absolute("pb", [0, 0.2, 0, 0, 0, 0], speed_pct=50)
+            na = a.wait_complete(ra, timeout_s=120)
+            nb = b.wait_complete(rb, timeout_s=120)
+            assert (na.event_id, nb.event_id) == ("moveAbsoluteComplete", "moveAbsoluteComplete")
+            for n, want in ((na, [0.1, 0, 0, 0, 0, 0]), (nb, [0, 0.2, 0, 0, 0, 0])):
+                assert [float(v) for v in notice_data(n)["joints"].split(",")] == pytest.approx(want, abs=2e-3)
+            for s in (a, b):
+                s.deactivate()
+                s.release()
+    finally:
+        notifier.stop()
+        bus.shutdown()
+        rc = second.stop()
+    assert rc == 0, second.log.read_text()
+
+
+CONFIG_DRIVER = BUILD / "bin" / "ls_config_driver"  # landscaped's configuration and --check, alone
+
+
+def check_command(which: str, tmp: Path, link: str) -> list[str]:
+    """`--check` for vcan/gpio-sim through `which`: the config driver (the
+    ls_config/ls_check code landscaped will use) or landscaped itself."""
+    ins, outs = ",".join(map(str, INPUT_LINES)), ",".join(map(str, OUTPUT_LINES))
+    conf = tmp / "check.conf"
+    conf.write_text(f"[hal]\nlink = {link}\ndio = gpiod:{GPIO_CHIP}\n[dio]\ninputs = {ins}\noutputs = {outs}\n")
+    if which == "driver":
+        assert CONFIG_DRIVER.exists(), f"{CONFIG_DRIVER} missing: build first"
+        return [str(CONFIG_DRIVER), "--config", str(conf), "--check"]
+    if "--check" not in HELP:
+        pytest.skip("waits for landscaped --check ('--check' not in landscaped --help)")
+    return [str(LANDSCAPED), "--config", str(conf), "--check"]
+
+
+@pytest.mark.parametrize("which", ["driver", "landscaped"])
+def test_check_passes_for_vcan_and_the_gpio_sim_chip(which: str, tmp_path: Path) -> None:
+    """On a kernel with AF_CAN, vcan0 and gpio-sim every check passes (root:
+    real-time and memory locking are granted)."""
+    r = subprocess.run(check_command(which, tmp_path, f"socketcan:{CAN_IF}"), capture_output=True, text=True,
+                       timeout=120)
+    lines = r.stdout.splitlines()
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert any(ln.startswith("PASS  AF_CAN") for ln in lines), r.stdout
+    assert any(ln.startswith(f"PASS  link socketcan:{CAN_IF}") for ln in lines), r.stdout
+    assert any(ln.startswith(f"PASS  gpio chip {GPIO_CHIP}") for ln in lines), r.stdout
+    assert [ln for ln in lines if ln.startswith(("FAIL", "WARN"))] == []
+
+
+@pytest.mark.parametrize("which", ["driver", "landscaped"])
+def test_check_fails_for_a_missing_interface_and_a_busy_line(which: str, tmp_path: Path) -> None:
+    """No vcan9 on this guest, and gpio-sim output line 5 held by gpioset:
+    --check exits 1 and names both."""
+    cmd = check_command(which, tmp_path, "socketcan:vcan9")
+    busy = OUTPUT_LINES[1]
+    holder = subprocess.Popen(["gpioset", "--mode=signal", GPIO_CHIP, f"{busy}=1"])
+    try:
+        wait_for(lambda: sysfs_line(busy, "value").read_text().strip() == "1", 20, "gpioset did not hold the line")
+        r = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    finally:
+        holder.terminate()
+        holder.wait(timeout=20)
+    assert r.returncode == 1, r.stdout + r.stderr
+    fails = [ln for ln in r.stdout.splitlines() if ln.startswith("FAIL")]
+    assert any(ln.startswith("FAIL  link socketcan:vcan9") for ln in fails), r.stdout
+    assert any(ln.startswith("FAIL  gpio") and re.search(rf"\b{busy}\b", ln) for ln in fails), r.stdout
