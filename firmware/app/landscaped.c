@@ -29,6 +29,7 @@
 #include "ls_core.h"
 #include "ls_core_events.h"
 #include "ls_kin.h"
+#include "faulty_link.h"
 #include "ls_net.h"
 #include "slcan_pty.h"
 
@@ -83,6 +84,32 @@ static int open_link(const char *spec, hal_can_link_t *out)
         LOG_ERR("--link %s: %s", spec, msg);
         return -1;
     }
+    return 0;
+}
+
+static uint64_t fault_now_us(void *self)
+{
+    (void)self;
+    return mono_us();
+}
+
+/* --link-faults: wrap a link in the fault injector (tests only). */
+static int wrap_faults(const char *spec, hal_can_link_t *link)
+{
+    hal_sim_fault_config_t fc;
+    char msg[256];
+    if (hal_sim_fault_parse(spec, &fc, msg, sizeof msg) != HAL_OK) {
+        LOG_ERR("--link-faults %s: %s", spec, msg);
+        return -1;
+    }
+    fc.clock = (hal_clock_t){ .now_us = fault_now_us, .self = NULL };
+    hal_can_link_t faulty;
+    if (hal_sim_faulty_wrap(&faulty, link, &fc) != HAL_OK) {
+        LOG_ERR("--link-faults: at most %d links can carry faults", HAL_SIM_FAULTY_MAX_LINKS);
+        return -1;
+    }
+    *link = faulty;
+    LOG_WARN("link %s: injecting faults %s", link->name, spec);
     return 0;
 }
 
@@ -394,6 +421,11 @@ int main(int argc, char **argv)
             rc = 1;
             break;
         }
+        if (opt.link_faults[0] != '\0' && wrap_faults(opt.link_faults, &link) != 0) {
+            hal_can_close(&link);
+            rc = 1;
+            break;
+        }
         (void)ls_net_add_link(&g_net, &link);
         LOG_INFO("link %s up", link.name);
     }
@@ -437,6 +469,12 @@ int main(int argc, char **argv)
         }
     }
     LOG_INFO("shutting down");
+    for (size_t i = 0; i < g_net.n_links; i++) {
+        char line[512];
+        if (hal_sim_faulty_format(&g_net.links[i], line, sizeof line) >= 0) {
+            LOG_INFO("link %s faults: %s", g_net.links[i].name, line);
+        }
+    }
     hal_linux_rt_stop(&g_rt);
     if (g_core.ctl != NULL) {
         (void)hal_arm_enable(&g_arm, false);

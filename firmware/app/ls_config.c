@@ -2,6 +2,8 @@
  * table for both so a key and its option cannot disagree on what they accept. */
 #include "ls_config.h"
 
+#include "faulty_link.h"
+
 #include <ctype.h>
 #include <errno.h>
 #include <getopt.h>
@@ -222,6 +224,24 @@ static int set_dio_socket(ls_config_t *cfg, const char *v, char *why, size_t why
     return 0;
 }
 
+static int set_link_faults(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    hal_sim_fault_config_t fc;
+    if (v[0] == '\0') {
+        cfg->link_faults[0] = '\0';
+        return 0;
+    }
+    if (copy_str(cfg->link_faults, sizeof cfg->link_faults, v) != 0) {
+        return EXPECT("a fault spec of at most %zu characters", sizeof cfg->link_faults - 1);
+    }
+    char m[200];
+    if (hal_sim_fault_parse(v, &fc, m, sizeof m) != HAL_OK) {
+        cfg->link_faults[0] = '\0';
+        return EXPECT("a fault spec as in docs/reliability.md (%s)", m);
+    }
+    return 0;
+}
+
 static int set_clock(ls_config_t *cfg, const char *v, char *why, size_t whylen)
 {
     if (strcmp(v, "realtime") != 0 && strcmp(v, "lockstep") != 0) {
@@ -312,6 +332,7 @@ static const key_def_t KEYS[] = {
     { "hal", "arm", "arm", false, set_arm },
     { "hal", "dio", "dio", false, set_dio },
     { "hal", "dio_socket", "dio-socket", false, set_dio_socket },
+    { "hal", "link_faults", "link-faults", false, set_link_faults },
     { "hal", "clock", "clock", false, set_clock },
     { "control", "rate_hz", "rate", false, set_rate },
     { "control", "telemetry_hz", "telemetry-hz", false, set_telemetry },
@@ -560,6 +581,7 @@ void ls_config_usage(FILE *f)
             "                            repeatable: every link is one segment of the same bus\n"
             "  --arm sim|none            [hal] arm (default sim)\n"
             "  --dio sim|none|gpiod:CHIP [hal] dio: digital I/O backend (default sim)\n"
+            "  --link-faults SPEC        [hal] link_faults: inject faults on every link (tests; docs/reliability.md)\n"
             "  --dio-socket PATH         [hal] dio_socket: sim DIO/jog control socket\n"
             "  --clock realtime|lockstep [hal] clock (default realtime)\n"
             "  --node ADDR               [device] node: node address 1..0xFE on the bus (default 0x10)\n"

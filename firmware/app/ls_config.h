@@ -32,6 +32,7 @@ typedef struct {
     size_t n_links;
     char arm[16];                /* arm = sim | none (default sim) */
     char dio[128];               /* dio = sim | gpiod:CHIP | none (default sim) */
+    char link_faults[192];       /* [hal] link_faults, --link-faults SPEC: tests only, faults injected on every link ("" = none) */
     char dio_socket[128];        /* dio_socket = PATH (sim DIO/jog control socket; "" = none) */
     char clock[16];              /* clock = realtime | lockstep (default realtime) */
     /* [control] */

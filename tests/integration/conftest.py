@@ -23,6 +23,7 @@ CLI = Path(sys.executable).parent / "landscape"
 class Controller:
     pty: str
     proc: subprocess.Popen[bytes]
+    log: Path
 
     def cli(self, *args: str, timeout: float = 60.0, check: bool = False) -> subprocess.CompletedProcess[str]:
         return run_cli("--interface", "slcan", "--channel", self.pty, *args, timeout=timeout, check=check)
@@ -44,18 +45,21 @@ def run_cli(*args: str, timeout: float = 60.0, check: bool = False) -> subproces
 def start_controller(path: Path, *extra: str) -> Controller:
     if not LANDSCAPED.exists():
         raise AssertionError(f"{LANDSCAPED} is missing: build first (bash .ci/build)")
-    proc = subprocess.Popen([str(LANDSCAPED), "--hal", "sim", "--link", f"slcan:pty:{path}", *extra],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    # stderr to a file, never a pipe: a pipe nobody reads would block the controller's logging
+    log = path.with_name(path.name + ".log")
+    with open(log, "wb") as err_file:
+        proc = subprocess.Popen([str(LANDSCAPED), "--hal", "sim", "--link", f"slcan:pty:{path}", *extra],
+                                stdout=subprocess.DEVNULL, stderr=err_file)
     deadline = time.monotonic() + 10
     while not path.exists():
         if proc.poll() is not None:
-            err = proc.stderr.read().decode() if proc.stderr else ""
+            err = log.read_text(errors="replace")
             raise AssertionError(f"landscaped exited with {proc.returncode}: {err}")
         if time.monotonic() > deadline:
             proc.kill()
             raise AssertionError("landscaped did not create its pty link within 10 s")
         time.sleep(0.02)
-    return Controller(str(path), proc)
+    return Controller(str(path), proc, log)
 
 
 @pytest.fixture
@@ -64,4 +68,8 @@ def controller(tmp_path: Path) -> Iterator[Controller]:
     try:
         yield c
     finally:
-        c.stop()
+        code = c.stop()
+        # A crash, a sanitizer report or a leak at shutdown must fail the test that caused it.
+        log = c.log.read_text(errors="replace")
+        assert code == 0, f"landscaped exited with {code}:\n{log[-4000:]}"
+        assert "Sanitizer" not in log, log[-4000:]

@@ -479,7 +479,7 @@ def test_faults_are_counted_and_logged_at_shutdown(tmp_path: Path) -> None:
         bus.shutdown()
         status = c.stop()  # also when the session failed: never leave landscaped behind
     assert status == 0
-    err = c.proc.stderr.read().decode() if c.proc.stderr else ""
+    err = c.log.read_text(errors="replace")
     line = next((ln for ln in err.splitlines() if " faults: tx frames=" in ln), "")
     assert line, err
     fields = dict(kv.split("=") for kv in line.split(" faults: ", 1)[1].split() if "=" in kv)
