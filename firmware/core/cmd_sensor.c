@@ -196,6 +196,37 @@ static ls_react_plan_t *take_slot(ls_core_t *core, ls_call_t *call, const char *
     return slot;
 }
 
+/* The common end of moveReact and comply: limits, the tool, the straight line
+ * from the current tip along `d` (tool frame) checked, then the start. */
+static int32_t plan_and_start(ls_core_t *core, ls_call_t *call, const char *what, const hal_sensor_t *sensor,
+                              const double d[3], ls_react_plan_t *plan, react_run_t *run)
+{
+    const ls_settings_t *set = &core->settings;
+    int32_t code;
+    plan->a_m_s2 = fmin(set->linear_accel_m_s2, core->model->max_linear_accel_m_s2);
+    plan->a_stop_m_s2 = core->model->max_linear_accel_m_s2;
+    snprintf(plan->sensor, sizeof plan->sensor, "%s", sensor->name);
+    tool_pose(core, plan->tool);
+
+    ls_ctl_snapshot_t snap;
+    ls_control_snapshot(core->ctl, &snap);
+    double F[16], P0[16], D[16], P1[16];
+    ls_kin_fk(core->model, snap.q_cmd_rad, F);
+    ls_pose_mul(F, plan->tool, P0);
+    const double off[6] = { d[0], d[1], d[2], 0, 0, 0 };
+    ls_pose_from_xyzrpy(off, D);
+    ls_pose_mul(P0, D, P1);
+    if ((code = check_line(core, call, what, snap.q_cmd_rad, P1, plan->v_m_s)) != 0) {
+        return code;
+    }
+    ls_react_plan_t *slot = take_slot(core, call, what, &code);
+    if (slot == NULL) {
+        return code;
+    }
+    snprintf(run->seed_name, sizeof run->seed_name, "%s", what);
+    return start_react(core, call, slot, plan, run);
+}
+
 /* ------------------------------------------------------------- moveReact */
 
 int32_t ls_h_move_react(struct ls_core *core, struct ls_call *call)
@@ -305,29 +336,8 @@ int32_t ls_h_move_react(struct ls_core *core, struct ls_call *call)
                         "%s: envelope max %.4g N must exceed the threshold's magnitude %.4g", what, env, fabs(t));
     }
     plan.envelope = env;
-    plan.a_m_s2 = fmin(set->linear_accel_m_s2, core->model->max_linear_accel_m_s2);
-    plan.a_stop_m_s2 = core->model->max_linear_accel_m_s2;
-    snprintf(plan.sensor, sizeof plan.sensor, "%s", sensor->name);
-    tool_pose(core, plan.tool);
-
-    ls_ctl_snapshot_t snap;
-    ls_control_snapshot(core->ctl, &snap);
-    double F[16], P0[16], D[16], P1[16];
-    ls_kin_fk(core->model, snap.q_cmd_rad, F);
-    ls_pose_mul(F, plan.tool, P0);
-    const double off[6] = { d[0], d[1], d[2], 0, 0, 0 };
-    ls_pose_from_xyzrpy(off, D);
-    ls_pose_mul(P0, D, P1);
-    if ((code = check_line(core, call, what, snap.q_cmd_rad, P1, plan.v_m_s)) != 0) {
-        return code;
-    }
-    ls_react_plan_t *slot = take_slot(core, call, what, &code);
-    if (slot == NULL) {
-        return code;
-    }
     react_run_t run = { .comply = false, .sensor = si, .length = length, .component = plan.component };
-    snprintf(run.seed_name, sizeof run.seed_name, "%s", what);
-    return start_react(core, call, slot, &plan, &run);
+    return plan_and_start(core, call, what, sensor, d, &plan, &run);
 }
 
 /* ------------------------------------------------------------- comply */
@@ -469,29 +479,8 @@ int32_t ls_h_comply(struct ls_core *core, struct ls_call *call)
                         what, env, COMPLY_DEFAULT_PANIC_FACTOR, fabs(plan.f_target_N));
     }
     plan.panic_N = env > 0.0 ? env : COMPLY_DEFAULT_PANIC_FACTOR * fabs(plan.f_target_N);
-    plan.a_m_s2 = fmin(set->linear_accel_m_s2, core->model->max_linear_accel_m_s2);
-    plan.a_stop_m_s2 = core->model->max_linear_accel_m_s2;
-    snprintf(plan.sensor, sizeof plan.sensor, "%s", sensor->name);
-    tool_pose(core, plan.tool);
-
-    ls_ctl_snapshot_t snap;
-    ls_control_snapshot(core->ctl, &snap);
-    double F[16], P0[16], D[16], P1[16];
-    ls_kin_fk(core->model, snap.q_cmd_rad, F);
-    ls_pose_mul(F, plan.tool, P0);
-    const double off[6] = { d[0], d[1], d[2], 0, 0, 0 };
-    ls_pose_from_xyzrpy(off, D);
-    ls_pose_mul(P0, D, P1);
-    if ((code = check_line(core, call, what, snap.q_cmd_rad, P1, plan.v_m_s)) != 0) {
-        return code;
-    }
-    ls_react_plan_t *slot = take_slot(core, call, what, &code);
-    if (slot == NULL) {
-        return code;
-    }
     react_run_t run = { .comply = true, .sensor = si, .length = false, .panic_code = r->panic_stop_code };
-    snprintf(run.seed_name, sizeof run.seed_name, "%s", what);
-    return start_react(core, call, slot, &plan, &run);
+    return plan_and_start(core, call, what, sensor, d, &plan, &run);
 }
 
 /* ------------------------------------------------------------- manualControl */
