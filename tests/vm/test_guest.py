@@ -466,6 +466,39 @@ def test_two_controllers_and_two_supervisors_on_one_bus(controller: Landscaped, 
     assert rc == 0, second.log.read_text()
 
 
+@needs_socketcan
+def test_two_supervisors_in_separate_processes(controller: Landscaped, tmp_path: Path) -> None:
+    """Issue 3 on real SocketCAN: two supervisor processes with their own
+    sockets and addresses (0xF1 in this process, 0xF3 a CLI process), each
+    owning its own controller (0x10, 0x11), move at the same time."""
+    import can
+    second = Landscaped(log_dir(tmp_path), 0x11, "none", rt_priority=0)
+    script = tmp_path / "b.lsc"
+    script.write_text("lock\nactivate\nmove-absolute pb JOINT_FRAME 0 0.2 0 0 0 0 --speed-pct 50\n"
+                      "deactivate\nrelease\n")
+    other = subprocess.Popen([str(CLI), "--interface", "socketcan", "--channel", CAN_IF, "--device", "0x11",
+                              "--source-address", "0xF3", "run", str(script)],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    bus = can.Bus(interface="socketcan", channel=CAN_IF)
+    try:
+        with Supervisor(bus, device=0x10, source_address=0xF1, client_name="vm-a", timeout_s=5.0) as a:
+            a.lock()
+            a.activate()
+            na = a.wait_complete(a.move_absolute("pa", [0.1, 0, 0, 0, 0, 0], speed_pct=50), timeout_s=120)
+            assert na.event_id == "moveAbsoluteComplete"
+            a.deactivate()
+            a.release()
+        out, err = other.communicate(timeout=240)
+        assert other.returncode == 0, f"{out}\n{err}"
+        assert re.search(r"EVENT moveAbsoluteComplete point=pb .*final", out), out
+    finally:
+        if other.poll() is None:
+            other.kill()
+        bus.shutdown()
+        rc = second.stop()
+    assert rc == 0, second.log.read_text()
+
+
 CONFIG_DRIVER = BUILD / "bin" / "ls_config_driver"  # landscaped's configuration and --check, alone
 
 
