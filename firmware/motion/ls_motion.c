@@ -415,7 +415,9 @@ int ls_motion_seg_arc(ls_motion_seg_t *s, const ls_robot_model_t *model, const d
     double c[3];
     v3_sub(p1, pv, c);
     const double lc = v3_norm(c);
-    if (la < 1e-6 || lb < 1e-6 || lc < 1e-6 || nn < 1e-6 * la * lb) {
+    /* Collinear when the arc point lies within 0.1 mm of the line through
+     * start and goal: the circle would be huge and ill-defined by rounding. */
+    if (la < 1e-6 || lb < 1e-6 || lc < 1e-6 || nn / lb < 1e-4) {
         return refuse(why, whylen, LS_MOTION_EGEOM,
                       "arc: start, arc point and goal are collinear or coincide (no unique circle); use a line");
     }
