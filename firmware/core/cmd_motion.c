@@ -492,12 +492,7 @@ int32_t ls_h_abort_motion(struct ls_core *core, struct ls_call *call)
         const char *data[] = { d1, d2 };
         char id[40];
         snprintf(id, sizeof id, "%sAborted", g_run.seed_name);
-        /* ls_core_notify builds the notice in core->down, where the response
-         * to this request is being built: keep the response aside. */
-        static ls_Downlink saved;
-        saved = core->down;
         ls_core_notify(core, g_run.sup, ls_NoticeKind_ALARM, id, g_run.ref_seq, true, data, 2);
-        core->down = saved;
         path_delete(g_run.path);
     }
     g_run.active = false;

@@ -204,7 +204,7 @@ def _joint_points(n: int) -> list[dict[str, object]]:
 def test_path_with_tags_runs_two_cycles(sup: Supervisor) -> None:
     assert sup.path_load("p", _joint_points(3)).result["points_in_path"] == 3
     list(sup.notices(timeout_s=0.1))
-    rv = sup.path_move("p", 2)
+    rv = sup.path_move("p", number_of_cycles=2)
     got = _finals(sup, rv.seq, 60)
     tags = [(notice_data(n)["tag"], notice_data(n)["cycle"]) for n in got if n.event_id == "tag"]
     assert tags == [("T0", "1"), ("T1", "1"), ("T2", "1"), ("T0", "2"), ("T1", "2"), ("T2", "2")]
@@ -225,7 +225,7 @@ def test_path_load_is_atomic(sup: Supervisor) -> None:
     assert sup.path_load("a", _joint_points(1)).result["points_in_path"] == 3  # nothing of the bad ones
     sup.path_clear_path("a")
     with pytest.raises(errors.ParamError, match="no path named"):
-        sup.path_move("a", 1)
+        sup.path_move("a", number_of_cycles=1)
 
 
 def test_stop_resume_abort(sup: Supervisor) -> None:
@@ -247,7 +247,7 @@ def test_stop_resume_abort(sup: Supervisor) -> None:
 
     # a path stopped and aborted: the queue is gone and the arm stays where it paused
     sup.path_load("q", _joint_points(3))
-    rv = sup.path_move("q", 1)
+    rv = sup.path_move("q", number_of_cycles=1)
     time.sleep(0.3)
     sup.stop_motion()
     q_paused = joints(sup)
@@ -256,7 +256,7 @@ def test_stop_resume_abort(sup: Supervisor) -> None:
     with pytest.raises(errors.AlarmError):
         sup.wait_complete(rv, timeout_s=5)
     with pytest.raises(errors.ParamError, match="no path named"):
-        sup.path_move("q", 1)
+        sup.path_move("q", number_of_cycles=1)
     assert joints(sup) == pytest.approx(q_paused, abs=2e-3)
 
 
@@ -278,7 +278,7 @@ def test_wait_aux_times_out_into_a_fault(sup: Supervisor) -> None:
     pts = _joint_points(1)
     pts[0]["aux_commands"] = ["wait 0 0x80 0.3"]
     sup.path_load("w", pts)
-    rv = sup.path_move("w", 1)
+    rv = sup.path_move("w", number_of_cycles=1)
     with pytest.raises(errors.AlarmError):
         sup.wait_complete(rv, timeout_s=20)
     st = sup.get_motion_control_state().result
@@ -297,7 +297,7 @@ def test_rsvp_aux_waits_for_the_owner(sup: Supervisor) -> None:
     pts[0]["aux_commands"] = ["event here", "rsvp ready 5"]
     sup.path_load("r", pts)
     list(sup.notices(timeout_s=0.1))
-    rv = sup.path_move("r", 1)
+    rv = sup.path_move("r", number_of_cycles=1)
     got = _finals(sup, rv.seq, 30)
     assert seen.is_set()
     assert [n.event_id for n in got if n.final] == ["pathMoveComplete"]
