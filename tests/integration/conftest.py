@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterator
 
+import can
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -73,3 +74,26 @@ def controller(tmp_path: Path) -> Iterator[Controller]:
         log = c.log.read_text(errors="replace")
         assert code == 0, f"landscaped exited with {code}:\n{log[-4000:]}"
         assert "Sanitizer" not in log, log[-4000:]
+
+
+def open_slcan(pty: str) -> can.BusABC:
+    """python-can's slcan interface on a controller's pty (no 2 s sleep after open)."""
+    return can.Bus(interface="slcan", channel=pty, bitrate=1000000, sleep_after_open=0)
+
+
+@pytest.fixture
+def bus(controller: Controller) -> Iterator[can.BusABC]:
+    b = open_slcan(controller.pty)
+    try:
+        yield b
+    finally:
+        b.shutdown()
+
+
+@pytest.fixture
+def notifier(bus: can.BusABC) -> Iterator[can.Notifier]:
+    n = can.Notifier(bus, [], timeout=0.01)
+    try:
+        yield n
+    finally:
+        n.stop()

@@ -42,15 +42,6 @@ def test_conformance_table_matches_the_schema() -> None:
         assert owner == ("yes" if cmd.owner_only else "no"), cmd.name
 
 
-@pytest.fixture
-def bus(controller: Controller) -> Iterator[can.BusABC]:
-    b = can.Bus(interface="slcan", channel=controller.pty, bitrate=1000000, sleep_after_open=0)
-    try:
-        yield b
-    finally:
-        b.shutdown()
-
-
 def _probe(sup: Supervisor, cmd: Command, expect_state: str) -> int:
     """Send `cmd` with default (empty) arguments; the answer's code. The
     device must stay in `expect_state` (an empty request must not start anything)."""

@@ -81,24 +81,6 @@ class Sniffer:
 
 
 @pytest.fixture
-def bus(controller: Controller) -> Iterator[can.BusABC]:
-    b = can.Bus(interface="slcan", channel=controller.pty, bitrate=1000000, sleep_after_open=0)
-    try:
-        yield b
-    finally:
-        b.shutdown()
-
-
-@pytest.fixture
-def notifier(bus: can.BusABC) -> Iterator[can.Notifier]:
-    n = can.Notifier(bus, [], timeout=0.01)
-    try:
-        yield n
-    finally:
-        n.stop()
-
-
-@pytest.fixture
 def sniffer(bus: can.BusABC, notifier: can.Notifier) -> Iterator[Sniffer]:
     s = Sniffer(bus, notifier, OWNER)
     try:

@@ -115,24 +115,6 @@ class Frames(can.Listener):
 
 
 @pytest.fixture
-def bus(controller: Controller) -> Iterator[can.BusABC]:
-    b = can.Bus(interface="slcan", channel=controller.pty, bitrate=1000000, sleep_after_open=0)
-    try:
-        yield b
-    finally:
-        b.shutdown()
-
-
-@pytest.fixture
-def notifier(bus: can.BusABC) -> Iterator[can.Notifier]:
-    n = can.Notifier(bus, [], timeout=0.01)
-    try:
-        yield n
-    finally:
-        n.stop()
-
-
-@pytest.fixture
 def sup(bus: can.BusABC, notifier: can.Notifier, controller: Controller) -> Iterator[Supervisor]:
     with Supervisor(bus, notifier=notifier, source_address=HOST, client_name="victim") as s:
         yield s

@@ -16,15 +16,6 @@ from landscape.registry import COMMANDS, lookup
 from landscape.supervisor import Supervisor
 
 
-@pytest.fixture
-def bus(controller: Controller) -> Iterator[can.BusABC]:
-    b = can.Bus(interface="slcan", channel=controller.pty, bitrate=1000000, sleep_after_open=0)
-    try:
-        yield b
-    finally:
-        b.shutdown()
-
-
 def _status(sup: Supervisor) -> dict[str, str]:
     text = sup.request("sendCommand", input="status").result["result"]
     out: dict[str, str] = {}
