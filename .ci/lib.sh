@@ -1,0 +1,49 @@
+# Sourced by the .ci scripts: run named steps, keep each step's output in a
+# log, and on failure show that output and name the step, so a failure is
+# never silent (a step that fails prints its own error, not just "exit 1").
+#
+#   step NAME CMD [ARG...]   run CMD; its output goes to a log under $LS_CI_LOGS
+#                            (default build-logs/) and is echoed when it fails
+#   step_live NAME CMD ...   the same, with the output shown as it runs
+#
+# Both print "== NAME" first and "ci: NAME failed (exit N), log: PATH" on failure,
+# then exit with CMD's status (the scripts run with set -e).
+
+LS_CI_LOGS=${LS_CI_LOGS:-$PWD/build-logs}
+mkdir -p "$LS_CI_LOGS"
+LS_CI_SCRIPT=${LS_CI_SCRIPT:-$(basename "$0")}
+
+_ci_log_path() {
+  local slug
+  slug=$(printf '%s' "$1" | tr -c 'A-Za-z0-9._-' '-' | cut -c1-60)
+  printf '%s/%s.%s.log' "$LS_CI_LOGS" "$LS_CI_SCRIPT" "$slug"
+}
+
+step() {
+  local name=$1
+  shift
+  local log rc=0
+  log=$(_ci_log_path "$name")
+  echo "== $name"
+  "$@" >"$log" 2>&1 || rc=$?
+  if [ "$rc" -ne 0 ]; then
+    echo "---- output of '$name' (last 120 lines of $log) ----" >&2
+    tail -n 120 "$log" >&2
+    echo "---- end of output ----" >&2
+    echo "$LS_CI_SCRIPT: step '$name' failed (exit $rc); full log: $log" >&2
+    exit "$rc"
+  fi
+}
+
+step_live() {
+  local name=$1
+  shift
+  local log rc=0
+  log=$(_ci_log_path "$name")
+  echo "== $name"
+  "$@" 2>&1 | tee "$log" || rc=${PIPESTATUS[0]}
+  if [ "$rc" -ne 0 ]; then
+    echo "$LS_CI_SCRIPT: step '$name' failed (exit $rc); its output is above and in $log" >&2
+    exit "$rc"
+  fi
+}
