@@ -10,7 +10,6 @@ answers CMD_NOT_IMPLEMENTED_ERR or the option is missing; they run as soon as
 the feature lands. docs/reliability.md records the figures."""
 from __future__ import annotations
 
-import functools
 import os
 import logging
 import socket
@@ -36,24 +35,6 @@ LOSS_RATES = [0.01, 0.05, 0.20]
 HB_MS = 100
 RETRIES = 8
 PER_TRY_S = float(os.environ.get("LS_FAULT_PER_TRY_S", "0.4"))
-
-
-@functools.cache
-def _landscaped_help() -> str:
-    if not LANDSCAPED.exists():
-        return ""
-    return subprocess.run([str(LANDSCAPED), "--help"], capture_output=True, text=True, timeout=10).stdout
-
-
-def need_option(opt: str) -> None:
-    if opt not in _landscaped_help():
-        pytest.skip(f"landscaped has no {opt} option yet (see docs/reliability.md)")
-
-
-def need_implemented(rv: RetVal) -> RetVal:
-    if rv.ret_code == pb.CMD_NOT_IMPLEMENTED_ERR:
-        pytest.skip(f"{rv.name} is not implemented in this firmware yet")
-    return rv
 
 
 class RetransmitCounter(logging.Handler):
@@ -83,7 +64,6 @@ def retransmits() -> Iterator[RetransmitCounter]:
 
 
 def faulty(tmp_path: Path, spec: str, *extra: str) -> Controller:
-    need_option("--link-faults")
     return start_controller(tmp_path / "ls0", "--link-faults", spec, *extra)
 
 
@@ -271,8 +251,8 @@ def test_set_speed_takes_effect_once_under_loss(tmp_path: Path, loss: float) -> 
     try:
         with sup_on(bus) as sup:
             sup.lock()
-            need_implemented(sup.set_speed(10.0, check=False))
-            need_implemented(sup.get_velocities(check=False))
+            sup.set_speed(10.0)
+            sup.get_velocities()
             e0, _ = executed_retry(sup)
             w.wait_open()
             t = Tally()
@@ -313,7 +293,7 @@ def test_path_is_never_half_loaded(tmp_path: Path, loss: float) -> None:
     try:
         with sup_on(bus) as sup:
             sup.lock()
-            need_implemented(sup.path_clear_path("soak", check=False))
+            sup.path_clear_path("soak", check=False)
             w.wait_open()
             t = Tally()
             prev: int | None = 0
@@ -420,8 +400,6 @@ ESTOP_BIT = 3
 
 
 def test_estop_input_stops_motion_and_raises_the_fault_alarm(tmp_path: Path) -> None:
-    need_option("--estop-input")
-    need_option("--dio-socket")
     sock_path = tmp_path / "dio.sock"
     c = faulty(tmp_path, "drop=0.01,seed=5", "--estop-input", str(ESTOP_BIT), "--dio-socket", str(sock_path))
     bus = open_bus(c)
@@ -430,7 +408,7 @@ def test_estop_input_stops_motion_and_raises_the_fault_alarm(tmp_path: Path) -> 
         with sup_on(bus) as sup:
             retry_until_answered(lambda: sup.lock())
             retry_until_answered(lambda: sup.activate())
-            mv = need_implemented(sup.move_absolute("far", [1.0, -0.5, 0.5, 0.0, 0.5, 0.0], check=False))
+            mv = sup.move_absolute("far", [1.0, -0.5, 0.5, 0.0, 0.5, 0.0], check=False)
             assert mv.started, mv
             time.sleep(0.3)  # well under way
             deadline = time.monotonic() + 5
@@ -468,7 +446,6 @@ def test_estop_input_stops_motion_and_raises_the_fault_alarm(tmp_path: Path) -> 
 
 
 def test_bad_fault_spec_is_refused_with_a_clear_message(tmp_path: Path) -> None:
-    need_option("--link-faults")
     r = subprocess.run([str(LANDSCAPED), "--hal", "sim", "--link", f"slcan:pty:{tmp_path / 'x'}",
                         "--link-faults", "drop=2"], capture_output=True, text=True, timeout=10)
     assert r.returncode != 0

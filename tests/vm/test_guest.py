@@ -255,24 +255,6 @@ INPUT_LINES = [0, 1, 2, 3]    # gpio-sim lines read as DIO inputs, bits 0..3
 OUTPUT_LINES = [4, 5, 6, 7]   # gpio-sim lines driven as DIO outputs, bits 16..19
 
 
-def _landscaped_help() -> str:
-    if not LANDSCAPED.exists():
-        return ""
-    r = subprocess.run([str(LANDSCAPED), "--help"], capture_output=True, text=True, timeout=60)
-    return r.stdout + r.stderr
-
-
-HELP = _landscaped_help()
-
-
-def needs(feature: str, probe: str) -> pytest.MarkDecorator:
-    """Skip when the built landscaped exists but its --help lacks `probe`."""
-    return pytest.mark.skipif(bool(HELP) and probe not in HELP,
-                              reason=f"waits for landscaped {feature} ('{probe}' not in landscaped --help)")
-
-
-needs_socketcan = needs("--link socketcan:IFNAME", "socketcan:IFNAME")
-needs_gpiod = needs("--dio gpiod:CHIP", "gpiod:CHIP")
 
 
 def landscaped_args(tmp: Path, node: int, dio: str, rt_priority: int = 50) -> list[str]:
@@ -283,20 +265,16 @@ def landscaped_args(tmp: Path, node: int, dio: str, rt_priority: int = 50) -> li
     second controller runs a normal thread. Telemetry is 2 Hz: at 50 Hz (7
     frames each) the emulated host tool cannot keep up with the bus and
     misses its ISO-TP time-outs. The heartbeat time-out is 10 s: the emulated
-    host tool's 200 ms heartbeats arrive more than 1 s apart at times. The DIO line offsets are options in early
-    landscaped builds (--inputs, --outputs) and [dio] keys of a --config file
-    later (docs/deploy.md)."""
+    host tool's 200 ms heartbeats arrive more than 1 s apart at times. The DIO line offsets are the
+    [dio] keys of a --config file (docs/deploy.md)."""
     args = ["--link", f"socketcan:{CAN_IF}", "--arm", "sim", "--node", f"{node:#04x}",
             "--rt-priority", str(rt_priority), "--rate", "100", "--telemetry-hz", "2",
             "--heartbeat-timeout", "10000", "--name", f"vm-{node:02x}"]
     if dio.startswith("gpiod:"):
         ins, outs = ",".join(map(str, INPUT_LINES)), ",".join(map(str, OUTPUT_LINES))
-        if "--inputs" in HELP:
-            args += ["--dio", dio, "--inputs", ins, "--outputs", outs]
-        else:
-            conf = tmp / f"landscaped-{node:02x}.conf"
-            conf.write_text(f"[hal]\ndio = {dio}\n[dio]\ninputs = {ins}\noutputs = {outs}\n")
-            args = ["--config", str(conf), *args]
+        conf = tmp / f"landscaped-{node:02x}.conf"
+        conf.write_text(f"[hal]\ndio = {dio}\n[dio]\ninputs = {ins}\noutputs = {outs}\n")
+        args = ["--config", str(conf), *args]
     else:
         args += ["--dio", dio]
     return args
@@ -368,8 +346,6 @@ def supervisor(device: int, source: int, name: str) -> Supervisor:
                                client_name=name, timeout_s=5.0)
 
 
-@needs_socketcan
-@needs_gpiod
 def test_cli_session_moves_the_arm_over_socketcan(controller: Landscaped, tmp_path: Path) -> None:
     """The host CLI on python-can's socketcan interface: connect, lock,
     activate, a joint move to completion, deactivate, release, in one run."""
@@ -390,8 +366,6 @@ def test_cli_session_moves_the_arm_over_socketcan(controller: Landscaped, tmp_pa
     assert joints == pytest.approx([0.2, -0.3, 0.25, 0, 0.1, 0], abs=2e-3)
 
 
-@needs_socketcan
-@needs_gpiod
 def test_set_digital_io_drives_gpio_sim_lines(controller: Landscaped) -> None:
     """setDigitalIO output bits 16 and 18 are gpio-sim lines 4 and 6: their
     values in sysfs follow, the other outputs stay low."""
@@ -409,8 +383,6 @@ def test_set_digital_io_drives_gpio_sim_lines(controller: Landscaped) -> None:
         sup.release()
 
 
-@needs_socketcan
-@needs_gpiod
 def test_pull_on_gpio_sim_input_signals_the_host(controller: Landscaped) -> None:
     """A pull-up on gpio-sim lines 1 and 2 (DIO inputs 1 and 2) fires a
     signalDigitalIO watch on bits 0x6: one dioSignal event at the host, and
@@ -431,7 +403,6 @@ def test_pull_on_gpio_sim_input_signals_the_host(controller: Landscaped) -> None
     set_pulls("pull-down")
 
 
-@needs_socketcan
 def test_two_controllers_and_two_supervisors_on_one_bus(controller: Landscaped, tmp_path: Path) -> None:
     """Nodes 0x10 and 0x11 on vcan0, each owned by its own supervisor (0xF1,
     0xF3) sharing one socket and Notifier (the library's documented way):
@@ -466,7 +437,6 @@ def test_two_controllers_and_two_supervisors_on_one_bus(controller: Landscaped, 
     assert rc == 0, second.log.read_text()
 
 
-@needs_socketcan
 def test_two_supervisors_in_separate_processes(controller: Landscaped, tmp_path: Path) -> None:
     """Issue 3 on real SocketCAN: two supervisor processes with their own
     sockets and addresses (0xF1 in this process, 0xF3 a CLI process), each
@@ -511,8 +481,6 @@ def check_command(which: str, tmp: Path, link: str) -> list[str]:
     if which == "driver":
         assert CONFIG_DRIVER.exists(), f"{CONFIG_DRIVER} missing: build first"
         return [str(CONFIG_DRIVER), "--config", str(conf), "--check"]
-    if "--check" not in HELP:
-        pytest.skip("waits for landscaped --check ('--check' not in landscaped --help)")
     return [str(LANDSCAPED), "--config", str(conf), "--check"]
 
 
