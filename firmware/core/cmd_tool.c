@@ -186,7 +186,8 @@ static int plan_step(ls_core_t *core, const double q0[LS_N_JOINTS], char *why, s
 static void step_failed(ls_core_t *core, const char *why)
 {
     char msg[200];
-    snprintf(msg, sizeof msg, "%s %s stopped at step %d: %s; the arm holds where it is", op_name(), g_op.id,
+    /* why: at most 100 characters, so the whole text fits msg (-Wformat-truncation at -O3). */
+    snprintf(msg, sizeof msg, "%s %s stopped at step %d: %.100s; the arm holds where it is", op_name(), g_op.id,
              g_op.step, why);
     op_end(core, ls_RetCode_CMD_ERR, msg, true);
 }

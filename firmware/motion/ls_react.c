@@ -53,7 +53,10 @@ static void emit(ls_motion_events_t *ev, ls_motion_event_kind_t kind, uint32_t r
     e->ref_seq = ref_seq;
     e->index = index;
     if (text != NULL) {
-        snprintf(e->text, sizeof e->text, "%s", text);
+        /* The precision bounds the copy by the field, whatever buffer the
+         * caller formatted into: a longer text is cut, and the compiler can
+         * prove that nothing else is (-Wformat-truncation at -O3). */
+        snprintf(e->text, sizeof e->text, "%.*s", (int)(sizeof e->text - 1), text);
     }
     if (q != NULL) {
         memcpy(e->q_rad, q, sizeof e->q_rad);
