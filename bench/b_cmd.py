@@ -11,7 +11,7 @@ from pathlib import Path
 import can
 import isotp
 
-from common import BIN, BUILD, BenchSkipped, Row, Section, fmt_ratio, median, need, percentile, pty_peer
+from common import BIN, BUILD, BenchError, Row, Section, fmt_ratio, median, need, percentile, pty_peer
 
 
 def slcan_bus(link: Path) -> can.BusABC:
@@ -22,7 +22,7 @@ def command_round_trips(link: Path, runs: int) -> list[float]:
     try:
         from landscape.supervisor import Supervisor
     except ImportError as exc:
-        raise BenchSkipped(f"the host package `landscape` is not importable ({exc}): run .ci/setup") from None
+        raise BenchError(f"the host package `landscape` is not importable ({exc}): run .ci/setup") from None
     sup = Supervisor(slcan_bus(link), owns_bus=True)
     with sup:
         for _ in range(5):
@@ -47,7 +47,7 @@ def frame_round_trips(link: Path, runs: int) -> list[float]:
             while True:
                 got = bus.recv(timeout=2.0)
                 if got is None:
-                    raise BenchSkipped(f"no echo of a frame from bench_frame_echo on {link} within 2 s")
+                    raise BenchError(f"no echo of a frame from bench_frame_echo on {link} within 2 s")
                 if got.arbitration_id == 0x18DAF110 and got.data[1] == (k & 0xFF):
                     break
             if k >= 5:
@@ -74,7 +74,7 @@ def isotp_sf_round_trips(link: Path, runs: int) -> list[float]:
             stack.send(data)
             got = stack.recv(block=True, timeout=2.0)
             if got != data:
-                raise BenchSkipped(f"no ISO-TP single-frame echo from bench_frame_echo on {link}")
+                raise BenchError(f"no ISO-TP single-frame echo from bench_frame_echo on {link}")
             if k >= 5:
                 out.append(time.perf_counter() - t0)
         return out

@@ -10,7 +10,7 @@ import subprocess
 import tempfile
 from pathlib import Path
 
-from common import BIN, BenchSkipped, Row, Section, need
+from common import BIN, BenchError, Row, Section, need
 
 CASE_TEXT = {
     "traj": "joint move: ls_traj_sample, 6 axes",
@@ -36,28 +36,28 @@ def callgrind_ir(exe: Path, case: str, n: int, tmp: Path) -> int:
     run = subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", str(exe), case, str(n)],
                          capture_output=True, text=True, timeout=600)
     if run.returncode != 0:
-        raise BenchSkipped(f"bench_cycle {case} {n} under callgrind failed: {run.stderr.strip()[-300:]}")
+        raise BenchError(f"bench_cycle {case} {n} under callgrind failed: {run.stderr.strip()[-300:]}")
     for line in out.read_text().splitlines():
         if line.startswith(("totals:", "summary:")):
             return int(line.split()[1])
-    raise BenchSkipped(f"no totals in callgrind's output for {case}")
+    raise BenchError(f"no totals in callgrind's output for {case}")
 
 
 def heap_allocs(exe: Path, case: str, n: int) -> int:
     run = subprocess.run(["valgrind", "--tool=memcheck", str(exe), case, str(n)], capture_output=True, text=True,
                          timeout=600)
     if run.returncode != 0:
-        raise BenchSkipped(f"bench_cycle {case} {n} under memcheck failed: {run.stderr.strip()[-300:]}")
+        raise BenchError(f"bench_cycle {case} {n} under memcheck failed: {run.stderr.strip()[-300:]}")
     m = re.search(r"total heap usage: ([\d,]+) allocs", run.stderr)
     if m is None:
-        raise BenchSkipped(f"no heap summary from memcheck for {case}")
+        raise BenchError(f"no heap summary from memcheck for {case}")
     return int(m.group(1).replace(",", ""))
 
 
 def bench_cycle(quick: bool) -> Section:
     sec = Section(5, "Control cycle cost: instructions and allocations per cycle (valgrind)")
     if shutil.which("valgrind") is None:
-        raise BenchSkipped("valgrind is not installed (apt-get install valgrind)")
+        raise BenchError("valgrind is not installed (apt-get install valgrind)")
     exe = need(BIN / "bench_cycle", "cycle driver")
     cases = subprocess.run([str(exe), "cases"], capture_output=True, text=True, check=True).stdout.split()
     n = 500 if quick else 2000

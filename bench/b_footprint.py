@@ -10,7 +10,7 @@ import tempfile
 from collections import defaultdict
 from pathlib import Path
 
-from common import BUILD, ROOT, BenchSkipped, Row, Section
+from common import BUILD, ROOT, BenchError, Row, Section
 
 CC = "arm-none-eabi-gcc"
 CXX = "arm-none-eabi-g++"
@@ -39,7 +39,7 @@ def nanopb_runtime() -> Path:
     carry the generator only, and libnanopb-dev only an x86 archive."""
     version = run(["dpkg-query", "-W", "-f=${Version}", "nanopb"]).stdout.strip()
     if not version:
-        raise BenchSkipped("Debian's nanopb is not installed (its generator made the codecs): run .ci/setup")
+        raise BenchError("Debian's nanopb is not installed (its generator made the codecs): run .ci/setup")
     upstream = version.split("-")[0].split(":")[-1]
     dest = BUILD / "nanopb-src"
     src = dest / f"nanopb-{upstream}"
@@ -47,7 +47,7 @@ def nanopb_runtime() -> Path:
         return src
     system = [p for p in [Path("/etc/apt/sources.list.d/debian.sources")] if p.is_file()]
     if not system:
-        raise BenchSkipped("no /etc/apt/sources.list.d/debian.sources to derive a deb-src entry from; "
+        raise BenchError("no /etc/apt/sources.list.d/debian.sources to derive a deb-src entry from; "
                            "put nanopb's pb_encode.c/pb_decode.c/pb_common.c into build-bench/nanopb-src/"
                            f"nanopb-{upstream}/")
     apt = dest / "apt"
@@ -60,7 +60,7 @@ def nanopb_runtime() -> Path:
     up = run(["apt-get", *opts, "update"])
     got = run(["apt-get", *opts, "source", f"nanopb={version}"], cwd=dest) if up.returncode == 0 else up
     if not all((src / f).is_file() for f in NANOPB_RUNTIME):
-        raise BenchSkipped(f"cannot fetch Debian's nanopb {version} source package: "
+        raise BenchError(f"cannot fetch Debian's nanopb {version} source package: "
                            f"{(got.stderr or got.stdout).strip()[-200:]}")
     return src
 
@@ -104,10 +104,10 @@ def bench_footprint(quick: bool) -> Section:
     del quick
     sec = Section(7, "Footprint on a Cortex-M4F (arm-none-eabi-gcc -Os, newlib-nano)")
     if shutil.which(CC) is None:
-        raise BenchSkipped("arm-none-eabi-gcc is missing: apt-get install gcc-arm-none-eabi libnewlib-arm-none-eabi")
+        raise BenchError("arm-none-eabi-gcc is missing: apt-get install gcc-arm-none-eabi libnewlib-arm-none-eabi")
     gen = BUILD / "ls" / "protocol" / "gen"
     if not (gen / "ls_cmd_table.c").is_file() or not (gen / "dbc" / "landscape.c").is_file():
-        raise BenchSkipped(f"generated sources missing under {gen}: build with bench/run.py first")
+        raise BenchError(f"generated sources missing under {gen}: build with bench/run.py first")
     npb = nanopb_runtime()
     fw = ROOT / "firmware"
     optional = [fw / "motion" / "ls_motion.c", fw / "control" / "ls_control.c", fw / "kinematics" / "ls_kin.cpp"]
@@ -124,13 +124,13 @@ def bench_footprint(quick: bool) -> Section:
             obj = tmp / f"{i:02d}_{src.stem.replace('landscape', 'dbc_landscape' if 'dbc' in str(src) else 'landscape')}.o"
             if src.suffix == ".cpp":
                 if shutil.which(CXX) is None:
-                    raise BenchSkipped(f"{CXX} is missing for {src.name}: apt-get install gcc-arm-none-eabi")
+                    raise BenchError(f"{CXX} is missing for {src.name}: apt-get install gcc-arm-none-eabi")
                 cmd = [CXX, *CXXFLAGS, "-I/usr/include/eigen3"]
             else:
                 cmd = [CC, *CFLAGS]
             cc = run([*cmd, *(f"-I{p}" for p in includes), "-c", str(src), "-o", str(obj)])
             if cc.returncode != 0:
-                raise BenchSkipped(f"cross-compiling {src.name} failed: {cc.stderr.strip()[-300:]}")
+                raise BenchError(f"cross-compiling {src.name} failed: {cc.stderr.strip()[-300:]}")
             undefined = set(run(["arm-none-eabi-nm", "-u", str(obj)]).stdout.split()) - {"U"}
             if "fw_main" not in obj.name:
                 firmware_allocs |= {f"{src.name}: {s}" for s in undefined & ALLOCATORS}
@@ -138,7 +138,7 @@ def bench_footprint(quick: bool) -> Section:
         elf, mapf = tmp / "fw.elf", tmp / "fw.map"
         ld = run([CC, *CFLAGS, *LDFLAGS, *map(str, objs), f"-Wl,-Map={mapf}", "-o", str(elf), "-lm"])
         if ld.returncode != 0:
-            raise BenchSkipped(f"linking the Cortex-M4F image failed: {ld.stderr.strip()[-400:]}")
+            raise BenchError(f"linking the Cortex-M4F image failed: {ld.stderr.strip()[-400:]}")
         text, data, bss = (int(x) for x in run(["arm-none-eabi-size", str(elf)]).stdout.splitlines()[1].split()[:3])
         syms = run(["arm-none-eabi-nm", "-S", "--size-sort", str(elf)]).stdout.splitlines()
         linked_allocs = sorted({line.split()[-1] for line in syms} & ALLOCATORS)

@@ -12,7 +12,7 @@ from pathlib import Path
 import can
 import isotp
 
-from common import BIN, PYTHON, ROOT, BenchSkipped, Row, Section, fmt_ratio, median, need, percentile, pty_peer
+from common import BIN, PYTHON, ROOT, BenchError, Row, Section, fmt_ratio, median, need, percentile, pty_peer
 
 MAX_LEN = 4095
 PY_RETRIES: list[int] = []  # lengths whose reference transfer was repeated (see py_frames)
@@ -35,10 +35,10 @@ def c_frames(block_size: int) -> dict[int, int]:
     exe = need(BIN / "bench_isotp_frames", "ISO-TP frame counter")
     out = subprocess.run([str(exe), str(block_size)], capture_output=True, text=True, timeout=120)
     if out.returncode != 0:
-        raise BenchSkipped(f"bench_isotp_frames failed: {out.stderr.strip()}")
+        raise BenchError(f"bench_isotp_frames failed: {out.stderr.strip()}")
     frames = {int(a): int(b) for a, b in (line.split() for line in out.stdout.splitlines())}
     if sorted(frames) != list(range(1, MAX_LEN + 1)):
-        raise BenchSkipped("bench_isotp_frames did not report every length 1..4095")
+        raise BenchError("bench_isotp_frames did not report every length 1..4095")
     return frames
 
 
@@ -84,7 +84,7 @@ def py_frames(block_size: int) -> dict[int, int]:
                 while monitor.recv(0) is not None:
                     pass
             if count is None:
-                raise BenchSkipped(f"can-isotp reference: transfer of {n} bytes failed 3 times on the virtual bus")
+                raise BenchError(f"can-isotp reference: transfer of {n} bytes failed 3 times on the virtual bus")
             frames[n] = count
         if retried:
             PY_RETRIES.extend(retried)
@@ -146,7 +146,7 @@ def echo_figures(link: Path, n_small: int, n_big: int) -> tuple[list[float], lis
             got = stack.recv(block=True, timeout=10.0)
             dt = time.perf_counter() - t0
             if got != data:
-                raise BenchSkipped(f"echo of {len(data)} B over {link} failed (got "
+                raise BenchError(f"echo of {len(data)} B over {link} failed (got "
                                    f"{'nothing' if got is None else f'{len(got)} B'})")
             return dt
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 import platform
 import subprocess
 
-from common import BIN, BenchSkipped, Row, Section, fmt_ratio, need
+from common import BIN, BenchError, Row, Section, fmt_ratio, need
 
 
 def parse(line: str) -> dict[str, int]:
@@ -22,7 +22,7 @@ def bench_jitter(quick: bool) -> Section:
     out = subprocess.run([str(exe), str(seconds), "1000", "80"], capture_output=True, text=True,
                          timeout=4 * seconds + 30)
     if out.returncode != 0:
-        raise BenchSkipped(f"bench_rt_jitter failed: {out.stderr.strip()}")
+        raise BenchError(f"bench_rt_jitter failed: {out.stderr.strip()}")
     lines = {line.split()[0]: line for line in out.stdout.splitlines()}
     hal, bare = parse(lines["hal_linux_rt"]), parse(lines["bare_loop"])
 

@@ -8,7 +8,7 @@ import random
 import subprocess
 import time
 
-from common import BIN, BenchSkipped, Row, Section, fmt_ratio, median, need, percentile
+from common import BIN, BenchError, Row, Section, fmt_ratio, median, need, percentile
 
 DOFS = 6
 SEED = 20261123
@@ -36,7 +36,7 @@ def ruckig_plan(problems: list[tuple[list[float], ...]]) -> tuple[list[float], l
     try:
         from ruckig import InputParameter, Result, Ruckig, Trajectory
     except ImportError:
-        raise BenchSkipped("ruckig is not installed in the venv (pip install ruckig; .ci/setup does)") from None
+        raise BenchError("ruckig is not installed in the venv (pip install ruckig; .ci/setup does)") from None
     otg = Ruckig(DOFS)
     traj = Trajectory(DOFS)
     durations, times = [], []
@@ -50,7 +50,7 @@ def ruckig_plan(problems: list[tuple[list[float], ...]]) -> tuple[list[float], l
         res = otg.calculate(inp, traj)
         times.append(float(time.perf_counter_ns() - t0))
         if res not in (Result.Working, Result.Finished):
-            raise BenchSkipped(f"ruckig refused a problem: {res}")
+            raise BenchError(f"ruckig refused a problem: {res}")
         durations.append(traj.duration)
     return durations, times
 
@@ -73,16 +73,16 @@ def c_plan(problems: list[tuple[list[float], ...]]) -> tuple[list[float], list[f
     text = "\n".join(" ".join(repr(x) for x in [DOFS, *p0, *p1, *v, *a, *j]) for p0, p1, v, a, j in problems)
     out = subprocess.run([str(exe)], input=text + "\n", capture_output=True, text=True, timeout=300)
     if out.returncode != 0:
-        raise BenchSkipped(f"bench_traj failed: {out.stderr.strip()}")
+        raise BenchError(f"bench_traj failed: {out.stderr.strip()}")
     durations, times = [], []
     for line in out.stdout.splitlines():
         parts = line.split()
         if parts[0] != "OK":
-            raise BenchSkipped(f"ls_traj_plan refused a problem: {line}")
+            raise BenchError(f"ls_traj_plan refused a problem: {line}")
         durations.append(float(parts[1]))
         times.append(float(parts[2]))
     if len(durations) != len(problems):
-        raise BenchSkipped("bench_traj answered fewer problems than it was given")
+        raise BenchError("bench_traj answered fewer problems than it was given")
     return durations, times
 
 

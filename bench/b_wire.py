@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 
-from common import BenchSkipped, Row, Section
+from common import BenchError, Row, Section
 
 POINTS = 100
 TAGS_PER_REQUEST = 32          # ls.PathLoadReq.tags max_count (protocol/landscape.options)
@@ -44,7 +44,7 @@ def bench_wire(quick: bool) -> Section:
         from landscape._generated import landscape_pb2 as pb
         from landscape.registry import build_request
     except ImportError as exc:
-        raise BenchSkipped(f"the host package `landscape` is not importable ({exc})") from None
+        raise BenchError(f"the host package `landscape` is not importable ({exc})") from None
     pts = path_points()
     messages = []
     for start in range(0, POINTS, TAGS_PER_REQUEST):
@@ -53,7 +53,7 @@ def bench_wire(quick: bool) -> Section:
                             motion_type="STRAIGHT_MOTION", number_of_points=len(chunk), tags=chunk)
         data = pb.Uplink(request=req).SerializeToString()
         if len(data) > MAX_MESSAGE:
-            raise BenchSkipped(f"a pathLoad of {len(chunk)} points is {len(data)} B, more than one ISO-TP message")
+            raise BenchError(f"a pathLoad of {len(chunk)} points is {len(data)} B, more than one ISO-TP message")
         messages.append(data)
     payload = sum(len(m) for m in messages)
     data_frames = sum(isotp_frames(len(m))[0] for m in messages)

@@ -19,8 +19,9 @@ BIN = BUILD / "bench"
 PYTHON = sys.executable
 
 
-class BenchSkipped(Exception):
-    """A benchmark cannot run here; the message says why (it goes into the table)."""
+class BenchError(Exception):
+    """A benchmark cannot build or run here; the message says why and what to do. bench/run.py
+    names the benchmark, puts the message into its table row and exits non-zero."""
 
 
 @dataclass
@@ -68,7 +69,7 @@ def fmt_ratio(x: float) -> str:
 
 def need(path: Path, what: str) -> Path:
     if not path.exists():
-        raise BenchSkipped(f"{path} is missing ({what}); build with bench/run.py (cmake -S bench -B build-bench)")
+        raise BenchError(f"{path} is missing ({what}); build with bench/run.py (cmake -S bench -B build-bench)")
     return path
 
 
@@ -83,9 +84,9 @@ def pty_peer(argv: Sequence[str], link: Path, timeout_s: float = 10.0) -> Iterat
         while not link.exists():
             if proc.poll() is not None:
                 err = proc.stderr.read().decode(errors="replace") if proc.stderr else ""
-                raise BenchSkipped(f"{argv[0]} exited with {proc.returncode}: {err.strip()}")
+                raise BenchError(f"{argv[0]} exited with {proc.returncode}: {err.strip()}")
             if time.monotonic() > deadline:
-                raise BenchSkipped(f"{argv[0]} did not create {link} within {timeout_s:g} s")
+                raise BenchError(f"{argv[0]} did not create {link} within {timeout_s:g} s")
             time.sleep(0.01)
         yield proc
     finally:

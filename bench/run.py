@@ -33,7 +33,7 @@ import b_isotp  # noqa: E402
 import b_jitter  # noqa: E402
 import b_traj  # noqa: E402
 import b_wire  # noqa: E402
-from common import BUILD, ROOT, BenchSkipped, Row, Section  # noqa: E402
+from common import BUILD, ROOT, BenchError, Row, Section  # noqa: E402
 
 BENCHES: list[tuple[int, str, Callable[[bool], Section]]] = [
     (1, "ISO-TP efficiency", b_isotp.bench_frames),
@@ -142,7 +142,7 @@ def main() -> int:
         t0 = time.monotonic()
         try:
             sec = fn(args.quick)
-        except BenchSkipped as exc:
+        except BenchError as exc:
             sec = Section(number, title, rows=[Row(f"{number}. {title}", f"not run: {exc}")])
         except Exception as exc:  # a benchmark must never take the others down
             traceback.print_exc()
