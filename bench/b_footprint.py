@@ -3,11 +3,14 @@ Cortex-M4F (flash, RAM) and proof of no heap."""
 
 from __future__ import annotations
 
+import os
 import re
 import shutil
 import subprocess
 import tempfile
 from collections import defaultdict
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from common import BUILD, ROOT, BenchError, Row, Section
@@ -17,15 +20,82 @@ CXX = "arm-none-eabi-g++"
 TARGET = ["-Os", "-mcpu=cortex-m4", "-mthumb", "-mfpu=fpv4-sp-d16", "-mfloat-abi=hard", "-ffunction-sections",
           "-fdata-sections", "-DNDEBUG", "-Wall", "-Wextra", "-Werror=implicit-function-declaration"]
 CFLAGS = ["-std=c11", *TARGET]
-# The kinematics as the main build compiles it (firmware/kinematics/CMakeLists.txt); needs
-# libstdc++-arm-none-eabi-newlib for <cmath>.
-CXXFLAGS = ["-std=c++17", *TARGET, "-fno-exceptions", "-fno-rtti", "-DEIGEN_NO_MALLOC", "-DEIGEN_MPL2_ONLY"]
+# C++ (the kinematics) needs libstdc++-arm-none-eabi-newlib for <cmath>; its definitions and -f options
+# (-fno-exceptions, -fno-rtti, EIGEN_NO_MALLOC) come from its target in the manifest.
+CXXFLAGS = ["-std=c++17", *TARGET]
 # nosys.specs: newlib's system-call stubs (fail with ENOSYS). newlib's strtod (used by the core) can reach
 # __assert_func -> fiprintf -> stdio -> _write/_close/...; fw_main.c's own _sbrk wins over nosys's.
 LDFLAGS = ["--specs=nano.specs", "--specs=nosys.specs", "-nostartfiles", "-Wl,--gc-sections"]
 ALLOCATORS = {"malloc", "free", "calloc", "realloc", "_malloc_r", "_free_r", "_calloc_r", "_realloc_r", "_sbrk",
               "_sbrk_r", "aligned_alloc", "posix_memalign", "memalign", "_Znwj", "_Znaj", "_ZdlPv", "_ZdaPv"}
 NANOPB_RUNTIME = ("pb_encode.c", "pb_decode.c", "pb_common.c")
+# What the image does with each library of landscaped's link closure that is not one of our targets.
+# A library missing here fails the benchmark: someone must decide what it means on a bare board.
+LIBRARIES = {
+    "nanopb::protobuf-nanopb-static": "nanopb runtime, compiled from Debian's nanopb source package",
+    "PkgConfig::EIGEN": "header-only",
+    "m": "newlib's libm (-lm)",
+    "Threads::Threads": "landscaped's threads (process glue): none on the bare board",
+}
+# The host's system headers: the cross compiler has its own (newlib); nanopb's headers come with its runtime.
+HOST_INCLUDE = Path("/usr/include")
+MANIFEST = BUILD / "footprint" / "portable.txt"
+
+
+@dataclass
+class FwTarget:
+    """One portable library of the firmware as the host build compiles it (from the manifest)."""
+
+    name: str
+    sources: list[Path] = field(default_factory=list)
+    includes: list[Path] = field(default_factory=list)
+    defines: list[str] = field(default_factory=list)
+    options: list[str] = field(default_factory=list)
+
+
+CXX_SUFFIXES = (".cpp", ".cc", ".cxx")
+
+
+def obj_stem(src: Path) -> str:
+    """Object name for the per-part breakdown: the DBC code (also named landscape.c) stays apart."""
+    return src.stem.replace("landscape", "dbc_landscape" if "dbc" in str(src) else "landscape")
+
+
+def read_manifest(path: Path) -> tuple[list[FwTarget], list[str]]:
+    """The portable libraries of landscaped and the other libraries it links, as bench/CMakeLists.txt
+    computed them from the main build's targets."""
+    if not path.is_file():
+        raise BenchError(f"{path} is missing: configure the bench project (bench/run.py, or "
+                         "cmake -S bench -B build-bench) to generate it")
+    targets: list[FwTarget] = []
+    libraries: list[str] = []
+    for number, line in enumerate(path.read_text().splitlines(), 1):
+        key, _, value = line.partition(" ")
+        items = [x for x in value.split(";") if x]
+        if key == "target":
+            targets.append(FwTarget(value))
+        elif key == "library":
+            libraries.append(value)
+        elif key in ("sources", "includes", "defines", "options") and targets:
+            t = targets[-1]
+            if key == "sources":
+                t.sources = [Path(x) for x in items]
+            elif key == "includes":
+                t.includes = [Path(x) for x in dict.fromkeys(items) if Path(x) != HOST_INCLUDE]
+            elif key == "defines":
+                t.defines = items
+            else:
+                t.options = [x for x in items if x.startswith("-f")]  # code generation; warnings are the host's
+        else:
+            raise BenchError(f"{path}:{number}: unexpected line {line!r}: reconfigure build-bench")
+    if not targets:
+        raise BenchError(f"{path} lists no firmware library: reconfigure build-bench")
+    unknown = [lib for lib in libraries if lib not in LIBRARIES]
+    if unknown:
+        raise BenchError(f"landscaped links {', '.join(unknown)}, which the Cortex-M4F image does not know: "
+                         "add it to LIBRARIES in bench/b_footprint.py (what it is on a bare board), or move it "
+                         "to an OS part (LS_FOOTPRINT_OS_DIRS in bench/CMakeLists.txt)")
+    return targets, libraries
 
 
 def run(cmd: list[str], **kw: object) -> subprocess.CompletedProcess[str]:
@@ -89,7 +159,9 @@ def label(path: str) -> str:
     name = Path(path).name
     for key, lab in (("ls_cmd_table", "generated dispatch table"), ("ls_core", "firmware/core"),
                      ("cmd_", "firmware/core"), ("ls_units", "firmware/core"), ("ls_kin", "firmware/kinematics"),
-                     ("ls_motion", "firmware/motion/ls_motion.c"), ("ls_control", "firmware/control"), ("ls_net", "firmware/net"),
+                     ("ls_motion", "firmware/motion/ls_motion.c"),
+                     ("ls_react", "firmware/motion/ls_react.c"), ("ls_control", "firmware/control"),
+                     ("ls_net", "firmware/net"),
                      ("ls_isotp", "firmware/isotp"), ("ls_traj", "firmware/motion/ls_traj.c"),
                      ("ls_robot_model", "firmware/model"), ("pb_", "nanopb runtime"),
                      ("landscape.pb", "generated nanopb codecs"),
@@ -105,36 +177,41 @@ def bench_footprint(quick: bool) -> Section:
     sec = Section(7, "Footprint on a Cortex-M4F (arm-none-eabi-gcc -Os, newlib-nano)")
     if shutil.which(CC) is None:
         raise BenchError("arm-none-eabi-gcc is missing: apt-get install gcc-arm-none-eabi libnewlib-arm-none-eabi")
-    gen = BUILD / "ls" / "protocol" / "gen"
-    if not (gen / "ls_cmd_table.c").is_file() or not (gen / "dbc" / "landscape.c").is_file():
-        raise BenchError(f"generated sources missing under {gen}: build with bench/run.py first")
-    npb = nanopb_runtime()
-    fw = ROOT / "firmware"
-    optional = [fw / "motion" / "ls_motion.c", fw / "control" / "ls_control.c", fw / "kinematics" / "ls_kin.cpp"]
-    sources = sorted((fw / "core").glob("*.c")) + [p for p in optional if p.is_file()] + [
-        fw / "net" / "ls_net.c", fw / "isotp" / "ls_isotp.c", fw / "motion" / "ls_traj.c",
-        fw / "model" / "ls_robot_model.c", ROOT / "hal" / "hal.c", gen / "landscape.pb.c", gen / "ls_cmd_table.c",
-        gen / "dbc" / "landscape.c", *(npb / f for f in NANOPB_RUNTIME), ROOT / "bench" / "footprint" / "fw_main.c"]
-    includes = [npb, gen, gen / "dbc", fw / "core", fw / "net", fw / "isotp", fw / "motion", fw / "model",
-                fw / "control", fw / "kinematics", ROOT / "hal" / "include"]
+    targets, libraries = read_manifest(MANIFEST)
+    missing = [str(src) for t in targets for src in t.sources if not src.is_file()]
+    if missing:
+        raise BenchError(f"sources missing (generated ones are made by the bench build): {', '.join(missing)}; "
+                         "build with bench/run.py first")
+    npb = nanopb_runtime() if "nanopb::protobuf-nanopb-static" in libraries else None
+    all_includes = list(dict.fromkeys(p for t in targets for p in t.includes))
+    main_t = FwTarget("fw_main", [ROOT / "bench" / "footprint" / "fw_main.c"], all_includes)
+    runtime_t = FwTarget("nanopb runtime", [npb / f for f in NANOPB_RUNTIME]) if npb is not None else None
+    units = [(t, src) for t in [*targets, *([runtime_t] if runtime_t else []), main_t] for src in t.sources]
     with tempfile.TemporaryDirectory(prefix="lsbench-fp-") as tmpdir:
         tmp = Path(tmpdir)
-        objs, firmware_allocs = [], set()
-        for i, src in enumerate(sources):
-            obj = tmp / f"{i:02d}_{src.stem.replace('landscape', 'dbc_landscape' if 'dbc' in str(src) else 'landscape')}.o"
-            if src.suffix == ".cpp":
-                if shutil.which(CXX) is None:
-                    raise BenchError(f"{CXX} is missing for {src.name}: apt-get install gcc-arm-none-eabi")
-                cmd = [CXX, *CXXFLAGS, "-I/usr/include/eigen3"]
-            else:
-                cmd = [CC, *CFLAGS]
-            cc = run([*cmd, *(f"-I{p}" for p in includes), "-c", str(src), "-o", str(obj)])
-            if cc.returncode != 0:
-                raise BenchError(f"cross-compiling {src.name} failed: {cc.stderr.strip()[-300:]}")
+        if any(src.suffix in CXX_SUFFIXES for _, src in units) and shutil.which(CXX) is None:
+            raise BenchError(f"{CXX} is missing for the C++ sources: apt-get install gcc-arm-none-eabi")
+        jobs = [(t, src, tmp / f"{i:02d}_{obj_stem(src)}.o") for i, (t, src) in enumerate(units)
+                if src.suffix in CXX_SUFFIXES or src.suffix == ".c"]  # headers listed as sources are skipped
+
+        def compile_one(job: tuple[FwTarget, Path, Path]) -> str:
+            t, src, obj = job
+            cmd = [CXX, *CXXFLAGS] if src.suffix in CXX_SUFFIXES else [CC, *CFLAGS]
+            includes = [*([npb] if npb is not None else []), *t.includes]
+            cc = run([*cmd, *t.options, *(f"-D{d}" for d in t.defines), *(f"-I{p}" for p in includes), "-c",
+                      str(src), "-o", str(obj)])
+            return "" if cc.returncode == 0 else f"cross-compiling {src.name} ({t.name}) failed: " + \
+                cc.stderr.strip()[-300:]
+
+        with ThreadPoolExecutor(max_workers=os.cpu_count() or 2) as pool:
+            errors = [e for e in pool.map(compile_one, jobs) if e]
+        if errors:
+            raise BenchError("; ".join(errors))
+        objs, firmware_allocs = [obj for _, _, obj in jobs], set()
+        for _, src, obj in jobs:
             undefined = set(run(["arm-none-eabi-nm", "-u", str(obj)]).stdout.split()) - {"U"}
             if "fw_main" not in obj.name:
                 firmware_allocs |= {f"{src.name}: {s}" for s in undefined & ALLOCATORS}
-            objs.append(obj)
         elf, mapf = tmp / "fw.elf", tmp / "fw.map"
         ld = run([CC, *CFLAGS, *LDFLAGS, *map(str, objs), f"-Wl,-Map={mapf}", "-o", str(elf), "-lm"])
         if ld.returncode != 0:
@@ -143,8 +220,8 @@ def bench_footprint(quick: bool) -> Section:
         syms = run(["arm-none-eabi-nm", "-S", "--size-sort", str(elf)]).stdout.splitlines()
         linked_allocs = sorted({line.split()[-1] for line in syms} & ALLOCATORS)
         map_text = mapf.read_text()
-        why = re.findall(r"\((lib_a-[\w-]+\.o)\)\s*\n?\s+\S*\((lib_a-[\w-]+\.o)\) \((_(?:malloc|realloc|free|calloc)_r|malloc|free|calloc)\)",
-                         map_text)
+        why = re.findall(r"\((lib_a-[\w-]+\.o)\)\s*\n?\s+\S*\((lib_a-[\w-]+\.o)\) "
+                         r"\((_(?:malloc|realloc|free|calloc)_r|malloc|free|calloc)\)", map_text)
         breakdown: dict[str, dict[str, int]] = defaultdict(lambda: {"flash": 0, "ram": 0})
         for path, sizes in map_breakdown(map_text).items():
             for k, v in sizes.items():
@@ -162,17 +239,20 @@ def bench_footprint(quick: bool) -> Section:
                         ("pulled in by " + "; ".join(pulled) + "; _sbrk stubbed to fail: no heap region")
                         if linked_allocs else "no allocator in the image"))
     sec.details.append(
-        f"`{CC} {' '.join(CFLAGS)}` (C++: `{CXX} {' '.join(CXXFLAGS)}`), linked with `{' '.join(LDFLAGS)} -lm`. Sources: "
-        "firmware/core/*.c, firmware/net, firmware/isotp, firmware/motion (ls_traj.c, ls_motion.c), "
-        "firmware/control, firmware/kinematics (C++17 + Eigen, which the core now needs), firmware/model, hal/hal.c, "
-        "the generated nanopb codecs, dispatch table and cantools DBC code (from build-bench), and nanopb "
-        f"{npb.name.split('-')[-1]}'s runtime (pb_encode.c, pb_decode.c, pb_common.c from Debian's source package: "
-        "the PyPI `nanopb` sdist/wheel ship only the generator, libnanopb-dev only an x86 archive). "
-        "`bench/footprint/fw_main.c` is landscaped's composition without the OS (core + net on one CAN link, the "
-        "control loop on a 1 ms tick with its events drained into the core, the heartbeat, one trajectory plan and "
-        "sample per turn), CAN and arm HALs as volatile registers, an entry point that zeroes .bss, and an `_sbrk` "
-        "that always fails. Not included: the sim and Linux HAL backends, telemetry broadcasts, landscaped's "
-        "process glue, a board's vector table and linker script. -DNDEBUG as in a release build.")
+        f"`{CC} {' '.join(CFLAGS)}` (C++: `{CXX} {' '.join(CXXFLAGS)}`), linked with "
+        f"`{' '.join(LDFLAGS)} -lm`. Sources: every library `landscaped` links, followed through their link "
+        "libraries, except the OS parts (the targets under firmware/app, hal/sim, hal/linux); bench/CMakeLists.txt "
+        "computes that list from the main build's targets and writes it with each target's include directories, "
+        "definitions and -f options to build-bench/footprint/portable.txt, so the image compiles the same "
+        f"sources as the firmware. Here: {', '.join(t.name for t in targets)}. The nanopb runtime "
+        f"({npb.name if npb is not None else 'not linked'}: pb_encode.c, pb_decode.c, pb_common.c) comes from "
+        "Debian's source package (the PyPI `nanopb` sdist/wheel ship only the generator, libnanopb-dev only an x86 "
+        "archive). `bench/footprint/fw_main.c` is landscaped's composition without the OS (core + net on one CAN "
+        "link, the control loop on a 1 ms tick with its events drained into the core, the heartbeat, one "
+        "trajectory plan and sample per turn), CAN and arm HALs as volatile registers, an entry point that zeroes "
+        ".bss, and an `_sbrk` that always fails. Not included: the sim and Linux HAL backends, telemetry "
+        "broadcasts, landscaped's "
+"process glue, a board's vector table and linker script. -DNDEBUG as in a release build.")
     rows = sorted(breakdown.items(), key=lambda kv: -(kv[1]["flash"] + kv[1]["ram"]))
     sec.details.append("Per part (from the linker map; flash includes initialised data):\n\n"
                        "| part | flash B | RAM B |\n|---|---:|---:|\n" +
