@@ -14,6 +14,9 @@
  *   control_hold, control_joint, control_line   the whole loop body (ls_control_cycle: command ring,
  *                                        executor, arm I/O, FK, seqlock snapshot) on an ideal arm
  *                                        (reads back what it was commanded; no physics)
+ *   react_guarded, react_comply          ls_react_step of a guarded move (no contact: it travels) and of a
+ *                                        compliant move pressing with its target force (the PD law and
+ *                                        IK run every cycle); the force reading is a constant
  * Prints "cases" to list the cases this build has; otherwise one line with a
  * checksum of the set-points so no cycle can be optimised away. */
 #include <math.h>
@@ -29,6 +32,9 @@
 #endif
 #if BENCH_HAVE_CONTROL
 #include "ls_control.h"
+#endif
+#if BENCH_HAVE_REACT
+#include "ls_react.h"
 #endif
 
 #define DT_S 1e-3
@@ -278,6 +284,65 @@ static int run_control(const char *which, long n)
 }
 #endif
 
+#if BENCH_HAVE_REACT
+/* The pose of ls_react's unit tests: the tool points down over the table. */
+static const double q_react[LS_N_JOINTS] = {-0.2, 0.8, 0.45, 0.0, 0.3, 0.0};
+static ls_react_t react;
+
+static int run_react(const char *which, long n)
+{
+    ls_react_plan_t p;
+    memset(&p, 0, sizeof p);
+    snprintf(p.sensor, sizeof p.sensor, "force_sensor");
+    const double zero[6] = {0};
+    ls_pose_from_xyzrpy(zero, p.tool);
+    p.ref_seq = 1;
+    p.v_m_s = 0.03;
+    p.a_m_s2 = 1.0;
+    p.a_stop_m_s2 = 4.0;
+    /* Travel long enough that all N cycles move: 0.03 m/s for N ms, plus the ramps. */
+    p.dist_m = 0.03 * (double)n * DT_S + 0.01;
+    double reading[6] = {0};
+    if (strcmp(which, "react_guarded") == 0) {
+        p.kind = LS_REACT_GUARDED;
+        p.dir_tool[2] = 1.0;
+        p.component = 2;
+        p.threshold = 5.0; /* never reached: the reading stays 0 */
+    } else {
+        p.kind = LS_REACT_COMPLY;
+        p.dir_tool[0] = 1.0; /* travel along tool x, press along tool z */
+        p.n_tool[2] = 1.0;
+        p.c_max_m = 0.05;
+        p.f_target_N = 10.0;
+        p.kp_m_s_N = 5e-4;
+        p.vc_max_m_s = 0.01;
+        p.timeout_s = 1e3;
+        p.panic_N = 30.0;
+        reading[2] = p.f_target_N; /* in contact at the target force from the start */
+    }
+    ls_react_init(&react, &ls_robot_model_default);
+    double q_cmd[LS_N_JOINTS], qd_cmd[LS_N_JOINTS];
+    memcpy(q_cmd, q_react, sizeof q_cmd);
+    if (ls_react_start(&react, &p, q_cmd, 6) != 0) {
+        fprintf(stderr, "bench_cycle: %s: ls_react_start refused the plan\n", which);
+        return -1;
+    }
+    ls_motion_events_t ev;
+    for (long k = 0; k < n; k++) {
+        ev.n = 0;
+        /* The measured position follows the command exactly (no following error). */
+        ls_react_step(&react, DT_S, q_cmd, reading, q_cmd, qd_cmd, &ev);
+        absorb(q_cmd);
+    }
+    if (n > 0 && !ls_react_moving(&react)) {
+        fprintf(stderr, "bench_cycle: %s: the move ended before the last cycle (%s)\n", which,
+                ls_react_end_name(react.report.end));
+        return -1;
+    }
+    return 0;
+}
+#endif
+
 static const char *const cases[] = {
     "traj", "fk", "cart_ik",
 #if BENCH_HAVE_MOTION
@@ -291,6 +356,9 @@ static const char *const cases[] = {
 #if BENCH_HAVE_MOTION_CART
     "control_line",
 #endif
+#endif
+#if BENCH_HAVE_REACT
+    "react_guarded", "react_comply",
 #endif
 };
 
@@ -324,6 +392,11 @@ int main(int argc, char **argv)
 #if BENCH_HAVE_CONTROL
     else if (strncmp(argv[1], "control_", 8) == 0) {
         rc = run_control(argv[1], n);
+    }
+#endif
+#if BENCH_HAVE_REACT
+    else if (strcmp(argv[1], "react_guarded") == 0 || strcmp(argv[1], "react_comply") == 0) {
+        rc = run_react(argv[1], n);
     }
 #endif
     else {
