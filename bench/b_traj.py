@@ -17,7 +17,7 @@ SEED = 20261123
 def make_problems(count: int) -> list[tuple[list[float], ...]]:
     """The distribution of tests/unit/traj/test_ruckig_oracle.py (every profile shape occurs)."""
     rng = random.Random(SEED)
-    out = []
+    out: list[tuple[list[float], ...]] = []
     for k in range(count):
         p0 = [rng.uniform(-3.0, 3.0) for _ in range(DOFS)]
         p1 = [rng.uniform(-3.0, 3.0) for _ in range(DOFS)]
@@ -93,11 +93,12 @@ def bench_traj(quick: bool) -> Section:
     ours_d, ours_t = c_plan(problems)
     ref_d, ref_t = ruckig_plan(problems)
     overhead = python_call_overhead_ns()
-    ratios = [o / r if r > 0 else 1.0 for o, r in zip(ours_d, ref_d)]
+    ratios = [o / r if r > 0 else 1.0 for o, r in zip(ours_d, ref_d, strict=True)]
     sec.rows.append(Row(f"4a. trajectory duration, {count} problems",
                         f"ls_traj_plan: mean {sum(ours_d) / count:.4f} s", "ruckig (PyPI) calculate(), time-optimal",
-                        f"mean {sum(ref_d) / count:.4f} s", f"min {min(ratios):.6f} / mean {sum(ratios) / len(ratios):.6f}"
-                        f" / max {max(ratios):.6f}", f"ours / ruckig per problem; 1.0 = time-optimal; max |ratio - 1| = "
+                        f"mean {sum(ref_d) / count:.4f} s",
+                        f"min {min(ratios):.6f} / mean {sum(ratios) / len(ratios):.6f} / max {max(ratios):.6f}",
+                        "ours / ruckig per problem; 1.0 = time-optimal; max |ratio - 1| = "
                         f"{max(abs(r - 1) for r in ratios):.1e}"))
     sec.rows.append(Row("4b. planning time per 6-DOF problem", f"median {median(ours_t) / 1000:.2f} us, "
                         f"p99 {percentile(ours_t, 99) / 1000:.2f} us", "ruckig calculate() via its Python binding",

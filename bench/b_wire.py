@@ -46,7 +46,7 @@ def bench_wire(quick: bool) -> Section:
     except ImportError as exc:
         raise BenchError(f"the host package `landscape` is not importable ({exc})") from None
     pts = path_points()
-    messages = []
+    messages: list[bytes] = []
     for start in range(0, POINTS, TAGS_PER_REQUEST):
         chunk = pts[start:start + TAGS_PER_REQUEST]
         req = build_request("path_load", seq=1 + len(messages), path_name="spiral", frame="BASE_CARTESIAN_FRAME",
