@@ -14,6 +14,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+# The host package from this tree, also when the venv has another (or no) editable install of it.
+sys.path.insert(0, str(ROOT / "host_tools" / "src"))
 BUILD = Path(os.environ.get("LS_BENCH_BUILD", ROOT / "build-bench"))
 BIN = BUILD / "bench"
 PYTHON = sys.executable
