@@ -40,6 +40,7 @@ LIBRARIES = {
 # The host's system headers: the cross compiler has its own (newlib); nanopb's headers come with its runtime.
 HOST_INCLUDE = Path("/usr/include")
 MANIFEST = BUILD / "footprint" / "portable.txt"
+CACHE = Path(os.environ.get("LS_BENCH_CACHE", Path.home() / ".cache" / "landscape-bench"))
 
 
 @dataclass
@@ -103,18 +104,43 @@ def run(cmd: list[str], **kw: object) -> subprocess.CompletedProcess[str]:
 
 
 def nanopb_runtime() -> Path:
-    """Debian's nanopb source package (the runtime matching Debian's generator), fetched once
-    into build-bench/nanopb-src with a private apt configuration (the system's own apt sources,
-    as deb-src; nothing of the system's apt state changes). The PyPI `nanopb` sdist and wheel
-    carry the generator only, and libnanopb-dev only an x86 archive."""
+    """Debian's nanopb source package (the runtime matching Debian's generator), fetched once per
+    machine with a private apt configuration (the system's own apt sources, as deb-src; nothing of the
+    system's apt state changes) and kept in $LS_BENCH_CACHE (default ~/.cache/landscape-bench), so a fresh
+    build-bench (a CI clone) does not fetch it again. The PyPI `nanopb` sdist and wheel carry the generator
+    only, and libnanopb-dev only an x86 archive."""
     version = run(["dpkg-query", "-W", "-f=${Version}", "nanopb"]).stdout.strip()
     if not version:
         raise BenchError("Debian's nanopb is not installed (its generator made the codecs): run .ci/setup")
     upstream = version.split("-")[0].split(":")[-1]
-    dest = BUILD / "nanopb-src"
-    src = dest / f"nanopb-{upstream}"
+    src = CACHE / f"nanopb-{version.replace(':', '_')}" / f"nanopb-{upstream}"
     if all((src / f).is_file() for f in NANOPB_RUNTIME):
         return src
+    system = [p for p in [Path("/etc/apt/sources.list.d/debian.sources")] if p.is_file()]
+    if not system:
+        raise BenchError("no /etc/apt/sources.list.d/debian.sources to derive a deb-src entry from; "
+                         f"put nanopb's pb_encode.c/pb_decode.c/pb_common.c into {src}/")
+    src.parent.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(prefix="lsbench-nanopb-", dir=src.parent.parent) as tmpdir:
+        dest = Path(tmpdir)
+        apt = dest / "apt"
+        for d in ("parts", "lists/partial", "cache/archives/partial"):
+            (apt / d).mkdir(parents=True, exist_ok=True)
+        text = system[0].read_text()
+        (apt / "parts" / "src.sources").write_text(re.sub(r"^Types:.*$", "Types: deb-src", text,
+                                                          flags=re.MULTILINE))
+        opts = ["-o", "Dir::Etc::SourceList=/dev/null", "-o", f"Dir::Etc::SourceParts={apt / 'parts'}",
+                "-o", f"Dir::State::Lists={apt / 'lists'}", "-o", f"Dir::Cache={apt / 'cache'}"]
+        up = run(["apt-get", *opts, "update"])
+        got = run(["apt-get", *opts, "source", f"nanopb={version}"], cwd=dest) if up.returncode == 0 else up
+        fetched = dest / src.name
+        if not all((fetched / f).is_file() for f in NANOPB_RUNTIME):
+            raise BenchError(f"cannot fetch Debian's nanopb {version} source package: "
+                             f"{(got.stderr or got.stdout).strip()[-200:]}")
+        src.parent.mkdir(exist_ok=True)
+        if not src.exists():  # another run may have put it there meanwhile
+            fetched.rename(src)
+    return src
     system = [p for p in [Path("/etc/apt/sources.list.d/debian.sources")] if p.is_file()]
     if not system:
         raise BenchError("no /etc/apt/sources.list.d/debian.sources to derive a deb-src entry from; "
