@@ -267,3 +267,21 @@ def test_supervisor_path_load_refused_midway(bus, notifier, device: FakeDevice) 
         assert rv.ret_code == 0 and rv.result == {"points_in_path": 1000}
         rv = sup.path_load_points("p", [_point(1)], check=False)
         assert rv.ret_code == ls.CMD_NO_RESOURCES_ERR and "0 of 1 points were loaded" in rv.ret_msg
+
+
+def test_supervisor_path_load_points_forwards_call_options(bus, notifier, device: FakeDevice) -> None:
+    """check= and timeout_s= of path_load_points reach every pathLoad message it sends: check
+    decides whether a refusal raises, timeout_s is each message's per-try time-out."""
+    from landscape import ControllerTimeoutError, NoResourcesError
+
+    with Supervisor(bus, notifier=notifier, channel_name="virtual:test", retries=0) as sup:
+        sup.lock()
+        device.silent = True
+        with pytest.raises(ControllerTimeoutError, match=r"to pathLoad \(seq 3, 1 tries of 0\.07 s\)"):
+            sup.path_load_points("p", [_point(i) for i in range(3)], timeout_s=0.07, check=False)
+        device.silent = False
+        sup.path_load_points("p", [_point(i) for i in range(1000)], timeout_s=5.0)
+        rv = sup.path_load_points("p", [_point(1)], timeout_s=5.0, check=False)
+        assert rv.ret_code == ls.CMD_NO_RESOURCES_ERR and "0 of 1 points were loaded" in rv.ret_msg
+        with pytest.raises(NoResourcesError, match="0 of 1 points were loaded"):
+            sup.path_load_points("p", [_point(1)], timeout_s=5.0, check=True)

@@ -22,13 +22,14 @@ from pathlib import Path
 from typing import Any, NoReturn, Union
 
 import click
-from google.protobuf.descriptor import FieldDescriptor
+from google.protobuf.descriptor import EnumDescriptor, FieldDescriptor
 
 from ._generated import landscape_pb2 as pb
 from .bus import DEFAULT_DEVICE, DEFAULT_HOST, BusSpec
 from .errors import (AlarmError, ArgumentError, BusError, CommandError, ControllerTimeoutError, LandscapeError,
                      ProtocolError, VersionMismatchError, error_for_code)
-from .registry import COMMANDS, Command, enum_choices, host_default, is_repeated, message_to_dict, parse_enum
+from .registry import (COMMANDS, Command, enum_choices, field_enum_type, field_message_type, host_default, is_repeated,
+                       message_to_dict, parse_enum)
 from .session import SessionClient, socket_path
 from .supervisor import RetVal, Supervisor
 
@@ -46,7 +47,7 @@ class CommandFailed(LandscapeError):
 # ---------------------------------------------------------------- parameter types
 
 
-class IntType(click.ParamType):
+class IntType(click.ParamType[int]):
     name = "integer"
 
     def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> int:
@@ -58,8 +59,8 @@ class IntType(click.ParamType):
             self.fail(f"'{value}' is not an integer (decimal or 0x hex)", param, ctx)
 
 
-class EnumType(click.ParamType):
-    def __init__(self, enum: Any) -> None:
+class EnumType(click.ParamType[int]):
+    def __init__(self, enum: EnumDescriptor) -> None:
         self.enum = enum
         self.name = enum.name
 
@@ -74,7 +75,7 @@ class EnumType(click.ParamType):
         return self.enum.name.upper()
 
 
-class CommaNumbers(click.ParamType):
+class CommaNumbers(click.ParamType[list[float] | list[int]]):
     def __init__(self, integer: bool) -> None:
         self.integer = integer
         self.name = "N,N,..."
@@ -89,7 +90,7 @@ class CommaNumbers(click.ParamType):
             self.fail(f"'{value}' is not a comma-separated list of numbers", param, ctx)
 
 
-class JsonObject(click.ParamType):
+class JsonObject(click.ParamType[dict[str, Any]]):
     name = "JSON"
 
     def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> dict[str, Any]:
@@ -122,7 +123,7 @@ def cli_params(cmd: Command) -> list[click.Parameter]:
     for i, f in enumerate(positional):
         trailing_string = (i == len(positional) - 1 and variadic is None
                            and f.type == FieldDescriptor.TYPE_STRING)
-        ptype: click.ParamType = EnumType(f.enum_type) if f.type == FieldDescriptor.TYPE_ENUM else click.STRING
+        ptype: click.ParamType[Any] = EnumType(field_enum_type(f)) if f.type == FieldDescriptor.TYPE_ENUM else click.STRING
         params.append(click.Argument([f.name], type=ptype, required=not trailing_string,
                                      default="" if trailing_string else None, metavar=f.name.upper()))
     if variadic is not None:
@@ -133,7 +134,7 @@ def cli_params(cmd: Command) -> list[click.Parameter]:
         opt = "--" + f.name.replace("_", "-")
         if is_repeated(f) and f.type == FieldDescriptor.TYPE_MESSAGE:
             params.append(click.Option([opt, f.name], type=JsonObject(), multiple=True,
-                                       help=f"one {f.message_type.name} as a JSON object; repeat per item"))
+                                       help=f"one {field_message_type(f).name} as a JSON object; repeat per item"))
         elif is_repeated(f) and _is_number(f):
             params.append(click.Option([opt, f.name], type=CommaNumbers(f.type not in _FLOATS), default=None,
                                        help="comma-separated numbers"))
@@ -142,7 +143,7 @@ def cli_params(cmd: Command) -> list[click.Parameter]:
         elif f.type == FieldDescriptor.TYPE_BOOL:
             params.append(click.Option([opt + "/--no-" + f.name.replace("_", "-"), f.name], default=False))
         elif f.type == FieldDescriptor.TYPE_ENUM:  # unreachable today (enums are positional)
-            params.append(click.Option([opt, f.name], type=EnumType(f.enum_type), default=0))
+            params.append(click.Option([opt, f.name], type=EnumType(field_enum_type(f)), default=0))
         elif f.type in _FLOATS:
             d = host_default(f)
             params.append(click.Option([opt, f.name], type=float, default=0.0 if d is None else d, show_default=True))
@@ -330,7 +331,7 @@ def make_command(cmd: Command) -> click.Command:
                  + ("; owner only" if cmd.owner_only else "") + ".")
     for f in cmd.fields():
         if f.type == FieldDescriptor.TYPE_ENUM:
-            help_text += f"\n\n{f.name.upper()}: {' | '.join(v.name for v in f.enum_type.values)} (any case; suffix optional)"
+            help_text += f"\n\n{f.name.upper()}: {' | '.join(v.name for v in field_enum_type(f).values)} (any case; suffix optional)"
     params = [] if cmd.field == "connect" else cli_params(cmd)
     if cmd.field == "connect":
         help_text += "\n\nEvery invocation connects first; this command prints the device description."
@@ -350,7 +351,7 @@ def _one_line(exc: object) -> str:
 class LandscapeGroup(click.Group):
     """Maps every error to one line on stderr and an exit code (module docstring)."""
 
-    def main(self, args: Sequence[str] | None = None, prog_name: str | None = None,  # type: ignore[override]
+    def main(self, args: Sequence[str] | None = None, prog_name: str | None = None,
              complete_var: str | None = None, standalone_mode: bool = True, **extra: Any) -> Any:
         code = self.run(args, "landscape", **extra)
         if standalone_mode:

@@ -315,7 +315,9 @@ def _parse_tree(data: Any, file: str) -> PathFile:
 
 
 def _check_path_name(raw: Any, file: str, what: str) -> str:
-    err = (lambda problem: PathFileError(file, "", what, problem))
+    def err(problem: str) -> PathFileError:
+        return PathFileError(file, "", what, problem)
+
     name = _text(raw, MAX_PATH_NAME_BYTES, err).strip()
     if not name:
         raise err("empty path name")

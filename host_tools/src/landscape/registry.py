@@ -16,7 +16,7 @@ import hashlib
 import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 from google.protobuf import json_format
 from google.protobuf.descriptor import Descriptor, EnumDescriptor, FieldDescriptor
@@ -24,6 +24,25 @@ from google.protobuf.message import Message
 
 from ._generated import landscape_pb2 as pb
 from .errors import ArgumentError
+
+if TYPE_CHECKING:
+    from google.protobuf.descriptor_pb2 import FieldOptions, MessageOptions
+    from google.protobuf.internal.extension_dict import _ExtensionFieldDescriptor
+
+# protoc's .pyi declares the schema's extensions as plain FieldDescriptors; the protobuf stubs
+# index Extensions[] by a typed extension handle. These casts state what the schema says.
+_CMD_OPTION = cast("_ExtensionFieldDescriptor[MessageOptions, pb.CommandSpec]", pb.cmd)
+_HOST_DEFAULT_OPTION = cast("_ExtensionFieldDescriptor[FieldOptions, str]", pb.host_default)
+
+
+def descriptor_of(msg: Message | type[Message]) -> Descriptor:
+    """`msg.DESCRIPTOR` as the descriptor API the rest of the package is typed against.
+
+    The stubs declare DESCRIPTOR as the union of the pure-Python and the upb (C) descriptor
+    classes, which are unrelated there although they have the same interface; protobuf picks
+    one at import time. This is the one place that states it.
+    """
+    return cast(Descriptor, msg.DESCRIPTOR)
 
 #: First 32 bits of SHA-256 over the serialized schema, as protocol/gen_registry.py computes it.
 SCHEMA_HASH: int = int.from_bytes(hashlib.sha256(pb.DESCRIPTOR.serialized_pb).digest()[:4], "big")
@@ -64,13 +83,14 @@ class Command:
 
 
 def _load() -> dict[str, Command]:
-    req = pb.Request.DESCRIPTOR
-    res = pb.Response.DESCRIPTOR
+    req = descriptor_of(pb.Request)
+    res = descriptor_of(pb.Response)
     out: dict[str, Command] = {}
     for f in req.oneofs_by_name["cmd"].fields:
-        spec = f.message_type.GetOptions().Extensions[pb.cmd]
+        request_type = field_message_type(f)
+        spec = request_type.GetOptions().Extensions[_CMD_OPTION]
         if not spec.name:
-            raise ImportError(f"landscape: schema message {f.message_type.name} has no (ls.cmd) option")
+            raise ImportError(f"landscape: schema message {request_type.name} has no (ls.cmd) option")
         rf = res.fields_by_number.get(f.number)
         if rf is None or rf.name != f.name:
             raise ImportError(f"landscape: Response.result lacks field {f.number} '{f.name}'")
@@ -79,8 +99,22 @@ def _load() -> dict[str, Command]:
             states=tuple(int(s) for s in spec.states), blocking=spec.blocking,
             owner_only=spec.owner_only, host_timeout_ms=spec.host_timeout_ms,
             seed_section=spec.seed_section, summary=spec.summary,
-            request_type=f.message_type, response_type=rf.message_type)
+            request_type=request_type, response_type=field_message_type(rf))
     return out
+
+
+def field_message_type(fd: FieldDescriptor) -> Descriptor:
+    """The message type of a message field (callers check fd.type first)."""
+    if fd.message_type is None:
+        raise TypeError(f"landscape: schema field {fd.full_name} is not a message")
+    return fd.message_type
+
+
+def field_enum_type(fd: FieldDescriptor) -> EnumDescriptor:
+    """The enum type of an enum field (callers check fd.type first)."""
+    if fd.enum_type is None:
+        raise TypeError(f"schema field {fd.full_name} is not an enum")
+    return fd.enum_type
 
 
 #: Every command of the schema, keyed by its Request oneof field, in schema order.
@@ -171,7 +205,7 @@ def is_repeated(fd: FieldDescriptor) -> bool:
     flag = getattr(fd, "is_repeated", None)
     if flag is not None:
         return bool(flag)
-    return bool(fd.label == FieldDescriptor.LABEL_REPEATED)
+    return bool(getattr(fd, "label", None) == FieldDescriptor.LABEL_REPEATED)
 
 
 def _set_field(msg: Message, fd: FieldDescriptor, value: Any, where: str) -> None:
@@ -199,7 +233,7 @@ def _scalar(fd: FieldDescriptor, value: Any, where: str) -> Any:
     t = fd.type
     try:
         if t == FieldDescriptor.TYPE_ENUM:
-            return parse_enum(fd.enum_type, value)
+            return parse_enum(field_enum_type(fd), value)
         if t in (FieldDescriptor.TYPE_DOUBLE, FieldDescriptor.TYPE_FLOAT):
             if isinstance(value, bool):
                 raise TypeError
@@ -237,7 +271,8 @@ def _scalar(fd: FieldDescriptor, value: Any, where: str) -> Any:
 
 def _type_name(fd: FieldDescriptor) -> str:
     if fd.type == FieldDescriptor.TYPE_ENUM:
-        return f"{fd.enum_type.name} ({enum_choices(fd.enum_type)})"
+        enum = field_enum_type(fd)
+        return f"{enum.name} ({enum_choices(enum)})"
     return {FieldDescriptor.TYPE_DOUBLE: "number", FieldDescriptor.TYPE_FLOAT: "number",
             FieldDescriptor.TYPE_STRING: "string", FieldDescriptor.TYPE_BOOL: "bool"}.get(fd.type, "integer")
 
@@ -256,7 +291,7 @@ def _fill_message(msg: Message, value: Any, where: str) -> None:
 def set_fields(msg: Message, values: Mapping[str, Any], where: str = "") -> Message:
     """Set `values` on `msg` by field name, checking names, types, ranges and enums."""
     where = where or msg.DESCRIPTOR.name
-    fields = msg.DESCRIPTOR.fields_by_name
+    fields = descriptor_of(msg).fields_by_name
     for key, value in values.items():
         fd = fields.get(key)
         if fd is None:
@@ -269,7 +304,7 @@ def set_fields(msg: Message, values: Mapping[str, Any], where: str = "") -> Mess
 
 def host_default(fd: FieldDescriptor) -> Any:
     """The schema's (ls.host_default) of a scalar field, parsed to its type, or None."""
-    text = fd.GetOptions().Extensions[pb.host_default]
+    text = fd.GetOptions().Extensions[_HOST_DEFAULT_OPTION]
     if not text:
         return None
     return float(text) if fd.type in (FieldDescriptor.TYPE_DOUBLE, FieldDescriptor.TYPE_FLOAT) else int(text, 0)

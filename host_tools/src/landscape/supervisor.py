@@ -760,12 +760,13 @@ class Supervisor:
         starts over."""
         reqs = build_path_load_requests(path_name, points, frame=frame, motion_type=motion_type,
                                         offset_type=offset_type)
-        check = opts.pop("check", True)
+        check = opts.get("check", True)
+        timeout_s = opts.get("timeout_s")
         total = sum(len(r.path_load.tags) for r in reqs)
         sent = 0
         rv: RetVal | None = None
         for i, req in enumerate(reqs):
-            rv = self.request("path_load", check=False, **opts, **request_fields(req))
+            rv = self.request("path_load", check=False, timeout_s=timeout_s, **request_fields(req))
             if rv.ret_code < 0:
                 rv.ret_msg = (f"{rv.ret_msg} (message {i + 1} of {len(reqs)}; {sent} of {total} points were "
                               f"loaded: pathClearPath {path_name} to start over)").lstrip()

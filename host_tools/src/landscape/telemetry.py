@@ -11,22 +11,26 @@ from functools import lru_cache
 from importlib import resources
 from typing import Any
 
-import cantools
-import cantools.database
 import can
+import cantools.database
+from cantools.database.can import Database as DbcDatabase
+from cantools.database.can import Message as DbcMessage
 
 ID_MASK = 0x1FFFFF00
 
 
 @lru_cache(maxsize=1)
-def database() -> Any:
+def database() -> DbcDatabase:
     """The telemetry DBC shipped with the package (a copy of protocol/landscape.dbc)."""
     text = resources.files("landscape._generated").joinpath("landscape.dbc").read_text()
-    return cantools.database.load_string(text, database_format="dbc")
+    db = cantools.database.load_string(text, database_format="dbc")
+    if not isinstance(db, DbcDatabase):  # a "dbc" load is always a CAN database
+        raise TypeError(f"landscape.dbc loaded as {type(db).__name__}, not a CAN database")
+    return db
 
 
 @lru_cache(maxsize=1)
-def _by_base() -> dict[int, Any]:
+def _by_base() -> dict[int, DbcMessage]:
     return {m.frame_id & ID_MASK: m for m in database().messages}
 
 
@@ -62,5 +66,7 @@ def decode(frame: can.Message) -> Broadcast | None:
     try:
         signals = msg.decode(bytes(frame.data[:msg.length]), decode_choices=False)
     except Exception:
+        return None
+    if not isinstance(signals, dict):  # a container message's list of parts: the DBC declares none
         return None
     return Broadcast(msg.name, frame.arbitration_id & 0xFF, dict(signals))
