@@ -10,6 +10,7 @@ from pathlib import Path
 
 import can
 import isotp
+
 from common import BIN, BUILD, BenchError, Row, Section, fmt_ratio, median, need, percentile, pty_peer
 
 

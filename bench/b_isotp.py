@@ -11,6 +11,7 @@ from pathlib import Path
 
 import can
 import isotp
+
 from common import BIN, PYTHON, ROOT, BenchError, Row, Section, fmt_ratio, median, need, percentile, pty_peer
 
 MAX_LEN = 4095

@@ -33,6 +33,7 @@ import b_isotp
 import b_jitter
 import b_traj
 import b_wire
+
 from common import BUILD, ROOT, BenchError, Row, Section
 
 HERE = Path(__file__).resolve().parent

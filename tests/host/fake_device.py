@@ -243,7 +243,8 @@ class FakeDevice:
             if self.owner is not None and self.owner != host:
                 return answer(pb.CMD_NOT_OWNER_ERR, f"supervisor {self.owner:#04x} owns the device")
             if self.state != pb.UNLOCKED:
-                return answer(pb.CMD_WRONG_STATE_ERR, f"lock is valid in UNLOCKED, the device is {pb.State.Name(self.state)}")
+                return answer(pb.CMD_WRONG_STATE_ERR,
+                              f"lock is valid in UNLOCKED, the device is {pb.State.Name(self.state)}")
             self.owner, self.state = host, pb.LOCKED
             resp.lock.SetInParent()
             return answer(pb.CMD_EXEC_OK)
@@ -328,7 +329,7 @@ class FakeDevice:
 
     def _run_path(self, host: int, seq: int, path: str, cycles: int, points: list[pb.TagPoint]) -> None:
         for cycle in range(1, max(cycles, 1) + 1):
-            for i, p in enumerate(points):
+            for p in points:
                 time.sleep(self.point_time_s)
                 if p.tag_name:
                     self.notify(host, kind=pb.EVENT, event_id="tag", ref_seq=seq,

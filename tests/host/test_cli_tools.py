@@ -7,6 +7,7 @@ from pathlib import Path
 
 import pytest
 from click.testing import CliRunner, Result
+
 from fake_device import FakeDevice
 from landscape import cli_tools, ls
 from landscape.cli import cli

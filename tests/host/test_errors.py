@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import pytest
+
 from landscape import errors, ls
 from landscape.errors import CommandError, LandscapeError, error_for_code, ret_name
 
@@ -11,7 +12,7 @@ NEGATIVE = [v.number for v in ls.RetCode.DESCRIPTOR.values if v.number < 0]
 def test_every_negative_code_has_its_own_subclass() -> None:
     classes = [type(error_for_code("lock", c, "")) for c in NEGATIVE]
     assert len(set(classes)) == len(NEGATIVE) == 14
-    for code, cls in zip(NEGATIVE, classes):
+    for code, cls in zip(NEGATIVE, classes, strict=True):
         assert cls is not CommandError and issubclass(cls, CommandError) and issubclass(cls, LandscapeError)
         assert cls.code == code
 

@@ -5,7 +5,6 @@ import shutil
 import subprocess
 from pathlib import Path
 
-
 ROOT = Path(__file__).resolve().parents[2]
 GEN = ROOT / "host_tools" / "src" / "landscape" / "_generated"
 FIX = "run host_tools/update_generated.sh and commit the result"

@@ -5,11 +5,18 @@ import json
 from pathlib import Path
 
 import pytest
+
 from fake_device import FakeDevice
 from landscape import ArgumentError, ls, paths
 from landscape.limits import max_count, max_string_bytes
-from landscape.paths import (PathFileError, build_path_load_requests, load_path_file, parse_path_text,
-                             resolve_settings, uplink_size)
+from landscape.paths import (
+    PathFileError,
+    build_path_load_requests,
+    load_path_file,
+    parse_path_text,
+    resolve_settings,
+    uplink_size,
+)
 from landscape.supervisor import Supervisor
 
 CSV_POSE = ("x,y,z,roll,pitch,yaw,tag_name,tag_index,time_delay_s,transition_speed_pct,speed_pct,accel_pct,aux\n"
@@ -107,7 +114,8 @@ POSE = "x,y,z,roll,pitch,yaw"
     ("csv", f"{POSE},time_delay_s\n1,2,3,4,5,6,-0.5\n", "f: line 2: time_delay_s: -0.5 is negative"),
     ("csv", f"{POSE},tag_name\n1,2,3,4,5,6,{'t' * 32}\n", f"f: line 2: tag_name: '{'t' * 32}' is 32 bytes; the "
                                                          f"firmware holds at most 31"),
-    ("csv", f"{POSE},aux\n1,2,3,4,5,6,a;b;c;d;e\n", "f: line 2: aux: 5 commands; the firmware holds at most 4 per point"),
+    ("csv", f"{POSE},aux\n1,2,3,4,5,6,a;b;c;d;e\n", "f: line 2: aux: 5 commands; the firmware holds at most 4 "
+                                                    "per point"),
     ("csv", f"{POSE},aux\n1,2,3,4,5,6,{'a' * 48}\n", "f: line 2: aux: '" + "a" * 48 + "' is 48 bytes; the firmware "
                                                     "holds at most 47 per command"),
     ("json", "[1, 2", "f: line 1: not valid JSON: Expecting ',' delimiter"),
@@ -123,7 +131,8 @@ POSE = "x,y,z,roll,pitch,yaw"
     ("json", "{\"motion_type\": 7, \"points\": [{\"j1\": 0}]}", "f: motion_type: MotionType: 7 is not a value"),
     ("json", "{\"path\": \"\", \"points\": [{\"j1\": 0}]}", "f: path: empty path name"),
     ("json", "{\"path\": 5, \"points\": [{\"j1\": 0}]}", "f: path: 5 is not text"),
-    ("json", "[{\"j1\": 0, \"j2\": 1}, {\"j1\": 0}]", "f: points[1]: j2: missing (every point of this file needs j1..j2)"),
+    ("json", "[{\"j1\": 0, \"j2\": 1}, {\"j1\": 0}]", "f: points[1]: j2: missing (every point of this file "
+                                                      "needs j1..j2)"),
     ("json", "[{\"j1\": 0}, {\"j1\": 0, \"j2\": 1}]", "f: points[1]: j2: unexpected: the points of this file have "
                                                       "j1..j1 only"),
     ("json", "[{\"j1\": 0}, {\"j1\": 0, \"x\": 1}]", "f: points[1]: x: unexpected"),
@@ -233,7 +242,7 @@ def test_supervisor_path_load_points(bus, notifier, device: FakeDevice) -> None:
         assert rv.result == {"points_in_path": 75}
     loads = [r for r in device.requests if r.WhichOneof("cmd") == "path_load"]
     assert [len(r.path_load.tags) for r in loads] == [len(s) for s in _chunks(75)]
-    assert seen == list(zip(_cumulative(_chunks(75)), [75] * len(loads)))
+    assert seen == list(zip(_cumulative(_chunks(75)), [75] * len(loads), strict=True))
     assert [t.tag_index for r in loads for t in r.path_load.tags] == list(range(75))
     assert [r.seq for r in loads] == list(range(3, 3 + len(loads)))
     assert max(device.uplink_sizes) <= 4095

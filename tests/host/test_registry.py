@@ -5,6 +5,7 @@ import inspect
 
 import click
 import pytest
+
 from landscape import ArgumentError, Supervisor, build_request, ls
 from landscape.cli import cli
 from landscape.registry import COMMANDS, enum_aliases, is_repeated, kebab, lookup, parse_enum

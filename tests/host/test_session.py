@@ -15,6 +15,7 @@ from pathlib import Path
 import can
 import pytest
 from click.testing import CliRunner, Result
+
 from fake_device import FakeDevice
 from landscape import BusSpec, Supervisor, ls
 from landscape.cli import cli

@@ -6,9 +6,20 @@ import time
 
 import can
 import pytest
+
 from fake_device import FakeDevice
-from landscape import (AlarmError, ControllerTimeoutError, LandscapeError, NotOwnerError, Supervisor,
-                       VersionMismatchError, WrongStateError, errors, ls, notice_data)
+from landscape import (
+    AlarmError,
+    ControllerTimeoutError,
+    LandscapeError,
+    NotOwnerError,
+    Supervisor,
+    VersionMismatchError,
+    WrongStateError,
+    errors,
+    ls,
+    notice_data,
+)
 from landscape import telemetry as tm
 from landscape.registry import PROTOCOL_VERSION, SCHEMA_HASH
 
@@ -241,7 +252,10 @@ def test_two_supervisors_share_one_bus_and_notifier(bus, notifier, device: FakeD
                 results[key].append(s.get_motion_control_state().seq)
         ta = threading.Thread(target=hammer, args=(a, "a"))
         tb = threading.Thread(target=hammer, args=(b, "b"))
-        ta.start(); tb.start(); ta.join(10); tb.join(10)
+        ta.start()
+        tb.start()
+        ta.join(10)
+        tb.join(10)
         assert results["a"] == list(range(3, 23)) and results["b"] == list(range(3, 23))
         assert a.get_motion_control_state().result["owner"] is True
         assert b.get_motion_control_state().result["owner"] is False

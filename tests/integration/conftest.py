@@ -7,9 +7,9 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Iterator
 
 import can
 import pytest
@@ -36,7 +36,7 @@ class Controller:
             return self.proc.wait(timeout=10)
         except subprocess.TimeoutExpired:
             self.proc.kill()
-            raise AssertionError("landscaped did not stop within 10 s of a signal")
+            raise AssertionError("landscaped did not stop within 10 s of a signal") from None
 
 
 def run_cli(*args: str, timeout: float = 60.0, check: bool = False) -> subprocess.CompletedProcess[str]:

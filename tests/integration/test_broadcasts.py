@@ -126,9 +126,9 @@ def check_heartbeats(found: list[tuple[float, str, dict[str, Any]]], state: str,
     hbs = [(t, s) for t, name, s in found if name == "HEARTBEAT"]
     # one every 200 ms: a capture of 1.2 s holds 5..7 of them
     assert int(CAPTURE_S / HEARTBEAT_PERIOD_S) - 1 <= len(hbs) <= int(CAPTURE_S / HEARTBEAT_PERIOD_S) + 1, hbs
-    for (_, a), (_, b) in zip(hbs, hbs[1:]):
+    for (_, a), (_, b) in zip(hbs, hbs[1:], strict=False):
         assert b["hb_counter"] == (a["hb_counter"] + 1) % 256
-    gaps = [tb - ta for (ta, _), (tb, _) in zip(hbs, hbs[1:])]
+    gaps = [tb - ta for (ta, _), (tb, _) in zip(hbs, hbs[1:], strict=False)]
     assert all(0.1 < g < 0.3 for g in gaps), gaps
     for _, s in hbs:
         assert s["hb_state"] == pb.State.Value(state)
@@ -206,7 +206,7 @@ def test_telemetry_is_broadcast_and_agrees_with_the_queries(bench: Bench, db: An
     rpy = last["TOOL_RPY"]
     got = rpy_matrix(rpy["tool_roll"], rpy["tool_pitch"], rpy["tool_yaw"])
     want = rpy_matrix(*position["world_pose"][3:6])
-    for row_got, row_want in zip(got, want):
+    for row_got, row_want in zip(got, want, strict=False):
         assert row_got == pytest.approx(row_want, abs=5e-4)
     status = last["STATUS"]
     assert status["st_state"] == pb.RESTING and status["st_motion"] == 0
@@ -238,6 +238,6 @@ def test_joint_broadcasts_follow_a_move(bench: Bench, db: Any) -> None:
     moving = [s for _, name, s in found if name == "STATUS" and s["st_state"] == pb.MOVING]
     assert moving and all(s["st_motion"] == 1 for s in moving)
     assert j1[0] == pytest.approx(0.0, abs=1e-3) and j1[-1] == pytest.approx(0.3, abs=1e-3)
-    assert all(b >= a - 1e-5 for a, b in zip(j1, j1[1:])), "j1 rises monotonically on a joint move"
+    assert all(b >= a - 1e-5 for a, b in zip(j1, j1[1:], strict=False)), "j1 rises monotonically on a joint move"
     assert j1[-1] == pytest.approx(bench.sup.get_robot_position().result["joints"][0], abs=1e-5)
     bench.sup.deactivate()

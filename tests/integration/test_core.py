@@ -231,8 +231,8 @@ def test_robot_position_follows_world_frame_and_tool(two: tuple[Supervisor, Supe
     owner.set_tool_offset([0.0, 0.0, 0.1, 0.0, 0.0, 0.0])
     p2 = observer.get_robot_position().result
     z_axis = _rot(p0["world_pose"][3:])[2::3]  # the flange z axis in the base frame
-    assert p2["world_pose"][:3] == pytest.approx([a + 0.1 * z for a, z in zip(p0["world_pose"][:3], z_axis)],
-                                                 abs=1e-5)
+    want = [a + 0.1 * z for a, z in zip(p0["world_pose"][:3], z_axis, strict=True)]
+    assert p2["world_pose"][:3] == pytest.approx(want, abs=1e-5)
     owner.set_units(linear="MILLIMETERS", angular="DEGREES")
     p3 = observer.get_robot_position().result
     assert p3["joints"] == pytest.approx([math.degrees(q) for q in p2["joints"]], abs=1e-4)

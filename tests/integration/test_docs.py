@@ -5,13 +5,10 @@ commands that answer CMD_NOT_IMPLEMENTED_ERR."""
 from __future__ import annotations
 
 import re
-from collections.abc import Iterator
 from pathlib import Path
 
 import can
-import pytest
 
-from conftest import Controller
 from landscape._generated import landscape_pb2 as pb
 from landscape.registry import COMMANDS, Command
 from landscape.supervisor import Supervisor

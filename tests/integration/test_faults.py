@@ -10,8 +10,8 @@ answers CMD_NOT_IMPLEMENTED_ERR or the option is missing; they run as soon as
 the feature lands. docs/reliability.md records the figures."""
 from __future__ import annotations
 
-import os
 import logging
+import os
 import socket
 import subprocess
 import time
@@ -261,7 +261,7 @@ def test_set_speed_takes_effect_once_under_loss(tmp_path: Path, loss: float) -> 
             while i < 30 and w.more():
                 i += 1
                 v = 5.0 + i
-                rv = t.run(lambda: sup.set_speed(v))
+                rv = t.run(lambda v=v: sup.set_speed(v))
                 last_set = v if rv is not None else None  # a timed-out set may or may not have run
                 got = t.run(lambda: sup.get_velocities())
                 if got is not None:
@@ -301,7 +301,7 @@ def test_path_is_never_half_loaded(tmp_path: Path, loss: float) -> None:
             k = -1
             while k < 20 and w.more():
                 k += 1
-                rv = t.run(lambda: sup.path_load("soak", _tags(k)))
+                rv = t.run(lambda k=k: sup.path_load("soak", _tags(k)))
                 if rv is None:
                     lost_since += 1
                     continue

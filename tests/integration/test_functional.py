@@ -16,7 +16,6 @@ import can
 import isotp
 import pytest
 
-from conftest import Controller
 from landscape._generated import landscape_pb2 as pb
 from landscape.supervisor import Supervisor
 

@@ -23,7 +23,6 @@ Run through ctest (LS_ISOTP_PTY_PEER set), or with the build directory's peer:
 from __future__ import annotations
 
 import os
-import queue
 import signal
 import subprocess
 import threading
@@ -147,7 +146,7 @@ class Peer:
         except subprocess.TimeoutExpired:
             self.proc.kill()
             _, err = self.proc.communicate()
-            raise AssertionError("isotp_pty_peer did not exit within 10 s of SIGTERM")
+            raise AssertionError("isotp_pty_peer did not exit within 10 s of SIGTERM") from None
         self._reader.join(timeout=5)
         return self.proc.returncode, err
 

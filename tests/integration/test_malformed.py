@@ -222,7 +222,7 @@ def test_first_frame_with_the_length_escape_gets_overflow(bus: can.BusABC, notif
     bytes([0x05, 1, 2]),                         # SF shorter than it says
     bytes([0x10, 0x05, 1, 2, 3, 4, 5, 6]),       # FF of 5 bytes (fits a SF)
     bytes([0x40, 0, 0, 0, 0, 0, 0, 0]),          # unknown PCI type
-    bytes(),                                     # empty frame
+    b"",                                         # empty frame
 ], ids=["cf-alone", "fc-idle", "sf-0", "sf-8", "sf-short", "ff-5", "pci-4", "empty"])
 def test_malformed_transport_frames_are_dropped(bus: can.BusABC, notifier: can.Notifier, sup: Supervisor,
                                                 reader: Reader, data: bytes) -> None:

@@ -11,8 +11,8 @@ import math
 import re
 import threading
 import time
+from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Callable, Iterator
 
 import can
 import numpy as np
@@ -43,7 +43,7 @@ DH = _dh_table()
 def fk(q: list[float]) -> np.ndarray:
     """Flange pose in the base frame (4x4)."""
     T = np.eye(4)
-    for (a, alpha, d, off), qi in zip(DH, q):
+    for (a, alpha, d, off), qi in zip(DH, q, strict=False):
         th = qi + off
         ct, st, ca, sa = math.cos(th), math.sin(th), math.cos(alpha), math.sin(alpha)
         T = T @ np.array([[ct, -st * ca, st * sa, a * ct], [st, ct * ca, -ct * sa, a * st],
@@ -65,7 +65,7 @@ class JointWatch:
         if not name.startswith("JOINTS_"):
             return
         with self._lock:
-            self._cur.update(getattr(b, "signals"))
+            self._cur.update(b.signals)
             if name == "JOINTS_56" and all(f"j{i}" in self._cur for i in range(1, 7)):
                 self.sets.append([float(self._cur[f"j{i}"]) for i in range(1, 7)])
 
@@ -237,7 +237,7 @@ def test_stop_resume_abort(sup: Supervisor) -> None:
     assert sup.get_motion_control_state().result["state"] == "PAUSED"
     q_paused = joints(sup)
     # on the joint-space line from HOME to the target (a synchronised joint move)
-    frac = [(q - h) / (t - h) for q, h, t in zip(q_paused, HOME, target) if abs(t - h) > 0.1]
+    frac = [(q - h) / (t - h) for q, h, t in zip(q_paused, HOME, target, strict=False) if abs(t - h) > 0.1]
     assert 0.0 < frac[0] < 1.0 and max(frac) - min(frac) < 0.02
     time.sleep(0.3)
     assert joints(sup) == pytest.approx(q_paused, abs=1e-3)

@@ -4,12 +4,10 @@ supervisors on one bus, malformed input, liveness."""
 from __future__ import annotations
 
 import time
-from typing import Iterator
 
 import can
 import pytest
 
-from conftest import Controller
 from landscape import errors
 from landscape._generated import landscape_pb2 as pb
 from landscape.registry import COMMANDS, lookup

@@ -199,7 +199,7 @@ def test_can_utils_isotpsend_isotprecv_echo(echo_peer: EchoPeer, size: int) -> N
     assert bytes.fromhex(out) == data
     lines, summary = echo_peer.stop()
     assert lines == [f"echo {size}"]
-    assert f"echoed 1, rx ok 1, tx ok 1" in summary, summary
+    assert "echoed 1, rx ok 1, tx ok 1" in summary, summary
 
 
 def isotp_socket(bs: int | None = None, stmin: int | None = None) -> socket.socket:
@@ -303,7 +303,7 @@ class Landscaped:
         except subprocess.TimeoutExpired:
             self.proc.kill()
             self.proc.wait()
-            raise AssertionError(f"landscaped --node {self.node:#04x} did not stop within 30 s of SIGTERM")
+            raise AssertionError(f"landscaped --node {self.node:#04x} did not stop within 30 s of SIGTERM") from None
 
 
 def sysfs_line(n: int, attr: str) -> Path:

@@ -6,11 +6,31 @@
 """
 from ._generated import landscape_pb2 as ls
 from .bus import BusSpec, open_bus
-from .errors import (AlarmError, ArgumentError, BusError, BusyError, CommandError, ControllerTimeoutError,
-                     DeviceTimeoutError, FaultError, GenericCommandError, LandscapeError, NoResourcesError,
-                     NotConnectedError, NotImplementedByDeviceError, NotOwnerError, ParamError,
-                     ParamOutOfRangeError, ProtocolError, UnknownCommandError, UnsupportedError,
-                     VersionMismatchCommandError, VersionMismatchError, WrongStateError, error_for_code)
+from .errors import (
+    AlarmError,
+    ArgumentError,
+    BusError,
+    BusyError,
+    CommandError,
+    ControllerTimeoutError,
+    DeviceTimeoutError,
+    FaultError,
+    GenericCommandError,
+    LandscapeError,
+    NoResourcesError,
+    NotConnectedError,
+    NotImplementedByDeviceError,
+    NotOwnerError,
+    ParamError,
+    ParamOutOfRangeError,
+    ProtocolError,
+    UnknownCommandError,
+    UnsupportedError,
+    VersionMismatchCommandError,
+    VersionMismatchError,
+    WrongStateError,
+    error_for_code,
+)
 from .paths import PathFile, PathFileError, build_path_load_requests, load_path_file, parse_path_text
 from .registry import COMMANDS, PROTOCOL_VERSION, SCHEMA_HASH, Command, build_request, lookup
 from .supervisor import ConnectResult, RetVal, Supervisor, mismatch_message, notice_data

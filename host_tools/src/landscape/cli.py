@@ -19,17 +19,35 @@ import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, NoReturn, Union
+from typing import Any, NoReturn
 
 import click
 from google.protobuf.descriptor import EnumDescriptor, FieldDescriptor
 
 from ._generated import landscape_pb2 as pb
 from .bus import DEFAULT_DEVICE, DEFAULT_HOST, BusSpec
-from .errors import (AlarmError, ArgumentError, BusError, CommandError, ControllerTimeoutError, LandscapeError,
-                     ProtocolError, VersionMismatchError, error_for_code)
-from .registry import (COMMANDS, Command, enum_choices, field_enum_type, field_message_type, host_default, is_repeated,
-                       message_to_dict, parse_enum)
+from .errors import (
+    AlarmError,
+    ArgumentError,
+    BusError,
+    CommandError,
+    ControllerTimeoutError,
+    LandscapeError,
+    ProtocolError,
+    VersionMismatchError,
+    error_for_code,
+)
+from .registry import (
+    COMMANDS,
+    Command,
+    enum_choices,
+    field_enum_type,
+    field_message_type,
+    host_default,
+    is_repeated,
+    message_to_dict,
+    parse_enum,
+)
 from .session import SessionClient, socket_path
 from .supervisor import RetVal, Supervisor
 
@@ -123,7 +141,8 @@ def cli_params(cmd: Command) -> list[click.Parameter]:
     for i, f in enumerate(positional):
         trailing_string = (i == len(positional) - 1 and variadic is None
                            and f.type == FieldDescriptor.TYPE_STRING)
-        ptype: click.ParamType[Any] = EnumType(field_enum_type(f)) if f.type == FieldDescriptor.TYPE_ENUM else click.STRING
+        ptype: click.ParamType[Any] = (EnumType(field_enum_type(f)) if f.type == FieldDescriptor.TYPE_ENUM
+                                       else click.STRING)
         params.append(click.Argument([f.name], type=ptype, required=not trailing_string,
                                      default="" if trailing_string else None, metavar=f.name.upper()))
     if variadic is not None:
@@ -162,7 +181,7 @@ def cli_params(cmd: Command) -> list[click.Parameter]:
 # ---------------------------------------------------------------- state shared by the subcommands
 
 
-Backend = Union[Supervisor, SessionClient]
+Backend = Supervisor | SessionClient
 """Where a command goes: the invocation's own session, or a background session's socket."""
 
 
@@ -331,7 +350,8 @@ def make_command(cmd: Command) -> click.Command:
                  + ("; owner only" if cmd.owner_only else "") + ".")
     for f in cmd.fields():
         if f.type == FieldDescriptor.TYPE_ENUM:
-            help_text += f"\n\n{f.name.upper()}: {' | '.join(v.name for v in field_enum_type(f).values)} (any case; suffix optional)"
+            names = " | ".join(v.name for v in field_enum_type(f).values)
+            help_text += f"\n\n{f.name.upper()}: {names} (any case; suffix optional)"
     params = [] if cmd.field == "connect" else cli_params(cmd)
     if cmd.field == "connect":
         help_text += "\n\nEvery invocation connects first; this command prints the device description."
@@ -415,8 +435,10 @@ def _addr(value: str) -> int:
 
 
 @click.group(cls=LandscapeGroup, context_settings={"help_option_names": ["-h", "--help"]})
-@click.option("--interface", "-i", default=None, help="python-can interface (default: python-can config / CAN_INTERFACE)")
-@click.option("--channel", "-c", default=None, help="channel, e.g. the pty of landscaped (default: config / CAN_CHANNEL)")
+@click.option("--interface", "-i", default=None,
+              help="python-can interface (default: python-can config / CAN_INTERFACE)")
+@click.option("--channel", "-c", default=None,
+              help="channel, e.g. the pty of landscaped (default: config / CAN_CHANNEL)")
 @click.option("--bitrate", "-b", type=int, default=None, help="bit rate (slcan default 1000000)")
 @click.option("--device", "-d", default=f"{DEFAULT_DEVICE:#04x}", show_default=True, callback=lambda c, p, v: _addr(v),
               help="node address of the controller")

@@ -22,8 +22,22 @@ from typing import Any
 import click
 
 from ._generated import landscape_pb2 as pb
-from .cli import (EXIT_COMMAND, EXIT_ERROR, CliState, CommandFailed, EnumType, _fmt_notice, _fmt_value,
-                  _one_line, _state, call, classify, cli, execute, send)
+from .cli import (
+    EXIT_COMMAND,
+    EXIT_ERROR,
+    CliState,
+    CommandFailed,
+    EnumType,
+    _fmt_notice,
+    _fmt_value,
+    _one_line,
+    _state,
+    call,
+    classify,
+    cli,
+    execute,
+    send,
+)
 from .demo import StepResult, demo_steps, run_demo
 from .errors import LandscapeError, error_for_code
 from .paths import build_path_load_requests, load_path_file, request_fields, resolve_settings

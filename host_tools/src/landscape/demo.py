@@ -82,7 +82,7 @@ def demo_steps(path: PathFile | None = None) -> list[Step]:
              {"point_name": "demo_side", "values": SIDE_RAD, "frame": pb.JOINT_FRAME, "speed_pct": 30.0},
              wait=True, needs=("activate",)),
         Step("back", "relative joint move back to the ready pose", "move_relative",
-             {"point_name": "demo_back", "values": [r - q for r, q in zip(READY_RAD, SIDE_RAD)],
+             {"point_name": "demo_back", "values": [r - q for r, q in zip(READY_RAD, SIDE_RAD, strict=True)],
               "frame": pb.JOINT_FRAME, "speed_pct": 30.0}, wait=True, needs=("activate",)),
         Step("where", "read the robot position", "get_robot_position"),
         Step("clear_old", f"clear any old path '{s.path_name}'", "path_clear_path", {"path_name": s.path_name},

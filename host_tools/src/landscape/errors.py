@@ -10,6 +10,7 @@ from typing import Any
 
 from ._generated import landscape_pb2 as pb
 
+
 class LandscapeError(Exception):
     """Base of every error raised by this package."""
 

@@ -263,7 +263,7 @@ def _parse_csv(text: str, file: str) -> PathFile:
         if len(row) != len(header):
             raise PathFileError(file, f"line {line}", None,
                                 f"{len(row)} cells, the header names {len(header)} columns")
-        values = {k: v for k, v in zip(header, row) if v.strip() != ""}
+        values = {k: v for k, v in zip(header, row, strict=False) if v.strip() != ""}
         points.append(point_from_mapping(values, kind, n_joints, file, f"line {line}"))
         locations.append(f"line {line}")
     if header is None:
@@ -421,7 +421,7 @@ def build_path_load_requests(path_name: str, points: Sequence[pb.TagPoint | Mapp
     mt = parse_enum(pb.MotionType.DESCRIPTOR, motion_type)
     ot = parse_enum(pb.OffsetType.DESCRIPTOR, offset_type)
     tags: list[pb.TagPoint] = []
-    for i, p in enumerate(points):
+    for p in points:
         if isinstance(p, pb.TagPoint):
             tags.append(p)
         else:

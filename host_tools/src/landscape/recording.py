@@ -185,7 +185,7 @@ def read_recording(path: str | Path) -> Recording:
                     elif row["kind"] == "notice":
                         rec.notices.append((t, row["name"], _data_dict(row["data"].split(";") if row["data"] else [])))
             else:
-                for lineno, line in enumerate(f, 1):
+                for line in f:
                     if not line.strip():
                         continue
                     obj = json.loads(line)

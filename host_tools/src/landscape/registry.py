@@ -146,13 +146,13 @@ def by_number(number: int) -> Command | None:
 def _common_affixes(names: list[str]) -> tuple[list[str], list[str]]:
     parts = [n.split("_") for n in names]
     prefix: list[str] = []
-    for toks in zip(*parts):
+    for toks in zip(*parts, strict=False):
         if len(set(toks)) == 1:
             prefix.append(toks[0])
         else:
             break
     suffix: list[str] = []
-    for toks in zip(*(list(reversed(p)) for p in parts)):
+    for toks in zip(*(list(reversed(p)) for p in parts), strict=False):
         if len(set(toks)) == 1:
             suffix.insert(0, toks[0])
         else:

@@ -28,10 +28,27 @@ from google.protobuf.message import DecodeError, Message
 
 from . import telemetry as tm
 from ._generated import landscape_pb2 as pb
-from .bus import (DEFAULT_DEVICE, DEFAULT_HOST, ISOTP_PARAMS, MAX_MESSAGE_BYTES, BusSpec, functional_id, open_bus,
-                  physical_address)
-from .errors import (AlarmError, ArgumentError, BusError, ControllerTimeoutError, LandscapeError,
-                     ProtocolError, VersionMismatchError, error_for_code, ret_name)
+from .bus import (
+    DEFAULT_DEVICE,
+    DEFAULT_HOST,
+    ISOTP_PARAMS,
+    MAX_MESSAGE_BYTES,
+    BusSpec,
+    functional_id,
+    open_bus,
+    physical_address,
+)
+from .errors import (
+    AlarmError,
+    ArgumentError,
+    BusError,
+    ControllerTimeoutError,
+    LandscapeError,
+    ProtocolError,
+    VersionMismatchError,
+    error_for_code,
+    ret_name,
+)
 from .paths import build_path_load_requests, request_fields
 from .registry import PROTOCOL_VERSION, SCHEMA_HASH, Command, build_request, lookup, message_to_dict
 

@@ -79,7 +79,7 @@ class Traffic:
 
 def cf_span_s(frames: list[bytes], times: list[float]) -> float:
     """Time from the first to the last consecutive frame of a transfer."""
-    cf_times = [t for f, t in zip(frames, times) if (f[0] >> 4) == 2]
+    cf_times = [t for f, t in zip(frames, times, strict=True) if (f[0] >> 4) == 2]
     return cf_times[-1] - cf_times[0] if len(cf_times) > 1 else 0.0
 
 
@@ -209,7 +209,8 @@ def peer_path() -> str:
 
 
 @contextmanager
-def make_setup(peer: str, block_size: int, st_min: int, device_padding: bool, host_padding: int | None) -> Iterator[Setup]:
+def make_setup(peer: str, block_size: int, st_min: int, device_padding: bool,
+               host_padding: int | None) -> Iterator[Setup]:
     channel = f"isotp-interop-{uuid.uuid4().hex}"
     bridge = PeerBridge(peer, channel, block_size, st_min, device_padding)
     host_bus = can.Bus(interface="virtual", channel=channel, receive_own_messages=False)
@@ -258,7 +259,8 @@ def host_to_device(s: Setup, payload: bytes) -> tuple[list[bytes], list[bytes]]:
     try:
         got = s.bridge.messages.get(timeout=TRANSFER_TIMEOUT_S)
     except queue.Empty:
-        raise PeerError(f"device did not receive a {len(payload)}-byte message; peer errors: {s.bridge.errors}")
+        raise PeerError(f"device did not receive a {len(payload)}-byte message; peer errors: {s.bridge.errors}") \
+            from None
     wait_idle(s.stack)
     assert got == payload
     return s.bridge.traffic.snapshot()
