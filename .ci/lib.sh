@@ -19,31 +19,27 @@ _ci_log_path() {
   printf '%s/%s.%s.log' "$LS_CI_LOGS" "$LS_CI_SCRIPT" "$slug"
 }
 
-step() {
-  local name=$1
-  shift
+# _ci_run quiet|live NAME CMD...: the body of step and step_live.
+_ci_run() {
+  local mode=$1 name=$2
+  shift 2
   local log rc=0
   log=$(_ci_log_path "$name")
   echo "== $name"
-  "$@" >"$log" 2>&1 || rc=$?
-  if [ "$rc" -ne 0 ]; then
+  if [ "$mode" = live ]; then
+    "$@" 2>&1 | tee "$log" || rc=${PIPESTATUS[0]}
+  else
+    "$@" >"$log" 2>&1 || rc=$?
+  fi
+  [ "$rc" -eq 0 ] && return 0
+  if [ "$mode" = quiet ]; then
     echo "---- output of '$name' (last 120 lines of $log) ----" >&2
     tail -n 120 "$log" >&2
     echo "---- end of output ----" >&2
-    echo "$LS_CI_SCRIPT: step '$name' failed (exit $rc); full log: $log" >&2
-    exit "$rc"
   fi
+  echo "$LS_CI_SCRIPT: step '$name' failed (exit $rc); full log: $log" >&2
+  exit "$rc"
 }
 
-step_live() {
-  local name=$1
-  shift
-  local log rc=0
-  log=$(_ci_log_path "$name")
-  echo "== $name"
-  "$@" 2>&1 | tee "$log" || rc=${PIPESTATUS[0]}
-  if [ "$rc" -ne 0 ]; then
-    echo "$LS_CI_SCRIPT: step '$name' failed (exit $rc); its output is above and in $log" >&2
-    exit "$rc"
-  fi
-}
+step() { _ci_run quiet "$@"; }
+step_live() { _ci_run live "$@"; }
