@@ -138,31 +138,44 @@ bool ls_control_start_plan(ls_control_t *c, uint32_t ref_seq)
     return true;
 }
 
-/* --- seqlock snapshot: odd sequence while the loop writes. */
+/* --- seqlock snapshot: odd sequence while the loop writes. The data words
+ * are atomics accessed relaxed: the fences order them against the sequence
+ * (writer: seq odd, release fence, words, seq even with release; reader:
+ * seq with acquire, words, acquire fence, seq again). */
 
 static void publish(ls_control_t *c, const ls_ctl_snapshot_t *s)
 {
+    uint32_t w[LS_CTL_SNAP_WORDS];
+    w[LS_CTL_SNAP_WORDS - 1u] = 0u; /* the tail past sizeof, if any */
+    memcpy(w, s, sizeof *s);
     unsigned seq = atomic_load_explicit(&c->snap_seq, memory_order_relaxed);
     atomic_store_explicit(&c->snap_seq, seq + 1u, memory_order_relaxed);
     atomic_thread_fence(memory_order_release);
-    c->snap = *s;
+    for (size_t i = 0; i < LS_CTL_SNAP_WORDS; i++) {
+        atomic_store_explicit(&c->snap_words[i], w[i], memory_order_relaxed);
+    }
     atomic_store_explicit(&c->snap_seq, seq + 2u, memory_order_release);
 }
 
-void ls_control_snapshot(ls_control_t *c, ls_ctl_snapshot_t *out)
+bool ls_control_snapshot(ls_control_t *c, ls_ctl_snapshot_t *out)
 {
-    for (;;) {
+    uint32_t w[LS_CTL_SNAP_WORDS];
+    for (unsigned attempt = 0; attempt < LS_CTL_SNAPSHOT_TRIES; attempt++) {
         unsigned s1 = atomic_load_explicit(&c->snap_seq, memory_order_acquire);
-        if ((s1 & 1u) != 0u) {
-            continue;
+        for (size_t i = 0; i < LS_CTL_SNAP_WORDS; i++) {
+            w[i] = atomic_load_explicit(&c->snap_words[i], memory_order_relaxed);
         }
-        *out = c->snap;
         atomic_thread_fence(memory_order_acquire);
         unsigned s2 = atomic_load_explicit(&c->snap_seq, memory_order_relaxed);
-        if (s1 == s2) {
-            return;
+        if ((s1 & 1u) == 0u && s1 == s2) {
+            memcpy(&c->snap_last, w, sizeof c->snap_last);
+            *out = c->snap_last;
+            return true;
         }
     }
+    c->snap_stale++;
+    *out = c->snap_last;
+    return false;
 }
 
 /* --- the loop */
@@ -284,6 +297,7 @@ void ls_control_init(ls_control_t *c, const ls_control_config_t *cfg)
     memcpy(s.q_cmd_rad, c->q, sizeof s.q_cmd_rad);
     (void)ls_kin_fk(cfg->model, c->q, s.flange_pose);
     publish(c, &s);
+    c->snap_last = s; /* before any thread starts: what a first failed read returns */
 }
 
 /* Executor events -> control events (REACT_END carries the report). */
@@ -509,6 +523,7 @@ void ls_control_cycle(ls_control_t *c, uint64_t now_us)
     motion_events(c, &mev);
     c->cycles++;
     ls_ctl_snapshot_t s;
+    memset(&s, 0, sizeof s); /* padding too: the seqlock copies raw words */
     s.cycle = c->cycles;
     s.t_us = now_us;
     s.enabled = c->enabled;

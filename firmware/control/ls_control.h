@@ -120,6 +120,18 @@ typedef struct {
     bool jogging;             /* the set-point moved by jogging this cycle */
 } ls_ctl_snapshot_t;
 
+/* The snapshot as 32-bit words: the seqlock copies it word by word with
+ * relaxed atomics, so a read racing a write is defined behaviour (and torn
+ * copies are caught by the sequence check). 32-bit words stay lock-free on
+ * Cortex-M too. */
+#define LS_CTL_SNAP_WORDS ((sizeof(ls_ctl_snapshot_t) + sizeof(uint32_t) - 1u) / sizeof(uint32_t))
+/* Attempts of ls_control_snapshot before it gives up. Each attempt copies
+ * the whole snapshot, so it lasts about as long as the loop's own publish:
+ * a publish in progress costs one or two attempts; running out means the
+ * loop thread stopped in the middle of a publish (descheduled, stopped in a
+ * debugger) or publishes back to back. */
+#define LS_CTL_SNAPSHOT_TRIES 16u
+
 typedef struct {
     const ls_robot_model_t *model;
     hal_arm_t *arm;           /* may be NULL: no arm backend (nothing moves) */
@@ -146,9 +158,13 @@ typedef struct ls_control {
     ls_ctl_event_t ev_ring[LS_CTL_QUEUE_LEN];
     atomic_uint ev_head, ev_tail;
     atomic_uint events_lost;
-    /* snapshot */
+    /* snapshot: seqlock, even = stable, odd = the loop is writing */
     atomic_uint snap_seq;
-    ls_ctl_snapshot_t snap;
+    atomic_uint snap_words[LS_CTL_SNAP_WORDS];
+    /* reader-private (comms thread): the last consistent copy, and how many
+     * reads returned it instead of a fresh one */
+    ls_ctl_snapshot_t snap_last;
+    uint32_t snap_stale;
     /* loop-private */
     ls_motion_t motion;
     ls_react_t react;
@@ -193,8 +209,21 @@ bool ls_control_set_manual(ls_control_t *c, const hal_manual_t *dev, const ls_jo
 bool ls_control_manual_on(ls_control_t *c);
 /* Install the comms thread's event filter (NULL: none). Call from the comms thread. */
 void ls_control_set_event_filter(ls_control_t *c, ls_control_event_filter_t fn, void *ctx);
-/* A consistent copy of the loop's state. */
-void ls_control_snapshot(ls_control_t *c, ls_ctl_snapshot_t *out);
+/* A consistent copy of the loop's state: true when `out` is the latest one
+ * the loop published. Bounded: at most LS_CTL_SNAPSHOT_TRIES copies of
+ * sizeof(ls_ctl_snapshot_t) bytes, no waiting.
+ *
+ * Failure mode: when every attempt overlapped a publish (the loop keeps the
+ * seqlock busy), it returns false and fills `out` with the last consistent
+ * copy this reader took (never a torn mix; its `cycle` and `t_us` tell its
+ * age) and counts the event in `snap_stale`. Callers that report state
+ * (telemetry, status answers) use that copy as it is: it is older by the
+ * time the loop stayed inside a publish. A caller that must act on the
+ * present state (a decision that the next cycle could change) treats false
+ * like a busy loop: refuse with a busy answer and let the sender retry.
+ *
+ * One reader: the comms thread (the last copy is its private state). */
+bool ls_control_snapshot(ls_control_t *c, ls_ctl_snapshot_t *out);
 /* Take the next event; false when none. */
 bool ls_control_next_event(ls_control_t *c, ls_ctl_event_t *out);
 

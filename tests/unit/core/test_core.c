@@ -47,13 +47,14 @@ static ls_ctl_cmd_t g_posted[16];
 static size_t g_nposted;
 static bool g_post_ok;
 
-void __wrap_ls_control_snapshot(ls_control_t *c, ls_ctl_snapshot_t *out);
+bool __wrap_ls_control_snapshot(ls_control_t *c, ls_ctl_snapshot_t *out);
 bool __wrap_ls_control_post(ls_control_t *c, const ls_ctl_cmd_t *cmd);
 
-void __wrap_ls_control_snapshot(ls_control_t *c, ls_ctl_snapshot_t *out)
+bool __wrap_ls_control_snapshot(ls_control_t *c, ls_ctl_snapshot_t *out)
 {
     assert_ptr_equal(c, &g_ctl);
     *out = g_snap;
+    return true;
 }
 
 bool __wrap_ls_control_post(ls_control_t *c, const ls_ctl_cmd_t *cmd)
