@@ -1,0 +1,627 @@
+/* ls_net, black box: CAN frames in on fake hal_can links, calls into the
+ * core and frames out.
+ *
+ * The core is a test double: the three entry points the network layer
+ * calls (ls_core_on_uplink, ls_core_on_heartbeat, ls_core_fault) are
+ * redirected here at link time (-Wl,--wrap, as tests/unit/core does for the
+ * control loop), so a test sees exactly which messages reached the core, from
+ * which address, without encoding protobuf requests; the real core's
+ * answers are covered by tests/unit/core and the integration tier. When
+ * asked, the double answers an uplink through ls_net_send_downlink as the
+ * core does, to drive the downlink path.
+ *
+ * The supervisors on the far side are real ls_isotp links (tests/unit/isotp
+ * covers the transport itself) whose frames the test queues on a fake link.
+ * The peer table is looked at directly only to tell which peer an eviction
+ * chose. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include <cmocka.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "ls_net.h"
+
+#define NODE 0x01u
+#define SUP_A 0x21u
+#define SUP_B 0x22u
+
+/* ---------------------------------------------------------------- fake links */
+
+#define LINK_Q 512
+
+typedef struct {
+    hal_can_frame_t rx[LINK_Q];
+    size_t rx_head, rx_count;
+    hal_can_frame_t tx[LINK_Q];
+    size_t n_tx;
+    int refuse_send;  /* send returns HAL_EAGAIN */
+    int closed;
+} fake_link_t;
+
+static int link_send(void *self, const hal_can_frame_t *frame)
+{
+    fake_link_t *l = self;
+    if (l->refuse_send || l->n_tx >= LINK_Q) {
+        return HAL_EAGAIN;
+    }
+    l->tx[l->n_tx++] = *frame;
+    return HAL_OK;
+}
+
+static int link_recv(void *self, hal_can_frame_t *frame)
+{
+    fake_link_t *l = self;
+    if (l->rx_count == 0) {
+        return HAL_EAGAIN;
+    }
+    *frame = l->rx[l->rx_head];
+    l->rx_head = (l->rx_head + 1u) % LINK_Q;
+    l->rx_count--;
+    return 1;
+}
+
+static int link_status(void *self, hal_can_status_t *out)
+{
+    (void)self;
+    memset(out, 0, sizeof *out);
+    out->rx_dropped = 2;
+    return HAL_OK;
+}
+
+static void link_close(void *self)
+{
+    ((fake_link_t *)self)->closed++;
+}
+
+static const hal_can_ops_t LINK_OPS = { .send = link_send, .recv = link_recv, .status = link_status,
+                                        .close = link_close };
+
+static void link_put(fake_link_t *l, uint32_t id, uint8_t flags, const uint8_t *data, uint8_t len)
+{
+    assert_true(l->rx_count < LINK_Q);
+    hal_can_frame_t *f = &l->rx[(l->rx_head + l->rx_count) % LINK_Q];
+    memset(f, 0, sizeof *f);
+    f->id = id;
+    f->flags = flags;
+    f->len = len;
+    memcpy(f->data, data, len);
+    l->rx_count++;
+}
+
+/* ---------------------------------------------------------------- core double */
+
+#define MAX_CALLS 64
+
+typedef enum { CALL_UPLINK = 1, CALL_HEARTBEAT, CALL_FAULT } call_kind_t;
+
+typedef struct {
+    call_kind_t kind;
+    uint8_t addr;
+    uint8_t buf[LS_ISOTP_MAX_PAYLOAD];
+    size_t len;
+    char text[64];
+    uint64_t now_us;
+} call_t;
+
+static call_t g_calls[MAX_CALLS];
+static size_t g_ncalls;
+static ls_net_t g_net;
+static ls_core_t *const CORE = (ls_core_t *)&g_calls; /* an address the double checks, never dereferenced */
+static size_t g_echo_len;                             /* > 0: answer each uplink with this many bytes */
+
+void __wrap_ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t len, uint64_t now_us);
+void __wrap_ls_core_on_heartbeat(ls_core_t *core, uint8_t addr, uint64_t now_us);
+void __wrap_ls_core_fault(ls_core_t *core, const char *text, uint64_t now_us);
+
+static call_t *record(ls_core_t *core, call_kind_t kind, uint8_t addr, uint64_t now_us)
+{
+    assert_ptr_equal(core, CORE);
+    assert_true(g_ncalls < MAX_CALLS);
+    call_t *c = &g_calls[g_ncalls++];
+    memset(c, 0, sizeof *c);
+    c->kind = kind;
+    c->addr = addr;
+    c->now_us = now_us;
+    return c;
+}
+
+void __wrap_ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t len, uint64_t now_us)
+{
+    call_t *c = record(core, CALL_UPLINK, addr, now_us);
+    assert_true(len <= sizeof c->buf);
+    memcpy(c->buf, buf, len);
+    c->len = len;
+    if (g_echo_len > 0) {
+        static uint8_t answer[LS_DOWNLINK_MAX];
+        for (size_t i = 0; i < g_echo_len; i++) {
+            answer[i] = (uint8_t)(buf[0] + i);
+        }
+        assert_int_equal(ls_net_send_downlink(&g_net, addr, answer, g_echo_len), 0);
+    }
+}
+
+void __wrap_ls_core_on_heartbeat(ls_core_t *core, uint8_t addr, uint64_t now_us)
+{
+    (void)record(core, CALL_HEARTBEAT, addr, now_us);
+}
+
+void __wrap_ls_core_fault(ls_core_t *core, const char *text, uint64_t now_us)
+{
+    call_t *c = record(core, CALL_FAULT, 0, now_us);
+    snprintf(c->text, sizeof c->text, "%s", text);
+}
+
+/* ---------------------------------------------------------------- fixture */
+
+static fake_link_t g_link[3];
+
+static void setup_net(size_t n_links)
+{
+    memset(g_link, 0, sizeof g_link);
+    memset(g_calls, 0, sizeof g_calls);
+    g_ncalls = 0;
+    g_echo_len = 0;
+    ls_net_init(&g_net, NODE, CORE);
+    for (size_t i = 0; i < n_links; i++) {
+        hal_can_link_t l = { .ops = &LINK_OPS, .self = &g_link[i] };
+        snprintf(l.name, sizeof l.name, "fake%zu", i);
+        assert_int_equal(ls_net_add_link(&g_net, &l), 0);
+    }
+}
+
+/* A supervisor: a real ISO-TP link whose frames go into one fake link. */
+typedef struct {
+    uint8_t addr;
+    fake_link_t *via;
+    ls_isotp_link_t tp;
+} sup_t;
+
+static int sup_send(void *ctx, uint32_t can_id, const uint8_t *data, uint8_t len)
+{
+    sup_t *s = ctx;
+    link_put(s->via, can_id, HAL_CAN_F_EXT, data, len);
+    return 0;
+}
+
+static void sup_init(sup_t *s, uint8_t addr, fake_link_t *via)
+{
+    s->addr = addr;
+    s->via = via;
+    uint32_t tx = LS_ID_ISOTP_PHYS | (NODE << 8) | addr;
+    uint32_t rx = LS_ID_ISOTP_PHYS | ((uint32_t)addr << 8) | NODE;
+    assert_int_equal(ls_isotp_init(&s->tp, NULL, tx, rx, sup_send, s), LS_ISOTP_OK);
+}
+
+/* Feed the supervisor every frame the node sent to it on `link` since index *seen. */
+static void sup_hear(sup_t *s, const fake_link_t *link, size_t *seen, uint64_t now_us)
+{
+    for (; *seen < link->n_tx; (*seen)++) {
+        const hal_can_frame_t *f = &link->tx[*seen];
+        if (f->id == s->tp.rx_id) {
+            ls_isotp_on_frame(&s->tp, f->data, f->len, now_us);
+        }
+    }
+}
+
+static void put_sf(fake_link_t *l, uint32_t id, const uint8_t *payload, uint8_t n)
+{
+    uint8_t d[8];
+    uint8_t len = ls_isotp_encode_single(payload, n, true, 0xCC, d);
+    assert_true(len > 0);
+    link_put(l, id, HAL_CAN_F_EXT, d, len);
+}
+
+static uint32_t phys(uint8_t target, uint8_t source)
+{
+    return LS_ID_ISOTP_PHYS | ((uint32_t)target << 8) | source;
+}
+
+static uint32_t func(uint8_t target, uint8_t source)
+{
+    return LS_ID_ISOTP_FUNC | ((uint32_t)target << 8) | source;
+}
+
+static bool peer_used(uint8_t addr)
+{
+    for (size_t i = 0; i < LS_NET_MAX_PEERS; i++) {
+        if (g_net.peers[i].used && g_net.peers[i].addr == addr) {
+            return true;
+        }
+    }
+    return false;
+}
+
+static unsigned describe_value(const char *key)
+{
+    char buf[1024];
+    ls_net_describe(&g_net, buf, sizeof buf);
+    char pat[64];
+    snprintf(pat, sizeof pat, "%s=", key);
+    const char *p = strstr(buf, pat);
+    if (p == NULL) {
+        fail_msg("no %s in the description:\n%s", key, buf);
+        return 0;
+    }
+    return (unsigned)strtoul(p + strlen(pat), NULL, 10);
+}
+
+/* ---------------------------------------------------------------- routing by id */
+
+static void test_physical_single_frame_reaches_the_core(void **state)
+{
+    (void)state;
+    setup_net(1);
+    const uint8_t req[] = { 0x0A, 0x03, 0x08, 0x01 };
+    put_sf(&g_link[0], phys(NODE, SUP_A), req, sizeof req);
+    put_sf(&g_link[0], phys(0x05, SUP_A), req, sizeof req);  /* another device's */
+    ls_net_poll(&g_net, 1000);
+    assert_int_equal(g_ncalls, 1);
+    assert_int_equal(g_calls[0].kind, CALL_UPLINK);
+    assert_int_equal(g_calls[0].addr, SUP_A);
+    assert_int_equal(g_calls[0].len, sizeof req);
+    assert_memory_equal(g_calls[0].buf, req, sizeof req);
+    assert_int_equal(g_calls[0].now_us, 1000);
+    assert_int_equal(describe_value("frames_in"), 2);
+    assert_true(peer_used(SUP_A));
+    assert_false(peer_used(0x05));
+}
+
+static void test_frames_that_are_not_ours_are_ignored(void **state)
+{
+    (void)state;
+    setup_net(1);
+    const uint8_t d[8] = { 0x02, 0x0A, 0x00 };
+    /* Our id with an 11-bit identifier, and as a remote frame. */
+    link_put(&g_link[0], phys(NODE, SUP_A) & 0x7FFu, 0, d, 8);
+    link_put(&g_link[0], phys(NODE, SUP_A), HAL_CAN_F_EXT | HAL_CAN_F_RTR, d, 0);
+    /* An unrelated 29-bit id. */
+    link_put(&g_link[0], 0x1CFF1021u, HAL_CAN_F_EXT, d, 8);
+    ls_net_poll(&g_net, 1000);
+    assert_int_equal(g_ncalls, 0);
+    assert_false(peer_used(SUP_A));
+    assert_int_equal(describe_value("frames_in"), 3);
+}
+
+static void test_functional_single_frames(void **state)
+{
+    (void)state;
+    setup_net(1);
+    const uint8_t req[] = { 0x11, 0x22 };
+    put_sf(&g_link[0], func(LS_ADDR_ALL, SUP_A), req, sizeof req);  /* every device */
+    put_sf(&g_link[0], func(NODE, SUP_B), req, sizeof req);         /* this device */
+    put_sf(&g_link[0], func(0x07, SUP_A), req, sizeof req);         /* another device */
+    /* A first frame on the functional id: functional addressing is single frames only. */
+    const uint8_t ff[8] = { 0x10, 0x20, 1, 2, 3, 4, 5, 6 };
+    link_put(&g_link[0], func(LS_ADDR_ALL, SUP_A), HAL_CAN_F_EXT, ff, 8);
+    ls_net_poll(&g_net, 2000);
+    assert_int_equal(g_ncalls, 2);
+    assert_int_equal(g_calls[0].addr, SUP_A);
+    assert_int_equal(g_calls[1].addr, SUP_B);
+    assert_int_equal(g_calls[1].len, 2);
+    assert_memory_equal(g_calls[1].buf, req, 2);
+    /* Functional requests need no ISO-TP link: no peer taken. */
+    assert_false(peer_used(SUP_A));
+    assert_false(peer_used(SUP_B));
+}
+
+static void test_heartbeats(void **state)
+{
+    (void)state;
+    setup_net(1);
+    uint8_t hb[8] = { 0 };
+    hb[2] = 1;  /* role: supervisor */
+    link_put(&g_link[0], LS_ID_HEARTBEAT | SUP_A, HAL_CAN_F_EXT, hb, 8);
+    hb[2] = 0;  /* a controller's heartbeat (another device) */
+    link_put(&g_link[0], LS_ID_HEARTBEAT | 0x02u, HAL_CAN_F_EXT, hb, 8);
+    hb[2] = 1;
+    link_put(&g_link[0], LS_ID_HEARTBEAT | SUP_B, HAL_CAN_F_EXT, hb, 2);  /* too short for a role */
+    ls_net_poll(&g_net, 3000);
+    assert_int_equal(g_ncalls, 1);
+    assert_int_equal(g_calls[0].kind, CALL_HEARTBEAT);
+    assert_int_equal(g_calls[0].addr, SUP_A);
+    assert_int_equal(g_calls[0].now_us, 3000);
+}
+
+static void test_emergency_frames(void **state)
+{
+    (void)state;
+    setup_net(1);
+    const uint8_t d[8] = { 0 };
+    link_put(&g_link[0], LS_ID_EMERGENCY | NODE, HAL_CAN_F_EXT, d, 8);   /* our own, echoed: ignored */
+    link_put(&g_link[0], LS_ID_EMERGENCY | SUP_A, HAL_CAN_F_EXT, d, 8);  /* a supervisor's */
+    ls_net_poll(&g_net, 4000);
+    assert_int_equal(g_ncalls, 1);
+    assert_int_equal(g_calls[0].kind, CALL_FAULT);
+    assert_string_equal(g_calls[0].text, "emergency stop frame on the bus");
+    assert_int_equal(g_calls[0].now_us, 4000);
+}
+
+/* Physical frames go to the sender's own ISO-TP link: two supervisors'
+ * multi-frame requests interleave frame by frame and both arrive whole. */
+static void test_interleaved_multi_frame_requests_stay_apart(void **state)
+{
+    (void)state;
+    setup_net(1);
+    static sup_t a, b;
+    sup_init(&a, SUP_A, &g_link[0]);
+    sup_init(&b, SUP_B, &g_link[0]);
+    static uint8_t ma[300], mb[200];
+    for (size_t i = 0; i < sizeof ma; i++) {
+        ma[i] = (uint8_t)i;
+    }
+    for (size_t i = 0; i < sizeof mb; i++) {
+        mb[i] = (uint8_t)(0xFF - i);
+    }
+    uint64_t t = 10000;
+    assert_int_equal(ls_isotp_send(&a.tp, ma, sizeof ma, t), LS_ISOTP_OK);
+    assert_int_equal(ls_isotp_send(&b.tp, mb, sizeof mb, t), LS_ISOTP_OK);
+    size_t seen_a = 0, seen_b = 0;
+    for (int turn = 0; turn < 200 && g_ncalls < 2; turn++) {
+        t += 100;
+        ls_net_poll(&g_net, t);  /* the node answers each first frame with a flow control */
+        sup_hear(&a, &g_link[0], &seen_a, t);
+        sup_hear(&b, &g_link[0], &seen_b, t);
+        ls_isotp_poll(&a.tp, t); /* one block of CFs each, alternately */
+        ls_isotp_poll(&b.tp, t);
+    }
+    assert_int_equal(g_ncalls, 2);
+    const call_t *ca = g_calls[0].addr == SUP_A ? &g_calls[0] : &g_calls[1];
+    const call_t *cb = g_calls[0].addr == SUP_A ? &g_calls[1] : &g_calls[0];
+    assert_int_equal(ca->addr, SUP_A);
+    assert_int_equal(cb->addr, SUP_B);
+    assert_int_equal(ca->len, sizeof ma);
+    assert_memory_equal(ca->buf, ma, sizeof ma);
+    assert_int_equal(cb->len, sizeof mb);
+    assert_memory_equal(cb->buf, mb, sizeof mb);
+    assert_int_equal(describe_value("isotp_ok"), 2);
+}
+
+/* The answer goes back on the sender's link as ISO-TP 0x18DA<sup><node>. */
+static void test_answer_is_sent_to_the_sender(void **state)
+{
+    (void)state;
+    setup_net(1);
+    static sup_t a;
+    sup_init(&a, SUP_A, &g_link[0]);
+    g_echo_len = 100;  /* multi-frame answer */
+    const uint8_t req[] = { 0x40 };
+    assert_int_equal(ls_isotp_send(&a.tp, req, sizeof req, 0), LS_ISOTP_OK);
+    size_t seen = 0;
+    uint8_t got[LS_ISOTP_MAX_PAYLOAD];
+    size_t n = 0;
+    uint64_t t = 0;
+    for (int turn = 0; turn < 100 && n == 0; turn++) {
+        t += 100;
+        ls_net_poll(&g_net, t);
+        sup_hear(&a, &g_link[0], &seen, t);
+        ls_isotp_poll(&a.tp, t);
+        n = ls_isotp_take_rx(&a.tp, got, sizeof got);
+    }
+    assert_int_equal(n, 100);
+    for (size_t i = 0; i < n; i++) {
+        assert_int_equal(got[i], (uint8_t)(0x40 + i));
+    }
+    assert_int_equal(g_link[0].tx[0].id, phys(SUP_A, NODE));
+    assert_int_equal(g_link[0].tx[0].flags, HAL_CAN_F_EXT);
+    assert_int_equal(g_link[0].tx[0].data[0] & 0xF0, 0x10);  /* first frame */
+}
+
+static void test_downlink_queue_is_bounded(void **state)
+{
+    (void)state;
+    setup_net(1);
+    uint8_t msg[20] = { 1 };
+    /* While the first message waits for its flow control, LS_NET_OUTQ queue behind it. */
+    assert_int_equal(ls_net_send_downlink(&g_net, SUP_A, msg, sizeof msg), 0);
+    ls_net_poll(&g_net, 100);
+    assert_int_equal(g_link[0].n_tx, 1);  /* the first frame */
+    for (int i = 0; i < LS_NET_OUTQ; i++) {
+        assert_int_equal(ls_net_send_downlink(&g_net, SUP_A, msg, sizeof msg), 0);
+    }
+    assert_int_equal(ls_net_send_downlink(&g_net, SUP_A, msg, sizeof msg), -1);
+    /* Too long for a downlink: refused. */
+    static uint8_t big[LS_DOWNLINK_MAX + 1];
+    assert_int_equal(ls_net_send_downlink(&g_net, SUP_B, big, sizeof big), -1);
+    /* Waiting for a flow control: the poll deadline is N_Bs away. */
+    uint64_t d = ls_net_next_deadline_us(&g_net);
+    assert_true(d > 100 && d <= 100 + 1000000u);
+}
+
+/* ---------------------------------------------------------------- LRU eviction */
+
+static void ping(uint8_t addr, uint64_t now_us)
+{
+    const uint8_t req[] = { addr };
+    put_sf(&g_link[0], phys(NODE, addr), req, 1);
+    ls_net_poll(&g_net, now_us);
+}
+
+static void test_lru_eviction_of_idle_links(void **state)
+{
+    (void)state;
+    setup_net(1);
+    /* Fill the pool: 0x30..0x35 at t = 1..6 ms. */
+    for (uint8_t i = 0; i < LS_NET_MAX_PEERS; i++) {
+        ping((uint8_t)(0x30 + i), 1000u * (i + 1u));
+    }
+    assert_int_equal(describe_value("peers_evicted"), 0);
+    /* 0x30 speaks again: now 0x31 is the least recently used. */
+    ping(0x30, 10000);
+    ping(0x40, 11000);
+    assert_int_equal(g_calls[g_ncalls - 1].addr, 0x40);
+    assert_true(peer_used(0x40));
+    assert_false(peer_used(0x31));
+    assert_true(peer_used(0x30));
+    assert_int_equal(describe_value("peers_evicted"), 1);
+    /* The evicted supervisor comes back: it takes the next LRU (0x32). */
+    ping(0x31, 12000);
+    assert_true(peer_used(0x31));
+    assert_false(peer_used(0x32));
+    assert_int_equal(describe_value("peers_evicted"), 2);
+    /* The outcome counters of evicted links are kept. */
+    assert_int_equal(describe_value("isotp_ok"), 9);
+}
+
+static void test_busy_links_are_not_evicted(void **state)
+{
+    (void)state;
+    setup_net(1);
+    for (uint8_t i = 0; i < LS_NET_MAX_PEERS; i++) {
+        ping((uint8_t)(0x30 + i), 1000u * (i + 1u));
+    }
+    /* 0x30 (oldest) is receiving a multi-frame message; 0x31 has a queued answer. */
+    const uint8_t ff[8] = { 0x10, 0x40, 1, 2, 3, 4, 5, 6 };
+    link_put(&g_link[0], phys(NODE, 0x30), HAL_CAN_F_EXT, ff, 8);
+    ls_net_poll(&g_net, 7000);
+    g_link[0].refuse_send = 1;  /* the bus is full from now on: the answer stays pending */
+    uint8_t ans[4] = { 0 };
+    assert_int_equal(ls_net_send_downlink(&g_net, 0x31, ans, sizeof ans), 0);
+    ls_net_poll(&g_net, 7100);
+    /* Refresh the others after them, so that 0x30 and 0x31 are the oldest. */
+    size_t before = g_ncalls;
+    ping(0x40, 8000);
+    assert_int_equal(g_ncalls, before + 1);
+    assert_true(peer_used(0x30));
+    assert_true(peer_used(0x31));
+    assert_false(peer_used(0x32));  /* the oldest idle one */
+    /* All busy: a new supervisor finds no link and its frame is dropped. */
+    for (uint8_t i = 0; i < LS_NET_MAX_PEERS; i++) {
+        ls_net_peer_t *p = &g_net.peers[i];
+        if (p->addr != 0x30 && p->addr != 0x31) {
+            uint8_t ff2[8] = { 0x10, 0x40, 1, 2, 3, 4, 5, 6 };
+            link_put(&g_link[0], phys(NODE, p->addr), HAL_CAN_F_EXT, ff2, 8);
+        }
+    }
+    ls_net_poll(&g_net, 9000);
+    before = g_ncalls;
+    ping(0x41, 9100);
+    assert_int_equal(g_ncalls, before);
+    assert_false(peer_used(0x41));
+    assert_int_equal(ls_net_send_downlink(&g_net, 0x41, ans, sizeof ans), -1);
+}
+
+/* ---------------------------------------------------------------- bridging */
+
+static void test_bridging_between_links(void **state)
+{
+    (void)state;
+    setup_net(3);
+    const uint8_t d[8] = { 1, 2, 3, 4, 5, 6, 7, 8 };
+    /* Someone else's traffic on link 1: copied to links 0 and 2, not back to 1. */
+    link_put(&g_link[1], 0x1CFF1042u, HAL_CAN_F_EXT, d, 8);
+    link_put(&g_link[1], 0x123u, 0, d, 3);  /* 11-bit frames too */
+    ls_net_poll(&g_net, 1000);
+    assert_int_equal(g_link[0].n_tx, 2);
+    assert_int_equal(g_link[2].n_tx, 2);
+    assert_int_equal(g_link[1].n_tx, 0);
+    assert_int_equal(g_link[0].tx[0].id, 0x1CFF1042u);
+    assert_int_equal(g_link[0].tx[1].id, 0x123u);
+    assert_int_equal(g_link[0].tx[1].flags, 0);
+    assert_int_equal(g_link[2].tx[1].len, 3);
+    assert_memory_equal(g_link[2].tx[0].data, d, 8);
+    assert_int_equal(g_ncalls, 0);
+    /* A request for us on link 2 is bridged and also served; the answer goes
+     * on every link (one bus). */
+    g_echo_len = 3;
+    const uint8_t req[] = { 0x50 };
+    put_sf(&g_link[2], phys(NODE, SUP_A), req, 1);
+    ls_net_poll(&g_net, 2000);
+    assert_int_equal(g_ncalls, 1);
+    assert_int_equal(g_link[0].n_tx, 4);   /* the bridged request, then the answer */
+    assert_int_equal(g_link[1].n_tx, 2);
+    assert_int_equal(g_link[2].n_tx, 3);   /* the answer only */
+    assert_int_equal(g_link[0].tx[2].id, phys(NODE, SUP_A));
+    assert_int_equal(g_link[0].tx[3].id, phys(SUP_A, NODE));
+    assert_int_equal(g_link[1].tx[1].id, phys(SUP_A, NODE));
+    assert_int_equal(g_link[2].tx[2].id, phys(SUP_A, NODE));
+}
+
+static void test_single_link_does_not_echo(void **state)
+{
+    (void)state;
+    setup_net(1);
+    const uint8_t d[8] = { 0 };
+    link_put(&g_link[0], 0x1CFF1042u, HAL_CAN_F_EXT, d, 8);
+    ls_net_poll(&g_net, 1000);
+    assert_int_equal(g_link[0].n_tx, 0);
+}
+
+static void test_send_frame_on_every_link_and_full_queues(void **state)
+{
+    (void)state;
+    setup_net(2);
+    hal_can_frame_t f = { .id = LS_ID_HEARTBEAT | NODE, .flags = HAL_CAN_F_EXT, .len = 8 };
+    assert_int_equal(ls_net_send_frame(&g_net, &f), 0);
+    assert_int_equal(g_link[0].n_tx, 1);
+    assert_int_equal(g_link[1].n_tx, 1);
+    /* One link full: still sent (on the other), counted. */
+    g_link[0].refuse_send = 1;
+    assert_int_equal(ls_net_send_frame(&g_net, &f), 0);
+    assert_int_equal(describe_value("tx_full"), 1);
+    /* Both full: refused. */
+    g_link[1].refuse_send = 1;
+    assert_int_equal(ls_net_send_frame(&g_net, &f), -1);
+    assert_int_equal(describe_value("tx_full"), 3);
+    assert_int_equal(describe_value("frames_out"), 2);
+    /* The links' own counters are summed. */
+    assert_int_equal(describe_value("link_rx_dropped"), 4);
+    ls_net_close(&g_net);
+    assert_int_equal(g_link[0].closed, 1);
+    assert_int_equal(g_link[1].closed, 1);
+}
+
+static void test_a_busy_link_does_not_starve_the_others(void **state)
+{
+    (void)state;
+    setup_net(2);
+    const uint8_t d[8] = { 0 };
+    for (int i = 0; i < 300; i++) {
+        link_put(&g_link[0], 0x1CFF1042u, HAL_CAN_F_EXT, d, 8);
+    }
+    const uint8_t req[] = { 0x60 };
+    put_sf(&g_link[1], phys(NODE, SUP_B), req, 1);
+    ls_net_poll(&g_net, 1000);
+    assert_int_equal(g_ncalls, 1);            /* link 1's request was served this turn */
+    assert_int_equal(g_link[0].rx_count, 44); /* 256 frames per link and turn */
+    ls_net_poll(&g_net, 2000);
+    assert_int_equal(g_link[0].rx_count, 0);
+    assert_int_equal(describe_value("frames_in"), 301);
+}
+
+static void test_link_table_is_bounded(void **state)
+{
+    (void)state;
+    setup_net(0);
+    hal_can_link_t l = { .ops = &LINK_OPS, .self = &g_link[0] };
+    for (int i = 0; i < LS_NET_MAX_LINKS; i++) {
+        assert_int_equal(ls_net_add_link(&g_net, &l), 0);
+    }
+    assert_int_equal(ls_net_add_link(&g_net, &l), -1);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_physical_single_frame_reaches_the_core),
+        cmocka_unit_test(test_frames_that_are_not_ours_are_ignored),
+        cmocka_unit_test(test_functional_single_frames),
+        cmocka_unit_test(test_heartbeats),
+        cmocka_unit_test(test_emergency_frames),
+        cmocka_unit_test(test_interleaved_multi_frame_requests_stay_apart),
+        cmocka_unit_test(test_answer_is_sent_to_the_sender),
+        cmocka_unit_test(test_downlink_queue_is_bounded),
+        cmocka_unit_test(test_lru_eviction_of_idle_links),
+        cmocka_unit_test(test_busy_links_are_not_evicted),
+        cmocka_unit_test(test_bridging_between_links),
+        cmocka_unit_test(test_single_link_does_not_echo),
+        cmocka_unit_test(test_send_frame_on_every_link_and_full_queues),
+        cmocka_unit_test(test_a_busy_link_does_not_starve_the_others),
+        cmocka_unit_test(test_link_table_is_bounded),
+    };
+    return cmocka_run_group_tests_name("ls_net", tests, NULL, NULL);
+}
