@@ -32,10 +32,10 @@ typedef struct {
     double q[LS_N_JOINTS];
     bool enabled;
     int n_enable_calls;
-    int fail_enable;        /* enable(true) returns HAL_EIO */
-    int fail_command;       /* command returns HAL_EIO */
+    int fail_enable;  /* enable(true) returns HAL_EIO */
+    int fail_command; /* command returns HAL_EIO */
     long steps;
-    bool counter;           /* q[j] follows the step count (seqlock test), commands ignored */
+    bool counter; /* q[j] follows the step count (seqlock test), commands ignored */
 } fake_arm_t;
 
 static double counter_q(long steps, int j)
@@ -84,7 +84,9 @@ static int arm_step(void *self, double dt_s)
     return HAL_OK;
 }
 
-static const hal_arm_ops_t ARM_OPS = { .enable = arm_enable, .command = arm_command, .read = arm_read, .step = arm_step };
+static const hal_arm_ops_t ARM_OPS = {
+    .enable = arm_enable, .command = arm_command, .read = arm_read, .step = arm_step
+};
 
 /* ---------------------------------------------------------------- fake DIO */
 
@@ -218,8 +220,12 @@ static fx_t *fx_init(bool with_sensor)
     f->sensor = (hal_sensor_t){ .name = "force_sensor", .n_values = 6, .read = sensor_read, .self = &f->sensor_state };
     f->tool = (hal_tool_t){ .ops = &TOOL_OPS, .self = &f->tool_state };
     f->manual = (hal_manual_t){ .read = manual_read, .self = &f->manual_state };
-    ls_control_config_t cfg = { .model = M, .arm = &f->arm, .dio = &f->dio, .sensors = with_sensor ? &f->sensor : NULL,
-                                .n_sensors = with_sensor ? 1u : 0u, .rate_hz = 1000 };
+    ls_control_config_t cfg = { .model = M,
+                                .arm = &f->arm,
+                                .dio = &f->dio,
+                                .sensors = with_sensor ? &f->sensor : NULL,
+                                .n_sensors = with_sensor ? 1u : 0u,
+                                .rate_hz = 1000 };
     ls_control_init(&f->ctl, &cfg);
     return f;
 }
@@ -444,9 +450,9 @@ static void test_event_filter_consumes_what_it_takes(void **state)
     fx_t *f = fx_init(false);
     int taken = 0;
     ls_control_set_event_filter(&f->ctl, filter_dio, &taken);
-    f->dio_state.levels[1] = 0x10;  /* an input edge: LS_CEV_DIO_CHANGED */
+    f->dio_state.levels[1] = 0x10; /* an input edge: LS_CEV_DIO_CHANGED */
     f->dio_state.fail_write = 1;
-    post_dio(f, LS_CTL_DIO_WRITE, 5, 0, 1, 0);  /* LS_CEV_CMD_FAILED */
+    post_dio(f, LS_CTL_DIO_WRITE, 5, 0, 1, 0); /* LS_CEV_CMD_FAILED */
     cycle(f);
     assert_int_equal(next(f, LS_CEV_CMD_FAILED).ref_seq, 5);
     assert_no_event(f);
@@ -457,7 +463,7 @@ static void test_event_filter_consumes_what_it_takes(void **state)
     ls_ctl_event_t ev = next(f, LS_CEV_DIO_CHANGED);
     assert_int_equal(ev.dio.unit, 1);
     assert_int_equal(ev.dio.on, 0x30);
-    assert_int_equal(ev.dio.off, 0x20);  /* the bits that changed */
+    assert_int_equal(ev.dio.off, 0x20); /* the bits that changed */
     assert_int_equal(snap(f).dio[1], 0x30);
 }
 
@@ -578,7 +584,7 @@ static void test_disable_while_moving_stops_along_the_path_first(void **state)
     post(f, LS_CTL_DISABLE, 12);
     cycle(f);
     ls_ctl_snapshot_t s = snap(f);
-    assert_true(s.enabled);  /* still braking */
+    assert_true(s.enabled); /* still braking */
     assert_int_equal(s.phase, LS_MOTION_STOPPING);
     run_until(f, LS_MEV_PAUSED, 5000);
     cycle(f);
@@ -593,7 +599,7 @@ static void test_stop_resume_abort(void **state)
     (void)state;
     fx_t *f = fx_init(false);
     enable(f);
-    post(f, LS_CTL_RESUME, 20);  /* nothing paused */
+    post(f, LS_CTL_RESUME, 20); /* nothing paused */
     cycle(f);
     ls_ctl_event_t ev = next(f, LS_CEV_CMD_FAILED);
     assert_int_equal(ev.ref_seq, 20);
@@ -611,7 +617,7 @@ static void test_stop_resume_abort(void **state)
     for (int i = 0; i < 20; i++) {
         cycle(f);
     }
-    assert_true(snap(f).q_rad[0] == held);  /* paused: the set-point stays */
+    assert_true(snap(f).q_rad[0] == held); /* paused: the set-point stays */
     post(f, LS_CTL_RESUME, 23);
     cycle(f);
     assert_int_equal(snap(f).phase, LS_MOTION_RUNNING);
@@ -623,7 +629,7 @@ static void test_stop_resume_abort(void **state)
     cycle(f);
     s = snap(f);
     assert_int_equal(s.phase, LS_MOTION_IDLE);
-    assert_true(s.enabled);  /* abort drops the motion, not the drives */
+    assert_true(s.enabled); /* abort drops the motion, not the drives */
     held = s.q_rad[0];
     for (int i = 0; i < 20; i++) {
         cycle(f);
@@ -674,7 +680,7 @@ static void test_estop_line_faults_and_disables(void **state)
     fx_t *f = fx_init(false);
     post_dio(f, LS_CTL_ESTOP_LINE, 40, 1, 0x4, 0);
     enable(f);
-    f->dio_state.levels[1] = 0x2;  /* another input: no fault */
+    f->dio_state.levels[1] = 0x2; /* another input: no fault */
     cycle(f);
     next(f, LS_CEV_DIO_CHANGED);
     assert_true(snap(f).enabled);
@@ -788,7 +794,7 @@ static void test_manual_jogging(void **state)
     assert_null(ls_control_react_slot(&f->ctl));
     cycle(f);
     assert_true(snap(f).manual_on);
-    assert_no_event(f);  /* drives off: not ready yet */
+    assert_no_event(f); /* drives off: not ready yet */
     post(f, LS_CTL_ENABLE, 71);
     cycle(f);
     ls_ctl_event_t ev = next_motion(f, LS_MEV_JOG);
@@ -945,8 +951,7 @@ static void check_published(const ls_ctl_snapshot_t *s)
 {
     long k = (long)s->cycle;
     if (s->t_us != s->cycle * 1000u + 7u) {
-        fail_msg("torn snapshot: cycle %llu with t_us %llu", (unsigned long long)s->cycle,
-                 (unsigned long long)s->t_us);
+        fail_msg("torn snapshot: cycle %llu with t_us %llu", (unsigned long long)s->cycle, (unsigned long long)s->t_us);
     }
     for (int j = 0; j < LS_N_JOINTS; j++) {
         if (s->q_rad[j] != counter_q(k, j) || s->q_cmd_rad[j] != counter_q(k, j)) {
@@ -1033,7 +1038,7 @@ static void test_snapshot_gives_up_on_a_stuck_writer(void **state)
     memset(&out, 0x5A, sizeof out);
     assert_false(ls_control_snapshot(&f->ctl, &out));
     assert_int_equal(f->ctl.snap_stale, 1);
-    assert_memory_equal(&out, &good, sizeof out);  /* the last good copy, not the torn words */
+    assert_memory_equal(&out, &good, sizeof out); /* the last good copy, not the torn words */
     assert_false(ls_control_snapshot(&f->ctl, &out));
     assert_int_equal(f->ctl.snap_stale, 2);
     /* The loop runs again: its next publish completes and reads are fresh. */

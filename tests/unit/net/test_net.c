@@ -39,7 +39,7 @@ typedef struct {
     size_t rx_head, rx_count;
     hal_can_frame_t tx[LINK_Q];
     size_t n_tx;
-    int refuse_send;  /* send returns HAL_EAGAIN */
+    int refuse_send; /* send returns HAL_EAGAIN */
     int closed;
 } fake_link_t;
 
@@ -78,8 +78,9 @@ static void link_close(void *self)
     ((fake_link_t *)self)->closed++;
 }
 
-static const hal_can_ops_t LINK_OPS = { .send = link_send, .recv = link_recv, .status = link_status,
-                                        .close = link_close };
+static const hal_can_ops_t LINK_OPS = {
+    .send = link_send, .recv = link_recv, .status = link_status, .close = link_close
+};
 
 static void link_put(fake_link_t *l, uint32_t id, uint8_t flags, const uint8_t *data, uint8_t len)
 {
@@ -258,7 +259,7 @@ static void test_physical_single_frame_reaches_the_core(void **state)
     setup_net(1);
     const uint8_t req[] = { 0x0A, 0x03, 0x08, 0x01 };
     put_sf(&g_link[0], phys(NODE, SUP_A), req, sizeof req);
-    put_sf(&g_link[0], phys(0x05, SUP_A), req, sizeof req);  /* another device's */
+    put_sf(&g_link[0], phys(0x05, SUP_A), req, sizeof req); /* another device's */
     ls_net_poll(&g_net, 1000);
     assert_int_equal(g_ncalls, 1);
     assert_int_equal(g_calls[0].kind, CALL_UPLINK);
@@ -292,9 +293,9 @@ static void test_functional_single_frames(void **state)
     (void)state;
     setup_net(1);
     const uint8_t req[] = { 0x11, 0x22 };
-    put_sf(&g_link[0], func(LS_ADDR_ALL, SUP_A), req, sizeof req);  /* every device */
-    put_sf(&g_link[0], func(NODE, SUP_B), req, sizeof req);         /* this device */
-    put_sf(&g_link[0], func(0x07, SUP_A), req, sizeof req);         /* another device */
+    put_sf(&g_link[0], func(LS_ADDR_ALL, SUP_A), req, sizeof req); /* every device */
+    put_sf(&g_link[0], func(NODE, SUP_B), req, sizeof req);        /* this device */
+    put_sf(&g_link[0], func(0x07, SUP_A), req, sizeof req);        /* another device */
     /* A first frame on the functional id: functional addressing is single frames only. */
     const uint8_t ff[8] = { 0x10, 0x20, 1, 2, 3, 4, 5, 6 };
     link_put(&g_link[0], func(LS_ADDR_ALL, SUP_A), HAL_CAN_F_EXT, ff, 8);
@@ -314,12 +315,12 @@ static void test_heartbeats(void **state)
     (void)state;
     setup_net(1);
     uint8_t hb[8] = { 0 };
-    hb[2] = 1;  /* role: supervisor */
+    hb[2] = 1; /* role: supervisor */
     link_put(&g_link[0], LS_ID_HEARTBEAT | SUP_A, HAL_CAN_F_EXT, hb, 8);
-    hb[2] = 0;  /* a controller's heartbeat (another device) */
+    hb[2] = 0; /* a controller's heartbeat (another device) */
     link_put(&g_link[0], LS_ID_HEARTBEAT | 0x02u, HAL_CAN_F_EXT, hb, 8);
     hb[2] = 1;
-    link_put(&g_link[0], LS_ID_HEARTBEAT | SUP_B, HAL_CAN_F_EXT, hb, 2);  /* too short for a role */
+    link_put(&g_link[0], LS_ID_HEARTBEAT | SUP_B, HAL_CAN_F_EXT, hb, 2); /* too short for a role */
     ls_net_poll(&g_net, 3000);
     assert_int_equal(g_ncalls, 1);
     assert_int_equal(g_calls[0].kind, CALL_HEARTBEAT);
@@ -332,8 +333,8 @@ static void test_emergency_frames(void **state)
     (void)state;
     setup_net(1);
     const uint8_t d[8] = { 0 };
-    link_put(&g_link[0], LS_ID_EMERGENCY | NODE, HAL_CAN_F_EXT, d, 8);   /* our own, echoed: ignored */
-    link_put(&g_link[0], LS_ID_EMERGENCY | SUP_A, HAL_CAN_F_EXT, d, 8);  /* a supervisor's */
+    link_put(&g_link[0], LS_ID_EMERGENCY | NODE, HAL_CAN_F_EXT, d, 8);  /* our own, echoed: ignored */
+    link_put(&g_link[0], LS_ID_EMERGENCY | SUP_A, HAL_CAN_F_EXT, d, 8); /* a supervisor's */
     ls_net_poll(&g_net, 4000);
     assert_int_equal(g_ncalls, 1);
     assert_int_equal(g_calls[0].kind, CALL_FAULT);
@@ -363,7 +364,7 @@ static void test_interleaved_multi_frame_requests_stay_apart(void **state)
     size_t seen_a = 0, seen_b = 0;
     for (int turn = 0; turn < 200 && g_ncalls < 2; turn++) {
         t += 100;
-        ls_net_poll(&g_net, t);  /* the node answers each first frame with a flow control */
+        ls_net_poll(&g_net, t); /* the node answers each first frame with a flow control */
         sup_hear(&a, &g_link[0], &seen_a, t);
         sup_hear(&b, &g_link[0], &seen_b, t);
         ls_isotp_poll(&a.tp, t); /* one block of CFs each, alternately */
@@ -388,7 +389,7 @@ static void test_answer_is_sent_to_the_sender(void **state)
     setup_net(1);
     static sup_t a;
     sup_init(&a, SUP_A, &g_link[0]);
-    g_echo_len = 100;  /* multi-frame answer */
+    g_echo_len = 100; /* multi-frame answer */
     const uint8_t req[] = { 0x40 };
     assert_int_equal(ls_isotp_send(&a.tp, req, sizeof req, 0), LS_ISOTP_OK);
     size_t seen = 0;
@@ -408,7 +409,7 @@ static void test_answer_is_sent_to_the_sender(void **state)
     }
     assert_int_equal(g_link[0].tx[0].id, phys(SUP_A, NODE));
     assert_int_equal(g_link[0].tx[0].flags, HAL_CAN_F_EXT);
-    assert_int_equal(g_link[0].tx[0].data[0] & 0xF0, 0x10);  /* first frame */
+    assert_int_equal(g_link[0].tx[0].data[0] & 0xF0, 0x10); /* first frame */
 }
 
 static void test_downlink_queue_is_bounded(void **state)
@@ -419,7 +420,7 @@ static void test_downlink_queue_is_bounded(void **state)
     /* While the first message waits for its flow control, LS_NET_OUTQ queue behind it. */
     assert_int_equal(ls_net_send_downlink(&g_net, SUP_A, msg, sizeof msg), 0);
     ls_net_poll(&g_net, 100);
-    assert_int_equal(g_link[0].n_tx, 1);  /* the first frame */
+    assert_int_equal(g_link[0].n_tx, 1); /* the first frame */
     for (int i = 0; i < LS_NET_OUTQ; i++) {
         assert_int_equal(ls_net_send_downlink(&g_net, SUP_A, msg, sizeof msg), 0);
     }
@@ -478,7 +479,7 @@ static void test_busy_links_are_not_evicted(void **state)
     const uint8_t ff[8] = { 0x10, 0x40, 1, 2, 3, 4, 5, 6 };
     link_put(&g_link[0], phys(NODE, 0x30), HAL_CAN_F_EXT, ff, 8);
     ls_net_poll(&g_net, 7000);
-    g_link[0].refuse_send = 1;  /* the bus is full from now on: the answer stays pending */
+    g_link[0].refuse_send = 1; /* the bus is full from now on: the answer stays pending */
     uint8_t ans[4] = { 0 };
     assert_int_equal(ls_net_send_downlink(&g_net, 0x31, ans, sizeof ans), 0);
     ls_net_poll(&g_net, 7100);
@@ -488,7 +489,7 @@ static void test_busy_links_are_not_evicted(void **state)
     assert_int_equal(g_ncalls, before + 1);
     assert_true(peer_used(0x30));
     assert_true(peer_used(0x31));
-    assert_false(peer_used(0x32));  /* the oldest idle one */
+    assert_false(peer_used(0x32)); /* the oldest idle one */
     /* All busy: a new supervisor finds no link and its frame is dropped. */
     for (uint8_t i = 0; i < LS_NET_MAX_PEERS; i++) {
         ls_net_peer_t *p = &g_net.peers[i];
@@ -514,7 +515,7 @@ static void test_bridging_between_links(void **state)
     const uint8_t d[8] = { 1, 2, 3, 4, 5, 6, 7, 8 };
     /* Someone else's traffic on link 1: copied to links 0 and 2, not back to 1. */
     link_put(&g_link[1], 0x1CFF1042u, HAL_CAN_F_EXT, d, 8);
-    link_put(&g_link[1], 0x123u, 0, d, 3);  /* 11-bit frames too */
+    link_put(&g_link[1], 0x123u, 0, d, 3); /* 11-bit frames too */
     ls_net_poll(&g_net, 1000);
     assert_int_equal(g_link[0].n_tx, 2);
     assert_int_equal(g_link[2].n_tx, 2);
@@ -532,9 +533,9 @@ static void test_bridging_between_links(void **state)
     put_sf(&g_link[2], phys(NODE, SUP_A), req, 1);
     ls_net_poll(&g_net, 2000);
     assert_int_equal(g_ncalls, 1);
-    assert_int_equal(g_link[0].n_tx, 4);   /* the bridged request, then the answer */
+    assert_int_equal(g_link[0].n_tx, 4); /* the bridged request, then the answer */
     assert_int_equal(g_link[1].n_tx, 2);
-    assert_int_equal(g_link[2].n_tx, 3);   /* the answer only */
+    assert_int_equal(g_link[2].n_tx, 3); /* the answer only */
     assert_int_equal(g_link[0].tx[2].id, phys(NODE, SUP_A));
     assert_int_equal(g_link[0].tx[3].id, phys(SUP_A, NODE));
     assert_int_equal(g_link[1].tx[1].id, phys(SUP_A, NODE));
