@@ -65,7 +65,6 @@ int hal_arm_info(hal_arm_t *arm, hal_arm_info_t *out) { return HAL_CALL(arm, inf
 int hal_arm_enable(hal_arm_t *arm, bool on) { return HAL_CALL(arm, enable, on); }
 int hal_arm_command(hal_arm_t *arm, const double *q_rad, const double *qd_rad_s) { return HAL_CALL(arm, command, q_rad, qd_rad_s); }
 int hal_arm_read(hal_arm_t *arm, double *q_rad, double *qd_rad_s) { return HAL_CALL(arm, read, q_rad, qd_rad_s); }
-int hal_arm_step(hal_arm_t *arm, double dt_s) { return HAL_CALL(arm, step, dt_s); }
 void hal_arm_close(hal_arm_t *arm)
 {
     if (arm != NULL && arm->ops != NULL && arm->ops->close != NULL) {

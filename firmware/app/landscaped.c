@@ -31,6 +31,7 @@
 #include "ls_kin.h"
 #include "faulty_link.h"
 #include "ls_net.h"
+#include "ls_robot_model_sim.h"
 #include "slcan_pty.h"
 
 #ifndef LS_FIRMWARE_VERSION
@@ -305,8 +306,10 @@ static int compose(const ls_config_t *o)
     const hal_sensor_t *sensors = NULL;
     size_t n_sensors = 0;
     if (strcmp(o->arm, "sim") == 0) {
+        hal_sim_arm_model_t sim_arm;
+        ls_robot_model_to_sim(&ls_robot_model_default, &sim_arm);
         hal_sim_world_config_t wc = {
-            .model = &ls_robot_model_default,
+            .arm = &sim_arm,
             .dio_socket_path = o->dio_socket[0] != '\0' ? o->dio_socket : NULL,
             .lockstep = strcmp(o->clock, "lockstep") == 0,
             .with_obstacle = true,
@@ -351,7 +354,8 @@ static int compose(const ls_config_t *o)
         g_core.dio_units = (uint16_t)(u + 1);
     }
     ls_control_config_t cc = { .model = &ls_robot_model_default, .arm = arm, .dio = dio, .sensors = sensors,
-                               .n_sensors = n_sensors, .rate_hz = o->rate_hz };
+                               .n_sensors = n_sensors, .rate_hz = o->rate_hz,
+                               .world_step = g_world_open ? hal_sim_world_step : NULL };
     ls_control_init(&g_ctl, &cc);
     g_core.ctl = &g_ctl;
     ls_core_sensor_attach(&g_core); /* the sensor/tool handlers see their loop events from the start */

@@ -517,7 +517,9 @@ void ls_control_cycle(ls_control_t *c, uint64_t now_us)
         c->enabled = false;
         c->disable_pending = false;
     }
-    (void)hal_arm_step(c->cfg.arm, c->dt_s); /* physics advances with the drives off too (brakes) */
+    if (c->cfg.world_step != NULL) {
+        (void)c->cfg.world_step(c->cfg.world_ctx, c->dt_s); /* physics advances with the drives off too (brakes) */
+    }
     read_feedback(c);
     read_sensors(c);
     motion_events(c, &mev);

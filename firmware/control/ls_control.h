@@ -3,8 +3,8 @@
  * The loop (ls_control_cycle) runs at a fixed rate on the HAL's periodic
  * runner (hal/linux real-time thread; in simulation the same runner with
  * real-time or lockstep time). Each cycle: take commands, run the motion
- * executor, command the arm, step the simulated world, read feedback,
- * sensors and DIO, check faults, publish a snapshot and events.
+ * executor, command the arm, step the simulated world (config world_step),
+ * read feedback, sensors and DIO, check faults, publish a snapshot and events.
  *
  * Between the threads there is no lock: commands and events travel through
  * single-producer single-consumer rings, state through a seqlock snapshot,
@@ -139,6 +139,11 @@ typedef struct {
     const hal_sensor_t *sensors; /* read every cycle into the snapshot */
     size_t n_sensors;
     uint32_t rate_hz;
+    /* A simulated world: advanced once per cycle after the arm command, with
+     * the drives on or off (brakes), before the feedback is read. NULL on
+     * hardware. E.g. hal_sim_world_step with world_ctx NULL. */
+    int (*world_step)(void *world_ctx, double dt_s);
+    void *world_ctx;
 } ls_control_config_t;
 
 typedef struct ls_control {

@@ -3,7 +3,9 @@
  * controller implements what its hardware has and leaves the rest NULL.
  *
  * Threading: every operation except open/close is called from the control
- * loop: no blocking, no allocation. Units: SI (m, rad, N, Nm, s). */
+ * loop: no blocking, no allocation. Units: SI (m, rad, N, Nm, s).
+ * A simulated world advances through its own call (hal/sim/world:
+ * hal_sim_world_step), which the contract of a real arm does not have. */
 #ifndef HAL_ARM_H
 #define HAL_ARM_H
 
@@ -31,8 +33,6 @@ typedef struct {
     int (*command)(void *self, const double *q_rad, const double *qd_rad_s);
     /* Measured joint positions and velocities. */
     int (*read)(void *self, double *q_rad, double *qd_rad_s);
-    /* Advance a simulated world by dt (NULL on real hardware). */
-    int (*step)(void *self, double dt_s);
     void (*close)(void *self);
 } hal_arm_ops_t;
 
@@ -84,7 +84,6 @@ int hal_arm_info(hal_arm_t *arm, hal_arm_info_t *out);
 int hal_arm_enable(hal_arm_t *arm, bool on);
 int hal_arm_command(hal_arm_t *arm, const double *q_rad, const double *qd_rad_s);
 int hal_arm_read(hal_arm_t *arm, double *q_rad, double *qd_rad_s);
-int hal_arm_step(hal_arm_t *arm, double dt_s);
 void hal_arm_close(hal_arm_t *arm);
 
 #endif

@@ -10,7 +10,7 @@
 
 #include "sim_world_internal.h"
 
-#define NJ LS_N_JOINTS
+#define NJ HAL_SIM_ARM_JOINTS
 #define PI 3.14159265358979323846
 
 #define GRAVITY_M_S2 9.81
@@ -54,7 +54,8 @@ typedef struct {
 
 static struct {
     bool open;
-    const ls_robot_model_t *m;
+    hal_sim_arm_model_t m_data;
+    const hal_sim_arm_model_t *m; /* &m_data while open */
     bool lockstep;
     bool with_obstacle;
     bool ode_initialised;
@@ -133,7 +134,7 @@ static void rpy_to_R(double roll, double pitch, double yaw, double R[9])
 }
 
 /* T_i = T_{i-1} * Rz(theta) Tz(d) Tx(a) Rx(alpha). */
-static void dh_chain(const frame_t *prev, const ls_dh_t *dh, double q, frame_t *out)
+static void dh_chain(const frame_t *prev, const hal_sim_dh_t *dh, double q, frame_t *out)
 {
     double th = q + dh->theta_offset_rad;
     double ct = cos(th), st = sin(th), ca = cos(dh->alpha_rad), sa = sin(dh->alpha_rad);
@@ -225,7 +226,7 @@ static void tool_frame(frame_t *t)
  * moves to the new centre and the fixed joint is re-recorded. */
 static void tool_rebuild(void)
 {
-    const ls_robot_model_t *m = W.m;
+    const hal_sim_arm_model_t *m = W.m;
     dMass mass, part;
     dMassSetCylinderTotal(&mass, PLATE_MASS_KG, 3, m->link_radius_m, PLATE_THICK_M);
     dMassTranslate(&mass, 0.0, 0.0, -PLATE_THICK_M / 2.0);
@@ -295,19 +296,23 @@ static void set_msg(char *msg, size_t msglen, const char *text)
     }
 }
 
-static int check_model(const ls_robot_model_t *m, char *msg, size_t msglen)
+static int check_model(const hal_sim_arm_model_t *m, char *msg, size_t msglen)
 {
+    if (m->n_joints != NJ) {
+        set_msg(msg, msglen, "arm model: the simulation builds a 6-joint arm (n_joints = 6)");
+        return HAL_EINVAL;
+    }
     for (int i = 0; i < NJ; i++) {
         if (!(m->q_min_rad[i] <= 0.0 && 0.0 <= m->q_max_rad[i]) || !(m->torque_max_Nm[i] > 0.0) ||
             !(m->link_mass_kg[i] > 0.0)) {
-            set_msg(msg, msglen, "robot model: every joint needs q_min <= 0 <= q_max, torque_max > 0 and mass > 0");
+            set_msg(msg, msglen, "arm model: every joint needs q_min <= 0 <= q_max, torque_max > 0 and mass > 0");
             return HAL_EINVAL;
         }
     }
-    const ls_dh_t *d6 = &m->dh[NJ - 1];
+    const hal_sim_dh_t *d6 = &m->dh[NJ - 1];
     if (fabs(d6->a_m) > 1e-12 || fabs(d6->alpha_rad) > 1e-12 || d6->d_m < 2.0 * PLATE_THICK_M ||
         !(m->link_radius_m > 0.0)) {
-        set_msg(msg, msglen, "robot model: the simulation needs link 6 along z6 (a6 = alpha6 = 0, d6 >= 10 mm) and link_radius > 0");
+        set_msg(msg, msglen, "arm model: the simulation needs link 6 along z6 (a6 = alpha6 = 0, d6 >= 10 mm) and link_radius > 0");
         return HAL_EINVAL;
     }
     return HAL_OK;
@@ -315,7 +320,7 @@ static int check_model(const ls_robot_model_t *m, char *msg, size_t msglen)
 
 static void build_arm(void)
 {
-    const ls_robot_model_t *m = W.m;
+    const hal_sim_arm_model_t *m = W.m;
     frame_t fr[NJ + 1];
     memset(&fr[0], 0, sizeof fr[0]);
     fr[0].R[0] = fr[0].R[4] = fr[0].R[8] = 1.0;
@@ -399,7 +404,7 @@ static void build_environment(void)
 
 static void set_motors(double dt)
 {
-    const ls_robot_model_t *m = W.m;
+    const hal_sim_arm_model_t *m = W.m;
     for (int i = 0; i < NJ; i++) {
         double vel, fmax, cfm;
         if (W.enabled) {
@@ -514,16 +519,17 @@ int hal_sim_world_open(const hal_sim_world_config_t *cfg, char *msg, size_t msgl
         set_msg(msg, msglen, "the simulated world is already open (one per process); close it first");
         return HAL_EINVAL;
     }
-    if (cfg == NULL || cfg->model == NULL) {
-        set_msg(msg, msglen, "hal_sim_world_open needs a config with a robot model");
+    if (cfg == NULL || cfg->arm == NULL) {
+        set_msg(msg, msglen, "hal_sim_world_open needs a config with an arm model (hal_sim_arm_model_t)");
         return HAL_EINVAL;
     }
-    int rc = check_model(cfg->model, msg, msglen);
+    int rc = check_model(cfg->arm, msg, msglen);
     if (rc < 0) {
         return rc;
     }
     memset(&W, 0, sizeof W);
-    W.m = cfg->model;
+    W.m_data = *cfg->arm;
+    W.m = &W.m_data;
     W.lockstep = cfg->lockstep;
     W.with_obstacle = cfg->with_obstacle;
     rc = sim_ctl_open(&W.ctl, cfg->dio_socket_path, msg, msglen);
@@ -651,8 +657,7 @@ static int arm_read(void *self, double *q_rad, double *qd_rad_s)
     return HAL_OK;
 }
 
-/* Returns 1 when the physics advanced, 0 when lockstep held it. */
-static int arm_step(void *self, double dt_s)
+int hal_sim_world_step(void *self, double dt_s)
 {
     (void)self;
     if (!W.open) {
@@ -691,7 +696,6 @@ static const hal_arm_ops_t k_arm_ops = {
     .enable = arm_enable,
     .command = arm_command,
     .read = arm_read,
-    .step = arm_step,
     .close = arm_close,
 };
 

@@ -1,5 +1,6 @@
 /* The simulated world of hal/sim: an ODE model of the 6-DOF arm described by
- * ls_robot_model_t, standing on the floor in front of a table, with a 6-axis
+ * a hal_sim_arm_model_t (plain data the caller fills, e.g. from its robot
+ * model), standing on the floor in front of a table, with a 6-axis
  * force/torque sensor and a laser standoff sensor at the wrist, a tool rack
  * with two tools, one simulated DIO unit and a manual jog device, the last two
  * driven from outside the process through a Unix datagram socket.
@@ -31,7 +32,7 @@
  * so each body sits at its capsule's midpoint and keeps its DH frame as a
  * fixed offset.
  *
- * Joint servo (step): each hinge is a velocity motor with
+ * Joint servo (hal_sim_world_step): each hinge is a velocity motor with
  *     target velocity = qd_cmd + KP * (q_cmd - q),   KP = 200 1/s,
  *     max torque      = model.torque_max_Nm,
  * and a motor damping of 2e4 Nm s/rad (hinge CFM = 5e-5), which makes the
@@ -45,13 +46,13 @@
  * Integrator: dWorldStep (the exact Dantzig LCP solver), dt as the caller
  * passes it (1 ms typically); world ERP 0.2, CFM 1e-10.
  *
- * Lockstep (cfg.lockstep): step() does NOT advance the physics while the joint
+ * Lockstep (cfg.lockstep): hal_sim_world_step() does NOT advance the physics while the joint
  * command is bit-identical to the one of the previous step, every commanded
  * velocity is 0 and no jog is active: the arm rests exactly where it is. A
  * fresh world starts with the command q = 0, qd = 0 (the built pose). Joint
  * trajectories are then a pure function of the command sequence, whatever the
  * number of idle cycles between host commands. Without lockstep the physics
- * always advances. step() returns 1 when it advanced the physics, 0 when
+ * always advances. hal_sim_world_step() returns 1 when it advanced the physics, 0 when
  * lockstep held it, HAL_EINVAL for dt outside (0, 0.1] s.
  *
  * ---------------------------------------------------------------------------
@@ -164,10 +165,29 @@
 
 #include "hal/hal_arm.h"
 #include "hal/hal_dio.h"
-#include "ls_robot_model.h"
+
+#define HAL_SIM_ARM_JOINTS 6
+
+/* One joint and its link in standard Denavit-Hartenberg form. */
+typedef struct {
+    double a_m, alpha_rad, d_m, theta_offset_rad;
+} hal_sim_dh_t;
+
+/* The arm to simulate, as data (copied by open). The simulation needs link 6
+ * along z6 (a6 = alpha6 = 0, d6 >= 10 mm), q_min <= 0 <= q_max, torque and
+ * mass > 0 per joint and a link radius > 0; open says which one is missing. */
+typedef struct {
+    const char *name;                      /* for the arm's name; static storage or NULL */
+    uint8_t n_joints;                      /* HAL_SIM_ARM_JOINTS */
+    hal_sim_dh_t dh[HAL_SIM_ARM_JOINTS];
+    double q_min_rad[HAL_SIM_ARM_JOINTS], q_max_rad[HAL_SIM_ARM_JOINTS];
+    double torque_max_Nm[HAL_SIM_ARM_JOINTS];
+    double link_mass_kg[HAL_SIM_ARM_JOINTS]; /* link i moves with joint i */
+    double link_radius_m;                  /* capsule radius of every link */
+} hal_sim_arm_model_t;
 
 typedef struct {
-    const ls_robot_model_t *model; /* must outlive the world */
+    const hal_sim_arm_model_t *arm; /* copied by open */
     const char *dio_socket_path;   /* NULL: no external control socket */
     bool lockstep;                 /* see "Lockstep" above */
     bool with_obstacle;            /* a box on the table */
@@ -187,6 +207,14 @@ int hal_sim_world_attach_thread(void);
  * device handles obtained below become invalid: their close ops do nothing,
  * the world is closed only here. */
 void hal_sim_world_close(void);
+
+/* Advance the world by dt_s (0 < dt_s <= 0.1): the joint servo, contacts and
+ * one ODE step (see "Lockstep" above). Called by the control loop once per
+ * cycle after commanding the arm, drives on or off (brakes). Returns 1 when
+ * the physics advanced, 0 when lockstep held it, HAL_EINVAL for a bad dt,
+ * HAL_ENODEV when not open. `self` is ignored (one world per process): the
+ * signature is that of a step callback with a context. */
+int hal_sim_world_step(void *self, double dt_s);
 
 /* Device handles of the open world (static ops, self = the world). Any
  * thread, any time after open; O(1), no allocation. When the world is not

@@ -77,16 +77,15 @@ static int arm_read(void *self, double *q_rad, double *qd_rad_s)
     return HAL_OK;
 }
 
-static int arm_step(void *self, double dt_s)
+/* The config's world_step: the fake arm is its own world (counts steps). */
+static int world_step(void *world_ctx, double dt_s)
 {
     (void)dt_s;
-    ((fake_arm_t *)self)->steps++;
+    ((fake_arm_t *)world_ctx)->steps++;
     return HAL_OK;
 }
 
-static const hal_arm_ops_t ARM_OPS = {
-    .enable = arm_enable, .command = arm_command, .read = arm_read, .step = arm_step
-};
+static const hal_arm_ops_t ARM_OPS = { .enable = arm_enable, .command = arm_command, .read = arm_read };
 
 /* ---------------------------------------------------------------- fake DIO */
 
@@ -225,7 +224,9 @@ static fx_t *fx_init(bool with_sensor)
                                 .dio = &f->dio,
                                 .sensors = with_sensor ? &f->sensor : NULL,
                                 .n_sensors = with_sensor ? 1u : 0u,
-                                .rate_hz = 1000 };
+                                .rate_hz = 1000,
+                                .world_step = world_step,
+                                .world_ctx = &f->arm_state };
     ls_control_init(&f->ctl, &cfg);
     return f;
 }
@@ -550,6 +551,20 @@ static void test_enable_and_disable(void **state)
     assert_false(snap(f).enabled);
     assert_false(f->arm_state.enabled);
     assert_no_event(f);
+}
+
+/* A simulated world advances once per cycle, with the drives off (brakes) too. */
+static void test_world_steps_every_cycle(void **state)
+{
+    (void)state;
+    fx_t *f = fx_init(false);
+    assert_int_equal(f->arm_state.steps, 0);
+    cycle(f);
+    cycle(f);
+    assert_int_equal(f->arm_state.steps, 2);
+    enable(f);
+    cycle(f);
+    assert_int_equal(f->arm_state.steps, 4);
 }
 
 static void test_enable_without_arm_fails(void **state)
@@ -979,7 +994,13 @@ static void test_snapshot_under_a_concurrent_writer(void **state)
     f->arm = (hal_arm_t){ .ops = &ARM_OPS, .self = &f->arm_state };
     f->sensor_state.arm = &f->arm_state;
     f->sensor = (hal_sensor_t){ .name = "force_sensor", .n_values = 6, .read = sensor_read, .self = &f->sensor_state };
-    ls_control_config_t cfg = { .model = M, .arm = &f->arm, .sensors = &f->sensor, .n_sensors = 1, .rate_hz = 1000 };
+    ls_control_config_t cfg = { .model = M,
+                                .arm = &f->arm,
+                                .sensors = &f->sensor,
+                                .n_sensors = 1,
+                                .rate_hz = 1000,
+                                .world_step = world_step,
+                                .world_ctx = &f->arm_state };
     ls_control_init(&f->ctl, &cfg);
 
     static writer_t w;
@@ -1073,6 +1094,7 @@ int main(void)
         cmocka_unit_test(test_plan_slot_hand_over),
         cmocka_unit_test(test_plan_slot_freed_when_ring_full_or_start_refused),
         cmocka_unit_test(test_enable_and_disable),
+        cmocka_unit_test(test_world_steps_every_cycle),
         cmocka_unit_test(test_enable_without_arm_fails),
         cmocka_unit_test(test_disable_while_moving_stops_along_the_path_first),
         cmocka_unit_test(test_stop_resume_abort),

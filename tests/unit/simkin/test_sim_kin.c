@@ -14,6 +14,7 @@
 #include "hal_sim_world.h"
 #include "ls_kin.h"
 #include "ls_robot_model.h"
+#include "ls_robot_model_sim.h"
 
 static const ls_robot_model_t *M = &ls_robot_model_default;
 
@@ -29,7 +30,7 @@ static void drive_to(hal_arm_t *arm, const double q1[LS_N_JOINTS])
             q[j] = q0[j] + s * (q1[j] - q0[j]);
         }
         assert_int_equal(hal_arm_command(arm, q, zero), HAL_OK);
-        assert_true(hal_arm_step(arm, 0.001) >= 0);
+        assert_true(hal_sim_world_step(NULL, 0.001) >= 0);
     }
 }
 
@@ -37,7 +38,9 @@ static void test_fk_of_sim_joints_equals_sim_flange(void **state)
 {
     (void)state;
     char msg[256];
-    hal_sim_world_config_t cfg = { .model = M, .dio_socket_path = NULL, .lockstep = false, .with_obstacle = false };
+    hal_sim_arm_model_t am;
+    ls_robot_model_to_sim(M, &am);
+    hal_sim_world_config_t cfg = { .arm = &am, .dio_socket_path = NULL, .lockstep = false, .with_obstacle = false };
     assert_int_equal(hal_sim_world_open(&cfg, msg, sizeof msg), HAL_OK);
     hal_arm_t arm;
     hal_sim_world_get_arm(&arm);

@@ -20,6 +20,7 @@
 #include <ode/ode.h>
 
 #include "hal_sim_world.h"
+#include "ls_robot_model_sim.h"
 
 #define NJ LS_N_JOINTS
 #define DT 0.001
@@ -240,7 +241,9 @@ static bool ik(const double xyzrpy[6], double q[NJ])
 
 static void open_world(bool lockstep, bool obstacle, const char *sock)
 {
-    hal_sim_world_config_t cfg = { .model = M, .dio_socket_path = sock, .lockstep = lockstep, .with_obstacle = obstacle };
+    hal_sim_arm_model_t am;
+    ls_robot_model_to_sim(M, &am);
+    hal_sim_world_config_t cfg = { .arm = &am, .dio_socket_path = sock, .lockstep = lockstep, .with_obstacle = obstacle };
     char msg[200] = "";
     int rc = hal_sim_world_open(&cfg, msg, sizeof msg);
     if (rc != HAL_OK) {
@@ -253,7 +256,7 @@ static void open_world(bool lockstep, bool obstacle, const char *sock)
 static int cycle(const double q[NJ], const double qd[NJ])
 {
     assert_int_equal(hal_arm_command(&arm, q, qd), HAL_OK);
-    int rc = hal_arm_step(&arm, DT);
+    int rc = hal_sim_world_step(NULL, DT);
     assert_true(rc >= 0);
     return rc;
 }
@@ -343,13 +346,29 @@ static void test_open_rejects_bad_config(void **state)
     (void)state;
     char msg[200] = "";
     assert_int_equal(hal_sim_world_open(NULL, msg, sizeof msg), HAL_EINVAL);
-    hal_sim_world_config_t cfg = { .model = NULL };
+    hal_sim_world_config_t cfg = { .arm = NULL };
     assert_int_equal(hal_sim_world_open(&cfg, msg, sizeof msg), HAL_EINVAL);
-    assert_non_null(strstr(msg, "robot model"));
+    assert_non_null(strstr(msg, "arm model"));
+    /* The description is checked: a joint count the world cannot build, a
+     * link 6 off z6, a joint without torque. */
+    hal_sim_arm_model_t am;
+    ls_robot_model_to_sim(M, &am);
+    cfg.arm = &am;
+    am.n_joints = 5;
+    assert_int_equal(hal_sim_world_open(&cfg, msg, sizeof msg), HAL_EINVAL);
+    assert_non_null(strstr(msg, "6-joint"));
+    ls_robot_model_to_sim(M, &am);
+    am.dh[5].a_m = 0.1;
+    assert_int_equal(hal_sim_world_open(&cfg, msg, sizeof msg), HAL_EINVAL);
+    assert_non_null(strstr(msg, "link 6 along z6"));
+    ls_robot_model_to_sim(M, &am);
+    am.torque_max_Nm[2] = 0.0;
+    assert_int_equal(hal_sim_world_open(&cfg, msg, sizeof msg), HAL_EINVAL);
+    assert_non_null(strstr(msg, "torque_max > 0"));
+    ls_robot_model_to_sim(M, &am);
     char longpath[200];
     memset(longpath, 'a', sizeof longpath - 1);
     longpath[sizeof longpath - 1] = '\0';
-    cfg.model = M;
     cfg.dio_socket_path = longpath;
     assert_int_equal(hal_sim_world_open(&cfg, msg, sizeof msg), HAL_EINVAL);
     assert_non_null(strstr(msg, "longer than"));
@@ -366,8 +385,8 @@ static void test_open_rejects_bad_config(void **state)
     assert_int_equal(hal_arm_info(&arm, &info), HAL_OK);
     assert_int_equal(info.n_joints, 6);
     assert_true(info.q_max_rad[5] == M->q_max_rad[5] && info.torque_max_Nm[1] == M->torque_max_Nm[1]);
-    assert_int_equal(hal_arm_step(&arm, 0.0), HAL_EINVAL);
-    assert_int_equal(hal_arm_step(&arm, NAN), HAL_EINVAL);
+    assert_int_equal(hal_sim_world_step(NULL, 0.0), HAL_EINVAL);
+    assert_int_equal(hal_sim_world_step(NULL, NAN), HAL_EINVAL);
     double bad[NJ] = { 0, NAN, 0, 0, 0, 0 };
     assert_int_equal(hal_arm_command(&arm, bad, NULL), HAL_EINVAL);
     assert_int_equal(hal_arm_command(&arm, NULL, NULL), HAL_EINVAL);
@@ -833,7 +852,7 @@ static void *loop_thread(void *arg)
     double w[6];
     for (int k = 0; k < 300; k++) {
         (void)hal_arm_command(&arm, cmd_q, NULL);
-        (void)hal_arm_step(&arm, DT);
+        (void)hal_sim_world_step(NULL, DT);
         (void)laser();
     }
     force(w);
