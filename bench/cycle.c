@@ -224,13 +224,7 @@ static int arm_read(void *self, double *q, double *qd)
     }
     return 0;
 }
-static int arm_step(void *self, double dt_s)
-{
-    (void)self;
-    (void)dt_s;
-    return 0;
-}
-static const hal_arm_ops_t arm_ops = {NULL, arm_enable, arm_command, arm_read, arm_step, NULL};
+static const hal_arm_ops_t arm_ops = {NULL, arm_enable, arm_command, arm_read, NULL};
 static hal_arm_t arm = {&arm_ops, NULL, "ideal"};
 static ls_control_t ctl;
 

@@ -115,7 +115,7 @@ static int arm_read(void *self, double *q_rad, double *qd_rad_s)
     return HAL_OK;
 }
 
-static const hal_arm_ops_t arm_ops = {NULL, arm_enable, arm_command, arm_read, NULL, NULL};
+static const hal_arm_ops_t arm_ops = {NULL, arm_enable, arm_command, arm_read, NULL};
 static hal_arm_t g_arm = {&arm_ops, NULL, "arm0"};
 
 static uint64_t now_us(void)
