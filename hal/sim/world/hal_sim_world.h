@@ -46,14 +46,15 @@
  * Integrator: dWorldStep (the exact Dantzig LCP solver), dt as the caller
  * passes it (1 ms typically); world ERP 0.2, CFM 1e-10.
  *
- * Lockstep (cfg.lockstep): hal_sim_world_step() does NOT advance the physics while the joint
- * command is bit-identical to the one of the previous step, every commanded
- * velocity is 0 and no jog is active: the arm rests exactly where it is. A
- * fresh world starts with the command q = 0, qd = 0 (the built pose). Joint
- * trajectories are then a pure function of the command sequence, whatever the
- * number of idle cycles between host commands. Without lockstep the physics
- * always advances. hal_sim_world_step() returns 1 when it advanced the physics, 0 when
- * lockstep held it, HAL_EINVAL for dt outside (0, 0.1] s.
+ * Lockstep (cfg.lockstep): hal_sim_world_step() does NOT advance the physics
+ * while the joint command is bit-identical to the one of the previous step,
+ * every commanded velocity is 0 and no jog is active: the arm rests exactly
+ * where it is. A fresh world starts with the command q = 0, qd = 0 (the built
+ * pose). Joint trajectories are then a pure function of the command sequence,
+ * whatever the number of idle cycles between host commands. Without lockstep
+ * the physics always advances. hal_sim_world_step() returns 1 when it
+ * advanced the physics, 0 when lockstep held it, HAL_EINVAL for dt outside
+ * (0, 0.1] s.
  *
  * ---------------------------------------------------------------------------
  * Environment and contact
