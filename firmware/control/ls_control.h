@@ -221,11 +221,11 @@ void ls_control_set_event_filter(ls_control_t *c, ls_control_event_filter_t fn, 
  * Failure mode: when every attempt overlapped a publish (the loop keeps the
  * seqlock busy), it returns false and fills `out` with the last consistent
  * copy this reader took (never a torn mix; its `cycle` and `t_us` tell its
- * age) and counts the event in `snap_stale`. Callers that report state
- * (telemetry, status answers) use that copy as it is: it is older by the
- * time the loop stayed inside a publish. A caller that must act on the
- * present state (a decision that the next cycle could change) treats false
- * like a busy loop: refuse with a busy answer and let the sender retry.
+ * age: that of this reader's last successful read) and counts the event in
+ * `snap_stale`. Callers that report state (telemetry, status answers) use
+ * that copy as it is. A caller that must act on the present state (a
+ * decision that the next cycle could change) treats false like a busy loop:
+ * refuse with a busy answer and let the sender retry.
  *
  * One reader: the comms thread (the last copy is its private state). */
 bool ls_control_snapshot(ls_control_t *c, ls_ctl_snapshot_t *out);
