@@ -162,6 +162,12 @@ static int act_enable(void *ctx, bool on)
     return ls_control_post((ls_control_t *)ctx, &cmd) ? 0 : HAL_EAGAIN;
 }
 
+static void act_halt(void *ctx)
+{
+    ls_ctl_cmd_t cmd = { .kind = LS_CTL_HALT };
+    (void)ls_control_post((ls_control_t *)ctx, &cmd);
+}
+
 static void act_stop(void *ctx)
 {
     ls_ctl_cmd_t cmd = { .kind = LS_CTL_STOP };
@@ -205,10 +211,7 @@ static void drain_control_events(uint64_t now)
     while (ls_control_next_event(&g_ctl, &ev)) {
         switch (ev.kind) {
         case LS_CEV_MOTION: ls_core_on_motion_event(&g_core, &ev.motion); break;
-        case LS_CEV_FAULT:
-            ls_core_fault(&g_core, ev.text, now);
-            ls_core_motion_failed(&g_core, 0, ev.text);
-            break;
+        case LS_CEV_FAULT: ls_core_fault(&g_core, ev.text, now); break; /* its halt ends the motion */
         case LS_CEV_DIO_CHANGED: ls_core_on_dio_event(&g_core, ev.dio.unit, ev.dio.on, ev.dio.off, now); break;
         case LS_CEV_CMD_FAILED: {
             char d[80];
@@ -413,8 +416,8 @@ int main(int argc, char **argv)
     };
     ls_core_io_t io = { .send_downlink = ls_net_send_downlink, .describe = ls_net_describe, .ctx = &g_net };
     g_cfg_running = &opt;
-    ls_core_actions_t act = { .enable_drives = act_enable, .stop_motion = act_stop, .describe_rt = describe_rt,
-                              .describe_config = describe_config, .ctx = &g_ctl };
+    ls_core_actions_t act = { .enable_drives = act_enable, .stop_motion = act_stop, .halt = act_halt,
+                              .describe_rt = describe_rt, .describe_config = describe_config, .ctx = &g_ctl };
     ls_core_init(&g_core, &cfg, &io, &act);
     ls_net_init(&g_net, opt.node, &g_core);
 
@@ -444,7 +447,22 @@ int main(int argc, char **argv)
     uint64_t next_tm = next_hb;
     uint64_t tm_period = opt.telemetry_hz > 0 ? 1000000u / opt.telemetry_hz : 0;
     uint8_t hb_counter = 0;
-    while (rc == 0 && !g_stop) {
+    /* SIGTERM/SIGINT: a motion stops along its path at the model's maximum
+     * deceleration, the drives go off, its final notice (reason=shutdown) goes
+     * out, then the process exits; at most shutdown_max_us. */
+    const uint64_t shutdown_max_us = 6000000u;
+    uint64_t shutdown_at = 0;
+    while (rc == 0) {
+        if (g_stop && shutdown_at == 0) {
+            shutdown_at = mono_us();
+            if (g_core.ctl == NULL || !ls_run_shutdown(&g_core, shutdown_at)) {
+                break;
+            }
+            LOG_INFO("shutting down: stopping the motion first");
+        }
+        if (shutdown_at != 0 && (!g_core.halt.active || mono_us() - shutdown_at > shutdown_max_us)) {
+            break;
+        }
         struct pollfd fds[LS_NET_MAX_LINKS];
         nfds_t n = 0;
         for (size_t i = 0; i < g_net.n_links; i++) {
@@ -461,6 +479,7 @@ int main(int argc, char **argv)
         ls_net_poll(&g_net, now);
         drain_control_events(now);
         ls_core_tick(&g_core, now);
+        ls_run_tick(&g_core, now);
         ls_dio_tick(&g_core, now);
         ls_core_motion_tick(&g_core, now);
         if (now >= next_hb) {

@@ -347,6 +347,32 @@ static void jog_ready(ls_control_t *c, uint32_t ref_seq)
     motion_events(c, &mev);
 }
 
+/* Drives off; a moving arm first decelerates along its path (braking a
+ * moving arm is a jolt): at the configured deceleration, or (fast) at the
+ * model's maximum. The guarded/compliant moves always stop at the maximum. */
+static void stop_then_disable(ls_control_t *c, bool fast)
+{
+    if (c->enabled && (c->motion.phase == LS_MOTION_RUNNING || c->motion.phase == LS_MOTION_STOPPING)) {
+        if (fast) {
+            ls_motion_stop_fast(&c->motion);
+        } else {
+            ls_motion_stop(&c->motion);
+        }
+        c->disable_pending = true;
+        return;
+    }
+    if (c->enabled && ls_react_moving(&c->react)) {
+        ls_react_stop(&c->react);
+        c->disable_pending = true;
+        return;
+    }
+    ls_motion_abort(&c->motion);
+    react_abort(c);
+    (void)hal_arm_enable(c->cfg.arm, false);
+    c->enabled = false;
+    c->disable_pending = false;
+}
+
 static void handle_command(ls_control_t *c, const ls_ctl_cmd_t *cmd)
 {
     switch (cmd->kind) {
@@ -366,22 +392,7 @@ static void handle_command(ls_control_t *c, const ls_ctl_cmd_t *cmd)
         }
         return;
     case LS_CTL_DISABLE:
-        if (c->enabled && (c->motion.phase == LS_MOTION_RUNNING || c->motion.phase == LS_MOTION_STOPPING)) {
-            /* Braking a moving arm is a jolt: decelerate along the path, then disable. */
-            ls_motion_stop(&c->motion);
-            c->disable_pending = true;
-            return;
-        }
-        if (c->enabled && ls_react_moving(&c->react)) {
-            ls_react_stop(&c->react);
-            c->disable_pending = true;
-            return;
-        }
-        ls_motion_abort(&c->motion);
-        react_abort(c);
-        (void)hal_arm_enable(c->cfg.arm, false);
-        c->enabled = false;
-        return;
+    case LS_CTL_HALT: stop_then_disable(c, cmd->kind == LS_CTL_HALT); return;
     case LS_CTL_START:
         if (!c->enabled || c->react.active || c->manual != NULL || ls_motion_start(&c->motion, &c->plan_slot) != 0) {
             cmd_failed(c, cmd->ref_seq, !c->enabled ? "the drives are off"
@@ -474,8 +485,15 @@ static void read_dio(ls_control_t *c)
             ev.dio.off = changed;
             ev_push(c, &ev);
         }
-        if (c->estop_bit != 0u && (unsigned)u == c->estop_unit && (bits & c->estop_bit) != 0u && c->enabled) {
-            fault(c, "e-stop input active");
+        if (c->estop_bit != 0u && (unsigned)u == c->estop_unit && (bits & c->estop_bit) != 0u && c->enabled &&
+            !c->disable_pending) {
+            /* Stop along the path at the model's maximum deceleration, then drives off. */
+            stop_then_disable(c, true);
+            ls_ctl_event_t ev;
+            memset(&ev, 0, sizeof ev);
+            ev.kind = LS_CEV_FAULT;
+            snprintf(ev.text, sizeof ev.text, "e-stop input active");
+            ev_push(c, &ev);
         }
     }
 }

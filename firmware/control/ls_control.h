@@ -54,6 +54,7 @@ typedef enum {
     LS_CTL_MANUAL,       /* manual: jogging on (dev, jog) or off (dev NULL); use ls_control_set_manual */
     LS_CTL_TOOL_COUPLE,  /* tool.dev, tool.id, tool.attach: LS_MEV_TOOL reports the HAL status */
     LS_CTL_TOOL_BITS,    /* tool.dev, tool.on, tool.off: LS_MEV_TOOL reports the status, dio.on the bits */
+    LS_CTL_HALT,         /* as DISABLE, stopping along the path at the model's maximum deceleration */
 } ls_ctl_kind_t;
 
 #define LS_CTL_TOOL_ID_LEN 32
@@ -79,7 +80,9 @@ typedef struct {
 
 typedef enum {
     LS_CEV_MOTION = 1,   /* motion: a motion executor event */
-    LS_CEV_FAULT,        /* text: the loop disabled the drives (e-stop input, overrun, HAL error) */
+    LS_CEV_FAULT,        /* text: the loop disabled the drives (HAL error), or is stopping a motion
+                            along its path at the model's maximum deceleration before it
+                            disables them (e-stop input) */
     LS_CEV_DIO_CHANGED,  /* dio.unit, dio.on = new levels, dio.off = bits that changed */
     LS_CEV_CMD_FAILED,   /* ref_seq, text: a command the loop could not carry out */
 } ls_cev_kind_t;

@@ -7,8 +7,9 @@
  * reports back through ls_core_on_motion_event.
  *
  * State kept here (static, one controller per process): the path queues
- * (LS_PATH_MAX names x LS_PATH_MAX_POINTS points), the program of the path
- * being run, and the motion being run (who started it, which request). */
+ * (LS_PATH_MAX names x LS_PATH_MAX_POINTS points) and the program of the path
+ * being run. The motion being run is core->run (ls_run.h), shared with
+ * moveReact and comply: its one final notice goes through ls_run_finish. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -100,29 +101,13 @@ typedef struct {
     path_point_t pt[LS_PATH_MAX_POINTS];
 } path_t;
 
-typedef struct {
-    bool active;          /* a motion was started and has not reported its end */
-    int sup;              /* who started it: the final notice goes there */
-    uint32_t ref_seq;
-    char seed_name[24];   /* "moveAbsolute", "pathMove", ... */
-    char point[LS_MOTION_NAME_LEN];
-    int path;             /* index in g_paths, -1 for single moves */
-    bool stop_pending;    /* stopMotion waits for LS_MEV_PAUSED */
-    int stop_sup;
-    /* auxiliary command in progress */
-    bool wait_active;
-    uint16_t wait_unit;
-    uint32_t wait_mask;
-    uint64_t wait_deadline_us;
-    char wait_text[LS_MOTION_AUX_LEN];
-} run_t;
 
 static path_t g_paths[LS_PATH_MAX];
 static ls_motion_program_t g_prog;
-static run_t g_run = { .path = -1 };
 static char g_tag_path[LS_MOTION_NAME_LEN];
 static char g_tag_last[LS_MOTION_NAME_LEN];
 static uint64_t g_now_us;
+static ls_ctl_snapshot_t g_snap; /* scratch */
 
 /* ------------------------------------------------------------- helpers */
 
@@ -238,11 +223,7 @@ static int32_t start_plan(ls_core_t *core, ls_call_t *call, ls_motion_plan_t *sl
         return ls_reply(call, ls_RetCode_CMD_BUSY_ERR,
                         "%s: the control loop's command queue is full; try again", seed_name);
     }
-    g_run = (run_t){ .active = true, .sup = call->sup, .ref_seq = call->req->seq, .path = path, .stop_sup = -1 };
-    snprintf(g_run.seed_name, sizeof g_run.seed_name, "%s", seed_name);
-    snprintf(g_run.point, sizeof g_run.point, "%s", point);
-    core->state = ls_State_MOVING;
-    snprintf(core->motion_state, sizeof core->motion_state, "running_trajectory");
+    ls_run_begin(core, call, false, seed_name, point, path);
     return ls_reply(call, ls_RetCode_CMD_STARTED_OK, "%s started: expect %sComplete or an alarm", seed_name,
                     seed_name);
 }
@@ -452,8 +433,8 @@ int32_t ls_h_stop_motion(struct ls_core *core, struct ls_call *call)
     if (!post(core, LS_CTL_STOP, call->req->seq)) {
         return ls_reply(call, ls_RetCode_CMD_BUSY_ERR, "stopMotion: the control loop's command queue is full; try again");
     }
-    g_run.stop_pending = true;
-    g_run.stop_sup = call->sup;
+    core->run.stop_pending = true;
+    core->run.stop_sup = call->sup;
     return LS_CALL_DEFERRED;
 }
 
@@ -484,22 +465,15 @@ int32_t ls_h_abort_motion(struct ls_core *core, struct ls_call *call)
     if (core->ctl != NULL && !post(core, LS_CTL_ABORT, call->req->seq)) {
         return ls_reply(call, ls_RetCode_CMD_BUSY_ERR, "abortMotion: the control loop's command queue is full; try again");
     }
-    bool had = g_run.active;
+    bool had = core->run.active;
     if (had) {
-        char d1[48], d2[40];
-        snprintf(d1, sizeof d1, "point=%s", g_run.point);
-        snprintf(d2, sizeof d2, "reason=abortMotion");
-        const char *data[] = { d1, d2 };
-        char id[40];
-        snprintf(id, sizeof id, "%sAborted", g_run.seed_name);
-        ls_core_notify(core, g_run.sup, ls_NoticeKind_ALARM, id, g_run.ref_seq, true, data, 2);
-        path_delete(g_run.path);
+        const int path = core->run.path;
+        ls_run_finish(core, LS_RUN_END_ABORT, NULL, 0);
+        path_delete(path);
     }
-    g_run.active = false;
-    g_run.wait_active = false;
     if (core->state == ls_State_PAUSED) {
         core->state = ls_State_RESTING;
-        snprintf(core->motion_state, sizeof core->motion_state, "robot_at_rest");
+        snprintf(core->motion_state, sizeof core->motion_state, "robot_stopped_on_command");
     }
     return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "%s", had ? "motion dropped and its path queue cleared"
                                                              : "nothing to abort: no motion was held");
@@ -625,56 +599,50 @@ static int parse_aux(const char *text, aux_t *a, char *why, size_t whylen)
 
 static void aux_done(ls_core_t *core)
 {
-    if (core->ctl == NULL || !post(core, LS_CTL_AUX_DONE, g_run.ref_seq)) {
+    if (core->ctl == NULL || !post(core, LS_CTL_AUX_DONE, core->run.ref_seq)) {
         /* The loop's queue is full: the path would wait for ever, so fail loudly. */
         ls_core_fault(core, "auxiliary command finished but the control loop's queue was full", g_now_us);
     }
 }
 
-/* The motion ended without completing: the one final notice is this alarm. */
-static void motion_failed(ls_core_t *core, const char *text)
+/* The path ended at a point because an auxiliary command failed: the arm is
+ * at rest there (the executor waits for the command), so the path is
+ * dropped and the device stays RESTING, ready for the next motion. */
+static void aux_failed(ls_core_t *core, int point, const char *text)
 {
-    if (!g_run.active) {
+    if (!core->run.active) {
         return;
     }
-    g_run.active = false;
-    g_run.wait_active = false;
-    char d1[48], d2[72];
-    snprintf(d1, sizeof d1, "point=%s", g_run.point);
+    (void)post(core, LS_CTL_ABORT, core->run.ref_seq);
+    char d1[24], d2[72];
+    snprintf(d1, sizeof d1, "at_point=%d", point);
     snprintf(d2, sizeof d2, "fault=%s", text);
-    const char *data[] = { d1, d2 };
-    char id[40];
-    snprintf(id, sizeof id, "%sFailed", g_run.seed_name);
-    ls_core_notify(core, g_run.sup, ls_NoticeKind_ALARM, id, g_run.ref_seq, true, data, 2);
-    if (g_run.stop_pending) {
-        g_run.stop_pending = false;
-        char msg[120];
-        snprintf(msg, sizeof msg, "the motion faulted before it paused: %s", text);
-        ls_core_finish_deferred(core, g_run.stop_sup, ls_RetCode_CMD_FAULT_ERR, msg);
+    const char *extra[] = { d1, d2 };
+    if (core->state == ls_State_MOVING || core->state == ls_State_PAUSED) {
+        core->state = ls_State_RESTING;
+        snprintf(core->motion_state, sizeof core->motion_state, "robot_stopped_on_error");
     }
+    ls_run_finish(core, LS_RUN_END_AUX_FAILED, extra, 2);
 }
 
 static void rsvp_done(struct ls_core *core, void *ctx, int32_t ret_code, bool timed_out)
 {
     (void)ctx;
-    if (!g_run.active) {
+    if (!core->run.active) {
         return;
     }
     if (!timed_out && ret_code < 0) {
-        /* The supervisor declined: drop the path (it asked us not to go on). */
-        (void)post(core, LS_CTL_ABORT, g_run.ref_seq);
-        char d1[48], d2[48];
-        snprintf(d1, sizeof d1, "point=%s", g_run.point);
-        snprintf(d2, sizeof d2, "reason=rsvp answered %d", (int)ret_code);
-        const char *data[] = { d1, d2 };
-        char id[40];
-        snprintf(id, sizeof id, "%sAborted", g_run.seed_name);
-        ls_core_notify(core, g_run.sup, ls_NoticeKind_ALARM, id, g_run.ref_seq, true, data, 2);
-        g_run.active = false;
+        /* The supervisor declined: drop the path (it asked us not to go on);
+         * the arm is at rest at the point. */
+        (void)post(core, LS_CTL_ABORT, core->run.ref_seq);
+        char d1[32];
+        snprintf(d1, sizeof d1, "answer=%d", (int)ret_code);
+        const char *extra[] = { d1 };
         if (core->state == ls_State_MOVING || core->state == ls_State_PAUSED) {
             core->state = ls_State_RESTING;
-            snprintf(core->motion_state, sizeof core->motion_state, "robot_at_rest");
+            snprintf(core->motion_state, sizeof core->motion_state, "robot_stopped_on_command");
         }
+        ls_run_finish(core, LS_RUN_END_RSVP_DECLINED, extra, 1);
         return;
     }
     aux_done(core); /* answered, or timed out: the default action is to continue */
@@ -687,13 +655,12 @@ static void run_aux(ls_core_t *core, const ls_motion_event_t *ev)
     if (parse_aux(ev->text, &a, why, sizeof why) != 0) {
         /* pathLoad checked it: only a corrupted program gets here. */
         char t[96];
-        snprintf(t, sizeof t, "bad auxiliary command '%s'", ev->text);
-        ls_core_fault(core, t, g_now_us);
-        motion_failed(core, t);
+        snprintf(t, sizeof t, "bad auxiliary command '%.40s'", ev->text);
+        aux_failed(core, (int)ev->index, t);
         return;
     }
     char d1[48], d2[24];
-    snprintf(d1, sizeof d1, "path=%s", g_run.point);
+    snprintf(d1, sizeof d1, "path=%s", core->run.point);
     snprintf(d2, sizeof d2, "point=%d", (int)ev->index);
     const char *data[] = { d1, d2 };
     switch (a.kind) {
@@ -701,32 +668,38 @@ static void run_aux(ls_core_t *core, const ls_motion_event_t *ev)
         ls_ctl_cmd_t c;
         memset(&c, 0, sizeof c);
         c.kind = LS_CTL_DIO_WRITE;
-        c.ref_seq = g_run.ref_seq;
+        c.ref_seq = core->run.ref_seq;
         c.dio.unit = a.unit;
         c.dio.on = a.on;
         c.dio.off = a.off;
         if (!ls_control_post(core->ctl, &c)) {
-            ls_core_fault(core, "dio auxiliary command: the control loop's queue was full", g_now_us);
-            motion_failed(core, "dio auxiliary command lost");
+            aux_failed(core, (int)ev->index, "dio: the control loop's queue was full");
             return;
         }
-        aux_done(core);
+        /* Go on only once the loop has carried the write out (ls_core_motion_tick);
+         * a refusal comes back as LS_CEV_CMD_FAILED (ls_core_motion_failed). */
+        core->run.dio_pending = true;
+        core->run.dio_point = (int)ev->index;
+        core->run.dio_cycle = snapshot(core, &g_snap) ? g_snap.cycle : 0;
+        core->run.dio_seen = false;
         return;
     }
     case AUX_WAIT:
-        g_run.wait_active = true;
-        g_run.wait_unit = a.unit;
-        g_run.wait_mask = a.on;
-        g_run.wait_deadline_us = g_now_us + (uint64_t)(a.timeout_s * 1e6);
-        snprintf(g_run.wait_text, sizeof g_run.wait_text, "%.*s", (int)sizeof g_run.wait_text - 1, ev->text);
+        core->run.wait_active = true;
+        core->run.wait_unit = a.unit;
+        core->run.wait_mask = a.on;
+        core->run.wait_deadline_us = g_now_us + (uint64_t)(a.timeout_s * 1e6);
+        core->run.wait_point = (int)ev->index;
+        snprintf(core->run.wait_text, sizeof core->run.wait_text, "%.*s", (int)sizeof core->run.wait_text - 1, ev->text);
         ls_core_motion_tick(core, g_now_us);
         return;
     case AUX_EVENT:
-        ls_core_notify(core, g_run.sup, ls_NoticeKind_EVENT, a.name, g_run.ref_seq, false, data, 2);
+        ls_core_notify_to(core, core->run.addr, core->run.epoch, ls_NoticeKind_EVENT, a.name, core->run.ref_seq, false,
+                          data, 2);
         aux_done(core);
         return;
     case AUX_RSVP:
-        if (ls_core_rsvp(core, g_run.sup, ls_NoticeKind_EVENT_RSVP, a.name, data, 2,
+        if (ls_core_rsvp(core, core->run.sup, ls_NoticeKind_EVENT_RSVP, a.name, data, 2,
                          (uint32_t)(a.timeout_s * 1000.0), "continue", rsvp_done, NULL, g_now_us) < 0) {
             aux_done(core); /* nobody to ask (or the table is full): take the default */
         }
@@ -739,34 +712,60 @@ static void run_aux(ls_core_t *core, const ls_motion_event_t *ev)
 void ls_core_motion_tick(ls_core_t *core, uint64_t now_us)
 {
     g_now_us = now_us;
-    if (!g_run.active || !g_run.wait_active || core->ctl == NULL) {
+    if (!core->run.active || core->run.react || core->ctl == NULL) {
         return;
     }
     ls_ctl_snapshot_t snap;
     ls_control_snapshot(core->ctl, &snap);
-    if ((snap.dio[g_run.wait_unit] & g_run.wait_mask) == g_run.wait_mask) {
-        g_run.wait_active = false;
+    if (core->run.dio_pending) {
+        /* The loop took the write two cycles ago: a refusal was pushed before
+         * that snapshot, so it has been drained by the next turn. */
+        if (core->run.dio_seen) {
+            core->run.dio_pending = false;
+            aux_done(core);
+        } else if (snap.cycle >= core->run.dio_cycle + 2u) {
+            core->run.dio_seen = true;
+        }
+        return;
+    }
+    if (!core->run.wait_active) {
+        return;
+    }
+    if ((snap.dio[core->run.wait_unit] & core->run.wait_mask) == core->run.wait_mask) {
+        core->run.wait_active = false;
         aux_done(core);
-    } else if (now_us >= g_run.wait_deadline_us) {
-        g_run.wait_active = false;
-        char t[96];
-        snprintf(t, sizeof t, "'%s': inputs 0x%X of unit %u not all set in time", g_run.wait_text,
-                 (unsigned)g_run.wait_mask, (unsigned)g_run.wait_unit);
-        ls_core_fault(core, t, now_us);
-        motion_failed(core, t);
+    } else if (now_us >= core->run.wait_deadline_us) {
+        core->run.wait_active = false;
+        char t[64];
+        snprintf(t, sizeof t, "wait: inputs 0x%X of unit %u not all set in time", (unsigned)core->run.wait_mask,
+                 (unsigned)core->run.wait_unit);
+        aux_failed(core, core->run.wait_point, t);
     }
 }
 
 void ls_core_motion_failed(ls_core_t *core, uint32_t ref_seq, const char *text)
 {
-    if (!g_run.active || (ref_seq != 0 && ref_seq != g_run.ref_seq)) {
+    if (!core->run.active || core->run.react || ref_seq == 0 || ref_seq != core->run.ref_seq) {
         return;
     }
-    motion_failed(core, text);
+    if (core->run.dio_pending) {
+        core->run.dio_pending = false;
+        aux_failed(core, core->run.dio_point, text);
+        return;
+    }
+    if (core->halt.active) {
+        return; /* the halt ends it */
+    }
+    /* The loop could not start it (drives off, manual control, a motion
+     * still held): nothing moved. */
+    char d[80];
+    snprintf(d, sizeof d, "fault=%s", text);
+    const char *extra[] = { d };
     if (core->state == ls_State_MOVING || core->state == ls_State_PAUSED) {
         core->state = ls_State_RESTING;
         snprintf(core->motion_state, sizeof core->motion_state, "robot_stopped_on_error");
     }
+    ls_run_finish(core, LS_RUN_END_FAULT, extra, 1);
 }
 
 /* ------------------------------------------------------------- executor events */
@@ -793,36 +792,31 @@ void ls_core_on_motion_event(ls_core_t *core, const ls_motion_event_t *ev)
     }
     switch (ev->kind) {
     case LS_MEV_DONE: {
-        if (!g_run.active || ev->ref_seq != g_run.ref_seq) {
+        if (!core->run.active || core->run.react || ev->ref_seq != core->run.ref_seq) {
             return; /* a motion we already gave up (abort) */
         }
-        g_run.active = false;
-        char d1[48], d2[64];
-        snprintf(d1, sizeof d1, "point=%s", g_run.point);
+        char d2[64];
         joints_text(core, ev->q_rad, d2, sizeof d2);
-        const char *data[] = { d1, d2 };
-        char id[40];
-        snprintf(id, sizeof id, "%sComplete", g_run.seed_name);
-        if (core->state == ls_State_MOVING || core->state == ls_State_PAUSED) {
+        const char *extra[] = { d2 };
+        if (!core->halt.active && (core->state == ls_State_MOVING || core->state == ls_State_PAUSED)) {
             core->state = ls_State_RESTING;
             snprintf(core->motion_state, sizeof core->motion_state, "robot_at_rest");
         }
-        ls_core_notify(core, g_run.sup, ls_NoticeKind_EVENT, id, g_run.ref_seq, true, data, 2);
-        if (g_run.stop_pending) {
-            g_run.stop_pending = false;
-            ls_core_finish_deferred(core, g_run.stop_sup, ls_RetCode_CMD_EXEC_OK,
-                                    "the motion completed before it could stop");
-        }
+        /* It completed, even when a halt was already stopping it. */
+        ls_run_finish(core, LS_RUN_END_COMPLETE, extra, 1);
         return;
     }
     case LS_MEV_PAUSED:
+        if (core->halt.active) {
+            return; /* a halt's stop: the drives go off next */
+        }
         if (core->state == ls_State_MOVING) {
             core->state = ls_State_PAUSED;
             snprintf(core->motion_state, sizeof core->motion_state, "robot_paused");
         }
-        if (g_run.stop_pending) {
-            g_run.stop_pending = false;
-            ls_core_finish_deferred(core, g_run.stop_sup, ls_RetCode_CMD_EXEC_OK,
+        if (core->run.stop_pending) {
+            core->run.stop_pending = false;
+            ls_core_finish_deferred(core, core->run.stop_sup, ls_RetCode_CMD_EXEC_OK,
                                     "paused on the planned path: resumeMotion continues, abortMotion drops it");
         }
         return;
@@ -836,14 +830,13 @@ void ls_core_on_motion_event(ls_core_t *core, const ls_motion_event_t *ev)
                 g_now_us = snap.t_us;
             }
         }
-        ls_core_fault(core, t, g_now_us);
-        motion_failed(core, t);
+        ls_core_fault(core, t, g_now_us); /* ends the run once the drives are off */
         return;
     }
     case LS_MEV_TAG: {
         snprintf(g_tag_path, sizeof g_tag_path, "%.*s", (int)sizeof g_tag_path - 1, ev->text);
         snprintf(g_tag_last, sizeof g_tag_last, "%s", ev->name);
-        if (!g_run.active) {
+        if (!core->run.active || core->run.react) {
             return;
         }
         char d1[48], d2[24], d3[24], d4[48];
@@ -852,11 +845,12 @@ void ls_core_on_motion_event(ls_core_t *core, const ls_motion_event_t *ev)
         snprintf(d3, sizeof d3, "cycle=%d", (int)ev->cycle);
         snprintf(d4, sizeof d4, "path=%.31s", ev->text);
         const char *data[] = { d1, d2, d3, d4 };
-        ls_core_notify(core, g_run.sup, ls_NoticeKind_EVENT, "tag", g_run.ref_seq, false, data, 4);
+        ls_core_notify_to(core, core->run.addr, core->run.epoch, ls_NoticeKind_EVENT, "tag", core->run.ref_seq, false,
+                          data, 4);
         return;
     }
     case LS_MEV_AUX:
-        if (g_run.active) {
+        if (core->run.active && !core->run.react && !core->halt.active) {
             run_aux(core, ev);
         }
         return;
@@ -877,9 +871,9 @@ static int path_find(const char *name)
     return -1;
 }
 
-static bool path_running(int i)
+static bool path_running(const ls_core_t *core, int i)
 {
-    return g_run.active && g_run.path == i;
+    return core->run.active && core->run.path == i;
 }
 
 static int32_t check_pct(ls_call_t *call, int k, const char *field, double v)
@@ -1001,7 +995,7 @@ int32_t ls_h_path_load(struct ls_core *core, struct ls_call *call)
                         "pathLoad: STRAIGHT_MOTION needs Cartesian points (BASE_ or WORLD_CARTESIAN_FRAME)");
     }
     int i = path_find(r->path_name);
-    if (i >= 0 && path_running(i)) {
+    if (i >= 0 && path_running(core, i)) {
         return ls_reply(call, ls_RetCode_CMD_BUSY_ERR,
                         "pathLoad: path '%s' belongs to a stopped motion: abortMotion first", r->path_name);
     }
@@ -1049,7 +1043,7 @@ int32_t ls_h_path_clear_path(struct ls_core *core, struct ls_call *call)
     if (i < 0) {
         return ls_reply(call, ls_RetCode_CMD_PARAM_ERR, "pathClearPath: there is no path named '%s'", name);
     }
-    if (path_running(i)) {
+    if (path_running(core, i)) {
         return ls_reply(call, ls_RetCode_CMD_BUSY_ERR,
                         "pathClearPath: path '%s' belongs to a stopped motion: abortMotion clears it", name);
     }

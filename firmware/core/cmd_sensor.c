@@ -7,8 +7,8 @@
  * loop, which runs it (firmware/motion/ls_react.h). The loop reports the end
  * with LS_MEV_REACT_END; this file turns it into the move's one final notice.
  *
- * State (static, one controller per process): the guarded/compliant move in
- * progress and the manual mode. */
+ * The guarded/compliant move in progress is core->run (ls_run.h, shared with
+ * the planned motions); the manual mode is static here. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -33,19 +33,16 @@
 /* comply: travel and compliance directions may differ from orthogonal by this much */
 #define COMPLY_MAX_COS 0.0872 /* 5 degrees */
 
+/* What a guarded or compliant move needs besides core->run (ls_run.h). */
 typedef struct {
-    bool active;
-    int sup;
-    uint32_t ref_seq;
     bool comply;
-    char seed_name[16];
     size_t sensor;
     bool length;          /* the sensor reads a distance (units follow setUnits) */
     uint8_t component;    /* moveReact: the watched component */
     int32_t panic_code;
+    char seed_name[16];
 } react_run_t;
 
-static react_run_t g_react;
 static char g_manual[16] = "off";
 static int g_manual_sup = -1;
 static ls_motion_seg_t g_check; /* scratch for the reachability check of a move's line */
@@ -176,12 +173,12 @@ static int32_t start_react(ls_core_t *core, ls_call_t *call, ls_react_plan_t *sl
         return ls_reply(call, ls_RetCode_CMD_BUSY_ERR, "%s: the control loop's command queue is full; try again",
                         run->seed_name);
     }
-    g_react = *run;
-    g_react.active = true;
-    g_react.sup = call->sup;
-    g_react.ref_seq = call->req->seq;
-    core->state = ls_State_MOVING;
-    snprintf(core->motion_state, sizeof core->motion_state, "running_%s", run->comply ? "comply" : "move_react");
+    ls_run_begin(core, call, true, run->seed_name, run->seed_name, -1);
+    core->run.comply = run->comply;
+    core->run.sensor = run->sensor;
+    core->run.length = run->length;
+    core->run.component = run->component;
+    core->run.panic_code = run->panic_code;
     return ls_reply(call, ls_RetCode_CMD_STARTED_OK, "%s started: expect %sComplete or an alarm", run->seed_name,
                     run->seed_name);
 }
@@ -566,16 +563,6 @@ static void rest(ls_core_t *core)
     }
 }
 
-static void react_alarm(ls_core_t *core, const char *suffix, const char *reason)
-{
-    char id[40], d1[72];
-    snprintf(id, sizeof id, "%s%s", g_react.seed_name, suffix);
-    snprintf(d1, sizeof d1, "reason=%s", reason);
-    const char *data[] = { d1 };
-    g_react.active = false;
-    ls_core_notify(core, g_react.sup, ls_NoticeKind_ALARM, id, g_react.ref_seq, true, data, 1);
-}
-
 static void react_end(ls_core_t *core, const ls_ctl_event_t *ev)
 {
     const ls_react_report_t *rep = &ev->react;
@@ -593,13 +580,13 @@ static void react_end(ls_core_t *core, const ls_ctl_event_t *ev)
     char d_reason[40], d_pose[64], d_read[64], d_trav[40], d_extra[4][64];
     const char *data[10];
     size_t n = 0;
-    const char *reason = rep->end == LS_REACT_END_MAX_DISTANCE && g_react.comply ? "max_travel"
+    const char *reason = rep->end == LS_REACT_END_MAX_DISTANCE && core->run.comply ? "max_travel"
                                                                                  : ls_react_end_name(rep->end);
     snprintf(d_reason, sizeof d_reason, "reason=%s", reason);
     data[n++] = d_reason;
     values_text("pose", pose, 6, d_pose, sizeof d_pose);
     data[n++] = d_pose;
-    if (g_react.length) {
+    if (core->run.length) {
         double dist = ls_units_from_si_linear(set->linear, rep->reading[0]);
         values_text("distance", &dist, 1, d_read, sizeof d_read);
     } else {
@@ -609,10 +596,10 @@ static void react_end(ls_core_t *core, const ls_ctl_event_t *ev)
     char d_trig[48];
     if (rep->triggered) {
         static const char *const k_ft[] = { "Fx", "Fy", "Fz", "Tx", "Ty", "Tz" };
-        double tv = g_react.length ? ls_units_from_si_linear(set->linear, rep->trigger) : rep->trigger;
+        double tv = core->run.length ? ls_units_from_si_linear(set->linear, rep->trigger) : rep->trigger;
         const char *comp = rep->end == LS_REACT_END_ENVELOPE ? "|F|"
-                           : g_react.length                  ? "distance"
-                           : g_react.component < 6           ? k_ft[g_react.component]
+                           : core->run.length                  ? "distance"
+                           : core->run.component < 6           ? k_ft[core->run.component]
                                                              : "value";
         snprintf(d_trig, sizeof d_trig, "trigger=%s:%.6g", comp, tv);
         data[n++] = d_trig;
@@ -620,7 +607,7 @@ static void react_end(ls_core_t *core, const ls_ctl_event_t *ev)
     double trav = ls_units_from_si_linear(set->linear, rep->travelled_m);
     values_text("travelled", &trav, 1, d_trav, sizeof d_trav);
     data[n++] = d_trav;
-    if (g_react.comply) {
+    if (core->run.comply) {
         values_text("fn_mean", &rep->fn_mean_N, 1, d_extra[0], sizeof d_extra[0]);
         values_text("fn_min", &rep->fn_min_N, 1, d_extra[1], sizeof d_extra[1]);
         values_text("fn_max", &rep->fn_max_N, 1, d_extra[2], sizeof d_extra[2]);
@@ -628,7 +615,7 @@ static void react_end(ls_core_t *core, const ls_ctl_event_t *ev)
         data[n++] = d_extra[1];
         data[n++] = d_extra[2];
         if (rep->end == LS_REACT_END_PANIC) {
-            snprintf(d_extra[3], sizeof d_extra[3], "panic_stop_code=%d", (int)g_react.panic_code);
+            snprintf(d_extra[3], sizeof d_extra[3], "panic_stop_code=%d", (int)core->run.panic_code);
             data[n++] = d_extra[3];
         }
     }
@@ -640,11 +627,11 @@ static void react_end(ls_core_t *core, const ls_ctl_event_t *ev)
                          : rep->end == LS_REACT_END_ABORTED  ? "Aborted"
                                                              : "Failed";
     char id[40];
-    snprintf(id, sizeof id, "%s%s", g_react.seed_name, suffix);
-    g_react.active = false;
+    snprintf(id, sizeof id, "%s%s", core->run.seed_name, suffix);
+    core->run.active = false;
     rest(core);
-    ls_core_notify(core, g_react.sup, ok ? ls_NoticeKind_EVENT : ls_NoticeKind_ALARM, id, g_react.ref_seq, true, data,
-                   n);
+    ls_core_notify_to(core, core->run.addr, core->run.epoch, ok ? ls_NoticeKind_EVENT : ls_NoticeKind_ALARM, id,
+                      core->run.ref_seq, true, data, n);
 }
 
 static void jog_event(ls_core_t *core, const ls_ctl_event_t *ev)
@@ -675,11 +662,13 @@ static bool on_event(void *ctx, const ls_ctl_event_t *ev)
     if (ls_core_tool_on_event(core, ev)) {
         return true;
     }
-    bool mine = g_react.active && ev->ref_seq == g_react.ref_seq;
+    bool mine = core->run.active && core->run.react && ev->ref_seq == core->run.ref_seq;
     switch (ev->kind) {
     case LS_CEV_MOTION:
         if (ev->motion.kind == LS_MEV_REACT_END) {
-            if (mine) {
+            /* During a halt (deactivate, fault, owner lost) the halt sends the
+             * final notice once the drives are off (ls_run_tick). */
+            if (mine && !core->halt.active) {
                 react_end(core, ev);
             }
             return true;
@@ -688,19 +677,17 @@ static bool on_event(void *ctx, const ls_ctl_event_t *ev)
             jog_event(core, ev);
             return true;
         }
-        if (ev->motion.kind == LS_MEV_FAULT && mine) {
-            react_alarm(core, "Failed", ev->motion.text); /* the fault itself is latched by the motion handler */
-        }
+        /* LS_MEV_FAULT: the motion handler latches the fault, whose halt ends the run. */
         return false;
-    case LS_CEV_FAULT:
-        if (g_react.active) {
-            react_alarm(core, "Failed", ev->text);
-        }
-        return false;
+    case LS_CEV_FAULT: return false; /* the same */
     case LS_CEV_CMD_FAILED:
-        if (mine) {
-            react_alarm(core, "Failed", ev->text);
+        if (mine && !core->halt.active) {
+            char d[80];
+            snprintf(d, sizeof d, "fault=%s", ev->text);
+            const char *extra[] = { d };
             rest(core);
+            snprintf(core->motion_state, sizeof core->motion_state, "robot_stopped_on_error");
+            ls_run_finish(core, LS_RUN_END_FAULT, extra, 1);
             return true;
         }
         return false;

@@ -44,10 +44,12 @@ int32_t ls_h_activate(struct ls_core *core, struct ls_call *call)
 int32_t ls_h_deactivate(struct ls_core *core, struct ls_call *call)
 {
     if (core->state == ls_State_MOVING || core->state == ls_State_PAUSED) {
-        if (core->act.stop_motion != NULL) {
-            core->act.stop_motion(core->act.ctx);
-        }
-        snprintf(core->motion_state, sizeof core->motion_state, "robot_stopped_on_command");
+        /* A controlled stop along the planned path at the configured
+         * deceleration, then drives off; the answer (and the motion's final
+         * notice, reason=deactivate) when the arm is at rest with the drives
+         * off (ls_run_tick). */
+        ls_run_halt(core, LS_RUN_END_DEACTIVATE, "", false, call->sup, call->now_us);
+        return LS_CALL_DEFERRED;
     }
     if (core->act.enable_drives != NULL) {
         (void)core->act.enable_drives(core->act.ctx, false);

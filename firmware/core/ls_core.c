@@ -69,6 +69,9 @@ void ls_core_init(ls_core_t *core, const ls_core_config_t *cfg, const ls_core_io
     core->settings.linear_accel_m_s2 = 1.0;
     core->settings.angular_accel_rad_s2 = 4.0;
     core->rsvp_next_id = 1;
+    core->epoch_next = 1;
+    core->run.path = -1;
+    core->halt.answer_sup = -1;
 }
 
 int ls_core_session_of(const ls_core_t *core, uint8_t addr)
@@ -141,6 +144,7 @@ void ls_core_notify(ls_core_t *core, int sup, ls_NoticeKind kind, const char *ev
         n->ref_seq = ref_seq;
         n->final = final;
         n->notice_seq = ++s->notice_seq;
+        n->session_epoch = ref_seq != 0u ? s->epoch : 0u;
         size_t cap = sizeof n->data / sizeof n->data[0];
         for (size_t k = 0; k < n_data && k < cap; k++) {
             snprintf(n->data[k], sizeof n->data[k], "%s", data[k]);
@@ -153,19 +157,48 @@ void ls_core_notify(ls_core_t *core, int sup, ls_NoticeKind kind, const char *ev
     }
 }
 
-void ls_core_fault(ls_core_t *core, const char *text, uint64_t now_us)
+void ls_core_notify_to(ls_core_t *core, uint8_t addr, uint32_t epoch, ls_NoticeKind kind, const char *event_id,
+                       uint32_t ref_seq, bool final, const char *const *data, size_t n_data)
 {
-    if (core->act.stop_motion != NULL) {
-        core->act.stop_motion(core->act.ctx);
+    int i = find_session(core, addr);
+    memset(&core->note, 0, sizeof core->note);
+    core->note.which_msg = ls_Downlink_notice_tag;
+    ls_Notice *n = &core->note.msg.notice;
+    n->kind = kind;
+    snprintf(n->event_id, sizeof n->event_id, "%s", event_id);
+    n->ref_seq = ref_seq;
+    n->final = final;
+    n->session_epoch = epoch;
+    /* The session that started it may be gone (disconnect, heartbeat): the
+     * address still gets the notice, outside any session's numbering. */
+    n->notice_seq = i >= 0 ? ++core->sessions[i].notice_seq : 0u;
+    size_t cap = sizeof n->data / sizeof n->data[0];
+    for (size_t k = 0; k < n_data && k < cap; k++) {
+        snprintf(n->data[k], sizeof n->data[k], "%s", data[k]);
+        n->data_count++;
     }
-    if (core->state == ls_State_RESTING || core->state == ls_State_MOVING || core->state == ls_State_PAUSED) {
-        if (core->act.enable_drives != NULL) {
-            (void)core->act.enable_drives(core->act.ctx, false);
-        }
-        core->state = ls_State_LOCKED;
+    size_t len = encode_msg(&core->note, core->note_enc, sizeof core->note_enc);
+    if (len > 0) {
+        send_bytes(core, addr, core->note_enc, len);
     }
+}
+
+static void fault_as(ls_core_t *core, ls_run_end_t why, const char *text, uint64_t now_us)
+{
     snprintf(core->fault, sizeof core->fault, "%s", text);
-    snprintf(core->motion_state, sizeof core->motion_state, "robot_stopped_on_error");
+    if (core->state == ls_State_MOVING || core->state == ls_State_PAUSED || core->halt.active) {
+        /* Stop along the path at the model's maximum deceleration, then drives
+         * off; ls_run_tick changes the state and sends the motion's notice. */
+        ls_run_halt(core, why, text, true, -1, now_us);
+    } else {
+        if (core->state == ls_State_RESTING) {
+            if (core->act.enable_drives != NULL) {
+                (void)core->act.enable_drives(core->act.ctx, false);
+            }
+            core->state = ls_State_LOCKED;
+        }
+        snprintf(core->motion_state, sizeof core->motion_state, "robot_stopped_on_error");
+    }
     ls_fault_entry_t *e = &core->fault_log[core->fault_log_count % LS_FAULT_LOG_LEN];
     e->at_us = now_us;
     snprintf(e->text, sizeof e->text, "%s", text);
@@ -176,6 +209,29 @@ void ls_core_fault(ls_core_t *core, const char *text, uint64_t now_us)
     ls_core_notify(core, -1, ls_NoticeKind_ALARM, "fault", 0, false, data, 1);
 }
 
+void ls_core_fault(ls_core_t *core, const char *text, uint64_t now_us)
+{
+    fault_as(core, LS_RUN_END_FAULT, text, now_us);
+}
+
+void ls_core_emergency(ls_core_t *core, uint64_t now_us)
+{
+    fault_as(core, LS_RUN_END_EMERGENCY, "emergency stop frame on the bus", now_us);
+}
+
+void ls_core_owner_lost_alarm(ls_core_t *core, uint8_t addr, const char *why, uint64_t now_us)
+{
+    char d1[40], d2[64];
+    snprintf(d1, sizeof d1, "supervisor=0x%02X", addr);
+    snprintf(d2, sizeof d2, "reason=%s", why);
+    const char *data[] = { d1, d2, "action=deactivated,released" };
+    ls_core_notify(core, -1, ls_NoticeKind_ALARM, "ownerLost", 0, false, data, 3);
+    ls_fault_entry_t *e = &core->fault_log[core->fault_log_count % LS_FAULT_LOG_LEN];
+    e->at_us = now_us;
+    snprintf(e->text, sizeof e->text, "owner 0x%02X lost (%s): deactivated and released", addr, why);
+    core->fault_log_count++;
+}
+
 /* Seed 2.2 disconnect handler: stop, deactivate, release; IDLE when nobody is left. */
 static void drop_session(ls_core_t *core, int i, const char *why, uint64_t now_us)
 {
@@ -183,31 +239,31 @@ static void drop_session(ls_core_t *core, int i, const char *why, uint64_t now_u
     bool was_owner = core->owner == i;
     uint8_t addr = s->addr;
     s->connected = false;
+    if (core->halt.answer_sup == i) {
+        core->halt.answer_sup = -1; /* nobody to answer any more */
+    }
     if (was_owner) {
-        if (core->state == ls_State_MOVING || core->state == ls_State_PAUSED) {
-            if (core->act.stop_motion != NULL) {
-                core->act.stop_motion(core->act.ctx);
-            }
+        ls_core_manual_off(core);
+        core->owner = -1;
+        if (core->state == ls_State_MOVING || core->state == ls_State_PAUSED || core->halt.active) {
+            /* Stop along the path, drives off, then release (ls_run_tick):
+             * the state says MOVING until the drives are off. */
+            bool lost = strcmp(why, "disconnect") != 0;
+            ls_run_halt(core, lost ? LS_RUN_END_OWNER_LOST : LS_RUN_END_DISCONNECT, "", false, -1, now_us);
+            core->halt.release = true;
+            core->halt.lost_addr = addr;
+            snprintf(core->halt.lost_why, sizeof core->halt.lost_why, "%s", why);
+            return;
         }
-        if (core->state == ls_State_RESTING || core->state == ls_State_MOVING || core->state == ls_State_PAUSED) {
+        if (core->state == ls_State_RESTING) {
             if (core->act.enable_drives != NULL) {
                 (void)core->act.enable_drives(core->act.ctx, false);
             }
         }
-        ls_core_manual_off(core);
-        core->owner = -1;
         core->state = ls_State_UNLOCKED;
-        char d1[40], d2[64];
-        snprintf(d1, sizeof d1, "supervisor=0x%02X", addr);
-        snprintf(d2, sizeof d2, "reason=%s", why);
-        const char *data[] = { d1, d2, "action=deactivated,released" };
-        ls_core_notify(core, -1, ls_NoticeKind_ALARM, "ownerLost", 0, false, data, 3);
-        ls_fault_entry_t *e = &core->fault_log[core->fault_log_count % LS_FAULT_LOG_LEN];
-        e->at_us = now_us;
-        snprintf(e->text, sizeof e->text, "owner 0x%02X lost (%s): deactivated and released", addr, why);
-        core->fault_log_count++;
+        ls_core_owner_lost_alarm(core, addr, why, now_us);
     }
-    if (connected_count(core) == 0) {
+    if (connected_count(core) == 0 && !core->halt.active) {
         core->state = ls_State_IDLE;
     }
 }
@@ -348,6 +404,11 @@ static int32_t do_connect(ls_core_t *core, uint8_t addr, ls_call_t *call)
     ls_session_t *s = &core->sessions[i];
     s->connected = true;
     s->addr = addr;
+    s->epoch = core->epoch_next++;
+    if (core->epoch_next == 0u) {
+        core->epoch_next = 1u;
+    }
+    rs->session_epoch = s->epoch;
     s->last_heard_us = call->now_us;
     s->heartbeat_period_ms = rq->heartbeat_period_ms;
     snprintf(s->name, sizeof s->name, "%s", rq->client_name);
@@ -451,6 +512,12 @@ static int32_t dispatch(ls_core_t *core, uint8_t addr, ls_call_t *call)
         return ls_reply(call, ls_RetCode_CMD_WRONG_STATE_ERR, "%s is valid in %s, the device is %s: %s", d->name,
                         valid, ls_core_state_name(core->state), how_to_reach(d->states, core->state));
     }
+    if (core->halt.active && (d->flags & LS_CMD_F_OWNER_ONLY) != 0u) {
+        return ls_reply(call, ls_RetCode_CMD_BUSY_ERR,
+                        "%s: the arm is stopping (%s), then the drives go off: wait for the motion's final "
+                        "notice, then see getMotionControlState",
+                        d->name, ls_run_end_name(core->halt.why));
+    }
     if ((d->flags & LS_CMD_F_OWNER_ONLY) != 0u && core->owner != call->sup) {
         if (core->owner < 0) {
             return ls_reply(call, ls_RetCode_CMD_NOT_OWNER_ERR, "%s needs the owner: lock the device first", d->name);
@@ -520,6 +587,7 @@ static void on_request(ls_core_t *core, uint8_t addr, const ls_Request *rq, uint
     sup = call.sup; /* connect may have created the session */
     s = sup >= 0 && core->sessions[sup].connected ? &core->sessions[sup] : NULL;
     if (s != NULL) {
+        res->session_epoch = s->epoch;
         s->have_last = true;
         s->last_seq = rq->seq;
         s->executed++;
@@ -552,6 +620,7 @@ void ls_core_finish_deferred(ls_core_t *core, int sup, int32_t code, const char 
     core->down.which_msg = ls_Downlink_response_tag;
     ls_Response *res = &core->down.msg.response;
     res->seq = s->last_seq;
+    res->session_epoch = s->epoch;
     res->ret_code = code;
     res->which_result = code >= 0 ? s->pending_tag : 0;
     snprintf(res->ret_msg, sizeof res->ret_msg, "%s", msg);

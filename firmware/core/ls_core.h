@@ -15,6 +15,7 @@
 #include "landscape.pb.h"
 #include "ls_cmd_table.h"
 #include "ls_robot_model.h"
+#include "ls_run.h"
 
 struct ls_control;
 
@@ -50,6 +51,7 @@ typedef struct {
     uint8_t last_resp[LS_DOWNLINK_MAX];
     size_t last_resp_len;
     uint32_t notice_seq;
+    uint32_t epoch;           /* session epoch: new at every connect (docs/protocol.md) */
     uint32_t executed;        /* requests executed (not answered from the cache) */
     pb_size_t pending_tag;    /* command id of the deferred request (last_pending) */
 } ls_session_t;
@@ -133,8 +135,12 @@ typedef struct {
 typedef struct {
     /* Enable or disable the drives; returns 0 or a negative HAL status. */
     int (*enable_drives)(void *ctx, bool on);
-    /* Stop any motion at once along its path (used by the disconnect handler). */
+    /* Stop any motion along its path at the configured deceleration (pause). */
     void (*stop_motion)(void *ctx);
+    /* Optional: stop along the path at the model's maximum deceleration, then
+     * drives off (faults, emergency, shutdown). NULL: enable_drives(false),
+     * which stops at the configured deceleration first. */
+    void (*halt)(void *ctx);
     /* Optional, for sendCommand: the control loop's real-time statistics and
      * the running configuration, as key=value lines. */
     void (*describe_rt)(void *ctx, char *buf, size_t cap);
@@ -163,7 +169,10 @@ typedef struct ls_core {
     int owner;                 /* index in sessions[], -1 when unlocked */
     ls_session_t sessions[LS_MAX_SUPERVISORS];
     char fault[96];            /* latched fault, empty when none */
-    char motion_state[32];     /* seed 3.3.1 motionControlState */
+    char motion_state[32];     /* seed 3.3.1 motionControlState (docs/state-machine.md) */
+    ls_run_t run;              /* the started motion (ls_run.h) */
+    ls_halt_t halt;            /* a stop that ends with the drives off (ls_run.h) */
+    uint32_t epoch_next;       /* the next session epoch */
     ls_fault_entry_t fault_log[LS_FAULT_LOG_LEN];
     uint32_t fault_log_count;
     uint32_t rx_malformed;     /* uplinks that did not decode */
@@ -201,8 +210,20 @@ void ls_core_tick(ls_core_t *core, uint64_t now_us);
 void ls_core_notify(ls_core_t *core, int sup, ls_NoticeKind kind, const char *event_id, uint32_t ref_seq,
                     bool final, const char *const *data, size_t n_data);
 
-/* Latch a fault: stop, deactivate, record it and raise an alarm to everyone. */
+/* Send a notice to the session at `addr` (if any) carrying session epoch
+ * `epoch`: the notices of a run go to the session that started it. */
+void ls_core_notify_to(ls_core_t *core, uint8_t addr, uint32_t epoch, ls_NoticeKind kind, const char *event_id,
+                       uint32_t ref_seq, bool final, const char *const *data, size_t n_data);
+
+/* Latch a fault: record it, raise the alarm `fault` to everyone, stop a
+ * motion along its path at the model's maximum deceleration, then drives off
+ * (ACTIVE -> LOCKED once they are off; the motion's final notice then). */
 void ls_core_fault(ls_core_t *core, const char *text, uint64_t now_us);
+/* The same for an EMERGENCY frame on the bus (reason=emergency). */
+void ls_core_emergency(ls_core_t *core, uint64_t now_us);
+/* The alarm ownerLost to everyone and its fault-log entry (ls_run.c calls it
+ * when the owner's motion has stopped). */
+void ls_core_owner_lost_alarm(ls_core_t *core, uint8_t addr, const char *why, uint64_t now_us);
 
 /* Answer a request that a handler deferred (LS_CALL_DEFERRED) for session
  * `sup`: the response carries the deferred request's seq and command id. */

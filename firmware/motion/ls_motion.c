@@ -101,6 +101,7 @@ static void seg_clear_motion(ls_motion_seg_t *s, ls_seg_kind_t kind)
     s->kind = kind;
     memset(&s->traj, 0, sizeof s->traj);
     s->stop_ramp_s = MIN_STOP_RAMP_S;
+    s->fast_stop_ramp_s = MIN_STOP_RAMP_S;
     s->radius_m = s->angle_rad = s->length_m = s->turn_rad = 0.0;
     s->overlap_s = 0.0;
 }
@@ -138,6 +139,13 @@ int ls_motion_seg_joint(ls_motion_seg_t *s, const ls_robot_model_t *model, const
     memcpy(s->q1, q1, sizeof s->q1);
     double ramp = ls_traj_stop_ramp_s(&tr, &lim);
     s->stop_ramp_s = fmax(MIN_STOP_RAMP_S, STOP_RAMP_MARGIN * (ramp > 0.0 ? ramp : 0.0));
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        lim.v_max[j] = model->qd_max_rad_s[j];
+        lim.a_max[j] = model->qdd_max_rad_s2[j];
+        lim.j_max[j] = model->qddd_max_rad_s3[j];
+    }
+    ramp = ls_traj_stop_ramp_s(&tr, &lim);
+    s->fast_stop_ramp_s = fmin(s->stop_ramp_s, fmax(MIN_STOP_RAMP_S, STOP_RAMP_MARGIN * (ramp > 0.0 ? ramp : 0.0)));
     return LS_MOTION_OK;
 }
 
@@ -296,6 +304,22 @@ static int cart_time_and_check(ls_motion_seg_t *s, const ls_robot_model_t *model
     }
     double ramp = ls_traj_stop_ramp_s(&s->traj, &tl);
     s->stop_ramp_s = fmax(MIN_STOP_RAMP_S, STOP_RAMP_MARGIN * (ramp > 0.0 ? ramp : 0.0));
+    if (!still) {
+        /* the fast stop: the model's Cartesian maxima on the path parameter */
+        double af = INFINITY, jf = INFINITY;
+        if (L > 1e-9) {
+            af = fmin(af, model->max_linear_accel_m_s2 / L);
+            jf = fmin(jf, model->max_linear_jerk_m_s3 / L);
+        }
+        if (A > 1e-9) {
+            af = fmin(af, model->max_angular_accel_rad_s2 / A);
+            jf = fmin(jf, model->max_angular_jerk_rad_s3 / A);
+        }
+        tl.a_max[0] = fmax(af, tl.a_max[0]);
+        tl.j_max[0] = fmax(jf, tl.j_max[0]);
+        ramp = ls_traj_stop_ramp_s(&s->traj, &tl);
+    }
+    s->fast_stop_ramp_s = fmin(s->stop_ramp_s, fmax(MIN_STOP_RAMP_S, STOP_RAMP_MARGIN * (ramp > 0.0 ? ramp : 0.0)));
 
     /* The target first, so an unreachable goal is reported as such rather
      * than as the velocity blow-up on the way to the edge of the reach. */
@@ -611,13 +635,14 @@ int ls_motion_start(ls_motion_t *m, const ls_motion_plan_t *p)
     return 0;
 }
 
-static double current_stop_ramp(const ls_motion_t *m)
+static double current_stop_ramp(const ls_motion_t *m, bool fast)
 {
-    double r = plan_seg(&m->plan, m->seg_i_, m->cycle_)->stop_ramp_s;
+    const ls_motion_seg_t *s = plan_seg(&m->plan, m->seg_i_, m->cycle_);
+    double r = fast ? s->fast_stop_ramp_s : s->stop_ramp_s;
     if (m->blending_) {
         const ls_motion_seg_t *nx = next_seg(m);
         if (nx != NULL) {
-            r = fmax(r, nx->stop_ramp_s);
+            r = fmax(r, fast ? nx->fast_stop_ramp_s : nx->stop_ramp_s);
         }
     }
     return r;
@@ -630,10 +655,21 @@ void ls_motion_stop(ls_motion_t *m)
     }
     m->phase = LS_MOTION_STOPPING;
     if (m->sub_ == SUB_MOVE) {
-        (void)ls_timescale_set(&m->ts, 0.0, current_stop_ramp(m));
+        (void)ls_timescale_set(&m->ts, 0.0, current_stop_ramp(m, false));
     }
     /* At a point (auxiliary command, dwell) the arm is at rest already: the
      * next step reports the pause. */
+}
+
+void ls_motion_stop_fast(ls_motion_t *m)
+{
+    if (m->phase != LS_MOTION_RUNNING && m->phase != LS_MOTION_STOPPING) {
+        return;
+    }
+    m->phase = LS_MOTION_STOPPING;
+    if (m->sub_ == SUB_MOVE) {
+        (void)ls_timescale_set(&m->ts, 0.0, current_stop_ramp(m, true));
+    }
 }
 
 int ls_motion_resume(ls_motion_t *m)
@@ -642,7 +678,7 @@ int ls_motion_resume(ls_motion_t *m)
         return -1;
     }
     m->phase = LS_MOTION_RUNNING;
-    (void)ls_timescale_set(&m->ts, 1.0, current_stop_ramp(m));
+    (void)ls_timescale_set(&m->ts, 1.0, current_stop_ramp(m, false));
     return 0;
 }
 

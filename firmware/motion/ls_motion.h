@@ -89,6 +89,7 @@ typedef struct {
     ls_seg_kind_t kind;
     ls_traj_t traj;            /* JOINT: 6 joints; LINE/ARC: 1 axis, the path parameter s from 0 to 1 */
     double stop_ramp_s;        /* time-scale ramp that stops it within its limits */
+    double fast_stop_ramp_s;   /* the same within the model's maximum limits (ls_motion_stop_fast) */
     double q0[LS_N_JOINTS], q1[LS_N_JOINTS];
     double P0[16], P1[16];     /* LINE/ARC: tool-tip poses at s = 0 and 1, base frame */
     double tool_inv[16];       /* LINE/ARC: flange = tip * tool_inv */
@@ -217,6 +218,9 @@ void ls_motion_seg_blend(ls_motion_seg_t *a, const ls_motion_seg_t *b, double fr
  * of the held set-point (nothing changes). Copies the plan (not a program). */
 int ls_motion_start(ls_motion_t *m, const ls_motion_plan_t *p);
 void ls_motion_stop(ls_motion_t *m);   /* decelerate along the path, then LS_MEV_PAUSED */
+/* The same at the model's maximum deceleration (faults, emergency, shutdown):
+ * also shortens a stop already under way. */
+void ls_motion_stop_fast(ls_motion_t *m);
 int ls_motion_resume(ls_motion_t *m); /* from PAUSED; -1 otherwise */
 void ls_motion_abort(ls_motion_t *m); /* drop the motion at once: hold the current set-point */
 /* The auxiliary command announced by LS_MEV_AUX finished: go on. */

@@ -150,7 +150,7 @@ static void route(ls_net_t *net, const hal_can_frame_t *f)
     } else if ((f->id & LS_ID_MASK_SRC) == LS_ID_HEARTBEAT && f->len >= 3 && f->data[2] == 1u) {
         ls_core_on_heartbeat(net->core, source, net->now_us);
     } else if ((f->id & LS_ID_MASK_SRC) == LS_ID_EMERGENCY && source != net->node) {
-        ls_core_fault(net->core, "emergency stop frame on the bus", net->now_us);
+        ls_core_emergency(net->core, net->now_us);
     }
 }
 

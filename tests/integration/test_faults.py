@@ -26,7 +26,7 @@ import pytest
 from conftest import LANDSCAPED, Controller, start_controller
 from landscape import errors
 from landscape._generated import landscape_pb2 as pb
-from landscape.supervisor import RetVal, Supervisor
+from landscape.supervisor import RetVal, Supervisor, notice_data
 
 LOSS_RATES = [0.01, 0.05, 0.20]
 # The supervisor beats every 100 ms against the device's 1 s time-out, so a
@@ -401,7 +401,7 @@ ESTOP_BIT = 3
 
 def test_estop_input_stops_motion_and_raises_the_fault_alarm(tmp_path: Path) -> None:
     sock_path = tmp_path / "dio.sock"
-    c = faulty(tmp_path, "drop=0.01,seed=5", "--estop-input", str(ESTOP_BIT), "--dio-socket", str(sock_path))
+    c = faulty(tmp_path, "drop=0,seed=5", "--estop-input", str(ESTOP_BIT), "--dio-socket", str(sock_path))
     bus = open_bus(c)
     dgram = socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM)
     try:
@@ -424,9 +424,16 @@ def test_estop_input_stops_motion_and_raises_the_fault_alarm(tmp_path: Path) -> 
                     break
             latency = time.monotonic() - t0
             assert alarm is not None, "no alarm after the e-stop input"
+            # the arm stops along its path at the model's maximum deceleration, the
+            # drives go off, then the move's one final notice names the fault
+            final = next((n for n in sup.notices(timeout_s=3.0) if n.final and n.ref_seq == mv.seq), None)
+            assert final is not None, "the move got no final notice after the e-stop input"
+            assert final.event_id == "moveAbsoluteFailed", final
+            assert notice_data(final)["reason"] == "fault", final
             st = sup.get_motion_control_state().result
             assert st["fault"], f"no latched fault: {st}"
-            assert st["state"] != "MOVING" and st["control_mode"] != "power_on", st
+            assert st["state"] == "LOCKED" and st["control_mode"] == "controller_error", st
+            assert st["motion_control_state"] == "robot_stopped_on_error", st
             # stopped: the position no longer changes (within one cycle plus the deceleration)
             time.sleep(0.5)
             p1 = retry_until_answered(lambda: sup.get_robot_position(check=False))

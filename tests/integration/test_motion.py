@@ -274,15 +274,24 @@ def test_refusals_name_the_limit_and_nothing_moves(sup: Supervisor) -> None:
     assert sup.get_motion_control_state().result["state"] == "RESTING"
 
 
-def test_wait_aux_times_out_into_a_fault(sup: Supervisor) -> None:
+def test_wait_aux_times_out_into_path_move_failed(sup: Supervisor) -> None:
+    """A `wait` that times out ends the path with pathMoveFailed naming the point
+    and the cause; the device stays RESTING and takes the next motion."""
     pts = _joint_points(1)
     pts[0]["aux_commands"] = ["wait 0 0x80 0.3"]
     sup.path_load("w", pts)
     rv = sup.path_move("w", number_of_cycles=1)
-    with pytest.raises(errors.AlarmError):
+    with pytest.raises(errors.AlarmError) as exc:
         sup.wait_complete(rv, timeout_s=20)
+    n = exc.value.notice
+    assert n.event_id == "pathMoveFailed"
+    data = notice_data(n)
+    assert data["reason"] == "auxFailed" and data["at_point"] == "0"
+    assert "not all set in time" in data["fault"]
     st = sup.get_motion_control_state().result
-    assert "not all set in time" in st["fault"]
+    assert st["state"] == "RESTING" and st["motion_control_state"] == "robot_stopped_on_error"
+    assert st["fault"] == ""
+    sup.wait_complete(sup.move_absolute("home", HOME), timeout_s=20)
 
 
 def test_rsvp_aux_waits_for_the_owner(sup: Supervisor) -> None:

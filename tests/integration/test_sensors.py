@@ -103,7 +103,7 @@ def test_comply_holds_the_force_within_20_percent(rig: Rig) -> None:
     rv = sup.comply("force_sensor", [0.0, 0.0, target], max_timeout_s=20.0, panic_stop_code=7,
                     max_travel=[0.15, 0.0, 0.0, 0.0, 0.0, 0.05], speed_pct=3.0)
     assert rv.started
-    assert sup.get_motion_control_state().result["motion_control_state"] == "running_comply"
+    assert sup.get_motion_control_state().result["motion_control_state"] == "running_trajectory"
     samples: list[tuple[float, float]] = []
     done: dict[str, object] = {}
 

@@ -282,7 +282,7 @@ def collect(backend: Backend, rv: RetVal, *, wait_timeout_s: float,
         notices.append(n)
         if on_notice is not None:
             on_notice(n)
-        if n.final and n.ref_seq == rv.seq:
+        if n.final and n.ref_seq == rv.seq and n.session_epoch == rv.epoch:
             return notices, n
     return notices, None
 

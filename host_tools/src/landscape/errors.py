@@ -39,9 +39,34 @@ class AlarmError(LandscapeError):
         self.command = command
         data = " ".join(notice.data)
         what = f"{command} ended with" if command else "device raised"
+        reason = ""
+        for item in notice.data:
+            key, _, value = str(item).partition("=")
+            if key == "reason":
+                reason = value
         super().__init__(
-            f"{what} alarm {notice.event_id}" + (f" ({data})" if data else "")
-            + ": read get-motion-control-state for the fault, fix it, then activate again")
+            f"{what} alarm {notice.event_id}" + (f" ({data})" if data else "") + ": " + alarm_advice(reason))
+
+
+#: What to do after a motion's final alarm, by its `reason=` (docs/protocol.md, "Motion lifecycle").
+_ADVICE = {
+    "fault": "the drives are off: read get-motion-control-state for the fault, fix it, then activate again",
+    "emergency": "an emergency stop frame stopped the arm and the drives are off: clear the emergency, "
+                 "then activate again",
+    "deactivate": "the device was deactivated: activate to move again",
+    "shutdown": "the controller shut down: restart landscaped, then connect, lock and activate",
+    "ownerLost": "the owner's session was lost and the device released: connect, lock and activate again",
+    "disconnect": "the owner disconnected and the device was released: connect, lock and activate again",
+    "auxFailed": "the path stopped at that point; the device is still active (RESTING): fix the auxiliary "
+                 "command or its I/O, then start the next motion",
+    "abortMotion": "the motion was dropped; the device is RESTING and takes the next motion",
+    "rsvpDeclined": "the path was dropped at the RSVP; the device is RESTING and takes the next motion",
+}
+
+
+def alarm_advice(reason: str) -> str:
+    """The advice for a motion alarm with data `reason=<reason>`."""
+    return _ADVICE.get(reason, "read get-motion-control-state for the device's state and fault")
 
 
 class CommandError(LandscapeError):

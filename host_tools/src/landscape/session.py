@@ -83,7 +83,7 @@ def _jsonable(value: Any) -> Any:
 
 def retval_to_dict(rv: RetVal) -> dict[str, Any]:
     return {"command": rv.command.field, "seq": rv.seq, "ret_code": rv.ret_code, "ret_name": rv.ret_name,
-            "ret_msg": rv.ret_msg, "result": rv.result}
+            "ret_msg": rv.ret_msg, "result": rv.result, "epoch": rv.epoch}
 
 
 def retval_from_dict(d: dict[str, Any]) -> RetVal:
@@ -92,7 +92,8 @@ def retval_from_dict(d: dict[str, Any]) -> RetVal:
     if d["ret_code"] >= 0 or d.get("result"):
         msg = message_factory.GetMessageClass(cmd.response_type)()
         json_format.ParseDict(d.get("result") or {}, msg)
-    return RetVal(cmd, int(d["seq"]), int(d["ret_code"]), str(d["ret_msg"]), msg, dict(d.get("result") or {}))
+    return RetVal(cmd, int(d["seq"]), int(d["ret_code"]), str(d["ret_msg"]), msg, dict(d.get("result") or {}),
+                  int(d.get("epoch", 0)))
 
 
 def error_from_dict(d: dict[str, Any]) -> LandscapeError:
@@ -264,7 +265,7 @@ class SessionServer:
             if rv.started and wait_s is not None:
                 for n in sup.notices(timeout_s=float(wait_s)):
                     send({"notice": message_to_dict(n)})
-                    if n.final and n.ref_seq == rv.seq:
+                    if n.final and n.ref_seq == rv.seq and n.session_epoch == rv.epoch:
                         break
             send({"done": True})
 

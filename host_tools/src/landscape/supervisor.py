@@ -71,6 +71,7 @@ class RetVal:
     ret_msg: str
     message: Message | None          # the result message, e.g. ls.GetRobotPositionRes
     result: dict[str, Any] = field(default_factory=dict)
+    epoch: int = 0                   # the session epoch the device answered in (docs/protocol.md)
 
     @property
     def name(self) -> str:
@@ -166,7 +167,9 @@ class Supervisor:
         self._seq = 0
         self._pending_seq: int | None = None
         self._pending_resp: pb.Response | None = None
-        self._finals: collections.OrderedDict[int, pb.Notice] = collections.OrderedDict()
+        # final notices by (session epoch, ref_seq): a late notice of an earlier session
+        # never ends a request of this one that reused its seq
+        self._finals: collections.OrderedDict[tuple[int, int], pb.Notice] = collections.OrderedDict()
         self._hist: collections.deque[pb.Notice] = collections.deque(maxlen=1024)
         self._hist_base = 0          # index of _hist[0] among every notice received
         self._read_cursor = 0        # next index notices() yields
@@ -442,7 +445,7 @@ class Supervisor:
         elif resp.ret_code >= 0:
             msg = message_factory.GetMessageClass(cmd.response_type)()
         result = message_to_dict(msg) if msg is not None else {}
-        return RetVal(cmd, resp.seq, resp.ret_code, resp.ret_msg, msg, result)
+        return RetVal(cmd, resp.seq, resp.ret_code, resp.ret_msg, msg, result, resp.session_epoch)
 
     def stop_all(self) -> None:
         """Ask every device on the bus to stopMotion: one functional ISO-TP single frame
@@ -512,7 +515,7 @@ class Supervisor:
                     self._hist_base += 1  # the deque drops its oldest notice
                 self._hist.append(n)
                 if n.final and n.ref_seq:
-                    self._finals[n.ref_seq] = n
+                    self._finals[(n.session_epoch, n.ref_seq)] = n
                     while len(self._finals) > 256:
                         self._finals.popitem(last=False)
                 self._cv.notify_all()
@@ -611,7 +614,8 @@ class Supervisor:
                                  f"CMD_STARTED_OK has a completion to wait for")
         deadline = None if timeout_s is None else time.monotonic() + timeout_s
         with self._cv:
-            while retval.seq not in self._finals:
+            key = (retval.epoch, retval.seq)
+            while key not in self._finals:
                 if not self._running:
                     raise LandscapeError("the session was closed while waiting for a completion")
                 left = None if deadline is None else deadline - time.monotonic()
@@ -620,7 +624,7 @@ class Supervisor:
                         f"{retval.name} (seq {retval.seq}) did not complete within {timeout_s:g} s: "
                         f"check get-motion-control-state, or stop-motion")
                 self._cv.wait(left if left is not None else 0.5)
-            n = self._finals[retval.seq]
+            n = self._finals[key]
         if n.kind in ALARM_KINDS:
             raise AlarmError(n, retval.name)
         return n

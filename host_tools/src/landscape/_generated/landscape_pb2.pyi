@@ -163,7 +163,7 @@ class ConnectReq(_message.Message):
     def __init__(self, protocol_version: _Optional[int] = ..., schema_hash: _Optional[int] = ..., client_name: _Optional[str] = ..., heartbeat_period_ms: _Optional[int] = ...) -> None: ...
 
 class ConnectRes(_message.Message):
-    __slots__ = ["device_name", "firmware_version", "heartbeat_timeout_ms", "joint_count", "owner", "protocol_version", "schema_hash", "state"]
+    __slots__ = ["device_name", "firmware_version", "heartbeat_timeout_ms", "joint_count", "owner", "protocol_version", "schema_hash", "session_epoch", "state"]
     DEVICE_NAME_FIELD_NUMBER: _ClassVar[int]
     FIRMWARE_VERSION_FIELD_NUMBER: _ClassVar[int]
     HEARTBEAT_TIMEOUT_MS_FIELD_NUMBER: _ClassVar[int]
@@ -171,6 +171,7 @@ class ConnectRes(_message.Message):
     OWNER_FIELD_NUMBER: _ClassVar[int]
     PROTOCOL_VERSION_FIELD_NUMBER: _ClassVar[int]
     SCHEMA_HASH_FIELD_NUMBER: _ClassVar[int]
+    SESSION_EPOCH_FIELD_NUMBER: _ClassVar[int]
     STATE_FIELD_NUMBER: _ClassVar[int]
     device_name: str
     firmware_version: str
@@ -179,8 +180,9 @@ class ConnectRes(_message.Message):
     owner: bool
     protocol_version: int
     schema_hash: int
+    session_epoch: int
     state: State
-    def __init__(self, protocol_version: _Optional[int] = ..., schema_hash: _Optional[int] = ..., device_name: _Optional[str] = ..., joint_count: _Optional[int] = ..., firmware_version: _Optional[str] = ..., heartbeat_timeout_ms: _Optional[int] = ..., state: _Optional[_Union[State, str]] = ..., owner: bool = ...) -> None: ...
+    def __init__(self, protocol_version: _Optional[int] = ..., schema_hash: _Optional[int] = ..., device_name: _Optional[str] = ..., joint_count: _Optional[int] = ..., firmware_version: _Optional[str] = ..., heartbeat_timeout_ms: _Optional[int] = ..., state: _Optional[_Union[State, str]] = ..., owner: bool = ..., session_epoch: _Optional[int] = ...) -> None: ...
 
 class DeactivateReq(_message.Message):
     __slots__ = []
@@ -485,7 +487,7 @@ class MoveRelativeRes(_message.Message):
     def __init__(self) -> None: ...
 
 class Notice(_message.Message):
-    __slots__ = ["data", "event_id", "final", "kind", "notice_seq", "ref_seq", "rsvp_default", "rsvp_id", "rsvp_timeout_ms"]
+    __slots__ = ["data", "event_id", "final", "kind", "notice_seq", "ref_seq", "rsvp_default", "rsvp_id", "rsvp_timeout_ms", "session_epoch"]
     DATA_FIELD_NUMBER: _ClassVar[int]
     EVENT_ID_FIELD_NUMBER: _ClassVar[int]
     FINAL_FIELD_NUMBER: _ClassVar[int]
@@ -495,6 +497,7 @@ class Notice(_message.Message):
     RSVP_DEFAULT_FIELD_NUMBER: _ClassVar[int]
     RSVP_ID_FIELD_NUMBER: _ClassVar[int]
     RSVP_TIMEOUT_MS_FIELD_NUMBER: _ClassVar[int]
+    SESSION_EPOCH_FIELD_NUMBER: _ClassVar[int]
     data: _containers.RepeatedScalarFieldContainer[str]
     event_id: str
     final: bool
@@ -504,7 +507,8 @@ class Notice(_message.Message):
     rsvp_default: str
     rsvp_id: int
     rsvp_timeout_ms: int
-    def __init__(self, kind: _Optional[_Union[NoticeKind, str]] = ..., event_id: _Optional[str] = ..., data: _Optional[_Iterable[str]] = ..., ref_seq: _Optional[int] = ..., rsvp_id: _Optional[int] = ..., rsvp_timeout_ms: _Optional[int] = ..., rsvp_default: _Optional[str] = ..., notice_seq: _Optional[int] = ..., final: bool = ...) -> None: ...
+    session_epoch: int
+    def __init__(self, kind: _Optional[_Union[NoticeKind, str]] = ..., event_id: _Optional[str] = ..., data: _Optional[_Iterable[str]] = ..., ref_seq: _Optional[int] = ..., rsvp_id: _Optional[int] = ..., rsvp_timeout_ms: _Optional[int] = ..., rsvp_default: _Optional[str] = ..., notice_seq: _Optional[int] = ..., final: bool = ..., session_epoch: _Optional[int] = ...) -> None: ...
 
 class PathClearPathReq(_message.Message):
     __slots__ = ["path_name"]
@@ -659,7 +663,7 @@ class Request(_message.Message):
     def __init__(self, seq: _Optional[int] = ..., connect: _Optional[_Union[ConnectReq, _Mapping]] = ..., disconnect: _Optional[_Union[DisconnectReq, _Mapping]] = ..., lock: _Optional[_Union[LockReq, _Mapping]] = ..., release: _Optional[_Union[ReleaseReq, _Mapping]] = ..., activate: _Optional[_Union[ActivateReq, _Mapping]] = ..., deactivate: _Optional[_Union[DeactivateReq, _Mapping]] = ..., set_speed: _Optional[_Union[SetSpeedReq, _Mapping]] = ..., set_acceleration: _Optional[_Union[SetAccelerationReq, _Mapping]] = ..., set_tool_offset: _Optional[_Union[SetToolOffsetReq, _Mapping]] = ..., set_world_cartesian_frame: _Optional[_Union[SetWorldCartesianFrameReq, _Mapping]] = ..., set_units: _Optional[_Union[SetUnitsReq, _Mapping]] = ..., get_units: _Optional[_Union[GetUnitsReq, _Mapping]] = ..., get_velocities: _Optional[_Union[GetVelocitiesReq, _Mapping]] = ..., get_accelerations: _Optional[_Union[GetAccelerationsReq, _Mapping]] = ..., get_max_velocities: _Optional[_Union[GetMaxVelocitiesReq, _Mapping]] = ..., get_max_accelerations: _Optional[_Union[GetMaxAccelerationsReq, _Mapping]] = ..., get_tool_offsets: _Optional[_Union[GetToolOffsetsReq, _Mapping]] = ..., get_robot_position: _Optional[_Union[GetRobotPositionReq, _Mapping]] = ..., get_motion_control_state: _Optional[_Union[GetMotionControlStateReq, _Mapping]] = ..., get_tag_id: _Optional[_Union[GetTagIdReq, _Mapping]] = ..., move_relative: _Optional[_Union[MoveRelativeReq, _Mapping]] = ..., move_absolute: _Optional[_Union[MoveAbsoluteReq, _Mapping]] = ..., move_arc: _Optional[_Union[MoveArcReq, _Mapping]] = ..., path_load: _Optional[_Union[PathLoadReq, _Mapping]] = ..., path_clear_path: _Optional[_Union[PathClearPathReq, _Mapping]] = ..., path_move: _Optional[_Union[PathMoveReq, _Mapping]] = ..., stop_motion: _Optional[_Union[StopMotionReq, _Mapping]] = ..., resume_motion: _Optional[_Union[ResumeMotionReq, _Mapping]] = ..., abort_motion: _Optional[_Union[AbortMotionReq, _Mapping]] = ..., get_sensor_reading: _Optional[_Union[GetSensorReadingReq, _Mapping]] = ..., move_react: _Optional[_Union[MoveReactReq, _Mapping]] = ..., comply: _Optional[_Union[ComplyReq, _Mapping]] = ..., manual_control: _Optional[_Union[ManualControlReq, _Mapping]] = ..., get_end_effector_state: _Optional[_Union[GetEndEffectorStateReq, _Mapping]] = ..., get_tool: _Optional[_Union[GetToolReq, _Mapping]] = ..., put_tool: _Optional[_Union[PutToolReq, _Mapping]] = ..., activate_tool: _Optional[_Union[ActivateToolReq, _Mapping]] = ..., deactivate_tool: _Optional[_Union[DeactivateToolReq, _Mapping]] = ..., set_digital_io: _Optional[_Union[SetDigitalIOReq, _Mapping]] = ..., get_digital_io: _Optional[_Union[GetDigitalIOReq, _Mapping]] = ..., signal_digital_io: _Optional[_Union[SignalDigitalIOReq, _Mapping]] = ..., send_command: _Optional[_Union[SendCommandReq, _Mapping]] = ...) -> None: ...
 
 class Response(_message.Message):
-    __slots__ = ["abort_motion", "activate", "activate_tool", "comply", "connect", "deactivate", "deactivate_tool", "disconnect", "get_accelerations", "get_digital_io", "get_end_effector_state", "get_max_accelerations", "get_max_velocities", "get_motion_control_state", "get_robot_position", "get_sensor_reading", "get_tag_id", "get_tool", "get_tool_offsets", "get_units", "get_velocities", "lock", "manual_control", "move_absolute", "move_arc", "move_react", "move_relative", "path_clear_path", "path_load", "path_move", "put_tool", "release", "resume_motion", "ret_code", "ret_msg", "send_command", "seq", "set_acceleration", "set_digital_io", "set_speed", "set_tool_offset", "set_units", "set_world_cartesian_frame", "signal_digital_io", "stop_motion"]
+    __slots__ = ["abort_motion", "activate", "activate_tool", "comply", "connect", "deactivate", "deactivate_tool", "disconnect", "get_accelerations", "get_digital_io", "get_end_effector_state", "get_max_accelerations", "get_max_velocities", "get_motion_control_state", "get_robot_position", "get_sensor_reading", "get_tag_id", "get_tool", "get_tool_offsets", "get_units", "get_velocities", "lock", "manual_control", "move_absolute", "move_arc", "move_react", "move_relative", "path_clear_path", "path_load", "path_move", "put_tool", "release", "resume_motion", "ret_code", "ret_msg", "send_command", "seq", "session_epoch", "set_acceleration", "set_digital_io", "set_speed", "set_tool_offset", "set_units", "set_world_cartesian_frame", "signal_digital_io", "stop_motion"]
     ABORT_MOTION_FIELD_NUMBER: _ClassVar[int]
     ACTIVATE_FIELD_NUMBER: _ClassVar[int]
     ACTIVATE_TOOL_FIELD_NUMBER: _ClassVar[int]
@@ -697,6 +701,7 @@ class Response(_message.Message):
     RET_MSG_FIELD_NUMBER: _ClassVar[int]
     SEND_COMMAND_FIELD_NUMBER: _ClassVar[int]
     SEQ_FIELD_NUMBER: _ClassVar[int]
+    SESSION_EPOCH_FIELD_NUMBER: _ClassVar[int]
     SET_ACCELERATION_FIELD_NUMBER: _ClassVar[int]
     SET_DIGITAL_IO_FIELD_NUMBER: _ClassVar[int]
     SET_SPEED_FIELD_NUMBER: _ClassVar[int]
@@ -742,6 +747,7 @@ class Response(_message.Message):
     ret_msg: str
     send_command: SendCommandRes
     seq: int
+    session_epoch: int
     set_acceleration: SetAccelerationRes
     set_digital_io: SetDigitalIORes
     set_speed: SetSpeedRes
@@ -750,7 +756,7 @@ class Response(_message.Message):
     set_world_cartesian_frame: SetWorldCartesianFrameRes
     signal_digital_io: SignalDigitalIORes
     stop_motion: StopMotionRes
-    def __init__(self, seq: _Optional[int] = ..., ret_code: _Optional[int] = ..., ret_msg: _Optional[str] = ..., connect: _Optional[_Union[ConnectRes, _Mapping]] = ..., disconnect: _Optional[_Union[DisconnectRes, _Mapping]] = ..., lock: _Optional[_Union[LockRes, _Mapping]] = ..., release: _Optional[_Union[ReleaseRes, _Mapping]] = ..., activate: _Optional[_Union[ActivateRes, _Mapping]] = ..., deactivate: _Optional[_Union[DeactivateRes, _Mapping]] = ..., set_speed: _Optional[_Union[SetSpeedRes, _Mapping]] = ..., set_acceleration: _Optional[_Union[SetAccelerationRes, _Mapping]] = ..., set_tool_offset: _Optional[_Union[SetToolOffsetRes, _Mapping]] = ..., set_world_cartesian_frame: _Optional[_Union[SetWorldCartesianFrameRes, _Mapping]] = ..., set_units: _Optional[_Union[SetUnitsRes, _Mapping]] = ..., get_units: _Optional[_Union[GetUnitsRes, _Mapping]] = ..., get_velocities: _Optional[_Union[GetVelocitiesRes, _Mapping]] = ..., get_accelerations: _Optional[_Union[GetAccelerationsRes, _Mapping]] = ..., get_max_velocities: _Optional[_Union[GetMaxVelocitiesRes, _Mapping]] = ..., get_max_accelerations: _Optional[_Union[GetMaxAccelerationsRes, _Mapping]] = ..., get_tool_offsets: _Optional[_Union[GetToolOffsetsRes, _Mapping]] = ..., get_robot_position: _Optional[_Union[GetRobotPositionRes, _Mapping]] = ..., get_motion_control_state: _Optional[_Union[GetMotionControlStateRes, _Mapping]] = ..., get_tag_id: _Optional[_Union[GetTagIdRes, _Mapping]] = ..., move_relative: _Optional[_Union[MoveRelativeRes, _Mapping]] = ..., move_absolute: _Optional[_Union[MoveAbsoluteRes, _Mapping]] = ..., move_arc: _Optional[_Union[MoveArcRes, _Mapping]] = ..., path_load: _Optional[_Union[PathLoadRes, _Mapping]] = ..., path_clear_path: _Optional[_Union[PathClearPathRes, _Mapping]] = ..., path_move: _Optional[_Union[PathMoveRes, _Mapping]] = ..., stop_motion: _Optional[_Union[StopMotionRes, _Mapping]] = ..., resume_motion: _Optional[_Union[ResumeMotionRes, _Mapping]] = ..., abort_motion: _Optional[_Union[AbortMotionRes, _Mapping]] = ..., get_sensor_reading: _Optional[_Union[GetSensorReadingRes, _Mapping]] = ..., move_react: _Optional[_Union[MoveReactRes, _Mapping]] = ..., comply: _Optional[_Union[ComplyRes, _Mapping]] = ..., manual_control: _Optional[_Union[ManualControlRes, _Mapping]] = ..., get_end_effector_state: _Optional[_Union[GetEndEffectorStateRes, _Mapping]] = ..., get_tool: _Optional[_Union[GetToolRes, _Mapping]] = ..., put_tool: _Optional[_Union[PutToolRes, _Mapping]] = ..., activate_tool: _Optional[_Union[ActivateToolRes, _Mapping]] = ..., deactivate_tool: _Optional[_Union[DeactivateToolRes, _Mapping]] = ..., set_digital_io: _Optional[_Union[SetDigitalIORes, _Mapping]] = ..., get_digital_io: _Optional[_Union[GetDigitalIORes, _Mapping]] = ..., signal_digital_io: _Optional[_Union[SignalDigitalIORes, _Mapping]] = ..., send_command: _Optional[_Union[SendCommandRes, _Mapping]] = ...) -> None: ...
+    def __init__(self, seq: _Optional[int] = ..., ret_code: _Optional[int] = ..., ret_msg: _Optional[str] = ..., session_epoch: _Optional[int] = ..., connect: _Optional[_Union[ConnectRes, _Mapping]] = ..., disconnect: _Optional[_Union[DisconnectRes, _Mapping]] = ..., lock: _Optional[_Union[LockRes, _Mapping]] = ..., release: _Optional[_Union[ReleaseRes, _Mapping]] = ..., activate: _Optional[_Union[ActivateRes, _Mapping]] = ..., deactivate: _Optional[_Union[DeactivateRes, _Mapping]] = ..., set_speed: _Optional[_Union[SetSpeedRes, _Mapping]] = ..., set_acceleration: _Optional[_Union[SetAccelerationRes, _Mapping]] = ..., set_tool_offset: _Optional[_Union[SetToolOffsetRes, _Mapping]] = ..., set_world_cartesian_frame: _Optional[_Union[SetWorldCartesianFrameRes, _Mapping]] = ..., set_units: _Optional[_Union[SetUnitsRes, _Mapping]] = ..., get_units: _Optional[_Union[GetUnitsRes, _Mapping]] = ..., get_velocities: _Optional[_Union[GetVelocitiesRes, _Mapping]] = ..., get_accelerations: _Optional[_Union[GetAccelerationsRes, _Mapping]] = ..., get_max_velocities: _Optional[_Union[GetMaxVelocitiesRes, _Mapping]] = ..., get_max_accelerations: _Optional[_Union[GetMaxAccelerationsRes, _Mapping]] = ..., get_tool_offsets: _Optional[_Union[GetToolOffsetsRes, _Mapping]] = ..., get_robot_position: _Optional[_Union[GetRobotPositionRes, _Mapping]] = ..., get_motion_control_state: _Optional[_Union[GetMotionControlStateRes, _Mapping]] = ..., get_tag_id: _Optional[_Union[GetTagIdRes, _Mapping]] = ..., move_relative: _Optional[_Union[MoveRelativeRes, _Mapping]] = ..., move_absolute: _Optional[_Union[MoveAbsoluteRes, _Mapping]] = ..., move_arc: _Optional[_Union[MoveArcRes, _Mapping]] = ..., path_load: _Optional[_Union[PathLoadRes, _Mapping]] = ..., path_clear_path: _Optional[_Union[PathClearPathRes, _Mapping]] = ..., path_move: _Optional[_Union[PathMoveRes, _Mapping]] = ..., stop_motion: _Optional[_Union[StopMotionRes, _Mapping]] = ..., resume_motion: _Optional[_Union[ResumeMotionRes, _Mapping]] = ..., abort_motion: _Optional[_Union[AbortMotionRes, _Mapping]] = ..., get_sensor_reading: _Optional[_Union[GetSensorReadingRes, _Mapping]] = ..., move_react: _Optional[_Union[MoveReactRes, _Mapping]] = ..., comply: _Optional[_Union[ComplyRes, _Mapping]] = ..., manual_control: _Optional[_Union[ManualControlRes, _Mapping]] = ..., get_end_effector_state: _Optional[_Union[GetEndEffectorStateRes, _Mapping]] = ..., get_tool: _Optional[_Union[GetToolRes, _Mapping]] = ..., put_tool: _Optional[_Union[PutToolRes, _Mapping]] = ..., activate_tool: _Optional[_Union[ActivateToolRes, _Mapping]] = ..., deactivate_tool: _Optional[_Union[DeactivateToolRes, _Mapping]] = ..., set_digital_io: _Optional[_Union[SetDigitalIORes, _Mapping]] = ..., get_digital_io: _Optional[_Union[GetDigitalIORes, _Mapping]] = ..., signal_digital_io: _Optional[_Union[SignalDigitalIORes, _Mapping]] = ..., send_command: _Optional[_Union[SendCommandRes, _Mapping]] = ...) -> None: ...
 
 class ResumeMotionReq(_message.Message):
     __slots__ = []

@@ -1,0 +1,232 @@
+/* The life of a started motion: see ls_run.h. */
+#include "ls_run.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "cmd_sensor.h"
+#include "ls_control.h"
+#include "ls_core.h"
+
+/* A halt that has not reached rest with the drives off after this long ends
+ * anyway (the notices must not wait for ever on a broken loop). */
+#define HALT_MAX_US 5000000u
+/* "At rest": every measured joint speed below this. */
+#define REST_SPEED_RAD_S 1e-3
+/* Drives off and the arm still coasting: wait at most this long for rest. */
+#define COAST_MAX_US 500000u
+
+static const char *const k_end_names[LS_RUN_END_COUNT] = {
+    [LS_RUN_END_COMPLETE] = "complete",
+    [LS_RUN_END_ABORT] = "abortMotion",
+    [LS_RUN_END_DEACTIVATE] = "deactivate",
+    [LS_RUN_END_FAULT] = "fault",
+    [LS_RUN_END_EMERGENCY] = "emergency",
+    [LS_RUN_END_OWNER_LOST] = "ownerLost",
+    [LS_RUN_END_DISCONNECT] = "disconnect",
+    [LS_RUN_END_AUX_FAILED] = "auxFailed",
+    [LS_RUN_END_RSVP_DECLINED] = "rsvpDeclined",
+    [LS_RUN_END_SHUTDOWN] = "shutdown",
+};
+
+const char *ls_run_end_name(ls_run_end_t why)
+{
+    return (unsigned)why < LS_RUN_END_COUNT ? k_end_names[why] : "unknown";
+}
+
+/* The event id suffix and notice kind of each reason (docs/protocol.md). */
+static const char *end_suffix(ls_run_end_t why)
+{
+    switch (why) {
+    case LS_RUN_END_COMPLETE: return "Complete";
+    case LS_RUN_END_FAULT:
+    case LS_RUN_END_EMERGENCY:
+    case LS_RUN_END_AUX_FAILED: return "Failed";
+    default: return "Aborted";
+    }
+}
+
+static void set_motion_state(ls_core_t *core, const char *s)
+{
+    snprintf(core->motion_state, sizeof core->motion_state, "%s", s);
+}
+
+void ls_run_begin(ls_core_t *core, const ls_call_t *call, bool react, const char *seed_name, const char *point,
+                  int path)
+{
+    ls_run_t *r = &core->run;
+    const ls_session_t *s = &core->sessions[call->sup];
+    memset(r, 0, sizeof *r);
+    r->active = true;
+    r->react = react;
+    r->sup = call->sup;
+    r->addr = s->addr;
+    r->epoch = s->epoch;
+    r->ref_seq = call->req->seq;
+    r->path = path;
+    r->stop_sup = -1;
+    snprintf(r->seed_name, sizeof r->seed_name, "%s", seed_name);
+    snprintf(r->point, sizeof r->point, "%s", point);
+    core->state = ls_State_MOVING;
+    set_motion_state(core, "running_trajectory");
+}
+
+void ls_run_finish(ls_core_t *core, ls_run_end_t why, const char *const *extra, size_t n_extra)
+{
+    ls_run_t *r = &core->run;
+    if (!r->active) {
+        return;
+    }
+    char d_point[48], d_reason[32];
+    snprintf(d_point, sizeof d_point, "point=%s", r->point);
+    snprintf(d_reason, sizeof d_reason, "reason=%s", ls_run_end_name(why));
+    const char *data[8] = { d_point, d_reason };
+    size_t n = 2;
+    for (size_t k = 0; k < n_extra && n < sizeof data / sizeof data[0]; k++) {
+        data[n++] = extra[k];
+    }
+    char id[40];
+    snprintf(id, sizeof id, "%s%s", r->seed_name, end_suffix(why));
+    r->active = false;
+    r->wait_active = false;
+    ls_core_notify_to(core, r->addr, r->epoch, why == LS_RUN_END_COMPLETE ? ls_NoticeKind_EVENT : ls_NoticeKind_ALARM,
+                      id, r->ref_seq, true, data, n);
+    if (r->stop_pending) {
+        r->stop_pending = false;
+        char msg[120];
+        snprintf(msg, sizeof msg, "the motion ended (%s) before it paused", ls_run_end_name(why));
+        ls_core_finish_deferred(core, r->stop_sup,
+                                why == LS_RUN_END_COMPLETE ? ls_RetCode_CMD_EXEC_OK : ls_RetCode_CMD_ERR,
+                                why == LS_RUN_END_COMPLETE ? "the motion completed before it could stop" : msg);
+    }
+}
+
+static void post_stop(ls_core_t *core, bool fast)
+{
+    if (fast && core->act.halt != NULL) {
+        core->act.halt(core->act.ctx);
+    } else if (core->act.enable_drives != NULL) {
+        /* The loop stops a running motion along its path first (LS_CTL_DISABLE). */
+        (void)core->act.enable_drives(core->act.ctx, false);
+    }
+}
+
+static bool is_fault(ls_run_end_t why)
+{
+    return why == LS_RUN_END_FAULT || why == LS_RUN_END_EMERGENCY;
+}
+
+void ls_run_halt(ls_core_t *core, ls_run_end_t why, const char *text, bool fast, int answer_sup, uint64_t now_us)
+{
+    ls_halt_t *h = &core->halt;
+    if (h->active) {
+        /* Already stopping: a fault takes over the reason and the speed of the stop. */
+        if (is_fault(why) && !is_fault(h->why)) {
+            h->why = why;
+            snprintf(h->text, sizeof h->text, "%s", text != NULL ? text : "");
+        }
+        if (answer_sup >= 0) {
+            h->answer_sup = answer_sup;
+        }
+        if (fast) {
+            post_stop(core, true);
+        }
+        return;
+    }
+    memset(h, 0, sizeof *h);
+    h->active = true;
+    h->why = why;
+    h->answer_sup = answer_sup;
+    h->since_us = now_us;
+    snprintf(h->text, sizeof h->text, "%s", text != NULL ? text : "");
+    h->start_cycle = 0;
+    if (core->ctl != NULL) {
+        ls_ctl_snapshot_t snap;
+        ls_control_snapshot(core->ctl, &snap);
+        h->start_cycle = snap.cycle;
+    }
+    core->run.wait_active = false;
+    ls_core_manual_off(core);
+    set_motion_state(core, "robot_stopping");
+    post_stop(core, fast);
+}
+
+/* The arm is at rest with the drives off (or there is no loop to ask). */
+static bool halted(ls_core_t *core, uint64_t now_us)
+{
+    ls_halt_t *h = &core->halt;
+    if (core->ctl == NULL) {
+        return true;
+    }
+    ls_ctl_snapshot_t snap;
+    ls_control_snapshot(core->ctl, &snap);
+    if (now_us - h->since_us > HALT_MAX_US) {
+        return true;
+    }
+    /* two cycles: the one that took the command and one that published after it */
+    if (snap.cycle < h->start_cycle + 2u || snap.enabled || snap.phase != LS_MOTION_IDLE || snap.react_active) {
+        h->off_since_us = 0;
+        return false;
+    }
+    if (h->off_since_us == 0) {
+        h->off_since_us = now_us;
+    }
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        if (fabs(snap.qd_rad_s[j]) > REST_SPEED_RAD_S && now_us - h->off_since_us < COAST_MAX_US) {
+            return false;
+        }
+    }
+    return true;
+}
+
+void ls_run_tick(ls_core_t *core, uint64_t now_us)
+{
+    ls_halt_t *h = &core->halt;
+    if (!h->active || !halted(core, now_us)) {
+        return;
+    }
+    h->active = false;
+    const bool fault = is_fault(h->why) || h->why == LS_RUN_END_AUX_FAILED;
+    char d_fault[80];
+    const char *extra[1] = { d_fault };
+    size_t n_extra = 0;
+    if (h->text[0] != '\0') {
+        snprintf(d_fault, sizeof d_fault, "fault=%s", h->text);
+        n_extra = 1;
+    }
+    /* The state first: a supervisor reacting to the notice sees the arm's state. */
+    if (h->release) {
+        core->state = ls_State_UNLOCKED;
+        for (int i = 0; i < LS_MAX_SUPERVISORS && core->state == ls_State_UNLOCKED; i++) {
+            if (core->sessions[i].connected) {
+                break;
+            }
+            if (i == LS_MAX_SUPERVISORS - 1) {
+                core->state = ls_State_IDLE;
+            }
+        }
+    } else if (core->state == ls_State_MOVING || core->state == ls_State_PAUSED ||
+               core->state == ls_State_RESTING) {
+        core->state = ls_State_LOCKED;
+    }
+    set_motion_state(core, fault || h->why == LS_RUN_END_OWNER_LOST ? "robot_stopped_on_error"
+                                                                   : "robot_stopped_on_command");
+    ls_run_finish(core, h->why, extra, n_extra);
+    if (h->release) {
+        ls_core_owner_lost_alarm(core, h->lost_addr, h->lost_why, now_us);
+    }
+    if (h->answer_sup >= 0) {
+        ls_core_finish_deferred(core, h->answer_sup, ls_RetCode_CMD_EXEC_OK,
+                                fault ? "inactive: a fault stopped the motion first, drives disabled"
+                                      : "inactive: stopped along the planned path, drives disabled");
+    }
+}
+
+bool ls_run_shutdown(ls_core_t *core, uint64_t now_us)
+{
+    if (core->state == ls_State_MOVING || core->state == ls_State_PAUSED || core->halt.active) {
+        ls_run_halt(core, LS_RUN_END_SHUTDOWN, "", true, -1, now_us);
+    }
+    return core->halt.active;
+}

@@ -1,0 +1,117 @@
+/* The life of a started motion: one owner in the core (docs/state-machine.md,
+ * "Motion lifecycle").
+ *
+ * Every request answered CMD_STARTED_OK (moveAbsolute, moveRelative, moveArc,
+ * pathMove, moveReact, comply) becomes the one run of ls_core_t.run. The run
+ * ends exactly once, with exactly one final notice carrying the request's
+ * ref_seq and session epoch, whatever ends it (ls_run_end_t). Endings that
+ * stop the arm first (deactivate, faults, owner loss, disconnect, shutdown)
+ * go through a halt: the stop is posted to the control loop, the core stays
+ * MOVING/PAUSED ("robot_stopping") until the loop reports the arm at rest
+ * with the drives off, then the final notice goes out, the state changes
+ * (LOCKED, UNLOCKED) and a deferred deactivate is answered.
+ *
+ * Comms thread only. No allocation. */
+#ifndef LS_RUN_H
+#define LS_RUN_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "ls_motion.h"
+
+struct ls_core;
+struct ls_call;
+
+/* Why a run ended: the `reason=` of its final notice (docs/protocol.md). */
+typedef enum {
+    LS_RUN_END_COMPLETE = 0, /* <cmd>Complete (EVENT) */
+    LS_RUN_END_ABORT,        /* abortMotion: <cmd>Aborted */
+    LS_RUN_END_DEACTIVATE,   /* deactivate: <cmd>Aborted */
+    LS_RUN_END_FAULT,        /* a fault (following error, IK, HAL, e-stop input, wait time-out): <cmd>Failed */
+    LS_RUN_END_EMERGENCY,    /* an EMERGENCY frame on the bus: <cmd>Failed */
+    LS_RUN_END_OWNER_LOST,   /* the owner's heartbeat stopped: <cmd>Aborted */
+    LS_RUN_END_DISCONNECT,   /* the owner sent disconnect: <cmd>Aborted */
+    LS_RUN_END_AUX_FAILED,   /* a path auxiliary command failed: <cmd>Failed */
+    LS_RUN_END_RSVP_DECLINED, /* the owner answered a path RSVP with an error: <cmd>Aborted */
+    LS_RUN_END_SHUTDOWN,     /* landscaped stops (SIGTERM/SIGINT): <cmd>Aborted */
+    LS_RUN_END_COUNT
+} ls_run_end_t;
+
+typedef struct {
+    bool active;              /* started and its final notice not sent yet */
+    bool react;               /* moveReact / comply (cmd_sensor.c), else a planned motion (cmd_motion.c) */
+    int sup;                  /* session that started it */
+    uint8_t addr;             /* its address: the final notice goes there */
+    uint32_t epoch;           /* its session epoch */
+    uint32_t ref_seq;
+    char seed_name[24];       /* "moveAbsolute", "pathMove", "comply", ... */
+    char point[LS_MOTION_NAME_LEN];
+    int path;                 /* index of the path queue it runs, -1 for single moves */
+    bool stop_pending;        /* stopMotion waits for the pause */
+    int stop_sup;
+    /* path auxiliary `wait` in progress */
+    bool wait_active;
+    uint16_t wait_unit;
+    uint32_t wait_mask;
+    uint64_t wait_deadline_us;
+    char wait_text[LS_MOTION_AUX_LEN];
+    int wait_point;
+    /* path auxiliary `dio` posted, waiting for the loop to carry it out */
+    bool dio_pending;
+    bool dio_seen;
+    int dio_point;
+    uint64_t dio_cycle;
+    /* moveReact / comply */
+    bool comply;
+    size_t sensor;
+    bool length;
+    uint8_t component;
+    int32_t panic_code;
+} ls_run_t;
+
+/* A stop in progress that ends with the drives off (deactivate, fault, owner
+ * loss, disconnect, shutdown). */
+typedef struct {
+    bool active;
+    ls_run_end_t why;
+    char text[72];            /* the fault, or "" */
+    int answer_sup;           /* deferred deactivate to answer at the end, -1: none */
+    bool release;             /* owner lost: UNLOCKED at the end (else LOCKED) */
+    uint8_t lost_addr;        /* owner lost: whose */
+    char lost_why[24];
+    uint64_t since_us;
+    uint64_t start_cycle;     /* the loop's cycle when the stop was posted */
+    uint64_t off_since_us;    /* first turn the loop reported the drives off, 0: not yet */
+} ls_halt_t;
+
+const char *ls_run_end_name(ls_run_end_t why);
+
+/* Take the run for the request being answered (call); ls_core_t.state becomes
+ * MOVING and motion_state running_trajectory. */
+void ls_run_begin(struct ls_core *core, const struct ls_call *call, bool react, const char *seed_name,
+                  const char *point, int path);
+
+/* Send the run's one final notice now and close it (no-op when no run).
+ * extra: data strings after `point=` and `reason=` (e.g. joints=, fault=). */
+void ls_run_finish(struct ls_core *core, ls_run_end_t why, const char *const *extra, size_t n_extra);
+
+/* Start a halt: post the stop (fast: the model's maximum deceleration, else
+ * the configured one), keep the state until the loop reports the arm at rest
+ * with the drives off. answer_sup: a deactivate to answer then (-1: none).
+ * A second halt while one runs can only make it faster and change the
+ * reason to a fault. */
+void ls_run_halt(struct ls_core *core, ls_run_end_t why, const char *text, bool fast, int answer_sup,
+                 uint64_t now_us);
+
+/* Every comms loop turn: finish a halt once the arm is at rest with the
+ * drives off. */
+void ls_run_tick(struct ls_core *core, uint64_t now_us);
+
+/* landscaped stops: halt whatever moves at the model's maximum deceleration
+ * (call once). Returns true when a halt runs: call ls_run_tick until
+ * core->halt.active is false. */
+bool ls_run_shutdown(struct ls_core *core, uint64_t now_us);
+
+#endif
