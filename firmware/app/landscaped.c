@@ -452,6 +452,7 @@ int main(int argc, char **argv)
      * out, then the process exits; at most shutdown_max_us. */
     const uint64_t shutdown_max_us = 6000000u;
     uint64_t shutdown_at = 0;
+    uint64_t flushed_at = 0;
     while (rc == 0) {
         if (g_stop && shutdown_at == 0) {
             shutdown_at = mono_us();
@@ -460,8 +461,19 @@ int main(int argc, char **argv)
             }
             LOG_INFO("shutting down: stopping the motion first");
         }
-        if (shutdown_at != 0 && (!g_core.halt.active || mono_us() - shutdown_at > shutdown_max_us)) {
-            break;
+        if (shutdown_at != 0) {
+            const uint64_t t = mono_us();
+            if (g_core.halt.active && t - shutdown_at > shutdown_max_us) {
+                LOG_WARN("shutting down: the motion did not stop within %llu ms",
+                         (unsigned long long)(shutdown_max_us / 1000u));
+                break;
+            }
+            if (!g_core.halt.active && flushed_at == 0) {
+                flushed_at = t + 1000000u; /* let the links carry the final notices out (ISO-TP flow control) */
+            }
+            if (flushed_at != 0 && t >= flushed_at) {
+                break;
+            }
         }
         struct pollfd fds[LS_NET_MAX_LINKS];
         nfds_t n = 0;

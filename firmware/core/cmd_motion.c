@@ -597,6 +597,45 @@ static int parse_aux(const char *text, aux_t *a, char *why, size_t whylen)
     return -1;
 }
 
+/* The I/O an auxiliary command names exists on this controller: a `dio`
+ * unit with those output bits, a `wait` unit with those input bits. */
+static int check_aux_io(const ls_core_t *core, const aux_t *a, char *why, size_t whylen)
+{
+    if (a->kind != AUX_DIO && a->kind != AUX_WAIT) {
+        return 0;
+    }
+    if (a->unit >= core->dio_units) {
+        if (core->dio_units == 0) {
+            snprintf(why, whylen, "this controller has no DIO units (start landscaped with a DIO backend)");
+        } else {
+            snprintf(why, whylen, "DIO unit %u does not exist: units 0..%u", (unsigned)a->unit,
+                     (unsigned)core->dio_units - 1u);
+        }
+        return -1;
+    }
+    const hal_dio_unit_info_t *u = &core->dio_info[a->unit];
+    if (a->kind == AUX_DIO) {
+        const uint32_t bad = (a->on | a->off) & ~u->output_mask;
+        if (bad != 0u) {
+            snprintf(why, whylen, "bits 0x%X of unit %u are not outputs (outputs: 0x%X)", (unsigned)bad,
+                     (unsigned)a->unit, (unsigned)u->output_mask);
+            return -1;
+        }
+        if ((a->on & a->off) != 0u) {
+            snprintf(why, whylen, "bits 0x%X are both set and cleared", (unsigned)(a->on & a->off));
+            return -1;
+        }
+        return 0;
+    }
+    const uint32_t bad = a->on & ~u->input_mask;
+    if (bad != 0u) {
+        snprintf(why, whylen, "bits 0x%X of unit %u are not inputs (inputs: 0x%X)", (unsigned)bad,
+                 (unsigned)a->unit, (unsigned)u->input_mask);
+        return -1;
+    }
+    return 0;
+}
+
 static void aux_done(ls_core_t *core)
 {
     if (core->ctl == NULL || !post(core, LS_CTL_AUX_DONE, core->run.ref_seq)) {
@@ -962,7 +1001,8 @@ static int32_t load_point(ls_core_t *core, ls_call_t *call, const ls_PathLoadReq
     for (int a = 0; a < pt->n_aux; a++) {
         aux_t ax;
         char why[96];
-        if (parse_aux(tp->aux_commands[a], &ax, why, sizeof why) != 0) {
+        if (parse_aux(tp->aux_commands[a], &ax, why, sizeof why) != 0 ||
+            check_aux_io(core, &ax, why, sizeof why) != 0) {
             return ls_reply(call, ls_RetCode_CMD_PARAM_ERR, "pathLoad point %d: aux command '%s': %s", k,
                             tp->aux_commands[a], why);
         }
