@@ -3,12 +3,12 @@ what the arm really does, from the device's own telemetry broadcasts (JOINTS_* a
 the telemetry rate, STATUS with the drives' state), next to what the protocol says."""
 from __future__ import annotations
 
+import itertools
 import threading
 import time
 from dataclasses import dataclass
 
 import can
-
 from landscape import telemetry as tm
 from landscape._generated import landscape_pb2 as pb
 from landscape.supervisor import Supervisor
@@ -69,7 +69,7 @@ class ArmWatch:
 
     def max_step(self, sets: list[JointSet]) -> float:
         """Largest change of any joint between consecutive sets (rad)."""
-        return max((abs(a - b) for s0, s1 in zip(sets, sets[1:]) for a, b in zip(s0.q, s1.q)), default=0.0)
+        return max((abs(a - b) for s0, s1 in itertools.pairwise(sets) for a, b in zip(s0.q, s1.q)), default=0.0)
 
     def moving_after(self, t: float, n: int = 4) -> float:
         """max_step over the n sets that follow host time t."""

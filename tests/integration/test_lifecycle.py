@@ -14,13 +14,20 @@ from pathlib import Path
 
 import can
 import pytest
-
 from conftest import Controller, open_slcan, start_controller
 from landscape import errors
 from landscape._generated import landscape_pb2 as pb
 from landscape.supervisor import RetVal, Supervisor, notice_data
-from lifecycle_rig import (DRIVES_OFF, FAR, HOME, REST_STEP_RAD, ArmWatch, final_of, send_emergency,
-                           state)
+from lifecycle_rig import (
+    DRIVES_OFF,
+    FAR,
+    HOME,
+    REST_STEP_RAD,
+    ArmWatch,
+    final_of,
+    send_emergency,
+    state,
+)
 
 OTHER = 0xF2
 
