@@ -1010,6 +1010,150 @@ static void test_signal_rsvp_unanswered_takes_the_default(void **state)
     }
 }
 
+/* ---------------------------------------------------------------- issue 16: the motion lifecycle */
+
+static const double k_home[6] = { 0.0, 0.3, 0.3, 0.0, 0.9, 0.0 };
+
+/* RESTING with HOST_A the owner; a joint move started: its seq. */
+static uint32_t start_move(void)
+{
+    setup_core(ls_State_RESTING);
+    atomic_store(&g_ctl.plan_slot_busy, false); /* the loop took the previous test's plan */
+    atomic_store(&g_ctl.cmd_tail, atomic_load(&g_ctl.cmd_head));
+    memcpy(g_snap.q_cmd_rad, k_home, sizeof k_home);
+    g_snap.enabled = true;
+    ls_MoveAbsoluteReq *m = &req(ls_Request_move_absolute_tag)->cmd.move_absolute;
+    snprintf(m->point_name, sizeof m->point_name, "p1");
+    m->frame = ls_ReferenceFrame_JOINT_FRAME;
+    m->values_count = 6;
+    for (int j = 0; j < 6; j++) {
+        m->values[j] = k_home[j] + (j == 0 ? 0.5 : 0.0);
+    }
+    const ls_Response *r = must(HOST_A);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_STARTED_OK);
+    assert_int_equal(g_core.state, ls_State_MOVING);
+    assert_string_equal(g_core.motion_state, "running_trajectory");
+    return r->seq;
+}
+
+/* The loop reports the arm at rest with the drives off, two cycles later. */
+static void loop_stopped(void)
+{
+    g_snap.cycle += 2;
+    g_snap.enabled = false;
+    g_snap.phase = LS_MOTION_IDLE;
+    memset(g_snap.qd_rad_s, 0, sizeof g_snap.qd_rad_s);
+}
+
+static const ls_Notice *the_final(size_t from, uint32_t seq, size_t *count)
+{
+    const ls_Notice *f = NULL;
+    *count = 0;
+    for (size_t i = from; i < g_nrx; i++) {
+        if (g_rx[i].which_msg == ls_Downlink_notice_tag && g_rx[i].msg.notice.final &&
+            g_rx[i].msg.notice.ref_seq == seq) {
+            f = &g_rx[i].msg.notice;
+            (*count)++;
+        }
+    }
+    return f;
+}
+
+static bool has_data(const ls_Notice *n, const char *item)
+{
+    for (pb_size_t k = 0; k < n->data_count; k++) {
+        if (strcmp(n->data[k], item) == 0) {
+            return true;
+        }
+    }
+    return false;
+}
+
+static void test_deactivate_while_moving_answers_at_rest(void **state)
+{
+    (void)state;
+    const uint32_t move = start_move();
+    const uint32_t epoch = g_core.sessions[0].epoch;
+    size_t from = g_nrx, n;
+    req(ls_Request_deactivate_tag);
+    assert_null(send_req(HOST_A)); /* deferred */
+    const uint32_t deact = g_seq;
+    assert_int_equal(g_core.state, ls_State_MOVING);
+    assert_string_equal(g_core.motion_state, "robot_stopping");
+    /* owner-only commands wait for the stop; queries work */
+    req(ls_Request_get_motion_control_state_tag);
+    assert_int_equal(must(HOST_B)->ret_code, ls_RetCode_CMD_EXEC_OK);
+    ls_run_tick(&g_core, g_now + 1000);
+    assert_null(the_final(from, move, &n)); /* still moving */
+    loop_stopped();
+    ls_run_tick(&g_core, g_now + 400000);
+    const ls_Notice *f = the_final(from, move, &n);
+    assert_non_null(f);
+    assert_int_equal(n, 1);
+    assert_string_equal(f->event_id, "moveAbsoluteAborted");
+    assert_true(has_data(f, "reason=deactivate"));
+    assert_int_equal(f->session_epoch, epoch);
+    assert_int_equal(g_core.state, ls_State_LOCKED);
+    assert_string_equal(g_core.motion_state, "robot_stopped_on_command");
+    /* then the deferred answer, after the notice */
+    bool answered = false;
+    for (size_t i = from; i < g_nrx; i++) {
+        if (g_rx[i].which_msg == ls_Downlink_response_tag && g_rx[i].msg.response.seq == deact) {
+            assert_int_equal(g_rx[i].msg.response.ret_code, ls_RetCode_CMD_EXEC_OK);
+            assert_true((const void *)&g_rx[i] > (const void *)f); /* sent after the notice */
+            answered = true;
+        }
+    }
+    assert_true(answered);
+    ls_run_tick(&g_core, g_now + 800000);
+    assert_non_null(the_final(from, move, &n));
+    assert_int_equal(n, 1); /* exactly one */
+}
+
+static void test_emergency_fails_the_motion_once_stopped(void **state)
+{
+    (void)state;
+    const uint32_t move = start_move();
+    size_t from = g_nrx, n;
+    ls_core_emergency(&g_core, g_now);
+    assert_int_equal(g_core.state, ls_State_MOVING); /* the drives are still on */
+    assert_string_equal(g_core.fault, "emergency stop frame on the bus");
+    assert_null(the_final(from, move, &n));
+    loop_stopped();
+    ls_run_tick(&g_core, g_now + 1000);
+    const ls_Notice *f = the_final(from, move, &n);
+    assert_non_null(f);
+    assert_int_equal(f->kind, ls_NoticeKind_ALARM);
+    assert_string_equal(f->event_id, "moveAbsoluteFailed");
+    assert_true(has_data(f, "reason=emergency"));
+    assert_int_equal(g_core.state, ls_State_LOCKED);
+    assert_string_equal(g_core.motion_state, "robot_stopped_on_error");
+}
+
+static void test_disconnect_during_motion_releases_after_the_stop(void **state)
+{
+    (void)state;
+    const uint32_t move = start_move();
+    const uint32_t epoch = g_core.sessions[0].epoch;
+    size_t from = g_nrx, n;
+    req(ls_Request_disconnect_tag);
+    assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
+    assert_int_equal(g_core.state, ls_State_MOVING);
+    assert_int_equal(g_core.owner, -1);
+    loop_stopped();
+    ls_run_tick(&g_core, g_now + 1000);
+    const ls_Notice *f = the_final(from, move, &n);
+    assert_non_null(f);
+    assert_int_equal(n, 1);
+    assert_true(has_data(f, "reason=disconnect"));
+    assert_int_equal(f->session_epoch, epoch);
+    assert_int_equal(g_core.state, ls_State_UNLOCKED);
+    assert_string_equal(g_core.motion_state, "robot_stopped_on_command");
+    /* the same address connects again: a new epoch, so the old notice cannot match */
+    connect_host(HOST_A);
+    assert_int_not_equal(g_core.sessions[ls_core_session_of(&g_core, HOST_A)].epoch, epoch);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1031,6 +1175,9 @@ int main(void)
         cmocka_unit_test_setup(test_rsvp_reply_and_timeout, setup_locked),
         cmocka_unit_test_setup(test_signal_rsvp_reply_before_timeout, setup_locked),
         cmocka_unit_test_setup(test_signal_rsvp_unanswered_takes_the_default, setup_locked),
+        cmocka_unit_test(test_deactivate_while_moving_answers_at_rest),
+        cmocka_unit_test(test_emergency_fails_the_motion_once_stopped),
+        cmocka_unit_test(test_disconnect_during_motion_releases_after_the_stop),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
