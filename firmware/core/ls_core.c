@@ -400,6 +400,18 @@ static int32_t do_connect(ls_core_t *core, uint8_t addr, ls_call_t *call)
         bool was_owner_slot = core->owner == i;
         memset(&core->sessions[i], 0, sizeof core->sessions[i]);
         (void)was_owner_slot;
+    } else {
+        /* connect again from a connected address: a new session (new epoch, the
+         * host restarts its seq), so the old retransmission cache must not
+         * answer (or swallow) the new session's requests; ownership stays. */
+        ls_session_t *old = &core->sessions[i];
+        if (old->last_pending && core->halt.answer_sup == i) {
+            core->halt.answer_sup = -1;
+        }
+        old->have_last = false;
+        old->last_pending = false;
+        old->last_resp_len = 0;
+        old->notice_seq = 0;
     }
     ls_session_t *s = &core->sessions[i];
     s->connected = true;
