@@ -18,16 +18,11 @@
 #define COAST_MAX_US 500000u
 
 static const char *const k_end_names[LS_RUN_END_COUNT] = {
-    [LS_RUN_END_COMPLETE] = "complete",
-    [LS_RUN_END_ABORT] = "abortMotion",
-    [LS_RUN_END_DEACTIVATE] = "deactivate",
-    [LS_RUN_END_FAULT] = "fault",
-    [LS_RUN_END_EMERGENCY] = "emergency",
-    [LS_RUN_END_OWNER_LOST] = "ownerLost",
-    [LS_RUN_END_DISCONNECT] = "disconnect",
-    [LS_RUN_END_AUX_FAILED] = "auxFailed",
-    [LS_RUN_END_RSVP_DECLINED] = "rsvpDeclined",
-    [LS_RUN_END_SHUTDOWN] = "shutdown",
+    [LS_RUN_END_COMPLETE] = "complete",          [LS_RUN_END_ABORT] = "abortMotion",
+    [LS_RUN_END_DEACTIVATE] = "deactivate",      [LS_RUN_END_FAULT] = "fault",
+    [LS_RUN_END_EMERGENCY] = "emergency",        [LS_RUN_END_OWNER_LOST] = "ownerLost",
+    [LS_RUN_END_DISCONNECT] = "disconnect",      [LS_RUN_END_AUX_FAILED] = "auxFailed",
+    [LS_RUN_END_RSVP_DECLINED] = "rsvpDeclined", [LS_RUN_END_SHUTDOWN] = "shutdown",
 };
 
 const char *ls_run_end_name(ls_run_end_t why)
@@ -206,12 +201,11 @@ void ls_run_tick(ls_core_t *core, uint64_t now_us)
                 core->state = ls_State_IDLE;
             }
         }
-    } else if (core->state == ls_State_MOVING || core->state == ls_State_PAUSED ||
-               core->state == ls_State_RESTING) {
+    } else if (core->state == ls_State_MOVING || core->state == ls_State_PAUSED || core->state == ls_State_RESTING) {
         core->state = ls_State_LOCKED;
     }
-    set_motion_state(core, fault || h->why == LS_RUN_END_OWNER_LOST ? "robot_stopped_on_error"
-                                                                   : "robot_stopped_on_command");
+    set_motion_state(core,
+                     fault || h->why == LS_RUN_END_OWNER_LOST ? "robot_stopped_on_error" : "robot_stopped_on_command");
     ls_run_finish(core, h->why, extra, n_extra);
     if (h->release) {
         ls_core_owner_lost_alarm(core, h->lost_addr, h->lost_why, now_us);

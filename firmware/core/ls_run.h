@@ -26,30 +26,30 @@ struct ls_call;
 
 /* Why a run ended: the `reason=` of its final notice (docs/protocol.md). */
 typedef enum {
-    LS_RUN_END_COMPLETE = 0, /* <cmd>Complete (EVENT) */
-    LS_RUN_END_ABORT,        /* abortMotion: <cmd>Aborted */
-    LS_RUN_END_DEACTIVATE,   /* deactivate: <cmd>Aborted */
-    LS_RUN_END_FAULT,        /* a fault (following error, IK, HAL, e-stop input, wait time-out): <cmd>Failed */
-    LS_RUN_END_EMERGENCY,    /* an EMERGENCY frame on the bus: <cmd>Failed */
-    LS_RUN_END_OWNER_LOST,   /* the owner's heartbeat stopped: <cmd>Aborted */
-    LS_RUN_END_DISCONNECT,   /* the owner sent disconnect: <cmd>Aborted */
-    LS_RUN_END_AUX_FAILED,   /* a path auxiliary command failed: <cmd>Failed */
+    LS_RUN_END_COMPLETE = 0,  /* <cmd>Complete (EVENT) */
+    LS_RUN_END_ABORT,         /* abortMotion: <cmd>Aborted */
+    LS_RUN_END_DEACTIVATE,    /* deactivate: <cmd>Aborted */
+    LS_RUN_END_FAULT,         /* a fault (following error, IK, HAL, e-stop input, wait time-out): <cmd>Failed */
+    LS_RUN_END_EMERGENCY,     /* an EMERGENCY frame on the bus: <cmd>Failed */
+    LS_RUN_END_OWNER_LOST,    /* the owner's heartbeat stopped: <cmd>Aborted */
+    LS_RUN_END_DISCONNECT,    /* the owner sent disconnect: <cmd>Aborted */
+    LS_RUN_END_AUX_FAILED,    /* a path auxiliary command failed: <cmd>Failed */
     LS_RUN_END_RSVP_DECLINED, /* the owner answered a path RSVP with an error: <cmd>Aborted */
-    LS_RUN_END_SHUTDOWN,     /* landscaped stops (SIGTERM/SIGINT): <cmd>Aborted */
+    LS_RUN_END_SHUTDOWN,      /* landscaped stops (SIGTERM/SIGINT): <cmd>Aborted */
     LS_RUN_END_COUNT
 } ls_run_end_t;
 
 typedef struct {
-    bool active;              /* started and its final notice not sent yet */
-    bool react;               /* moveReact / comply (cmd_sensor.c), else a planned motion (cmd_motion.c) */
-    int sup;                  /* session that started it */
-    uint8_t addr;             /* its address: the final notice goes there */
-    uint32_t epoch;           /* its session epoch */
+    bool active;    /* started and its final notice not sent yet */
+    bool react;     /* moveReact / comply (cmd_sensor.c), else a planned motion (cmd_motion.c) */
+    int sup;        /* session that started it */
+    uint8_t addr;   /* its address: the final notice goes there */
+    uint32_t epoch; /* its session epoch */
     uint32_t ref_seq;
-    char seed_name[24];       /* "moveAbsolute", "pathMove", "comply", ... */
+    char seed_name[24]; /* "moveAbsolute", "pathMove", "comply", ... */
     char point[LS_MOTION_NAME_LEN];
-    int path;                 /* index of the path queue it runs, -1 for single moves */
-    bool stop_pending;        /* stopMotion waits for the pause */
+    int path;          /* index of the path queue it runs, -1 for single moves */
+    bool stop_pending; /* stopMotion waits for the pause */
     int stop_sup;
     /* path auxiliary `wait` in progress */
     bool wait_active;
@@ -76,14 +76,14 @@ typedef struct {
 typedef struct {
     bool active;
     ls_run_end_t why;
-    char text[72];            /* the fault, or "" */
-    int answer_sup;           /* deferred deactivate to answer at the end, -1: none */
-    bool release;             /* owner lost: UNLOCKED at the end (else LOCKED) */
-    uint8_t lost_addr;        /* owner lost: whose */
+    char text[72];     /* the fault, or "" */
+    int answer_sup;    /* deferred deactivate to answer at the end, -1: none */
+    bool release;      /* owner lost: UNLOCKED at the end (else LOCKED) */
+    uint8_t lost_addr; /* owner lost: whose */
     char lost_why[24];
     uint64_t since_us;
-    uint64_t start_cycle;     /* the loop's cycle when the stop was posted */
-    uint64_t off_since_us;    /* first turn the loop reported the drives off, 0: not yet */
+    uint64_t start_cycle;  /* the loop's cycle when the stop was posted */
+    uint64_t off_since_us; /* first turn the loop reported the drives off, 0: not yet */
 } ls_halt_t;
 
 const char *ls_run_end_name(ls_run_end_t why);
@@ -102,8 +102,7 @@ void ls_run_finish(struct ls_core *core, ls_run_end_t why, const char *const *ex
  * with the drives off. answer_sup: a deactivate to answer then (-1: none).
  * A second halt while one runs can only make it faster and change the
  * reason to a fault. */
-void ls_run_halt(struct ls_core *core, ls_run_end_t why, const char *text, bool fast, int answer_sup,
-                 uint64_t now_us);
+void ls_run_halt(struct ls_core *core, ls_run_end_t why, const char *text, bool fast, int answer_sup, uint64_t now_us);
 
 /* Every comms loop turn: finish a halt once the arm is at rest with the
  * drives off. */
