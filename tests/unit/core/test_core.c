@@ -1154,6 +1154,79 @@ static void test_disconnect_during_motion_releases_after_the_stop(void **state)
     assert_int_not_equal(g_core.sessions[ls_core_session_of(&g_core, HOST_A)].epoch, epoch);
 }
 
+/* A path with one `dio` auxiliary command, started: its seq. */
+static uint32_t start_dio_path(void)
+{
+    setup_core(ls_State_RESTING);
+    atomic_store(&g_ctl.plan_slot_busy, false);
+    atomic_store(&g_ctl.cmd_tail, atomic_load(&g_ctl.cmd_head));
+    memcpy(g_snap.q_cmd_rad, k_home, sizeof k_home);
+    g_snap.enabled = true;
+    ls_PathLoadReq *l = &req(ls_Request_path_load_tag)->cmd.path_load;
+    snprintf(l->path_name, sizeof l->path_name, "io");
+    l->frame = ls_ReferenceFrame_JOINT_FRAME;
+    l->motion_type = ls_MotionType_JOINT_MOTION;
+    l->number_of_points = 1;
+    l->tags_count = 1;
+    l->tags[0].joints_count = 6;
+    memcpy(l->tags[0].joints, k_home, sizeof k_home);
+    l->tags[0].joints[0] += 0.2;
+    l->tags[0].aux_commands_count = 1;
+    snprintf(l->tags[0].aux_commands[0], sizeof l->tags[0].aux_commands[0], "dio 0 0x10000 0");
+    assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
+    ls_PathMoveReq *m = &req(ls_Request_path_move_tag)->cmd.path_move;
+    snprintf(m->path_name, sizeof m->path_name, "io");
+    m->number_of_cycles = 1;
+    const ls_Response *r = must(HOST_A);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_STARTED_OK);
+    /* the executor arrives at point 0 and announces the command */
+    ls_motion_event_t ev = { .kind = LS_MEV_AUX, .ref_seq = r->seq, .index = 0 };
+    snprintf(ev.text, sizeof ev.text, "dio 0 0x10000 0");
+    g_nposted = 0;
+    ls_core_on_motion_event(&g_core, &ev);
+    assert_int_equal(g_nposted, 1);
+    assert_int_equal(g_posted[0].kind, LS_CTL_DIO_WRITE);
+    return r->seq;
+}
+
+static void test_aux_dio_waits_for_the_write_then_goes_on(void **state)
+{
+    (void)state;
+    (void)start_dio_path();
+    ls_core_motion_tick(&g_core, g_now);
+    assert_int_equal(g_nposted, 1); /* the loop has not taken the write yet */
+    g_snap.cycle += 2;
+    ls_core_motion_tick(&g_core, g_now); /* taken: a refusal would be drained by the next turn */
+    assert_int_equal(g_nposted, 1);
+    ls_core_motion_tick(&g_core, g_now);
+    assert_int_equal(g_nposted, 2);
+    assert_int_equal(g_posted[1].kind, LS_CTL_AUX_DONE);
+}
+
+static void test_aux_dio_refused_at_run_time_fails_the_path_and_leaves_it_usable(void **state)
+{
+    (void)state;
+    const uint32_t seq = start_dio_path();
+    size_t from = g_nrx, n;
+    ls_core_motion_failed(&g_core, seq, "DIO write refused by the backend");
+    const ls_Notice *f = the_final(from, seq, &n);
+    assert_non_null(f);
+    assert_int_equal(n, 1);
+    assert_string_equal(f->event_id, "pathMoveFailed");
+    assert_true(has_data(f, "reason=auxFailed"));
+    assert_true(has_data(f, "at_point=0"));
+    assert_true(has_data(f, "fault=DIO write refused by the backend"));
+    assert_int_equal(g_posted[g_nposted - 1].kind, LS_CTL_ABORT);
+    assert_int_equal(g_core.state, ls_State_RESTING);
+    assert_string_equal(g_core.motion_state, "robot_stopped_on_error");
+    assert_string_equal(g_core.fault, "");
+    /* the path is free again, nothing waits */
+    ls_core_motion_tick(&g_core, g_now);
+    req(ls_Request_path_clear_path_tag);
+    snprintf(g_rq.cmd.path_clear_path.path_name, sizeof g_rq.cmd.path_clear_path.path_name, "io");
+    assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1178,6 +1251,8 @@ int main(void)
         cmocka_unit_test(test_deactivate_while_moving_answers_at_rest),
         cmocka_unit_test(test_emergency_fails_the_motion_once_stopped),
         cmocka_unit_test(test_disconnect_during_motion_releases_after_the_stop),
+        cmocka_unit_test(test_aux_dio_waits_for_the_write_then_goes_on),
+        cmocka_unit_test(test_aux_dio_refused_at_run_time_fails_the_path_and_leaves_it_usable),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
