@@ -176,6 +176,17 @@ class LifecycleModel(RuleBasedStateMachine):
             self.stats.started += 1
         return rv
 
+    def _transport(self) -> str:
+        """The device's downlink counters that tell a lost notice from one never sent."""
+        for c in self.clients.values():
+            rv = c.sup.request("sendCommand", check=False, input="status")
+            if rv.ret_code >= 0:
+                text = str(rv.result.get("result", ""))
+                keep = [ln for ln in text.splitlines()
+                        if ln.startswith(("tx_lost", "isotp_", "tx_full", "link_"))]
+                return " ".join(keep)
+        return "?"
+
     def _owner_client(self) -> Client | None:
         return self.clients[self.owner] if self.owner is not None else None
 
@@ -367,7 +378,7 @@ class LifecycleModel(RuleBasedStateMachine):
             time.sleep(0.02)
         for k in missing:
             self.reported.add(k)
-            self._violation(f"no final notice for {self.started[k]} {k}")
+            self._violation(f"no final notice for {self.started[k]} {k}; device transport: {self._transport()}")
 
     @invariant()
     def state_is_the_arms(self) -> None:
