@@ -382,6 +382,13 @@ class LifecycleModel(RuleBasedStateMachine):
 
     @invariant()
     def state_is_the_arms(self) -> None:
+        try:
+            self._check_state()
+        except ControllerTimeoutError as exc:
+            self.stats.transport += 1
+            self.history.append(f"check: time-out ({exc})")
+
+    def _check_state(self) -> None:
         s, t = self._any_state()
         if s is None:
             return
