@@ -9,6 +9,7 @@ import time
 from dataclasses import dataclass
 
 import can
+
 from landscape import telemetry as tm
 from landscape._generated import landscape_pb2 as pb
 from landscape.supervisor import Supervisor
@@ -69,7 +70,8 @@ class ArmWatch:
 
     def max_step(self, sets: list[JointSet]) -> float:
         """Largest change of any joint between consecutive sets (rad)."""
-        return max((abs(a - b) for s0, s1 in itertools.pairwise(sets) for a, b in zip(s0.q, s1.q)), default=0.0)
+        steps = (abs(a - b) for s0, s1 in itertools.pairwise(sets) for a, b in zip(s0.q, s1.q, strict=True))
+        return max(steps, default=0.0)
 
     def moving_after(self, t: float, n: int = 4) -> float:
         """max_step over the n sets that follow host time t."""

@@ -14,10 +14,6 @@ from pathlib import Path
 
 import can
 import pytest
-from conftest import Controller, open_slcan, start_controller
-from landscape import errors
-from landscape._generated import landscape_pb2 as pb
-from landscape.supervisor import RetVal, Supervisor, notice_data
 from lifecycle_rig import (
     DRIVES_OFF,
     FAR,
@@ -28,6 +24,11 @@ from lifecycle_rig import (
     send_emergency,
     state,
 )
+
+from conftest import Controller, open_slcan, start_controller
+from landscape import errors
+from landscape._generated import landscape_pb2 as pb
+from landscape.supervisor import RetVal, Supervisor, notice_data
 
 OTHER = 0xF2
 

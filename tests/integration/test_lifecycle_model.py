@@ -32,7 +32,6 @@ from pathlib import Path
 import can
 import hypothesis
 import pytest
-from conftest import Controller, open_slcan, start_controller
 from hypothesis import Phase, settings
 from hypothesis import strategies as st
 from hypothesis.stateful import (
@@ -41,11 +40,13 @@ from hypothesis.stateful import (
     rule,
     run_state_machine_as_test,
 )
+from lifecycle_rig import DRIVES_ON, HOME, REST_STEP_RAD, ArmWatch, send_emergency
+
+from conftest import Controller, open_slcan, start_controller
 from landscape._generated import landscape_pb2 as pb
 from landscape.errors import ControllerTimeoutError
 from landscape.registry import lookup
 from landscape.supervisor import RetVal, Supervisor, notice_data
-from lifecycle_rig import DRIVES_ON, HOME, REST_STEP_RAD, ArmWatch, send_emergency
 
 EXAMPLES = int(os.environ.get("LS_MODEL_EXAMPLES", "8"))
 STEPS = int(os.environ.get("LS_MODEL_STEPS", "40"))
