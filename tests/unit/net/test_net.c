@@ -98,7 +98,7 @@ static void link_put(fake_link_t *l, uint32_t id, uint8_t flags, const uint8_t *
 
 #define MAX_CALLS 64
 
-typedef enum { CALL_UPLINK = 1, CALL_HEARTBEAT, CALL_FAULT } call_kind_t;
+typedef enum { CALL_UPLINK = 1, CALL_HEARTBEAT, CALL_EMERGENCY } call_kind_t;
 
 typedef struct {
     call_kind_t kind;
@@ -117,7 +117,7 @@ static size_t g_echo_len;                             /* > 0: answer each uplink
 
 void __wrap_ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t len, uint64_t now_us);
 void __wrap_ls_core_on_heartbeat(ls_core_t *core, uint8_t addr, uint64_t now_us);
-void __wrap_ls_core_fault(ls_core_t *core, const char *text, uint64_t now_us);
+void __wrap_ls_core_emergency(ls_core_t *core, uint64_t now_us);
 
 static call_t *record(ls_core_t *core, call_kind_t kind, uint8_t addr, uint64_t now_us)
 {
@@ -151,10 +151,9 @@ void __wrap_ls_core_on_heartbeat(ls_core_t *core, uint8_t addr, uint64_t now_us)
     (void)record(core, CALL_HEARTBEAT, addr, now_us);
 }
 
-void __wrap_ls_core_fault(ls_core_t *core, const char *text, uint64_t now_us)
+void __wrap_ls_core_emergency(ls_core_t *core, uint64_t now_us)
 {
-    call_t *c = record(core, CALL_FAULT, 0, now_us);
-    snprintf(c->text, sizeof c->text, "%s", text);
+    (void)record(core, CALL_EMERGENCY, 0, now_us);
 }
 
 /* ---------------------------------------------------------------- fixture */
@@ -337,8 +336,7 @@ static void test_emergency_frames(void **state)
     link_put(&g_link[0], LS_ID_EMERGENCY | SUP_A, HAL_CAN_F_EXT, d, 8); /* a supervisor's */
     ls_net_poll(&g_net, 4000);
     assert_int_equal(g_ncalls, 1);
-    assert_int_equal(g_calls[0].kind, CALL_FAULT);
-    assert_string_equal(g_calls[0].text, "emergency stop frame on the bus");
+    assert_int_equal(g_calls[0].kind, CALL_EMERGENCY);
     assert_int_equal(g_calls[0].now_us, 4000);
 }
 
