@@ -39,8 +39,8 @@
 
 #define DT_S 1e-3
 
-static const double q_home[LS_N_JOINTS] = {0.1, -0.6, 1.1, 0.2, 0.9, -0.3};
-static const double q_goal[LS_N_JOINTS] = {1.2, -0.1, 0.4, -0.8, 1.4, 0.9};
+static const double q_home[LS_N_JOINTS] = { 0.1, -0.6, 1.1, 0.2, 0.9, -0.3 };
+static const double q_goal[LS_N_JOINTS] = { 1.2, -0.1, 0.4, -0.8, 1.4, 0.9 };
 static double checksum;
 
 static void absorb(const double *q)
@@ -156,8 +156,8 @@ static int run_motion(const char *which, long n)
     }
 #if BENCH_HAVE_MOTION_CART
     static ls_motion_program_t prog;
-    static const double tool[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0.05, 1};
-    const ls_motion_cart_limits_t lim = {0.05, 0.5, 5.0, 0.3, 1.0, 10.0, 0.5};
+    static const double tool[16] = { 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0.05, 1 };
+    const ls_motion_cart_limits_t lim = { 0.05, 0.5, 5.0, 0.3, 1.0, 10.0, 0.5 };
     if (strcmp(which, "motion_line") == 0) {
         double F[16], tip[16];
         ls_kin_fk(m, q_home, F);
@@ -166,9 +166,10 @@ static int run_motion(const char *which, long n)
         tip[14] -= 0.05;
         rc = ls_motion_plan_line(&plan, m, q_home, tool, tip, &lim, why, sizeof why);
     } else if (strcmp(which, "motion_path") == 0) {
-        static const double pts[4][LS_N_JOINTS] = {
-            {0.6, -0.4, 0.9, -0.2, 1.0, 0.2}, {1.0, -0.2, 0.6, -0.6, 1.3, 0.6},
-            {0.4, -0.5, 1.0, 0.1, 0.8, 0.0},  {0.1, -0.6, 1.1, 0.2, 0.9, -0.3}};
+        static const double pts[4][LS_N_JOINTS] = { { 0.6, -0.4, 0.9, -0.2, 1.0, 0.2 },
+                                                    { 1.0, -0.2, 0.6, -0.6, 1.3, 0.6 },
+                                                    { 0.4, -0.5, 1.0, 0.1, 0.8, 0.0 },
+                                                    { 0.1, -0.6, 1.1, 0.2, 0.9, -0.3 } };
         const double *from = q_home;
         prog.n = 4;
         rc = 0;
@@ -224,17 +225,17 @@ static int arm_read(void *self, double *q, double *qd)
     }
     return 0;
 }
-static const hal_arm_ops_t arm_ops = {NULL, arm_enable, arm_command, arm_read, NULL};
-static hal_arm_t arm = {&arm_ops, NULL, "ideal"};
+static const hal_arm_ops_t arm_ops = { NULL, arm_enable, arm_command, arm_read, NULL };
+static hal_arm_t arm = { &arm_ops, NULL, "ideal" };
 static ls_control_t ctl;
 
 static int run_control(const char *which, long n)
 {
     const ls_robot_model_t *m = &ls_robot_model_default;
     memcpy(arm_q, q_home, sizeof arm_q);
-    ls_control_config_t cfg = {.model = m, .arm = &arm, .rate_hz = 1000};
+    ls_control_config_t cfg = { .model = m, .arm = &arm, .rate_hz = 1000 };
     ls_control_init(&ctl, &cfg);
-    ls_ctl_cmd_t en = {.kind = LS_CTL_ENABLE};
+    ls_ctl_cmd_t en = { .kind = LS_CTL_ENABLE };
     if (!ls_control_post(&ctl, &en)) {
         return -1;
     }
@@ -247,8 +248,8 @@ static int run_control(const char *which, long n)
         int rc = slot == NULL ? -1 : ls_motion_plan_joint(slot, m, q_home, q_goal, 0.2, 0.2, why, sizeof why);
 #if BENCH_HAVE_MOTION_CART
         if (slot != NULL && strcmp(which, "control_line") == 0) {
-            static const double tool[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0.05, 1};
-            const ls_motion_cart_limits_t lim = {0.05, 0.5, 5.0, 0.3, 1.0, 10.0, 0.5};
+            static const double tool[16] = { 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0.05, 1 };
+            const ls_motion_cart_limits_t lim = { 0.05, 0.5, 5.0, 0.3, 1.0, 10.0, 0.5 };
             double F[16], tip[16];
             ls_kin_fk(m, q_home, F);
             ls_pose_mul(F, tool, tip);
@@ -280,7 +281,7 @@ static int run_control(const char *which, long n)
 
 #if BENCH_HAVE_REACT
 /* The pose of ls_react's unit tests: the tool points down over the table. */
-static const double q_react[LS_N_JOINTS] = {-0.2, 0.8, 0.45, 0.0, 0.3, 0.0};
+static const double q_react[LS_N_JOINTS] = { -0.2, 0.8, 0.45, 0.0, 0.3, 0.0 };
 static ls_react_t react;
 
 static int run_react(const char *which, long n)
@@ -288,7 +289,7 @@ static int run_react(const char *which, long n)
     ls_react_plan_t p;
     memset(&p, 0, sizeof p);
     snprintf(p.sensor, sizeof p.sensor, "force_sensor");
-    const double zero[6] = {0};
+    const double zero[6] = { 0 };
     ls_pose_from_xyzrpy(zero, p.tool);
     p.ref_seq = 1;
     p.v_m_s = 0.03;
@@ -296,7 +297,7 @@ static int run_react(const char *which, long n)
     p.a_stop_m_s2 = 4.0;
     /* Travel long enough that all N cycles move: 0.03 m/s for N ms, plus the ramps. */
     p.dist_m = 0.03 * (double)n * DT_S + 0.01;
-    double reading[6] = {0};
+    double reading[6] = { 0 };
     if (strcmp(which, "react_guarded") == 0) {
         p.kind = LS_REACT_GUARDED;
         p.dir_tool[2] = 1.0;
@@ -338,15 +339,16 @@ static int run_react(const char *which, long n)
 #endif
 
 static const char *const cases[] = {
-    "traj", "fk", "cart_ik",
+    "traj",          "fk",
+    "cart_ik",
 #if BENCH_HAVE_MOTION
-    "motion_hold", "motion_joint",
+    "motion_hold",   "motion_joint",
 #if BENCH_HAVE_MOTION_CART
-    "motion_line", "motion_path",
+    "motion_line",   "motion_path",
 #endif
 #endif
 #if BENCH_HAVE_CONTROL
-    "control_hold", "control_joint",
+    "control_hold",  "control_joint",
 #if BENCH_HAVE_MOTION_CART
     "control_line",
 #endif

@@ -34,7 +34,7 @@ int main(int argc, char **argv)
     }
     signal(SIGTERM, on_signal);
     signal(SIGINT, on_signal);
-    struct pollfd pfd = {.fd = hal_can_poll_fd(&can), .events = POLLIN};
+    struct pollfd pfd = { .fd = hal_can_poll_fd(&can), .events = POLLIN };
     unsigned long echoed = 0;
     while (!stop_) {
         if (poll(&pfd, 1, 100) < 0 && errno != EINTR) {

@@ -41,7 +41,7 @@ static uint64_t now_us(void)
 static int can_send(void *ctx, uint32_t can_id, const uint8_t *data, uint8_t len)
 {
     (void)ctx;
-    hal_can_frame_t f = {.id = can_id, .flags = HAL_CAN_F_EXT, .len = len};
+    hal_can_frame_t f = { .id = can_id, .flags = HAL_CAN_F_EXT, .len = len };
     memcpy(f.data, data, len);
     return hal_can_send(&can_, &f) == HAL_OK ? 0 : -1;
 }
@@ -64,7 +64,7 @@ int main(int argc, char **argv)
         hal_can_close(&can_);
         return 1;
     }
-    struct pollfd pfd = {.fd = hal_can_poll_fd(&can_), .events = POLLIN};
+    struct pollfd pfd = { .fd = hal_can_poll_fd(&can_), .events = POLLIN };
     while (!stop_) {
         uint64_t t = now_us();
         uint64_t due = ls_isotp_next_deadline_us(&link_);

@@ -80,7 +80,7 @@ static void *bare_main(void *p)
 {
     bare_arg_t *a = p;
     if (a->priority > 0) {
-        struct sched_param sp = {.sched_priority = a->priority};
+        struct sched_param sp = { .sched_priority = a->priority };
         a->realtime = pthread_setschedparam(pthread_self(), SCHED_FIFO, &sp) == 0;
     }
     uint64_t deadline = mono_ns();
@@ -93,7 +93,7 @@ static void *bare_main(void *p)
             deadline = t; /* skip missed cycles, as the runner does */
         }
         deadline += a->m->period_ns;
-        struct timespec ts = {.tv_sec = (time_t)(deadline / 1000000000u), .tv_nsec = (long)(deadline % 1000000000u)};
+        struct timespec ts = { .tv_sec = (time_t)(deadline / 1000000000u), .tv_nsec = (long)(deadline % 1000000000u) };
         while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL) == EINTR) {
         }
     }
@@ -130,19 +130,19 @@ int main(int argc, char **argv)
     uint64_t want = (uint64_t)(seconds * (double)rate);
     static uint64_t hal_lat[MAX_SAMPLES], bare_lat[MAX_SAMPLES];
     uint64_t period = 1000000000u / (uint64_t)rate;
-    g_hal_meter = (meter_t){.period_ns = period, .lat_ns = hal_lat, .want = want};
-    g_bare_meter = (meter_t){.period_ns = period, .lat_ns = bare_lat, .want = want};
+    g_hal_meter = (meter_t){ .period_ns = period, .lat_ns = hal_lat, .want = want };
+    g_bare_meter = (meter_t){ .period_ns = period, .lat_ns = bare_lat, .want = want };
 
     /* 1. the runner */
     static hal_linux_rt_t rt;
-    hal_rt_config_t cfg = {.rate_hz = (uint32_t)rate, .priority = (int)prio, .cpu = -1, .lock_memory = true};
+    hal_rt_config_t cfg = { .rate_hz = (uint32_t)rate, .priority = (int)prio, .cpu = -1, .lock_memory = true };
     char msg[256];
     if (hal_linux_rt_start(&rt, &cfg, hal_cycle, &g_hal_meter, msg, sizeof msg) != HAL_OK) {
         fprintf(stderr, "bench_rt_jitter: %s\n", msg);
         return 1;
     }
     while (!atomic_load(&g_hal_done)) {
-        struct timespec ts = {0, 20000000};
+        struct timespec ts = { 0, 20000000 };
         nanosleep(&ts, NULL);
     }
     hal_rt_stats_t st;
@@ -150,7 +150,7 @@ int main(int argc, char **argv)
     hal_linux_rt_stop(&rt);
 
     /* 2. the bare loop, same scheduling (memory stays locked: mlockall is process-wide) */
-    bare_arg_t a = {.m = &g_bare_meter, .priority = st.realtime ? (int)prio : 0, .realtime = 0};
+    bare_arg_t a = { .m = &g_bare_meter, .priority = st.realtime ? (int)prio : 0, .realtime = 0 };
     pthread_t th;
     if (pthread_create(&th, NULL, bare_main, &a) != 0) {
         fprintf(stderr, "bench_rt_jitter: pthread_create failed\n");

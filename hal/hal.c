@@ -23,20 +23,29 @@ const char *hal_strerror(int status)
     }
 }
 
-#define HAL_CALL(obj, op, ...) \
-    (((obj) != NULL && (obj)->ops != NULL && (obj)->ops->op != NULL) ? (obj)->ops->op((obj)->self, __VA_ARGS__) \
+#define HAL_CALL(obj, op, ...)                                                                                         \
+    (((obj) != NULL && (obj)->ops != NULL && (obj)->ops->op != NULL) ? (obj)->ops->op((obj)->self, __VA_ARGS__)        \
                                                                      : HAL_EUNSUPPORTED)
-#define HAL_CALL0(obj, op) \
+#define HAL_CALL0(obj, op)                                                                                             \
     (((obj) != NULL && (obj)->ops != NULL && (obj)->ops->op != NULL) ? (obj)->ops->op((obj)->self) : HAL_EUNSUPPORTED)
 
-int hal_can_send(hal_can_link_t *link, const hal_can_frame_t *frame) { return HAL_CALL(link, send, frame); }
-int hal_can_recv(hal_can_link_t *link, hal_can_frame_t *frame) { return HAL_CALL(link, recv, frame); }
+int hal_can_send(hal_can_link_t *link, const hal_can_frame_t *frame)
+{
+    return HAL_CALL(link, send, frame);
+}
+int hal_can_recv(hal_can_link_t *link, hal_can_frame_t *frame)
+{
+    return HAL_CALL(link, recv, frame);
+}
 int hal_can_poll_fd(hal_can_link_t *link)
 {
     int fd = HAL_CALL0(link, poll_fd);
     return fd == HAL_EUNSUPPORTED ? -1 : fd;
 }
-int hal_can_status(hal_can_link_t *link, hal_can_status_t *out) { return HAL_CALL(link, status, out); }
+int hal_can_status(hal_can_link_t *link, hal_can_status_t *out)
+{
+    return HAL_CALL(link, status, out);
+}
 void hal_can_close(hal_can_link_t *link)
 {
     if (link != NULL && link->ops != NULL && link->ops->close != NULL) {
@@ -44,16 +53,31 @@ void hal_can_close(hal_can_link_t *link)
     }
 }
 
-int hal_dio_unit_count(hal_dio_t *dio) { return HAL_CALL0(dio, unit_count); }
-int hal_dio_describe(hal_dio_t *dio, uint16_t unit, hal_dio_unit_info_t *out) { return HAL_CALL(dio, describe, unit, out); }
-int hal_dio_read(hal_dio_t *dio, uint16_t unit, uint32_t *bits) { return HAL_CALL(dio, read, unit, bits); }
-int hal_dio_write(hal_dio_t *dio, uint16_t unit, uint32_t on, uint32_t off) { return HAL_CALL(dio, write, unit, on, off); }
+int hal_dio_unit_count(hal_dio_t *dio)
+{
+    return HAL_CALL0(dio, unit_count);
+}
+int hal_dio_describe(hal_dio_t *dio, uint16_t unit, hal_dio_unit_info_t *out)
+{
+    return HAL_CALL(dio, describe, unit, out);
+}
+int hal_dio_read(hal_dio_t *dio, uint16_t unit, uint32_t *bits)
+{
+    return HAL_CALL(dio, read, unit, bits);
+}
+int hal_dio_write(hal_dio_t *dio, uint16_t unit, uint32_t on, uint32_t off)
+{
+    return HAL_CALL(dio, write, unit, on, off);
+}
 int hal_dio_poll_fd(hal_dio_t *dio)
 {
     int fd = HAL_CALL0(dio, poll_fd);
     return fd == HAL_EUNSUPPORTED ? -1 : fd;
 }
-int hal_dio_drain_events(hal_dio_t *dio) { return HAL_CALL0(dio, drain_events); }
+int hal_dio_drain_events(hal_dio_t *dio)
+{
+    return HAL_CALL0(dio, drain_events);
+}
 void hal_dio_close(hal_dio_t *dio)
 {
     if (dio != NULL && dio->ops != NULL && dio->ops->close != NULL) {
@@ -61,10 +85,22 @@ void hal_dio_close(hal_dio_t *dio)
     }
 }
 
-int hal_arm_info(hal_arm_t *arm, hal_arm_info_t *out) { return HAL_CALL(arm, info, out); }
-int hal_arm_enable(hal_arm_t *arm, bool on) { return HAL_CALL(arm, enable, on); }
-int hal_arm_command(hal_arm_t *arm, const double *q_rad, const double *qd_rad_s) { return HAL_CALL(arm, command, q_rad, qd_rad_s); }
-int hal_arm_read(hal_arm_t *arm, double *q_rad, double *qd_rad_s) { return HAL_CALL(arm, read, q_rad, qd_rad_s); }
+int hal_arm_info(hal_arm_t *arm, hal_arm_info_t *out)
+{
+    return HAL_CALL(arm, info, out);
+}
+int hal_arm_enable(hal_arm_t *arm, bool on)
+{
+    return HAL_CALL(arm, enable, on);
+}
+int hal_arm_command(hal_arm_t *arm, const double *q_rad, const double *qd_rad_s)
+{
+    return HAL_CALL(arm, command, q_rad, qd_rad_s);
+}
+int hal_arm_read(hal_arm_t *arm, double *q_rad, double *qd_rad_s)
+{
+    return HAL_CALL(arm, read, q_rad, qd_rad_s);
+}
 void hal_arm_close(hal_arm_t *arm)
 {
     if (arm != NULL && arm->ops != NULL && arm->ops->close != NULL) {
@@ -72,4 +108,7 @@ void hal_arm_close(hal_arm_t *arm)
     }
 }
 
-uint64_t hal_clock_now_us(const hal_clock_t *clock) { return clock->now_us(clock->self); }
+uint64_t hal_clock_now_us(const hal_clock_t *clock)
+{
+    return clock->now_us(clock->self);
+}

@@ -56,7 +56,7 @@ static int can_recv(void *self, hal_can_frame_t *f)
         return HAL_EAGAIN;
     }
     uint32_t id = CAN0->rx_id;
-    uint32_t d[2] = {CAN0->rx_data[0], CAN0->rx_data[1]};
+    uint32_t d[2] = { CAN0->rx_data[0], CAN0->rx_data[1] };
     f->id = id & 0x1FFFFFFFu;
     f->flags = (uint8_t)(id >> 29);
     f->len = (uint8_t)(CAN0->rx_len & 0xFu);
@@ -82,9 +82,12 @@ static int can_status(void *self, hal_can_status_t *out)
     return HAL_OK;
 }
 
-static void can_close(void *self) { (void)self; }
+static void can_close(void *self)
+{
+    (void)self;
+}
 
-static const hal_can_ops_t can_ops = {can_send, can_recv, can_poll_fd, can_status, can_close};
+static const hal_can_ops_t can_ops = { can_send, can_recv, can_poll_fd, can_status, can_close };
 
 static int arm_enable(void *self, bool on)
 {
@@ -115,8 +118,8 @@ static int arm_read(void *self, double *q_rad, double *qd_rad_s)
     return HAL_OK;
 }
 
-static const hal_arm_ops_t arm_ops = {NULL, arm_enable, arm_command, arm_read, NULL};
-static hal_arm_t g_arm = {&arm_ops, NULL, "arm0"};
+static const hal_arm_ops_t arm_ops = { NULL, arm_enable, arm_command, arm_read, NULL };
+static hal_arm_t g_arm = { &arm_ops, NULL, "arm0" };
 
 static uint64_t now_us(void)
 {
@@ -130,13 +133,13 @@ static ls_control_t g_ctl;
 
 static int act_enable(void *ctx, bool on)
 {
-    ls_ctl_cmd_t cmd = {.kind = on ? LS_CTL_ENABLE : LS_CTL_DISABLE};
+    ls_ctl_cmd_t cmd = { .kind = on ? LS_CTL_ENABLE : LS_CTL_DISABLE };
     return ls_control_post((ls_control_t *)ctx, &cmd) ? 0 : HAL_EAGAIN;
 }
 
 static void act_stop(void *ctx)
 {
-    ls_ctl_cmd_t cmd = {.kind = LS_CTL_STOP};
+    ls_ctl_cmd_t cmd = { .kind = LS_CTL_STOP };
     (void)ls_control_post((ls_control_t *)ctx, &cmd);
 }
 
@@ -165,16 +168,16 @@ int main(void)
         .joint_count = 6,
         .heartbeat_timeout_ms = 1000,
     };
-    ls_core_io_t io = {.send_downlink = ls_net_send_downlink, .ctx = &g_net};
-    ls_core_actions_t act = {.enable_drives = act_enable, .stop_motion = act_stop, .ctx = &g_ctl};
+    ls_core_io_t io = { .send_downlink = ls_net_send_downlink, .ctx = &g_net };
+    ls_core_actions_t act = { .enable_drives = act_enable, .stop_motion = act_stop, .ctx = &g_ctl };
     ls_core_init(&g_core, &cfg, &io, &act);
     ls_net_init(&g_net, 0x10, &g_core);
-    hal_can_link_t link = {.ops = &can_ops, .self = NULL, .name = "can0"};
+    hal_can_link_t link = { .ops = &can_ops, .self = NULL, .name = "can0" };
     (void)ls_net_add_link(&g_net, &link);
 
     const ls_robot_model_t *m = &ls_robot_model_default;
     g_core.model = m;
-    ls_control_config_t cc = {.model = m, .arm = &g_arm, .rate_hz = 1000};
+    ls_control_config_t cc = { .model = m, .arm = &g_arm, .rate_hz = 1000 };
     ls_control_init(&g_ctl, &cc);
     g_core.ctl = &g_ctl;
     ls_traj_limits_t lim;
@@ -183,7 +186,7 @@ int main(void)
         lim.a_max[i] = m->qdd_max_rad_s2[i];
         lim.j_max[i] = m->qddd_max_rad_s3[i];
     }
-    double q0[LS_N_JOINTS] = {0}, q1[LS_N_JOINTS] = {0}, q[LS_N_JOINTS];
+    double q0[LS_N_JOINTS] = { 0 }, q1[LS_N_JOINTS] = { 0 }, q[LS_N_JOINTS];
     uint8_t hb_counter = 0;
     uint64_t next_hb = 0, next_cycle = 0;
     for (;;) {
@@ -197,8 +200,8 @@ int main(void)
         ls_core_tick(&g_core, t);
         ls_core_motion_tick(&g_core, t);
         if (t >= next_hb) {
-            struct landscape_heartbeat_t hb = {.hb_counter = hb_counter++, .hb_state = (uint8_t)g_core.state};
-            hal_can_frame_t f = {.id = LS_ID_HEARTBEAT | 0x10u, .flags = HAL_CAN_F_EXT, .len = 8};
+            struct landscape_heartbeat_t hb = { .hb_counter = hb_counter++, .hb_state = (uint8_t)g_core.state };
+            hal_can_frame_t f = { .id = LS_ID_HEARTBEAT | 0x10u, .flags = HAL_CAN_F_EXT, .len = 8 };
             if (landscape_heartbeat_pack(f.data, &hb, sizeof f.data) == 8) {
                 (void)ls_net_send_frame(&g_net, &f);
             }

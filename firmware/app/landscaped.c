@@ -242,9 +242,9 @@ static void send_telemetry(void)
     struct landscape_status_t st = {
         .st_state = (uint8_t)g_core.state,
         .st_motion = (uint8_t)(s.phase == LS_MOTION_RUNNING || s.phase == LS_MOTION_STOPPING ? 1
-                               : s.phase == LS_MOTION_PAUSED                              ? 2
-                               : g_core.fault[0] != '\0'                                  ? 3
-                                                                                          : 0),
+                               : s.phase == LS_MOTION_PAUSED                                 ? 2
+                               : g_core.fault[0] != '\0'                                     ? 3
+                                                                                             : 0),
         .st_control_mode = (uint8_t)(g_core.fault[0] != '\0' ? 2 : (s.enabled ? 1 : 0)),
         .st_fault = g_core.fault[0] != '\0' ? 1u : 0u,
         .st_overruns = 0,
@@ -257,9 +257,12 @@ static void send_telemetry(void)
     if (landscape_status_pack(d, &st, sizeof d) == 8) {
         send_frame(0x1CFF1000u, d);
     }
-    struct landscape_joints_12_t j12 = { landscape_joints_12_j1_encode(s.q_rad[0]), landscape_joints_12_j2_encode(s.q_rad[1]) };
-    struct landscape_joints_34_t j34 = { landscape_joints_34_j3_encode(s.q_rad[2]), landscape_joints_34_j4_encode(s.q_rad[3]) };
-    struct landscape_joints_56_t j56 = { landscape_joints_56_j5_encode(s.q_rad[4]), landscape_joints_56_j6_encode(s.q_rad[5]) };
+    struct landscape_joints_12_t j12 = { landscape_joints_12_j1_encode(s.q_rad[0]),
+                                         landscape_joints_12_j2_encode(s.q_rad[1]) };
+    struct landscape_joints_34_t j34 = { landscape_joints_34_j3_encode(s.q_rad[2]),
+                                         landscape_joints_34_j4_encode(s.q_rad[3]) };
+    struct landscape_joints_56_t j56 = { landscape_joints_56_j5_encode(s.q_rad[4]),
+                                         landscape_joints_56_j6_encode(s.q_rad[5]) };
     if (landscape_joints_12_pack(d, &j12, sizeof d) == 8) {
         send_frame(0x1CFF1100u, d);
     }
@@ -356,8 +359,12 @@ static int compose(const ls_config_t *o)
         (void)hal_dio_describe(dio, (uint16_t)u, &g_core.dio_info[u]);
         g_core.dio_units = (uint16_t)(u + 1);
     }
-    ls_control_config_t cc = { .model = &ls_robot_model_default, .arm = arm, .dio = dio, .sensors = sensors,
-                               .n_sensors = n_sensors, .rate_hz = o->rate_hz,
+    ls_control_config_t cc = { .model = &ls_robot_model_default,
+                               .arm = arm,
+                               .dio = dio,
+                               .sensors = sensors,
+                               .n_sensors = n_sensors,
+                               .rate_hz = o->rate_hz,
                                .world_step = g_world_open ? hal_sim_world_step : NULL };
     ls_control_init(&g_ctl, &cc);
     g_core.ctl = &g_ctl;
@@ -366,14 +373,17 @@ static int compose(const ls_config_t *o)
         ls_ctl_cmd_t cmd = { .kind = LS_CTL_ESTOP_LINE, .dio = { 0, 1u << (unsigned)o->estop_input, 0 } };
         (void)ls_control_post(&g_ctl, &cmd);
     }
-    hal_rt_config_t rc = { .rate_hz = o->rate_hz, .priority = o->rt_priority, .cpu = o->rt_cpu,
-                           .lock_memory = o->lock_memory, .lockstep = strcmp(o->clock, "lockstep") == 0 };
+    hal_rt_config_t rc = { .rate_hz = o->rate_hz,
+                           .priority = o->rt_priority,
+                           .cpu = o->rt_cpu,
+                           .lock_memory = o->lock_memory,
+                           .lockstep = strcmp(o->clock, "lockstep") == 0 };
     if (hal_linux_rt_start(&g_rt, &rc, control_cycle, &g_ctl, msg, sizeof msg) < 0) {
         LOG_ERR("control thread: %s", msg);
         return -1;
     }
-    LOG_INFO("control loop at %u Hz (%s clock), arm %s, dio %s, %zu sensors", (unsigned)o->rate_hz, o->clock,
-             o->arm, o->dio, n_sensors);
+    LOG_INFO("control loop at %u Hz (%s clock), arm %s, dio %s, %zu sensors", (unsigned)o->rate_hz, o->clock, o->arm,
+             o->dio, n_sensors);
     return 0;
 }
 
@@ -416,8 +426,12 @@ int main(int argc, char **argv)
     };
     ls_core_io_t io = { .send_downlink = ls_net_send_downlink, .describe = ls_net_describe, .ctx = &g_net };
     g_cfg_running = &opt;
-    ls_core_actions_t act = { .enable_drives = act_enable, .stop_motion = act_stop, .halt = act_halt,
-                              .describe_rt = describe_rt, .describe_config = describe_config, .ctx = &g_ctl };
+    ls_core_actions_t act = { .enable_drives = act_enable,
+                              .stop_motion = act_stop,
+                              .halt = act_halt,
+                              .describe_rt = describe_rt,
+                              .describe_config = describe_config,
+                              .ctx = &g_ctl };
     ls_core_init(&g_core, &cfg, &io, &act);
     ls_net_init(&g_net, opt.node, &g_core);
 

@@ -132,15 +132,19 @@ static void check_slcan_pty(report_t *r, const char *spec, const char *path)
     snprintf(what, sizeof what, "link %s", spec);
     int fd = posix_openpt(O_RDWR | O_NOCTTY | O_CLOEXEC);
     if (fd < 0) {
-        report(r, LS_CHECK_FAIL, what, "cannot open a pseudo-terminal (/dev/ptmx): %s; fix: mount devpts and "
-               "allow /dev/ptmx (systemd: DeviceAllow=/dev/ptmx rw and char-pts rw)", strerror(errno));
+        report(r, LS_CHECK_FAIL, what,
+               "cannot open a pseudo-terminal (/dev/ptmx): %s; fix: mount devpts and "
+               "allow /dev/ptmx (systemd: DeviceAllow=/dev/ptmx rw and char-pts rw)",
+               strerror(errno));
         return;
     }
     close(fd);
     char dir[256];
     if (parent_writable(path, dir, sizeof dir) != 0) {
-        report(r, LS_CHECK_FAIL, what, "cannot create the symlink in %s: %s; fix: create the directory or choose "
-               "a writable one (the service may write to /run/landscape)", dir, strerror(errno));
+        report(r, LS_CHECK_FAIL, what,
+               "cannot create the symlink in %s: %s; fix: create the directory or choose "
+               "a writable one (the service may write to /run/landscape)",
+               dir, strerror(errno));
         return;
     }
     struct stat sb;
@@ -231,9 +235,10 @@ static void check_dio(report_t *r, const ls_config_t *cfg)
     if (cfg->dio_socket[0] != '\0') {
         char dir[256];
         if (parent_writable(cfg->dio_socket, dir, sizeof dir) != 0) {
-            report(r, LS_CHECK_FAIL, "dio_socket", "cannot create %s in %s: %s; fix: create the directory or choose "
-                   "a writable one (the service may write to /run/landscape)", cfg->dio_socket, dir,
-                   strerror(errno));
+            report(r, LS_CHECK_FAIL, "dio_socket",
+                   "cannot create %s in %s: %s; fix: create the directory or choose "
+                   "a writable one (the service may write to /run/landscape)",
+                   cfg->dio_socket, dir, strerror(errno));
         } else {
             report(r, LS_CHECK_PASS, "dio_socket", "%s writable", dir);
         }
@@ -293,8 +298,10 @@ static void check_realtime(report_t *r, const ls_config_t *cfg)
         if (sched_getaffinity(0, sizeof set, &set) != 0) {
             report(r, LS_CHECK_WARN, "rt_cpu", "cannot read the allowed CPUs: %s", strerror(errno));
         } else if (cfg->rt_cpu >= CPU_SETSIZE || !CPU_ISSET((size_t)cfg->rt_cpu, &set)) {
-            report(r, LS_CHECK_FAIL, "rt_cpu", "CPU %d is not one this process may run on (%d allowed); fix: set "
-                   "rt_cpu to an online CPU (nproc, taskset -p $$) or -1", cfg->rt_cpu, CPU_COUNT(&set));
+            report(r, LS_CHECK_FAIL, "rt_cpu",
+                   "CPU %d is not one this process may run on (%d allowed); fix: set "
+                   "rt_cpu to an online CPU (nproc, taskset -p $$) or -1",
+                   cfg->rt_cpu, CPU_COUNT(&set));
         } else {
             report(r, LS_CHECK_PASS, "rt_cpu", "CPU %d is available", cfg->rt_cpu);
         }

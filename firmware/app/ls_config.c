@@ -304,8 +304,7 @@ static int set_outputs(ls_config_t *cfg, const char *v, char *why, size_t whylen
 static int set_estop(ls_config_t *cfg, const char *v, char *why, size_t whylen)
 {
     if (parse_int(v, -1, LS_CONFIG_MAX_LINES - 1, &cfg->estop_input) != 0) {
-        return EXPECT("-1..%d (input bit index that stops everything when active; -1 = none)",
-                      LS_CONFIG_MAX_LINES - 1);
+        return EXPECT("-1..%d (input bit index that stops everything when active; -1 = none)", LS_CONFIG_MAX_LINES - 1);
     }
     return 0;
 }
@@ -393,8 +392,8 @@ typedef struct {
     ls_config_t *cfg;
     const char *path;
     FILE *f;
-    int line;             /* lines handed to inih so far = the line being parsed */
-    int error_line;       /* 0 = no error yet */
+    int line;       /* lines handed to inih so far = the line being parsed */
+    int error_line; /* 0 = no error yet */
     char *msg;
     size_t msglen;
     int seen_line[N_KEYS]; /* first line of each key in this file */
@@ -534,8 +533,8 @@ int ls_config_load_file(ls_config_t *cfg, const char *path, char *msg, size_t ms
     if (c.error_line != 0) {
         /* inih reports earlier syntax errors too: keep whichever came first */
         if (r > 0 && r < c.error_line) {
-            snprintf(msg, msglen, "%s:%d: syntax error: expected '[section]', 'key = value' or a ; or # comment",
-                     path, r);
+            snprintf(msg, msglen, "%s:%d: syntax error: expected '[section]', 'key = value' or a ; or # comment", path,
+                     r);
         }
         return -1;
     }
@@ -544,8 +543,7 @@ int ls_config_load_file(ls_config_t *cfg, const char *path, char *msg, size_t ms
         return -1;
     }
     if (r > 0) {
-        snprintf(msg, msglen, "%s:%d: syntax error: expected '[section]', 'key = value' or a ; or # comment", path,
-                 r);
+        snprintf(msg, msglen, "%s:%d: syntax error: expected '[section]', 'key = value' or a ; or # comment", path, r);
         return -1;
     }
     if (r < 0) {
@@ -641,10 +639,8 @@ int ls_config_from_args(ls_config_t *cfg, int argc, char **argv, char *msg, size
             break;
         case OPT_CHECK: cfg->check = true; break;
         case 'h': help = true; break;
-        case ':':
-            return opt_error(msg, msglen, "%s: missing value (see --help)", argv[optind - 1]);
-        case '?':
-            return opt_error(msg, msglen, "unknown option '%s' (see --help)", argv[optind - 1]);
+        case ':': return opt_error(msg, msglen, "%s: missing value (see --help)", argv[optind - 1]);
+        case '?': return opt_error(msg, msglen, "unknown option '%s' (see --help)", argv[optind - 1]);
         default: break;
         }
     }
@@ -702,8 +698,10 @@ int ls_config_validate(const ls_config_t *cfg, char *msg, size_t msglen)
                          "(e.g. slcan:pty:/tmp/landscape0 or socketcan:can0)");
     }
     if (cfg->telemetry_hz > cfg->rate_hz) {
-        return opt_error(msg, msglen, "[control] telemetry_hz = %u is above rate_hz = %u: telemetry is sent from "
-                         "control cycles; lower telemetry_hz", (unsigned)cfg->telemetry_hz, (unsigned)cfg->rate_hz);
+        return opt_error(msg, msglen,
+                         "[control] telemetry_hz = %u is above rate_hz = %u: telemetry is sent from "
+                         "control cycles; lower telemetry_hz",
+                         (unsigned)cfg->telemetry_hz, (unsigned)cfg->rate_hz);
     }
     for (uint8_t i = 0; i < cfg->n_inputs; i++) {
         for (uint8_t j = 0; j < cfg->n_outputs; j++) {
@@ -715,7 +713,8 @@ int ls_config_validate(const ls_config_t *cfg, char *msg, size_t msglen)
     }
     bool gpiod = strncmp(cfg->dio, "gpiod:", 6) == 0;
     if (strcmp(cfg->dio, "sim") == 0 && strcmp(cfg->arm, "sim") != 0) {
-        return opt_error(msg, msglen, "[hal] dio = sim needs arm = sim: the simulated DIO lives in the simulated "
+        return opt_error(msg, msglen,
+                         "[hal] dio = sim needs arm = sim: the simulated DIO lives in the simulated "
                          "world (use dio = gpiod:CHIP or none)");
     }
     if (cfg->estop_input >= 0) {
@@ -724,8 +723,10 @@ int ls_config_validate(const ls_config_t *cfg, char *msg, size_t msglen)
                              cfg->estop_input);
         }
         if (gpiod && cfg->estop_input >= (int)cfg->n_inputs) {
-            return opt_error(msg, msglen, "[dio] estop_input = %d but only %u inputs are configured: use an input "
-                             "bit 0..%d or -1", cfg->estop_input, (unsigned)cfg->n_inputs, (int)cfg->n_inputs - 1);
+            return opt_error(msg, msglen,
+                             "[dio] estop_input = %d but only %u inputs are configured: use an input "
+                             "bit 0..%d or -1",
+                             cfg->estop_input, (unsigned)cfg->n_inputs, (int)cfg->n_inputs - 1);
         }
     }
     return 0;

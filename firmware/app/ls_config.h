@@ -18,39 +18,40 @@
 
 #define LS_CONFIG_MAX_LINKS 4
 #define LS_CONFIG_MAX_LINES 16
-#define LS_CONFIG_MAX_OFFSET 1023u   /* highest gpiod line offset accepted in inputs/outputs */
+#define LS_CONFIG_MAX_OFFSET 1023u /* highest gpiod line offset accepted in inputs/outputs */
 #define LS_CONFIG_DEFAULT_PATH "/etc/landscape/landscaped.conf"
 
 typedef struct {
-    char config_path[256];       /* --config FILE ("" = none) */
+    char config_path[256]; /* --config FILE ("" = none) */
     /* [device] */
-    char name[32];               /* name = landscape-sim (1..31 printable characters) */
-    uint8_t node;                /* node = 0x10 (1..0xFE) */
+    char name[32];                 /* name = landscape-sim (1..31 printable characters) */
+    uint8_t node;                  /* node = 0x10 (1..0xFE) */
     uint32_t heartbeat_timeout_ms; /* heartbeat_timeout_ms = 1000 (50..600000) */
     /* [hal] */
     char links[LS_CONFIG_MAX_LINKS][128]; /* link = slcan:pty:PATH | socketcan:IFNAME (repeatable) */
     size_t n_links;
-    char arm[16];                /* arm = sim | none (default sim) */
-    char dio[128];               /* dio = sim | gpiod:CHIP | none (default sim) */
-    char link_faults[192];       /* [hal] link_faults, --link-faults SPEC: tests only, faults injected on every link ("" = none) */
-    char dio_socket[128];        /* dio_socket = PATH (sim DIO/jog control socket; "" = none) */
-    char clock[16];              /* clock = realtime | lockstep (default realtime) */
+    char arm[16];  /* arm = sim | none (default sim) */
+    char dio[128]; /* dio = sim | gpiod:CHIP | none (default sim) */
+    char link_faults
+        [192]; /* [hal] link_faults, --link-faults SPEC: tests only, faults injected on every link ("" = none) */
+    char dio_socket[128]; /* dio_socket = PATH (sim DIO/jog control socket; "" = none) */
+    char clock[16];       /* clock = realtime | lockstep (default realtime) */
     /* [control] */
-    uint32_t rate_hz;            /* rate_hz = 1000 (100..10000) */
-    uint32_t telemetry_hz;       /* telemetry_hz = 50 (0..200, <= rate_hz; 0 = off) */
-    int rt_priority;             /* rt_priority = 80 (0 = normal thread, 1..99 SCHED_FIFO) */
-    int rt_cpu;                  /* rt_cpu = -1 (no pinning; else 0..1023) */
-    bool lock_memory;            /* lock_memory = true */
+    uint32_t rate_hz;      /* rate_hz = 1000 (100..10000) */
+    uint32_t telemetry_hz; /* telemetry_hz = 50 (0..200, <= rate_hz; 0 = off) */
+    int rt_priority;       /* rt_priority = 80 (0 = normal thread, 1..99 SCHED_FIFO) */
+    int rt_cpu;            /* rt_cpu = -1 (no pinning; else 0..1023) */
+    bool lock_memory;      /* lock_memory = true */
     /* [dio] gpiod line offsets and roles (used by dio = gpiod:CHIP only, so that
      * --hal sim can run a gpiod configuration on a bench) */
     uint8_t n_inputs;
-    unsigned input_offsets[LS_CONFIG_MAX_LINES];   /* inputs = 0,1,2 (default none) */
+    unsigned input_offsets[LS_CONFIG_MAX_LINES]; /* inputs = 0,1,2 (default none) */
     uint8_t n_outputs;
-    unsigned output_offsets[LS_CONFIG_MAX_LINES];  /* outputs = 8,9 (default none) */
-    int estop_input;             /* estop_input = -1 (input bit index 0..15 that stops everything when active) */
+    unsigned output_offsets[LS_CONFIG_MAX_LINES]; /* outputs = 8,9 (default none) */
+    int estop_input; /* estop_input = -1 (input bit index 0..15 that stops everything when active) */
     /* modes */
-    bool check;                  /* --check: self-check and exit */
-    bool hal_sim;                /* --hal sim: the skeleton's shorthand for arm=sim dio=sim clock=realtime */
+    bool check;   /* --check: self-check and exit */
+    bool hal_sim; /* --hal sim: the skeleton's shorthand for arm=sim dio=sim clock=realtime */
 } ls_config_t;
 
 /* Defaults above. Never fails. */

@@ -395,9 +395,10 @@ static void handle_command(ls_control_t *c, const ls_ctl_cmd_t *cmd)
     case LS_CTL_HALT: stop_then_disable(c, cmd->kind == LS_CTL_HALT); return;
     case LS_CTL_START:
         if (!c->enabled || c->react.active || c->manual != NULL || ls_motion_start(&c->motion, &c->plan_slot) != 0) {
-            cmd_failed(c, cmd->ref_seq, !c->enabled ? "the drives are off"
-                                        : c->manual != NULL ? "manualControl is on: switch it off first"
-                                                            : "a motion is already running");
+            cmd_failed(c, cmd->ref_seq,
+                       !c->enabled         ? "the drives are off"
+                       : c->manual != NULL ? "manualControl is on: switch it off first"
+                                           : "a motion is already running");
         }
         atomic_store_explicit(&c->plan_slot_busy, false, memory_order_release);
         return;
@@ -405,11 +406,12 @@ static void handle_command(ls_control_t *c, const ls_ctl_cmd_t *cmd)
         int si = sensor_index(c, c->react_slot.sensor);
         if (!c->enabled || busy(c) || c->manual != NULL || si < 0 ||
             ls_react_start(&c->react, &c->react_slot, c->q_cmd, c->cfg.sensors[si].n_values) != 0) {
-            cmd_failed(c, cmd->ref_seq, !c->enabled ? "the drives are off"
-                                        : busy(c) ? "a motion is already running"
-                                        : c->manual != NULL ? "manualControl is on: switch it off first"
-                                        : si < 0 ? "the move's sensor is not composed"
-                                                 : "the sensor-guided move was refused");
+            cmd_failed(c, cmd->ref_seq,
+                       !c->enabled         ? "the drives are off"
+                       : busy(c)           ? "a motion is already running"
+                       : c->manual != NULL ? "manualControl is on: switch it off first"
+                       : si < 0            ? "the move's sensor is not composed"
+                                           : "the sensor-guided move was refused");
         } else {
             c->react_sensor = si;
         }
@@ -510,8 +512,8 @@ void ls_control_cycle(ls_control_t *c, uint64_t now_us)
     c->jogging = false;
     if (c->enabled) {
         if (c->react.active) {
-            ls_react_step(&c->react, c->dt_s, c->q, c->react_sensor >= 0 ? c->sens[c->react_sensor] : NULL,
-                          c->q_cmd, c->qd_cmd, &mev);
+            ls_react_step(&c->react, c->dt_s, c->q, c->react_sensor >= 0 ? c->sens[c->react_sensor] : NULL, c->q_cmd,
+                          c->qd_cmd, &mev);
             /* The path executor holds where the guarded move is (or ended). */
             ls_motion_hold(&c->motion, c->q_cmd);
         } else if (c->motion.phase == LS_MOTION_IDLE && c->manual != NULL) {

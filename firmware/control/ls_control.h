@@ -37,24 +37,24 @@
 #include "ls_react.h"
 #include "ls_robot_model.h"
 
-#define LS_CTL_QUEUE_LEN 32u   /* power of two */
+#define LS_CTL_QUEUE_LEN 32u /* power of two */
 #define LS_CTL_MAX_DIO_UNITS 4
 
 typedef enum {
-    LS_CTL_ENABLE = 1,   /* drives on: hold the measured position */
-    LS_CTL_DISABLE,      /* drives off; a running motion first stops along its path */
-    LS_CTL_START,        /* start the plan in the plan slot */
-    LS_CTL_STOP,         /* decelerate along the path and pause */
+    LS_CTL_ENABLE = 1, /* drives on: hold the measured position */
+    LS_CTL_DISABLE,    /* drives off; a running motion first stops along its path */
+    LS_CTL_START,      /* start the plan in the plan slot */
+    LS_CTL_STOP,       /* decelerate along the path and pause */
     LS_CTL_RESUME,
     LS_CTL_ABORT,
-    LS_CTL_DIO_WRITE,    /* dio.unit, dio.on, dio.off */
-    LS_CTL_AUX_DONE,     /* a path auxiliary command finished: continue */
-    LS_CTL_ESTOP_LINE,   /* dio.unit, dio.on = input bit that means e-stop when active (0: none) */
-    LS_CTL_REACT_START,  /* start the guarded/compliant move in the react slot */
-    LS_CTL_MANUAL,       /* manual: jogging on (dev, jog) or off (dev NULL); use ls_control_set_manual */
-    LS_CTL_TOOL_COUPLE,  /* tool.dev, tool.id, tool.attach: LS_MEV_TOOL reports the HAL status */
-    LS_CTL_TOOL_BITS,    /* tool.dev, tool.on, tool.off: LS_MEV_TOOL reports the status, dio.on the bits */
-    LS_CTL_HALT,         /* as DISABLE, stopping along the path at the model's maximum deceleration */
+    LS_CTL_DIO_WRITE,   /* dio.unit, dio.on, dio.off */
+    LS_CTL_AUX_DONE,    /* a path auxiliary command finished: continue */
+    LS_CTL_ESTOP_LINE,  /* dio.unit, dio.on = input bit that means e-stop when active (0: none) */
+    LS_CTL_REACT_START, /* start the guarded/compliant move in the react slot */
+    LS_CTL_MANUAL,      /* manual: jogging on (dev, jog) or off (dev NULL); use ls_control_set_manual */
+    LS_CTL_TOOL_COUPLE, /* tool.dev, tool.id, tool.attach: LS_MEV_TOOL reports the HAL status */
+    LS_CTL_TOOL_BITS,   /* tool.dev, tool.on, tool.off: LS_MEV_TOOL reports the status, dio.on the bits */
+    LS_CTL_HALT,        /* as DISABLE, stopping along the path at the model's maximum deceleration */
 } ls_ctl_kind_t;
 
 #define LS_CTL_TOOL_ID_LEN 32
@@ -79,12 +79,12 @@ typedef struct {
 } ls_ctl_cmd_t;
 
 typedef enum {
-    LS_CEV_MOTION = 1,   /* motion: a motion executor event */
-    LS_CEV_FAULT,        /* text: the loop disabled the drives (HAL error), or is stopping a motion
+    LS_CEV_MOTION = 1,  /* motion: a motion executor event */
+    LS_CEV_FAULT,       /* text: the loop disabled the drives (HAL error), or is stopping a motion
                             along its path at the model's maximum deceleration before it
                             disables them (e-stop input) */
-    LS_CEV_DIO_CHANGED,  /* dio.unit, dio.on = new levels, dio.off = bits that changed */
-    LS_CEV_CMD_FAILED,   /* ref_seq, text: a command the loop could not carry out */
+    LS_CEV_DIO_CHANGED, /* dio.unit, dio.on = new levels, dio.off = bits that changed */
+    LS_CEV_CMD_FAILED,  /* ref_seq, text: a command the loop could not carry out */
 } ls_cev_kind_t;
 
 typedef struct {
@@ -115,12 +115,12 @@ typedef struct {
     uint32_t dio[LS_CTL_MAX_DIO_UNITS];
     /* sensors in the order of ls_control_config_t.sensors, SI, tool frame */
     double sensor[HAL_MAX_SENSORS][HAL_SENSOR_MAX_VALUES];
-    double flange_pose[16];   /* FK of q_rad, base frame, column-major */
+    double flange_pose[16]; /* FK of q_rad, base frame, column-major */
     uint32_t events_lost;
     uint32_t max_cycle_us;
-    bool react_active;        /* a guarded/compliant move runs or is paused */
-    bool manual_on;           /* jogging is switched on */
-    bool jogging;             /* the set-point moved by jogging this cycle */
+    bool react_active; /* a guarded/compliant move runs or is paused */
+    bool manual_on;    /* jogging is switched on */
+    bool jogging;      /* the set-point moved by jogging this cycle */
 } ls_ctl_snapshot_t;
 
 /* The snapshot as 32-bit words: the seqlock copies it word by word with
@@ -137,8 +137,8 @@ typedef struct {
 
 typedef struct {
     const ls_robot_model_t *model;
-    hal_arm_t *arm;           /* may be NULL: no arm backend (nothing moves) */
-    hal_dio_t *dio;           /* may be NULL */
+    hal_arm_t *arm;              /* may be NULL: no arm backend (nothing moves) */
+    hal_dio_t *dio;              /* may be NULL */
     const hal_sensor_t *sensors; /* read every cycle into the snapshot */
     size_t n_sensors;
     uint32_t rate_hz;
@@ -159,7 +159,7 @@ typedef struct ls_control {
     atomic_bool plan_slot_busy; /* set by the comms thread when filled, cleared by the loop when taken */
     ls_react_plan_t react_slot;
     atomic_bool react_slot_busy;
-    atomic_bool manual_on;      /* written by ls_control_set_manual: plans are refused meanwhile */
+    atomic_bool manual_on; /* written by ls_control_set_manual: plans are refused meanwhile */
     ls_control_event_filter_t filter;
     void *filter_ctx;
     /* loop -> comms */
@@ -176,12 +176,12 @@ typedef struct ls_control {
     /* loop-private */
     ls_motion_t motion;
     ls_react_t react;
-    int react_sensor;         /* index of the running move's sensor, -1: none */
+    int react_sensor; /* index of the running move's sensor, -1: none */
     const hal_manual_t *manual;
     double sens[HAL_MAX_SENSORS][HAL_SENSOR_MAX_VALUES]; /* last reading, SI */
     bool jogging;
     bool enabled;
-    bool disable_pending;     /* DISABLE while moving: stop along the path first */
+    bool disable_pending; /* DISABLE while moving: stop along the path first */
     double q[LS_N_JOINTS], qd[LS_N_JOINTS], q_cmd[LS_N_JOINTS], qd_cmd[LS_N_JOINTS];
     uint32_t dio_levels[LS_CTL_MAX_DIO_UNITS];
     uint16_t estop_unit;

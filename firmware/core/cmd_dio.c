@@ -74,14 +74,18 @@ int32_t ls_h_set_digital_io(struct ls_core *core, struct ls_call *call)
     }
     ls_ctl_snapshot_t snap;
     ls_control_snapshot(core->ctl, &snap);
-    ls_ctl_cmd_t cmd = { .kind = LS_CTL_DIO_WRITE, .ref_seq = call->req->seq,
+    ls_ctl_cmd_t cmd = { .kind = LS_CTL_DIO_WRITE,
+                         .ref_seq = call->req->seq,
                          .dio = { .unit = unit, .on = rq->bits_on, .off = rq->bits_off } };
     if (!ls_control_post(core->ctl, &cmd)) {
         return ls_reply(call, ls_RetCode_CMD_BUSY_ERR, "setDigitalIO: the control loop's command queue is full: retry");
     }
-    core->dio.write_wait[call->sup] = (ls_dio_write_wait_t){ .pending = true, .cycle0 = snap.cycle,
-                                                            .deadline_us = call->now_us + LS_DIO_WRITE_TIMEOUT_US,
-                                                            .unit = unit, .on = rq->bits_on, .off = rq->bits_off };
+    core->dio.write_wait[call->sup] = (ls_dio_write_wait_t){ .pending = true,
+                                                             .cycle0 = snap.cycle,
+                                                             .deadline_us = call->now_us + LS_DIO_WRITE_TIMEOUT_US,
+                                                             .unit = unit,
+                                                             .on = rq->bits_on,
+                                                             .off = rq->bits_off };
     return LS_CALL_DEFERRED;
 }
 
@@ -142,7 +146,8 @@ int32_t ls_h_signal_digital_io(struct ls_core *core, struct ls_call *call)
     }
     if (rq->polling_timeout_ms < 0) {
         return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR,
-                        "signalDigitalIO: pollingTimeOut %d ms: allowed 0 (no time-out) or more", (int)rq->polling_timeout_ms);
+                        "signalDigitalIO: pollingTimeOut %d ms: allowed 0 (no time-out) or more",
+                        (int)rq->polling_timeout_ms);
     }
     if (rq->polling_cycle_time_ms < 0) {
         return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR,
@@ -245,7 +250,8 @@ static void fire(ls_core_t *core, ls_dio_watch_t *w, uint32_t levels, uint64_t n
     watch_data_t d;
     watch_data(&d, w, levels);
     if (w->cb == ls_CallbackType_CB_EVENT_RSVP || w->cb == ls_CallbackType_CB_ALARM_RSVP) {
-        ls_NoticeKind kind = w->cb == ls_CallbackType_CB_ALARM_RSVP ? ls_NoticeKind_ALARM_RSVP : ls_NoticeKind_EVENT_RSVP;
+        ls_NoticeKind kind =
+            w->cb == ls_CallbackType_CB_ALARM_RSVP ? ls_NoticeKind_ALARM_RSVP : ls_NoticeKind_EVENT_RSVP;
         if (ls_core_rsvp(core, w->sup, kind, "dioSignal", d.v, 4, LS_DIO_RSVP_TIMEOUT_MS, "continue", rsvp_done, w,
                          now_us) > 0) {
             w->phase = LS_WATCH_AWAIT_RSVP;
@@ -317,9 +323,10 @@ static void finish_writes(ls_core_t *core, lazy_snap_t *ls, uint64_t now_us)
                 snprintf(msg, sizeof msg, "unit %u: levels now 0x%08X", (unsigned)ww->unit, (unsigned)lv);
                 ls_core_finish_deferred(core, i, ls_RetCode_CMD_EXEC_OK, msg);
             } else {
-                snprintf(msg, sizeof msg, "unit %u: after switching on 0x%X, off 0x%X the levels read 0x%08X: the DIO "
-                         "backend refused the write (see the log)", (unsigned)ww->unit, (unsigned)ww->on,
-                         (unsigned)ww->off, (unsigned)lv);
+                snprintf(msg, sizeof msg,
+                         "unit %u: after switching on 0x%X, off 0x%X the levels read 0x%08X: the DIO "
+                         "backend refused the write (see the log)",
+                         (unsigned)ww->unit, (unsigned)ww->on, (unsigned)ww->off, (unsigned)lv);
                 ls_core_finish_deferred(core, i, ls_RetCode_CMD_ERR, msg);
             }
         } else if (now_us >= ww->deadline_us) {

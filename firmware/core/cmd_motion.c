@@ -84,7 +84,7 @@ typedef struct {
     bool used;
     char name[LS_MOTION_NAME_LEN];
     ls_ReferenceFrame frame;
-    bool straight;     /* STRAIGHT_MOTION (Cartesian points only) */
+    bool straight; /* STRAIGHT_MOTION (Cartesian points only) */
     bool relative;
     double v[LS_N_JOINTS]; /* SI: joints (rad), or x y z (m) roll pitch yaw (rad) */
     char tag[LS_MOTION_NAME_LEN];
@@ -220,12 +220,11 @@ static int32_t start_plan(ls_core_t *core, ls_call_t *call, ls_motion_plan_t *sl
     slot->ref_seq = call->req->seq;
     snprintf(slot->name, sizeof slot->name, "%s", point);
     if (!ls_control_start_plan(core->ctl, call->req->seq)) {
-        return ls_reply(call, ls_RetCode_CMD_BUSY_ERR,
-                        "%s: the control loop's command queue is full; try again", seed_name);
+        return ls_reply(call, ls_RetCode_CMD_BUSY_ERR, "%s: the control loop's command queue is full; try again",
+                        seed_name);
     }
     ls_run_begin(core, call, false, seed_name, point, path);
-    return ls_reply(call, ls_RetCode_CMD_STARTED_OK, "%s started: expect %sComplete or an alarm", seed_name,
-                    seed_name);
+    return ls_reply(call, ls_RetCode_CMD_STARTED_OK, "%s started: expect %sComplete or an alarm", seed_name, seed_name);
 }
 
 static int32_t no_arm(ls_call_t *call, const char *what)
@@ -431,7 +430,8 @@ int32_t ls_h_stop_motion(struct ls_core *core, struct ls_call *call)
         return no_arm(call, "stopMotion");
     }
     if (!post(core, LS_CTL_STOP, call->req->seq)) {
-        return ls_reply(call, ls_RetCode_CMD_BUSY_ERR, "stopMotion: the control loop's command queue is full; try again");
+        return ls_reply(call, ls_RetCode_CMD_BUSY_ERR,
+                        "stopMotion: the control loop's command queue is full; try again");
     }
     core->run.stop_pending = true;
     core->run.stop_sup = call->sup;
@@ -444,7 +444,8 @@ int32_t ls_h_resume_motion(struct ls_core *core, struct ls_call *call)
         return no_arm(call, "resumeMotion");
     }
     if (!post(core, LS_CTL_RESUME, call->req->seq)) {
-        return ls_reply(call, ls_RetCode_CMD_BUSY_ERR, "resumeMotion: the control loop's command queue is full; try again");
+        return ls_reply(call, ls_RetCode_CMD_BUSY_ERR,
+                        "resumeMotion: the control loop's command queue is full; try again");
     }
     core->state = ls_State_MOVING;
     snprintf(core->motion_state, sizeof core->motion_state, "running_trajectory");
@@ -463,7 +464,8 @@ static void path_delete(int i)
 int32_t ls_h_abort_motion(struct ls_core *core, struct ls_call *call)
 {
     if (core->ctl != NULL && !post(core, LS_CTL_ABORT, call->req->seq)) {
-        return ls_reply(call, ls_RetCode_CMD_BUSY_ERR, "abortMotion: the control loop's command queue is full; try again");
+        return ls_reply(call, ls_RetCode_CMD_BUSY_ERR,
+                        "abortMotion: the control loop's command queue is full; try again");
     }
     bool had = core->run.active;
     if (had) {
@@ -475,8 +477,8 @@ int32_t ls_h_abort_motion(struct ls_core *core, struct ls_call *call)
         core->state = ls_State_RESTING;
         snprintf(core->motion_state, sizeof core->motion_state, "robot_stopped_on_command");
     }
-    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "%s", had ? "motion dropped and its path queue cleared"
-                                                             : "nothing to abort: no motion was held");
+    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "%s",
+                    had ? "motion dropped and its path queue cleared" : "nothing to abort: no motion was held");
 }
 
 /* ------------------------------------------------------------- getTagId */
@@ -487,7 +489,8 @@ int32_t ls_h_get_tag_id(struct ls_core *core, struct ls_call *call)
     ls_GetTagIdRes *r = &call->res->result.get_tag_id;
     snprintf(r->path_name, sizeof r->path_name, "%s", g_tag_path);
     snprintf(r->tag_id, sizeof r->tag_id, "%s", g_tag_last);
-    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "%s", g_tag_last[0] != '\0' ? "last tag reached" : "no tag reached yet");
+    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "%s",
+                    g_tag_last[0] != '\0' ? "last tag reached" : "no tag reached yet");
 }
 
 /* ------------------------------------------------------------- auxiliary commands */
@@ -497,7 +500,7 @@ typedef enum { AUX_DIO = 1, AUX_WAIT, AUX_EVENT, AUX_RSVP } aux_kind_t;
 typedef struct {
     aux_kind_t kind;
     uint16_t unit;
-    uint32_t on, off;  /* dio: bits to set, bits to clear; wait: on = mask */
+    uint32_t on, off; /* dio: bits to set, bits to clear; wait: on = mask */
     double timeout_s;
     char name[LS_MOTION_NAME_LEN];
 } aux_t;
@@ -629,8 +632,8 @@ static int check_aux_io(const ls_core_t *core, const aux_t *a, char *why, size_t
     }
     const uint32_t bad = a->on & ~u->input_mask;
     if (bad != 0u) {
-        snprintf(why, whylen, "bits 0x%X of unit %u are not inputs (inputs: 0x%X)", (unsigned)bad,
-                 (unsigned)a->unit, (unsigned)u->input_mask);
+        snprintf(why, whylen, "bits 0x%X of unit %u are not inputs (inputs: 0x%X)", (unsigned)bad, (unsigned)a->unit,
+                 (unsigned)u->input_mask);
         return -1;
     }
     return 0;
@@ -729,7 +732,8 @@ static void run_aux(ls_core_t *core, const ls_motion_event_t *ev)
         core->run.wait_mask = a.on;
         core->run.wait_deadline_us = g_now_us + (uint64_t)(a.timeout_s * 1e6);
         core->run.wait_point = (int)ev->index;
-        snprintf(core->run.wait_text, sizeof core->run.wait_text, "%.*s", (int)sizeof core->run.wait_text - 1, ev->text);
+        snprintf(core->run.wait_text, sizeof core->run.wait_text, "%.*s", (int)sizeof core->run.wait_text - 1,
+                 ev->text);
         ls_core_motion_tick(core, g_now_us);
         return;
     case AUX_EVENT:
@@ -743,8 +747,7 @@ static void run_aux(ls_core_t *core, const ls_motion_event_t *ev)
             aux_done(core); /* nobody to ask (or the table is full): take the default */
         }
         return;
-    default:
-        return;
+    default: return;
     }
 }
 
@@ -893,8 +896,7 @@ void ls_core_on_motion_event(ls_core_t *core, const ls_motion_event_t *ev)
             run_aux(core, ev);
         }
         return;
-    default:
-        return;
+    default: return;
     }
 }
 
@@ -943,8 +945,8 @@ static int32_t load_point(ls_core_t *core, ls_call_t *call, const ls_PathLoadReq
         for (int j = 0; j < LS_N_JOINTS; j++) {
             pt->v[j] = tp->joints[j] * ang_si(set->angular);
             if (!pt->relative && (pt->v[j] < core->model->q_min_rad[j] || pt->v[j] > core->model->q_max_rad[j])) {
-                const double lim = pt->v[j] < core->model->q_min_rad[j] ? core->model->q_min_rad[j]
-                                                                        : core->model->q_max_rad[j];
+                const double lim =
+                    pt->v[j] < core->model->q_min_rad[j] ? core->model->q_min_rad[j] : core->model->q_max_rad[j];
                 return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR,
                                 "pathLoad point %d: joint %d: %.4g %s beyond its limit %.4g %s", k, j + 1,
                                 tp->joints[j], ang_name(set->angular), lim / ang_si(set->angular),
@@ -1028,7 +1030,8 @@ int32_t ls_h_path_load(struct ls_core *core, struct ls_call *call)
                         "pathLoad: frame must be JOINT_FRAME, BASE_CARTESIAN_FRAME or WORLD_CARTESIAN_FRAME");
     }
     if (r->motion_type != ls_MotionType_JOINT_MOTION && r->motion_type != ls_MotionType_STRAIGHT_MOTION) {
-        return ls_reply(call, ls_RetCode_CMD_PARAM_ERR, "pathLoad: motion_type must be JOINT_MOTION or STRAIGHT_MOTION");
+        return ls_reply(call, ls_RetCode_CMD_PARAM_ERR,
+                        "pathLoad: motion_type must be JOINT_MOTION or STRAIGHT_MOTION");
     }
     if (r->motion_type == ls_MotionType_STRAIGHT_MOTION && r->frame == ls_ReferenceFrame_JOINT_FRAME) {
         return ls_reply(call, ls_RetCode_CMD_PARAM_ERR,
@@ -1157,8 +1160,8 @@ static void copy_point_attrs(ls_motion_seg_t *s, const path_point_t *pt, int k)
 
 /* Plan every segment of path `p` from q_start into g_prog. Returns 0 or the
  * planner status with `why` naming the point. */
-static int build_program(ls_core_t *core, const path_t *p, const double q_start[LS_N_JOINTS], int32_t cycles,
-                         char *why, unsigned whylen)
+static int build_program(ls_core_t *core, const path_t *p, const double q_start[LS_N_JOINTS], int32_t cycles, char *why,
+                         unsigned whylen)
 {
     double q_prev[LS_N_JOINTS], P_prev[16], q_first[LS_N_JOINTS], P_first[16];
     memcpy(q_prev, q_start, sizeof q_prev);

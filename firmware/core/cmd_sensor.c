@@ -37,8 +37,8 @@
 typedef struct {
     bool comply;
     size_t sensor;
-    bool length;          /* the sensor reads a distance (units follow setUnits) */
-    uint8_t component;    /* moveReact: the watched component */
+    bool length;       /* the sensor reads a distance (units follow setUnits) */
+    uint8_t component; /* moveReact: the watched component */
     int32_t panic_code;
     char seed_name[16];
 } react_run_t;
@@ -97,8 +97,8 @@ static int32_t find_sensor(ls_core_t *core, ls_call_t *call, const char *what, c
 static int32_t refuse_if_manual(ls_core_t *core, ls_call_t *call, const char *what)
 {
     if (core->ctl != NULL && ls_control_manual_on(core->ctl)) {
-        return ls_reply(call, ls_RetCode_CMD_BUSY_ERR, "%s: manualControl %s is on: send manualControl off first",
-                        what, g_manual);
+        return ls_reply(call, ls_RetCode_CMD_BUSY_ERR, "%s: manualControl %s is on: send manualControl off first", what,
+                        g_manual);
     }
     return 0;
 }
@@ -128,8 +128,7 @@ static int32_t check_line(ls_core_t *core, ls_call_t *call, const char *what, co
     char why[128];
     int st = ls_motion_seg_line(&g_check, m, q0, tool, tip1, &lim, why, sizeof why);
     if (st < 0) {
-        return ls_reply(call,
-                        st == LS_MOTION_ERANGE ? ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR : ls_RetCode_CMD_PARAM_ERR,
+        return ls_reply(call, st == LS_MOTION_ERANGE ? ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR : ls_RetCode_CMD_PARAM_ERR,
                         "%s refused, nothing moved: %s", what, why);
     }
     return 0;
@@ -141,8 +140,8 @@ static int32_t move_speed(ls_core_t *core, ls_call_t *call, const char *what, co
 {
     if (!isfinite(pct) || pct < 0.0 || pct > 100.0) {
         return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR,
-                        "%s: %s %.4g %% is out of range: give 0 (the current setSpeed) or a value in (0, 100]",
-                        what, field, pct);
+                        "%s: %s %.4g %% is out of range: give 0 (the current setSpeed) or a value in (0, 100]", what,
+                        field, pct);
     }
     *v_m_s = pct > 0.0 ? core->model->max_linear_speed_m_s * pct / 100.0 : core->settings.linear_speed_m_s;
     *v_m_s = fmin(*v_m_s, core->model->max_linear_speed_m_s);
@@ -379,8 +378,8 @@ int32_t ls_h_comply(struct ls_core *core, struct ls_call *call)
     const ls_settings_t *set = &core->settings;
     if (r->max_travel_count != 6) {
         return ls_reply(call, ls_RetCode_CMD_PARAM_ERR,
-                        "%s: max_travel has %u values; give x y z (travel) c_x c_y c_z (compliance), tool frame",
-                        what, (unsigned)r->max_travel_count);
+                        "%s: max_travel has %u values; give x y z (travel) c_x c_y c_z (compliance), tool frame", what,
+                        (unsigned)r->max_travel_count);
     }
     if (r->thresholds_count != 3 && r->thresholds_count != 6) {
         return ls_reply(call, ls_RetCode_CMD_PARAM_ERR,
@@ -417,8 +416,8 @@ int32_t ls_h_comply(struct ls_core *core, struct ls_call *call)
         plan.dir_tool[i] = d[i] / plan.dist_m;
         plan.n_tool[i] = c[i] / plan.c_max_m;
     }
-    double cosang = plan.dir_tool[0] * plan.n_tool[0] + plan.dir_tool[1] * plan.n_tool[1] +
-                    plan.dir_tool[2] * plan.n_tool[2];
+    double cosang =
+        plan.dir_tool[0] * plan.n_tool[0] + plan.dir_tool[1] * plan.n_tool[1] + plan.dir_tool[2] * plan.n_tool[2];
     if (fabs(cosang) > COMPLY_MAX_COS) {
         return ls_reply(call, ls_RetCode_CMD_PARAM_ERR,
                         "%s: the travel and the compliance direction must be orthogonal (they are %.1f deg apart)",
@@ -438,21 +437,21 @@ int32_t ls_h_comply(struct ls_core *core, struct ls_call *call)
     }
     for (size_t k = 0; k < r->proportional_gains_count; k++) {
         if (r->proportional_gains[k] < 0.0) {
-            return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR, "%s: proportional gain %zu is negative",
-                            what, k + 1);
+            return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR, "%s: proportional gain %zu is negative", what,
+                            k + 1);
         }
     }
     for (size_t k = 0; k < r->differential_gains_count; k++) {
         if (r->differential_gains[k] < 0.0) {
-            return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR, "%s: differential gain %zu is negative",
-                            what, k + 1);
+            return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR, "%s: differential gain %zu is negative", what,
+                            k + 1);
         }
     }
     /* gains: (linear unit / s) per N and linear unit per N -> SI */
     double kp = gain_along(r->proportional_gains, r->proportional_gains_count, plan.n_tool);
     plan.kp_m_s_N = kp > 0.0 ? ls_units_to_si_linear(set->linear, kp) : COMPLY_DEFAULT_KP_M_S_N;
-    plan.kd_m_N = ls_units_to_si_linear(set->linear,
-                                        gain_along(r->differential_gains, r->differential_gains_count, plan.n_tool));
+    plan.kd_m_N =
+        ls_units_to_si_linear(set->linear, gain_along(r->differential_gains, r->differential_gains_count, plan.n_tool));
     if ((code = move_speed(core, call, what, "speed", r->speed_pct, &plan.v_m_s)) != 0) {
         return code;
     }
@@ -464,16 +463,15 @@ int32_t ls_h_comply(struct ls_core *core, struct ls_call *call)
     double cfrac = r->compliance_speed_pct > 0.0 ? r->compliance_speed_pct / 100.0 : COMPLY_DEFAULT_CSPEED_FRAC;
     plan.vc_max_m_s = cfrac * core->model->max_linear_speed_m_s;
     if (r->max_timeout_s < 0.0) {
-        return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR,
-                        "%s: max_timeout %.4g s must be >= 0 (0: %g s)", what, r->max_timeout_s,
-                        COMPLY_DEFAULT_TIMEOUT_S);
+        return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR, "%s: max_timeout %.4g s must be >= 0 (0: %g s)",
+                        what, r->max_timeout_s, COMPLY_DEFAULT_TIMEOUT_S);
     }
     plan.timeout_s = r->max_timeout_s > 0.0 ? r->max_timeout_s : COMPLY_DEFAULT_TIMEOUT_S;
     double env = r->envelope_max_count > 0 ? r->envelope_max[0] : 0.0;
     if (env < 0.0 || (env > 0.0 && env <= fabs(plan.f_target_N))) {
         return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR,
-                        "%s: envelope max %.4g N must be 0 (panic at %g x the target) or above the target %.4g N",
-                        what, env, COMPLY_DEFAULT_PANIC_FACTOR, fabs(plan.f_target_N));
+                        "%s: envelope max %.4g N must be 0 (panic at %g x the target) or above the target %.4g N", what,
+                        env, COMPLY_DEFAULT_PANIC_FACTOR, fabs(plan.f_target_N));
     }
     plan.panic_N = env > 0.0 ? env : COMPLY_DEFAULT_PANIC_FACTOR * fabs(plan.f_target_N);
     react_run_t run = { .comply = true, .sensor = si, .length = false, .panic_code = r->panic_stop_code };
@@ -519,7 +517,8 @@ int32_t ls_h_manual_control(struct ls_core *core, struct ls_call *call)
         ok = ls_control_set_manual(core->ctl, NULL, NULL, call->req->seq);
     }
     if (!ok) {
-        return ls_reply(call, ls_RetCode_CMD_BUSY_ERR, "manualControl: the control loop's command queue is full; try again");
+        return ls_reply(call, ls_RetCode_CMD_BUSY_ERR,
+                        "manualControl: the control loop's command queue is full; try again");
     }
     snprintf(g_manual, sizeof g_manual, "%s", type);
     g_manual_sup = frac > 0.0 ? call->sup : -1;
@@ -580,8 +579,8 @@ static void react_end(ls_core_t *core, const ls_ctl_event_t *ev)
     char d_reason[40], d_pose[64], d_read[64], d_trav[40], d_extra[4][64];
     const char *data[10];
     size_t n = 0;
-    const char *reason = rep->end == LS_REACT_END_MAX_DISTANCE && core->run.comply ? "max_travel"
-                                                                                 : ls_react_end_name(rep->end);
+    const char *reason =
+        rep->end == LS_REACT_END_MAX_DISTANCE && core->run.comply ? "max_travel" : ls_react_end_name(rep->end);
     snprintf(d_reason, sizeof d_reason, "reason=%s", reason);
     data[n++] = d_reason;
     values_text("pose", pose, 6, d_pose, sizeof d_pose);
@@ -598,8 +597,8 @@ static void react_end(ls_core_t *core, const ls_ctl_event_t *ev)
         static const char *const k_ft[] = { "Fx", "Fy", "Fz", "Tx", "Ty", "Tz" };
         double tv = core->run.length ? ls_units_from_si_linear(set->linear, rep->trigger) : rep->trigger;
         const char *comp = rep->end == LS_REACT_END_ENVELOPE ? "|F|"
-                           : core->run.length                  ? "distance"
-                           : core->run.component < 6           ? k_ft[core->run.component]
+                           : core->run.length                ? "distance"
+                           : core->run.component < 6         ? k_ft[core->run.component]
                                                              : "value";
         snprintf(d_trig, sizeof d_trig, "trigger=%s:%.6g", comp, tv);
         data[n++] = d_trig;
@@ -620,7 +619,7 @@ static void react_end(ls_core_t *core, const ls_ctl_event_t *ev)
         }
     }
     bool ok = rep->end == LS_REACT_END_THRESHOLD || rep->end == LS_REACT_END_MAX_DISTANCE;
-    const char *suffix = ok ? "Complete"
+    const char *suffix = ok                                  ? "Complete"
                          : rep->end == LS_REACT_END_ENVELOPE ? "Envelope"
                          : rep->end == LS_REACT_END_TIMEOUT  ? "Timeout"
                          : rep->end == LS_REACT_END_PANIC    ? "PanicStop"

@@ -122,8 +122,7 @@ int32_t ls_h_set_acceleration(struct ls_core *core, struct ls_call *call)
         if (rc < 0) {
             return rc;
         }
-        st->angular_accel_rad_s2 =
-            fmin(ls_units_to_si_angular(st->angular, v), core->model->max_angular_accel_rad_s2);
+        st->angular_accel_rad_s2 = fmin(ls_units_to_si_angular(st->angular, v), core->model->max_angular_accel_rad_s2);
         return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "ANGULAR_ACCEL %g %s", v, unit);
     }
     return ls_reply(call, ls_RetCode_CMD_PARAM_ERR,
@@ -137,8 +136,8 @@ static int32_t take_pose(ls_core_t *core, ls_call_t *call, const char *what, con
                          double out[6])
 {
     if (n != 6) {
-        return ls_reply(call, ls_RetCode_CMD_PARAM_ERR,
-                        "%s takes 6 values (x y z roll pitch yaw), got %u", what, (unsigned)n);
+        return ls_reply(call, ls_RetCode_CMD_PARAM_ERR, "%s takes 6 values (x y z roll pitch yaw), got %u", what,
+                        (unsigned)n);
     }
     for (int i = 0; i < 6; i++) {
         if (!isfinite(v[i])) {
@@ -159,8 +158,8 @@ int32_t ls_h_set_tool_offset(struct ls_core *core, struct ls_call *call)
         return rc;
     }
     memcpy(core->settings.tool_offset, si, sizeof si);
-    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "tool offset set (%s, %s)", ls_units_linear_name(core->settings.linear),
-                    ls_units_angular_name(core->settings.angular));
+    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "tool offset set (%s, %s)",
+                    ls_units_linear_name(core->settings.linear), ls_units_angular_name(core->settings.angular));
 }
 
 int32_t ls_h_set_world_cartesian_frame(struct ls_core *core, struct ls_call *call)
@@ -375,5 +374,6 @@ int32_t ls_h_get_sensor_reading(struct ls_core *core, struct ls_call *call)
     }
     r->current_data_count = (pb_size_t)n;
     return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "%s: %u values (%s)", s->name, (unsigned)n,
-                    length ? ls_units_linear_name(core->settings.linear) : "SI: forces N, torques Nm, not scaled by setUnits");
+                    length ? ls_units_linear_name(core->settings.linear)
+                           : "SI: forces N, torques Nm, not scaled by setUnits");
 }

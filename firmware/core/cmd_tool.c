@@ -39,13 +39,13 @@ enum { STEP_APPROACH = 1, STEP_IN, STEP_COUPLE, STEP_OUT };
 
 typedef struct {
     bool active;
-    bool attach;          /* getTool (true) or putTool */
+    bool attach; /* getTool (true) or putTool */
     int sup;
     uint32_t ref_seq;
     int step;
     char id[LS_CTL_TOOL_ID_LEN];
     double rack[16], approach[16]; /* flange poses, base frame */
-    double offset[6];     /* the tool's offset, SI */
+    double offset[6];              /* the tool's offset, SI */
 } tool_op_t;
 
 typedef struct {
@@ -76,8 +76,7 @@ static bool have_changer(const ls_core_t *core)
 
 static int32_t no_changer(ls_call_t *call, const char *what)
 {
-    return ls_reply(call, ls_RetCode_CMD_UNSUPPORTED_ERR, "%s: no tool changer is composed in this controller",
-                    what);
+    return ls_reply(call, ls_RetCode_CMD_UNSUPPORTED_ERR, "%s: no tool changer is composed in this controller", what);
 }
 
 static int32_t unknown_tool(ls_core_t *core, ls_call_t *call, const char *what, const char *id)
@@ -94,8 +93,8 @@ static int32_t unknown_tool(ls_core_t *core, ls_call_t *call, const char *what, 
                     n > 0 ? list : "tools whose names this firmware cannot list");
 }
 
-static bool post_tool(ls_core_t *core, ls_ctl_kind_t kind, uint32_t ref_seq, const char *id, bool attach,
-                      uint32_t on, uint32_t off)
+static bool post_tool(ls_core_t *core, ls_ctl_kind_t kind, uint32_t ref_seq, const char *id, bool attach, uint32_t on,
+                      uint32_t off)
 {
     ls_ctl_cmd_t c;
     memset(&c, 0, sizeof c);
@@ -213,8 +212,8 @@ static int32_t change(ls_core_t *core, ls_call_t *call, const char *id, bool att
     }
     bool holding = strcmp(g_held, "none") != 0;
     if (attach && holding) {
-        return ls_reply(call, ls_RetCode_CMD_ERR, "getTool %s: holding %s: put back %s first (putTool %s)", id,
-                        g_held, g_held, g_held);
+        return ls_reply(call, ls_RetCode_CMD_ERR, "getTool %s: holding %s: put back %s first (putTool %s)", id, g_held,
+                        g_held, g_held);
     }
     if (!attach && !holding) {
         return ls_reply(call, ls_RetCode_CMD_ERR, "putTool %s: no tool is held, nothing to put back", id);
@@ -248,8 +247,7 @@ static int32_t change(ls_core_t *core, ls_call_t *call, const char *id, bool att
     char why[128];
     if (plan_step(core, snap.q_cmd_rad, why, sizeof why) != 0) {
         g_op.active = false;
-        return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR, "%s %s refused, nothing moved: %s", what, id,
-                        why);
+        return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR, "%s %s refused, nothing moved: %s", what, id, why);
     }
     g_op.active = true;
     core->state = ls_State_MOVING;

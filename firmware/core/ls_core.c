@@ -128,8 +128,8 @@ static void send_bytes(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t
     }
 }
 
-void ls_core_notify(ls_core_t *core, int sup, ls_NoticeKind kind, const char *event_id, uint32_t ref_seq,
-                    bool final, const char *const *data, size_t n_data)
+void ls_core_notify(ls_core_t *core, int sup, ls_NoticeKind kind, const char *event_id, uint32_t ref_seq, bool final,
+                    const char *const *data, size_t n_data)
 {
     for (int i = 0; i < LS_MAX_SUPERVISORS; i++) {
         ls_session_t *s = &core->sessions[i];
@@ -340,8 +340,12 @@ int32_t ls_core_rsvp(ls_core_t *core, int sup, ls_NoticeKind kind, const char *e
     if (len == 0) {
         return -1;
     }
-    *slot = (ls_rsvp_t){ .used = true, .id = id, .addr = s->addr,
-                         .deadline_us = now_us + (uint64_t)timeout_ms * 1000u, .done = done, .ctx = ctx };
+    *slot = (ls_rsvp_t){ .used = true,
+                         .id = id,
+                         .addr = s->addr,
+                         .deadline_us = now_us + (uint64_t)timeout_ms * 1000u,
+                         .done = done,
+                         .ctx = ctx };
     send_bytes(core, s->addr, core->note_enc, len);
     return (int32_t)id;
 }
@@ -451,8 +455,8 @@ int32_t ls_h_disconnect(struct ls_core *core, struct ls_call *call)
 
 static void describe_states(uint8_t mask, char *out, size_t cap)
 {
-    static const ls_State all[] = { ls_State_IDLE, ls_State_UNLOCKED, ls_State_LOCKED,
-                                    ls_State_RESTING, ls_State_MOVING, ls_State_PAUSED };
+    static const ls_State all[] = { ls_State_IDLE,    ls_State_UNLOCKED, ls_State_LOCKED,
+                                    ls_State_RESTING, ls_State_MOVING,   ls_State_PAUSED };
     size_t n = 0;
     out[0] = '\0';
     for (size_t i = 0; i < sizeof all / sizeof all[0]; i++) {
@@ -521,8 +525,8 @@ static int32_t dispatch(ls_core_t *core, uint8_t addr, ls_call_t *call)
     if ((d->states & (uint8_t)core->state) == 0u) {
         char valid[64];
         describe_states(d->states, valid, sizeof valid);
-        return ls_reply(call, ls_RetCode_CMD_WRONG_STATE_ERR, "%s is valid in %s, the device is %s: %s", d->name,
-                        valid, ls_core_state_name(core->state), how_to_reach(d->states, core->state));
+        return ls_reply(call, ls_RetCode_CMD_WRONG_STATE_ERR, "%s is valid in %s, the device is %s: %s", d->name, valid,
+                        ls_core_state_name(core->state), how_to_reach(d->states, core->state));
     }
     if (core->halt.active && (d->flags & LS_CMD_F_OWNER_ONLY) != 0u) {
         return ls_reply(call, ls_RetCode_CMD_BUSY_ERR,
@@ -723,7 +727,8 @@ void ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t
         if (cmd != 0u) {
             answer_bad_request(core, addr, ls_RetCode_CMD_UNKNOWN_CMD_ERR, core->up.msg.request.seq,
                                "command id %u is not in this firmware's schema: update the firmware or the "
-                               "host tool (they must come from the same tree)", (unsigned)cmd);
+                               "host tool (they must come from the same tree)",
+                               (unsigned)cmd);
         } else {
             answer_bad_request(core, addr, ls_RetCode_CMD_UNKNOWN_CMD_ERR, core->up.msg.request.seq,
                                "the request carries no command: the host tool must set one");

@@ -46,14 +46,14 @@ typedef struct {
     uint32_t heartbeat_period_ms;
     /* retransmission cache: the last request's seq and its encoded response */
     bool have_last;
-    bool last_pending;        /* the last request is still running (deferred) */
+    bool last_pending; /* the last request is still running (deferred) */
     uint32_t last_seq;
     uint8_t last_resp[LS_DOWNLINK_MAX];
     size_t last_resp_len;
     uint32_t notice_seq;
-    uint32_t epoch;           /* session epoch: new at every connect (docs/protocol.md) */
-    uint32_t executed;        /* requests executed (not answered from the cache) */
-    pb_size_t pending_tag;    /* command id of the deferred request (last_pending) */
+    uint32_t epoch;        /* session epoch: new at every connect (docs/protocol.md) */
+    uint32_t executed;     /* requests executed (not answered from the cache) */
+    pb_size_t pending_tag; /* command id of the deferred request (last_pending) */
 } ls_session_t;
 
 /* Settings of seed 3.2, always in SI (m, rad, s) inside the firmware; the
@@ -61,14 +61,14 @@ typedef struct {
 typedef struct {
     ls_LinearUnit linear;
     ls_AngularUnit angular;
-    double speed_pct;              /* PERCENT_SPEED, (0, 100] */
-    double accel_pct;              /* PERCENT_ACCEL, (0, 100] */
-    double linear_speed_m_s;       /* LINEAR_SPEED, Cartesian moves */
-    double angular_speed_rad_s;    /* ANGULAR_SPEED, Cartesian moves */
+    double speed_pct;           /* PERCENT_SPEED, (0, 100] */
+    double accel_pct;           /* PERCENT_ACCEL, (0, 100] */
+    double linear_speed_m_s;    /* LINEAR_SPEED, Cartesian moves */
+    double angular_speed_rad_s; /* ANGULAR_SPEED, Cartesian moves */
     double linear_accel_m_s2;
     double angular_accel_rad_s2;
-    double tool_offset[6];         /* flange -> tool tip: x y z roll pitch yaw */
-    double world_frame[6];         /* base -> world: x y z roll pitch yaw */
+    double tool_offset[6]; /* flange -> tool tip: x y z roll pitch yaw */
+    double world_frame[6]; /* base -> world: x y z roll pitch yaw */
 } ls_settings_t;
 
 struct ls_core;
@@ -95,21 +95,21 @@ typedef enum { LS_WATCH_FREE = 0, LS_WATCH_ARMED, LS_WATCH_AWAIT_RSVP } ls_watch
 typedef struct {
     ls_watch_phase_t phase;
     uint32_t id;
-    int sup;                  /* the session that asked; the watch ends with it */
+    int sup; /* the session that asked; the watch ends with it */
     uint8_t addr;
-    uint32_t ref_seq;         /* seq of the signalDigitalIO request */
+    uint32_t ref_seq; /* seq of the signalDigitalIO request */
     uint16_t unit;
     uint32_t bits;
     ls_CallbackType cb;
-    uint64_t deadline_us;     /* 0: no time-out */
-    uint64_t period_us;       /* 0: checked on every DIO change */
+    uint64_t deadline_us; /* 0: no time-out */
+    uint64_t period_us;   /* 0: checked on every DIO change */
     uint64_t next_check_us;
-    bool check_now;           /* first check at the next ls_dio_tick (after the answer went out) */
+    bool check_now; /* first check at the next ls_dio_tick (after the answer went out) */
 } ls_dio_watch_t;
 
 typedef struct {
     bool pending;
-    uint64_t cycle0;          /* control-loop cycle when the write was posted */
+    uint64_t cycle0; /* control-loop cycle when the write was posted */
     uint64_t deadline_us;
     uint16_t unit;
     uint32_t on, off;
@@ -161,18 +161,18 @@ typedef struct ls_core {
     hal_manual_t *manual;
     hal_dio_unit_info_t dio_info[LS_CORE_MAX_DIO_UNITS]; /* input/output masks per unit */
     uint16_t dio_units;
-    ls_dio_state_t dio;                                  /* signalDigitalIO watches, setDigitalIO in flight */
+    ls_dio_state_t dio; /* signalDigitalIO watches, setDigitalIO in flight */
     ls_settings_t settings;
     ls_rsvp_t rsvp[LS_MAX_RSVP];
     uint32_t rsvp_next_id;
     ls_State state;
-    int owner;                 /* index in sessions[], -1 when unlocked */
+    int owner; /* index in sessions[], -1 when unlocked */
     ls_session_t sessions[LS_MAX_SUPERVISORS];
-    char fault[96];            /* latched fault, empty when none */
-    char motion_state[32];     /* seed 3.3.1 motionControlState (docs/state-machine.md) */
-    ls_run_t run;              /* the started motion (ls_run.h) */
-    ls_halt_t halt;            /* a stop that ends with the drives off (ls_run.h) */
-    uint32_t epoch_next;       /* the next session epoch */
+    char fault[96];        /* latched fault, empty when none */
+    char motion_state[32]; /* seed 3.3.1 motionControlState (docs/state-machine.md) */
+    ls_run_t run;          /* the started motion (ls_run.h) */
+    ls_halt_t halt;        /* a stop that ends with the drives off (ls_run.h) */
+    uint32_t epoch_next;   /* the next session epoch */
     ls_fault_entry_t fault_log[LS_FAULT_LOG_LEN];
     uint32_t fault_log_count;
     uint32_t rx_malformed;     /* uplinks that did not decode */
@@ -180,16 +180,16 @@ typedef struct ls_core {
     uint32_t sessions_dropped; /* heartbeat time-outs */
     /* scratch (kept here, not on the stack: the messages are large) */
     ls_Uplink up;
-    ls_Downlink down;             /* the response being built (handlers write into it) */
+    ls_Downlink down; /* the response being built (handlers write into it) */
     uint8_t enc[LS_DOWNLINK_MAX];
-    ls_Downlink note;             /* notices: separate, so a handler may notify while answering */
+    ls_Downlink note; /* notices: separate, so a handler may notify while answering */
     uint8_t note_enc[LS_DOWNLINK_MAX];
 } ls_core_t;
 
 /* One command being dispatched. */
 typedef struct ls_call {
     ls_core_t *core;
-    int sup;                   /* index of the calling session */
+    int sup; /* index of the calling session */
     const ls_Request *req;
     ls_Response *res;
     uint64_t now_us;
@@ -207,8 +207,8 @@ void ls_core_on_heartbeat(ls_core_t *core, uint8_t addr, uint64_t now_us);
 void ls_core_tick(ls_core_t *core, uint64_t now_us);
 
 /* Send a notice (event, alarm) to one session (sup >= 0) or to all (sup < 0). */
-void ls_core_notify(ls_core_t *core, int sup, ls_NoticeKind kind, const char *event_id, uint32_t ref_seq,
-                    bool final, const char *const *data, size_t n_data);
+void ls_core_notify(ls_core_t *core, int sup, ls_NoticeKind kind, const char *event_id, uint32_t ref_seq, bool final,
+                    const char *const *data, size_t n_data);
 
 /* Send a notice to the session at `addr` (if any) carrying session epoch
  * `epoch`: the notices of a run go to the session that started it. */
@@ -245,7 +245,6 @@ const char *ls_core_ret_name(int32_t code);
 
 /* Fill call->res->ret_msg (printf-style) and return `code`: handlers end with
  * `return ls_reply(call, CODE, "...", ...)`. */
-int32_t ls_reply(ls_call_t *call, int32_t code, const char *fmt, ...)
-    __attribute__((format(printf, 3, 4)));
+int32_t ls_reply(ls_call_t *call, int32_t code, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 
 #endif

@@ -28,18 +28,21 @@ enum {
 
 /* Deadlines are far-future timestamps; saturate so a caller's clock near the
  * end of uint64 cannot wrap a deadline into the past. */
-static uint64_t add_sat(uint64_t now_us, uint32_t dt_us) {
+static uint64_t add_sat(uint64_t now_us, uint32_t dt_us)
+{
     return (now_us > UINT64_MAX - dt_us) ? UINT64_MAX : now_us + dt_us;
 }
 
-static void count_rx(ls_isotp_link_t *l, ls_isotp_result_t r) {
+static void count_rx(ls_isotp_link_t *l, ls_isotp_result_t r)
+{
     l->rx_results[r]++;
     if (r != LS_ISOTP_N_OK) {
         l->last_error = r;
     }
 }
 
-static void count_tx(ls_isotp_link_t *l, ls_isotp_result_t r) {
+static void count_tx(ls_isotp_link_t *l, ls_isotp_result_t r)
+{
     l->tx_results[r]++;
     if (r != LS_ISOTP_N_OK) {
         l->last_error = r;
@@ -48,7 +51,8 @@ static void count_tx(ls_isotp_link_t *l, ls_isotp_result_t r) {
 
 /* Pads (or not) and hands one frame to the CAN queue. `used` bytes of `f` are
  * valid; the rest is filled here when padding. */
-static int emit(ls_isotp_link_t *l, uint8_t f[CAN_DL], uint8_t used) {
+static int emit(ls_isotp_link_t *l, uint8_t f[CAN_DL], uint8_t used)
+{
     uint8_t len = used;
     if (l->cfg.tx_padding) {
         memset(f + used, l->cfg.padding_byte, CAN_DL - used);
@@ -57,7 +61,8 @@ static int emit(ls_isotp_link_t *l, uint8_t f[CAN_DL], uint8_t used) {
     return l->send(l->send_ctx, l->tx_id, f, len);
 }
 
-static bool send_fc(ls_isotp_link_t *l, uint8_t fs) {
+static bool send_fc(ls_isotp_link_t *l, uint8_t fs)
+{
     uint8_t f[CAN_DL];
     f[0] = (uint8_t)((PCI_FC << 4) | fs);
     f[1] = l->cfg.block_size;
@@ -68,7 +73,8 @@ static bool send_fc(ls_isotp_link_t *l, uint8_t fs) {
 /* Queue a flow control now, or remember it for the next poll when the CAN
  * queue is full. A newer FC replaces an older unsent one: only the latest
  * state of the receiver matters to the peer. */
-static void queue_fc(ls_isotp_link_t *l, uint8_t fs, uint64_t now_us) {
+static void queue_fc(ls_isotp_link_t *l, uint8_t fs, uint64_t now_us)
+{
     if (send_fc(l, fs)) {
         l->rx_fc_pending = false;
         if (fs == FS_CTS) {
@@ -80,11 +86,13 @@ static void queue_fc(ls_isotp_link_t *l, uint8_t fs, uint64_t now_us) {
     }
 }
 
-static bool stmin_valid(uint8_t st_min) {
+static bool stmin_valid(uint8_t st_min)
+{
     return st_min <= 0x7Fu || (st_min >= 0xF1u && st_min <= 0xF9u);
 }
 
-uint32_t ls_isotp_stmin_to_us(uint8_t st_min) {
+uint32_t ls_isotp_stmin_to_us(uint8_t st_min)
+{
     if (st_min <= 0x7Fu) {
         return (uint32_t)st_min * 1000u;
     }
@@ -94,7 +102,8 @@ uint32_t ls_isotp_stmin_to_us(uint8_t st_min) {
     return 127000u;
 }
 
-void ls_isotp_default_config(ls_isotp_config_t *cfg) {
+void ls_isotp_default_config(ls_isotp_config_t *cfg)
+{
     if (cfg == NULL) {
         return;
     }
@@ -108,7 +117,8 @@ void ls_isotp_default_config(ls_isotp_config_t *cfg) {
 }
 
 int ls_isotp_init(ls_isotp_link_t *l, const ls_isotp_config_t *cfg, uint32_t tx_id, uint32_t rx_id,
-                  ls_isotp_send_fn send, void *send_ctx) {
+                  ls_isotp_send_fn send, void *send_ctx)
+{
     if (l == NULL || send == NULL) {
         return LS_ISOTP_EARG;
     }
@@ -135,7 +145,8 @@ int ls_isotp_init(ls_isotp_link_t *l, const ls_isotp_config_t *cfg, uint32_t tx_
 
 /* ---- transmitter ------------------------------------------------------- */
 
-static void tx_finish(ls_isotp_link_t *l, ls_isotp_result_t r) {
+static void tx_finish(ls_isotp_link_t *l, ls_isotp_result_t r)
+{
     count_tx(l, r);
     l->tx_state = LS_ISOTP_TX_IDLE;
 }
@@ -143,7 +154,8 @@ static void tx_finish(ls_isotp_link_t *l, ls_isotp_result_t r) {
 /* Queue every frame that is due: the SF/FF if not yet out, then CFs as STmin
  * and BS allow. Stops at the first refusal of the CAN queue; the same frame is
  * rebuilt and retried on the next call. */
-static void tx_pump(ls_isotp_link_t *l, uint64_t now_us) {
+static void tx_pump(ls_isotp_link_t *l, uint64_t now_us)
+{
     uint8_t f[CAN_DL];
     while (l->tx_state == LS_ISOTP_TX_SENDING && now_us >= l->tx_next_us) {
         if (l->tx_off == 0) {
@@ -191,7 +203,8 @@ static void tx_pump(ls_isotp_link_t *l, uint64_t now_us) {
     }
 }
 
-static void on_fc(ls_isotp_link_t *l, const uint8_t *d, uint8_t len, uint64_t now_us) {
+static void on_fc(ls_isotp_link_t *l, const uint8_t *d, uint8_t len, uint64_t now_us)
+{
     if (l->tx_state != LS_ISOTP_TX_WAIT_FC) {
         count_tx(l, LS_ISOTP_N_UNEXP_PDU);
         return;
@@ -218,16 +231,13 @@ static void on_fc(ls_isotp_link_t *l, const uint8_t *d, uint8_t len, uint64_t no
             l->tx_deadline_us = add_sat(now_us, l->cfg.n_bs_timeout_us);
         }
         break;
-    case FS_OVFLW:
-        tx_finish(l, LS_ISOTP_N_BUFFER_OVFLW);
-        break;
-    default:
-        tx_finish(l, LS_ISOTP_N_INVALID_FS);
-        break;
+    case FS_OVFLW: tx_finish(l, LS_ISOTP_N_BUFFER_OVFLW); break;
+    default: tx_finish(l, LS_ISOTP_N_INVALID_FS); break;
     }
 }
 
-int ls_isotp_send(ls_isotp_link_t *l, const uint8_t *payload, size_t len, uint64_t now_us) {
+int ls_isotp_send(ls_isotp_link_t *l, const uint8_t *payload, size_t len, uint64_t now_us)
+{
     if (l == NULL || payload == NULL) {
         return LS_ISOTP_EARG;
     }
@@ -251,21 +261,24 @@ int ls_isotp_send(ls_isotp_link_t *l, const uint8_t *payload, size_t len, uint64
     return LS_ISOTP_OK;
 }
 
-bool ls_isotp_tx_busy(const ls_isotp_link_t *l) {
+bool ls_isotp_tx_busy(const ls_isotp_link_t *l)
+{
     return l != NULL && l->tx_state != LS_ISOTP_TX_IDLE;
 }
 
 /* ---- receiver ---------------------------------------------------------- */
 
 /* An aborted reception must not leave a CTS for it in the FC retry slot. */
-static void rx_abort(ls_isotp_link_t *l, ls_isotp_result_t r) {
+static void rx_abort(ls_isotp_link_t *l, ls_isotp_result_t r)
+{
     count_rx(l, r);
     l->rx_state = LS_ISOTP_RX_IDLE;
     l->rx_fc_pending = false;
 }
 
 /* A new SF/FF that is well formed: decide whether it may start a reception. */
-static bool rx_may_start(ls_isotp_link_t *l) {
+static bool rx_may_start(ls_isotp_link_t *l)
+{
     if (l->rx_state == LS_ISOTP_RX_DONE) {
         count_rx(l, LS_ISOTP_N_BUFFER_OVFLW);
         return false;
@@ -276,7 +289,8 @@ static bool rx_may_start(ls_isotp_link_t *l) {
     return true;
 }
 
-static void on_sf(ls_isotp_link_t *l, const uint8_t *d, uint8_t len) {
+static void on_sf(ls_isotp_link_t *l, const uint8_t *d, uint8_t len)
+{
     uint8_t n = d[0] & 0x0Fu;
     if (n == 0 || n > SF_MAX || len < 1u + n) {
         count_rx(l, LS_ISOTP_N_MALFORMED);
@@ -292,7 +306,8 @@ static void on_sf(ls_isotp_link_t *l, const uint8_t *d, uint8_t len) {
     count_rx(l, LS_ISOTP_N_OK);
 }
 
-static void on_ff(ls_isotp_link_t *l, const uint8_t *d, uint8_t len, uint64_t now_us) {
+static void on_ff(ls_isotp_link_t *l, const uint8_t *d, uint8_t len, uint64_t now_us)
+{
     if (len < CAN_DL) {
         count_rx(l, LS_ISOTP_N_MALFORMED);
         return;
@@ -327,7 +342,8 @@ static void on_ff(ls_isotp_link_t *l, const uint8_t *d, uint8_t len, uint64_t no
     queue_fc(l, FS_CTS, now_us);
 }
 
-static void on_cf(ls_isotp_link_t *l, const uint8_t *d, uint8_t len, uint64_t now_us) {
+static void on_cf(ls_isotp_link_t *l, const uint8_t *d, uint8_t len, uint64_t now_us)
+{
     if (l->rx_state != LS_ISOTP_RX_RECEIVING) {
         count_rx(l, LS_ISOTP_N_UNEXP_PDU);
         return;
@@ -358,7 +374,8 @@ static void on_cf(ls_isotp_link_t *l, const uint8_t *d, uint8_t len, uint64_t no
     }
 }
 
-static void expire(ls_isotp_link_t *l, uint64_t now_us) {
+static void expire(ls_isotp_link_t *l, uint64_t now_us)
+{
     if (l->tx_state == LS_ISOTP_TX_WAIT_FC && now_us >= l->tx_deadline_us) {
         tx_finish(l, LS_ISOTP_N_TIMEOUT_BS);
     }
@@ -367,7 +384,8 @@ static void expire(ls_isotp_link_t *l, uint64_t now_us) {
     }
 }
 
-void ls_isotp_on_frame(ls_isotp_link_t *l, const uint8_t *data, uint8_t len, uint64_t now_us) {
+void ls_isotp_on_frame(ls_isotp_link_t *l, const uint8_t *data, uint8_t len, uint64_t now_us)
+{
     if (l == NULL) {
         return;
     }
@@ -377,25 +395,16 @@ void ls_isotp_on_frame(ls_isotp_link_t *l, const uint8_t *data, uint8_t len, uin
         return;
     }
     switch (data[0] >> 4) {
-    case PCI_SF:
-        on_sf(l, data, len);
-        break;
-    case PCI_FF:
-        on_ff(l, data, len, now_us);
-        break;
-    case PCI_CF:
-        on_cf(l, data, len, now_us);
-        break;
-    case PCI_FC:
-        on_fc(l, data, len, now_us);
-        break;
-    default:
-        count_rx(l, LS_ISOTP_N_MALFORMED);
-        break;
+    case PCI_SF: on_sf(l, data, len); break;
+    case PCI_FF: on_ff(l, data, len, now_us); break;
+    case PCI_CF: on_cf(l, data, len, now_us); break;
+    case PCI_FC: on_fc(l, data, len, now_us); break;
+    default: count_rx(l, LS_ISOTP_N_MALFORMED); break;
     }
 }
 
-void ls_isotp_poll(ls_isotp_link_t *l, uint64_t now_us) {
+void ls_isotp_poll(ls_isotp_link_t *l, uint64_t now_us)
+{
     if (l == NULL) {
         return;
     }
@@ -406,7 +415,8 @@ void ls_isotp_poll(ls_isotp_link_t *l, uint64_t now_us) {
     tx_pump(l, now_us);
 }
 
-size_t ls_isotp_take_rx(ls_isotp_link_t *l, uint8_t *out, size_t cap) {
+size_t ls_isotp_take_rx(ls_isotp_link_t *l, uint8_t *out, size_t cap)
+{
     if (l == NULL || out == NULL || l->rx_state != LS_ISOTP_RX_DONE) {
         return 0;
     }
@@ -420,7 +430,8 @@ size_t ls_isotp_take_rx(ls_isotp_link_t *l, uint8_t *out, size_t cap) {
     return n;
 }
 
-uint64_t ls_isotp_next_deadline_us(const ls_isotp_link_t *l) {
+uint64_t ls_isotp_next_deadline_us(const ls_isotp_link_t *l)
+{
     if (l == NULL) {
         return UINT64_MAX;
     }
@@ -442,7 +453,8 @@ uint64_t ls_isotp_next_deadline_us(const ls_isotp_link_t *l) {
 
 /* ---- single frames outside a link -------------------------------------- */
 
-size_t ls_isotp_decode_single(const uint8_t *data, uint8_t len, uint8_t *out, size_t cap) {
+size_t ls_isotp_decode_single(const uint8_t *data, uint8_t len, uint8_t *out, size_t cap)
+{
     if (data == NULL || out == NULL || len == 0 || len > CAN_DL || (data[0] >> 4) != PCI_SF) {
         return 0;
     }
@@ -454,7 +466,8 @@ size_t ls_isotp_decode_single(const uint8_t *data, uint8_t len, uint8_t *out, si
     return n;
 }
 
-uint8_t ls_isotp_encode_single(const uint8_t *payload, size_t len, bool pad, uint8_t pad_byte, uint8_t frame[8]) {
+uint8_t ls_isotp_encode_single(const uint8_t *payload, size_t len, bool pad, uint8_t pad_byte, uint8_t frame[8])
+{
     if (payload == NULL || frame == NULL || len == 0 || len > SF_MAX) {
         return 0;
     }
@@ -467,7 +480,8 @@ uint8_t ls_isotp_encode_single(const uint8_t *payload, size_t len, bool pad, uin
     return CAN_DL;
 }
 
-const char *ls_isotp_result_name(ls_isotp_result_t r) {
+const char *ls_isotp_result_name(ls_isotp_result_t r)
+{
     switch (r) {
     case LS_ISOTP_N_OK: return "N_OK";
     case LS_ISOTP_N_TIMEOUT_BS: return "N_TIMEOUT_BS";

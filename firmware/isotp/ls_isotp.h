@@ -20,7 +20,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#define LS_ISOTP_MAX_PAYLOAD 4095u  /* classic ISO-TP without the 32-bit escape */
+#define LS_ISOTP_MAX_PAYLOAD 4095u /* classic ISO-TP without the 32-bit escape */
 
 /* Result of a transfer (N_Result of the standard), also the error counters' index. */
 typedef enum {
@@ -38,10 +38,10 @@ typedef enum {
 } ls_isotp_result_t;
 
 /* Return codes of the API functions. */
-#define LS_ISOTP_OK      0
-#define LS_ISOTP_EBUSY (-1)  /* a transmission is already in progress */
-#define LS_ISOTP_ELEN  (-2)  /* length 0 or > LS_ISOTP_MAX_PAYLOAD */
-#define LS_ISOTP_EARG  (-3)  /* NULL pointer or bad configuration */
+#define LS_ISOTP_OK 0
+#define LS_ISOTP_EBUSY (-1) /* a transmission is already in progress */
+#define LS_ISOTP_ELEN (-2)  /* length 0 or > LS_ISOTP_MAX_PAYLOAD */
+#define LS_ISOTP_EARG (-3)  /* NULL pointer or bad configuration */
 
 /* Transmit one CAN frame. Returns 0 when queued, negative when the link's
  * queue is full (the ISO-TP layer then retries the same frame on the next
@@ -49,13 +49,13 @@ typedef enum {
 typedef int (*ls_isotp_send_fn)(void *ctx, uint32_t can_id, const uint8_t *data, uint8_t len);
 
 typedef struct {
-    uint8_t block_size;        /* BS we ask of a sender (0: no flow control after the first) */
-    uint8_t st_min;            /* STmin we ask of a sender, raw ISO byte (0x00-0x7F ms, 0xF1-0xF9 100-900 us) */
-    bool tx_padding;           /* pad our frames to 8 bytes with `padding_byte` */
-    uint8_t padding_byte;      /* 0xCC is customary */
-    uint32_t n_bs_timeout_us;  /* default 1000000 */
-    uint32_t n_cr_timeout_us;  /* default 1000000 */
-    uint8_t wft_max;           /* FC.WAIT frames tolerated in a row; default 10 */
+    uint8_t block_size;       /* BS we ask of a sender (0: no flow control after the first) */
+    uint8_t st_min;           /* STmin we ask of a sender, raw ISO byte (0x00-0x7F ms, 0xF1-0xF9 100-900 us) */
+    bool tx_padding;          /* pad our frames to 8 bytes with `padding_byte` */
+    uint8_t padding_byte;     /* 0xCC is customary */
+    uint32_t n_bs_timeout_us; /* default 1000000 */
+    uint32_t n_cr_timeout_us; /* default 1000000 */
+    uint8_t wft_max;          /* FC.WAIT frames tolerated in a row; default 10 */
 } ls_isotp_config_t;
 
 /* Fills `cfg` with the defaults above (BS 8, STmin 0, padding on with 0xCC). */
@@ -76,7 +76,7 @@ typedef struct {
     uint16_t rx_len, rx_got;
     uint8_t rx_sn, rx_bs_left;
     uint64_t rx_deadline_us;
-    bool rx_fc_pending;        /* a flow control frame waits for room in the CAN queue */
+    bool rx_fc_pending; /* a flow control frame waits for room in the CAN queue */
     uint8_t rx_fc_status;
 
     /* sender */

@@ -7,7 +7,8 @@
 #include <Eigen/Dense>
 #include <cmath>
 
-namespace {
+namespace
+{
 
 using Eigen::Map;
 using Eigen::Matrix3d;
@@ -21,13 +22,13 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kTwoPi = 2.0 * kPi;
 
 // Geometry tolerances (documented in ls_kin.h).
-constexpr double kWristSingularSin = 1e-6;   // |sin q5| below: wrist singular
-constexpr double kShoulderSingularM = 1e-9;  // wrist centre this near the joint 1 axis
-constexpr double kReachSlack = 1e-10;        // rounding slack on cos(elbow) and sin(shoulder)
-constexpr double kLimitSlackRad = 1e-10;     // a wrap this far past a limit is clamped onto it
-constexpr double kSameBranchRad = 1e-9;      // branches closer than this are one branch
-constexpr double kStructTol = 1e-12;         // DH structure checks
-constexpr double kRotationTol = 1e-6;        // orthonormality of an input rotation
+constexpr double kWristSingularSin = 1e-6;  // |sin q5| below: wrist singular
+constexpr double kShoulderSingularM = 1e-9; // wrist centre this near the joint 1 axis
+constexpr double kReachSlack = 1e-10;       // rounding slack on cos(elbow) and sin(shoulder)
+constexpr double kLimitSlackRad = 1e-10;    // a wrap this far past a limit is clamped onto it
+constexpr double kSameBranchRad = 1e-9;     // branches closer than this are one branch
+constexpr double kStructTol = 1e-12;        // DH structure checks
+constexpr double kRotationTol = 1e-6;       // orthonormality of an input rotation
 
 bool finite_n(const double *v, int n) noexcept
 {
@@ -45,10 +46,8 @@ Matrix4d dh_transform(const ls_dh_t &dh, double theta) noexcept
     const double ct = std::cos(theta), st = std::sin(theta);
     const double ca = std::cos(dh.alpha_rad), sa = std::sin(dh.alpha_rad);
     Matrix4d A;
-    A << ct, -st * ca, st * sa, dh.a_m * ct,
-         st, ct * ca, -ct * sa, dh.a_m * st,
-         0.0, sa, ca, dh.d_m,
-         0.0, 0.0, 0.0, 1.0;
+    A << ct, -st * ca, st * sa, dh.a_m * ct, st, ct * ca, -ct * sa, dh.a_m * st, 0.0, sa, ca, dh.d_m, 0.0, 0.0, 0.0,
+        1.0;
     return A;
 }
 
@@ -100,18 +99,17 @@ bool ik_structure_ok(const ls_robot_model_t &m) noexcept
     const ls_dh_t *d = m.dh;
     for (int i = 0; i < LS_N_JOINTS; ++i) {
         if (!std::isfinite(d[i].a_m) || !std::isfinite(d[i].d_m) || !std::isfinite(d[i].alpha_rad) ||
-            !std::isfinite(d[i].theta_offset_rad) || !std::isfinite(m.q_min_rad[i]) ||
-            !std::isfinite(m.q_max_rad[i]) || m.q_min_rad[i] > m.q_max_rad[i]) {
+            !std::isfinite(d[i].theta_offset_rad) || !std::isfinite(m.q_min_rad[i]) || !std::isfinite(m.q_max_rad[i]) ||
+            m.q_min_rad[i] > m.q_max_rad[i]) {
             return false;
         }
     }
     const double forearm = std::hypot(d[2].a_m, d[3].d_m);
-    return std::fabs(d[3].a_m) < kStructTol && std::fabs(d[4].a_m) < kStructTol &&
-           std::fabs(d[5].a_m) < kStructTol && std::fabs(d[4].d_m) < kStructTol &&
-           std::fabs(std::cos(d[3].alpha_rad)) < kStructTol &&
-           std::fabs(std::cos(d[4].alpha_rad)) < kStructTol &&
-           std::fabs(std::sin(d[1].alpha_rad)) < kStructTol && std::cos(d[1].alpha_rad) > 0.0 &&
-           std::fabs(std::sin(d[0].alpha_rad)) > 1e-9 && std::fabs(d[1].a_m) > 1e-9 && forearm > 1e-9;
+    return std::fabs(d[3].a_m) < kStructTol && std::fabs(d[4].a_m) < kStructTol && std::fabs(d[5].a_m) < kStructTol &&
+           std::fabs(d[4].d_m) < kStructTol && std::fabs(std::cos(d[3].alpha_rad)) < kStructTol &&
+           std::fabs(std::cos(d[4].alpha_rad)) < kStructTol && std::fabs(std::sin(d[1].alpha_rad)) < kStructTol &&
+           std::cos(d[1].alpha_rad) > 0.0 && std::fabs(std::sin(d[0].alpha_rad)) > 1e-9 && std::fabs(d[1].a_m) > 1e-9 &&
+           forearm > 1e-9;
 }
 
 bool pose_ok(const Matrix4d &T) noexcept
@@ -123,8 +121,7 @@ bool pose_ok(const Matrix4d &T) noexcept
         return false;
     }
     const Matrix3d R = T.topLeftCorner<3, 3>();
-    return (R.transpose() * R - Matrix3d::Identity()).cwiseAbs().maxCoeff() < kRotationTol &&
-           R.determinant() > 0.0;
+    return (R.transpose() * R - Matrix3d::Identity()).cwiseAbs().maxCoeff() < kRotationTol && R.determinant() > 0.0;
 }
 
 // Move q by multiples of 2*pi into [lo, hi], nearest to ref. False if no
@@ -180,7 +177,7 @@ IkStatus ik_branches(const ls_robot_model_t &m, const Matrix4d &T, const double 
     // centre equally well: q1 is undetermined. Reachability is still checked
     // (with q1 = 0, pi) so that a far-away pose reports unreachable.
     const bool shoulder_singular = r < kShoulderSingularM;
-    double theta1[2] = {0.0, kPi};
+    double theta1[2] = { 0.0, kPi };
     if (shoulder_singular) {
         if (std::fabs(k) >= kShoulderSingularM) {
             return kIkUnreachable;
@@ -251,21 +248,20 @@ IkStatus ik_branches(const ls_robot_model_t &m, const Matrix4d &T, const double 
                     double q4 = ref[3];
                     q4 = q4 < m.q_min_rad[3] ? m.q_min_rad[3] : (q4 > m.q_max_rad[3] ? m.q_max_rad[3] : q4);
                     t4 = q4 + d[3].theta_offset_rad;
-                    const Matrix3d N = (rot_z(t4) * rot_x(d[3].alpha_rad) * rot_z(t5) * rot_x(d[4].alpha_rad))
-                                           .transpose() *
-                                       M;
+                    const Matrix3d N =
+                        (rot_z(t4) * rot_x(d[3].alpha_rad) * rot_z(t5) * rot_x(d[4].alpha_rad)).transpose() * M;
                     t6 = std::atan2(N(1, 0), N(0, 0));
                 } else {
                     t4 = std::atan2(f * s5 * M(1, 2), f * s5 * M(0, 2));
                     t6 = std::atan2(-f * s4 * M(2, 1), f * s4 * M(2, 0));
                 }
 
-                const double theta[LS_N_JOINTS] = {t1, t2, t3, t4, t5, t6};
+                const double theta[LS_N_JOINTS] = { t1, t2, t3, t4, t5, t6 };
                 double q[LS_N_JOINTS];
                 bool in_limits = true;
                 for (int j = 0; j < LS_N_JOINTS && in_limits; ++j) {
-                    in_limits = wrap_into(theta[j] - d[j].theta_offset_rad, m.q_min_rad[j], m.q_max_rad[j],
-                                          ref[j], &q[j]);
+                    in_limits =
+                        wrap_into(theta[j] - d[j].theta_offset_rad, m.q_min_rad[j], m.q_max_rad[j], ref[j], &q[j]);
                 }
                 if (!in_limits) {
                     continue;
@@ -300,14 +296,10 @@ IkStatus ik_branches(const ls_robot_model_t &m, const Matrix4d &T, const double 
 int ik_status_code(IkStatus s) noexcept
 {
     switch (s) {
-    case kIkOk:
-        return LS_KIN_OK;
-    case kIkUnreachable:
-        return LS_KIN_EUNREACHABLE;
-    case kIkSingular:
-        return LS_KIN_ESINGULAR;
-    case kIkLimits:
-        return LS_KIN_ELIMITS;
+    case kIkOk: return LS_KIN_OK;
+    case kIkUnreachable: return LS_KIN_EUNREACHABLE;
+    case kIkSingular: return LS_KIN_ESINGULAR;
+    case kIkLimits: return LS_KIN_ELIMITS;
     }
     return LS_KIN_EARG;
 }
@@ -344,20 +336,19 @@ int ls_kin_ik_all(const ls_robot_model_t *m, const double T_base_flange[16],
     if (n_out != nullptr) {
         *n_out = 0;
     }
-    if (m == nullptr || T_base_flange == nullptr || q_out == nullptr || n_out == nullptr ||
-        !ik_structure_ok(*m)) {
+    if (m == nullptr || T_base_flange == nullptr || q_out == nullptr || n_out == nullptr || !ik_structure_ok(*m)) {
         return LS_KIN_EARG;
     }
     const Matrix4d T = Map<const Matrix4d>(T_base_flange);
     if (!pose_ok(T)) {
         return LS_KIN_EARG;
     }
-    const double zero[LS_N_JOINTS] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+    const double zero[LS_N_JOINTS] = { 0.0, 0.0, 0.0, 0.0, 0.0, 0.0 };
     return ik_status_code(ik_branches(*m, T, zero, q_out, n_out));
 }
 
-int ls_kin_ik_nearest(const ls_robot_model_t *m, const double T_base_flange[16],
-                      const double q_near[LS_N_JOINTS], double q_out[LS_N_JOINTS]) noexcept
+int ls_kin_ik_nearest(const ls_robot_model_t *m, const double T_base_flange[16], const double q_near[LS_N_JOINTS],
+                      double q_out[LS_N_JOINTS]) noexcept
 {
     if (m == nullptr || T_base_flange == nullptr || q_near == nullptr || q_out == nullptr ||
         !finite_n(q_near, LS_N_JOINTS) || !ik_structure_ok(*m)) {

@@ -24,11 +24,11 @@ extern "C" {
 #define LS_KIN_NOEXCEPT
 #endif
 
-#define LS_KIN_OK            0
+#define LS_KIN_OK 0
 #define LS_KIN_EUNREACHABLE (-1) /* the pose is outside the reachable space */
-#define LS_KIN_ESINGULAR    (-2) /* shoulder singularity: q1 undetermined (see IK below) */
-#define LS_KIN_ELIMITS      (-3) /* reachable, but no branch within the joint limits */
-#define LS_KIN_EARG         (-4) /* NULL, non-finite or non-rigid input, unsupported model */
+#define LS_KIN_ESINGULAR (-2)    /* shoulder singularity: q1 undetermined (see IK below) */
+#define LS_KIN_ELIMITS (-3)      /* reachable, but no branch within the joint limits */
+#define LS_KIN_EARG (-4)         /* NULL, non-finite or non-rigid input, unsupported model */
 
 #define LS_KIN_MAX_BRANCHES 8
 
@@ -79,8 +79,8 @@ int ls_kin_ik_all(const ls_robot_model_t *m, const double T_base_flange[16],
  * with the smallest max_j |q_j - q_near_j|. At a wrist singularity q4 =
  * q_near[3]. Same status codes as ls_kin_ik_all; q_out is written only on
  * LS_KIN_OK. LS_KIN_EARG on a non-finite q_near. Cost: as ls_kin_ik_all. */
-int ls_kin_ik_nearest(const ls_robot_model_t *m, const double T_base_flange[16],
-                      const double q_near[LS_N_JOINTS], double q_out[LS_N_JOINTS]) LS_KIN_NOEXCEPT;
+int ls_kin_ik_nearest(const ls_robot_model_t *m, const double T_base_flange[16], const double q_near[LS_N_JOINTS],
+                      double q_out[LS_N_JOINTS]) LS_KIN_NOEXCEPT;
 
 /* Geometric Jacobian (6x6, column-major; rows vx vy vz wx wy wz) of the
  * flange origin in the base frame: column i = (z_{i-1} x (p - o_{i-1}),

@@ -19,12 +19,12 @@ typedef struct {
     const char *name;
     ls_dh_t dh[LS_N_JOINTS];
     double q_min_rad[LS_N_JOINTS], q_max_rad[LS_N_JOINTS];
-    double qd_max_rad_s[LS_N_JOINTS];      /* joint velocity limits */
-    double qdd_max_rad_s2[LS_N_JOINTS];    /* joint acceleration limits */
-    double qddd_max_rad_s3[LS_N_JOINTS];   /* joint jerk limits */
+    double qd_max_rad_s[LS_N_JOINTS];    /* joint velocity limits */
+    double qdd_max_rad_s2[LS_N_JOINTS];  /* joint acceleration limits */
+    double qddd_max_rad_s3[LS_N_JOINTS]; /* joint jerk limits */
     double torque_max_Nm[LS_N_JOINTS];
-    double link_mass_kg[LS_N_JOINTS];      /* link i moves with joint i */
-    double link_radius_m;                  /* capsule radius used by the simulation */
+    double link_mass_kg[LS_N_JOINTS]; /* link i moves with joint i */
+    double link_radius_m;             /* capsule radius used by the simulation */
     double max_linear_speed_m_s, max_angular_speed_rad_s;
     double max_linear_accel_m_s2, max_angular_accel_rad_s2;
     double max_linear_jerk_m_s3, max_angular_jerk_rad_s3;

@@ -79,8 +79,7 @@ void ls_motion_hold(ls_motion_t *m, const double q[LS_N_JOINTS])
 
 /* -------------------------------------------------------------- planners */
 
-static int check_joint_limits(const ls_robot_model_t *model, const double q[LS_N_JOINTS], char *why,
-                              unsigned whylen)
+static int check_joint_limits(const ls_robot_model_t *model, const double q[LS_N_JOINTS], char *why, unsigned whylen)
 {
     for (int j = 0; j < LS_N_JOINTS; j++) {
         if (q[j] > model->q_max_rad[j]) {
@@ -107,8 +106,7 @@ static void seg_clear_motion(ls_motion_seg_t *s, ls_seg_kind_t kind)
 }
 
 int ls_motion_seg_joint(ls_motion_seg_t *s, const ls_robot_model_t *model, const double q0[LS_N_JOINTS],
-                        const double q1[LS_N_JOINTS], double speed_frac, double accel_frac, char *why,
-                        unsigned whylen)
+                        const double q1[LS_N_JOINTS], double speed_frac, double accel_frac, char *why, unsigned whylen)
 {
     if (s == NULL || model == NULL || q0 == NULL || q1 == NULL || !finite_n(q0, LS_N_JOINTS) ||
         !finite_n(q1, LS_N_JOINTS)) {
@@ -163,8 +161,7 @@ static void plan_init(ls_motion_plan_t *p, ls_plan_kind_t kind)
 }
 
 int ls_motion_plan_joint(ls_motion_plan_t *p, const ls_robot_model_t *model, const double q0[LS_N_JOINTS],
-                         const double q1[LS_N_JOINTS], double speed_frac, double accel_frac, char *why,
-                         unsigned whylen)
+                         const double q1[LS_N_JOINTS], double speed_frac, double accel_frac, char *why, unsigned whylen)
 {
     if (p == NULL) {
         return refuse(why, whylen, LS_MOTION_EARG, "no plan");

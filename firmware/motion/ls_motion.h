@@ -40,9 +40,9 @@
 
 /* Planner statuses (negative = refused; `why` says which joint/axis and limit). */
 #define LS_MOTION_OK 0
-#define LS_MOTION_EARG (-1)    /* NULL, non-finite value, fraction outside (0, 1] */
-#define LS_MOTION_ERANGE (-2)  /* a joint/velocity/workspace limit, or unreachable */
-#define LS_MOTION_EGEOM (-3)   /* degenerate geometry: collinear arc points */
+#define LS_MOTION_EARG (-1)   /* NULL, non-finite value, fraction outside (0, 1] */
+#define LS_MOTION_ERANGE (-2) /* a joint/velocity/workspace limit, or unreachable */
+#define LS_MOTION_EGEOM (-3)  /* degenerate geometry: collinear arc points */
 
 typedef enum {
     LS_MOTION_IDLE = 0,
@@ -87,20 +87,20 @@ typedef enum { LS_SEG_JOINT = 1, LS_SEG_LINE, LS_SEG_ARC } ls_seg_kind_t;
  * the caller). */
 typedef struct {
     ls_seg_kind_t kind;
-    ls_traj_t traj;            /* JOINT: 6 joints; LINE/ARC: 1 axis, the path parameter s from 0 to 1 */
-    double stop_ramp_s;        /* time-scale ramp that stops it within its limits */
-    double fast_stop_ramp_s;   /* the same within the model's maximum limits (ls_motion_stop_fast) */
+    ls_traj_t traj;          /* JOINT: 6 joints; LINE/ARC: 1 axis, the path parameter s from 0 to 1 */
+    double stop_ramp_s;      /* time-scale ramp that stops it within its limits */
+    double fast_stop_ramp_s; /* the same within the model's maximum limits (ls_motion_stop_fast) */
     double q0[LS_N_JOINTS], q1[LS_N_JOINTS];
-    double P0[16], P1[16];     /* LINE/ARC: tool-tip poses at s = 0 and 1, base frame */
-    double tool_inv[16];       /* LINE/ARC: flange = tip * tool_inv */
+    double P0[16], P1[16];                               /* LINE/ARC: tool-tip poses at s = 0 and 1, base frame */
+    double tool_inv[16];                                 /* LINE/ARC: flange = tip * tool_inv */
     double centre_m[3], u[3], v[3], radius_m, angle_rad; /* ARC: p(s) = c + r (cos(a s) u + sin(a s) v) */
-    double length_m, turn_rad; /* LINE/ARC: path length and rotation, for reports */
+    double length_m, turn_rad;                           /* LINE/ARC: path length and rotation, for reports */
     /* the point at the end of the segment (paths) */
     char tag[LS_MOTION_NAME_LEN]; /* empty: no tag event */
     int32_t tag_index;
-    int32_t point;             /* index of the point in its path */
-    double delay_s;            /* dwell after arriving (after the auxiliary commands) */
-    double overlap_s;          /* > 0: the next segment starts this long before this one ends */
+    int32_t point;    /* index of the point in its path */
+    double delay_s;   /* dwell after arriving (after the auxiliary commands) */
+    double overlap_s; /* > 0: the next segment starts this long before this one ends */
     uint8_t n_aux;
     char aux[LS_MOTION_AUX_PER_POINT][LS_MOTION_AUX_LEN];
 } ls_motion_seg_t;
@@ -120,12 +120,12 @@ typedef enum { LS_PLAN_NONE = 0, LS_PLAN_JOINT, LS_PLAN_LINE, LS_PLAN_ARC, LS_PL
 
 typedef struct {
     ls_plan_kind_t kind;
-    uint32_t ref_seq;                 /* request that started it (notice ref_seq) */
-    char name[LS_MOTION_NAME_LEN];    /* point name, or path name */
-    ls_motion_seg_t one;              /* single moves */
-    const ls_motion_program_t *prog;  /* LS_PLAN_PATH */
-    int32_t cycles;                   /* LS_PLAN_PATH: >= 1 */
-    bool dry_run;                     /* LS_PLAN_PATH: skip the auxiliary commands */
+    uint32_t ref_seq;                /* request that started it (notice ref_seq) */
+    char name[LS_MOTION_NAME_LEN];   /* point name, or path name */
+    ls_motion_seg_t one;             /* single moves */
+    const ls_motion_program_t *prog; /* LS_PLAN_PATH */
+    int32_t cycles;                  /* LS_PLAN_PATH: >= 1 */
+    bool dry_run;                    /* LS_PLAN_PATH: skip the auxiliary commands */
 } ls_motion_plan_t;
 
 /* Limits of a Cartesian move, SI, all > 0. The tool tip moves at most at
@@ -142,7 +142,7 @@ typedef struct {
     const ls_robot_model_t *model;
     ls_motion_phase_t phase;
     ls_motion_plan_t plan;
-    double t_s;                       /* trajectory clock of the current segment */
+    double t_s; /* trajectory clock of the current segment */
     ls_timescale_t ts;
     double following_error_max_rad;
     double q_cmd[LS_N_JOINTS];
@@ -151,7 +151,7 @@ typedef struct {
     int32_t cycle_;
     bool blending_;
     double t_next_s_;
-    int sub_;                         /* moving, auxiliary commands, dwell */
+    int sub_; /* moving, auxiliary commands, dwell */
     uint8_t aux_k_;
     bool aux_wait_;
     double dwell_left_s_;
@@ -194,8 +194,7 @@ int ls_motion_plan_path(ls_motion_plan_t *p, const ls_motion_program_t *prog, in
 /* Segment planners behind the plan_* functions (for path programs). They
  * fill the motion fields only and leave the point attributes alone. */
 int ls_motion_seg_joint(ls_motion_seg_t *s, const ls_robot_model_t *model, const double q0[LS_N_JOINTS],
-                        const double q1[LS_N_JOINTS], double speed_frac, double accel_frac, char *why,
-                        unsigned whylen);
+                        const double q1[LS_N_JOINTS], double speed_frac, double accel_frac, char *why, unsigned whylen);
 int ls_motion_seg_line(ls_motion_seg_t *s, const ls_robot_model_t *model, const double q0[LS_N_JOINTS],
                        const double tool[16], const double tip1[16], const ls_motion_cart_limits_t *lim, char *why,
                        unsigned whylen);
@@ -217,7 +216,7 @@ void ls_motion_seg_blend(ls_motion_seg_t *a, const ls_motion_seg_t *b, double fr
  * motion is already running, -2 when the plan does not start within 1e-3 rad
  * of the held set-point (nothing changes). Copies the plan (not a program). */
 int ls_motion_start(ls_motion_t *m, const ls_motion_plan_t *p);
-void ls_motion_stop(ls_motion_t *m);   /* decelerate along the path, then LS_MEV_PAUSED */
+void ls_motion_stop(ls_motion_t *m); /* decelerate along the path, then LS_MEV_PAUSED */
 /* The same at the model's maximum deceleration (faults, emergency, shutdown):
  * also shortens a stop already under way. */
 void ls_motion_stop_fast(ls_motion_t *m);

@@ -41,8 +41,8 @@ static bool finite_n(const double *v, size_t n)
     return true;
 }
 
-static void emit(ls_motion_events_t *ev, ls_motion_event_kind_t kind, uint32_t ref_seq, int32_t index,
-                 const char *text, const double q[LS_N_JOINTS])
+static void emit(ls_motion_events_t *ev, ls_motion_event_kind_t kind, uint32_t ref_seq, int32_t index, const char *text,
+                 const double q[LS_N_JOINTS])
 {
     if (ev == NULL || ev->n >= LS_MOTION_MAX_EVENTS) {
         return;
@@ -104,7 +104,7 @@ static int solve(const ls_robot_model_t *m, const double P[16], const double too
     for (int i = 0; i < 3; i++) {
         if (P[12 + i] < m->workspace_min_m[i] || P[12 + i] > m->workspace_max_m[i]) {
             snprintf(why, len, "workspace: tip %c %.4g m outside [%.4g, %.4g]", "xyz"[i], P[12 + i],
-                     m->workspace_min_m[i], m->workspace_max_m[i]);
+                     m -> workspace_min_m[i], m -> workspace_max_m[i]);
             return -1;
         }
     }
@@ -112,9 +112,10 @@ static int solve(const ls_robot_model_t *m, const double P[16], const double too
     ls_pose_mul(P, tool_inv, F);
     int st = ls_kin_ik_nearest(m, F, q_prev, q_out);
     if (st != LS_KIN_OK) {
-        snprintf(why, len, "%s", st == LS_KIN_ELIMITS     ? "a joint limit"
-                                 : st == LS_KIN_ESINGULAR ? "the shoulder singularity"
-                                                          : "the edge of the reachable space");
+        snprintf(why, len, "%s",
+                 st == LS_KIN_ELIMITS     ? "a joint limit"
+                 : st == LS_KIN_ESINGULAR ? "the shoulder singularity"
+                                          : "the edge of the reachable space");
         return -1;
     }
     for (int j = 0; j < LS_N_JOINTS; j++) {
@@ -179,8 +180,9 @@ int ls_react_check_plan(const ls_react_plan_t *p, char *why, size_t whylen)
     }
     if (p->f_target_N == 0.0 || !(p->kp_m_s_N > 0.0) || p->kd_m_N < 0.0 || !(p->vc_max_m_s > 0.0) ||
         !(p->timeout_s > 0.0) || !(p->panic_N > 0.0)) {
-        return refuse(why, whylen, "comply needs a non-zero target, kp > 0, kd >= 0, a correction speed, "
-                                   "time-out and panic level > 0");
+        return refuse(why, whylen,
+                      "comply needs a non-zero target, kp > 0, kd >= 0, a correction speed, "
+                      "time-out and panic level > 0");
     }
     return 0;
 }

@@ -68,26 +68,26 @@ typedef struct {
     ls_react_kind_t kind;
     uint32_t ref_seq;
     char sensor[LS_REACT_SENSOR_NAME_LEN]; /* resolved by the loop (hal_sensor_t.name) */
-    double tool[16];          /* flange -> tip */
-    double dir_tool[3];       /* unit direction of travel */
-    double dist_m;            /* guarded: maximum distance; comply: travel (> 0) */
-    double v_m_s;             /* travel speed (> 0) */
-    double a_m_s2;            /* acceleration and normal braking (> 0) */
-    double a_stop_m_s2;       /* braking after a threshold, envelope, panic or stop (> 0) */
+    double tool[16];                       /* flange -> tip */
+    double dir_tool[3];                    /* unit direction of travel */
+    double dist_m;                         /* guarded: maximum distance; comply: travel (> 0) */
+    double v_m_s;                          /* travel speed (> 0) */
+    double a_m_s2;                         /* acceleration and normal braking (> 0) */
+    double a_stop_m_s2;                    /* braking after a threshold, envelope, panic or stop (> 0) */
     /* guarded */
-    uint8_t component;        /* watched component of the reading */
-    bool below;               /* stop when reading <= threshold, else when >= threshold */
+    uint8_t component; /* watched component of the reading */
+    bool below;        /* stop when reading <= threshold, else when >= threshold */
     double threshold;
-    double envelope;          /* > 0: |force| (force sensor) beyond it ends the move */
+    double envelope; /* > 0: |force| (force sensor) beyond it ends the move */
     /* comply */
-    double n_tool[3];         /* unit compliance direction */
-    double c_max_m;           /* compliance travel bound along +-n */
-    double f_target_N;        /* target force along n (F . n) */
-    double kp_m_s_N;          /* correction speed per newton of force error */
-    double kd_m_N;            /* correction speed per newton/second */
-    double vc_max_m_s;        /* correction speed bound */
-    double timeout_s;         /* > 0 */
-    double panic_N;           /* |F| beyond it: stop at once */
+    double n_tool[3];  /* unit compliance direction */
+    double c_max_m;    /* compliance travel bound along +-n */
+    double f_target_N; /* target force along n (F . n) */
+    double kp_m_s_N;   /* correction speed per newton of force error */
+    double kd_m_N;     /* correction speed per newton/second */
+    double vc_max_m_s; /* correction speed bound */
+    double timeout_s;  /* > 0 */
+    double panic_N;    /* |F| beyond it: stop at once */
 } ls_react_plan_t;
 
 /* Filled when a guarded or compliant move ends (before LS_MEV_REACT_END). */
@@ -95,12 +95,12 @@ typedef struct {
     ls_react_end_t end;
     double reading[LS_REACT_MAX_VALUES]; /* the last reading (after the return and settling) */
     uint8_t n_values;
-    bool triggered;            /* guarded: threshold or envelope: */
-    double trigger;            /* the watched component's value (envelope: the force) when it crossed */
-    double travelled_m;        /* along the direction of travel */
+    bool triggered;                       /* guarded: threshold or envelope: */
+    double trigger;                       /* the watched component's value (envelope: the force) when it crossed */
+    double travelled_m;                   /* along the direction of travel */
     double fn_mean_N, fn_min_N, fn_max_N; /* comply: F . n during the travel after settling */
     uint32_t fn_samples;
-    double compliance_m;       /* comply: final offset along n */
+    double compliance_m; /* comply: final offset along n */
 } ls_react_report_t;
 
 /* Jogging limits, SI, > 0. The twist's tool frame is FK(q) * tool. */
@@ -112,7 +112,7 @@ typedef struct {
 
 typedef struct {
     const ls_robot_model_t *model;
-    bool active;              /* a guarded or compliant move runs (or is paused) */
+    bool active; /* a guarded or compliant move runs (or is paused) */
     bool paused;
     ls_react_plan_t plan;
     ls_react_report_t report;
@@ -122,7 +122,7 @@ typedef struct {
     bool stop_req_;
     double q_cmd_[LS_N_JOINTS];
     double P0_[16], tool_inv_[16];
-    double d_[3], n_[3];      /* base frame */
+    double d_[3], n_[3]; /* base frame */
     double s_, v_, c_, vc_, t_, s_trigger_, e_prev_, de_f_, travel_t_;
     bool have_e_;
     ls_react_end_t end_;
@@ -130,7 +130,7 @@ typedef struct {
     bool jog_on_;
     bool jog_limited_;
     ls_jog_config_t jog_;
-    double jv_[6];            /* current twist, base frame */
+    double jv_[6]; /* current twist, base frame */
 } ls_react_t;
 
 /* Init-time. */

@@ -20,7 +20,10 @@
 /* A time-scale ramp this close to its end (relative) counts as finished. */
 #define SETTLE_REL_TOL 1e-9
 
-static int is_limit(double x) { return isfinite(x) && x > 0.0; }
+static int is_limit(double x)
+{
+    return isfinite(x) && x > 0.0;
+}
 
 /* The acceleration half for peak velocity v (> 0). */
 static void half_of_peak(double v, double a_max, double j_max, double *tj, double *ta)
@@ -55,8 +58,8 @@ static double min_time_peak(double d, double v_max, double a_max, double j_max)
     return cbrt(d * d * j_max / 4.0);
 }
 
-static void set_axis(ls_traj_axis_t *ax, double p0, double p1, double d, double tj, double ta, double tv,
-                     double jerk, double T)
+static void set_axis(ls_traj_axis_t *ax, double p0, double p1, double d, double tj, double ta, double tv, double jerk,
+                     double T)
 {
     ax->p0 = p0;
     ax->p1 = p1;
@@ -68,8 +71,7 @@ static void set_axis(ls_traj_axis_t *ax, double p0, double p1, double d, double 
     ax->T = T;
 }
 
-static int check_axis_args(const ls_traj_axis_t *ax, double p0, double p1, double v_max, double a_max,
-                           double j_max)
+static int check_axis_args(const ls_traj_axis_t *ax, double p0, double p1, double v_max, double a_max, double j_max)
 {
     if (ax == NULL || !isfinite(p0) || !isfinite(p1) || !isfinite(p1 - p0)) {
         return LS_TRAJ_EARG;
@@ -156,11 +158,10 @@ static double peak_for_duration(double D, double a_max, double j_max, double v_h
     return v;
 }
 
-int ls_traj_plan_axis_duration(ls_traj_axis_t *ax, double p0, double p1, double v_max, double a_max,
-                               double j_max, double duration_s)
+int ls_traj_plan_axis_duration(ls_traj_axis_t *ax, double p0, double p1, double v_max, double a_max, double j_max,
+                               double duration_s)
 {
-    if (check_axis_args(ax, p0, p1, v_max, a_max, j_max) != LS_TRAJ_OK || !isfinite(duration_s) ||
-        duration_s < 0.0) {
+    if (check_axis_args(ax, p0, p1, v_max, a_max, j_max) != LS_TRAJ_OK || !isfinite(duration_s) || duration_s < 0.0) {
         return LS_TRAJ_EARG;
     }
     ls_traj_axis_t fast;
@@ -205,8 +206,7 @@ int ls_traj_plan(ls_traj_t *tr, uint8_t n, const double *p0, const double *p1, c
     out.n = n;
     out.duration_s = 0.0;
     for (uint8_t i = 0; i < n; ++i) {
-        if (ls_traj_plan_axis(&out.axis[i], p0[i], p1[i], lim->v_max[i], lim->a_max[i], lim->j_max[i]) !=
-            LS_TRAJ_OK) {
+        if (ls_traj_plan_axis(&out.axis[i], p0[i], p1[i], lim->v_max[i], lim->a_max[i], lim->j_max[i]) != LS_TRAJ_OK) {
             return LS_TRAJ_EARG;
         }
         if (out.axis[i].T > out.duration_s) {
@@ -218,8 +218,8 @@ int ls_traj_plan(ls_traj_t *tr, uint8_t n, const double *p0, const double *p1, c
             continue;
         }
         /* duration_s >= this axis's minimum, so ETIME cannot happen. */
-        if (ls_traj_plan_axis_duration(&out.axis[i], p0[i], p1[i], lim->v_max[i], lim->a_max[i],
-                                       lim->j_max[i], out.duration_s) != LS_TRAJ_OK) {
+        if (ls_traj_plan_axis_duration(&out.axis[i], p0[i], p1[i], lim->v_max[i], lim->a_max[i], lim->j_max[i],
+                                       out.duration_s) != LS_TRAJ_OK) {
             return LS_TRAJ_EARG;
         }
     }

@@ -19,18 +19,18 @@
 
 #define LS_TRAJ_MAX_AXES 8
 
-#define LS_TRAJ_OK     0
-#define LS_TRAJ_EARG (-1) /* NULL pointer, bad axis count, non-finite value, non-positive limit */
+#define LS_TRAJ_OK 0
+#define LS_TRAJ_EARG (-1)  /* NULL pointer, bad axis count, non-finite value, non-positive limit */
 #define LS_TRAJ_ETIME (-2) /* requested duration shorter than the axis's minimum time */
 
 /* One axis: a rest-to-rest seven-segment profile from p0 to p1.
  * Plain data: copy freely. Filled by the planners only. */
 typedef struct {
-    double p0, dist;        /* dist = p1 - p0 (signed) */
-    double p1;              /* kept so the end position is exact, not p0 + dist */
-    double t[7];            /* durations of the seven phases (jerk +,0,-, cruise, -,0,+) */
-    double j;               /* jerk magnitude used (signed with dist; 0 when dist == 0) */
-    double T;               /* total duration */
+    double p0, dist; /* dist = p1 - p0 (signed) */
+    double p1;       /* kept so the end position is exact, not p0 + dist */
+    double t[7];     /* durations of the seven phases (jerk +,0,-, cruise, -,0,+) */
+    double j;        /* jerk magnitude used (signed with dist; 0 when dist == 0) */
+    double T;        /* total duration */
 } ls_traj_axis_t;
 
 typedef struct {
@@ -62,8 +62,8 @@ int ls_traj_plan_axis(ls_traj_axis_t *ax, double p0, double p1, double v_max, do
  * Returns LS_TRAJ_OK, LS_TRAJ_EARG (as above, or duration_s not finite or
  * < 0), or LS_TRAJ_ETIME (duration_s below the minimum time by more than a
  * relative 1e-12, which is absorbed as rounding). *ax is untouched on error. */
-int ls_traj_plan_axis_duration(ls_traj_axis_t *ax, double p0, double p1, double v_max, double a_max,
-                               double j_max, double duration_s);
+int ls_traj_plan_axis_duration(ls_traj_axis_t *ax, double p0, double p1, double v_max, double a_max, double j_max,
+                               double duration_s);
 
 /* n (1..LS_TRAJ_MAX_AXES) axes from p0[n] to p1[n], synchronised: duration is
  * the largest per-axis minimum time and every other axis is re-planned to
@@ -97,7 +97,7 @@ void ls_traj_sample_axis(const ls_traj_axis_t *ax, double t_s, double *p, double
  * within a_max: see ls_traj_stop_ramp_s. During a cruise (q'' = 0) that is
  * the whole acceleration; when stopping while the path itself brakes, the
  * two terms can add up to at most 2 a_max (|q''| r^2 <= a_max as well). */
-#define LS_TIMESCALE_RD_GAIN  1.5
+#define LS_TIMESCALE_RD_GAIN 1.5
 #define LS_TIMESCALE_RDD_GAIN 4.5
 
 typedef struct {

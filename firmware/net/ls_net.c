@@ -236,10 +236,11 @@ void ls_net_describe(void *ctx, char *buf, size_t cap)
         }
     }
     size_t n = 0;
-    int w = snprintf(buf, cap, "frames_in=%u\nframes_out=%u\ntx_full=%u\nlink_rx_dropped=%u\nlink_tx_dropped=%u\n"
-                     "peers_evicted=%u\n", (unsigned)net->frames_in, (unsigned)net->frames_out,
-                     (unsigned)net->tx_full, (unsigned)link_rx_dropped, (unsigned)link_tx_dropped,
-                     (unsigned)net->peers_evicted);
+    int w = snprintf(buf, cap,
+                     "frames_in=%u\nframes_out=%u\ntx_full=%u\nlink_rx_dropped=%u\nlink_tx_dropped=%u\n"
+                     "peers_evicted=%u\n",
+                     (unsigned)net->frames_in, (unsigned)net->frames_out, (unsigned)net->tx_full,
+                     (unsigned)link_rx_dropped, (unsigned)link_tx_dropped, (unsigned)net->peers_evicted);
     n = w > 0 ? (size_t)w : 0u;
     for (int r = 0; r < LS_ISOTP_N_RESULT_COUNT && n < cap; r++) {
         /* e.g. isotp_unexp_pdu=1: receive and send outcomes together, by ISO name */

@@ -33,7 +33,10 @@ static pthread_mutex_t g_pool_lock = PTHREAD_MUTEX_INITIALIZER;
  * hold the caller; the rest stays readable for the next call. */
 #define GD_MAX_EVENTS_PER_LINE 64
 
-static uint32_t in_mask(const gd_unit_t *u) { return (uint32_t)((1ul << u->n_in) - 1ul); }
+static uint32_t in_mask(const gd_unit_t *u)
+{
+    return (uint32_t)((1ul << u->n_in) - 1ul);
+}
 static uint32_t out_mask(const gd_unit_t *u)
 {
     return (uint32_t)(((1ul << u->n_out) - 1ul) << HAL_LINUX_GPIOD_OUTPUT_SHIFT);
@@ -216,15 +219,14 @@ static int check_config(const hal_linux_gpiod_config_t *cfg, char *msg, size_t m
     return HAL_OK;
 }
 
-static int line_get(gd_unit_t *u, const char *chip, unsigned off, struct gpiod_line **line, char *msg,
-                    size_t msglen)
+static int line_get(gd_unit_t *u, const char *chip, unsigned off, struct gpiod_line **line, char *msg, size_t msglen)
 {
     *line = gpiod_chip_get_line(u->chip, off);
     if (*line == NULL) {
         unsigned n = gpiod_chip_num_lines(u->chip);
         if (off >= n) {
-            return hal_linux_msg(HAL_EINVAL, msg, msglen, "GPIO chip '%s' has lines 0..%u; there is no line %u",
-                                 chip, n == 0u ? 0u : n - 1u, off);
+            return hal_linux_msg(HAL_EINVAL, msg, msglen, "GPIO chip '%s' has lines 0..%u; there is no line %u", chip,
+                                 n == 0u ? 0u : n - 1u, off);
         }
         return hal_linux_msg(HAL_EIO, msg, msglen, "cannot get line %u of GPIO chip '%s': %s", off, chip,
                              strerror(errno));
@@ -245,12 +247,12 @@ static int request_failed(struct gpiod_line *line, const char *chip, unsigned of
                              off, chip, who != NULL ? who : "another process", chip);
     }
     if (e == EACCES || e == EPERM) {
-        return hal_linux_msg(HAL_EPERM, msg, msglen, "no permission to request GPIO line %u of '%s' as %s", off,
-                             chip, what);
+        return hal_linux_msg(HAL_EPERM, msg, msglen, "no permission to request GPIO line %u of '%s' as %s", off, chip,
+                             what);
     }
     if (e == ENXIO || e == EINVAL || e == ENOTSUP || e == EOPNOTSUPP) {
-        return hal_linux_msg(HAL_EIO, msg, msglen, "GPIO line %u of '%s' cannot be used as %s: %s", off, chip,
-                             what, strerror(e));
+        return hal_linux_msg(HAL_EIO, msg, msglen, "GPIO line %u of '%s' cannot be used as %s: %s", off, chip, what,
+                             strerror(e));
     }
     return hal_linux_msg(HAL_EIO, msg, msglen, "requesting GPIO line %u of '%s' as %s failed: %s", off, chip, what,
                          strerror(e));
@@ -271,13 +273,12 @@ static int setup_inputs(gd_unit_t *u, const char *chip, char *msg, size_t msglen
         int fd = gpiod_line_event_get_fd(u->in[i]);
         int fl = fd < 0 ? -1 : fcntl(fd, F_GETFL);
         if (fl < 0 || fcntl(fd, F_SETFL, fl | O_NONBLOCK) < 0) {
-            return hal_linux_msg(HAL_EIO, msg, msglen, "cannot make the event fd of GPIO line %u non-blocking: %s",
-                                 off, strerror(errno));
-        }
-        struct epoll_event ev = {.events = EPOLLIN, .data.u32 = i};
-        if (epoll_ctl(u->epfd, EPOLL_CTL_ADD, fd, &ev) < 0) {
-            return hal_linux_msg(HAL_EIO, msg, msglen, "epoll_ctl for GPIO line %u failed: %s", off,
+            return hal_linux_msg(HAL_EIO, msg, msglen, "cannot make the event fd of GPIO line %u non-blocking: %s", off,
                                  strerror(errno));
+        }
+        struct epoll_event ev = { .events = EPOLLIN, .data.u32 = i };
+        if (epoll_ctl(u->epfd, EPOLL_CTL_ADD, fd, &ev) < 0) {
+            return hal_linux_msg(HAL_EIO, msg, msglen, "epoll_ctl for GPIO line %u failed: %s", off, strerror(errno));
         }
         /* Read after the event request so no edge falls between the two. */
         int v = gpiod_line_get_value(u->in[i]);

@@ -24,7 +24,10 @@ static uint64_t mono_ns(void)
     return (uint64_t)ts.tv_sec * NS_PER_S + (uint64_t)ts.tv_nsec;
 }
 
-uint64_t hal_linux_monotonic_us(void) { return mono_ns() / 1000u; }
+uint64_t hal_linux_monotonic_us(void)
+{
+    return mono_ns() / 1000u;
+}
 
 static uint64_t clock_now_us(void *self)
 {
@@ -34,7 +37,7 @@ static uint64_t clock_now_us(void *self)
 
 hal_clock_t hal_linux_clock(void)
 {
-    hal_clock_t c = {.now_us = clock_now_us, .self = NULL};
+    hal_clock_t c = { .now_us = clock_now_us, .self = NULL };
     return c;
 }
 
@@ -88,10 +91,11 @@ static void setup_scheduling(hal_linux_rt_t *rt)
         if (e == 0) {
             atomic_store(&rt->realtime, true);
         } else if (e == EPERM) {
-            warn_once(&g_warned_fifo,
-                      "hal_linux_rt: warning: no permission for SCHED_FIFO (%s): run as root, grant CAP_SYS_NICE, or set "
-                      "LimitRTPRIO= in the systemd unit (ulimit -r); running as a normal thread\n",
-                      strerror(e));
+            warn_once(
+                &g_warned_fifo,
+                "hal_linux_rt: warning: no permission for SCHED_FIFO (%s): run as root, grant CAP_SYS_NICE, or set "
+                "LimitRTPRIO= in the systemd unit (ulimit -r); running as a normal thread\n",
+                strerror(e));
         } else {
             warn_once(&g_warned_fifo,
                       "hal_linux_rt: warning: SCHED_FIFO refused (%s): check the kernel's RT group scheduling "
@@ -130,27 +134,26 @@ static void *rt_main(void *p)
         atomic_fetch_add_explicit(&rt->cycles, 1u, memory_order_relaxed);
 
         deadline += period;
-        struct timespec ts = {.tv_sec = (time_t)(deadline / NS_PER_S), .tv_nsec = (long)(deadline % NS_PER_S)};
+        struct timespec ts = { .tv_sec = (time_t)(deadline / NS_PER_S), .tv_nsec = (long)(deadline % NS_PER_S) };
         while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL) == EINTR) {
         }
     }
     return NULL;
 }
 
-static int check_config(const hal_linux_rt_t *rt, const hal_rt_config_t *cfg, hal_cycle_fn fn, char *msg,
-                        size_t msglen)
+static int check_config(const hal_linux_rt_t *rt, const hal_rt_config_t *cfg, hal_cycle_fn fn, char *msg, size_t msglen)
 {
     if (rt == NULL || cfg == NULL || fn == NULL) {
         return hal_linux_msg(HAL_EINVAL, msg, msglen, "hal_linux_rt_start: rt, cfg and fn must not be NULL");
     }
     if (cfg->rate_hz == 0u || cfg->rate_hz > HAL_LINUX_RT_MAX_RATE_HZ) {
-        return hal_linux_msg(HAL_EINVAL, msg, msglen, "control rate %u Hz is outside 1..%u Hz",
-                             (unsigned)cfg->rate_hz, HAL_LINUX_RT_MAX_RATE_HZ);
+        return hal_linux_msg(HAL_EINVAL, msg, msglen, "control rate %u Hz is outside 1..%u Hz", (unsigned)cfg->rate_hz,
+                             HAL_LINUX_RT_MAX_RATE_HZ);
     }
     int pmax = sched_get_priority_max(SCHED_FIFO);
     if (cfg->priority < 0 || cfg->priority > pmax) {
-        return hal_linux_msg(HAL_EINVAL, msg, msglen,
-                             "real-time priority %d is outside 0..%d (0 = normal thread)", cfg->priority, pmax);
+        return hal_linux_msg(HAL_EINVAL, msg, msglen, "real-time priority %d is outside 0..%d (0 = normal thread)",
+                             cfg->priority, pmax);
     }
     if (cfg->cpu >= 0) {
         cpu_set_t allowed;
@@ -192,10 +195,11 @@ int hal_linux_rt_start(hal_linux_rt_t *rt, const hal_rt_config_t *cfg, hal_cycle
         if (mlockall(MCL_CURRENT | MCL_FUTURE) == 0) {
             atomic_store(&rt->memory_locked, true);
         } else {
-            warn_once(&g_warned_mlock,
-                      "hal_linux_rt: warning: cannot lock memory (mlockall: %s): run as root, grant CAP_IPC_LOCK, or raise "
-                      "LimitMEMLOCK= in the systemd unit (ulimit -l); page faults may delay control cycles\n",
-                      strerror(errno));
+            warn_once(
+                &g_warned_mlock,
+                "hal_linux_rt: warning: cannot lock memory (mlockall: %s): run as root, grant CAP_IPC_LOCK, or raise "
+                "LimitMEMLOCK= in the systemd unit (ulimit -l); page faults may delay control cycles\n",
+                strerror(errno));
         }
     }
 

@@ -38,11 +38,11 @@
 typedef void (*hal_cycle_fn)(void *arg, uint64_t now_us, uint64_t cycle);
 
 typedef struct {
-    uint32_t rate_hz;  /* 1..HAL_LINUX_RT_MAX_RATE_HZ; period = 1e9 / rate_hz ns (truncated) */
-    int priority;      /* SCHED_FIFO priority 1..99; 0 = normal thread, no request, no warning */
-    int cpu;           /* pin to this CPU when >= 0 */
-    bool lock_memory;  /* mlockall(MCL_CURRENT | MCL_FUTURE): process-wide, kept after stop */
-    bool lockstep;     /* virtual now_us, see above */
+    uint32_t rate_hz; /* 1..HAL_LINUX_RT_MAX_RATE_HZ; period = 1e9 / rate_hz ns (truncated) */
+    int priority;     /* SCHED_FIFO priority 1..99; 0 = normal thread, no request, no warning */
+    int cpu;          /* pin to this CPU when >= 0 */
+    bool lock_memory; /* mlockall(MCL_CURRENT | MCL_FUTURE): process-wide, kept after stop */
+    bool lockstep;    /* virtual now_us, see above */
 } hal_rt_config_t;
 
 /* Fields are private; read them through hal_linux_rt_stats. */
@@ -54,7 +54,7 @@ typedef struct hal_linux_rt {
     hal_cycle_fn fn;
     void *arg;
     uint64_t period_ns;
-    sem_t ready;         /* the thread posts once its scheduling is set up */
+    sem_t ready; /* the thread posts once its scheduling is set up */
     atomic_uint_least64_t cycles;
     atomic_uint_least64_t overruns;
     atomic_uint_least32_t max_late_us;

@@ -31,9 +31,9 @@ typedef struct {
     int fd;
     char ifname[IFNAMSIZ];
     char operstate_path[64];
-    hal_can_status_t st;     /* state, counters except rx_dropped */
-    uint32_t parse_drops;    /* records we could not use */
-    uint32_t kernel_drops;   /* last SO_RXQ_OVFL count: cumulative for the socket */
+    hal_can_status_t st;   /* state, counters except rx_dropped */
+    uint32_t parse_drops;  /* records we could not use */
+    uint32_t kernel_drops; /* last SO_RXQ_OVFL count: cumulative for the socket */
 } sc_link_t;
 
 static sc_link_t g_links[HAL_LINUX_SOCKETCAN_MAX_LINKS];
@@ -149,13 +149,14 @@ static int sc_recv(void *self, hal_can_frame_t *frame)
     }
     for (int i = 0; i < SC_MAX_RECORDS_PER_RECV; i++) {
         struct can_frame cf;
-        struct iovec iov = {.iov_base = &cf, .iov_len = sizeof cf};
+        struct iovec iov = { .iov_base = &cf, .iov_len = sizeof cf };
         union {
             char buf[CMSG_SPACE(sizeof(uint32_t))];
             struct cmsghdr align;
         } ctrl;
         struct msghdr mh = {
-            .msg_iov = &iov, .msg_iovlen = 1, .msg_control = ctrl.buf, .msg_controllen = sizeof ctrl.buf};
+            .msg_iov = &iov, .msg_iovlen = 1, .msg_control = ctrl.buf, .msg_controllen = sizeof ctrl.buf
+        };
         ssize_t n = recvmsg(l->fd, &mh, MSG_DONTWAIT);
         if (n < 0) {
             if (errno == EINTR) {
@@ -170,7 +171,8 @@ static int sc_recv(void *self, hal_can_frame_t *frame)
             return HAL_EIO; /* the peer of an adopted stream/seqpacket socket closed */
         }
         for (struct cmsghdr *c = CMSG_FIRSTHDR(&mh); c != NULL; c = CMSG_NXTHDR(&mh, c)) {
-            if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SO_RXQ_OVFL && c->cmsg_len >= CMSG_LEN(sizeof(uint32_t))) {
+            if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SO_RXQ_OVFL &&
+                c->cmsg_len >= CMSG_LEN(sizeof(uint32_t))) {
                 memcpy(&l->kernel_drops, CMSG_DATA(c), sizeof l->kernel_drops);
             }
         }
@@ -363,7 +365,7 @@ static void netlink_query(int ifindex, sc_netlink_info_t *info)
     if (nl < 0) {
         return;
     }
-    struct timeval tv = {.tv_sec = 1, .tv_usec = 0}; /* never hang open on a stuck netlink */
+    struct timeval tv = { .tv_sec = 1, .tv_usec = 0 }; /* never hang open on a stuck netlink */
     (void)setsockopt(nl, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
     struct {
         struct nlmsghdr nh;
@@ -415,8 +417,8 @@ static int check_ifname(const char *ifname, char *msg, size_t msglen)
         return hal_linux_msg(HAL_EINVAL, msg, msglen, "no CAN interface name given (e.g. can0 or vcan0)");
     }
     if (strlen(ifname) >= IFNAMSIZ) {
-        return hal_linux_msg(HAL_EINVAL, msg, msglen, "CAN interface name '%s' is longer than %d characters",
-                             ifname, IFNAMSIZ - 1);
+        return hal_linux_msg(HAL_EINVAL, msg, msglen, "CAN interface name '%s' is longer than %d characters", ifname,
+                             IFNAMSIZ - 1);
     }
     return HAL_OK;
 }
@@ -453,9 +455,8 @@ static int sc_configure(const char *ifname, int *fd_out, sc_netlink_info_t *info
     struct ifreq ifr;
     memset(&ifr, 0, sizeof ifr);
     memcpy(ifr.ifr_name, ifname, strlen(ifname));
-    const char *bringup =
-        "bring it up with 'ip link set %s up type can bitrate 500000' "
-        "(or 'ip link add dev vcan0 type vcan && ip link set vcan0 up')";
+    const char *bringup = "bring it up with 'ip link set %s up type can bitrate 500000' "
+                          "(or 'ip link add dev vcan0 type vcan && ip link set vcan0 up')";
     char hint[192];
     (void)snprintf(hint, sizeof hint, bringup, ifname);
     if (ioctl(fd, SIOCGIFINDEX, &ifr) < 0) {
@@ -566,7 +567,7 @@ int hal_linux_socketcan_open(hal_can_link_t *out, const char *ifname, char *msg,
         return hal_linux_msg(HAL_EINVAL, msg, msglen, "hal_linux_socketcan_open: no link to fill (out is NULL)");
     }
     link_clear(out);
-    sc_netlink_info_t info = {0};
+    sc_netlink_info_t info = { 0 };
     int fd = -1;
     int rc = sc_configure(ifname, &fd, &info, msg, msglen);
     if (rc != HAL_OK) {
@@ -580,8 +581,8 @@ int hal_linux_socketcan_open(hal_can_link_t *out, const char *ifname, char *msg,
     link_fill(out, l, ifname, fd);
     l->st.bitrate = info.bitrate;
     l->st.state = info.have_state ? info.state : HAL_CAN_STATE_ACTIVE;
-    return hal_linux_msg(HAL_OK, msg, msglen, "%s open: bitrate %u bit/s, state %s", out->name,
-                         (unsigned)l->st.bitrate, state_name(l->st.state));
+    return hal_linux_msg(HAL_OK, msg, msglen, "%s open: bitrate %u bit/s, state %s", out->name, (unsigned)l->st.bitrate,
+                         state_name(l->st.state));
 }
 
 int hal_linux_socketcan_adopt_fd(hal_can_link_t *out, int fd, const char *ifname, char *msg, size_t msglen)
@@ -619,7 +620,7 @@ int hal_linux_socketcan_adopt_fd(hal_can_link_t *out, int fd, const char *ifname
 
 int hal_linux_socketcan_probe(const char *ifname, char *msg, size_t msglen)
 {
-    sc_netlink_info_t info = {0};
+    sc_netlink_info_t info = { 0 };
     int fd = -1;
     int rc = sc_configure(ifname, &fd, &info, msg, msglen);
     if (rc != HAL_OK) {

@@ -69,8 +69,8 @@ int hal_linux_socketcan_decode(const struct can_frame *in, hal_can_frame_t *out,
 
 /* What rtnetlink says about a CAN interface. */
 typedef struct {
-    uint32_t bitrate;    /* bit/s; 0 when not reported (vcan, slcan) */
-    bool have_state;     /* the kernel reported a controller state */
+    uint32_t bitrate; /* bit/s; 0 when not reported (vcan, slcan) */
+    bool have_state;  /* the kernel reported a controller state */
     hal_can_state_t state;
 } hal_linux_socketcan_link_info_t;
 

@@ -51,7 +51,10 @@ static uint32_t draw(dir_t *d)
 }
 
 /* p * 2^32: a draw below it happens with probability p (p = 1 always). */
-static uint64_t threshold(double p) { return (uint64_t)(p * 4294967296.0); }
+static uint64_t threshold(double p)
+{
+    return (uint64_t)(p * 4294967296.0);
+}
 
 static uint64_t now_of(const faulty_t *f)
 {
@@ -292,12 +295,15 @@ static const hal_can_ops_t g_ops = {
     .close = f_close,
 };
 
-static bool rate_ok(double p) { return p >= 0.0 && p <= 1.0; } /* false for NaN too */
+static bool rate_ok(double p)
+{
+    return p >= 0.0 && p <= 1.0;
+} /* false for NaN too */
 
 static bool rates_ok(const hal_sim_fault_rates_t *r)
 {
-    return rate_ok(r->drop) && rate_ok(r->dup) && rate_ok(r->corrupt) && rate_ok(r->reorder) &&
-           rate_ok(r->delay) && (r->delay == 0.0 || r->delay_us > 0);
+    return rate_ok(r->drop) && rate_ok(r->dup) && rate_ok(r->corrupt) && rate_ok(r->reorder) && rate_ok(r->delay) &&
+           (r->delay == 0.0 || r->delay_us > 0);
 }
 
 static void dir_init(dir_t *d, const hal_sim_fault_rates_t *r, uint64_t seed)
@@ -325,8 +331,8 @@ int hal_sim_faulty_wrap(hal_can_link_t *out, const hal_can_link_t *inner, const 
     if (cfg->window_after_us > 0 && cfg->window_for_us == 0) {
         return HAL_EINVAL;
     }
-    bool timed = busoff || cfg->window_for_us > 0 || cfg->tx.delay > 0.0 || cfg->rx.delay > 0.0 || cfg->tx.reorder > 0.0 ||
-                 cfg->rx.reorder > 0.0;
+    bool timed = busoff || cfg->window_for_us > 0 || cfg->tx.delay > 0.0 || cfg->rx.delay > 0.0 ||
+                 cfg->tx.reorder > 0.0 || cfg->rx.reorder > 0.0;
     if (timed && cfg->clock.now_us == NULL) {
         return HAL_EINVAL;
     }
@@ -393,8 +399,8 @@ int hal_sim_faulty_format(const hal_can_link_t *link, char *buf, size_t buflen)
         int w = snprintf(buf + n, buflen - n,
                          "%s%s frames=%u drop=%u dup=%u corrupt=%u reorder=%u delay=%u busoff_lost=%u "
                          "hold_overflow=%u",
-                         i > 0 ? " " : "", names[i], d[i]->frames, d[i]->dropped, d[i]->duplicated,
-                         d[i]->corrupted, d[i]->reordered, d[i]->delayed, d[i]->busoff_lost, d[i]->hold_overflow);
+                         i > 0 ? " " : "", names[i], d[i]->frames, d[i]->dropped, d[i]->duplicated, d[i]->corrupted,
+                         d[i]->reordered, d[i]->delayed, d[i]->busoff_lost, d[i]->hold_overflow);
         if (w < 0) {
             return HAL_EINVAL;
         }
@@ -595,9 +601,8 @@ int hal_sim_fault_parse(const char *spec, hal_sim_fault_config_t *cfg, char *msg
             return fail(msg, msglen, "'%s%s' given twice", dirs[dir], name);
         }
         if (dir == 0 && (seen[key] & 6u) != 0) {
-            return fail(msg, msglen,
-                        "bare '%s' after a tx./rx. '%s' would override it: give the bare key first",
-                        name, name);
+            return fail(msg, msglen, "bare '%s' after a tx./rx. '%s' would override it: give the bare key first", name,
+                        name);
         }
         seen[key] |= 1u << dir;
         switch (key) {
@@ -614,8 +619,7 @@ int hal_sim_fault_parse(const char *spec, hal_sim_fault_config_t *cfg, char *msg
                             "every 30 s)");
             }
             if (dur >= every) {
-                return fail(msg, msglen, "busoff: FOR must be shorter than EVERY (got %s+%s)", val,
-                            plus + 1);
+                return fail(msg, msglen, "busoff: FOR must be shorter than EVERY (got %s+%s)", val, plus + 1);
             }
             cfg->busoff_every_us = every;
             cfg->busoff_for_us = dur;
@@ -641,8 +645,7 @@ int hal_sim_fault_parse(const char *spec, hal_sim_fault_config_t *cfg, char *msg
         }
         case K_SEED:
             if (!parse_seed(val, &cfg->seed)) {
-                return fail(msg, msglen, "seed '%s': expected an unsigned 64-bit integer (e.g. 1 or 0x2A)",
-                            val);
+                return fail(msg, msglen, "seed '%s': expected an unsigned 64-bit integer (e.g. 1 or 0x2A)", val);
             }
             break;
         case K_DELAY: {
@@ -664,8 +667,7 @@ int hal_sim_fault_parse(const char *spec, hal_sim_fault_config_t *cfg, char *msg
         default: {
             double rate = 0.0;
             if (!parse_rate(val, &rate)) {
-                return fail(msg, msglen,
-                            "%s%s '%s': expected a probability 0..1 or a percentage, e.g. 0.05 or 5%%",
+                return fail(msg, msglen, "%s%s '%s': expected a probability 0..1 or a percentage, e.g. 0.05 or 5%%",
                             dirs[dir], name, val);
             }
             set_rate(cfg, key, dir, rate, 0);

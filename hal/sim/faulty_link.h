@@ -63,7 +63,7 @@ typedef struct {
 } hal_sim_fault_config_t;
 
 typedef struct {
-    uint32_t frames;        /* frames offered to the decorator */
+    uint32_t frames; /* frames offered to the decorator */
     uint32_t dropped;
     uint32_t duplicated;
     uint32_t corrupted;

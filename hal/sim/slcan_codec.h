@@ -16,15 +16,15 @@
 #define LS_SLCAN_MAX_LINE 32u /* "T" + 8 id + 1 len + 16 data = 26, plus slack */
 
 typedef enum {
-    LS_SLCAN_FRAME = 0,  /* a data or remote frame: see `frame` */
-    LS_SLCAN_OPEN,       /* O */
-    LS_SLCAN_CLOSE,      /* C */
-    LS_SLCAN_BITRATE,    /* Sn: `bitrate` holds bit/s */
-    LS_SLCAN_VERSION,    /* V */
-    LS_SLCAN_SERIAL,     /* N */
-    LS_SLCAN_FLAGS,      /* F */
-    LS_SLCAN_TIMESTAMP,  /* Zn */
-    LS_SLCAN_EMPTY,      /* a bare CR */
+    LS_SLCAN_FRAME = 0, /* a data or remote frame: see `frame` */
+    LS_SLCAN_OPEN,      /* O */
+    LS_SLCAN_CLOSE,     /* C */
+    LS_SLCAN_BITRATE,   /* Sn: `bitrate` holds bit/s */
+    LS_SLCAN_VERSION,   /* V */
+    LS_SLCAN_SERIAL,    /* N */
+    LS_SLCAN_FLAGS,     /* F */
+    LS_SLCAN_TIMESTAMP, /* Zn */
+    LS_SLCAN_EMPTY,     /* a bare CR */
 } ls_slcan_kind_t;
 
 typedef struct {

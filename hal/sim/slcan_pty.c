@@ -102,19 +102,13 @@ static void handle_line(slcan_pty_t *p, const char *line, size_t len, hal_can_fr
         p->tlen = 0;
         p->open = true;
         break;
-    case LS_SLCAN_CLOSE:
-        p->open = false;
-        break;
-    case LS_SLCAN_BITRATE:
-        p->st.bitrate = m.bitrate;
-        break;
-    case LS_SLCAN_EMPTY:
-        return; /* python-can sends a bare CR to clear the adapter's buffer */
+    case LS_SLCAN_CLOSE: p->open = false; break;
+    case LS_SLCAN_BITRATE: p->st.bitrate = m.bitrate; break;
+    case LS_SLCAN_EMPTY: return; /* python-can sends a bare CR to clear the adapter's buffer */
     case LS_SLCAN_VERSION:
     case LS_SLCAN_SERIAL:
     case LS_SLCAN_FLAGS:
-    case LS_SLCAN_TIMESTAMP:
-        break;
+    case LS_SLCAN_TIMESTAMP: break;
     }
     reply(p, '\r');
 }

@@ -38,7 +38,8 @@ static uint8_t out[LS_ISOTP_MAX_PAYLOAD + 16];
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
-static int fz_send(void *ctx, uint32_t can_id, const uint8_t *d, uint8_t len) {
+static int fz_send(void *ctx, uint32_t can_id, const uint8_t *d, uint8_t len)
+{
     fz_queue_t *q = ctx;
     (void)can_id;
     if (len < 1 || len > 8 || d == NULL) {
@@ -53,7 +54,8 @@ static int fz_send(void *ctx, uint32_t can_id, const uint8_t *d, uint8_t len) {
     return 0;
 }
 
-static void check(const ls_isotp_link_t *l) {
+static void check(const ls_isotp_link_t *l)
+{
     if (l->rx_len > LS_ISOTP_MAX_PAYLOAD || l->tx_len > LS_ISOTP_MAX_PAYLOAD) {
         abort();
     }
@@ -70,7 +72,8 @@ static void check(const ls_isotp_link_t *l) {
 
 /* Before its next deadline a poll must be a no-op: this is what lets the
  * caller sleep until ls_isotp_next_deadline_us. */
-static void check_deadline(ls_isotp_link_t *l, fz_queue_t *q, uint64_t now_us) {
+static void check_deadline(ls_isotp_link_t *l, fz_queue_t *q, uint64_t now_us)
+{
     uint64_t d = ls_isotp_next_deadline_us(l);
     if (d <= now_us || q->full) {
         return;
@@ -85,7 +88,8 @@ static void check_deadline(ls_isotp_link_t *l, fz_queue_t *q, uint64_t now_us) {
     }
 }
 
-static void take(ls_isotp_link_t *l, size_t cap) {
+static void take(ls_isotp_link_t *l, size_t cap)
+{
     bool done = l->rx_state == LS_ISOTP_RX_DONE;
     size_t held = l->rx_len;
     memset(out, 0xA5, sizeof(out));
@@ -100,7 +104,8 @@ static void take(ls_isotp_link_t *l, size_t cap) {
     }
 }
 
-static void deliver(fz_queue_t *from, ls_isotp_link_t *to, uint64_t now_us) {
+static void deliver(fz_queue_t *from, ls_isotp_link_t *to, uint64_t now_us)
+{
     size_t n = from->n;
     from->n = 0;
     for (size_t i = 0; i < n; i++) {
@@ -108,7 +113,8 @@ static void deliver(fz_queue_t *from, ls_isotp_link_t *to, uint64_t now_us) {
     }
 }
 
-int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
     ls_isotp_config_t cfg;
     ls_isotp_default_config(&cfg);
     size_t p = 0;
@@ -135,7 +141,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
         uint8_t op = data[p++];
         rx_q.full = tx_q.full = (op & 8u) != 0;
         switch (op & 7u) {
-        case 0: case 1: case 2: case 3: case 4: {
+        case 0:
+        case 1:
+        case 2:
+        case 3:
+        case 4: {
             if (p + 2 > size) {
                 return 0;
             }
@@ -143,7 +153,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
             uint8_t len = data[p + 1] & 0x0Fu;
             p += 2;
             size_t avail = size - p;
-            uint8_t frame[16] = {0};
+            uint8_t frame[16] = { 0 };
             size_t take_n = len < avail ? len : avail;
             memcpy(frame, data + p, take_n);
             p += take_n;
@@ -165,9 +175,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
             p += 2;
             bool busy = ls_isotp_tx_busy(&tx_link);
             int rc = ls_isotp_send(&tx_link, payload, len, now_us);
-            int want = (len == 0 || len > LS_ISOTP_MAX_PAYLOAD) ? LS_ISOTP_ELEN
-                       : busy                                    ? LS_ISOTP_EBUSY
-                                                                 : LS_ISOTP_OK;
+            int want = (len == 0 || len > LS_ISOTP_MAX_PAYLOAD) ? LS_ISOTP_ELEN : busy ? LS_ISOTP_EBUSY : LS_ISOTP_OK;
             if (rc != want) {
                 abort();
             }

@@ -54,8 +54,11 @@ static const hal_can_ops_t feed_ops = { .send = feed_send, .recv = feed_recv };
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    ls_core_config_t cfg = { .device_name = "fuzz", .firmware_version = "0", .node_addr = 0x10,
-                             .joint_count = 6, .heartbeat_timeout_ms = 1000 };
+    ls_core_config_t cfg = { .device_name = "fuzz",
+                             .firmware_version = "0",
+                             .node_addr = 0x10,
+                             .joint_count = 6,
+                             .heartbeat_timeout_ms = 1000 };
     ls_core_io_t io = { .send_downlink = ls_net_send_downlink, .ctx = &g_net };
     ls_core_init(&g_core, &cfg, &io, NULL);
     ls_net_init(&g_net, 0x10, &g_core);

@@ -16,9 +16,9 @@
 #define HAL_CAN_F_RTR 0x02u /* remote frame */
 
 typedef struct {
-    uint32_t id;     /* 11 or 29 bits, without flag bits */
-    uint8_t flags;   /* HAL_CAN_F_* */
-    uint8_t len;     /* 0..8 */
+    uint32_t id;   /* 11 or 29 bits, without flag bits */
+    uint8_t flags; /* HAL_CAN_F_* */
+    uint8_t len;   /* 0..8 */
     uint8_t data[8];
 } hal_can_frame_t;
 
@@ -32,7 +32,7 @@ typedef enum {
 typedef struct {
     hal_can_state_t state;
     uint32_t rx_frames, tx_frames;
-    uint32_t rx_dropped;   /* frames the backend could not parse or had no room for */
+    uint32_t rx_dropped; /* frames the backend could not parse or had no room for */
     uint32_t tx_dropped;
     uint32_t error_frames; /* error frames / error reports seen */
     uint32_t bitrate;      /* bit/s, 0 when unknown */

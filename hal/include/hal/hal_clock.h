@@ -24,11 +24,11 @@ uint64_t hal_clock_now_us(const hal_clock_t *clock);
 /* Statistics of a periodic runner (readable from any thread, approximate). */
 typedef struct {
     uint64_t cycles;
-    uint64_t overruns;      /* cycles that started later than one period after their deadline */
-    uint32_t max_late_us;   /* worst wake-up latency */
-    uint32_t max_cycle_us;  /* worst cycle execution time */
-    bool realtime;          /* SCHED_FIFO granted */
-    bool memory_locked;     /* mlockall succeeded */
+    uint64_t overruns;     /* cycles that started later than one period after their deadline */
+    uint32_t max_late_us;  /* worst wake-up latency */
+    uint32_t max_cycle_us; /* worst cycle execution time */
+    bool realtime;         /* SCHED_FIFO granted */
+    bool memory_locked;    /* mlockall succeeded */
 } hal_rt_stats_t;
 
 #endif

@@ -15,12 +15,12 @@
 
 #define GRAVITY_M_S2 9.81
 #define SERVO_KP_1_S 200.0
-#define SERVO_CFM 5e-5                 /* 1 / motor damping (2e4 Nm s/rad) */
+#define SERVO_CFM 5e-5 /* 1 / motor damping (2e4 Nm s/rad) */
 #define BRAKE_TORQUE_FACTOR 2.0
 #define CONTACT_K_N_M 5e4
 #define CONTACT_C_NS_M 500.0
 #define CONTACT_MU 0.5
-#define CONTACT_SLIP_M_S_N 1e-3          /* viscous friction below mu*N */
+#define CONTACT_SLIP_M_S_N 1e-3 /* viscous friction below mu*N */
 #define MAX_CONTACTS 96
 #define CONTACTS_PER_PAIR 8 /* a cylinder face on a box gives 8 rim points */
 #define STEP_RESERVE_BYTES (4u << 20)
@@ -35,10 +35,10 @@
 
 typedef struct {
     const char *id;
-    double offset[6];   /* flange -> tip, x y z roll pitch yaw */
+    double offset[6]; /* flange -> tip, x y z roll pitch yaw */
     double mass_kg;
-    double rack[6];     /* flange pose at the rack, base frame */
-    uint32_t bit_mask;  /* tool bits that exist */
+    double rack[6];    /* flange pose at the rack, base frame */
+    uint32_t bit_mask; /* tool bits that exist */
 } sim_tool_desc_t;
 
 static const sim_tool_desc_t k_tools[] = {
@@ -68,12 +68,12 @@ static struct {
     dBodyID tool_body;
     dJointID sensor_joint;
     dJointFeedback fb;
-    double tool_mass_kg;     /* tool body total (plate + tool) */
+    double tool_mass_kg; /* tool body total (plate + tool) */
     dGeomID link6_geom, plate_geom, tip_geom, ray;
     dGeomID env[3];
     int n_env;
 
-    int tool;                /* index in k_tools, -1: none */
+    int tool; /* index in k_tools, -1: none */
     uint32_t tool_bits;
 
     bool enabled;
@@ -312,7 +312,8 @@ static int check_model(const hal_sim_arm_model_t *m, char *msg, size_t msglen)
     const hal_sim_dh_t *d6 = &m->dh[NJ - 1];
     if (fabs(d6->a_m) > 1e-12 || fabs(d6->alpha_rad) > 1e-12 || d6->d_m < 2.0 * PLATE_THICK_M ||
         !(m->link_radius_m > 0.0)) {
-        set_msg(msg, msglen, "arm model: the simulation needs link 6 along z6 (a6 = alpha6 = 0, d6 >= 10 mm) and link_radius > 0");
+        set_msg(msg, msglen,
+                "arm model: the simulation needs link 6 along z6 (a6 = alpha6 = 0, d6 >= 10 mm) and link_radius > 0");
         return HAL_EINVAL;
     }
     return HAL_OK;
@@ -456,8 +457,7 @@ static void collide(double dt)
             for (int k = 0; k < n && made < MAX_CONTACTS; k++, made++) {
                 dContact c;
                 memset(&c, 0, sizeof c);
-                c.surface.mode = dContactSoftERP | dContactSoftCFM | dContactApprox1 | dContactSlip1 |
-                                 dContactSlip2;
+                c.surface.mode = dContactSoftERP | dContactSoftCFM | dContactApprox1 | dContactSlip1 | dContactSlip2;
                 c.surface.mu = CONTACT_MU;
                 c.surface.slip1 = CONTACT_SLIP_M_S_N;
                 c.surface.slip2 = CONTACT_SLIP_M_S_N;
@@ -547,7 +547,8 @@ int hal_sim_world_open(const hal_sim_world_config_t *cfg, char *msg, size_t msgl
     dWorldSetGravity(W.world, 0.0, 0.0, -GRAVITY_M_S2);
     dWorldSetERP(W.world, 0.2);
     dWorldSetCFM(W.world, 1e-10);
-    dWorldStepReserveInfo reserve = { .struct_size = sizeof reserve, .reserve_factor = 1.2f,
+    dWorldStepReserveInfo reserve = { .struct_size = sizeof reserve,
+                                      .reserve_factor = 1.2f,
                                       .reserve_minimum = STEP_RESERVE_BYTES };
     (void)dWorldSetStepMemoryReservationPolicy(W.world, &reserve);
     W.contacts = dJointGroupCreate(0);
@@ -666,8 +667,8 @@ int hal_sim_world_step(void *self, double dt_s)
     if (!(dt_s > 0.0 && dt_s <= MAX_DT_S)) {
         return HAL_EINVAL;
     }
-    bool same = memcmp(W.q_cmd, W.last_q_cmd, sizeof W.q_cmd) == 0 &&
-                memcmp(W.qd_cmd, W.last_qd_cmd, sizeof W.qd_cmd) == 0;
+    bool same =
+        memcmp(W.q_cmd, W.last_q_cmd, sizeof W.q_cmd) == 0 && memcmp(W.qd_cmd, W.last_qd_cmd, sizeof W.qd_cmd) == 0;
     bool still = true;
     for (int i = 0; i < NJ; i++) {
         if (W.qd_cmd[i] != 0.0) {

@@ -178,20 +178,20 @@ typedef struct {
  * along z6 (a6 = alpha6 = 0, d6 >= 10 mm), q_min <= 0 <= q_max, torque and
  * mass > 0 per joint and a link radius > 0; open says which one is missing. */
 typedef struct {
-    const char *name;                      /* for the arm's name; static storage or NULL */
-    uint8_t n_joints;                      /* HAL_SIM_ARM_JOINTS */
+    const char *name; /* for the arm's name; static storage or NULL */
+    uint8_t n_joints; /* HAL_SIM_ARM_JOINTS */
     hal_sim_dh_t dh[HAL_SIM_ARM_JOINTS];
     double q_min_rad[HAL_SIM_ARM_JOINTS], q_max_rad[HAL_SIM_ARM_JOINTS];
     double torque_max_Nm[HAL_SIM_ARM_JOINTS];
     double link_mass_kg[HAL_SIM_ARM_JOINTS]; /* link i moves with joint i */
-    double link_radius_m;                  /* capsule radius of every link */
+    double link_radius_m;                    /* capsule radius of every link */
 } hal_sim_arm_model_t;
 
 typedef struct {
     const hal_sim_arm_model_t *arm; /* copied by open */
-    const char *dio_socket_path;   /* NULL: no external control socket */
-    bool lockstep;                 /* see "Lockstep" above */
-    bool with_obstacle;            /* a box on the table */
+    const char *dio_socket_path;    /* NULL: no external control socket */
+    bool lockstep;                  /* see "Lockstep" above */
+    bool with_obstacle;             /* a box on the table */
 } hal_sim_world_config_t;
 
 /* Build the world. Init only; allocates. Returns HAL_OK, or HAL_EINVAL (bad

@@ -60,7 +60,8 @@ int sim_ctl_open(sim_ctl_t *ctl, const char *path, char *msg, size_t msglen)
         return HAL_EIO;
     }
     if (bind(fd, (const struct sockaddr *)&addr, sizeof addr) != 0) {
-        set_msg(msg, msglen, "cannot bind the DIO socket (check the directory exists and is writable)", strerror(errno));
+        set_msg(msg, msglen, "cannot bind the DIO socket (check the directory exists and is writable)",
+                strerror(errno));
         (void)close(fd);
         return HAL_EIO;
     }

@@ -16,12 +16,12 @@
 /* The control socket and the state it drives (DIO inputs, jog, buttons). */
 typedef struct {
     bool open;
-    int fd;                 /* -1 without a socket */
-    char path[108];         /* sun_path, unlinked at close */
-    uint32_t dio_bits;      /* inputs (0-15) and outputs (16-31) */
-    double twist[6];        /* -1..1 */
+    int fd;            /* -1 without a socket */
+    char path[108];    /* sun_path, unlinked at close */
+    uint32_t dio_bits; /* inputs (0-15) and outputs (16-31) */
+    double twist[6];   /* -1..1 */
     uint32_t buttons;
-    uint32_t malformed;     /* messages ignored since open */
+    uint32_t malformed; /* messages ignored since open */
 } sim_ctl_t;
 
 /* Reset the state; bind the socket when path != NULL. Init only. */
@@ -34,7 +34,7 @@ int sim_ctl_apply(sim_ctl_t *ctl, const char *text, size_t len);
 int sim_ctl_drain(sim_ctl_t *ctl);
 bool sim_ctl_jog_active(const sim_ctl_t *ctl);
 
-extern const hal_dio_ops_t sim_dio_ops;     /* self = sim_ctl_t* (NULL: closed) */
+extern const hal_dio_ops_t sim_dio_ops; /* self = sim_ctl_t* (NULL: closed) */
 int sim_manual_read(void *self, double *twist, uint32_t *buttons);
 
 #endif

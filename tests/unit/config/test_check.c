@@ -199,8 +199,10 @@ static void test_pty_path_taken_by_a_file_fails(void **state)
     add_link(c, link);
     assert_int_equal(run(c), LS_EXIT_CHECK_FAILED);
     char want[400];
-    snprintf(want, sizeof want, "FAIL  link %s: %s exists and is not a symlink; fix: choose another path for the "
-             "pty link", link, path);
+    snprintf(want, sizeof want,
+             "FAIL  link %s: %s exists and is not a symlink; fix: choose another path for the "
+             "pty link",
+             link, path);
     assert_string_equal(line_of(c, "link slcan"), want);
     unlink(path);
 }

@@ -57,8 +57,8 @@ static int args(fx_t *f, int argc, const char **argv)
     return ls_config_from_args(&f->cfg, argc, (char **)argv, f->msg, sizeof f->msg);
 }
 
-#define ARGS(f, ...)                                                                                                 \
-    args((f), (int)(sizeof((const char *[]){ "landscaped", __VA_ARGS__ }) / sizeof(const char *)),                   \
+#define ARGS(f, ...)                                                                                                   \
+    args((f), (int)(sizeof((const char *[]){ "landscaped", __VA_ARGS__ }) / sizeof(const char *)),                     \
          (const char *[]){ "landscaped", __VA_ARGS__ })
 
 /* ---- defaults and good files ------------------------------------------- */
@@ -214,8 +214,9 @@ static void test_key_in_wrong_section(void **state)
 
 static void test_unknown_section(void **state)
 {
-    refused(*state, "[device]\nnode = 3\n[motors]\n", "3: unknown section [motors]; expected [device], [hal], "
-                                                       "[control] or [dio]");
+    refused(*state, "[device]\nnode = 3\n[motors]\n",
+            "3: unknown section [motors]; expected [device], [hal], "
+            "[control] or [dio]");
 }
 
 static void test_key_outside_section(void **state)
@@ -236,11 +237,13 @@ static void test_wrong_types_of_each_kind(void **state)
     refused(f, "[control]\nlock_memory = maybe\n",
             "2: [control] lock_memory: got 'maybe', expected true or false (also yes/no, on/off, 1/0)");
     unlink(f->path);
-    refused(f, "[hal]\nclock = wallclock\n", "2: [hal] clock: got 'wallclock', expected realtime or lockstep "
-                                             "(lockstep: virtual time advancing exactly one period per cycle)");
+    refused(f, "[hal]\nclock = wallclock\n",
+            "2: [hal] clock: got 'wallclock', expected realtime or lockstep "
+            "(lockstep: virtual time advancing exactly one period per cycle)");
     unlink(f->path);
-    refused(f, "[hal]\ndio = gpio:0\n", "2: [hal] dio: got 'gpio:0', expected sim, none or gpiod:CHIP (CHIP as "
-                                        "gpiochip0, 0, /dev/gpiochip0 or a chip label)");
+    refused(f, "[hal]\ndio = gpio:0\n",
+            "2: [hal] dio: got 'gpio:0', expected sim, none or gpiod:CHIP (CHIP as "
+            "gpiochip0, 0, /dev/gpiochip0 or a chip label)");
     unlink(f->path);
     refused(f, "[hal]\nlink = can0\n",
             "2: [hal] link: got 'can0', expected slcan:pty:PATH or socketcan:IFNAME (unknown link kind)");
@@ -249,45 +252,54 @@ static void test_wrong_types_of_each_kind(void **state)
             "2: [hal] link: got 'socketcan:averyveryverylongname', expected slcan:pty:PATH or socketcan:IFNAME "
             "(IFNAME is a network interface name of 1..15 characters, e.g. can0)");
     unlink(f->path);
-    refused(f, "[dio]\ninputs = 1,,2\n", "2: [dio] inputs: got '1,,2', expected a comma-separated list of at most "
-                                         "16 distinct line offsets 0..1023, e.g. 0,1,2");
+    refused(f, "[dio]\ninputs = 1,,2\n",
+            "2: [dio] inputs: got '1,,2', expected a comma-separated list of at most "
+            "16 distinct line offsets 0..1023, e.g. 0,1,2");
     unlink(f->path);
-    refused(f, "[dio]\noutputs = 4,5,4\n", "2: [dio] outputs: got '4,5,4', expected a comma-separated list of at "
-                                           "most 16 distinct line offsets 0..1023, e.g. 0,1,2 (4 is listed twice)");
+    refused(f, "[dio]\noutputs = 4,5,4\n",
+            "2: [dio] outputs: got '4,5,4', expected a comma-separated list of at "
+            "most 16 distinct line offsets 0..1023, e.g. 0,1,2 (4 is listed twice)");
     unlink(f->path);
     refused(f, "[device]\nnode = -3\n",
             "2: [device] node: got '-3', expected 1..0xFE (node address; 0xFF is the broadcast address)");
     unlink(f->path);
-    refused(f, "[device]\nname =\n", "2: [device] name: got '', expected 1..31 printable characters (device name "
-                                     "reported at connect)");
+    refused(f, "[device]\nname =\n",
+            "2: [device] name: got '', expected 1..31 printable characters (device name "
+            "reported at connect)");
 }
 
 static void test_out_of_range(void **state)
 {
     fx_t *f = *state;
-    refused(f, "[control]\nrate_hz = 5\n", "2: [control] rate_hz: got '5', expected 100..10000 (control cycles "
-                                           "per second)");
+    refused(f, "[control]\nrate_hz = 5\n",
+            "2: [control] rate_hz: got '5', expected 100..10000 (control cycles "
+            "per second)");
     unlink(f->path);
-    refused(f, "[control]\nrate_hz = 10001\n", "2: [control] rate_hz: got '10001', expected 100..10000 (control "
-                                               "cycles per second)");
+    refused(f, "[control]\nrate_hz = 10001\n",
+            "2: [control] rate_hz: got '10001', expected 100..10000 (control "
+            "cycles per second)");
     unlink(f->path);
     refused(f, "[device]\nnode = 0xFF\n",
             "2: [device] node: got '0xFF', expected 1..0xFE (node address; 0xFF is the broadcast address)");
     unlink(f->path);
-    refused(f, "[device]\nheartbeat_timeout_ms = 49\n", "2: [device] heartbeat_timeout_ms: got '49', expected "
+    refused(f, "[device]\nheartbeat_timeout_ms = 49\n",
+            "2: [device] heartbeat_timeout_ms: got '49', expected "
             "milliseconds 50..600000 (drop a supervisor after this long without heartbeat)");
     unlink(f->path);
-    refused(f, "[control]\nrt_priority = 100\n", "2: [control] rt_priority: got '100', expected 0..99 (SCHED_FIFO "
-                                                 "priority of the control thread; 0 = normal thread)");
+    refused(f, "[control]\nrt_priority = 100\n",
+            "2: [control] rt_priority: got '100', expected 0..99 (SCHED_FIFO "
+            "priority of the control thread; 0 = normal thread)");
     unlink(f->path);
     refused(f, "[control]\ntelemetry_hz = 201\n",
             "2: [control] telemetry_hz: got '201', expected 0..200 (telemetry frames per second; 0 = off)");
     unlink(f->path);
-    refused(f, "[dio]\nestop_input = 16\n", "2: [dio] estop_input: got '16', expected -1..15 (input bit index that "
-                                            "stops everything when active; -1 = none)");
+    refused(f, "[dio]\nestop_input = 16\n",
+            "2: [dio] estop_input: got '16', expected -1..15 (input bit index that "
+            "stops everything when active; -1 = none)");
     unlink(f->path);
-    refused(f, "[dio]\ninputs = 1024\n", "2: [dio] inputs: got '1024', expected a comma-separated list of at most "
-                                         "16 distinct line offsets 0..1023, e.g. 0,1,2");
+    refused(f, "[dio]\ninputs = 1024\n",
+            "2: [dio] inputs: got '1024', expected a comma-separated list of at most "
+            "16 distinct line offsets 0..1023, e.g. 0,1,2");
     unlink(f->path);
     refused(f, "[dio]\ninputs = 0,1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16\n",
             "2: [dio] inputs: got '0,1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16', expected a comma-separated list of "
@@ -320,8 +332,9 @@ static void test_links_repeat_up_to_four(void **state)
             "3: [hal] link: got 'socketcan:can0', expected slcan:pty:PATH or socketcan:IFNAME, each link once "
             "(this one is already listed)");
     unlink(f->path);
-    refused(f, "[hal]\nlink = socketcan:can0\nlink = socketcan:can1\nlink = socketcan:can2\nlink = socketcan:can3\n"
-               "link = socketcan:can4\n",
+    refused(f,
+            "[hal]\nlink = socketcan:can0\nlink = socketcan:can1\nlink = socketcan:can2\nlink = socketcan:can3\n"
+            "link = socketcan:can4\n",
             "6: [hal] link: got 'socketcan:can4', expected slcan:pty:PATH or socketcan:IFNAME, at most 4 links");
 }
 
@@ -335,8 +348,7 @@ static void test_missing_file(void **state)
 
 static void test_syntax_error(void **state)
 {
-    refused(*state, "[device]\nnode 3\n",
-            "2: syntax error: expected '[section]', 'key = value' or a ; or # comment");
+    refused(*state, "[device]\nnode 3\n", "2: syntax error: expected '[section]', 'key = value' or a ; or # comment");
 }
 
 /* A syntax error before a bad value: the first one is reported. */
@@ -403,8 +415,7 @@ static void test_every_option(void **state)
     fx_t *f = *state;
     assert_int_equal(ARGS(f, "--link", "socketcan:vcan0", "--arm", "none", "--dio", "gpiod:0", "--dio-socket",
                           "/run/x.sock", "--clock", "lockstep", "--rate", "500", "--telemetry-hz", "25",
-                          "--rt-priority", "0", "--rt-cpu", "0", "--no-lock-memory", "--estop-input", "2",
-                          "--check"),
+                          "--rt-priority", "0", "--rt-cpu", "0", "--no-lock-memory", "--estop-input", "2", "--check"),
                      0);
     const ls_config_t *c = &f->cfg;
     assert_false(c->hal_sim);
@@ -435,22 +446,21 @@ static void test_options_override_the_file(void **state)
                      0);
     const ls_config_t *c = &f->cfg;
     assert_string_equal(c->config_path, f->path);
-    assert_string_equal(c->name, "from-file");     /* file, no option */
-    assert_int_equal(c->node, 0x30);               /* file */
-    assert_int_equal(c->telemetry_hz, 10);         /* file */
-    assert_int_equal(c->rate_hz, 2000);            /* option over file */
-    assert_int_equal(c->n_links, 1);               /* --link replaces the file's links */
+    assert_string_equal(c->name, "from-file"); /* file, no option */
+    assert_int_equal(c->node, 0x30);           /* file */
+    assert_int_equal(c->telemetry_hz, 10);     /* file */
+    assert_int_equal(c->rate_hz, 2000);        /* option over file */
+    assert_int_equal(c->n_links, 1);           /* --link replaces the file's links */
     assert_string_equal(c->links[0], "slcan:pty:/tmp/x");
-    assert_string_equal(c->dio, "sim");            /* --hal sim over dio = gpiod:... */
+    assert_string_equal(c->dio, "sim"); /* --hal sim over dio = gpiod:... */
     assert_false(c->lock_memory);
 }
 
 static void test_later_option_wins(void **state)
 {
     fx_t *f = *state;
-    assert_int_equal(ARGS(f, "--hal", "sim", "--dio", "none", "--rate", "300", "--rate", "400", "--link",
-                          "slcan:pty:/tmp/a"),
-                     0);
+    assert_int_equal(
+        ARGS(f, "--hal", "sim", "--dio", "none", "--rate", "300", "--rate", "400", "--link", "slcan:pty:/tmp/a"), 0);
     assert_string_equal(f->cfg.dio, "none");
     assert_int_equal(f->cfg.rate_hz, 400);
 }
@@ -463,7 +473,8 @@ static void test_option_errors(void **state)
     assert_int_equal(ARGS(f, "--hal", "real", "--link", "slcan:pty:/tmp/x"), -1);
     assert_string_equal(f->msg, "--hal: got 'real', expected sim (or set --arm, --dio, --clock)");
     assert_int_equal(ARGS(f, "--hal", "sim", "--link", "bogus:x"), -1);
-    assert_string_equal(f->msg, "--link: got 'bogus:x', expected slcan:pty:PATH or socketcan:IFNAME (unknown link kind)");
+    assert_string_equal(f->msg,
+                        "--link: got 'bogus:x', expected slcan:pty:PATH or socketcan:IFNAME (unknown link kind)");
     assert_int_equal(ARGS(f, "--rate", "5"), -1);
     assert_string_equal(f->msg, "--rate: got '5', expected 100..10000 (control cycles per second)");
     assert_int_equal(ARGS(f, "--heartbeat-timeout", "10"), -1);
@@ -484,8 +495,10 @@ static void test_config_error_through_args_keeps_check(void **state)
     fx_t *f = *state;
     tc_write_file(f->path, sizeof f->path, "[control]\nrate_hz = 5\n");
     assert_int_equal(ARGS(f, "--check", "--config", f->path), -1);
-    snprintf(f->want, sizeof f->want, "%s:2: [control] rate_hz: got '5', expected 100..10000 (control cycles per "
-             "second)", f->path);
+    snprintf(f->want, sizeof f->want,
+             "%s:2: [control] rate_hz: got '5', expected 100..10000 (control cycles per "
+             "second)",
+             f->path);
     assert_string_equal(f->msg, f->want);
     assert_true(f->cfg.check);
     assert_string_equal(f->cfg.config_path, f->path);
@@ -524,10 +537,11 @@ static void test_help(void **state)
     ls_config_usage(m);
     fclose(m);
     /* every option of the key table is documented */
-    static const char *opts[] = { "--config FILE", "--check", "--hal sim", "--link SPEC", "--arm", "--dio sim",
-                                  "--dio-socket", "--clock", "--node", "--heartbeat-timeout", "--name", "--rate",
-                                  "--telemetry-hz", "--rt-priority", "--rt-cpu", "--no-lock-memory",
-                                  "--estop-input", "-h, --help" };
+    static const char *opts[] = {
+        "--config FILE",  "--check",       "--hal sim", "--link SPEC",         "--arm",         "--dio sim",
+        "--dio-socket",   "--clock",       "--node",    "--heartbeat-timeout", "--name",        "--rate",
+        "--telemetry-hz", "--rt-priority", "--rt-cpu",  "--no-lock-memory",    "--estop-input", "-h, --help"
+    };
     for (size_t i = 0; i < sizeof opts / sizeof opts[0]; i++) {
         if (strstr(buf, opts[i]) == NULL) {
             fail_msg("--help does not mention %s", opts[i]);

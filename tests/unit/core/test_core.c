@@ -120,7 +120,8 @@ static const ls_Response *send_req(uint8_t addr)
     size_t before = g_nrx;
     send_uplink(addr);
     for (size_t i = before; i < g_nrx; i++) {
-        if (g_rx[i].which_msg == ls_Downlink_response_tag && g_rx[i].msg.response.seq == g_seq && g_rx_addr[i] == addr) {
+        if (g_rx[i].which_msg == ls_Downlink_response_tag && g_rx[i].msg.response.seq == g_seq &&
+            g_rx_addr[i] == addr) {
             return &g_rx[i].msg.response;
         }
     }
@@ -155,8 +156,11 @@ static void connect_host(uint8_t addr)
 /* A core with HOST_A connected and owning the device in `state`, HOST_B connected. */
 static void setup_core(ls_State state)
 {
-    static const ls_core_config_t cfg = { .device_name = "test", .firmware_version = "0", .node_addr = 0x10,
-                                          .joint_count = 6, .heartbeat_timeout_ms = 600000 };
+    static const ls_core_config_t cfg = { .device_name = "test",
+                                          .firmware_version = "0",
+                                          .node_addr = 0x10,
+                                          .joint_count = 6,
+                                          .heartbeat_timeout_ms = 600000 };
     const ls_core_io_t io = { .send_downlink = fake_send, .ctx = NULL };
     ls_core_init(&g_core, &cfg, &io, NULL);
     g_core.model = &ls_robot_model_default;
@@ -206,8 +210,8 @@ static size_t count_notices(size_t from)
 
 /* ---------------------------------------------------------------- 1, 2: states and owner, every command */
 
-static const ls_State k_states[] = { ls_State_IDLE, ls_State_UNLOCKED, ls_State_LOCKED,
-                                     ls_State_RESTING, ls_State_MOVING, ls_State_PAUSED };
+static const ls_State k_states[] = { ls_State_IDLE,    ls_State_UNLOCKED, ls_State_LOCKED,
+                                     ls_State_RESTING, ls_State_MOVING,   ls_State_PAUSED };
 
 static void test_every_command_in_every_state(void **state)
 {
@@ -861,7 +865,8 @@ static void test_signal_refusals_and_table_full(void **state)
     s->bit_string = 0x01000001u;
     r = must(HOST_A);
     assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
-    assert_string_equal(r->ret_msg, "signalDigitalIO: bits 0x1000000 are not lines of unit 0: its lines are 0x00FFFFFF");
+    assert_string_equal(r->ret_msg,
+                        "signalDigitalIO: bits 0x1000000 are not lines of unit 0: its lines are 0x00FFFFFF");
     s = &req(ls_Request_signal_digital_io_tag)->cmd.signal_digital_io;
     snprintf(s->type, sizeof s->type, "dig");
     s->bit_string = 1;
@@ -934,8 +939,8 @@ static void test_rsvp_reply_and_timeout(void **state)
     ls_core_tick(&g_core, g_now + 400000);
     assert_int_equal(g_done_calls, 1);
 
-    id = ls_core_rsvp(&g_core, 0, ls_NoticeKind_ALARM_RSVP, "ask", data, 1, 300, "abort", done_cb, &g_done_calls,
-                      g_now);
+    id =
+        ls_core_rsvp(&g_core, 0, ls_NoticeKind_ALARM_RSVP, "ask", data, 1, 300, "abort", done_cb, &g_done_calls, g_now);
     ls_core_tick(&g_core, g_now + 299999);
     assert_int_equal(g_done_calls, 1);
     ls_core_tick(&g_core, g_now + 300000);

@@ -341,8 +341,13 @@ static void test_each_fault_rate_within_binomial_bounds(void **state)
     (void)state;
     /* one fault at a time, each direction, several rates */
     static const char *const specs[] = {
-        "dup=0.01,seed=3",     "dup=0.2,seed=4",     "corrupt=0.05,seed=5", "reorder=0.05,seed=6",
-        "delay=0.05:1ms,seed=7", "drop=0.2,seed=8",  "rx.drop=0.01,tx.dup=0.3,seed=9",
+        "dup=0.01,seed=3",
+        "dup=0.2,seed=4",
+        "corrupt=0.05,seed=5",
+        "reorder=0.05,seed=6",
+        "delay=0.05:1ms,seed=7",
+        "drop=0.2,seed=8",
+        "rx.drop=0.01,tx.dup=0.3,seed=9",
     };
     for (size_t s = 0; s < sizeof specs / sizeof specs[0]; s++) {
         setup(NULL);
@@ -777,10 +782,9 @@ static void test_format_names_every_counter(void **state)
     char buf[512];
     int n = hal_sim_faulty_format(&link_, buf, sizeof buf);
     assert_int_equal(n, (int)strlen(buf));
-    assert_string_equal(buf,
-                        "tx frames=3 drop=3 dup=0 corrupt=0 reorder=0 delay=0 busoff_lost=0 hold_overflow=0 "
-                        "rx frames=0 drop=0 dup=0 corrupt=0 reorder=0 delay=0 busoff_lost=0 hold_overflow=0 "
-                        "busoff_windows=0");
+    assert_string_equal(buf, "tx frames=3 drop=3 dup=0 corrupt=0 reorder=0 delay=0 busoff_lost=0 hold_overflow=0 "
+                             "rx frames=0 drop=0 dup=0 corrupt=0 reorder=0 delay=0 busoff_lost=0 hold_overflow=0 "
+                             "busoff_windows=0");
     char small[10];
     assert_int_equal(hal_sim_faulty_format(&link_, small, sizeof small), 9);
     assert_string_equal(small, "tx frames");
@@ -818,9 +822,10 @@ static void test_parse_units_percentages_and_directions(void **state)
     (void)state;
     hal_sim_fault_config_t c;
     char msg[256];
-    assert_int_equal(hal_sim_fault_parse("drop=5%,rx.drop=20%,tx.delay=1:250us,rx.delay=0.5:1.5s,seed=0xFFFFFFFFFFFFFFFF",
-                                         &c, msg, sizeof msg),
-                     HAL_OK);
+    assert_int_equal(
+        hal_sim_fault_parse("drop=5%,rx.drop=20%,tx.delay=1:250us,rx.delay=0.5:1.5s,seed=0xFFFFFFFFFFFFFFFF", &c, msg,
+                            sizeof msg),
+        HAL_OK);
     assert_true(c.tx.drop == 0.05);
     assert_true(c.rx.drop == 0.2);
     assert_true(c.tx.delay == 1.0);

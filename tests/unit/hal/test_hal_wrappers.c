@@ -19,19 +19,19 @@ static void test_null_entries_are_unsupported(void **state)
     static const hal_dio_ops_t dio_ops;
     static const hal_arm_ops_t arm_ops;
     int self = 0;
-    hal_can_link_t link = {.ops = &can_ops, .self = &self, .name = "x"};
-    hal_dio_t dio = {.ops = &dio_ops, .self = &self, .name = "x"};
-    hal_arm_t arm = {.ops = &arm_ops, .self = &self, .name = "x"};
-    hal_can_frame_t f = {0};
+    hal_can_link_t link = { .ops = &can_ops, .self = &self, .name = "x" };
+    hal_dio_t dio = { .ops = &dio_ops, .self = &self, .name = "x" };
+    hal_arm_t arm = { .ops = &arm_ops, .self = &self, .name = "x" };
+    hal_can_frame_t f = { 0 };
     hal_can_status_t cs;
     hal_dio_unit_info_t di;
     uint32_t bits;
     hal_arm_info_t ai;
-    double q[HAL_ARM_MAX_JOINTS] = {0};
+    double q[HAL_ARM_MAX_JOINTS] = { 0 };
 
     /* Same answers for an ops table of NULLs, no ops table and no device. */
-    hal_can_link_t no_ops = {.ops = NULL, .self = &self};
-    hal_can_link_t *links[] = {&link, &no_ops, NULL};
+    hal_can_link_t no_ops = { .ops = NULL, .self = &self };
+    hal_can_link_t *links[] = { &link, &no_ops, NULL };
     for (size_t i = 0; i < 3; i++) {
         assert_int_equal(hal_can_send(links[i], &f), HAL_EUNSUPPORTED);
         assert_int_equal(hal_can_recv(links[i], &f), HAL_EUNSUPPORTED);
@@ -39,8 +39,8 @@ static void test_null_entries_are_unsupported(void **state)
         assert_int_equal(hal_can_status(links[i], &cs), HAL_EUNSUPPORTED);
         hal_can_close(links[i]);
     }
-    hal_dio_t dio_no_ops = {.ops = NULL, .self = &self};
-    hal_dio_t *dios[] = {&dio, &dio_no_ops, NULL};
+    hal_dio_t dio_no_ops = { .ops = NULL, .self = &self };
+    hal_dio_t *dios[] = { &dio, &dio_no_ops, NULL };
     for (size_t i = 0; i < 3; i++) {
         assert_int_equal(hal_dio_unit_count(dios[i]), HAL_EUNSUPPORTED);
         assert_int_equal(hal_dio_describe(dios[i], 0, &di), HAL_EUNSUPPORTED);
@@ -86,7 +86,10 @@ static int fake_poll_fd(void *self)
     (void)self;
     return 42;
 }
-static void fake_close(void *self) { ((fake_t *)self)->closes++; }
+static void fake_close(void *self)
+{
+    ((fake_t *)self)->closes++;
+}
 static int fake_write(void *self, uint16_t unit, uint32_t on, uint32_t off)
 {
     fake_t *f = self;
@@ -100,18 +103,22 @@ static int fake_dio_poll_fd(void *self)
     (void)self;
     return HAL_EIO; /* a failing poll_fd passes through, only "unsupported" becomes -1 */
 }
-static uint64_t fake_now(void *self) { return *(const uint64_t *)self; }
+static uint64_t fake_now(void *self)
+{
+    return *(const uint64_t *)self;
+}
 
 static void test_present_entries_pass_through(void **state)
 {
     (void)state;
-    fake_t fk = {0};
-    static const hal_can_ops_t can_ops = {.send = fake_send, .recv = fake_recv, .poll_fd = fake_poll_fd,
-                                          .close = fake_close};
-    static const hal_dio_ops_t dio_ops = {.write = fake_write, .poll_fd = fake_dio_poll_fd, .close = fake_close};
-    hal_can_link_t link = {.ops = &can_ops, .self = &fk};
-    hal_dio_t dio = {.ops = &dio_ops, .self = &fk};
-    hal_can_frame_t f = {.id = 1};
+    fake_t fk = { 0 };
+    static const hal_can_ops_t can_ops = {
+        .send = fake_send, .recv = fake_recv, .poll_fd = fake_poll_fd, .close = fake_close
+    };
+    static const hal_dio_ops_t dio_ops = { .write = fake_write, .poll_fd = fake_dio_poll_fd, .close = fake_close };
+    hal_can_link_t link = { .ops = &can_ops, .self = &fk };
+    hal_dio_t dio = { .ops = &dio_ops, .self = &fk };
+    hal_can_frame_t f = { .id = 1 };
 
     assert_int_equal(hal_can_send(&link, &f), HAL_EAGAIN);
     assert_ptr_equal(fk.self_seen, &fk);
@@ -133,7 +140,7 @@ static void test_present_entries_pass_through(void **state)
     assert_int_equal(fk.closes, 2);
 
     uint64_t t = 123456789u;
-    hal_clock_t clk = {.now_us = fake_now, .self = &t};
+    hal_clock_t clk = { .now_us = fake_now, .self = &t };
     assert_int_equal(hal_clock_now_us(&clk), 123456789u);
 }
 

@@ -30,13 +30,15 @@ static ls_isotp_link_t link_;
 static char line[LINE_MAX_CHARS];
 static uint8_t buf[LS_ISOTP_MAX_PAYLOAD];
 
-static void put_hex(const uint8_t *d, size_t n) {
+static void put_hex(const uint8_t *d, size_t n)
+{
     for (size_t i = 0; i < n; i++) {
         printf("%02X", d[i]);
     }
 }
 
-static int peer_send(void *ctx, uint32_t can_id, const uint8_t *data, uint8_t len) {
+static int peer_send(void *ctx, uint32_t can_id, const uint8_t *data, uint8_t len)
+{
     (void)ctx;
     printf("F %08X ", (unsigned)can_id);
     put_hex(data, len);
@@ -44,7 +46,8 @@ static int peer_send(void *ctx, uint32_t can_id, const uint8_t *data, uint8_t le
     return 0;
 }
 
-static int hex_nibble(char c) {
+static int hex_nibble(char c)
+{
     if (c >= '0' && c <= '9') {
         return c - '0';
     }
@@ -58,7 +61,8 @@ static int hex_nibble(char c) {
 }
 
 /* Parses hex digits up to the end of the token; returns the byte count or -1. */
-static long parse_hex(const char *s, uint8_t *out, size_t cap) {
+static long parse_hex(const char *s, uint8_t *out, size_t cap)
+{
     size_t n = 0;
     while (*s != '\0' && *s != '\n' && *s != '\r' && *s != ' ') {
         int hi = hex_nibble(s[0]);
@@ -72,7 +76,8 @@ static long parse_hex(const char *s, uint8_t *out, size_t cap) {
     return (long)n;
 }
 
-static int parse_args(int argc, char **argv, ls_isotp_config_t *cfg) {
+static int parse_args(int argc, char **argv, ls_isotp_config_t *cfg)
+{
     for (int i = 1; i < argc; i++) {
         if (i + 1 >= argc) {
             return -1;
@@ -96,7 +101,8 @@ static int parse_args(int argc, char **argv, ls_isotp_config_t *cfg) {
     return 0;
 }
 
-int main(int argc, char **argv) {
+int main(int argc, char **argv)
+{
     ls_isotp_config_t cfg;
     ls_isotp_default_config(&cfg);
     if (parse_args(argc, argv, &cfg) != 0) {

@@ -53,18 +53,21 @@ static size_t g_q_len[ECHO_QUEUE];
 static size_t g_q_head, g_q_count;
 static uint32_t g_tx_refused;
 
-static void on_signal(int sig) {
+static void on_signal(int sig)
+{
     (void)sig;
     g_stop = 1;
 }
 
-static uint64_t now_us(void) {
+static uint64_t now_us(void)
+{
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (uint64_t)ts.tv_sec * 1000000u + (uint64_t)ts.tv_nsec / 1000u;
 }
 
-static void put_frame(char kind, uint64_t t_us, uint32_t id, const uint8_t *data, uint8_t len) {
+static void put_frame(char kind, uint64_t t_us, uint32_t id, const uint8_t *data, uint8_t len)
+{
     printf("%c %llu %08X ", kind, (unsigned long long)t_us, (unsigned)id);
     for (uint8_t i = 0; i < len; i++) {
         printf("%02X", data[i]);
@@ -72,7 +75,8 @@ static void put_frame(char kind, uint64_t t_us, uint32_t id, const uint8_t *data
     putchar('\n');
 }
 
-static int link_send(void *ctx, uint32_t can_id, const uint8_t *data, uint8_t len) {
+static int link_send(void *ctx, uint32_t can_id, const uint8_t *data, uint8_t len)
+{
     (void)ctx;
     hal_can_frame_t f;
     memset(&f, 0, sizeof f);
@@ -89,7 +93,8 @@ static int link_send(void *ctx, uint32_t can_id, const uint8_t *data, uint8_t le
     return 0;
 }
 
-static int parse_args(int argc, char **argv, ls_isotp_config_t *cfg, const char **path) {
+static int parse_args(int argc, char **argv, ls_isotp_config_t *cfg, const char **path)
+{
     *path = NULL;
     for (int i = 1; i < argc; i++) {
         if (strncmp(argv[i], LINK_PREFIX, strlen(LINK_PREFIX)) == 0 && *path == NULL) {
@@ -119,7 +124,8 @@ static int parse_args(int argc, char **argv, ls_isotp_config_t *cfg, const char 
 }
 
 /* Counts of failed transfers seen so far, to report each new one once. */
-static uint32_t errors_total(const ls_isotp_link_t *l) {
+static uint32_t errors_total(const ls_isotp_link_t *l)
+{
     uint32_t n = 0;
     for (int r = LS_ISOTP_N_OK + 1; r < LS_ISOTP_N_RESULT_COUNT; r++) {
         n += l->rx_results[r] + l->tx_results[r];
@@ -129,7 +135,8 @@ static uint32_t errors_total(const ls_isotp_link_t *l) {
 
 /* Called after every frame, not once per batch: the last CF of one message
  * and the FF of the next often arrive in one read of the pty. */
-static void take_message(void) {
+static void take_message(void)
+{
     if (g_q_count >= ECHO_QUEUE) {
         return; /* the receiver keeps it (and refuses the next FF) until there is room */
     }
@@ -141,7 +148,8 @@ static void take_message(void) {
     }
 }
 
-static int wait_ms(uint64_t now) {
+static int wait_ms(uint64_t now)
+{
     if (g_q_count > 0 || ls_isotp_tx_busy(&g_link)) {
         return MAX_WAIT_MS;
     }
@@ -153,7 +161,8 @@ static int wait_ms(uint64_t now) {
     return ms < IDLE_WAIT_MS ? (int)ms : IDLE_WAIT_MS;
 }
 
-static int serve(void) {
+static int serve(void)
+{
     uint32_t errors_seen = 0;
     while (!g_stop) {
         struct pollfd pfd = { .fd = hal_can_poll_fd(&g_can), .events = POLLIN, .revents = 0 };
@@ -195,7 +204,8 @@ static int serve(void) {
     return 0;
 }
 
-int main(int argc, char **argv) {
+int main(int argc, char **argv)
+{
     ls_isotp_config_t cfg;
     ls_isotp_default_config(&cfg);
     const char *path = NULL;

@@ -31,7 +31,8 @@ typedef struct {
     uint64_t now_us;
 } cap_t;
 
-static int cap_send(void *ctx, uint32_t id, const uint8_t *data, uint8_t len) {
+static int cap_send(void *ctx, uint32_t id, const uint8_t *data, uint8_t len)
+{
     cap_t *c = ctx;
     assert_true(len >= 1 && len <= 8);
     if (c->refuse > 0) {
@@ -51,7 +52,8 @@ static int cap_send(void *ctx, uint32_t id, const uint8_t *data, uint8_t len) {
 
 /* ---- expected frames, from the standard's PCI bytes --------------------- */
 
-static frame_t mk(uint32_t id, const uint8_t *bytes, uint8_t used, bool pad) {
+static frame_t mk(uint32_t id, const uint8_t *bytes, uint8_t used, bool pad)
+{
     frame_t f;
     memset(&f, 0, sizeof(f));
     f.id = id;
@@ -66,17 +68,20 @@ static frame_t mk(uint32_t id, const uint8_t *bytes, uint8_t used, bool pad) {
     return f;
 }
 
-static frame_t fc_frame(uint32_t id, uint8_t fs, uint8_t bs, uint8_t stmin, bool pad) {
-    uint8_t b[3] = {(uint8_t)(0x30u | fs), bs, stmin};
+static frame_t fc_frame(uint32_t id, uint8_t fs, uint8_t bs, uint8_t stmin, bool pad)
+{
+    uint8_t b[3] = { (uint8_t)(0x30u | fs), bs, stmin };
     return mk(id, b, 3, pad);
 }
 
-static size_t iso_data_frames(size_t len) {
+static size_t iso_data_frames(size_t len)
+{
     return len <= 7 ? 1u : 1u + (len - 6u + 6u) / 7u;
 }
 
 /* SF, or FF + CFs, for `p`. Returns the number of frames written. */
-static size_t expected_data_frames(uint32_t id, const uint8_t *p, size_t len, bool pad, frame_t *out) {
+static size_t expected_data_frames(uint32_t id, const uint8_t *p, size_t len, bool pad, frame_t *out)
+{
     uint8_t b[8];
     if (len <= 7) {
         b[0] = (uint8_t)len;
@@ -102,13 +107,15 @@ static size_t expected_data_frames(uint32_t id, const uint8_t *p, size_t len, bo
     return n;
 }
 
-static void assert_frame_eq(const frame_t *got, const frame_t *want) {
+static void assert_frame_eq(const frame_t *got, const frame_t *want)
+{
     assert_int_equal(got->id, want->id);
     assert_int_equal(got->len, want->len);
     assert_memory_equal(got->d, want->d, want->len);
 }
 
-static void fill_pattern(uint8_t *p, size_t len, uint32_t seed) {
+static void fill_pattern(uint8_t *p, size_t len, uint32_t seed)
+{
     uint32_t x = seed * 2654435761u + 1u;
     for (size_t i = 0; i < len; i++) {
         x = x * 1103515245u + 12345u;
@@ -128,7 +135,8 @@ typedef struct {
 
 static fx_t fx; /* too large for the stack */
 
-static ls_isotp_config_t cfg_of(uint8_t bs, uint8_t stmin, bool pad) {
+static ls_isotp_config_t cfg_of(uint8_t bs, uint8_t stmin, bool pad)
+{
     ls_isotp_config_t c;
     ls_isotp_default_config(&c);
     c.block_size = bs;
@@ -137,25 +145,29 @@ static ls_isotp_config_t cfg_of(uint8_t bs, uint8_t stmin, bool pad) {
     return c;
 }
 
-static void setup_links(const ls_isotp_config_t *ca, const ls_isotp_config_t *cb) {
+static void setup_links(const ls_isotp_config_t *ca, const ls_isotp_config_t *cb)
+{
     memset(&fx, 0, sizeof(fx));
     assert_int_equal(ls_isotp_init(&fx.a, ca, ID_A, ID_B, cap_send, &fx.ca), LS_ISOTP_OK);
     assert_int_equal(ls_isotp_init(&fx.b, cb, ID_B, ID_A, cap_send, &fx.cb), LS_ISOTP_OK);
 }
 
-static void feed(ls_isotp_link_t *l, cap_t *own, const uint8_t *bytes, uint8_t len, uint64_t t) {
+static void feed(ls_isotp_link_t *l, cap_t *own, const uint8_t *bytes, uint8_t len, uint64_t t)
+{
     own->now_us = t;
     ls_isotp_on_frame(l, bytes, len, t);
 }
 
-static void poll_at(ls_isotp_link_t *l, cap_t *own, uint64_t t) {
+static void poll_at(ls_isotp_link_t *l, cap_t *own, uint64_t t)
+{
     own->now_us = t;
     ls_isotp_poll(l, t);
 }
 
 /* Both links back to back: deliver frames in order, poll each step. Returns
  * the time at which the receiver completed. */
-static uint64_t run_wire(uint64_t step_us, uint64_t limit_us) {
+static uint64_t run_wire(uint64_t step_us, uint64_t limit_us)
+{
     size_t da = 0, db = 0;
     for (uint64_t t = 0; t <= limit_us; t += step_us) {
         fx.ca.now_us = t;
@@ -187,7 +199,8 @@ static uint64_t run_wire(uint64_t step_us, uint64_t limit_us) {
 
 /* ---- single frames --------------------------------------------------------- */
 
-static void test_sf_tx_padded_and_unpadded(void **state) {
+static void test_sf_tx_padded_and_unpadded(void **state)
+{
     (void)state;
     for (int pad = 0; pad <= 1; pad++) {
         for (size_t len = 1; len <= 7; len += 6) {
@@ -196,7 +209,7 @@ static void test_sf_tx_padded_and_unpadded(void **state) {
             fill_pattern(fx.payload, len, (uint32_t)len);
             assert_int_equal(ls_isotp_send(&fx.a, fx.payload, len, 0), LS_ISOTP_OK);
             assert_int_equal(fx.ca.n, 1);
-            uint8_t b[8] = {(uint8_t)len};
+            uint8_t b[8] = { (uint8_t)len };
             memcpy(b + 1, fx.payload, len);
             frame_t want = mk(ID_A, b, (uint8_t)(1 + len), pad != 0);
             assert_frame_eq(&fx.ca.f[0], &want);
@@ -207,20 +220,21 @@ static void test_sf_tx_padded_and_unpadded(void **state) {
     }
 }
 
-static void test_sf_rx_padded_and_unpadded(void **state) {
+static void test_sf_rx_padded_and_unpadded(void **state)
+{
     (void)state;
     setup_links(NULL, NULL);
-    const uint8_t unpadded[2] = {0x01, 0x5A};
+    const uint8_t unpadded[2] = { 0x01, 0x5A };
     feed(&fx.b, &fx.cb, unpadded, 2, 0);
     assert_int_equal(fx.b.rx_state, LS_ISOTP_RX_DONE);
     assert_int_equal(ls_isotp_take_rx(&fx.b, fx.out, sizeof(fx.out)), 1);
     assert_int_equal(fx.out[0], 0x5A);
-    const uint8_t padded[8] = {0x07, 1, 2, 3, 4, 5, 6, 7};
+    const uint8_t padded[8] = { 0x07, 1, 2, 3, 4, 5, 6, 7 };
     feed(&fx.b, &fx.cb, padded, 8, 1);
     assert_int_equal(ls_isotp_take_rx(&fx.b, fx.out, sizeof(fx.out)), 7);
-    const uint8_t want[7] = {1, 2, 3, 4, 5, 6, 7};
+    const uint8_t want[7] = { 1, 2, 3, 4, 5, 6, 7 };
     assert_memory_equal(fx.out, want, 7);
-    const uint8_t padded1[8] = {0x01, 0x42, 0xAA, 0xAA, 0xAA, 0xAA, 0xAA, 0xAA};
+    const uint8_t padded1[8] = { 0x01, 0x42, 0xAA, 0xAA, 0xAA, 0xAA, 0xAA, 0xAA };
     feed(&fx.b, &fx.cb, padded1, 8, 2);
     assert_int_equal(ls_isotp_take_rx(&fx.b, fx.out, sizeof(fx.out)), 1);
     assert_int_equal(fx.out[0], 0x42);
@@ -231,7 +245,8 @@ static void test_sf_rx_padded_and_unpadded(void **state) {
 
 /* ---- multi-frame transfers: exact frames, counts and STmin timing ---------- */
 
-static void check_transfer(size_t len, uint8_t bs, uint8_t stmin, bool pad_a, bool pad_b) {
+static void check_transfer(size_t len, uint8_t bs, uint8_t stmin, bool pad_a, bool pad_b)
+{
     ls_isotp_config_t ca = cfg_of(8, 0, pad_a);
     ls_isotp_config_t cb = cfg_of(bs, stmin, pad_b);
     setup_links(&ca, &cb);
@@ -282,11 +297,12 @@ static void check_transfer(size_t len, uint8_t bs, uint8_t stmin, bool pad_a, bo
     }
 }
 
-static void test_transfer_matrix(void **state) {
+static void test_transfer_matrix(void **state)
+{
     (void)state;
-    static const size_t lens[] = {1, 7, 8, 62, 63, 100, 1000, 4095};
-    static const uint8_t bss[] = {0, 8};
-    static const uint8_t stmins[] = {0, 1};
+    static const size_t lens[] = { 1, 7, 8, 62, 63, 100, 1000, 4095 };
+    static const uint8_t bss[] = { 0, 8 };
+    static const uint8_t stmins[] = { 0, 1 };
     for (size_t i = 0; i < sizeof(lens) / sizeof(lens[0]); i++) {
         for (size_t j = 0; j < 2; j++) {
             for (size_t k = 0; k < 2; k++) {
@@ -299,13 +315,14 @@ static void test_transfer_matrix(void **state) {
 }
 
 /* With STmin 0 and BS 0 every CF goes out in the same call that took the FC. */
-static void test_stmin0_bs0_burst(void **state) {
+static void test_stmin0_bs0_burst(void **state)
+{
     (void)state;
     setup_links(NULL, NULL);
     fill_pattern(fx.payload, 100, 7);
     assert_int_equal(ls_isotp_send(&fx.a, fx.payload, 100, 0), LS_ISOTP_OK);
     assert_int_equal(fx.ca.n, 1);
-    const uint8_t cts[3] = {0x30, 0x00, 0x00};
+    const uint8_t cts[3] = { 0x30, 0x00, 0x00 };
     feed(&fx.a, &fx.ca, cts, 3, 50);
     assert_int_equal(fx.ca.n, iso_data_frames(100));
     assert_false(ls_isotp_tx_busy(&fx.a));
@@ -313,7 +330,8 @@ static void test_stmin0_bs0_burst(void **state) {
 
 /* ---- STmin encoding -------------------------------------------------------- */
 
-static void test_stmin_to_us(void **state) {
+static void test_stmin_to_us(void **state)
+{
     (void)state;
     assert_int_equal(ls_isotp_stmin_to_us(0x00), 0);
     assert_int_equal(ls_isotp_stmin_to_us(0x01), 1000);
@@ -330,11 +348,12 @@ static void test_stmin_to_us(void **state) {
 
 /* Start a 20-byte send (FF + 2 CFs), answer CTS with BS 0 and `stmin` at t0,
  * then check that the 2nd CF waits exactly `gap_us`. */
-static void check_sender_gap(uint8_t stmin, uint64_t gap_us) {
+static void check_sender_gap(uint8_t stmin, uint64_t gap_us)
+{
     setup_links(NULL, NULL);
     fill_pattern(fx.payload, 20, stmin);
     assert_int_equal(ls_isotp_send(&fx.a, fx.payload, 20, 0), LS_ISOTP_OK);
-    const uint8_t cts[3] = {0x30, 0x00, stmin};
+    const uint8_t cts[3] = { 0x30, 0x00, stmin };
     feed(&fx.a, &fx.ca, cts, 3, 1000);
     assert_int_equal(fx.ca.n, 2); /* FF + first CF at once */
     assert_int_equal(fx.ca.f[1].t_us, 1000);
@@ -347,12 +366,14 @@ static void check_sender_gap(uint8_t stmin, uint64_t gap_us) {
     assert_false(ls_isotp_tx_busy(&fx.a));
 }
 
-static void test_sender_stmin_f3_is_300us(void **state) {
+static void test_sender_stmin_f3_is_300us(void **state)
+{
     (void)state;
     check_sender_gap(0xF3, 300);
 }
 
-static void test_sender_stmin_reserved_is_127ms(void **state) {
+static void test_sender_stmin_reserved_is_127ms(void **state)
+{
     (void)state;
     check_sender_gap(0x80, 127000);
     check_sender_gap(0xF0, 127000);
@@ -363,7 +384,8 @@ static void test_sender_stmin_reserved_is_127ms(void **state) {
 
 /* ---- sender: flow control handling ---------------------------------------- */
 
-static void start_ff(size_t len) {
+static void start_ff(size_t len)
+{
     setup_links(NULL, NULL);
     fill_pattern(fx.payload, len, 99);
     assert_int_equal(ls_isotp_send(&fx.a, fx.payload, len, 0), LS_ISOTP_OK);
@@ -372,7 +394,8 @@ static void start_ff(size_t len) {
     assert_int_equal(fx.a.tx_state, LS_ISOTP_TX_WAIT_FC);
 }
 
-static void test_n_bs_timeout(void **state) {
+static void test_n_bs_timeout(void **state)
+{
     (void)state;
     start_ff(20);
     assert_int_equal(ls_isotp_next_deadline_us(&fx.a), 1000000);
@@ -385,17 +408,18 @@ static void test_n_bs_timeout(void **state) {
     assert_int_equal(fx.ca.n, 1);
     assert_int_equal(ls_isotp_next_deadline_us(&fx.a), UINT64_MAX);
     /* a late CTS now is unexpected and sends nothing */
-    const uint8_t cts[3] = {0x30, 0, 0};
+    const uint8_t cts[3] = { 0x30, 0, 0 };
     feed(&fx.a, &fx.ca, cts, 3, 1000001);
     assert_int_equal(fx.ca.n, 1);
     assert_int_equal(fx.a.tx_results[LS_ISOTP_N_UNEXP_PDU], 1);
 }
 
 /* N_Bs also guards the FC after each block. */
-static void test_n_bs_timeout_between_blocks(void **state) {
+static void test_n_bs_timeout_between_blocks(void **state)
+{
     (void)state;
     start_ff(100);
-    const uint8_t cts[3] = {0x30, 0x02, 0x00};
+    const uint8_t cts[3] = { 0x30, 0x02, 0x00 };
     feed(&fx.a, &fx.ca, cts, 3, 10);
     assert_int_equal(fx.ca.n, 3); /* FF + a block of 2 CFs */
     assert_int_equal(fx.a.tx_state, LS_ISOTP_TX_WAIT_FC);
@@ -407,16 +431,17 @@ static void test_n_bs_timeout_between_blocks(void **state) {
     assert_int_equal(fx.ca.n, 3);
 }
 
-static void test_fc_wait_then_cts(void **state) {
+static void test_fc_wait_then_cts(void **state)
+{
     (void)state;
     start_ff(20);
-    const uint8_t wait[3] = {0x31, 0, 0};
+    const uint8_t wait[3] = { 0x31, 0, 0 };
     feed(&fx.a, &fx.ca, wait, 3, 900000);
     /* WAIT restarted N_Bs: still waiting after the original deadline */
     poll_at(&fx.a, &fx.ca, 1800000);
     assert_true(ls_isotp_tx_busy(&fx.a));
     assert_int_equal(fx.ca.n, 1);
-    const uint8_t cts[3] = {0x30, 0, 0};
+    const uint8_t cts[3] = { 0x30, 0, 0 };
     feed(&fx.a, &fx.ca, cts, 3, 1850000);
     assert_int_equal(fx.ca.n, 3);
     assert_false(ls_isotp_tx_busy(&fx.a));
@@ -427,17 +452,19 @@ static void test_fc_wait_then_cts(void **state) {
     }
 }
 
-static void test_fc_wait_restarts_n_bs_then_times_out(void **state) {
+static void test_fc_wait_restarts_n_bs_then_times_out(void **state)
+{
     (void)state;
     start_ff(20);
-    const uint8_t wait[3] = {0x31, 0, 0};
+    const uint8_t wait[3] = { 0x31, 0, 0 };
     feed(&fx.a, &fx.ca, wait, 3, 500000);
     assert_int_equal(ls_isotp_next_deadline_us(&fx.a), 1500000);
     poll_at(&fx.a, &fx.ca, 1500000);
     assert_int_equal(fx.a.tx_results[LS_ISOTP_N_TIMEOUT_BS], 1);
 }
 
-static void test_wft_max_overrun(void **state) {
+static void test_wft_max_overrun(void **state)
+{
     (void)state;
     ls_isotp_config_t c = cfg_of(8, 0, true);
     c.wft_max = 2;
@@ -445,7 +472,7 @@ static void test_wft_max_overrun(void **state) {
     assert_int_equal(ls_isotp_init(&fx.a, &c, ID_A, ID_B, cap_send, &fx.ca), LS_ISOTP_OK);
     fill_pattern(fx.payload, 30, 1);
     assert_int_equal(ls_isotp_send(&fx.a, fx.payload, 30, 0), LS_ISOTP_OK);
-    const uint8_t wait[3] = {0x31, 0, 0};
+    const uint8_t wait[3] = { 0x31, 0, 0 };
     feed(&fx.a, &fx.ca, wait, 3, 10);
     feed(&fx.a, &fx.ca, wait, 3, 20);
     assert_true(ls_isotp_tx_busy(&fx.a));
@@ -457,7 +484,8 @@ static void test_wft_max_overrun(void **state) {
 }
 
 /* The WAIT count is "in a row": a CTS resets it for the next block. */
-static void test_wft_counter_resets_on_cts(void **state) {
+static void test_wft_counter_resets_on_cts(void **state)
+{
     (void)state;
     ls_isotp_config_t c = cfg_of(8, 0, true);
     c.wft_max = 1;
@@ -465,8 +493,8 @@ static void test_wft_counter_resets_on_cts(void **state) {
     assert_int_equal(ls_isotp_init(&fx.a, &c, ID_A, ID_B, cap_send, &fx.ca), LS_ISOTP_OK);
     fill_pattern(fx.payload, 30, 1);
     assert_int_equal(ls_isotp_send(&fx.a, fx.payload, 30, 0), LS_ISOTP_OK);
-    const uint8_t wait[3] = {0x31, 0, 0};
-    const uint8_t cts1[3] = {0x30, 1, 0};
+    const uint8_t wait[3] = { 0x31, 0, 0 };
+    const uint8_t cts1[3] = { 0x30, 1, 0 };
     feed(&fx.a, &fx.ca, wait, 3, 10);
     feed(&fx.a, &fx.ca, cts1, 3, 20);
     assert_int_equal(fx.ca.n, 2);
@@ -477,10 +505,11 @@ static void test_wft_counter_resets_on_cts(void **state) {
     assert_int_equal(fx.a.tx_results[LS_ISOTP_N_WFT_OVRN], 0);
 }
 
-static void test_fc_ovflw_aborts_sender(void **state) {
+static void test_fc_ovflw_aborts_sender(void **state)
+{
     (void)state;
     start_ff(3000);
-    const uint8_t ovf[3] = {0x32, 0, 0};
+    const uint8_t ovf[3] = { 0x32, 0, 0 };
     feed(&fx.a, &fx.ca, ovf, 3, 10);
     assert_false(ls_isotp_tx_busy(&fx.a));
     assert_int_equal(fx.a.tx_results[LS_ISOTP_N_BUFFER_OVFLW], 1);
@@ -489,26 +518,28 @@ static void test_fc_ovflw_aborts_sender(void **state) {
     assert_int_equal(fx.ca.n, 1);
 }
 
-static void test_invalid_fs_aborts_sender(void **state) {
+static void test_invalid_fs_aborts_sender(void **state)
+{
     (void)state;
     start_ff(20);
-    const uint8_t bad[8] = {0x33, 0, 0, PAD, PAD, PAD, PAD, PAD};
+    const uint8_t bad[8] = { 0x33, 0, 0, PAD, PAD, PAD, PAD, PAD };
     feed(&fx.a, &fx.ca, bad, 8, 10);
     assert_false(ls_isotp_tx_busy(&fx.a));
     assert_int_equal(fx.a.tx_results[LS_ISOTP_N_INVALID_FS], 1);
     assert_int_equal(fx.ca.n, 1);
 }
 
-static void test_fc_when_not_waiting_is_ignored(void **state) {
+static void test_fc_when_not_waiting_is_ignored(void **state)
+{
     (void)state;
     setup_links(NULL, NULL);
-    const uint8_t cts[3] = {0x30, 0, 0};
+    const uint8_t cts[3] = { 0x30, 0, 0 };
     feed(&fx.a, &fx.ca, cts, 3, 0);
     assert_int_equal(fx.a.tx_results[LS_ISOTP_N_UNEXP_PDU], 1);
     assert_int_equal(fx.ca.n, 0);
     /* also while sending CFs with BS 0 */
     start_ff(100);
-    const uint8_t cts_slow[3] = {0x30, 0, 10};
+    const uint8_t cts_slow[3] = { 0x30, 0, 10 };
     feed(&fx.a, &fx.ca, cts_slow, 3, 0);
     assert_int_equal(fx.ca.n, 2);
     feed(&fx.a, &fx.ca, cts, 3, 1);
@@ -517,33 +548,37 @@ static void test_fc_when_not_waiting_is_ignored(void **state) {
     assert_int_equal(fx.a.tx_stmin_us, 10000);
 }
 
-static void test_short_fc_is_malformed(void **state) {
+static void test_short_fc_is_malformed(void **state)
+{
     (void)state;
     start_ff(20);
-    const uint8_t shortfc[2] = {0x30, 0};
+    const uint8_t shortfc[2] = { 0x30, 0 };
     feed(&fx.a, &fx.ca, shortfc, 2, 10);
     assert_int_equal(fx.a.tx_results[LS_ISOTP_N_MALFORMED], 1);
     assert_int_equal(fx.a.tx_state, LS_ISOTP_TX_WAIT_FC);
-    const uint8_t cts[3] = {0x30, 0, 0};
+    const uint8_t cts[3] = { 0x30, 0, 0 };
     feed(&fx.a, &fx.ca, cts, 3, 20);
     assert_int_equal(fx.a.tx_results[LS_ISOTP_N_OK], 1);
 }
 
 /* ---- receiver -------------------------------------------------------------- */
 
-static void rx_ff(uint16_t len, uint64_t t) {
-    uint8_t ff[8] = {(uint8_t)(0x10u | (len >> 8)), (uint8_t)len, 0, 1, 2, 3, 4, 5};
+static void rx_ff(uint16_t len, uint64_t t)
+{
+    uint8_t ff[8] = { (uint8_t)(0x10u | (len >> 8)), (uint8_t)len, 0, 1, 2, 3, 4, 5 };
     feed(&fx.b, &fx.cb, ff, 8, t);
 }
 
-static void rx_cf(uint8_t sn, uint8_t fillv, uint64_t t) {
+static void rx_cf(uint8_t sn, uint8_t fillv, uint64_t t)
+{
     uint8_t cf[8];
     memset(cf, fillv, sizeof(cf));
     cf[0] = (uint8_t)(0x20u | sn);
     feed(&fx.b, &fx.cb, cf, 8, t);
 }
 
-static void test_rx_ff_sends_cts_with_our_params(void **state) {
+static void test_rx_ff_sends_cts_with_our_params(void **state)
+{
     (void)state;
     ls_isotp_config_t cb = cfg_of(4, 0xF2, true);
     setup_links(NULL, &cb);
@@ -561,7 +596,8 @@ static void test_rx_ff_sends_cts_with_our_params(void **state) {
     assert_frame_eq(&fx.cb.f[0], &want_u);
 }
 
-static void test_rx_block_size_fc_after_each_block(void **state) {
+static void test_rx_block_size_fc_after_each_block(void **state)
+{
     (void)state;
     ls_isotp_config_t cb = cfg_of(2, 0, true);
     setup_links(NULL, &cb);
@@ -581,12 +617,13 @@ static void test_rx_block_size_fc_after_each_block(void **state) {
         assert_frame_eq(&fx.cb.f[i], &want);
     }
     assert_int_equal(ls_isotp_take_rx(&fx.b, fx.out, sizeof(fx.out)), 41);
-    const uint8_t head[8] = {0, 1, 2, 3, 4, 5, 0x11, 0x11};
+    const uint8_t head[8] = { 0, 1, 2, 3, 4, 5, 0x11, 0x11 };
     assert_memory_equal(fx.out, head, 8);
     assert_int_equal(fx.out[40], 0x55);
 }
 
-static void test_rx_sn_wraps(void **state) {
+static void test_rx_sn_wraps(void **state)
+{
     (void)state;
     ls_isotp_config_t cb = cfg_of(0, 0, true);
     setup_links(NULL, &cb);
@@ -601,7 +638,8 @@ static void test_rx_sn_wraps(void **state) {
     assert_int_equal(fx.out[6 + 7 * 15], 15); /* the CF after SN 15 was SN 0 */
 }
 
-static void test_rx_n_cr_timeout(void **state) {
+static void test_rx_n_cr_timeout(void **state)
+{
     (void)state;
     setup_links(NULL, NULL);
     rx_ff(30, 100);
@@ -619,7 +657,8 @@ static void test_rx_n_cr_timeout(void **state) {
     assert_int_equal(ls_isotp_take_rx(&fx.b, fx.out, sizeof(fx.out)), 0);
 }
 
-static void test_rx_wrong_sn(void **state) {
+static void test_rx_wrong_sn(void **state)
+{
     (void)state;
     setup_links(NULL, NULL);
     rx_ff(30, 0);
@@ -635,7 +674,8 @@ static void test_rx_wrong_sn(void **state) {
     assert_int_equal(fx.b.rx_results[LS_ISOTP_N_OK], 0);
 }
 
-static void test_rx_cf_while_idle(void **state) {
+static void test_rx_cf_while_idle(void **state)
+{
     (void)state;
     setup_links(NULL, NULL);
     rx_cf(1, 0, 0);
@@ -644,7 +684,8 @@ static void test_rx_cf_while_idle(void **state) {
     assert_int_equal(fx.cb.n, 0);
 }
 
-static void test_rx_ff_during_reception_restarts(void **state) {
+static void test_rx_ff_during_reception_restarts(void **state)
+{
     (void)state;
     setup_links(NULL, NULL);
     rx_ff(30, 0);
@@ -654,15 +695,16 @@ static void test_rx_ff_during_reception_restarts(void **state) {
     assert_int_equal(fx.cb.n, 2); /* a fresh CTS for the new message */
     rx_cf(1, 0xBB, 3);
     assert_int_equal(ls_isotp_take_rx(&fx.b, fx.out, sizeof(fx.out)), 13);
-    const uint8_t want[13] = {0, 1, 2, 3, 4, 5, 0xBB, 0xBB, 0xBB, 0xBB, 0xBB, 0xBB, 0xBB};
+    const uint8_t want[13] = { 0, 1, 2, 3, 4, 5, 0xBB, 0xBB, 0xBB, 0xBB, 0xBB, 0xBB, 0xBB };
     assert_memory_equal(fx.out, want, 13);
 }
 
-static void test_rx_sf_during_reception_replaces(void **state) {
+static void test_rx_sf_during_reception_replaces(void **state)
+{
     (void)state;
     setup_links(NULL, NULL);
     rx_ff(30, 0);
-    const uint8_t sf[3] = {0x02, 0xDE, 0xAD};
+    const uint8_t sf[3] = { 0x02, 0xDE, 0xAD };
     feed(&fx.b, &fx.cb, sf, 3, 1);
     assert_int_equal(fx.b.rx_results[LS_ISOTP_N_UNEXP_PDU], 1);
     assert_int_equal(ls_isotp_take_rx(&fx.b, fx.out, sizeof(fx.out)), 2);
@@ -670,10 +712,11 @@ static void test_rx_sf_during_reception_replaces(void **state) {
     assert_int_equal(fx.out[1], 0xAD);
 }
 
-static void test_rx_ff_escape_gets_ovflw(void **state) {
+static void test_rx_ff_escape_gets_ovflw(void **state)
+{
     (void)state;
     setup_links(NULL, NULL);
-    const uint8_t ff32[8] = {0x10, 0x00, 0x00, 0x00, 0x10, 0x00, 0xAB, 0xCD};
+    const uint8_t ff32[8] = { 0x10, 0x00, 0x00, 0x00, 0x10, 0x00, 0xAB, 0xCD };
     feed(&fx.b, &fx.cb, ff32, 8, 0);
     assert_int_equal(fx.cb.n, 1);
     frame_t want = fc_frame(ID_B, 2, 8, 0, true);
@@ -683,10 +726,11 @@ static void test_rx_ff_escape_gets_ovflw(void **state) {
 }
 
 /* The receiver's FC.OVFLW reaches the sender, which aborts with N_BUFFER_OVFLW. */
-static void test_ovflw_end_to_end(void **state) {
+static void test_ovflw_end_to_end(void **state)
+{
     (void)state;
     setup_links(NULL, NULL);
-    const uint8_t sf[2] = {0x01, 0x77};
+    const uint8_t sf[2] = { 0x01, 0x77 };
     feed(&fx.b, &fx.cb, sf, 2, 0); /* b now holds an untaken message */
     fill_pattern(fx.payload, 50, 5);
     assert_int_equal(ls_isotp_send(&fx.a, fx.payload, 50, 0), LS_ISOTP_OK);
@@ -703,11 +747,12 @@ static void test_ovflw_end_to_end(void **state) {
     assert_int_equal(fx.out[0], 0x77);
 }
 
-static void test_rx_done_drops_new_sf(void **state) {
+static void test_rx_done_drops_new_sf(void **state)
+{
     (void)state;
     setup_links(NULL, NULL);
-    const uint8_t sf1[2] = {0x01, 0x01};
-    const uint8_t sf2[2] = {0x01, 0x02};
+    const uint8_t sf1[2] = { 0x01, 0x01 };
+    const uint8_t sf2[2] = { 0x01, 0x02 };
     feed(&fx.b, &fx.cb, sf1, 2, 0);
     feed(&fx.b, &fx.cb, sf2, 2, 1);
     assert_int_equal(fx.b.rx_results[LS_ISOTP_N_BUFFER_OVFLW], 1);
@@ -718,16 +763,17 @@ static void test_rx_done_drops_new_sf(void **state) {
     assert_int_equal(fx.out[0], 0x02);
 }
 
-static void test_rx_malformed_frames(void **state) {
+static void test_rx_malformed_frames(void **state)
+{
     (void)state;
     setup_links(NULL, NULL);
-    const uint8_t ff_short_len[8] = {0x10, 0x07, 1, 2, 3, 4, 5, 6}; /* fits a SF */
-    const uint8_t ff_dlc7[7] = {0x10, 0x20, 1, 2, 3, 4, 5};
-    const uint8_t sf_len0[8] = {0x00, 1, 2, 3, 4, 5, 6, 7};
-    const uint8_t sf_len8[8] = {0x08, 1, 2, 3, 4, 5, 6, 7};
-    const uint8_t sf_trunc[4] = {0x05, 1, 2, 3};
-    const uint8_t pci4[8] = {0x40, 0, 0, 0, 0, 0, 0, 0};
-    const uint8_t nine[9] = {0x01, 1, 0, 0, 0, 0, 0, 0, 0};
+    const uint8_t ff_short_len[8] = { 0x10, 0x07, 1, 2, 3, 4, 5, 6 }; /* fits a SF */
+    const uint8_t ff_dlc7[7] = { 0x10, 0x20, 1, 2, 3, 4, 5 };
+    const uint8_t sf_len0[8] = { 0x00, 1, 2, 3, 4, 5, 6, 7 };
+    const uint8_t sf_len8[8] = { 0x08, 1, 2, 3, 4, 5, 6, 7 };
+    const uint8_t sf_trunc[4] = { 0x05, 1, 2, 3 };
+    const uint8_t pci4[8] = { 0x40, 0, 0, 0, 0, 0, 0, 0 };
+    const uint8_t nine[9] = { 0x01, 1, 0, 0, 0, 0, 0, 0, 0 };
     feed(&fx.b, &fx.cb, ff_short_len, 8, 0);
     feed(&fx.b, &fx.cb, ff_dlc7, 7, 0);
     feed(&fx.b, &fx.cb, sf_len0, 8, 0);
@@ -740,42 +786,45 @@ static void test_rx_malformed_frames(void **state) {
     assert_int_equal(fx.b.rx_results[LS_ISOTP_N_MALFORMED], 9);
     assert_int_equal(fx.b.last_error, LS_ISOTP_N_MALFORMED);
     assert_int_equal(fx.b.rx_state, LS_ISOTP_RX_IDLE);
-    assert_int_equal(fx.cb.n, 0); /* no FC for a malformed FF */
+    assert_int_equal(fx.cb.n, 0);           /* no FC for a malformed FF */
     ls_isotp_on_frame(NULL, sf_len0, 8, 0); /* no crash */
 }
 
 /* A too-short CF is ignored, the reception continues with the same SN. */
-static void test_rx_short_cf_ignored(void **state) {
+static void test_rx_short_cf_ignored(void **state)
+{
     (void)state;
     setup_links(NULL, NULL);
     rx_ff(20, 0);
-    const uint8_t short_cf[5] = {0x21, 1, 2, 3, 4};
+    const uint8_t short_cf[5] = { 0x21, 1, 2, 3, 4 };
     feed(&fx.b, &fx.cb, short_cf, 5, 1);
     assert_int_equal(fx.b.rx_results[LS_ISOTP_N_MALFORMED], 1);
     assert_int_equal(fx.b.rx_state, LS_ISOTP_RX_RECEIVING);
     rx_cf(1, 9, 2);
     /* last CF needs 1 + 7 bytes: unpadded minimal frame is accepted */
-    const uint8_t last[8] = {0x22, 8, 8, 8, 8, 8, 8, 8};
+    const uint8_t last[8] = { 0x22, 8, 8, 8, 8, 8, 8, 8 };
     feed(&fx.b, &fx.cb, last, 8, 3);
     assert_int_equal(ls_isotp_take_rx(&fx.b, fx.out, sizeof(fx.out)), 20);
     assert_int_equal(fx.out[19], 8);
 }
 
-static void test_rx_unpadded_last_cf(void **state) {
+static void test_rx_unpadded_last_cf(void **state)
+{
     (void)state;
     setup_links(NULL, NULL);
     rx_ff(9, 0);
-    const uint8_t last[4] = {0x21, 7, 8, 9};
+    const uint8_t last[4] = { 0x21, 7, 8, 9 };
     feed(&fx.b, &fx.cb, last, 4, 1);
     assert_int_equal(ls_isotp_take_rx(&fx.b, fx.out, sizeof(fx.out)), 9);
-    const uint8_t want[9] = {0, 1, 2, 3, 4, 5, 7, 8, 9};
+    const uint8_t want[9] = { 0, 1, 2, 3, 4, 5, 7, 8, 9 };
     assert_memory_equal(fx.out, want, 9);
 }
 
-static void test_take_rx_too_small_cap(void **state) {
+static void test_take_rx_too_small_cap(void **state)
+{
     (void)state;
     setup_links(NULL, NULL);
-    const uint8_t sf[6] = {0x05, 1, 2, 3, 4, 5};
+    const uint8_t sf[6] = { 0x05, 1, 2, 3, 4, 5 };
     feed(&fx.b, &fx.cb, sf, 6, 0);
     memset(fx.out, 0xEE, 8);
     assert_int_equal(ls_isotp_take_rx(&fx.b, fx.out, 4), 0);
@@ -791,7 +840,8 @@ static void test_take_rx_too_small_cap(void **state) {
 
 /* ---- CAN queue full: the same frame is retried by poll -------------------- */
 
-static void test_queue_full_retry(void **state) {
+static void test_queue_full_retry(void **state)
+{
     (void)state;
     setup_links(NULL, NULL);
     fill_pattern(fx.payload, 20, 3);
@@ -804,7 +854,7 @@ static void test_queue_full_retry(void **state) {
     assert_int_equal(fx.ca.n, 1);
     /* N_Bs counts from when the FF really went out */
     assert_int_equal(ls_isotp_next_deadline_us(&fx.a), 10 + 1000000);
-    const uint8_t cts[3] = {0x30, 0, 0};
+    const uint8_t cts[3] = { 0x30, 0, 0 };
     fx.ca.refuse = 1;
     feed(&fx.a, &fx.ca, cts, 3, 20);
     assert_int_equal(fx.ca.n, 1);
@@ -822,10 +872,11 @@ static void test_queue_full_retry(void **state) {
     assert_int_equal(fx.a.tx_results[LS_ISOTP_N_OK], 1);
 }
 
-static void test_queue_full_sf_retry(void **state) {
+static void test_queue_full_sf_retry(void **state)
+{
     (void)state;
     setup_links(NULL, NULL);
-    const uint8_t p[3] = {9, 8, 7};
+    const uint8_t p[3] = { 9, 8, 7 };
     fx.ca.refuse = 2;
     assert_int_equal(ls_isotp_send(&fx.a, p, 3, 0), LS_ISOTP_OK);
     poll_at(&fx.a, &fx.ca, 1);
@@ -833,13 +884,14 @@ static void test_queue_full_sf_retry(void **state) {
     assert_int_equal(ls_isotp_send(&fx.a, p, 3, 1), LS_ISOTP_EBUSY);
     poll_at(&fx.a, &fx.ca, 2);
     assert_int_equal(fx.ca.n, 1);
-    const uint8_t b[4] = {0x03, 9, 8, 7};
+    const uint8_t b[4] = { 0x03, 9, 8, 7 };
     frame_t want = mk(ID_A, b, 4, true);
     assert_frame_eq(&fx.ca.f[0], &want);
     assert_false(ls_isotp_tx_busy(&fx.a));
 }
 
-static void test_queue_full_fc_retry(void **state) {
+static void test_queue_full_fc_retry(void **state)
+{
     (void)state;
     setup_links(NULL, NULL);
     fx.cb.refuse = 1;
@@ -858,16 +910,18 @@ static void test_queue_full_fc_retry(void **state) {
 /* ---- random loopback ------------------------------------------------------ */
 
 static uint32_t rng_state;
-static uint32_t rng(void) {
+static uint32_t rng(void)
+{
     rng_state ^= rng_state << 13;
     rng_state ^= rng_state >> 17;
     rng_state ^= rng_state << 5;
     return rng_state;
 }
 
-static void test_loopback_random_lengths(void **state) {
+static void test_loopback_random_lengths(void **state)
+{
     (void)state;
-    static const uint8_t stmins[] = {0x00, 0x01, 0xF1, 0xF5};
+    static const uint8_t stmins[] = { 0x00, 0x01, 0xF1, 0xF5 };
     rng_state = 0x12345678u;
     for (int iter = 0; iter < 120; iter++) {
         size_t len = 1u + rng() % LS_ISOTP_MAX_PAYLOAD;
@@ -890,7 +944,8 @@ static void test_loopback_random_lengths(void **state) {
 }
 
 /* Both directions at once on the same pair of links (full duplex). */
-static void test_full_duplex(void **state) {
+static void test_full_duplex(void **state)
+{
     (void)state;
     ls_isotp_config_t c = cfg_of(3, 0xF2, true);
     setup_links(&c, &c);
@@ -928,7 +983,8 @@ static void test_full_duplex(void **state) {
 
 /* ---- API contract ------------------------------------------------------------ */
 
-static void test_api_arguments(void **state) {
+static void test_api_arguments(void **state)
+{
     (void)state;
     memset(&fx, 0, sizeof(fx));
     ls_isotp_config_t c;
@@ -968,15 +1024,16 @@ static void test_api_arguments(void **state) {
     ls_isotp_poll(NULL, 0);
 }
 
-static void test_single_frame_codec(void **state) {
+static void test_single_frame_codec(void **state)
+{
     (void)state;
     uint8_t frame[8];
-    const uint8_t p[7] = {1, 2, 3, 4, 5, 6, 7};
+    const uint8_t p[7] = { 1, 2, 3, 4, 5, 6, 7 };
     assert_int_equal(ls_isotp_encode_single(p, 3, true, 0xAA, frame), 8);
-    const uint8_t want_pad[8] = {0x03, 1, 2, 3, 0xAA, 0xAA, 0xAA, 0xAA};
+    const uint8_t want_pad[8] = { 0x03, 1, 2, 3, 0xAA, 0xAA, 0xAA, 0xAA };
     assert_memory_equal(frame, want_pad, 8);
     assert_int_equal(ls_isotp_encode_single(p, 7, false, 0xAA, frame), 8);
-    const uint8_t want7[8] = {0x07, 1, 2, 3, 4, 5, 6, 7};
+    const uint8_t want7[8] = { 0x07, 1, 2, 3, 4, 5, 6, 7 };
     assert_memory_equal(frame, want7, 8);
     assert_int_equal(ls_isotp_encode_single(p, 1, false, 0, frame), 2);
     assert_int_equal(ls_isotp_encode_single(p, 0, true, 0, frame), 0);
@@ -989,8 +1046,8 @@ static void test_single_frame_codec(void **state) {
     assert_int_equal(ls_isotp_decode_single(want_pad, 4, out, sizeof(out)), 3);
     assert_int_equal(ls_isotp_decode_single(want_pad, 3, out, sizeof(out)), 0);
     assert_int_equal(ls_isotp_decode_single(want7, 8, out, sizeof(out)), 7);
-    const uint8_t ff[8] = {0x10, 0x10, 0, 0, 0, 0, 0, 0};
-    const uint8_t sf0[8] = {0x00, 0, 0, 0, 0, 0, 0, 0};
+    const uint8_t ff[8] = { 0x10, 0x10, 0, 0, 0, 0, 0, 0 };
+    const uint8_t sf0[8] = { 0x00, 0, 0, 0, 0, 0, 0, 0 };
     assert_int_equal(ls_isotp_decode_single(ff, 8, out, sizeof(out)), 0);
     assert_int_equal(ls_isotp_decode_single(sf0, 8, out, sizeof(out)), 0);
     assert_int_equal(ls_isotp_decode_single(want7, 8, out, 6), 0);
@@ -998,7 +1055,8 @@ static void test_single_frame_codec(void **state) {
     assert_int_equal(ls_isotp_decode_single(want7, 0, out, 7), 0);
 }
 
-static void test_result_names(void **state) {
+static void test_result_names(void **state)
+{
     (void)state;
     assert_string_equal(ls_isotp_result_name(LS_ISOTP_N_OK), "N_OK");
     assert_string_equal(ls_isotp_result_name(LS_ISOTP_N_TIMEOUT_BS), "N_TIMEOUT_BS");
@@ -1012,7 +1070,8 @@ static void test_result_names(void **state) {
     assert_string_equal(ls_isotp_result_name(LS_ISOTP_N_RESULT_COUNT), "N_UNKNOWN");
 }
 
-int main(void) {
+int main(void)
+{
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_sf_tx_padded_and_unpadded),
         cmocka_unit_test(test_sf_rx_padded_and_unpadded),

@@ -31,7 +31,7 @@ double kt_angdiff(double a, double b)
 void kt_log_rot(const double R[16], double w[3])
 {
     /* R given as the 3x3 block of a column-major 4x4: R[c * 4 + r]. */
-#define E(r, c) R[(c) * 4 + (r)]
+#define E(r, c) R[(c)*4 + (r)]
     const double v[3] = { 0.5 * (E(2, 1) - E(1, 2)), 0.5 * (E(0, 2) - E(2, 0)), 0.5 * (E(1, 0) - E(0, 1)) };
     const double s = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
     const double c = 0.5 * (E(0, 0) + E(1, 1) + E(2, 2) - 1.0);

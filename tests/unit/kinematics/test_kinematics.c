@@ -20,19 +20,18 @@
 #define M (&ls_robot_model_default)
 
 /* cmocka's assert_float_equal works in float; this one in double, NaN fails. */
-#define assert_near(a, b, tol)                                                                  \
-    do {                                                                                        \
-        const double a_ = (a), b_ = (b);                                                        \
-        if (!(fabs(a_ - b_) <= (tol))) {                                                        \
-            fail_msg("%s = %.17g, expected %.17g within %g", #a, a_, b_, (double)(tol));        \
-        }                                                                                       \
+#define assert_near(a, b, tol)                                                                                         \
+    do {                                                                                                               \
+        const double a_ = (a), b_ = (b);                                                                               \
+        if (!(fabs(a_ - b_) <= (tol))) {                                                                               \
+            fail_msg("%s = %.17g, expected %.17g within %g", #a, a_, b_, (double)(tol));                               \
+        }                                                                                                              \
     } while (0)
 
 /* ---- helpers ---------------------------------------------------------- */
 
 /* Expected flange pose from axes and origin (column-major). */
-static void pose_from_axes(const double x[3], const double y[3], const double z[3], const double p[3],
-                           double T[16])
+static void pose_from_axes(const double x[3], const double y[3], const double z[3], const double p[3], double T[16])
 {
     for (int i = 0; i < 3; ++i) {
         T[0 + i] = x[i];
@@ -53,8 +52,7 @@ static void assert_pose_near(const double A[16], const double B[16], double tol)
     }
 }
 
-static void fk_expect(const double q[6], const double x[3], const double y[3], const double z[3],
-                      const double p[3])
+static void fk_expect(const double q[6], const double x[3], const double y[3], const double z[3], const double p[3])
 {
     double T[16], E[16];
     assert_int_equal(ls_kin_fk(M, q, T), LS_KIN_OK);
@@ -104,16 +102,15 @@ static void test_fk_zero(void **state)
 {
     (void)state;
     const double q[6] = { 0, 0, 0, 0, 0, 0 };
-    fk_expect(q, (double[]){ 0, 0, 1 }, (double[]){ 0, -1, 0 }, (double[]){ 1, 0, 0 },
-              (double[]){ 0.51, 0, 0.84 });
+    fk_expect(q, (double[]){ 0, 0, 1 }, (double[]){ 0, -1, 0 }, (double[]){ 1, 0, 0 }, (double[]){ 0.51, 0, 0.84 });
 }
 
 static void test_fk_hand_configurations(void **state)
 {
     (void)state;
     /* q1 = 90 deg: the whole arm turned about z. */
-    fk_expect((double[]){ PI / 2, 0, 0, 0, 0, 0 }, (double[]){ 0, 0, 1 }, (double[]){ 1, 0, 0 },
-              (double[]){ 0, 1, 0 }, (double[]){ 0, 0.51, 0.84 });
+    fk_expect((double[]){ PI / 2, 0, 0, 0, 0, 0 }, (double[]){ 0, 0, 1 }, (double[]){ 1, 0, 0 }, (double[]){ 0, 1, 0 },
+              (double[]){ 0, 0.51, 0.84 });
     /* q2 = 90 deg: upper arm horizontal, forearm pointing down. */
     fk_expect((double[]){ 0, PI / 2, 0, 0, 0, 0 }, (double[]){ 1, 0, 0 }, (double[]){ 0, -1, 0 },
               (double[]){ 0, 0, -1 }, (double[]){ 0.49, 0, -0.06 });
@@ -188,8 +185,8 @@ static int check_ik_round_trips(const ls_robot_model_t *m, uint64_t seed, int n_
             found |= same_mod_2pi(qs[b], q, 1e-8);
         }
         if (!found) {
-            fail_msg("pose %d: the generating q (%g %g %g %g %g %g) is not among %d branches", tested, q[0],
-                     q[1], q[2], q[3], q[4], q[5], n);
+            fail_msg("pose %d: the generating q (%g %g %g %g %g %g) is not among %d branches", tested, q[0], q[1], q[2],
+                     q[3], q[4], q[5], n);
         }
     }
     if (ik_s != NULL) {
@@ -309,8 +306,7 @@ static void test_ik_unreachable(void **state)
     const double q0[6] = { 0 };
     int n = -1;
     /* 2 m away: the arm spans well under 1 m. */
-    pose_from_axes((double[]){ 0, 0, 1 }, (double[]){ 0, -1, 0 }, (double[]){ 1, 0, 0 },
-                   (double[]){ 2.0, 0, 0.84 }, T);
+    pose_from_axes((double[]){ 0, 0, 1 }, (double[]){ 0, -1, 0 }, (double[]){ 1, 0, 0 }, (double[]){ 2.0, 0, 0.84 }, T);
     assert_int_equal(ls_kin_ik_all(M, T, qs, &n), LS_KIN_EUNREACHABLE);
     assert_int_equal(n, 0);
     assert_int_equal(ls_kin_ik_nearest(M, T, q0, out), LS_KIN_EUNREACHABLE);
@@ -322,8 +318,7 @@ static void test_ik_unreachable(void **state)
     T[12] -= 2e-6;
     assert_int_equal(ls_kin_ik_all(M, T, qs, &n), LS_KIN_OK);
     /* On the joint 1 axis but far above: unreachable wins over singular. */
-    pose_from_axes((double[]){ 1, 0, 0 }, (double[]){ 0, 1, 0 }, (double[]){ 0, 0, 1 },
-                   (double[]){ 0, 0, 3.0 }, T);
+    pose_from_axes((double[]){ 1, 0, 0 }, (double[]){ 0, 1, 0 }, (double[]){ 0, 0, 1 }, (double[]){ 0, 0, 3.0 }, T);
     assert_int_equal(ls_kin_ik_all(M, T, qs, &n), LS_KIN_EUNREACHABLE);
 }
 
@@ -412,8 +407,7 @@ static void test_ik_shoulder_singularity(void **state)
     const double q0[6] = { 0 };
     int n = -1;
     /* Flange pointing up, 0.08 above a wrist centre at (0, 0, 0.92). */
-    pose_from_axes((double[]){ 1, 0, 0 }, (double[]){ 0, 1, 0 }, (double[]){ 0, 0, 1 },
-                   (double[]){ 0, 0, 1.0 }, T);
+    pose_from_axes((double[]){ 1, 0, 0 }, (double[]){ 0, 1, 0 }, (double[]){ 0, 0, 1 }, (double[]){ 0, 0, 1.0 }, T);
     assert_int_equal(ls_kin_ik_all(M, T, qs, &n), LS_KIN_ESINGULAR);
     assert_int_equal(n, 0);
     assert_int_equal(ls_kin_ik_nearest(M, T, q0, out), LS_KIN_ESINGULAR);
@@ -571,13 +565,11 @@ static void test_rpy_axis_order(void **state)
     double T[16], E[16];
     /* R = Rz(90) Ry(0) Rx(90): x -> y, y -> z, z -> x. */
     ls_pose_from_xyzrpy((double[]){ 1, 2, 3, PI / 2, 0, PI / 2 }, T);
-    pose_from_axes((double[]){ 0, 1, 0 }, (double[]){ 0, 0, 1 }, (double[]){ 1, 0, 0 }, (double[]){ 1, 2, 3 },
-                   E);
+    pose_from_axes((double[]){ 0, 1, 0 }, (double[]){ 0, 0, 1 }, (double[]){ 1, 0, 0 }, (double[]){ 1, 2, 3 }, E);
     assert_pose_near(T, E, 1e-15);
     /* Pitch alone: Ry(90) sends x to -z. */
     ls_pose_from_xyzrpy((double[]){ 0, 0, 0, 0, PI / 2, 0 }, T);
-    pose_from_axes((double[]){ 0, 0, -1 }, (double[]){ 0, 1, 0 }, (double[]){ 1, 0, 0 }, (double[]){ 0, 0, 0 },
-                   E);
+    pose_from_axes((double[]){ 0, 0, -1 }, (double[]){ 0, 1, 0 }, (double[]){ 1, 0, 0 }, (double[]){ 0, 0, 0 }, E);
     assert_pose_near(T, E, 1e-15);
 }
 
@@ -586,9 +578,12 @@ static void test_rpy_round_trip(void **state)
     (void)state;
     kt_rng_t rng = { 99 };
     for (int i = 0; i < 1000; ++i) {
-        const double in[6] = { kt_uniform(&rng, -1, 1),           kt_uniform(&rng, -1, 1),
-                               kt_uniform(&rng, -1, 1),           kt_uniform(&rng, -PI, PI),
-                               kt_uniform(&rng, -PI / 2 + 1e-6, PI / 2 - 1e-6), kt_uniform(&rng, -PI, PI) };
+        const double in[6] = { kt_uniform(&rng, -1, 1),
+                               kt_uniform(&rng, -1, 1),
+                               kt_uniform(&rng, -1, 1),
+                               kt_uniform(&rng, -PI, PI),
+                               kt_uniform(&rng, -PI / 2 + 1e-6, PI / 2 - 1e-6),
+                               kt_uniform(&rng, -PI, PI) };
         double T[16], out[6], T2[16];
         ls_pose_from_xyzrpy(in, T);
         ls_pose_to_xyzrpy(T, out);
@@ -643,8 +638,7 @@ static void test_pose_mul_inv(void **state)
         ls_pose_from_xyzrpy(in, T);
         ls_pose_inv(T, Ti);
         ls_pose_mul(Ti, T, P);
-        pose_from_axes((double[]){ 1, 0, 0 }, (double[]){ 0, 1, 0 }, (double[]){ 0, 0, 1 }, (double[]){ 0, 0, 0 },
-                       I);
+        pose_from_axes((double[]){ 1, 0, 0 }, (double[]){ 0, 1, 0 }, (double[]){ 0, 0, 1 }, (double[]){ 0, 0, 0 }, I);
         assert_pose_near(P, I, 1e-14);
         ls_pose_mul(T, Ti, P);
         assert_pose_near(P, I, 1e-14);
@@ -655,8 +649,7 @@ static void test_pose_mul_inv(void **state)
     ls_pose_from_xyzrpy((double[]){ 1, 0, 0, 0, 0, PI / 2 }, A);
     ls_pose_from_xyzrpy((double[]){ 1, 0, 0, 0, 0, 0 }, B);
     ls_pose_mul(A, B, A);
-    pose_from_axes((double[]){ 0, 1, 0 }, (double[]){ -1, 0, 0 }, (double[]){ 0, 0, 1 }, (double[]){ 1, 1, 0 },
-                   E);
+    pose_from_axes((double[]){ 0, 1, 0 }, (double[]){ -1, 0, 0 }, (double[]){ 0, 0, 1 }, (double[]){ 1, 1, 0 }, E);
     assert_pose_near(A, E, 1e-15);
 }
 

@@ -9,8 +9,9 @@
 
 static void assert_missing_chip(const char *chip)
 {
-    hal_linux_gpiod_config_t cfg = {.chip = chip, .n_inputs = 1, .input_offsets = {0}, .n_outputs = 1,
-                                    .output_offsets = {1}};
+    hal_linux_gpiod_config_t cfg = {
+        .chip = chip, .n_inputs = 1, .input_offsets = { 0 }, .n_outputs = 1, .output_offsets = { 1 }
+    };
     hal_dio_t dio;
     memset(&dio, 0x5A, sizeof dio);
     char msg[512] = "";
@@ -46,7 +47,7 @@ static void test_missing_chip_by_path(void **state)
 static void test_path_that_is_not_a_gpio_chip(void **state)
 {
     (void)state;
-    hal_linux_gpiod_config_t cfg = {.chip = "/dev/null", .n_inputs = 0, .n_outputs = 1, .output_offsets = {0}};
+    hal_linux_gpiod_config_t cfg = { .chip = "/dev/null", .n_inputs = 0, .n_outputs = 1, .output_offsets = { 0 } };
     hal_dio_t dio;
     char msg[512] = "";
     assert_int_equal(hal_linux_gpiod_open(&dio, &cfg, msg, sizeof msg), HAL_ENODEV);
@@ -60,16 +61,17 @@ static void test_bad_configurations_are_refused_first(void **state)
     (void)state;
     hal_dio_t dio;
     char msg[256];
-    hal_linux_gpiod_config_t cfg = {.chip = "gpiochip99", .n_inputs = 17};
+    hal_linux_gpiod_config_t cfg = { .chip = "gpiochip99", .n_inputs = 17 };
     assert_int_equal(hal_linux_gpiod_open(&dio, &cfg, msg, sizeof msg), HAL_EINVAL);
     assert_non_null(strstr(msg, "17 inputs"));
     assert_non_null(strstr(msg, "at most 16"));
 
-    cfg = (hal_linux_gpiod_config_t){.chip = "gpiochip99", .n_outputs = 17};
+    cfg = (hal_linux_gpiod_config_t){ .chip = "gpiochip99", .n_outputs = 17 };
     assert_int_equal(hal_linux_gpiod_open(&dio, &cfg, msg, sizeof msg), HAL_EINVAL);
 
-    cfg = (hal_linux_gpiod_config_t){.chip = "gpiochip99", .n_inputs = 2, .input_offsets = {3, 4}, .n_outputs = 2,
-                                     .output_offsets = {5, 4}};
+    cfg = (hal_linux_gpiod_config_t){
+        .chip = "gpiochip99", .n_inputs = 2, .input_offsets = { 3, 4 }, .n_outputs = 2, .output_offsets = { 5, 4 }
+    };
     assert_int_equal(hal_linux_gpiod_open(&dio, &cfg, msg, sizeof msg), HAL_EINVAL);
     assert_string_equal(msg, "GPIO line 4 is configured twice");
     assert_null(dio.ops);

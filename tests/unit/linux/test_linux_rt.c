@@ -49,16 +49,16 @@ typedef struct {
     int policy[MAX_REC];
     int cpu[MAX_REC];
     size_t n;
-    uint64_t slow_cycle;   /* this cycle sleeps slow_us once; UINT64_MAX: none */
+    uint64_t slow_cycle; /* this cycle sleeps slow_us once; UINT64_MAX: none */
     uint32_t slow_us;
-    uint32_t busy_us;      /* every cycle spins this long */
+    uint32_t busy_us; /* every cycle spins this long */
 } rec_t;
 
 static rec_t g_rec;
 
 static void sleep_us(uint64_t us)
 {
-    struct timespec ts = {.tv_sec = (time_t)(us / 1000000u), .tv_nsec = (long)(us % 1000000u) * 1000};
+    struct timespec ts = { .tv_sec = (time_t)(us / 1000000u), .tv_nsec = (long)(us % 1000000u) * 1000 };
     while (nanosleep(&ts, &ts) != 0 && errno == EINTR) {
     }
 }
@@ -104,7 +104,7 @@ static void wait_cycles(const hal_linux_rt_t *rt, uint64_t cycles)
 /* Can this process give a thread SCHED_FIFO? Decides what stats.realtime must say. */
 static bool fifo_permitted(void)
 {
-    struct sched_param sp = {.sched_priority = 1};
+    struct sched_param sp = { .sched_priority = 1 };
     if (pthread_setschedparam(pthread_self(), SCHED_FIFO, &sp) != 0) {
         return false;
     }
@@ -126,7 +126,7 @@ static void test_runs_paced_cycles(void **state)
     static hal_linux_rt_t rt;
     rec_reset();
     bool fifo = fifo_permitted();
-    hal_rt_config_t cfg = {.rate_hz = 1000, .priority = 40, .cpu = -1, .lock_memory = false, .lockstep = false};
+    hal_rt_config_t cfg = { .rate_hz = 1000, .priority = 40, .cpu = -1, .lock_memory = false, .lockstep = false };
     char msg[256];
     assert_int_equal(hal_linux_rt_start(&rt, &cfg, record, &g_rec, msg, sizeof msg), HAL_OK);
     assert_non_null(strstr(msg, "1000 Hz"));
@@ -175,7 +175,7 @@ static void test_lockstep_time_is_exact(void **state)
     (void)state;
     static hal_linux_rt_t rt;
     rec_reset();
-    hal_rt_config_t cfg = {.rate_hz = 1000, .priority = 0, .cpu = -1, .lock_memory = false, .lockstep = true};
+    hal_rt_config_t cfg = { .rate_hz = 1000, .priority = 0, .cpu = -1, .lock_memory = false, .lockstep = true };
     char msg[256];
     uint64_t before = hal_linux_monotonic_us();
     assert_int_equal(hal_linux_rt_start(&rt, &cfg, record, &g_rec, msg, sizeof msg), HAL_OK);
@@ -201,7 +201,7 @@ static void test_one_slow_cycle_is_one_overrun_without_burst(void **state)
     rec_reset();
     g_rec.slow_cycle = 50;
     g_rec.slow_us = 3000;
-    hal_rt_config_t cfg = {.rate_hz = 1000, .priority = 40, .cpu = -1, .lock_memory = false, .lockstep = false};
+    hal_rt_config_t cfg = { .rate_hz = 1000, .priority = 40, .cpu = -1, .lock_memory = false, .lockstep = false };
     char msg[256];
     assert_int_equal(hal_linux_rt_start(&rt, &cfg, record, &g_rec, msg, sizeof msg), HAL_OK);
     wait_cycles(&rt, 150);
@@ -241,7 +241,7 @@ static void test_stats_report_cycle_time_and_memory_lock(void **state)
     while (!CPU_ISSET((size_t)cpu, &allowed)) {
         cpu++;
     }
-    hal_rt_config_t cfg = {.rate_hz = 500, .priority = 30, .cpu = cpu, .lock_memory = true, .lockstep = false};
+    hal_rt_config_t cfg = { .rate_hz = 500, .priority = 30, .cpu = cpu, .lock_memory = true, .lockstep = false };
     char msg[256];
     assert_int_equal(hal_linux_rt_start(&rt, &cfg, record, &g_rec, msg, sizeof msg), HAL_OK);
     wait_cycles(&rt, 50);
@@ -262,7 +262,7 @@ static void test_bad_configurations(void **state)
     (void)state;
     static hal_linux_rt_t rt;
     char msg[256];
-    hal_rt_config_t cfg = {.rate_hz = 0, .priority = 0, .cpu = -1};
+    hal_rt_config_t cfg = { .rate_hz = 0, .priority = 0, .cpu = -1 };
     assert_int_equal(hal_linux_rt_start(&rt, &cfg, record, &g_rec, msg, sizeof msg), HAL_EINVAL);
     assert_string_equal(msg, "control rate 0 Hz is outside 1..100000 Hz");
     cfg.rate_hz = 100001;
@@ -301,15 +301,15 @@ static void test_bad_configurations(void **state)
 
 /* ---- no privilege: child process ------------------------------------------- */
 
-#define CAP_BIT(c) (1u << ((c) & 31))
+#define CAP_BIT(c) (1u << ((c)&31))
 
 static int drop_rt_privileges(void)
 {
-    struct rlimit zero = {0, 0};
+    struct rlimit zero = { 0, 0 };
     if (setrlimit(RLIMIT_RTPRIO, &zero) != 0 || setrlimit(RLIMIT_MEMLOCK, &zero) != 0) {
         return -1;
     }
-    struct __user_cap_header_struct hdr = {.version = _LINUX_CAPABILITY_VERSION_3, .pid = 0};
+    struct __user_cap_header_struct hdr = { .version = _LINUX_CAPABILITY_VERSION_3, .pid = 0 };
     struct __user_cap_data_struct data[_LINUX_CAPABILITY_U32S_3];
     if (syscall(SYS_capget, &hdr, data) != 0) {
         return -1;
@@ -346,12 +346,12 @@ int rt_child_without_privilege(void)
     if (drop_rt_privileges() != 0) {
         return 10;
     }
-    struct sched_param sp = {.sched_priority = 1};
+    struct sched_param sp = { .sched_priority = 1 };
     if (pthread_setschedparam(pthread_self(), SCHED_FIFO, &sp) != EPERM) {
         return 11; /* the privilege drop did not take */
     }
     static hal_linux_rt_t rt;
-    hal_rt_config_t cfg = {.rate_hz = 1000, .priority = 50, .cpu = -1, .lock_memory = true, .lockstep = false};
+    hal_rt_config_t cfg = { .rate_hz = 1000, .priority = 50, .cpu = -1, .lock_memory = true, .lockstep = false };
     for (int round = 0; round < 2; round++) {
         rec_reset();
         if (hal_linux_rt_start(&rt, &cfg, record, &g_rec, NULL, 0) != HAL_OK) {
@@ -390,7 +390,7 @@ static void test_without_privilege_warns_once_and_runs(void **state)
         if (dup2(fd, STDERR_FILENO) < 0) {
             _exit(8);
         }
-        char *argv[] = {"test_linux_hal", RT_CHILD_ARG, NULL};
+        char *argv[] = { "test_linux_hal", RT_CHILD_ARG, NULL };
         execv("/proc/self/exe", argv);
         _exit(9);
     }

@@ -99,30 +99,30 @@ static void test_encode_frames(void **state)
 {
     (void)state;
     struct can_frame cf;
-    hal_can_frame_t f = {.id = 0x123, .flags = 0, .len = 3, .data = {1, 2, 3, 4, 5, 6, 7, 8}};
+    hal_can_frame_t f = { .id = 0x123, .flags = 0, .len = 3, .data = { 1, 2, 3, 4, 5, 6, 7, 8 } };
     assert_int_equal(hal_linux_socketcan_encode(&f, &cf), HAL_OK);
     assert_int_equal(cf.can_id, 0x123);
     assert_int_equal(cf.can_dlc, 3);
-    assert_memory_equal(cf.data, ((uint8_t[]){1, 2, 3, 0, 0, 0, 0, 0}), 8);
+    assert_memory_equal(cf.data, ((uint8_t[]){ 1, 2, 3, 0, 0, 0, 0, 0 }), 8);
 
-    f = (hal_can_frame_t){.id = 0x1ABCDEF0, .flags = HAL_CAN_F_EXT, .len = 8, .data = {8, 7, 6, 5, 4, 3, 2, 1}};
+    f = (hal_can_frame_t){ .id = 0x1ABCDEF0, .flags = HAL_CAN_F_EXT, .len = 8, .data = { 8, 7, 6, 5, 4, 3, 2, 1 } };
     assert_int_equal(hal_linux_socketcan_encode(&f, &cf), HAL_OK);
     assert_int_equal(cf.can_id, 0x1ABCDEF0u | CAN_EFF_FLAG);
     assert_memory_equal(cf.data, f.data, 8);
 
-    f = (hal_can_frame_t){.id = 0x7FF, .flags = HAL_CAN_F_RTR, .len = 4, .data = {9, 9, 9, 9}};
+    f = (hal_can_frame_t){ .id = 0x7FF, .flags = HAL_CAN_F_RTR, .len = 4, .data = { 9, 9, 9, 9 } };
     assert_int_equal(hal_linux_socketcan_encode(&f, &cf), HAL_OK);
     assert_int_equal(cf.can_id, 0x7FFu | CAN_RTR_FLAG);
     assert_int_equal(cf.can_dlc, 4);
-    assert_memory_equal(cf.data, ((uint8_t[8]){0}), 8);
+    assert_memory_equal(cf.data, ((uint8_t[8]){ 0 }), 8);
 
-    f = (hal_can_frame_t){.id = 0x800, .flags = 0, .len = 0};
+    f = (hal_can_frame_t){ .id = 0x800, .flags = 0, .len = 0 };
     assert_int_equal(hal_linux_socketcan_encode(&f, &cf), HAL_EINVAL);
-    f = (hal_can_frame_t){.id = 0x20000000, .flags = HAL_CAN_F_EXT, .len = 0};
+    f = (hal_can_frame_t){ .id = 0x20000000, .flags = HAL_CAN_F_EXT, .len = 0 };
     assert_int_equal(hal_linux_socketcan_encode(&f, &cf), HAL_EINVAL);
-    f = (hal_can_frame_t){.id = 1, .flags = 0, .len = 9};
+    f = (hal_can_frame_t){ .id = 1, .flags = 0, .len = 9 };
     assert_int_equal(hal_linux_socketcan_encode(&f, &cf), HAL_EINVAL);
-    f = (hal_can_frame_t){.id = 1, .flags = 0x04, .len = 0};
+    f = (hal_can_frame_t){ .id = 1, .flags = 0x04, .len = 0 };
     assert_int_equal(hal_linux_socketcan_encode(&f, &cf), HAL_EINVAL);
 }
 
@@ -139,7 +139,7 @@ static struct can_frame err_frame(canid_t cls, uint8_t d1)
 static void test_decode_frames_and_error_states(void **state)
 {
     (void)state;
-    hal_can_status_t st = {0};
+    hal_can_status_t st = { 0 };
     hal_can_frame_t f;
     struct can_frame cf;
     memset(&cf, 0, sizeof cf);
@@ -262,13 +262,13 @@ static void test_link_recv_send_and_error_frames(void **state)
     assert_int_equal(hal_can_status(&p.link, &st), HAL_OK);
     assert_int_equal(st.rx_dropped, 1);
 
-    hal_can_frame_t out = {.id = 0x18DA00F1, .flags = HAL_CAN_F_EXT, .len = 3, .data = {0x02, 0x10, 0x01}};
+    hal_can_frame_t out = { .id = 0x18DA00F1, .flags = HAL_CAN_F_EXT, .len = 3, .data = { 0x02, 0x10, 0x01 } };
     assert_int_equal(hal_can_send(&p.link, &out), HAL_OK);
     struct can_frame got;
     assert_int_equal(read(p.peer, &got, sizeof got), (ssize_t)sizeof got);
     assert_int_equal(got.can_id, 0x18DA00F1u | CAN_EFF_FLAG);
     assert_int_equal(got.can_dlc, 3);
-    assert_memory_equal(got.data, ((uint8_t[]){0x02, 0x10, 0x01}), 3);
+    assert_memory_equal(got.data, ((uint8_t[]){ 0x02, 0x10, 0x01 }), 3);
     out.len = 9;
     assert_int_equal(hal_can_send(&p.link, &out), HAL_EINVAL);
     assert_int_equal(hal_can_status(&p.link, &st), HAL_OK);
@@ -286,7 +286,7 @@ static void test_link_send_full_queue_is_eagain(void **state)
     (void)state;
     pair_t p;
     open_pair(&p, SOCK_DGRAM);
-    hal_can_frame_t f = {.id = 0x100, .flags = 0, .len = 8, .data = {0}};
+    hal_can_frame_t f = { .id = 0x100, .flags = 0, .len = 8, .data = { 0 } };
     int sent = 0;
     int rc = HAL_OK;
     while (sent < 100000 && (rc = hal_can_send(&p.link, &f)) == HAL_OK) {
@@ -320,7 +320,7 @@ static void test_link_peer_gone_is_eio(void **state)
     pair_t p;
     open_pair(&p, SOCK_SEQPACKET);
     close(p.peer);
-    hal_can_frame_t f = {.id = 1, .flags = 0, .len = 0};
+    hal_can_frame_t f = { .id = 1, .flags = 0, .len = 0 };
     assert_int_equal(hal_can_recv(&p.link, &f), HAL_EIO);
     assert_int_equal(hal_can_send(&p.link, &f), HAL_EIO);
     hal_can_status_t st;
@@ -373,7 +373,7 @@ typedef struct {
 static size_t put_attr(nlbuf_t *m, unsigned short type, const void *data, size_t len)
 {
     size_t at = m->len;
-    struct rtattr a = {.rta_len = (unsigned short)RTA_LENGTH(len), .rta_type = type};
+    struct rtattr a = { .rta_len = (unsigned short)RTA_LENGTH(len), .rta_type = type };
     memcpy(m->b + at, &a, sizeof a);
     if (len > 0) {
         memcpy(m->b + at + RTA_LENGTH(0u), data, len);
@@ -397,7 +397,7 @@ static void build_newlink(nlbuf_t *m, const char *kind, uint32_t bitrate, int st
     put_attr(m, IFLA_INFO_KIND, kind, strlen(kind) + 1);
     size_t data = put_attr(m, IFLA_INFO_DATA, NULL, 0);
     if (bitrate > 0) {
-        struct can_bittiming bt = {.bitrate = bitrate, .sample_point = 875};
+        struct can_bittiming bt = { .bitrate = bitrate, .sample_point = 875 };
         put_attr(m, IFLA_CAN_BITTIMING, &bt, sizeof bt);
     }
     if (state >= 0) {
@@ -406,7 +406,7 @@ static void build_newlink(nlbuf_t *m, const char *kind, uint32_t bitrate, int st
     }
     end_nest(m, data);
     end_nest(m, li);
-    struct nlmsghdr nh = {.nlmsg_len = (uint32_t)m->len, .nlmsg_type = RTM_NEWLINK};
+    struct nlmsghdr nh = { .nlmsg_len = (uint32_t)m->len, .nlmsg_type = RTM_NEWLINK };
     memcpy(m->b, &nh, sizeof nh);
 }
 
@@ -497,7 +497,7 @@ static void test_parse_link_on_a_real_answer(void **state)
     close(nl);
     assert_true(n > (ssize_t)sizeof(struct nlmsghdr));
     assert_int_equal(resp.align.nlmsg_type, RTM_NEWLINK);
-    hal_linux_socketcan_link_info_t info = {0};
+    hal_linux_socketcan_link_info_t info = { 0 };
     assert_int_equal(hal_linux_socketcan_parse_link(resp.b, (size_t)n, &info), 0);
     assert_int_equal(info.bitrate, 0);
 }

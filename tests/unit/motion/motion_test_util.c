@@ -41,7 +41,11 @@ void mt_tool(double T[16])
 
 void mt_limits(ls_motion_cart_limits_t *lim)
 {
-    *lim = (ls_motion_cart_limits_t){ .v_lin_m_s = 0.25, .a_lin_m_s2 = 1.0, .j_lin_m_s3 = 10.0,
-                                      .v_ang_rad_s = 1.0, .a_ang_rad_s2 = 4.0, .j_ang_rad_s3 = 40.0,
+    *lim = (ls_motion_cart_limits_t){ .v_lin_m_s = 0.25,
+                                      .a_lin_m_s2 = 1.0,
+                                      .j_lin_m_s3 = 10.0,
+                                      .v_ang_rad_s = 1.0,
+                                      .a_ang_rad_s2 = 4.0,
+                                      .j_ang_rad_s3 = 40.0,
                                       .joint_speed_frac = 1.0 };
 }

@@ -130,10 +130,8 @@ static void test_joint_refusal_names_joint_and_limit(void **state)
     char why[128];
     assert_int_equal(ls_motion_plan_joint(&g_plan, M, mt_q_home, q1, 0.5, 0.5, why, sizeof why), LS_MOTION_ERANGE);
     assert_string_equal(why, "joint 3: 2.9 rad beyond its limit 2.618 rad");
-    assert_int_equal(ls_motion_plan_joint(&g_plan, M, mt_q_home, mt_q_home, 0.0, 0.5, why, sizeof why),
-                     LS_MOTION_EARG);
-    assert_int_equal(ls_motion_plan_joint(&g_plan, M, mt_q_home, mt_q_home, 0.5, 1.5, why, sizeof why),
-                     LS_MOTION_EARG);
+    assert_int_equal(ls_motion_plan_joint(&g_plan, M, mt_q_home, mt_q_home, 0.0, 0.5, why, sizeof why), LS_MOTION_EARG);
+    assert_int_equal(ls_motion_plan_joint(&g_plan, M, mt_q_home, mt_q_home, 0.5, 1.5, why, sizeof why), LS_MOTION_EARG);
 }
 
 static void test_start_refuses_wrong_start_and_double_start(void **state)
@@ -406,8 +404,7 @@ static void test_arc_collinear_refused(void **state)
     ls_motion_cart_limits_t lim;
     mt_limits(&lim);
     char why[160];
-    assert_int_equal(ls_motion_plan_arc(&g_plan, M, mt_q_home, tool, Pv, P1, &lim, why, sizeof why),
-                     LS_MOTION_EGEOM);
+    assert_int_equal(ls_motion_plan_arc(&g_plan, M, mt_q_home, tool, Pv, P1, &lim, why, sizeof why), LS_MOTION_EGEOM);
     assert_non_null(strstr(why, "collinear"));
 }
 
@@ -422,16 +419,14 @@ static void test_cartesian_refusals_name_axis_and_reason(void **state)
     /* Below the floor of the workspace box (z >= 0.02 m). */
     tip_of(mt_q_home, P1);
     P1[14] = -0.05;
-    assert_int_equal(ls_motion_plan_line(&g_plan, M, mt_q_home, tool, P1, &lim, why, sizeof why),
-                     LS_MOTION_ERANGE);
+    assert_int_equal(ls_motion_plan_line(&g_plan, M, mt_q_home, tool, P1, &lim, why, sizeof why), LS_MOTION_ERANGE);
     assert_non_null(strstr(why, "axis z: "));
     assert_non_null(strstr(why, "beyond the workspace limit 0.02 m"));
     /* Inside the box but out of reach. */
     tip_of(mt_q_home, P1);
     P1[12] = 0.9;
     P1[13] = 0.9;
-    assert_int_equal(ls_motion_plan_line(&g_plan, M, mt_q_home, tool, P1, &lim, why, sizeof why),
-                     LS_MOTION_ERANGE);
+    assert_int_equal(ls_motion_plan_line(&g_plan, M, mt_q_home, tool, P1, &lim, why, sizeof why), LS_MOTION_ERANGE);
     assert_non_null(strstr(why, "unreachable"));
     /* Through the joint 1 axis: joint 1 would have to turn half a circle at once. */
     double q0[LS_N_JOINTS] = { 0.0, -0.2, 1.4, 0.0, 0.6, 0.0 };

@@ -108,21 +108,21 @@ static void test_step_never_allocates(void **state)
     P1[13] += 0.2;
     ls_motion_cart_limits_t lim;
     mt_limits(&lim);
-    assert_int_equal(ls_motion_plan_line(&g_plan, &ls_robot_model_default, mt_q_home, tool, P1, &lim, why,
-                                         sizeof why), 0);
+    assert_int_equal(ls_motion_plan_line(&g_plan, &ls_robot_model_default, mt_q_home, tool, P1, &lim, why, sizeof why),
+                     0);
     assert_int_equal(run_counted(&g_plan, 300), 1);
-    assert_int_equal(ls_motion_plan_arc(&g_plan, &ls_robot_model_default, mt_q_home, tool, Pv, P1, &lim, why,
-                                        sizeof why), 0);
+    assert_int_equal(
+        ls_motion_plan_arc(&g_plan, &ls_robot_model_default, mt_q_home, tool, Pv, P1, &lim, why, sizeof why), 0);
     assert_int_equal(run_counted(&g_plan, 300), 1);
 
     /* A blended path of two points, two cycles, with an auxiliary command. */
     memset(&g_prog, 0, sizeof g_prog);
-    assert_int_equal(ls_motion_seg_joint(&g_prog.seg[0], &ls_robot_model_default, mt_q_home, q1, 1, 1, why,
-                                         sizeof why), 0);
-    assert_int_equal(ls_motion_seg_joint(&g_prog.seg[1], &ls_robot_model_default, q1, mt_q_home, 1, 1, why,
-                                         sizeof why), 0);
-    assert_int_equal(ls_motion_seg_joint(&g_prog.seg[2], &ls_robot_model_default, mt_q_home, q1, 1, 1, why,
-                                         sizeof why), 0);
+    assert_int_equal(ls_motion_seg_joint(&g_prog.seg[0], &ls_robot_model_default, mt_q_home, q1, 1, 1, why, sizeof why),
+                     0);
+    assert_int_equal(ls_motion_seg_joint(&g_prog.seg[1], &ls_robot_model_default, q1, mt_q_home, 1, 1, why, sizeof why),
+                     0);
+    assert_int_equal(ls_motion_seg_joint(&g_prog.seg[2], &ls_robot_model_default, mt_q_home, q1, 1, 1, why, sizeof why),
+                     0);
     g_prog.n = 2;
     g_prog.seg[1].n_aux = 1;
     memcpy(g_prog.seg[1].aux[0], "event x", 8);

@@ -52,16 +52,15 @@ static double along(const double P0[16], const double P[16], const double u[3])
 
 typedef struct {
     double P0[16];
-    double u[3];        /* base-frame direction the wall faces (travel direction) */
-    double wall_m;      /* the wall is this far from P0 along u */
-    double spike_N;     /* added to the force on one cycle (0: none) */
+    double u[3];    /* base-frame direction the wall faces (travel direction) */
+    double wall_m;  /* the wall is this far from P0 along u */
+    double spike_N; /* added to the force on one cycle (0: none) */
     long spike_at;
 } world_t;
 
 /* Force/torque reading in the tool frame (Fz along the tool z = u here):
  * a spring that pushes back when the tip is beyond the wall. */
-static void read_force(const world_t *w, const double q[LS_N_JOINTS], const double tool[16], long cycle,
-                       double out[6])
+static void read_force(const world_t *w, const double q[LS_N_JOINTS], const double tool[16], long cycle, double out[6])
 {
     double P[16];
     tip(q, tool, P);
@@ -338,8 +337,8 @@ static void comply_plan(ls_react_plan_t *p, double target_N)
     p->ref_seq = 7;
     snprintf(p->sensor, sizeof p->sensor, "force_sensor");
     identity(p->tool);
-    p->dir_tool[0] = 1.0;  /* travel along tool x */
-    p->n_tool[2] = 1.0;    /* press along tool z */
+    p->dir_tool[0] = 1.0; /* travel along tool x */
+    p->n_tool[2] = 1.0;   /* press along tool z */
     p->dist_m = 0.05;
     p->c_max_m = 0.05;
     p->v_m_s = 0.03;

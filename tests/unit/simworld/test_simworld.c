@@ -57,7 +57,8 @@ static void fk(const double q[NJ], double T[16])
         double th = q[i] + d->theta_offset_rad;
         double ct = cos(th), st = sin(th), ca = cos(d->alpha_rad), sa = sin(d->alpha_rad);
         /* standard DH: Rz(theta) Tz(d) Tx(a) Rx(alpha), column-major */
-        double A[16] = { ct, st, 0, 0, -st * ca, ct * ca, sa, 0, st * sa, -ct * sa, ca, 0, d->a_m * ct, d->a_m * st, d->d_m, 1 };
+        double A[16] = { ct,      st,       0,  0, -st * ca,    ct * ca,     sa,     0,
+                         st * sa, -ct * sa, ca, 0, d->a_m * ct, d->a_m * st, d->d_m, 1 };
         m4_mul(acc, A, acc);
     }
     memcpy(T, acc, sizeof acc);
@@ -225,9 +226,9 @@ static bool ik(const double xyzrpy[6], double q[NJ])
     pose_to_T(xyzrpy, Tt);
     double yaw = atan2(xyzrpy[1], xyzrpy[0]);
     const double seeds[][NJ] = {
-        { yaw, 0.3, 0.3, 0.0, 1.2, 0.0 },  { yaw, 0.3, 0.3, 0.0, -1.2, 0.0 }, { yaw, 0.6, 0.6, 0.0, 1.0, 0.0 },
-        { yaw, 0.0, 0.8, 0.0, 0.8, 0.0 },  { yaw, 0.5, 0.0, PI, 1.0, 0.0 },   { yaw, 0.2, 0.2, 0.0, -0.4, 0.0 },
-        { yaw, 0.2, 0.2, 0.0, 0.4, 0.0 },  { 0.0, 0.0, 0.0, 0.0, 0.0, 0.0 },
+        { yaw, 0.3, 0.3, 0.0, 1.2, 0.0 }, { yaw, 0.3, 0.3, 0.0, -1.2, 0.0 }, { yaw, 0.6, 0.6, 0.0, 1.0, 0.0 },
+        { yaw, 0.0, 0.8, 0.0, 0.8, 0.0 }, { yaw, 0.5, 0.0, PI, 1.0, 0.0 },   { yaw, 0.2, 0.2, 0.0, -0.4, 0.0 },
+        { yaw, 0.2, 0.2, 0.0, 0.4, 0.0 }, { 0.0, 0.0, 0.0, 0.0, 0.0, 0.0 },
     };
     for (size_t s = 0; s < sizeof seeds / sizeof seeds[0]; s++) {
         if (ik_from(Tt, seeds[s], q)) {
@@ -243,7 +244,9 @@ static void open_world(bool lockstep, bool obstacle, const char *sock)
 {
     hal_sim_arm_model_t am;
     ls_robot_model_to_sim(M, &am);
-    hal_sim_world_config_t cfg = { .arm = &am, .dio_socket_path = sock, .lockstep = lockstep, .with_obstacle = obstacle };
+    hal_sim_world_config_t cfg = {
+        .arm = &am, .dio_socket_path = sock, .lockstep = lockstep, .with_obstacle = obstacle
+    };
     char msg[200] = "";
     int rc = hal_sim_world_open(&cfg, msg, sizeof msg);
     if (rc != HAL_OK) {
@@ -560,10 +563,10 @@ static void test_contact_force_and_laser(void **state)
     force(w);
     assert_int_equal(hal_sim_world_flange_pose(T), HAL_OK);
     double pen = 0.10 - T[14];
-    print_message("contact: penetration %.3g m, F = %.3g %.3g %.3g N, T = %.3g %.3g %.3g Nm\n", pen, w[0], w[1],
-                  w[2], w[3], w[4], w[5]);
+    print_message("contact: penetration %.3g m, F = %.3g %.3g %.3g N, T = %.3g %.3g %.3g Nm\n", pen, w[0], w[1], w[2],
+                  w[3], w[4], w[5]);
     assert_true(pen > 0.0);
-    assert_true(w[2] > 5.0); /* the tool pushes along its approach axis */
+    assert_true(w[2] > 5.0);                                 /* the tool pushes along its approach axis */
     assert_true(fabs(w[2] - 5e4 * pen) < 0.05 * w[2] + 1.0); /* spring law */
     /* a flat, centred press: no lateral force (viscous friction relaxes) and
      * no torque about the tool tip */
@@ -613,12 +616,12 @@ static void test_tool_rack(void **state)
     assert_int_equal(tool.ops->couple(tool.self, "gripper", true), HAL_EINVAL);
 
     go_to_pose(rack_g);
-    assert_true(fabs(laser() - 0.35) < 1e-3); /* flange over the floor */
-    assert_int_equal(tool.ops->couple(tool.self, "probe", true), HAL_EINVAL); /* wrong rack */
+    assert_true(fabs(laser() - 0.35) < 1e-3);                                    /* flange over the floor */
+    assert_int_equal(tool.ops->couple(tool.self, "probe", true), HAL_EINVAL);    /* wrong rack */
     assert_int_equal(tool.ops->couple(tool.self, "gripper", false), HAL_EINVAL); /* not coupled */
     assert_int_equal(tool.ops->couple(tool.self, "gripper", true), HAL_OK);
     assert_string_equal(hal_sim_world_current_tool(), "gripper");
-    assert_true(fabs(laser() - 0.23) < 1e-3); /* tip 0.12 below the flange */
+    assert_true(fabs(laser() - 0.23) < 1e-3);                                   /* tip 0.12 below the flange */
     assert_int_equal(tool.ops->couple(tool.self, "gripper", true), HAL_EINVAL); /* already */
     hold(300);
     double w[6];
@@ -717,9 +720,11 @@ static void test_dio_socket(void **state)
     assert_int_equal(hal_sim_world_malformed_messages(), 0);
 
     /* malformed: counted and ignored */
-    const char *bad[] = { "in", "in 10000 0", "in 5 0 7", "in -1 0", "in 5 zz", "foo 1", "jog 1 2",
-                          "jog 1 2 3 4 5 x", "jog 1 2 3 4 5 1e", "buttons", "buttons 123456789", "jog-stop now",
-                          "IN 5 0", "in 5\x01 0" };
+    const char *bad[] = { "in",      "in 10000 0",        "in 5 0 7",
+                          "in -1 0", "in 5 zz",           "foo 1",
+                          "jog 1 2", "jog 1 2 3 4 5 x",   "jog 1 2 3 4 5 1e",
+                          "buttons", "buttons 123456789", "jog-stop now",
+                          "IN 5 0",  "in 5\x01 0" };
     size_t n_bad = sizeof bad / sizeof bad[0];
     /* in small batches: the kernel queues few datagrams per socket */
     for (size_t i = 0; i < n_bad; i++) {
@@ -747,9 +752,9 @@ static void test_dio_socket(void **state)
 
     /* outputs */
     assert_int_equal(hal_dio_write(&dio, 0, 1u << 16, 0), HAL_OK);
-    assert_int_equal(hal_dio_write(&dio, 0, 1u << 3, 0), HAL_EINVAL);         /* input bit */
-    assert_int_equal(hal_dio_write(&dio, 0, 1u << 17, 1u << 2), HAL_EINVAL);  /* input bit in off */
-    assert_int_equal(hal_dio_write(&dio, 1, 1u << 17, 0), HAL_EINVAL);        /* no unit 1 */
+    assert_int_equal(hal_dio_write(&dio, 0, 1u << 3, 0), HAL_EINVAL);        /* input bit */
+    assert_int_equal(hal_dio_write(&dio, 0, 1u << 17, 1u << 2), HAL_EINVAL); /* input bit in off */
+    assert_int_equal(hal_dio_write(&dio, 1, 1u << 17, 0), HAL_EINVAL);       /* no unit 1 */
     assert_int_equal(hal_dio_read(&dio, 0, &bits), HAL_OK);
     assert_int_equal(bits, 0x18004);
     assert_int_equal(hal_dio_write(&dio, 0, 0, 1u << 16), HAL_OK);

@@ -54,8 +54,8 @@ static void assert_axis_within_limits(const ls_traj_axis_t *ax, double v_max, do
         double p, v, a;
         ls_traj_sample_axis(ax, (double)k * KHZ_DT_S, &p, &v, &a);
         if (fabs(v) > v_max * (1.0 + REL_TOL) || fabs(a) > a_max * (1.0 + REL_TOL)) {
-            fail_msg("limit exceeded at t=%.6f: v=%.17g (max %g) a=%.17g (max %g)", (double)k * KHZ_DT_S, v,
-                     v_max, a, a_max);
+            fail_msg("limit exceeded at t=%.6f: v=%.17g (max %g) a=%.17g (max %g)", (double)k * KHZ_DT_S, v, v_max, a,
+                     a_max);
         }
         if (k > 0 && fabs(a - a_prev) / KHZ_DT_S > j_max * (1.0 + REL_TOL)) {
             fail_msg("jerk %.17g exceeds %g at t=%.6f", fabs(a - a_prev) / KHZ_DT_S, j_max, (double)k * KHZ_DT_S);
@@ -83,8 +83,8 @@ static void assert_axis_continuous(const ls_traj_axis_t *ax)
         const double scale = 1.0 + fabs(ax->dist);
         if (fabs(ar - al) > 2.0 * J * eps + 1e-9 * scale || fabs(vr - vl) > 2.0 * fabs(al) * eps + 1e-9 * scale ||
             fabs(pr - pl) > 2.0 * fabs(vl) * eps + 1e-9 * scale) {
-            fail_msg("jump at boundary %d (t=%.17g): p %.17g/%.17g v %.17g/%.17g a %.17g/%.17g", k, tb, pl, pr, vl,
-                     vr, al, ar);
+            fail_msg("jump at boundary %d (t=%.17g): p %.17g/%.17g v %.17g/%.17g a %.17g/%.17g", k, tb, pl, pr, vl, vr,
+                     al, ar);
         }
     }
     const double h = 1e-5;
@@ -160,7 +160,7 @@ static void test_full_profile(void **state)
     ls_traj_axis_t ax;
     assert_int_equal(ls_traj_plan_axis(&ax, 1.0, 11.0, 2.0, 1.0, 2.0), LS_TRAJ_OK);
     assert_close(ax.T, 7.5, 1e-15);
-    const double want[7] = {0.5, 1.5, 0.5, 2.5, 0.5, 1.5, 0.5};
+    const double want[7] = { 0.5, 1.5, 0.5, 2.5, 0.5, 1.5, 0.5 };
     for (int k = 0; k < 7; ++k) {
         assert_close(ax.t[k], want[k], 1e-15);
     }
@@ -261,7 +261,7 @@ static void test_random_profiles_limits_continuity(void **state)
 {
     (void)state;
     rng_state = 12345;
-    int shapes[4] = {0, 0, 0, 0}; /* [cruise?][a_max reached?] */
+    int shapes[4] = { 0, 0, 0, 0 }; /* [cruise?][a_max reached?] */
     for (int k = 0; k < 300; ++k) {
         double vm, am, jm;
         random_limits(&vm, &am, &jm);
@@ -318,7 +318,7 @@ static void test_duration_very_long(void **state)
     /* d=10, v=1, a=10, j=1 (a_max out of reach: pure jerk phases) stretched
      * to 1e9 s: the peak v ~ 1e-8 must still satisfy the defining equation
      * d = v (T - Tacc), Tacc = 2 sqrt(v / j), and the halves must meet. */
-    const double T[2] = {1e9, 1e6};
+    const double T[2] = { 1e9, 1e6 };
     for (int k = 0; k < 2; ++k) {
         ls_traj_axis_t ax;
         assert_int_equal(ls_traj_plan_axis_duration(&ax, 0.0, 10.0, 1.0, 10.0, 1.0, T[k]), LS_TRAJ_OK);
@@ -384,8 +384,8 @@ static void test_sync_hand_case(void **state)
     (void)state;
     /* Axis 0 needs 12 s (d=10, v=a=j=1), axis 1 2^(5/3) s (d=-1), axis 2
      * does not move: all last 12 s. */
-    const double p0[3] = {0.0, 1.0, 5.0}, p1[3] = {10.0, 0.0, 5.0};
-    const ls_traj_limits_t lim = {.v_max = {1, 1, 1}, .a_max = {1, 1, 1}, .j_max = {1, 1, 1}};
+    const double p0[3] = { 0.0, 1.0, 5.0 }, p1[3] = { 10.0, 0.0, 5.0 };
+    const ls_traj_limits_t lim = { .v_max = { 1, 1, 1 }, .a_max = { 1, 1, 1 }, .j_max = { 1, 1, 1 } };
     ls_traj_t tr;
     assert_int_equal(ls_traj_plan(&tr, 3, p0, p1, &lim), LS_TRAJ_OK);
     assert_int_equal(tr.n, 3);
@@ -582,8 +582,8 @@ static void test_stop_resume_in_cruise_within_limits(void **state)
      * max(1.5 v/a, sqrt(4.5 v/j)) = sqrt(4.5) s and covers sqrt(4.5)/2 s of
      * path: the whole stop happens in the cruise, where q'' = 0, so the real
      * acceleration is q' dr/dt only, at most 1.5 / sqrt(4.5) = 0.707 a_max. */
-    const double p0[2] = {0.0, 0.0}, p1[2] = {10.0, -5.0};
-    const ls_traj_limits_t lim = {.v_max = {1, 1}, .a_max = {1, 1}, .j_max = {1, 1}};
+    const double p0[2] = { 0.0, 0.0 }, p1[2] = { 10.0, -5.0 };
+    const ls_traj_limits_t lim = { .v_max = { 1, 1 }, .a_max = { 1, 1 }, .j_max = { 1, 1 } };
     ls_traj_t tr;
     assert_int_equal(ls_traj_plan(&tr, 2, p0, p1, &lim), LS_TRAJ_OK);
     assert_close(ls_traj_stop_ramp_s(&tr, &lim), sqrt(4.5), 1e-15);
@@ -621,7 +621,7 @@ static void test_bad_input(void **state)
     ls_traj_axis_t ax, before;
     memset(&ax, 0x3c, sizeof ax);
     before = ax;
-    const double bad[] = {NAN, INFINITY, -INFINITY};
+    const double bad[] = { NAN, INFINITY, -INFINITY };
     for (size_t k = 0; k < sizeof bad / sizeof bad[0]; ++k) {
         assert_int_equal(ls_traj_plan_axis(&ax, bad[k], 1.0, 1.0, 1.0, 1.0), LS_TRAJ_EARG);
         assert_int_equal(ls_traj_plan_axis(&ax, 0.0, bad[k], 1.0, 1.0, 1.0), LS_TRAJ_EARG);
@@ -639,7 +639,7 @@ static void test_bad_input(void **state)
     assert_int_equal(ls_traj_plan_axis(NULL, 0.0, 1.0, 1.0, 1.0, 1.0), LS_TRAJ_EARG);
     assert_int_equal(ls_traj_plan_axis_duration(NULL, 0.0, 1.0, 1.0, 1.0, 1.0, 5.0), LS_TRAJ_EARG);
 
-    const double p0[LS_TRAJ_MAX_AXES + 1] = {0}, p1[LS_TRAJ_MAX_AXES + 1] = {1, 1, 1, 1, 1, 1, 1, 1, 1};
+    const double p0[LS_TRAJ_MAX_AXES + 1] = { 0 }, p1[LS_TRAJ_MAX_AXES + 1] = { 1, 1, 1, 1, 1, 1, 1, 1, 1 };
     ls_traj_limits_t lim;
     for (int i = 0; i < LS_TRAJ_MAX_AXES; ++i) {
         lim.v_max[i] = lim.a_max[i] = lim.j_max[i] = 1.0;

@@ -26,7 +26,10 @@ static int read_vec(double *x, int n)
     return 0;
 }
 
-static double maxd(double a, double b) { return a > b ? a : b; }
+static double maxd(double a, double b)
+{
+    return a > b ? a : b;
+}
 
 int main(void)
 {

@@ -36,27 +36,31 @@ static hal_can_link_t can_link;
 static ls_isotp_link_t tp_link;
 static uint8_t msg_buf[LS_ISOTP_MAX_PAYLOAD];
 
-static void on_signal(int sig) {
+static void on_signal(int sig)
+{
     (void)sig;
     stop_requested = 1;
 }
 
-static uint64_t now_us(void) {
+static uint64_t now_us(void)
+{
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (uint64_t)ts.tv_sec * 1000000u + (uint64_t)ts.tv_nsec / 1000u;
 }
 
-static int can_send(void *ctx, uint32_t can_id, const uint8_t *data, uint8_t len) {
+static int can_send(void *ctx, uint32_t can_id, const uint8_t *data, uint8_t len)
+{
     (void)ctx;
-    hal_can_frame_t f = {.id = can_id, .flags = HAL_CAN_F_EXT, .len = len};
+    hal_can_frame_t f = { .id = can_id, .flags = HAL_CAN_F_EXT, .len = len };
     memcpy(f.data, data, len);
     return hal_can_send(&can_link, &f) == HAL_OK ? 0 : -1;
 }
 
 /* Milliseconds poll() may sleep: until the link's next deadline, at most 100 ms
  * (so signals and the lifetime limit are seen promptly). */
-static int sleep_ms(uint64_t now) {
+static int sleep_ms(uint64_t now)
+{
     uint64_t due = ls_isotp_next_deadline_us(&tp_link);
     if (due <= now) {
         return 0;
@@ -65,7 +69,8 @@ static int sleep_ms(uint64_t now) {
     return ms > 100u ? 100 : (int)ms;
 }
 
-static int parse_args(int argc, char **argv, const char **ifname, unsigned long *lifetime_s) {
+static int parse_args(int argc, char **argv, const char **ifname, unsigned long *lifetime_s)
+{
     if (argc != 2 && argc != 4) {
         return -1;
     }
@@ -83,7 +88,8 @@ static int parse_args(int argc, char **argv, const char **ifname, unsigned long 
     return 0;
 }
 
-int main(int argc, char **argv) {
+int main(int argc, char **argv)
+{
     const char *ifname = NULL;
     unsigned long lifetime_s = 300;
     if (parse_args(argc, argv, &ifname, &lifetime_s) != 0) {
@@ -113,7 +119,7 @@ int main(int argc, char **argv) {
     const uint64_t end_us = now_us() + (uint64_t)lifetime_s * 1000000u;
     unsigned echoed = 0;
     int exit_code = 0;
-    struct pollfd pfd = {.fd = hal_can_poll_fd(&can_link), .events = POLLIN};
+    struct pollfd pfd = { .fd = hal_can_poll_fd(&can_link), .events = POLLIN };
     while (!stop_requested) {
         uint64_t t = now_us();
         if (t >= end_us) {
