@@ -454,3 +454,6 @@ def test_lifecycle_model(world: World) -> None:
           f"{s.transport} host time-outs, {len(s.violations)} violations")
     assert s.steps > 0 and s.started > 0
     assert not s.violations, "\n".join(s.violations[:10])
+    # A time-out is not a lifecycle violation, but a device that stopped
+    # answering would turn every later step into one: more than a tenth fails.
+    assert s.transport * 10 <= s.steps, f"{s.transport} of {s.steps} steps timed out on the host"
