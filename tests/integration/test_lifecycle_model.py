@@ -97,8 +97,10 @@ class Client:
         try:
             self.sup.open()
         except ControllerTimeoutError:
-            time.sleep(2.0)  # a loaded machine: one more try, then it is a failure
-            self.sup.connect()
+            # A loaded machine: one more try, then it is a failure. open() left
+            # nothing running when it failed, so the retry is a whole open().
+            time.sleep(2.0)
+            self.sup.open()
 
     def _on(self, n: pb.Notice) -> None:
         if n.final:
