@@ -422,7 +422,11 @@ class LifecycleModel(RuleBasedStateMachine):
 
 @pytest.fixture
 def world(tmp_path: Path) -> Iterator[World]:
-    c = start_controller(tmp_path / "ls0", "--telemetry-hz", "200")
+    # 50 Hz: 350 telemetry frames/s leave the host's SLCAN reader (one byte per
+    # read) room on a loaded machine; at 200 Hz (1,400 frames/s) it fell behind,
+    # the pty filled and the first connect went unanswered for 15 s. Three joint
+    # sets (60 ms) still judge "at rest" after every step.
+    c = start_controller(tmp_path / "ls0", "--telemetry-hz", "50")
     bus = open_slcan(c.pty)
     notifier = can.Notifier(bus, [], timeout=0.01)
     w = World(c, bus, notifier, Stats())
