@@ -360,7 +360,7 @@ def test_cli_session_moves_the_arm_over_socketcan(controller: Landscaped, tmp_pa
     for cmd in ("lock", "activate", "deactivate", "release"):
         assert f"\n{cmd}: CMD_EXEC_OK" in out, out
     assert "\nmove-absolute: CMD_STARTED_OK" in out, out
-    done = re.search(r"EVENT moveAbsoluteComplete point=p1 joints=(\S+) .*final", out)
+    done = re.search(r"EVENT moveAbsoluteComplete point=p1 reason=complete joints=(\S+) .*final", out)
     assert done, out
     joints = [float(v) for v in done[1].split(",")]
     assert joints == pytest.approx([0.2, -0.3, 0.25, 0, 0.1, 0], abs=2e-3)
