@@ -5,6 +5,14 @@
 #   step NAME CMD [ARG...]   run CMD; its output goes to a log under $LS_CI_LOGS
 #                            (default build-logs/) and is echoed when it fails
 #   step_live NAME CMD ...   the same, with the output shown as it runs
+#   step_bg NAME CMD ...     start CMD in the background at the lowest CPU
+#                            priority (nice 19), its output to the step's log
+#   step_wait NAME           wait for a step_bg step; fails as step does
+#
+# step_bg is for CPU-bound work (builds) that can overlap steps that mostly
+# wait on the simulated arm in real time: at nice 19 it takes only the CPU
+# those steps leave idle. Background steps still running when the script
+# exits (a foreground step failed) are killed.
 #
 # Both print "== NAME" first and "ci: NAME failed (exit N), log: PATH" on failure,
 # then exit with CMD's status (the scripts run with set -e).
@@ -43,3 +51,40 @@ _ci_run() {
 
 step() { _ci_run quiet "$@"; }
 step_live() { _ci_run live "$@"; }
+
+declare -A _ci_bg_pid=()
+
+_ci_kill_bg() {
+  local pid
+  for pid in "${_ci_bg_pid[@]}"; do
+    kill -- "-$pid" 2>/dev/null || kill "$pid" 2>/dev/null || true
+  done
+}
+trap _ci_kill_bg EXIT
+
+step_bg() {
+  local name=$1 log
+  shift
+  log=$(_ci_log_path "$name")
+  echo "== $name (started in the background, log: $log)"
+  # setsid: its own process group, so the EXIT trap ends the whole tree.
+  setsid nice -n 19 "$@" >"$log" 2>&1 &
+  _ci_bg_pid[$name]=$!
+}
+
+step_wait() {
+  local name=$1 log rc=0
+  log=$(_ci_log_path "$name")
+  [ -n "${_ci_bg_pid[$name]:-}" ] || { echo "$LS_CI_SCRIPT: no background step '$name'" >&2; exit 2; }
+  wait "${_ci_bg_pid[$name]}" || rc=$?
+  unset "_ci_bg_pid[$name]"
+  if [ "$rc" -eq 0 ]; then
+    echo "== $name: done"
+    return 0
+  fi
+  echo "---- output of '$name' (last 120 lines of $log) ----" >&2
+  tail -n 120 "$log" >&2
+  echo "---- end of output ----" >&2
+  echo "$LS_CI_SCRIPT: step '$name' failed (exit $rc); full log: $log" >&2
+  exit "$rc"
+}

@@ -55,7 +55,7 @@ ADDR = {"A": 0xF1, "B": 0xF2}
 STILL = ("RESTING", "PAUSED", "LOCKED", "UNLOCKED", "IDLE")
 OFF = ("LOCKED", "UNLOCKED", "IDLE")
 ACTIONS = (["move"] * 6 + ["path"] * 3 + ["stop"] * 3 + ["resume"] * 2 + ["abort"] * 2 + ["deactivate"] * 2
-           + ["activate"] * 3 + ["lock"] * 2 + ["release", "emergency", "heartbeat_loss", "disconnect_reconnect"]
+           + ["activate"] * 5 + ["lock"] * 3 + ["release", "emergency", "heartbeat_loss", "disconnect_reconnect"]
            + ["wait"] * 3)
 TARGETS = [HOME, [0.4, 0.3, 0.3, 0.0, 0.9, 0.0], [-0.3, 0.1, 0.5, 0.2, 0.7, 0.0], [0.2, 0.5, 0.1, -0.3, 1.1, 0.4]]
 
@@ -67,6 +67,7 @@ class Stats:
     finals: int = 0
     reasons: collections.Counter[str] = field(default_factory=collections.Counter)
     rules: collections.Counter[str] = field(default_factory=collections.Counter)
+    answers: collections.Counter[str] = field(default_factory=collections.Counter)  # "move:CMD_BUSY_ERR"
     violations: list[str] = field(default_factory=list)
     transport: int = 0        # steps that hit a host-side time-out (counted, not a lifecycle violation)
 
@@ -166,6 +167,7 @@ class LifecycleModel(RuleBasedStateMachine):
         rv = c.sup.request(command, check=False, **fields)
         cmd = lookup(command)
         self.history.append(f"{c.name}:{command}->{rv.ret_name}({before})")
+        self.stats.answers[f"{command}:{rv.ret_name}"] += 1
         if rv.ret_code >= 0:
             valid = cmd.state_names
             # a motion may complete between the state query and the command
@@ -457,6 +459,7 @@ def test_lifecycle_model(world: World) -> None:
     s = world.stats
     print(f"\nlifecycle model: seed {SEED}, {s.steps} steps in {time.monotonic() - t0:.0f} s, "
           f"{s.started} started, {s.finals} finals, reasons {dict(s.reasons)}, rules {dict(s.rules)}, "
+          f"answers {dict(s.answers)}, "
           f"{s.transport} host time-outs, {len(s.violations)} violations")
     assert s.steps > 0 and s.started > 0
     assert not s.violations, "\n".join(s.violations[:10])
