@@ -6,7 +6,8 @@ set -eu
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/.." && pwd)
 out="$here/src/landscape/_generated"
-protoc -I"$root/protocol" -I/usr/include --python_out="$out" --pyi_out="$out" "$root/protocol/landscape.proto"
+protoc -I"$root/protocol" -I/usr/include --python_out="$out" --pyi_out="$out" \
+  --descriptor_set_out="$out/landscape.desc" "$root/protocol/landscape.proto"
 cp "$root/protocol/landscape.dbc" "$out/landscape.dbc"
 cp "$root/protocol/landscape.options" "$out/landscape.options"
-echo "updated $out/landscape_pb2.py(i), $out/landscape.dbc and $out/landscape.options"
+echo "updated $out/landscape_pb2.py(i), landscape.desc, landscape.dbc and landscape.options"

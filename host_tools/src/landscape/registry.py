@@ -16,6 +16,7 @@ import hashlib
 import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
+from importlib import resources
 from typing import TYPE_CHECKING, Any, cast
 
 from google.protobuf import json_format
@@ -44,8 +45,12 @@ def descriptor_of(msg: Message | type[Message]) -> Descriptor:
     """
     return cast(Descriptor, msg.DESCRIPTOR)
 
-#: First 32 bits of SHA-256 over the serialized schema, as protocol/gen_registry.py computes it.
-SCHEMA_HASH: int = int.from_bytes(hashlib.sha256(pb.DESCRIPTOR.serialized_pb).digest()[:4], "big")
+#: The schema hash (docs/protocol.md, "Schema hash"): the first 4 bytes, big-endian, of the
+#: SHA-256 of protoc's descriptor set of landscape.proto, committed as _generated/landscape.desc
+#: (tests/host/test_generated.py checks it against a fresh protoc run).
+SCHEMA_HASH: int = int.from_bytes(
+    hashlib.sha256(resources.files("landscape._generated").joinpath("landscape.desc").read_bytes()).digest()[:4],
+    "big")
 PROTOCOL_VERSION: int = pb.PROTOCOL_VERSION
 
 _WORD = re.compile(r"[A-Z]+(?![a-z])|[A-Z]?[a-z0-9]+")
