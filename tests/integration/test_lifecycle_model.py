@@ -24,6 +24,7 @@ import collections
 import contextlib
 import os
 import random
+import sys
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass, field
@@ -51,6 +52,7 @@ from landscape.supervisor import RetVal, Supervisor, notice_data
 EXAMPLES = int(os.environ.get("LS_MODEL_EXAMPLES", "8"))
 STEPS = int(os.environ.get("LS_MODEL_STEPS", "40"))
 SEED = int(os.environ.get("LS_MODEL_SEED", "16"))
+PROGRESS_EVERY = 1000
 ADDR = {"A": 0xF1, "B": 0xF2}
 STILL = ("RESTING", "PAUSED", "LOCKED", "UNLOCKED", "IDLE")
 OFF = ("LOCKED", "UNLOCKED", "IDLE")
@@ -70,6 +72,7 @@ class Stats:
     answers: collections.Counter[str] = field(default_factory=collections.Counter)  # "move:CMD_BUSY_ERR"
     violations: list[str] = field(default_factory=list)
     transport: int = 0        # steps that hit a host-side time-out (counted, not a lifecycle violation)
+    t0: float = field(default_factory=time.monotonic)
 
 
 @dataclass
@@ -219,6 +222,12 @@ class LifecycleModel(RuleBasedStateMachine):
     def _count(self, name: str) -> None:
         self.stats.steps += 1
         self.stats.rules[name] += 1
+        s = self.stats
+        if s.steps % PROGRESS_EVERY == 0:
+            # a long run says how far it is (pytest -s shows it)
+            print(f"lifecycle model: {s.steps} steps, {time.monotonic() - s.t0:.0f} s, {s.started} started, "
+                  f"{s.finals} finals, {s.transport} host time-outs, {len(s.violations)} violations",
+                  file=sys.stderr, flush=True)
 
     def _pick(self, role: str) -> Client:
         """The owner (or A when nobody owns the device), or the other supervisor."""
