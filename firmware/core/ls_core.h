@@ -1,5 +1,5 @@
 /* The controller core: supervisor sessions, ownership, the state machine of
- * DESIGN.md section 4, the command dispatcher and the seed's return codes.
+ * docs/state-machine.md, the command dispatcher and the seed's return codes.
  *
  * Runs in the comms thread only (never in the control loop). Time is passed
  * in. All storage is static, inside ls_core_t. */

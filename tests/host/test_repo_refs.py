@@ -1,0 +1,55 @@
+"""Docs and comments name files of this repository only, and the paths the docs name exist
+(issue 21: references to files the repository does not have)."""
+from __future__ import annotations
+
+import itertools
+import re
+import subprocess
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+TOP = ("firmware/", "hal/", "protocol/", "host_tools/", "tests/", "docs/", "bench/", ".ci/")
+# Names of files outside the repository (the project brief and notes beside it).
+OUTSIDE = re.compile(r"DESIGN\.md|\.\./shared|house-style\.md|notes/environment\.md")
+
+
+def _tracked() -> list[str]:
+    out = subprocess.run(["git", "ls-files"], cwd=ROOT, capture_output=True, text=True, check=True)
+    return out.stdout.split()
+
+
+def _expand(ref: str) -> list[str]:
+    """`a/b.{h,c}` -> `a/b.h`, `a/b.c`."""
+    parts = re.split(r"\{([^}]*)\}", ref)
+    choices = [[p] if i % 2 == 0 else p.split(",") for i, p in enumerate(parts)]
+    return ["".join(c) for c in itertools.product(*choices)]
+
+
+def test_nothing_names_a_file_outside_the_repository() -> None:
+    hits = []
+    for name in _tracked():
+        path = ROOT / name
+        if name.startswith("tests/host/test_repo_refs.py") or path.suffix not in (
+                ".md", ".c", ".h", ".cpp", ".hpp", ".py", ".sh", ".txt", ".toml", ".proto") and \
+                not name.startswith(".ci/") and path.name != "CMakeLists.txt":
+            continue
+        for n, line in enumerate(path.read_text(errors="replace").splitlines(), 1):
+            if OUTSIDE.search(line):
+                hits.append(f"{name}:{n}: {line.strip()}")
+    assert not hits, "references to files outside the repository:\n" + "\n".join(hits)
+
+
+def test_paths_in_the_docs_exist() -> None:
+    missing = []
+    docs = [n for n in _tracked() if n.endswith(".md")]
+    for name in docs:
+        text = (ROOT / name).read_text()
+        for ref in re.findall(r"`([^`\s]+)`", text):
+            ref = ref.rstrip(".,:;")
+            if not ref.startswith(TOP) or "<" in ref or "*" in ref or "$" in ref:
+                continue
+            for one in _expand(ref.split(":")[0]):
+                # a module may be named without its extension (`hal/sim/slcan_pty`)
+                if not any((ROOT / (one + ext)).exists() for ext in ("", ".c", ".h", ".py")):
+                    missing.append(f"{name}: `{ref}`")
+    assert not missing, "paths named in the docs that the repository does not have:\n" + "\n".join(missing)
