@@ -236,6 +236,8 @@ static void on_fc(ls_isotp_link_t *l, const uint8_t *d, uint8_t len, uint64_t no
     }
 }
 
+static void tx_start(ls_isotp_link_t *l, uint64_t now_us);
+
 int ls_isotp_send(ls_isotp_link_t *l, const uint8_t *payload, size_t len, uint64_t now_us)
 {
     if (l == NULL || payload == NULL) {
@@ -249,6 +251,25 @@ int ls_isotp_send(ls_isotp_link_t *l, const uint8_t *payload, size_t len, uint64
     }
     memcpy(l->tx_buf, payload, len);
     l->tx_len = (uint16_t)len;
+    tx_start(l, now_us);
+    return LS_ISOTP_OK;
+}
+
+int ls_isotp_resend(ls_isotp_link_t *l, uint64_t now_us)
+{
+    if (l == NULL || l->tx_len == 0) {
+        return LS_ISOTP_EARG;
+    }
+    if (l->tx_state != LS_ISOTP_TX_IDLE) {
+        return LS_ISOTP_EBUSY;
+    }
+    tx_start(l, now_us);
+    return LS_ISOTP_OK;
+}
+
+/* Begin the transfer of the tx_len bytes in tx_buf from the first frame. */
+static void tx_start(ls_isotp_link_t *l, uint64_t now_us)
+{
     l->tx_off = 0;
     l->tx_sn = 0;
     l->tx_bs = 0;
@@ -258,7 +279,6 @@ int ls_isotp_send(ls_isotp_link_t *l, const uint8_t *payload, size_t len, uint64
     l->tx_next_us = now_us;
     l->tx_state = LS_ISOTP_TX_SENDING;
     tx_pump(l, now_us);
-    return LS_ISOTP_OK;
 }
 
 bool ls_isotp_tx_busy(const ls_isotp_link_t *l)

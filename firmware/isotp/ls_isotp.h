@@ -127,6 +127,13 @@ void ls_isotp_on_frame(ls_isotp_link_t *l, const uint8_t *data, uint8_t len, uin
  * LS_ISOTP_ELEN or LS_ISOTP_EBUSY. */
 int ls_isotp_send(ls_isotp_link_t *l, const uint8_t *payload, size_t len, uint64_t now_us);
 
+/* Send the last message again from its first frame (its bytes are still in
+ * the link), after its transfer failed: no flow control within N_Bs, too many
+ * FC.WAIT, an invalid flow status. The caller tells failure from success by
+ * tx_results[LS_ISOTP_N_OK]. Returns LS_ISOTP_OK, LS_ISOTP_EARG (NULL, or
+ * nothing was ever sent) or LS_ISOTP_EBUSY (a transfer is under way). */
+int ls_isotp_resend(ls_isotp_link_t *l, uint64_t now_us);
+
 /* Send due consecutive frames (honouring STmin and BS), pending flow controls,
  * and expire N_Bs / N_Cr. */
 void ls_isotp_poll(ls_isotp_link_t *l, uint64_t now_us);

@@ -78,7 +78,8 @@ static ls_net_peer_t *get_peer(ls_net_t *net, uint8_t addr)
             victim = c;
             break;
         }
-        bool idle = !ls_isotp_tx_busy(&c->isotp) && c->isotp.rx_state == LS_ISOTP_RX_IDLE && c->q_count == 0;
+        bool idle = !ls_isotp_tx_busy(&c->isotp) && c->isotp.rx_state == LS_ISOTP_RX_IDLE && c->q_count == 0 &&
+                    c->tx_tries == 0;
         if (idle && (victim == NULL || c->last_used_us < victim->last_used_us)) {
             victim = c;
         }
@@ -119,6 +120,26 @@ int ls_net_send_downlink(void *ctx, uint8_t addr, const uint8_t *buf, size_t len
     p->q_count++;
     p->last_used_us = net->now_us;
     return 0;
+}
+
+/* The downlink in the peer's ISO-TP link has finished its transfer: done
+ * when it succeeded, else sent again up to LS_NET_TX_TRIES transfers. */
+static void settle_tx(ls_net_t *net, ls_net_peer_t *p, uint64_t now_us)
+{
+    if (p->tx_tries == 0) {
+        return;
+    }
+    if (p->isotp.tx_results[LS_ISOTP_N_OK] != p->tx_ok_mark) {
+        p->tx_tries = 0;
+        return;
+    }
+    if (p->tx_tries < LS_NET_TX_TRIES && ls_isotp_resend(&p->isotp, now_us) == LS_ISOTP_OK) {
+        p->tx_tries++;
+        net->tx_retried++;
+        return;
+    }
+    p->tx_tries = 0;
+    net->tx_given_up++;
 }
 
 static void route(ls_net_t *net, const hal_can_frame_t *f)
@@ -181,11 +202,17 @@ void ls_net_poll(ls_net_t *net, uint64_t now_us)
         if (n > 0) {
             ls_core_on_uplink(net->core, p->addr, net->rxbuf, n, now_us);
         }
-        if (p->q_count > 0 && !ls_isotp_tx_busy(&p->isotp)) {
+        if (!ls_isotp_tx_busy(&p->isotp)) {
+            settle_tx(net, p, now_us);
+        }
+        if (p->q_count > 0 && p->tx_tries == 0 && !ls_isotp_tx_busy(&p->isotp)) {
             ls_net_msg_t *m = &p->q[p->q_head];
+            uint32_t ok_mark = p->isotp.tx_results[LS_ISOTP_N_OK];
             if (ls_isotp_send(&p->isotp, m->buf, m->len, now_us) == LS_ISOTP_OK) {
                 p->q_head = (uint8_t)((p->q_head + 1u) % LS_NET_OUTQ);
                 p->q_count--;
+                p->tx_tries = 1;
+                p->tx_ok_mark = ok_mark;
             }
         }
     }
@@ -238,9 +265,10 @@ void ls_net_describe(void *ctx, char *buf, size_t cap)
     size_t n = 0;
     int w = snprintf(buf, cap,
                      "frames_in=%u\nframes_out=%u\ntx_full=%u\nlink_rx_dropped=%u\nlink_tx_dropped=%u\n"
-                     "peers_evicted=%u\n",
+                     "peers_evicted=%u\ntx_retried=%u\ntx_given_up=%u\n",
                      (unsigned)net->frames_in, (unsigned)net->frames_out, (unsigned)net->tx_full,
-                     (unsigned)link_rx_dropped, (unsigned)link_tx_dropped, (unsigned)net->peers_evicted);
+                     (unsigned)link_rx_dropped, (unsigned)link_tx_dropped, (unsigned)net->peers_evicted,
+                     (unsigned)net->tx_retried, (unsigned)net->tx_given_up);
     n = w > 0 ? (size_t)w : 0u;
     for (int r = 0; r < LS_ISOTP_N_RESULT_COUNT && n < cap; r++) {
         /* e.g. isotp_unexp_pdu=1: receive and send outcomes together, by ISO name */

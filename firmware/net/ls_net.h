@@ -23,6 +23,11 @@
 #define LS_NET_MAX_LINKS 4
 #define LS_NET_MAX_PEERS 6
 #define LS_NET_OUTQ 8
+/* Transfers of one downlink before it is given up: a transfer that fails
+ * (no flow control within N_Bs, ...) is sent again from its first frame,
+ * so a supervisor that was slow for a moment still gets its answer or
+ * notice (docs/protocol.md, "ISO-TP parameters"). */
+#define LS_NET_TX_TRIES 3
 
 #define LS_ID_ISOTP_PHYS 0x18DA0000u
 #define LS_ID_ISOTP_FUNC 0x18DB0000u
@@ -45,6 +50,8 @@ typedef struct {
     ls_net_msg_t q[LS_NET_OUTQ];
     uint8_t q_head, q_count;
     uint32_t q_dropped;
+    uint8_t tx_tries;    /* > 0: transfers so far of the downlink in the ISO-TP link */
+    uint32_t tx_ok_mark; /* isotp.tx_results[N_OK] before its first transfer */
 } ls_net_peer_t;
 
 typedef struct ls_net {
@@ -57,6 +64,7 @@ typedef struct ls_net {
     ls_isotp_config_t isotp_cfg;
     uint64_t now_us;
     uint32_t frames_in, frames_out, frames_bridged, tx_full, peers_evicted;
+    uint32_t tx_retried, tx_given_up; /* downlink transfers sent again; downlinks given up */
     uint32_t rx_results_gone[LS_ISOTP_N_RESULT_COUNT]; /* counters of evicted peers */
     uint32_t tx_results_gone[LS_ISOTP_N_RESULT_COUNT];
     uint8_t rxbuf[LS_ISOTP_MAX_PAYLOAD];

@@ -415,6 +415,32 @@ static void test_n_bs_timeout(void **state)
 }
 
 /* N_Bs also guards the FC after each block. */
+static void test_resend_after_a_failed_transfer(void **state)
+{
+    (void)state;
+    setup_links(NULL, NULL);
+    /* nothing sent yet: nothing to send again */
+    assert_int_equal(ls_isotp_resend(&fx.a, 0), LS_ISOTP_EARG);
+    assert_int_equal(ls_isotp_resend(NULL, 0), LS_ISOTP_EARG);
+    start_ff(20);
+    assert_int_equal(ls_isotp_resend(&fx.a, 10), LS_ISOTP_EBUSY); /* under way */
+    poll_at(&fx.a, &fx.ca, 1000000);                              /* N_Bs: failed */
+    assert_false(ls_isotp_tx_busy(&fx.a));
+    /* the same bytes from the first frame again, with a fresh N_Bs */
+    assert_int_equal(ls_isotp_resend(&fx.a, 1000000), LS_ISOTP_OK);
+    assert_int_equal(fx.ca.n, 2);
+    assert_memory_equal(fx.ca.f[1].d, fx.ca.f[0].d, 8);
+    assert_int_equal(fx.a.tx_state, LS_ISOTP_TX_WAIT_FC);
+    assert_int_equal(ls_isotp_next_deadline_us(&fx.a), 2000000);
+    /* this time the receiver answers: the whole message arrives once */
+    const uint8_t cts[3] = { 0x30, 0, 0 };
+    feed(&fx.a, &fx.ca, cts, 3, 1000100);
+    assert_false(ls_isotp_tx_busy(&fx.a));
+    assert_int_equal(fx.a.tx_results[LS_ISOTP_N_OK], 1);
+    assert_int_equal(fx.a.tx_results[LS_ISOTP_N_TIMEOUT_BS], 1);
+    assert_int_equal(fx.ca.n, 4); /* FF, FF again, two CFs (20 = 6 + 7 + 7) */
+}
+
 static void test_n_bs_timeout_between_blocks(void **state)
 {
     (void)state;
@@ -1082,6 +1108,7 @@ int main(void)
         cmocka_unit_test(test_sender_stmin_reserved_is_127ms),
         cmocka_unit_test(test_n_bs_timeout),
         cmocka_unit_test(test_n_bs_timeout_between_blocks),
+        cmocka_unit_test(test_resend_after_a_failed_transfer),
         cmocka_unit_test(test_fc_wait_then_cts),
         cmocka_unit_test(test_fc_wait_restarts_n_bs_then_times_out),
         cmocka_unit_test(test_wft_max_overrun),

@@ -440,6 +440,93 @@ static void ping(uint8_t addr, uint64_t now_us)
     ls_net_poll(&g_net, now_us);
 }
 
+/* First frames the node sent to `addr` on link 0 of a message whose first
+ * byte is `first` (each starts one transfer of it). */
+static size_t first_frames_to(uint8_t addr, uint8_t first)
+{
+    size_t n = 0;
+    for (size_t i = 0; i < g_link[0].n_tx; i++) {
+        const hal_can_frame_t *f = &g_link[0].tx[i];
+        if (f->id == phys(addr, NODE) && (f->data[0] & 0xF0u) == 0x10u && f->data[2] == first) {
+            n++;
+        }
+    }
+    return n;
+}
+
+#define PAST_N_BS_US 1001000u /* the default N_Bs (1 s) and a little */
+
+static void test_a_downlink_without_flow_control_is_sent_again_then_given_up(void **state)
+{
+    (void)state;
+    setup_net(1);
+    uint8_t msg[20] = { 7 };
+    uint8_t next[20] = { 8 };
+    assert_int_equal(ls_net_send_downlink(&g_net, SUP_A, msg, sizeof msg), 0);
+    assert_int_equal(ls_net_send_downlink(&g_net, SUP_A, next, sizeof next), 0); /* queued behind */
+    uint64_t t = 100;
+    ls_net_poll(&g_net, t);
+    assert_int_equal(first_frames_to(SUP_A, 7), 1);
+    /* Nobody answers with a flow control: each N_Bs time-out starts the same
+     * message again, LS_NET_TX_TRIES transfers in all, the queued one waits. */
+    for (size_t k = 2; k <= LS_NET_TX_TRIES; k++) {
+        t += PAST_N_BS_US;
+        ls_net_poll(&g_net, t);
+        assert_int_equal(first_frames_to(SUP_A, 7), k);
+        assert_int_equal(first_frames_to(SUP_A, 8), 0);
+    }
+    assert_int_equal(describe_value("tx_retried"), LS_NET_TX_TRIES - 1);
+    assert_int_equal(describe_value("tx_given_up"), 0);
+    /* The last transfer fails too: given up, counted, and the next message goes. */
+    t += PAST_N_BS_US;
+    ls_net_poll(&g_net, t);
+    assert_int_equal(describe_value("tx_given_up"), 1);
+    assert_int_equal(describe_value("isotp_timeout_bs"), LS_NET_TX_TRIES);
+    assert_int_equal(first_frames_to(SUP_A, 7), LS_NET_TX_TRIES);
+    assert_int_equal(first_frames_to(SUP_A, 8), 1);
+}
+
+static void test_a_downlink_sent_again_arrives_once(void **state)
+{
+    (void)state;
+    setup_net(1);
+    static sup_t a;
+    sup_init(&a, SUP_A, &g_link[0]);
+    uint8_t msg[40];
+    for (size_t i = 0; i < sizeof msg; i++) {
+        msg[i] = (uint8_t)(0x30 + i);
+    }
+    assert_int_equal(ls_net_send_downlink(&g_net, SUP_A, msg, sizeof msg), 0);
+    uint64_t t = 100;
+    ls_net_poll(&g_net, t);
+    /* The supervisor misses the first frame (busy for a moment)... */
+    size_t seen = g_link[0].n_tx;
+    t += PAST_N_BS_US;
+    ls_net_poll(&g_net, t);
+    assert_int_equal(first_frames_to(SUP_A, 0x30), 2);
+    /* ...and takes the second transfer whole. */
+    uint8_t got[LS_ISOTP_MAX_PAYLOAD];
+    size_t n = 0;
+    for (int turn = 0; turn < 100 && n == 0; turn++) {
+        sup_hear(&a, &g_link[0], &seen, t);
+        ls_isotp_poll(&a.tp, t);
+        t += 100;
+        ls_net_poll(&g_net, t);
+        sup_hear(&a, &g_link[0], &seen, t);
+        n = ls_isotp_take_rx(&a.tp, got, sizeof got);
+    }
+    assert_int_equal(n, sizeof msg);
+    assert_memory_equal(got, msg, sizeof msg);
+    /* Delivered: never sent a third time. */
+    for (int k = 0; k < 3; k++) {
+        t += PAST_N_BS_US;
+        ls_net_poll(&g_net, t);
+    }
+    assert_int_equal(first_frames_to(SUP_A, 0x30), 2);
+    assert_int_equal(describe_value("tx_retried"), 1);
+    assert_int_equal(describe_value("tx_given_up"), 0);
+}
+
 static void test_lru_eviction_of_idle_links(void **state)
 {
     (void)state;
@@ -614,6 +701,8 @@ int main(void)
         cmocka_unit_test(test_interleaved_multi_frame_requests_stay_apart),
         cmocka_unit_test(test_answer_is_sent_to_the_sender),
         cmocka_unit_test(test_downlink_queue_is_bounded),
+        cmocka_unit_test(test_a_downlink_without_flow_control_is_sent_again_then_given_up),
+        cmocka_unit_test(test_a_downlink_sent_again_arrives_once),
         cmocka_unit_test(test_lru_eviction_of_idle_links),
         cmocka_unit_test(test_busy_links_are_not_evicted),
         cmocka_unit_test(test_bridging_between_links),
