@@ -191,7 +191,7 @@ class LifecycleModel(RuleBasedStateMachine):
             if rv.ret_code >= 0:
                 text = str(rv.result.get("result", ""))
                 keep = [ln for ln in text.splitlines()
-                        if ln.startswith(("tx_lost", "isotp_", "tx_full", "link_"))]
+                        if ln.startswith(("tx_", "isotp_", "link_"))]
                 return " ".join(keep)
         return "?"
 
