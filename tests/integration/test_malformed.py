@@ -62,7 +62,11 @@ class Reader:
                                                          "tx_padding": 0xCC, "blocksize": 8, "stmin": 0})
         self.stack.start()
 
-    def drain(self, quiet_s: float = 0.1) -> None:
+    def drain(self, quiet_s: float = 0.5) -> None:
+        """Wait until the device has been quiet towards `source` for quiet_s. A
+        slow device (the TSan build) may still be answering a request the
+        supervisor sent twice (the connect): 0.1 s let such a late answer land in
+        the next test's "nothing sent" window (CI, TSan tier)."""
         while self.stack.recv(block=True, timeout=quiet_s) is not None:
             pass
 
@@ -145,7 +149,14 @@ def raw_request(sup: Supervisor, payload: bytes) -> int:
     with sup._req_lock:
         sup._seq += 1
         sup._send(payload)
-        return sup._seq
+        seq = sup._seq
+    # The answer is judged from the end of the transfer: a 3,000-byte request is 430
+    # frames and 54 flow controls, which alone took over WAIT_S on a loaded machine.
+    stack = sup._stack
+    deadline = time.monotonic() + 10.0
+    while stack is not None and stack.transmitting() and time.monotonic() < deadline:
+        time.sleep(0.005)
+    return seq
 
 
 # ---------------------------------------------------------------- transport
