@@ -177,7 +177,7 @@ def _check_png(path: Path, shape: tuple[int, int]) -> None:
 @pytest.mark.parametrize("suffix", [".csv", ".jsonl"])
 def test_plot_joints_and_path(channel: str, device: FakeDevice, tmp_path: Path, suffix: str) -> None:
     rec = tmp_path / f"rec{suffix}"
-    assert run(channel, "record", str(rec), "--duration", "0.4").exit_code == 0
+    assert run(channel, "record", str(rec), "--duration", "1.5").exit_code == 0  # 0.4 s caught no joints at load 15
     r = CliRunner().invoke(cli, ["plot", str(rec), "-o", str(tmp_path / "j.png")])
     assert r.exit_code == 0, r.stderr
     assert r.stdout == f"plot: wrote {tmp_path / 'j.png'} (joints)\n"
