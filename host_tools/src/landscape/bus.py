@@ -10,6 +10,8 @@ channel and says what to check.
 """
 from __future__ import annotations
 
+import logging
+import socket
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -17,8 +19,11 @@ from typing import Any
 import can
 import isotp
 
+from . import link
 from ._generated import landscape_pb2 as pb
 from .errors import BusError
+
+log = logging.getLogger("landscape.bus")
 
 DEFAULT_DEVICE: int = pb.DEFAULT_DEVICE_ADDRESS
 DEFAULT_HOST: int = pb.DEFAULT_HOST_ADDRESS
@@ -96,12 +101,46 @@ def open_bus(spec: BusSpec | None = None, **kwargs: Any) -> can.BusABC:
         cfg.setdefault("sleep_after_open", 0)
         cfg.setdefault("bitrate", SLCAN_DEFAULT_BITRATE)
     channel = cfg.get("channel")
+    shared = False
+    claimed: str | None = None
+    if cfg.get("interface") == "slcan" and isinstance(channel, str) and link.is_local_line(channel):
+        holder = link.read_holder(channel)
+        if holder is not None:  # a session serves this line: share it (landscape/link.py)
+            log.info("%s is served by pid %d: sharing it at %s", channel, holder.pid, holder.url)
+            cfg["channel"] = holder.url
+            shared = True
+        else:
+            link.claim(channel)
+            claimed = channel
     try:
-        return can.ThreadSafeBus(**cfg)
+        bus = can.ThreadSafeBus(**cfg)
     except Exception as exc:
+        if claimed is not None:
+            link.release(claimed)
+        if shared:
+            raise BusError(f"cannot reach the link of {channel} at {cfg['channel']} ({exc}): check "
+                           f"`landscape session status`, or stop the session and retry") from None
         raise BusError(
             f"cannot open CAN channel '{channel}' on interface '{cfg.get('interface')}': "
             f"{exc}; {_hint(cfg, exc)}") from None
+    if shared:
+        # pyserial's socket URL leaves Nagle on: every frame line would wait for the previous ACK.
+        sock = getattr(getattr(bus, "serialPortOrig", None), "_socket", None)
+        if isinstance(sock, socket.socket):
+            sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+    if claimed is not None:
+        _claims[id(bus)] = claimed
+    return bus
+
+
+_claims: dict[int, str] = {}
+
+
+def release_bus(bus: can.BusABC) -> None:
+    """Release the claim open_bus took on `bus`'s serial line (call after bus.shutdown())."""
+    channel = _claims.pop(id(bus), None)
+    if channel is not None:
+        link.release(channel)
 
 
 def physical_address(device: int, host: int) -> isotp.Address:

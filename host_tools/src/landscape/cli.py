@@ -11,11 +11,13 @@ code:
 """
 from __future__ import annotations
 
+import contextlib
 import json
 import logging
 import os
 import shlex
 import sys
+import threading
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -48,8 +50,10 @@ from .registry import (
     message_to_dict,
     parse_enum,
 )
-from .session import SessionClient, socket_path
+from .session import SessionClient, SessionError, socket_path
 from .supervisor import RetVal, Supervisor
+
+log = logging.getLogger("landscape.cli")
 
 EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_COMMAND, EXIT_BUS, EXIT_VERSION, EXIT_INTERRUPTED = 0, 1, 2, 3, 4, 5, 130
 
@@ -146,7 +150,8 @@ def cli_params(cmd: Command) -> list[click.Parameter]:
         params.append(click.Argument([f.name], type=ptype, required=not trailing_string,
                                      default="" if trailing_string else None, metavar=f.name.upper()))
     if variadic is not None:
-        params.append(click.Argument([variadic.name], type=float, nargs=-1, metavar=f"[{variadic.name.upper()}]..."))
+        params.append(click.Argument([variadic.name], type=float, nargs=-1, required=True,
+                                     metavar=f"{variadic.name.upper()}..."))
     for f in fields:
         if f in positional or f is variadic:
             continue
@@ -203,6 +208,8 @@ class CliState:
     def session(self) -> Supervisor:
         """The invocation's own session: opened on first use, reconnected after a disconnect command."""
         if self.sup is None:
+            if self.no_session:
+                self._refuse_second_supervisor()
             sup = Supervisor.open_bus(self.spec, device=self.device, source_address=self.source_address,
                                       timeout_s=self.timeout_s, client_name="landscape-cli")
             sup.open()
@@ -210,6 +217,18 @@ class CliState:
         elif not self.sup.connected:
             self.sup.connect()
         return self.sup
+
+    def _refuse_second_supervisor(self) -> None:
+        """--no-session while the background session speaks from the same address: two
+        supervisors with one address would take each other's answers."""
+        running = SessionClient.attach(self.socket_path())
+        if running is None:
+            return
+        with running:
+            pid = running.status().get("pid")
+        raise ArgumentError(f"the background session (pid {pid}) already speaks as {self.source_address:#04x} "
+                            f"to device {self.device:#04x}: drop --no-session to use it, or pass another "
+                            f"--source-address (e.g. -s {(self.source_address + 1) & 0xFF:#04x})")
 
     def background(self) -> SessionClient | None:
         """A client of the background session of this bus and device, if one runs (and
@@ -261,7 +280,17 @@ def _fmt_notice(n: pb.Notice) -> str:
 
 def send(backend: Backend, cmd: Command, fields: dict[str, Any], *, wait_s: float | None) -> RetVal:
     """Send one command through `backend` (never raises for a negative code). With a
-    background session, `wait_s` asks it to stream the notices up to the final one."""
+    background session, `wait_s` asks it to stream the notices up to the final one.
+    `-v` logs the request and its answer (logger landscape.cli)."""
+    via = "session" if isinstance(backend, SessionClient) else "bus"
+    log.info("-> %s %s (via %s)", cmd.name, json.dumps(fields, default=str), via)
+    rv = _send(backend, cmd, fields, wait_s=wait_s)
+    log.info("<- %s seq %d %s%s %s", cmd.name, rv.seq, rv.ret_name, f" {rv.ret_msg!r}" if rv.ret_msg else "",
+             json.dumps(rv.result, default=str))
+    return rv
+
+
+def _send(backend: Backend, cmd: Command, fields: dict[str, Any], *, wait_s: float | None) -> RetVal:
     if isinstance(backend, SessionClient):
         return backend.request(cmd, wait_s=wait_s, **fields)
     if cmd.field == "connect":
@@ -279,6 +308,7 @@ def collect(backend: Backend, rv: RetVal, *, wait_timeout_s: float,
     if not rv.started:
         return notices, None
     for n in backend.notices(timeout_s=wait_timeout_s):
+        log.info("<- notice %s", _fmt_notice(n).strip())
         notices.append(n)
         if on_notice is not None:
             on_notice(n)
@@ -303,22 +333,62 @@ def execute(ctx: click.Context, cmd: Command, fields: dict[str, Any], *, wait: b
     arrive; raise CommandFailed on failure."""
     st = _state(ctx)
     backend = st.backend()
-    rv = send(backend, cmd, fields, wait_s=wait_timeout_s if wait else None)
-    if not st.json_out:
-        click.echo(f"{cmd.cli_name}: {rv.ret_name}" + (f": {rv.ret_msg}" if rv.ret_msg else ""))
-        for k, v in rv.result.items():
-            click.echo(f"  {k}: {_fmt_value(v)}")
-    notices: list[pb.Notice] = []
-    final: pb.Notice | None = None
-    if wait:
-        notices, final = collect(backend, rv, wait_timeout_s=wait_timeout_s,
-                                 on_notice=None if st.json_out else (lambda n: click.echo(_fmt_notice(n))))
+    try:
+        rv = send(backend, cmd, fields, wait_s=wait_timeout_s if wait else None)
+        if not st.json_out:
+            click.echo(f"{cmd.cli_name}: {rv.ret_name}" + (f": {rv.ret_msg}" if rv.ret_msg else ""))
+            for k, v in rv.result.items():
+                click.echo(f"  {k}: {_fmt_value(v)}")
+        notices: list[pb.Notice] = []
+        final: pb.Notice | None = None
+        if wait:
+            notices, final = collect(backend, rv, wait_timeout_s=wait_timeout_s,
+                                     on_notice=None if st.json_out else (lambda n: click.echo(_fmt_notice(n))))
+    except KeyboardInterrupt:
+        if not cmd.blocking:
+            stop_after_interrupt(st, cmd)
+        raise
     if st.json_out:
         click.echo(json.dumps({
             "command": cmd.cli_name, "ret_code": rv.ret_code, "ret_name": rv.ret_name, "ret_msg": rv.ret_msg,
             "result": rv.result, "notices": [message_to_dict(n) for n in notices]}))
     check_outcome(cmd, rv, final, wait=wait, wait_timeout_s=wait_timeout_s)
     return rv
+
+
+def stop_after_interrupt(st: CliState, cmd: Command) -> None:
+    """Ctrl-C while a motion command runs: send stopMotion (the move pauses; resume-motion
+    continues it, abort-motion ends it) and say so on stderr. Never raises."""
+    import signal
+
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)  # a second Ctrl-C must not cut the stop short
+    try:
+        try:
+            if st.client is not None:
+                # Our connection is mid-stream: the stop goes through a connection of its own.
+                st.client.close()
+                st.client = None
+                stopper = SessionClient.attach(st.socket_path())
+                if stopper is None:
+                    raise LandscapeError("the background session went away")
+                with stopper:
+                    rv = stopper.request("stop_motion", timeout_s=1.0)
+            elif st.sup is not None and st.sup.connected:
+                rv = st.sup.request("stop_motion", check=False, timeout_s=1.0)
+            else:
+                return
+        except (LandscapeError, OSError) as exc:
+            click.echo(f"landscape: {cmd.cli_name} interrupted; stop-motion could not be sent ({_one_line(exc)}): "
+                       f"the arm may still move, use `landscape stop-motion` or the emergency stop", err=True)
+            return
+        if rv.ok:
+            click.echo(f"landscape: {cmd.cli_name} interrupted: stop-motion sent ({rv.ret_name}); the motion "
+                       f"is paused: resume-motion continues it, abort-motion ends it", err=True)
+        else:
+            click.echo(f"landscape: {cmd.cli_name} interrupted: stop-motion answered {rv.ret_name}"
+                       + (f" ({rv.ret_msg})" if rv.ret_msg else "") + " (nothing was moving)", err=True)
+    finally:
+        signal.signal(signal.SIGINT, old)
 
 
 def check_outcome(cmd: Command, rv: RetVal, final: pb.Notice | None, *, wait: bool, wait_timeout_s: float) -> None:
@@ -434,6 +504,20 @@ def _addr(value: str) -> int:
     return v
 
 
+def _print_version(ctx: click.Context, param: click.Parameter, value: bool) -> None:
+    if not value or ctx.resilient_parsing:
+        return
+    from importlib.metadata import PackageNotFoundError, version
+
+    from .registry import PROTOCOL_VERSION, SCHEMA_HASH
+    try:
+        v = version("landscape")
+    except PackageNotFoundError:
+        v = "(not installed)"
+    click.echo(f"landscape {v} (protocol {PROTOCOL_VERSION}, schema {SCHEMA_HASH:08X})")
+    ctx.exit(0)
+
+
 @click.group(cls=LandscapeGroup, context_settings={"help_option_names": ["-h", "--help"]})
 @click.option("--interface", "-i", default=None,
               help="python-can interface (default: python-can config / CAN_INTERFACE)")
@@ -453,7 +537,10 @@ def _addr(value: str) -> int:
 @click.option("--no-session", is_flag=True,
               help="open a session of our own even when a background session (landscape session start) runs")
 @click.option("--json", "json_out", is_flag=True, help="print one JSON object per command")
-@click.option("--verbose", "-v", count=True, help="log protocol activity on stderr (-vv: debug)")
+@click.option("--verbose", "-v", count=True,
+              help="show each request, its answer and its notices on stderr (-vv: every protocol detail)")
+@click.option("--version", is_flag=True, expose_value=False, is_eager=True, callback=_print_version,
+              help="print the tool's version, protocol version and schema hash, then exit")
 @click.pass_context
 def cli(ctx: click.Context, interface: str | None, channel: str | None, bitrate: int | None, device: int,
         source_address: int, timeout: float | None, can_context: str | None, can_config: str | None,
@@ -464,8 +551,9 @@ def cli(ctx: click.Context, interface: str | None, channel: str | None, bitrate:
     1 protocol error, 2 usage, 3 command error or alarm, 4 bus or time-out, 5 version mismatch.
     """
     if verbose:
-        logging.basicConfig(level=logging.DEBUG if verbose > 1 else logging.INFO, stream=sys.stderr,
+        logging.basicConfig(level=logging.DEBUG if verbose > 1 else logging.WARNING, stream=sys.stderr,
                             format="%(name)s: %(message)s")
+        logging.getLogger("landscape").setLevel(logging.DEBUG if verbose > 1 else logging.INFO)
     st = CliState(BusSpec(interface, channel, bitrate, can_context, can_config), device, source_address, timeout,
                   json_out, no_session=no_session)
     ctx.obj = st
@@ -484,8 +572,13 @@ NOT_IN_SCRIPTS = ("run", "shell", "monitor", "record", "plot", "demo", "session"
 
 
 def run_line(ctx: click.Context, line: str) -> None:
-    """Run one command line (shlex) in the current session; errors propagate."""
-    args = shlex.split(line, comments=True)
+    """Run one command line (shlex) in the current session; errors propagate (a line that
+    does not parse is a click.UsageError)."""
+    try:
+        args = shlex.split(line, comments=True)
+    except ValueError as exc:
+        raise click.UsageError(f"cannot split the line into words ({str(exc).lower()}): close the quote or "
+                               f"escape it with a backslash") from None
     if not args:
         return
     name, rest = args[0], args[1:]
@@ -543,10 +636,59 @@ def _history_path() -> Path:
     return base / "history"
 
 
+def shell_help(group: click.Group, ctx: click.Context, names: Sequence[str], topic: str) -> str:
+    """The text of the shell's `help [CMD]`."""
+    if not topic:
+        return ("commands (help CMD or CMD --help for one; Ctrl-C stops a running motion; quit or Ctrl-D "
+                "leaves):\n" + "\n".join(f"  {n:<28} {group.commands[n].get_short_help_str(60)}" for n in names))
+    sub = group.get_command(ctx, topic)
+    if sub is None or topic in NOT_IN_SCRIPTS:
+        raise click.UsageError(f"no command '{topic}' in the shell: `help` lists them")
+    with click.Context(sub, info_name=topic, parent=ctx.find_root()) as sub_ctx:
+        return sub.get_help(sub_ctx)
+
+
+def shell_line(ctx: click.Context, line: str, names: Sequence[str]) -> bool:
+    """Run one shell line; False when the shell should end. Nothing a line does ends the
+    shell: help, --help, usage errors, device errors, a lost bus, Ctrl-C (which stops a running
+    motion, see execute) are reported and the prompt comes back."""
+    group = ctx.find_root().command
+    assert isinstance(group, click.Group)
+    line = line.strip()
+    if line in ("quit", "exit"):
+        return False
+    try:
+        words = line.split(None, 1)
+        if words and words[0] in ("help", "?"):
+            click.echo(shell_help(group, ctx, names, words[1].strip() if len(words) > 1 else ""))
+            return True
+        run_line(ctx, line)
+    except click.exceptions.Exit:
+        pass  # CMD --help printed its help
+    except click.UsageError as exc:
+        click.echo(f"error: {_one_line(exc.format_message())}", err=True)
+    except click.ClickException as exc:
+        click.echo(f"error: {_one_line(exc.format_message())}", err=True)
+    except (KeyboardInterrupt, click.exceptions.Abort):
+        click.echo("interrupted", err=True)
+    except Exception as exc:  # noqa: BLE001 (one line, never a traceback; the shell goes on)
+        code, msg = classify(exc)
+        click.echo(msg if code is not None else f"error: {type(exc).__name__}: {_one_line(exc)}", err=True)
+        st = _state(ctx)
+        if code in (EXIT_BUS, EXIT_VERSION, EXIT_ERROR) and st.client is not None:
+            st.client.close()   # a broken session connection is opened afresh by the next line
+            st.client = None
+    return True
+
+
 @cli.command("shell")
 @click.pass_context
 def shell_cmd(ctx: click.Context) -> None:
-    """Interactive prompt: one session for every line; Tab completes command names."""
+    """Interactive prompt: one session for every line; Tab completes command names.
+
+    `help [CMD]` and `CMD --help` show help; errors are reported and the prompt comes
+    back; Ctrl-C during a motion sends stop-motion (the arm pauses) and returns to the
+    prompt; Ctrl-C at the prompt clears the line; quit, exit or Ctrl-D leave."""
     from prompt_toolkit import PromptSession
     from prompt_toolkit.completion import WordCompleter
     from prompt_toolkit.history import FileHistory
@@ -564,24 +706,8 @@ def shell_cmd(ctx: click.Context) -> None:
             return
         except KeyboardInterrupt:
             continue
-        line = line.strip()
-        if line in ("quit", "exit"):
+        if not shell_line(ctx, line, names):
             return
-        if line in ("help", "?"):
-            click.echo("commands: " + " ".join(names))
-            continue
-        try:
-            run_line(ctx, line)
-        except BaseException as exc:  # noqa: BLE001
-            if isinstance(exc, click.UsageError):
-                click.echo(f"error: {_one_line(exc.format_message())}", err=True)
-                continue
-            code, msg = classify(exc)
-            if code is None:
-                raise
-            click.echo(msg, err=True)
-            if code not in (EXIT_USAGE, EXIT_COMMAND):
-                raise
 
 
 def _state_name(v: Any) -> str:
@@ -591,12 +717,11 @@ def _state_name(v: Any) -> str:
         return str(v)
 
 
-def monitor_view(sup: Supervisor, last_notices: Sequence[pb.Notice]) -> Any:
-    """A rich renderable of the device's telemetry and the last notices."""
+def monitor_view(t: dict[str, dict[str, Any]], title: str, last_notices: Sequence[pb.Notice]) -> Any:
+    """A rich renderable of the device's telemetry `t` (message name -> signals) and the last notices."""
     from rich.table import Table
 
-    t = sup.telemetry()
-    table = Table(title=f"landscape monitor: device {sup.device:#04x} on {sup.channel_name}", show_header=False)
+    table = Table(title=title, show_header=False)
     table.add_column("what", style="bold")
     table.add_column("value")
     st = t.get("STATUS", {})
@@ -634,31 +759,93 @@ def monitor_view(sup: Supervisor, last_notices: Sequence[pb.Notice]) -> Any:
     return table
 
 
+class TelemetryFeed:
+    """The latest telemetry and notices for `monitor`: from the background session (a watch
+    connection of its own, so the session's commands go on) or from our own session."""
+
+    def __init__(self, st: CliState, last: int = 5) -> None:
+        import collections
+
+        self.notices: collections.deque[pb.Notice] = collections.deque(maxlen=last)
+        self._latest: dict[str, dict[str, Any]] = {}
+        self._lock = threading.Lock()
+        self._sup: Supervisor | None = None
+        self._watcher: SessionClient | None = None
+        self._thread: threading.Thread | None = None
+        client = st.background()
+        if client is None:
+            self._sup = st.session()
+            self._sup.on_notice(self.notices.append)
+            self.title = f"landscape monitor: device {st.device:#04x} on {self._sup.channel_name}"
+            return
+        self.title = f"landscape monitor: device {st.device:#04x} on {st.spec.describe()} (via the session)"
+        with self._lock:
+            self._latest.update(client.telemetry())
+        self._watcher = SessionClient.attach(client.path)
+        if self._watcher is None:
+            raise SessionError(f"the session at {client.path} went away: check `landscape session status`")
+        self._thread = threading.Thread(target=self._pump, args=(self._watcher,), daemon=True,
+                                        name="landscape-monitor")
+        self._thread.start()
+
+    def _pump(self, watcher: SessionClient) -> None:
+        try:
+            for kind, item, _ in watcher.watch():
+                if kind == "broadcast":
+                    with self._lock:
+                        self._latest[item.name] = dict(item.signals)
+                else:
+                    self.notices.append(item)
+        except (OSError, ValueError, LandscapeError):
+            pass  # close() ended the connection, or the session stopped
+
+    def telemetry(self) -> dict[str, dict[str, Any]]:
+        if self._sup is not None:
+            return self._sup.telemetry()
+        with self._lock:
+            return {k: dict(v) for k, v in self._latest.items()}
+
+    def close(self) -> None:
+        if self._sup is not None:
+            with contextlib.suppress(ValueError):
+                self._sup.remove_notice_callback(self.notices.append)
+        if self._watcher is not None:
+            self._watcher.close()
+        if self._thread is not None:
+            self._thread.join(2.0)
+
+
 @cli.command("monitor")
 @click.option("--duration", type=float, default=None, help="stop after this many seconds (default: Ctrl-C)")
 @click.option("--once", is_flag=True, help="print one snapshot after a short wait and exit")
 @click.pass_context
 def monitor_cmd(ctx: click.Context, duration: float | None, once: bool) -> None:
-    """Live view of state, joints, tool pose, DIO and the last notices."""
-    import collections
+    """Live view of state, joints, tool pose, DIO and the last notices.
+
+    With a background session running it watches through the session (commands from
+    other terminals go on); else it opens a session of its own. Ctrl-C ends it."""
     import time
 
     from rich.console import Console
     from rich.live import Live
 
-    sup = _state(ctx).session()
-    last: collections.deque[pb.Notice] = collections.deque(maxlen=5)
-    sup.on_notice(last.append)
+    feed = TelemetryFeed(_state(ctx))
     console = Console()
-    if once:
-        time.sleep(0.5)
-        console.print(monitor_view(sup, list(last)))
-        return
-    end = None if duration is None else time.monotonic() + duration
-    with Live(monitor_view(sup, []), console=console, refresh_per_second=5) as live:
-        while end is None or time.monotonic() < end:
-            time.sleep(0.2)
-            live.update(monitor_view(sup, list(last)))
+    try:
+        if once:
+            time.sleep(0.5)
+            console.print(monitor_view(feed.telemetry(), feed.title, list(feed.notices)))
+            return
+        end = None if duration is None else time.monotonic() + duration
+        try:
+            with Live(monitor_view(feed.telemetry(), feed.title, []), console=console, refresh_per_second=5) as live:
+                while end is None or time.monotonic() < end:
+                    time.sleep(0.2)
+                    live.update(monitor_view(feed.telemetry(), feed.title, list(feed.notices)))
+        except KeyboardInterrupt:
+            pass  # Ctrl-C is how an open-ended monitor ends
+    finally:
+        feed.close()
 
 
 from . import cli_tools  # noqa: E402,F401  (registers path, record, plot, demo, session)

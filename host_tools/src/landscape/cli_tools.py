@@ -22,6 +22,7 @@ from typing import Any
 import click
 
 from ._generated import landscape_pb2 as pb
+from .bus import SLCAN_DEFAULT_BITRATE, resolve_config
 from .cli import (
     EXIT_COMMAND,
     EXIT_ERROR,
@@ -40,6 +41,7 @@ from .cli import (
 )
 from .demo import StepResult, demo_steps, run_demo
 from .errors import LandscapeError, error_for_code
+from .link import LinkBroker, is_local_line
 from .paths import build_path_load_requests, load_path_file, request_fields, resolve_settings
 from .plotting import KINDS, plot
 from .recording import Recorder, read_recording
@@ -396,6 +398,9 @@ def session_start_cmd(ctx: click.Context, lock: bool, start_timeout: float) -> N
     else:
         click.echo(f"session started: pid {obj['pid']}, device {st.device:#04x} on {st.spec.describe()}"
                    + (", locked" if lock else "") + f", socket {obj['socket']}")
+        if obj.get("link"):
+            click.echo(f"  link: the session owns {st.spec.channel or 'the serial line'} and shares it at "
+                       f"{obj['link']}; other landscape commands use it automatically")
 
 
 @session_group.command("serve", hidden=True)
@@ -405,23 +410,39 @@ def session_serve_cmd(ctx: click.Context, lock: bool) -> None:
     """The background process (started by `session start`): reports readiness as one JSON line."""
     st = _state(ctx)
     st.no_session = True
+    broker: LinkBroker | None = None
     try:
+        cfg = resolve_config(st.spec)
+        channel = cfg.get("channel")
+        if cfg.get("interface") == "slcan" and isinstance(channel, str) and is_local_line(channel):
+            # Own the serial line and share it (landscape/link.py); our Supervisor is one client of it.
+            broker = LinkBroker(channel, bitrate=int(cfg.get("bitrate") or SLCAN_DEFAULT_BITRATE))
+            broker.start()
         sup = st.session()
         if lock:
             sup.lock()
-        server = SessionServer(sup, st.socket_path(), channel=st.spec.describe())
+        server = SessionServer(sup, st.socket_path(), channel=st.spec.describe(),
+                               link_url=broker.url if broker is not None else None)
         server.bind()
     except BaseException as exc:  # noqa: BLE001 (reported to `session start` as one line)
+        if broker is not None:
+            broker.stop()
         code, line = classify(exc)
         print(json.dumps({"error": line or str(exc), "exit": code if code is not None else EXIT_ERROR}), flush=True)
         raise SystemExit(code if code is not None else EXIT_ERROR) from None
-    print(json.dumps({"ready": True, "pid": os.getpid(), "socket": str(server.path)}), flush=True)
+    print(json.dumps({"ready": True, "pid": os.getpid(), "socket": str(server.path),
+                      "link": broker.url if broker is not None else None}), flush=True)
     devnull = os.open(os.devnull, os.O_WRONLY)
     os.dup2(devnull, 1)
     signal.signal(signal.SIGTERM, lambda *_: server.stop())
     signal.signal(signal.SIGINT, lambda *_: server.stop())
     signal.signal(signal.SIGHUP, signal.SIG_IGN)
-    server.serve_forever()
+    try:
+        server.serve_forever()
+    finally:
+        st.close()  # disconnect while the link still carries it
+        if broker is not None:
+            broker.stop()
 
 
 @session_group.command("status")
@@ -441,6 +462,8 @@ def session_status_cmd(ctx: click.Context) -> None:
                f"source {int(s['source_address']):#04x}")
     click.echo(f"  connected: {s['connected']}  owner: {s['owner']}  state: {s['state']}")
     click.echo(f"  requests: {s['requests']}  up: {up:.0f} s  socket: {s['socket']}")
+    if s.get("link"):
+        click.echo(f"  link: shared at {s['link']} (python-can: --interface slcan --channel {s['link']})")
 
 
 @session_group.command("stop")

@@ -56,6 +56,11 @@ log = logging.getLogger("landscape.session")
 MAX_SOCKET_PATH = 107
 
 
+#: Commands a session sends at once, never queued behind another client's request: whatever
+#: runs, a stop from any terminal reaches the device (docs/host-tool.md, "Stopping").
+PRIORITY_COMMANDS = frozenset({"stop_motion", "abort_motion", "deactivate"})
+
+
 class SessionError(LandscapeError):
     """No session runs, or the session process does not answer."""
 
@@ -114,13 +119,14 @@ class SessionServer:
     Requests from every client are executed one at a time (a lock), each with the
     session's own seq; notices go to the client waiting for its command's end."""
 
-    def __init__(self, sup: Supervisor, path: Path, *, channel: str = "") -> None:
+    def __init__(self, sup: Supervisor, path: Path, *, channel: str = "", link_url: str | None = None) -> None:
         if len(os.fsencode(str(path))) > MAX_SOCKET_PATH:
             raise ArgumentError(f"session socket path {path} is longer than {MAX_SOCKET_PATH} bytes: set "
                                 f"XDG_RUNTIME_DIR to a shorter directory")
         self.sup = sup
         self.path = path
         self.channel = channel
+        self.link_url = link_url
         self.requests = 0
         self.started_at = time.time()
         self._cmd_lock = threading.Lock()
@@ -188,7 +194,7 @@ class SessionServer:
         return {"pid": os.getpid(), "socket": str(self.path), "device": sup.device, "channel": self.channel,
                 "source_address": sup.source_address, "connected": sup.connected, "owner": owner, "state": state,
                 "device_name": info.device_name if info is not None else None,
-                "requests": self.requests, "started_at": self.started_at}
+                "requests": self.requests, "started_at": self.started_at, "link": self.link_url}
 
     # ------------------------------------------------------------ one client
 
@@ -242,32 +248,64 @@ class SessionServer:
         timeout_s = obj.get("timeout_s")
         wait_s = obj.get("wait_s")
         sup = self.sup
-        with self._cmd_lock:
-            self.requests += 1
-            if cmd.field == "connect":
-                if not sup.connected:
-                    sup.connect()
-                assert sup.connect_result is not None
-                send({"retval": retval_to_dict(sup.connect_result.retval)})
-                send({"done": True})
-                return
-            if cmd.field == "disconnect":
-                send({"retval": retval_to_dict(sup.disconnect(check=False))})
-                send({"done": True})
-                return
-            if not sup.connected:
-                sup.connect()
-            if wait_s is not None:
-                for _ in sup.notices(timeout_s=0):
-                    pass  # notices of earlier commands nobody waited for
-            rv = sup.request(cmd, check=False, timeout_s=timeout_s, **fields)
+        if cmd.field in ("connect", "disconnect"):
+            with self._cmd_lock:
+                self.requests += 1
+                if cmd.field == "connect":
+                    if not sup.connected:
+                        sup.connect()
+                    assert sup.connect_result is not None
+                    rv = sup.connect_result.retval
+                else:
+                    rv = sup.disconnect(check=False)
+            send({"retval": retval_to_dict(rv)})
+            send({"done": True})
+            return
+        # Notices are collected from before the request goes out, so none is lost between
+        # its answer and the wait below; the wait holds no lock, so other clients' commands
+        # (a stop above all) run while this one's move goes on.
+        q: queue.Queue[pb.Notice] = queue.Queue(maxsize=10000)
+
+        def on_n(n: pb.Notice) -> None:
+            with contextlib.suppress(queue.Full):
+                q.put_nowait(n)
+
+        if wait_s is not None:
+            sup.on_notice(on_n)
+        try:
+            if cmd.field in PRIORITY_COMMANDS:
+                rv = self._send_request(cmd, fields, timeout_s)   # never queued behind another client
+            else:
+                with self._cmd_lock:
+                    rv = self._send_request(cmd, fields, timeout_s)
             send({"retval": retval_to_dict(rv)})
             if rv.started and wait_s is not None:
-                for n in sup.notices(timeout_s=float(wait_s)):
+                deadline = time.monotonic() + float(wait_s)
+                while not self._stop.is_set():
+                    left = deadline - time.monotonic()
+                    if left <= 0:
+                        break
+                    try:
+                        n = q.get(timeout=min(left, 0.2))
+                    except queue.Empty:
+                        continue
                     send({"notice": message_to_dict(n)})
                     if n.final and n.ref_seq == rv.seq and n.session_epoch == rv.epoch:
                         break
             send({"done": True})
+        finally:
+            if wait_s is not None:
+                with contextlib.suppress(ValueError):
+                    sup.remove_notice_callback(on_n)
+
+    def _send_request(self, cmd: Command, fields: dict[str, Any], timeout_s: float | None) -> RetVal:
+        sup = self.sup
+        self.requests += 1
+        if not sup.connected:
+            with self._cmd_lock if cmd.field in PRIORITY_COMMANDS else contextlib.nullcontext():
+                if not sup.connected:
+                    sup.connect()
+        return sup.request(cmd, check=False, timeout_s=timeout_s, **fields)
 
     def _watch(self, conn: socket.socket, send: Callable[[dict[str, Any]], None]) -> None:
         q: queue.Queue[dict[str, Any]] = queue.Queue(maxsize=10000)

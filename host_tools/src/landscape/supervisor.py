@@ -37,6 +37,7 @@ from .bus import (
     functional_id,
     open_bus,
     physical_address,
+    release_bus,
 )
 from .errors import (
     AlarmError,
@@ -318,6 +319,7 @@ class Supervisor:
             self._notifier = None
         if self._owns_bus:
             self.bus.shutdown()
+            release_bus(self.bus)
             self._owns_bus = False
 
     # ------------------------------------------------------------ heartbeat
