@@ -129,7 +129,10 @@ def test_run_all_ok_exit_0(channel: str, device: FakeDevice, tmp_path: Path) -> 
 @pytest.mark.parametrize("args,code,start", [
     (["fly"], 2, "landscape: error: No such command 'fly'."),
     (["move-absolute", "p", "sideways"], 2, "landscape: error: Invalid value for 'FRAME': 'sideways'"),
-    (["move-absolute", "p", "joint", "1", "x"], 2, "landscape: error: Invalid value for '[VALUES]...': 'x'"),
+    (["move-absolute", "p", "joint", "1", "x"], 2, "landscape: error: Invalid value for 'VALUES...': 'x'"),
+    # a required argument is required: a bare move is a usage error, never sent to the device
+    (["move-absolute", "p", "joint"], 2, "landscape: error: Missing argument 'VALUES...'"),
+    (["move-absolute"], 2, "landscape: error: Missing argument '"),
     (["set-speed", "--speed", "fast"], 2, "landscape: error: Invalid value for '--speed': 'fast'"),
     (["lock", "extra"], 2, "landscape: error: Got unexpected extra argument (extra)"),
 ])

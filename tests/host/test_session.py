@@ -64,7 +64,10 @@ def test_session_start_status_stop_and_a_lock_that_lives_on(pty_device: tuple[Fa
     assert r.exit_code == 0, r.stderr
     sock = socket_path(BusSpec("slcan", pty), 0x10, 0xF1)
     assert sock.parent == runtime_dir and sock.name.startswith("landscape-10-") and sock.exists()
-    assert r.stdout.startswith("session started: pid ") and r.stdout.rstrip().endswith(f"socket {sock}")
+    started, shared = r.stdout.splitlines()
+    assert started.startswith("session started: pid ") and started.endswith(f"socket {sock}")
+    # the session owns the pty and serves it on loopback for every other landscape process
+    assert shared.startswith(f"  link: the session owns {pty} and shares it at socket://127.0.0.1:")
     assert connects(dev) == 1
 
     r = slcan(pty, "lock")                       # first invocation takes the lock and exits

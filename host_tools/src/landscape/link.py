@@ -130,7 +130,7 @@ def _describe_pid(pid: int | None) -> str:
         return "another process"
     try:
         argv = Path(f"/proc/{pid}/cmdline").read_bytes().split(b"\0")
-        cmd = " ".join(a.decode(errors="replace") for a in argv if a)
+        cmd = " ".join(" ".join(a.decode(errors="replace").split()) for a in argv if a)
     except OSError:
         cmd = ""
     if len(cmd) > 80:
