@@ -197,3 +197,5 @@ def test_monitor_once_shows_telemetry(channel: str, device: FakeDevice) -> None:
     r = run(channel, "monitor", "--once")
     assert r.exit_code == 0, r.stderr
     assert "UNLOCKED" in r.stdout and "+0.5000 -0.2500" in r.stdout and "supervisors" in r.stdout
+    # units are shown (rich took "[rad]" for markup and printed nothing)
+    assert "joints (rad)" in r.stdout

@@ -741,13 +741,13 @@ def monitor_view(t: dict[str, dict[str, Any]], title: str, last_notices: Sequenc
     joints = [t[k][f"j{i}"] for k, r in (("JOINTS_12", (1, 2)), ("JOINTS_34", (3, 4)), ("JOINTS_56", (5, 6)))
               if k in t for i in r]
     if joints:
-        table.add_row("joints [rad]", " ".join(f"{j:+.4f}" for j in joints))
+        table.add_row("joints (rad)", " ".join(f"{j:+.4f}" for j in joints))
     if "TOOL_POS" in t:
         p = t["TOOL_POS"]
-        table.add_row("tool xyz [m]", f"{p['tool_x']:+.4f} {p['tool_y']:+.4f} {p['tool_z']:+.4f}")
+        table.add_row("tool xyz (m)", f"{p['tool_x']:+.4f} {p['tool_y']:+.4f} {p['tool_z']:+.4f}")
     if "TOOL_RPY" in t:
         r = t["TOOL_RPY"]
-        table.add_row("tool rpy [rad]", f"{r['tool_roll']:+.4f} {r['tool_pitch']:+.4f} {r['tool_yaw']:+.4f}")
+        table.add_row("tool rpy (rad)", f"{r['tool_roll']:+.4f} {r['tool_pitch']:+.4f} {r['tool_yaw']:+.4f}")
     if "DIO" in t:
         table.add_row("DIO in/out", f"{int(t['DIO']['dio_inputs']):#010x} / {int(t['DIO']['dio_outputs']):#010x}")
     if "EMERGENCY" in t:
