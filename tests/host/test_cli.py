@@ -199,3 +199,54 @@ def test_monitor_once_shows_telemetry(channel: str, device: FakeDevice) -> None:
     assert "UNLOCKED" in r.stdout and "+0.5000 -0.2500" in r.stdout and "supervisors" in r.stdout
     # units are shown (rich took "[rad]" for markup and printed nothing)
     assert "joints (rad)" in r.stdout
+
+
+def test_run_file_with_an_unclosed_quote_is_one_line(channel: str, device: FakeDevice, tmp_path: Path) -> None:
+    script = tmp_path / "quote.ls"
+    script.write_text('lock\nset-digital-io dio "unclosed\nrelease\n')
+    r = run(channel, "run", str(script))
+    assert r.exit_code == 2
+    assert "Traceback" not in r.stderr
+    assert r.stderr.splitlines()[0] == (f"{script}:2: cannot split the line into words (no closing quotation): "
+                                        f"close the quote or escape it with a backslash")
+    assert [q.WhichOneof("cmd") for q in device.requests] == ["connect", "lock", "disconnect"]
+
+
+def test_shell_lines_never_end_the_shell(channel: str, device: FakeDevice, tmp_path: Path) -> None:
+    from prompt_toolkit.application import create_app_session
+    from prompt_toolkit.input import create_pipe_input
+    from prompt_toolkit.output import DummyOutput
+
+    with create_pipe_input() as inp, create_app_session(input=inp, output=DummyOutput()):
+        inp.send_text('lock --help\nhelp set-speed\nhelp fly\nhelp\nset-digital-io dio "x\n'
+                      'release extra\nrelease\nget-motion-control-state\nquit\n')
+        r = CliRunner().invoke(cli, ["--interface", "virtual", "--channel", channel, "shell"],
+                               env={"XDG_STATE_HOME": str(tmp_path)})
+    assert r.exit_code == 0, r.stderr
+    assert "Traceback" not in r.stdout + r.stderr
+    assert "Usage: landscape lock [OPTIONS]" in r.stdout                     # CMD --help
+    assert "Usage: landscape set-speed [OPTIONS] ATTRIBUTE" in r.stdout       # help CMD
+    assert "\n  move-absolute " in r.stdout                                    # help: one line per command
+    assert r.stderr.splitlines() == [
+        "error: no command 'fly' in the shell: `help` lists them",
+        "error: cannot split the line into words (no closing quotation): close the quote or escape it "
+        "with a backslash",
+        "error: Got unexpected extra argument (extra)",
+        "release: CMD_NOT_OWNER_ERR: " + r.stderr.splitlines()[3].split("CMD_NOT_OWNER_ERR: ", 1)[1]]
+    assert "get-motion-control-state: CMD_EXEC_OK" in r.stdout  # the shell went on to the end
+
+
+def test_version_names_protocol_and_schema() -> None:
+    from landscape.registry import PROTOCOL_VERSION, SCHEMA_HASH
+
+    r = CliRunner().invoke(cli, ["--version"])
+    assert r.exit_code == 0
+    assert r.stdout.startswith("landscape ") and r.stdout.rstrip().endswith(
+        f"(protocol {PROTOCOL_VERSION}, schema {SCHEMA_HASH:08X})")
+
+
+def test_verbose_shows_requests_and_answers(channel: str, device: FakeDevice) -> None:
+    r = run(channel, "-v", "lock")
+    assert r.exit_code == 0, r.stderr
+    assert "landscape.cli: -> lock {} (via bus)" in r.stderr
+    assert "landscape.cli: <- lock seq 2 CMD_EXEC_OK {}" in r.stderr  # seq 1 was connect

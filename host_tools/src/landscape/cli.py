@@ -504,6 +504,25 @@ def _addr(value: str) -> int:
     return v
 
 
+def _verbose_logging(ctx: click.Context, verbose: int) -> None:
+    """-v: the landscape loggers (requests, answers, notices) on stderr; -vv: every logger at debug."""
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter("%(name)s: %(message)s"))
+    ours = logging.getLogger("landscape")
+    old_level, old_propagate = ours.level, ours.propagate
+    ours.addHandler(handler)
+    ours.setLevel(logging.DEBUG if verbose > 1 else logging.INFO)
+    ours.propagate = False
+    if verbose > 1:
+        logging.basicConfig(level=logging.DEBUG, stream=sys.stderr, format="%(name)s: %(message)s")
+
+    def restore() -> None:
+        ours.removeHandler(handler)
+        ours.setLevel(old_level)
+        ours.propagate = old_propagate
+    ctx.call_on_close(restore)
+
+
 def _print_version(ctx: click.Context, param: click.Parameter, value: bool) -> None:
     if not value or ctx.resilient_parsing:
         return
@@ -551,9 +570,7 @@ def cli(ctx: click.Context, interface: str | None, channel: str | None, bitrate:
     1 protocol error, 2 usage, 3 command error or alarm, 4 bus or time-out, 5 version mismatch.
     """
     if verbose:
-        logging.basicConfig(level=logging.DEBUG if verbose > 1 else logging.WARNING, stream=sys.stderr,
-                            format="%(name)s: %(message)s")
-        logging.getLogger("landscape").setLevel(logging.DEBUG if verbose > 1 else logging.INFO)
+        _verbose_logging(ctx, verbose)
     st = CliState(BusSpec(interface, channel, bitrate, can_context, can_config), device, source_address, timeout,
                   json_out, no_session=no_session)
     ctx.obj = st

@@ -399,8 +399,8 @@ def session_start_cmd(ctx: click.Context, lock: bool, start_timeout: float) -> N
         click.echo(f"session started: pid {obj['pid']}, device {st.device:#04x} on {st.spec.describe()}"
                    + (", locked" if lock else "") + f", socket {obj['socket']}")
         if obj.get("link"):
-            line = resolve_config(st.spec, strict=False).get("channel")
-            click.echo(f"  link: the session owns {line} and shares it at "
+            owned = resolve_config(st.spec, strict=False).get("channel")
+            click.echo(f"  link: the session owns {owned} and shares it at "
                        f"{obj['link']}; other landscape commands use it automatically")
 
 
