@@ -137,3 +137,10 @@ def test_busy_message_without_a_known_pid() -> None:
 def test_unknown_bitrate_is_refused_with_the_choices() -> None:
     with pytest.raises(BusError, match=r"SLCAN has no bit rate 123; use one of 10000, 20000"):
         LinkBroker("/dev/null", bitrate=123)
+
+
+@pytest.mark.parametrize("buf,want", [(b"", -1), (b"t1230", -1), (b"t1230\r", 5), (b"\a", 0), (b"x\ay\r", 1),
+                                      (b"x\ry\a", 1)])
+def test_line_end_finds_the_first_terminator(buf: bytes, want: int) -> None:
+    from landscape.link import line_end
+    assert line_end(buf) == want

@@ -11,7 +11,9 @@ channel and says what to check.
 from __future__ import annotations
 
 import logging
+import select
 import socket
+import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -124,13 +126,46 @@ def open_bus(spec: BusSpec | None = None, **kwargs: Any) -> can.BusABC:
             f"cannot open CAN channel '{channel}' on interface '{cfg.get('interface')}': "
             f"{exc}; {_hint(cfg, exc)}") from None
     if shared:
-        # pyserial's socket URL leaves Nagle on: every frame line would wait for the previous ACK.
         sock = getattr(getattr(bus, "serialPortOrig", None), "_socket", None)
         if isinstance(sock, socket.socket):
+            # pyserial's socket URL leaves Nagle on: every frame line would wait for the previous ACK.
             sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            _read_lines_in_chunks(bus, sock)
     if claimed is not None:
         _claims[id(bus)] = claimed
     return bus
+
+
+def _read_lines_in_chunks(bus: can.BusABC, sock: socket.socket) -> None:
+    """python-can's slcan reads one byte per call (two system calls and a select each: some
+    10 % of a core for the telemetry alone); on the broker's socket read what has arrived
+    at once. Same contract as slcanBus._read: one line with its terminator, or None."""
+    inner: Any = getattr(bus, "__wrapped__", bus)
+    buffer: bytearray = inner._buffer
+
+    def read(timeout: float | None) -> str | None:
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while True:
+            cut = link.line_end(buffer)
+            if cut >= 0:
+                line = bytes(buffer[:cut + 1]).decode()
+                del buffer[:cut + 1]
+                return line
+            left = None if deadline is None else max(0.0, deadline - time.monotonic())
+            ready, _, _ = select.select([sock], [], [], left)
+            if not ready:
+                return None
+            try:
+                chunk = sock.recv(4096)
+            except BlockingIOError:
+                continue
+            except OSError as exc:
+                raise can.CanOperationError(f"the shared link closed: {exc}") from None
+            if not chunk:
+                raise can.CanOperationError("the shared link closed (the session stopped?)")
+            buffer.extend(chunk)
+
+    inner._read = read
 
 
 _claims: dict[int, str] = {}

@@ -51,6 +51,12 @@ SLCAN_BITRATES = {10000: "S0", 20000: "S1", 50000: "S2", 100000: "S3", 125000: "
 LOOPBACK = "127.0.0.1"
 
 
+def line_end(buf: bytes | bytearray) -> int:
+    """Index of the first SLCAN line terminator (CR, or BEL for an error) in `buf`, else -1."""
+    cr, bel = buf.find(b"\r"), buf.find(b"\a")
+    return cr if bel < 0 else bel if cr < 0 else min(cr, bel)
+
+
 class LinkBusyError(BusError):
     """The serial line is already held by another process."""
 
@@ -351,7 +357,7 @@ class LinkBroker:
                 continue
             buf.extend(chunk)
             while True:
-                cut = next((i for i, b in enumerate(buf) if b in (0x0D, 0x07)), -1)
+                cut = line_end(buf)
                 if cut < 0:
                     break
                 line = bytes(buf[:cut])
