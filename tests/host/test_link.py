@@ -144,3 +144,39 @@ def test_unknown_bitrate_is_refused_with_the_choices() -> None:
 def test_line_end_finds_the_first_terminator(buf: bytes, want: int) -> None:
     from landscape.link import line_end
     assert line_end(buf) == want
+
+
+def test_a_client_outlives_the_broker_quietly(device_end: PtySlcanBus, runtime_dir: Path,
+                                              monkeypatch: pytest.MonkeyPatch,
+                                              caplog: pytest.LogCaptureFixture) -> None:
+    """The session stops while another process's supervisor uses the link: no exception in
+    python-can's or can-isotp's threads, one warning, and a request ends in a clean time-out."""
+    import threading
+
+    from landscape import Supervisor
+    from landscape.errors import ControllerTimeoutError
+
+    thread_errors: list[BaseException | None] = []
+    monkeypatch.setattr(threading, "excepthook", lambda args: thread_errors.append(args.exc_value))
+    b = LinkBroker(device_end.path)
+    b.start()
+    bus = open_bus(BusSpec("slcan", device_end.path))
+    notifier = can.Notifier(bus, [], timeout=0.05)
+    sup = Supervisor(bus, timeout_s=0.2, retries=0, notifier=notifier)
+    try:
+        sup._start_transport()  # no device answers here: the transport alone, as after a connect
+        sup.connected = True
+        b.stop()
+        time.sleep(0.5)
+        with pytest.raises(ControllerTimeoutError):
+            sup.request("get_motion_control_state")
+        time.sleep(0.3)
+    finally:
+        sup.connected = False
+        sup.close()
+        notifier.stop()
+        bus.shutdown()   # writes C: goes nowhere, raises nothing
+        release_bus(bus)
+    assert thread_errors == []
+    warnings = [r.getMessage() for r in caplog.records if "the shared link" in r.getMessage()]
+    assert len(warnings) == 1 and warnings[0].startswith(f"the shared link {b.url} closed (")

@@ -13,6 +13,7 @@ from __future__ import annotations
 import logging
 import select
 import socket
+import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -137,11 +138,25 @@ def open_bus(spec: BusSpec | None = None, **kwargs: Any) -> can.BusABC:
 
 
 def _read_lines_in_chunks(bus: can.BusABC, sock: socket.socket) -> None:
-    """python-can's slcan reads one byte per call (two system calls and a select each: some
-    10 % of a core for the telemetry alone); on the broker's socket read what has arrived
-    at once. Same contract as slcanBus._read: one line with its terminator, or None."""
+    """Adapt python-can's slcan bus on the broker's socket.
+
+    It reads one byte per call (two system calls and a select each: some 10 % of a core for
+    the telemetry alone); this reads what has arrived at once, with the same contract as
+    slcanBus._read (one line with its terminator, or None). And when the session serving
+    the link stops, the bus goes quiet instead of raising in python-can's and can-isotp's
+    threads (tracebacks no user should see): reads time out, writes go nowhere, one warning
+    says why, and the next request ends in a clean time-out error."""
     inner: Any = getattr(bus, "__wrapped__", bus)
     buffer: bytearray = inner._buffer
+    original_write = inner._write
+    closed = threading.Event()
+    host, port = sock.getpeername()[:2]
+
+    def lost(why: object) -> None:
+        if not closed.is_set():
+            closed.set()
+            log.warning("the shared link socket://%s:%d closed (%s): the session serving it stopped; check "
+                        "`landscape session status`", host, port, why)
 
     def read(timeout: float | None) -> str | None:
         deadline = None if timeout is None else time.monotonic() + timeout
@@ -152,6 +167,9 @@ def _read_lines_in_chunks(bus: can.BusABC, sock: socket.socket) -> None:
                 del buffer[:cut + 1]
                 return line
             left = None if deadline is None else max(0.0, deadline - time.monotonic())
+            if closed.is_set():
+                time.sleep(0.05 if left is None else left)
+                return None
             ready, _, _ = select.select([sock], [], [], left)
             if not ready:
                 return None
@@ -160,12 +178,23 @@ def _read_lines_in_chunks(bus: can.BusABC, sock: socket.socket) -> None:
             except BlockingIOError:
                 continue
             except OSError as exc:
-                raise can.CanOperationError(f"the shared link closed: {exc}") from None
+                lost(exc.strerror)
+                continue
             if not chunk:
-                raise can.CanOperationError("the shared link closed (the session stopped?)")
+                lost("end of stream")
+                continue
             buffer.extend(chunk)
 
+    def write(string: str) -> None:
+        if closed.is_set():
+            return
+        try:
+            original_write(string)
+        except can.CanError as exc:
+            lost(exc.__cause__ or exc)
+
     inner._read = read
+    inner._write = write
 
 
 _claims: dict[int, str] = {}
