@@ -28,7 +28,9 @@ FAR_B = ["-1.2", "0.3", "0.4", "-0.5", "0.9", "-1.0"]
 #: SIGINT or a stop from another terminal to a paused, still arm (s): the CLI sends stopMotion at
 #: once and the device decelerates along the path at 10 % speed in well under a second.
 STOP_TIME_S = 2.0
-STATUS_PAUSED = 2  # STATUS.st_motion robot_paused (docs/state-machine.md)
+#: STATUS.st_motion robot_paused, robot_stopped_on_command (docs/state-machine.md): a one-shot
+#: invocation disconnects right after its stop, and the owner's disconnect ends the paused motion.
+STOPPED = (2, 4)
 
 
 @pytest.fixture
@@ -68,11 +70,11 @@ def wait_moving(sup: Supervisor, timeout_s: float = 20.0) -> None:
 
 
 def wait_paused(sup: Supervisor, since: float, timeout_s: float = 10.0) -> float:
-    """Seconds from `since` until telemetry says the motion is paused and the joints are still."""
+    """Seconds from `since` until telemetry says the motion is paused (or stopped on command)."""
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
         st = sup.telemetry().get("STATUS", {})
-        if int(st.get("st_motion", -1)) == STATUS_PAUSED:
+        if int(st.get("st_motion", -1)) in STOPPED:
             return time.monotonic() - since
         time.sleep(0.01)
     raise AssertionError(f"the arm did not pause within {timeout_s} s: {sup.get_motion_control_state()}")
