@@ -1,6 +1,7 @@
 #!/bin/sh
 # Regenerate the host package's copies of the protocol artefacts from protocol/.
-# Run after every change of protocol/landscape.proto, .dbc or .options;
+# Run after every change of protocol/landscape.proto, .dbc or .options, or of the
+# robot model (firmware/model/ls_robot_model.c, the URDF's source);
 # tests/host/test_generated.py fails while the committed copies are stale.
 set -eu
 here=$(cd "$(dirname "$0")" && pwd)
@@ -10,4 +11,8 @@ protoc -I"$root/protocol" -I/usr/include --python_out="$out" --pyi_out="$out" \
   --descriptor_set_out="$out/landscape.desc" "$root/protocol/landscape.proto"
 cp "$root/protocol/landscape.dbc" "$out/landscape.dbc"
 cp "$root/protocol/landscape.options" "$out/landscape.options"
-echo "updated $out/landscape_pb2.py(i), landscape.desc, landscape.dbc and landscape.options"
+# The arm's URDF, printed by the built ls_urdf from firmware/model/ls_robot_model.c.
+ls_urdf="${LS_BUILD_DIR:-$root/build}/bin/ls_urdf"
+[ -x "$ls_urdf" ] || { echo "update_generated.sh: $ls_urdf is missing: build first (bash .ci/build)" >&2; exit 1; }
+"$ls_urdf" -o "$out/ls-sim6.urdf"
+echo "updated $out/landscape_pb2.py(i), landscape.desc, landscape.dbc, landscape.options and ls-sim6.urdf"

@@ -1,6 +1,7 @@
 """The committed protocol artefacts of the host package equal a fresh generation from protocol/."""
 from __future__ import annotations
 
+import os
 import shutil
 import subprocess
 from pathlib import Path
@@ -39,6 +40,14 @@ def test_schema_hash_equals_gen_registry() -> None:
     spec.loader.exec_module(mod)
     assert SCHEMA_HASH == mod.schema_hash((GEN / "landscape.desc").read_bytes())
     assert 0 < SCHEMA_HASH < 2**32
+
+
+def test_urdf_copy_matches_the_robot_model() -> None:
+    """The packaged URDF is what the built ls_urdf prints from firmware/model/ls_robot_model.c."""
+    ls_urdf = Path(os.environ.get("LS_BUILD_DIR", ROOT / "build")) / "bin" / "ls_urdf"
+    assert ls_urdf.exists(), f"{ls_urdf} is missing: build first (bash .ci/build)"
+    fresh = subprocess.run([str(ls_urdf)], capture_output=True, check=True).stdout
+    assert (GEN / "ls-sim6.urdf").read_bytes() == fresh, f"ls-sim6.urdf is stale: {FIX}"
 
 
 def test_options_copy_matches_protocol() -> None:
