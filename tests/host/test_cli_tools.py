@@ -161,8 +161,8 @@ def test_record_writes_rows(channel: str, device: FakeDevice, tmp_path: Path, su
 def test_record_unknown_suffix_exit_2(channel: str, tmp_path: Path) -> None:
     r = run(channel, "record", str(tmp_path / "x.txt"), "--duration", "0.1")
     assert r.exit_code == 2
-    assert single_error(r) == (f"landscape: error: {tmp_path / 'x.txt'}: unknown recording type '.txt': use .csv or "
-                               f".jsonl (also .json, .ndjson)")
+    assert single_error(r) == (f"landscape: error: {tmp_path / 'x.txt'}: unknown recording type '.txt': use .mcap, "
+                               f".csv or .jsonl (also .json, .ndjson)")
 
 
 def _check_png(path: Path, shape: tuple[int, int]) -> None:
@@ -174,14 +174,17 @@ def _check_png(path: Path, shape: tuple[int, int]) -> None:
     assert float(img[..., :3].std()) > 0.01  # not blank
 
 
-@pytest.mark.parametrize("suffix", [".csv", ".jsonl"])
+@pytest.mark.parametrize("suffix", [".csv", ".jsonl", ".mcap"])
 def test_plot_joints_and_path(channel: str, device: FakeDevice, tmp_path: Path, suffix: str) -> None:
     rec = tmp_path / f"rec{suffix}"
     assert run(channel, "record", str(rec), "--duration", "1.5").exit_code == 0  # 0.4 s caught no joints at load 15
     r = CliRunner().invoke(cli, ["plot", str(rec), "-o", str(tmp_path / "j.png")])
     assert r.exit_code == 0, r.stderr
     assert r.stdout == f"plot: wrote {tmp_path / 'j.png'} (joints)\n"
-    _check_png(tmp_path / "j.png", (550, 1000))
+    _check_png(tmp_path / "j.png", (600, 1000))
+    r = CliRunner().invoke(cli, ["plot", str(rec), "-o", str(tmp_path / "v.png"), "--kind", "velocity"])
+    assert r.exit_code == 0, r.stderr
+    _check_png(tmp_path / "v.png", (600, 1000))
     r = CliRunner().invoke(cli, ["plot", str(rec), "-o", str(tmp_path / "p.png"), "--kind", "path"])
     assert r.exit_code == 0, r.stderr
     _check_png(tmp_path / "p.png", (700, 750))
@@ -226,7 +229,7 @@ def test_demo_skips_not_implemented_and_exits_0(channel: str, device: FakeDevice
         ["tag=corner1", "tag=corner2", "tag=corner3", "tag=corner4", "tag=back"]
     assert out[-3] == "demo: 10 steps ok, 3 skipped, 0 failed"
     assert device.owner is None and device.paths == {} and device.state == ls.IDLE
-    _check_png(tmp_path / "d.png", (550, 1000))
+    _check_png(tmp_path / "d.png", (600, 1000))
     _check_png(tmp_path / "d-path.png", (700, 750))
     with (tmp_path / "d.csv").open() as fh:
         rows = list(csv.DictReader(fh))

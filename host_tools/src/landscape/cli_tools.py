@@ -42,12 +42,14 @@ from .cli import (
 from .demo import StepResult, demo_steps, run_demo
 from .errors import LandscapeError, error_for_code
 from .link import LinkBroker, is_local_line
+from .mcap_log import McapRecorder
 from .paths import build_path_load_requests, load_path_file, request_fields, resolve_settings
 from .plotting import KINDS, plot
-from .recording import Recorder, read_recording
+from .recording import Recorder, open_recorder, read_recording
 from .registry import lookup, message_to_dict
 from .session import SessionClient, SessionError, SessionServer
 from .supervisor import RetVal, Supervisor
+from .urdf import urdf_text, write_urdf
 
 
 def _stdout_is_tty() -> bool:
@@ -150,18 +152,24 @@ def path_run_cmd(ctx: click.Context, name: str, cycles: int, wait_timeout: float
 # ---------------------------------------------------------------- record, plot
 
 
-def start_recording(st: CliState, rec: Recorder) -> Callable[[], None]:
+def start_recording(st: CliState, rec: Recorder | McapRecorder) -> Callable[[], None]:
     """Feed `rec` from the background session (a watch connection of its own) or from the
-    invocation's own session; returns the function that stops it."""
+    invocation's own session; returns the function that stops it. Raw CAN frames (MCAP) come
+    from the own session only: the background session forwards broadcasts and notices."""
     client = st.background()
     if client is None:
         sup = st.session()
         sup.on_telemetry(rec.broadcast)
         sup.on_notice(rec.notice)
+        frames = rec.frame if isinstance(rec, McapRecorder) else None
+        if frames is not None:
+            sup.add_frame_listener(frames)
 
         def stop_own() -> None:
             sup.remove_telemetry_callback(rec.broadcast)
             sup.remove_notice_callback(rec.notice)
+            if frames is not None:
+                sup.remove_frame_listener(frames)
         return stop_own
     watcher = SessionClient.attach(client.path)
     if watcher is None:
@@ -193,28 +201,55 @@ def start_recording(st: CliState, rec: Recorder) -> Callable[[], None]:
 @click.pass_context
 def record_cmd(ctx: click.Context, file: Path, duration: float | None) -> None:
     """Record telemetry (JOINTS_12/34/56, TOOL_POS, TOOL_RPY, STATUS, DIO) and notices to FILE:
-    CSV for .csv, JSON lines for .jsonl/.json/.ndjson."""
+    MCAP for .mcap (joint states, link transforms for the URDF of `landscape urdf`, tool pose,
+    status, DIO, notices as logs, raw CAN frames), CSV for .csv, JSON lines for .jsonl/.json/.ndjson."""
     st = _state(ctx)
-    rec = Recorder(file)
+    rec = open_recorder(file)
     t0 = time.monotonic()
+    progress = sys.stderr.isatty() and not st.json_out
     try:
         stop = start_recording(st, rec)
         try:
+            next_report = t0 + 1.0
             while duration is None or time.monotonic() - t0 < duration:
                 time.sleep(0.05 if duration is None else min(0.05, max(0.0, duration - (time.monotonic() - t0))))
+                if progress and time.monotonic() >= next_report:
+                    next_report += 1.0
+                    click.echo(f"\rrecord: {time.monotonic() - t0:5.0f} s, {rec.broadcasts} broadcasts, "
+                               f"{rec.notices} notices", nl=False, err=True)
         except KeyboardInterrupt:
             pass  # Ctrl-C is how an open-ended recording ends
         finally:
             stop()
+            if progress:
+                click.echo("", err=True)
     finally:
         rec.close()
-    summary = {"file": str(file), "broadcasts": rec.broadcasts, "notices": rec.notices,
-               "seconds": round(time.monotonic() - t0, 3)}
+    summary: dict[str, Any] = {"file": str(file), "broadcasts": rec.broadcasts, "notices": rec.notices,
+                               "seconds": round(time.monotonic() - t0, 3)}
+    if isinstance(rec, McapRecorder):
+        summary["frames"] = rec.frames
+        summary["channels"] = dict(rec.counts)
     if st.json_out:
         click.echo(json.dumps({"command": "record", "result": summary}))
     else:
-        click.echo(f"record: {rec.broadcasts} broadcasts and {rec.notices} notices in {summary['seconds']:g} s "
-                   f"to {file}")
+        extra = ""
+        if isinstance(rec, McapRecorder):
+            extra = f", {rec.frames} CAN frames, {rec.messages} messages on {len(rec.counts)} channels"
+        click.echo(f"record: {rec.broadcasts} broadcasts and {rec.notices} notices{extra} in "
+                   f"{summary['seconds']:g} s to {file}")
+
+
+@cli.command("urdf")
+@click.option("-o", "--output", "out", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="file to write (default: stdout)")
+def urdf_cmd(out: Path | None) -> None:
+    """The URDF of the simulated arm (generated from the firmware's robot model), for a 3D viewer."""
+    if out is None:
+        click.echo(urdf_text(), nl=False)
+    else:
+        write_urdf(out)
+        click.echo(f"urdf: wrote {out}")
 
 
 @cli.command("plot")
@@ -222,9 +257,10 @@ def record_cmd(ctx: click.Context, file: Path, duration: float | None) -> None:
 @click.option("-o", "--output", "out", type=click.Path(dir_okay=False, path_type=Path), required=True,
               help="image to write (PNG; the suffix chooses the format)")
 @click.option("--kind", type=click.Choice(KINDS), default="joints", show_default=True,
-              help="joints: positions over time; path: the tool position in 3-D")
+              help="joints: positions over time; velocity: joint velocities over time; path: the tool position "
+                   "in 3-D")
 def plot_cmd(file: Path, out: Path, kind: str) -> None:
-    """Plot a recording of `landscape record` (no bus needed)."""
+    """Plot a recording of `landscape record` (.mcap, .csv or .jsonl; no bus needed)."""
     plot(read_recording(file), out, kind)
     click.echo(f"plot: wrote {out} ({kind})")
 
@@ -251,7 +287,7 @@ def demo_cmd(ctx: click.Context, record_file: Path | None, plot_file: Path | Non
     rec_path = record_file
     if plot_file is not None and rec_path is None:
         rec_path = Path(tempfile.mkstemp(prefix="landscape-demo-", suffix=".csv")[1])
-    rec = Recorder(rec_path) if rec_path is not None else None
+    rec = open_recorder(rec_path) if rec_path is not None else None
     backend = st.backend()
     if isinstance(backend, Supervisor):
         backend.on_rsvp(None, lambda n: None)  # confirm every RSVP: the demo goes on

@@ -12,6 +12,9 @@ one column per signal of RECORDED_MESSAGES, then `notice_kind`, `data`
 (';'-joined), `ref_seq`, `final`. A row fills only its own columns.
 JSON lines (`.jsonl`, `.json`, `.ndjson`): one object per row with `signals` or
 `notice` (the Notice as a dict).
+MCAP (`.mcap`): channels with schemas for viewers such as Foxglove, written by
+mcap_log.McapRecorder (`open_recorder` picks the writer from the suffix);
+`read_recording` reads all three.
 """
 from __future__ import annotations
 
@@ -21,17 +24,20 @@ import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, TYPE_CHECKING, Any
 
 from . import telemetry as tm
 from ._generated import landscape_pb2 as pb
 from .errors import ArgumentError, LandscapeError
 from .registry import message_to_dict
 
+if TYPE_CHECKING:
+    from .mcap_log import McapRecorder
+
 RECORDED_MESSAGES: tuple[str, ...] = ("JOINTS_12", "JOINTS_34", "JOINTS_56", "TOOL_POS", "TOOL_RPY", "STATUS", "DIO")
 TIME_COLUMNS: tuple[str, ...] = ("host_monotonic_s", "t_s", "device_time_ms")
 NOTICE_COLUMNS: tuple[str, ...] = ("notice_kind", "data", "ref_seq", "final")
-FORMATS: dict[str, str] = {".csv": "csv", ".jsonl": "jsonl", ".json": "jsonl", ".ndjson": "jsonl"}
+FORMATS: dict[str, str] = {".csv": "csv", ".jsonl": "jsonl", ".json": "jsonl", ".ndjson": "jsonl", ".mcap": "mcap"}
 
 
 class RecordingError(LandscapeError):
@@ -47,9 +53,18 @@ def signal_columns() -> list[str]:
 def record_format(path: str | Path) -> str:
     fmt = FORMATS.get(Path(path).suffix.lower())
     if fmt is None:
-        raise ArgumentError(f"{path}: unknown recording type '{Path(path).suffix}': use .csv or .jsonl "
+        raise ArgumentError(f"{path}: unknown recording type '{Path(path).suffix}': use .mcap, .csv or .jsonl "
                             f"(also .json, .ndjson)")
     return fmt
+
+
+def open_recorder(path: str | Path, *, start_s: float | None = None) -> Recorder | McapRecorder:
+    """The writer for `path`'s suffix: McapRecorder for .mcap, else Recorder (CSV, JSON lines)."""
+    if record_format(path) == "mcap":
+        from .mcap_log import McapRecorder
+
+        return McapRecorder(path, start_s=start_s)
+    return Recorder(path, start_s=start_s)
 
 
 class Recorder:
@@ -59,6 +74,8 @@ class Recorder:
     def __init__(self, path: str | Path, *, start_s: float | None = None) -> None:
         self.path = Path(path)
         self.format = record_format(path)
+        if self.format == "mcap":
+            raise ArgumentError(f"{path}: Recorder writes CSV or JSON lines; use open_recorder() for .mcap")
         self.start_s = time.monotonic() if start_s is None else start_s
         self.broadcasts = 0
         self.notices = 0
@@ -146,11 +163,13 @@ def _plain(v: Any) -> Any:
 
 @dataclass
 class Recording:
-    """A recording read back: per broadcast name, (t_s, signals) samples in order; notices."""
+    """A recording read back: per broadcast name, (t_s, signals) samples in order; notices;
+    for MCAP also the joint states as recorded (t_s, positions [rad], velocities [rad/s] or None)."""
 
     path: Path
     series: dict[str, list[tuple[float, dict[str, float]]]] = field(default_factory=dict)
     notices: list[tuple[float, str, dict[str, str]]] = field(default_factory=list)  # (t_s, event_id, data)
+    joint_states: list[tuple[float, list[float], list[float | None]]] = field(default_factory=list)
 
 
 def _data_dict(items: list[str]) -> dict[str, str]:
@@ -162,9 +181,13 @@ def _data_dict(items: list[str]) -> dict[str, str]:
 
 
 def read_recording(path: str | Path) -> Recording:
-    """Read a recording written by Recorder (CSV or JSON lines)."""
+    """Read a recording written by Recorder (CSV or JSON lines) or McapRecorder (MCAP)."""
     p = Path(path)
     fmt = record_format(p)
+    if fmt == "mcap":
+        from .mcap_log import recording_from_mcap
+
+        return recording_from_mcap(p)
     rec = Recording(p)
     try:
         f = p.open(newline="", encoding="utf-8")

@@ -684,6 +684,17 @@ class Supervisor:
     def remove_telemetry_callback(self, fn: TelemetryCallback) -> None:
         self._telemetry_cbs.remove(fn)
 
+    def add_frame_listener(self, fn: Callable[[can.Message], None]) -> None:
+        """Call fn(frame) for every CAN frame received, decoded or not (the Notifier's thread: keep
+        it short). Frames this host sends are not among them (python-can does not echo them)."""
+        if self._notifier is None:
+            raise LandscapeError("the session is not open: call open() before add_frame_listener()")
+        self._notifier.add_listener(fn)
+
+    def remove_frame_listener(self, fn: Callable[[can.Message], None]) -> None:
+        if self._notifier is not None:
+            self._notifier.remove_listener(fn)
+
     # ------------------------------------------------------------ typed commands (one per schema command)
     # Argument names are the schema's field names, so units are in them (speed_pct,
     # max_timeout_s, polling_timeout_ms); tests/host checks each method against the registry.
