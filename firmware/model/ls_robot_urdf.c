@@ -73,8 +73,8 @@ int ls_robot_urdf_write(const ls_robot_model_t *m, FILE *out)
                       "      <geometry><sphere radius=\"%.17g\"/></geometry>\n"
                       "      <material name=\"joint\"/>\n"
                       "    </visual>\n",
-                      i + 1, parent, i + 1, dh->theta_offset_rad, m->q_min_rad[i], m->q_max_rad[i],
-                      m->qd_max_rad_s[i], m->torque_max_Nm[i], i + 1, 1.25 * r) < 0
+                      i + 1, parent, i + 1, dh->theta_offset_rad, m->q_min_rad[i], m->q_max_rad[i], m->qd_max_rad_s[i],
+                      m->torque_max_Nm[i], i + 1, 1.25 * r) < 0
                   ? -1
                   : 0;
         rc |= write_segment(out, r, 0.0, 0.0, 0.0, dh->d_m, 0);
