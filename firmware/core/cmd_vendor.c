@@ -5,12 +5,14 @@
  *   faults   the fault log (oldest first)
  *   rtstats  the control loop: cycles, overruns, worst latency and cycle time, SCHED_FIFO, memory lock
  *   config   the running configuration (file and options merged)
+ *   stopping the category-1 stop's bound per joint, from the robot model
  * Output is plain text, one item per line, at most 1 KiB. */
 #include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
 
 #include "ls_core.h"
+#include "ls_motion.h"
 
 typedef struct {
     char *buf;
@@ -38,7 +40,7 @@ int32_t ls_h_send_command(struct ls_core *core, struct ls_call *call)
     ls_SendCommandRes *r = &call->res->result.send_command;
     out_t o = { r->result, sizeof r->result, 0 };
     if (strcmp(in, "help") == 0 || in[0] == '\0') {
-        put(&o, "help\nversion\nstatus\nfaults\nrtstats\nconfig\n");
+        put(&o, "help\nversion\nstatus\nfaults\nrtstats\nconfig\nstopping\n");
     } else if (strcmp(in, "version") == 0) {
         put(&o, "firmware=%s\nprotocol=%u\nschema=%08X\n", core->cfg.firmware_version,
             (unsigned)ls_Protocol_PROTOCOL_VERSION, (unsigned)LS_SCHEMA_HASH);
@@ -70,6 +72,18 @@ int32_t ls_h_send_command(struct ls_core *core, struct ls_call *call)
         }
         if (n == 0) {
             put(&o, "no faults\n");
+        }
+    } else if (strcmp(in, "stopping") == 0) {
+        if (core->model == NULL) {
+            return ls_reply(call, ls_RetCode_CMD_UNSUPPORTED_ERR,
+                            "sendCommand stopping: no arm model is composed in this firmware");
+        }
+        /* Emergency frame, e-stop input, faults, shutdown: docs/reliability.md. */
+        for (int j = 0; j < LS_N_JOINTS; j++) {
+            double t_s, d_rad;
+            if (ls_motion_fast_stop_bound(core->model, j, &t_s, &d_rad) == 0) {
+                put(&o, "j%d time_s=%.4f distance_rad=%.4f\n", j + 1, t_s, d_rad);
+            }
         }
     } else if (strcmp(in, "rtstats") == 0 || strcmp(in, "config") == 0) {
         void (*fn)(void *, char *, size_t) = in[0] == 'r' ? core->act.describe_rt : core->act.describe_config;

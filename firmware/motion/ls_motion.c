@@ -669,6 +669,24 @@ void ls_motion_stop_fast(ls_motion_t *m)
     }
 }
 
+int ls_motion_fast_stop_bound(const ls_robot_model_t *model, int j, double *time_s, double *dist_rad)
+{
+    if (model == NULL || j < 0 || j >= LS_N_JOINTS || time_s == NULL || dist_rad == NULL) {
+        return -1;
+    }
+    /* The fast ramp of a joint segment whose peak speed is the joint's limit
+     * (ls_motion_seg_joint); a slower segment has a shorter ramp. */
+    const double v = model->qd_max_rad_s[j];
+    const double by_acc = LS_TIMESCALE_RD_GAIN * v / model->qdd_max_rad_s2[j];
+    const double by_jerk = sqrt(LS_TIMESCALE_RDD_GAIN * v / model->qddd_max_rad_s3[j]);
+    const double ramp = fmax(MIN_STOP_RAMP_S, STOP_RAMP_MARGIN * fmax(by_acc, by_jerk));
+    /* r falls from 1 to 0 symmetrically over the ramp: the path clock
+     * advances by ramp / 2, at most v per second of path time. */
+    *time_s = ramp;
+    *dist_rad = v * ramp / 2.0;
+    return 0;
+}
+
 int ls_motion_resume(ls_motion_t *m)
 {
     if (m->phase != LS_MOTION_PAUSED) {

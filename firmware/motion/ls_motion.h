@@ -220,6 +220,13 @@ void ls_motion_stop(ls_motion_t *m); /* decelerate along the path, then LS_MEV_P
 /* The same at the model's maximum deceleration (faults, emergency, shutdown):
  * also shortens a stop already under way. */
 void ls_motion_stop_fast(ls_motion_t *m);
+/* The category-1 stop's bound for joint j (0-based) moving at up to its
+ * velocity limit in a joint move, from the model alone (docs/reliability.md,
+ * "Stopping distance and time"): once the loop takes the stop, the joint
+ * comes to rest within *time_s and travels at most *dist_rad. The user's speed
+ * and acceleration settings can only make the stop shorter. Returns 0, -1 on
+ * a bad argument (nothing written). */
+int ls_motion_fast_stop_bound(const ls_robot_model_t *model, int j, double *time_s, double *dist_rad);
 int ls_motion_resume(ls_motion_t *m); /* from PAUSED; -1 otherwise */
 void ls_motion_abort(ls_motion_t *m); /* drop the motion at once: hold the current set-point */
 /* The auxiliary command announced by LS_MEV_AUX finished: go on. */
