@@ -7,6 +7,7 @@
 #include <errno.h>
 #include <inttypes.h>
 #include <poll.h>
+#include <pthread.h>
 #include <signal.h>
 #include <stdatomic.h>
 #include <stdbool.h>
@@ -38,12 +39,64 @@
 #define LS_FIRMWARE_VERSION "0.0.0"
 #endif
 
-static volatile sig_atomic_t g_stop;
+static volatile sig_atomic_t g_stop; /* the signal that asked us to stop, 0: none */
 
 static void on_signal(int sig)
 {
-    (void)sig;
-    g_stop = 1;
+    g_stop = sig;
+}
+
+/* Signals (docs/reliability.md "Signals"): SIGTERM, SIGINT, SIGHUP and
+ * SIGQUIT stop the arm (category 1), send the final notices and exit 0;
+ * they are blocked in every thread but this one (block_stop_signals around
+ * the control thread's start). SIGPIPE, SIGUSR1, SIGUSR2 and SIGALRM are
+ * ignored process-wide: nothing here uses them, and their default action
+ * would kill the controller with the drives on. */
+static const int k_stop_signals[] = { SIGTERM, SIGINT, SIGHUP, SIGQUIT };
+static const int k_ignored_signals[] = { SIGPIPE, SIGUSR1, SIGUSR2, SIGALRM };
+
+static void install_signals(void)
+{
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigemptyset(&sa.sa_mask);
+    for (size_t i = 0; i < sizeof k_stop_signals / sizeof k_stop_signals[0]; i++) {
+        sigaddset(&sa.sa_mask, k_stop_signals[i]);
+    }
+    for (size_t i = 0; i < sizeof k_stop_signals / sizeof k_stop_signals[0]; i++) {
+        (void)sigaction(k_stop_signals[i], &sa, NULL);
+    }
+    struct sigaction ign;
+    memset(&ign, 0, sizeof ign);
+    ign.sa_handler = SIG_IGN;
+    sigemptyset(&ign.sa_mask);
+    for (size_t i = 0; i < sizeof k_ignored_signals / sizeof k_ignored_signals[0]; i++) {
+        (void)sigaction(k_ignored_signals[i], &ign, NULL);
+    }
+}
+
+/* Block (true) or unblock the stop signals in the calling thread; threads
+ * started while they are blocked inherit the mask. */
+static void block_stop_signals(bool block)
+{
+    sigset_t set;
+    sigemptyset(&set);
+    for (size_t i = 0; i < sizeof k_stop_signals / sizeof k_stop_signals[0]; i++) {
+        sigaddset(&set, k_stop_signals[i]);
+    }
+    (void)pthread_sigmask(block ? SIG_BLOCK : SIG_UNBLOCK, &set, NULL);
+}
+
+static const char *signal_name(int sig)
+{
+    switch (sig) {
+    case SIGTERM: return "SIGTERM";
+    case SIGINT: return "SIGINT";
+    case SIGHUP: return "SIGHUP";
+    case SIGQUIT: return "SIGQUIT";
+    default: return "a signal";
+    }
 }
 
 /* sd-daemon style level prefixes: journald stores them as priorities. */
@@ -241,10 +294,11 @@ static void send_telemetry(void)
     uint8_t d[8];
     struct landscape_status_t st = {
         .st_state = (uint8_t)g_core.state,
-        .st_motion = (uint8_t)(s.phase == LS_MOTION_RUNNING || s.phase == LS_MOTION_STOPPING ? 1
-                               : s.phase == LS_MOTION_PAUSED                                 ? 2
-                               : g_core.fault[0] != '\0'                                     ? 3
-                                                                                             : 0),
+        .st_motion = (uint8_t)(g_core.halt.active                                              ? 5
+                               : s.phase == LS_MOTION_RUNNING || s.phase == LS_MOTION_STOPPING ? 1
+                               : s.phase == LS_MOTION_PAUSED                                   ? 2
+                               : g_core.fault[0] != '\0'                                       ? 3
+                                                                                               : 0),
         .st_control_mode = (uint8_t)(g_core.fault[0] != '\0' ? 2 : (s.enabled ? 1 : 0)),
         .st_fault = g_core.fault[0] != '\0' ? 1u : 0u,
         .st_overruns = 0,
@@ -410,12 +464,7 @@ int main(int argc, char **argv)
         LOG_ERR("%s", cmsg);
         return LS_EXIT_BAD_CONFIG;
     }
-    struct sigaction sa;
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = on_signal;
-    sigaction(SIGINT, &sa, NULL);
-    sigaction(SIGTERM, &sa, NULL);
-    signal(SIGPIPE, SIG_IGN);
+    install_signals();
 
     ls_core_config_t cfg = {
         .device_name = opt.name,
@@ -450,9 +499,14 @@ int main(int argc, char **argv)
         (void)ls_net_add_link(&g_net, &link);
         LOG_INFO("link %s up", link.name);
     }
+    /* The control thread (and anything it starts) never takes a stop signal:
+     * this thread runs the stop. */
+    block_stop_signals(true);
     if (rc == 0 && compose(&opt) != 0) {
         rc = 1;
     }
+    block_stop_signals(false);
+    const bool started = rc == 0;
     if (rc == 0) {
         LOG_INFO("%s ready: node 0x%02X, firmware %s, schema %08X", opt.name, opt.node, LS_FIRMWARE_VERSION,
                  (unsigned)LS_SCHEMA_HASH);
@@ -461,15 +515,21 @@ int main(int argc, char **argv)
     uint64_t next_tm = next_hb;
     uint64_t tm_period = opt.telemetry_hz > 0 ? 1000000u / opt.telemetry_hz : 0;
     uint8_t hb_counter = 0;
-    /* SIGTERM/SIGINT: a motion stops along its path at the model's maximum
-     * deceleration, the drives go off, its final notice (reason=shutdown) goes
-     * out, then the process exits; at most shutdown_max_us. */
+    /* SIGTERM/SIGINT/SIGHUP/SIGQUIT: a motion stops along its path at the
+     * model's maximum deceleration, the drives go off, its final notice
+     * (reason=shutdown) goes out, then the process exits. The stop itself is
+     * bounded by the slowest joint's category-1 stop (sendCommand stopping,
+     * under 1 s) and by the halt's own limit (ls_run.c, 5 s); shutdown_max_us
+     * caps it, then up to 1 s lets the links carry the notices out. The
+     * systemd unit's TimeoutStopSec (landscaped.service) is their sum plus a
+     * margin: docs/reliability.md "Signals". */
     const uint64_t shutdown_max_us = 6000000u;
     uint64_t shutdown_at = 0;
     uint64_t flushed_at = 0;
     while (rc == 0) {
         if (g_stop && shutdown_at == 0) {
             shutdown_at = mono_us();
+            LOG_INFO("%s received", signal_name((int)g_stop));
             if (g_core.ctl == NULL || !ls_run_shutdown(&g_core, shutdown_at)) {
                 break;
             }
@@ -517,7 +577,9 @@ int main(int argc, char **argv)
             next_tm = now + tm_period;
         }
     }
-    LOG_INFO("shutting down");
+    if (started) {
+        LOG_INFO("shutting down");
+    }
     for (size_t i = 0; i < g_net.n_links; i++) {
         char line[512];
         if (hal_sim_faulty_format(&g_net.links[i], line, sizeof line) >= 0) {
