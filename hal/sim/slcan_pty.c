@@ -11,6 +11,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <termios.h>
 #include <unistd.h>
@@ -23,6 +24,8 @@ typedef struct {
     int slave_keep; /* our own slave fd: keeps the master from seeing EIO while no host is attached */
     bool open;      /* the host sent 'O' */
     char path[256];
+    char lock_path[262]; /* path + ".lock" */
+    int lock_fd;         /* holds flock(LOCK_EX) on lock_path while the link lives */
     ls_slcan_lexer_t lx;
     char rbuf[512];
     size_t rlen, rpos;
@@ -163,6 +166,10 @@ static void pty_close(void *self)
     if (p->path[0] != '\0') {
         unlink(p->path);
     }
+    /* Unlinked while still held: a process that opened the old file finds it
+     * replaced (take_lock) and retries on the new one. */
+    unlink(p->lock_path);
+    close(p->lock_fd);
     close(p->slave_keep);
     close(p->master);
     p->used = false;
@@ -175,6 +182,51 @@ static const hal_can_ops_t g_ops = {
     .status = pty_status,
     .close = pty_close,
 };
+
+/* flock `lock_path` for this process: the fd, or -1 with msg set. */
+static int take_lock(const char *lock_path, const char *path, char *msg, size_t msglen)
+{
+    for (int attempt = 0; attempt < 3; attempt++) {
+        int fd = open(lock_path, O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+        if (fd < 0) {
+            snprintf(msg, msglen, "cannot open the lock file %s: %s", lock_path, strerror(errno));
+            return -1;
+        }
+        if (flock(fd, LOCK_EX | LOCK_NB) != 0) {
+            const int e = errno;
+            char pid[24] = "";
+            ssize_t n = pread(fd, pid, sizeof pid - 1, 0);
+            close(fd);
+            if (e != EWOULDBLOCK) {
+                snprintf(msg, msglen, "cannot lock %s: %s", lock_path, strerror(e));
+                return -1;
+            }
+            pid[n > 0 ? n : 0] = '\0';
+            pid[strcspn(pid, "\r\n")] = '\0';
+            snprintf(msg, msglen,
+                     "%s is in use by landscaped PID %s (lock %s): stop that controller or choose another path", path,
+                     pid[0] != '\0' ? pid : "(unknown)", lock_path);
+            return -1;
+        }
+        /* The holder we waited for may have removed the file as it exited:
+         * a lock on a file no longer at lock_path guards nothing. */
+        struct stat a, b;
+        if (fstat(fd, &a) == 0 && stat(lock_path, &b) == 0 && a.st_ino == b.st_ino && a.st_dev == b.st_dev) {
+            char pid[24];
+            int len = snprintf(pid, sizeof pid, "%ld\n", (long)getpid());
+            if (ftruncate(fd, 0) != 0 || pwrite(fd, pid, (size_t)len, 0) != (ssize_t)len) {
+                snprintf(msg, msglen, "cannot write the lock file %s: %s", lock_path, strerror(errno));
+                close(fd);
+                return -1;
+            }
+            return fd;
+        }
+        close(fd);
+    }
+    snprintf(msg, msglen, "the lock file %s keeps being replaced: is another landscaped starting on %s?", lock_path,
+             path);
+    return -1;
+}
 
 int hal_sim_slcan_pty_open(hal_can_link_t *out, const char *path, char *msg, size_t msglen)
 {
@@ -193,13 +245,19 @@ int hal_sim_slcan_pty_open(hal_can_link_t *out, const char *path, char *msg, siz
         snprintf(msg, msglen, "slcan:pty needs a path for the symlink, e.g. --link slcan:pty:/tmp/landscape0");
         return HAL_EINVAL;
     }
+    char lock_path[sizeof p->lock_path];
+    snprintf(lock_path, sizeof lock_path, "%s.lock", path);
     struct stat sb;
+    if (lstat(path, &sb) == 0 && !S_ISLNK(sb.st_mode)) {
+        snprintf(msg, msglen, "%s exists and is not a symlink: choose another path for the pty link", path);
+        return HAL_EINVAL;
+    }
+    int lock_fd = take_lock(lock_path, path, msg, msglen);
+    if (lock_fd < 0) {
+        return HAL_EIO;
+    }
     if (lstat(path, &sb) == 0) {
-        if (!S_ISLNK(sb.st_mode)) {
-            snprintf(msg, msglen, "%s exists and is not a symlink: choose another path for the pty link", path);
-            return HAL_EINVAL;
-        }
-        unlink(path); /* a stale link from a controller that did not exit cleanly */
+        unlink(path); /* a stale link from a controller that did not exit cleanly (its lock is free) */
     }
     int master = posix_openpt(O_RDWR | O_NOCTTY | O_NONBLOCK);
     if (master < 0 || grantpt(master) != 0 || unlockpt(master) != 0) {
@@ -207,6 +265,8 @@ int hal_sim_slcan_pty_open(hal_can_link_t *out, const char *path, char *msg, siz
         if (master >= 0) {
             close(master);
         }
+        unlink(lock_path);
+        close(lock_fd);
         return HAL_EIO;
     }
     const char *slave_name = ptsname(master);
@@ -214,6 +274,8 @@ int hal_sim_slcan_pty_open(hal_can_link_t *out, const char *path, char *msg, siz
     if (slave < 0) {
         snprintf(msg, msglen, "cannot open the pty slave: %s", strerror(errno));
         close(master);
+        unlink(lock_path);
+        close(lock_fd);
         return HAL_EIO;
     }
     struct termios tio;
@@ -225,10 +287,14 @@ int hal_sim_slcan_pty_open(hal_can_link_t *out, const char *path, char *msg, siz
         snprintf(msg, msglen, "cannot create the symlink %s -> %s: %s", path, slave_name, strerror(errno));
         close(slave);
         close(master);
+        unlink(lock_path);
+        close(lock_fd);
         return HAL_EIO;
     }
     memset(p, 0, sizeof *p);
     p->used = true;
+    p->lock_fd = lock_fd;
+    snprintf(p->lock_path, sizeof p->lock_path, "%s", lock_path);
     p->master = master;
     p->slave_keep = slave;
     snprintf(p->path, sizeof p->path, "%s", path);
