@@ -565,10 +565,38 @@ static void send_response(ls_core_t *core, ls_session_t *s, uint8_t addr)
     send_bytes(core, addr, core->enc, len);
 }
 
-static void on_request(ls_core_t *core, uint8_t addr, const ls_Request *rq, uint64_t now_us)
+static void answer_bad_request(ls_core_t *core, uint8_t addr, int32_t code, uint32_t seq, const char *fmt, ...)
+    __attribute__((format(printf, 5, 6)));
+
+/* FNV-1a, 64 bits: tells a retransmission (the same bytes) from a new
+ * request that reuses the seq. */
+static uint64_t request_hash(const uint8_t *buf, size_t len)
+{
+    uint64_t h = 0xcbf29ce484222325u;
+    for (size_t i = 0; i < len; i++) {
+        h = (h ^ buf[i]) * 0x100000001b3u;
+    }
+    return h;
+}
+
+static void on_request(ls_core_t *core, uint8_t addr, const ls_Request *rq, const uint8_t *raw, size_t raw_len,
+                       uint64_t now_us)
 {
     int sup = find_session(core, addr);
     ls_session_t *s = sup >= 0 ? &core->sessions[sup] : NULL;
+    const uint64_t hash = request_hash(raw, raw_len);
+    if (s != NULL && s->have_last && rq->seq == s->last_seq && rq->which_cmd != ls_Request_connect_tag &&
+        hash != s->last_req_hash) {
+        /* The same seq, another request: answering from the cache would
+         * silently not run it (docs/protocol.md "Sequence numbers"). */
+        const ls_cmd_desc_t *prev = ls_cmd_find(s->last_tag);
+        const ls_cmd_desc_t *now = ls_cmd_find(rq->which_cmd);
+        answer_bad_request(core, addr, ls_RetCode_CMD_PARAM_ERR, rq->seq,
+                           "seq %u reused with a different request (previous: %s, now: %s): use a new seq; "
+                           "only a retransmission repeats one",
+                           (unsigned)rq->seq, prev != NULL ? prev->name : "?", now != NULL ? now->name : "request");
+        return;
+    }
     if (s != NULL && s->have_last && rq->seq == s->last_seq && rq->which_cmd != ls_Request_connect_tag) {
         /* A retransmission: answer from the cache, never execute twice. */
         if (!s->last_pending && s->last_resp_len > 0) {
@@ -606,6 +634,8 @@ static void on_request(ls_core_t *core, uint8_t addr, const ls_Request *rq, uint
         res->session_epoch = s->epoch;
         s->have_last = true;
         s->last_seq = rq->seq;
+        s->last_req_hash = hash;
+        s->last_tag = rq->which_cmd;
         s->executed++;
         s->last_heard_us = now_us;
     }
@@ -691,8 +721,6 @@ static bool scan_request(const uint8_t *buf, size_t len, uint32_t *seq, uint32_t
 }
 
 static void answer_bad_request(ls_core_t *core, uint8_t addr, int32_t code, uint32_t seq, const char *fmt, ...)
-    __attribute__((format(printf, 5, 6)));
-static void answer_bad_request(ls_core_t *core, uint8_t addr, int32_t code, uint32_t seq, const char *fmt, ...)
 {
     memset(&core->down, 0, sizeof core->down);
     core->down.which_msg = ls_Downlink_response_tag;
@@ -736,7 +764,7 @@ void ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t
         return;
     }
     if (core->up.which_msg == ls_Uplink_request_tag) {
-        on_request(core, addr, &core->up.msg.request, now_us);
+        on_request(core, addr, &core->up.msg.request, buf, len, now_us);
     } else if (core->up.which_msg == ls_Uplink_rsvp_reply_tag) {
         int sup = find_session(core, addr);
         if (sup >= 0) {

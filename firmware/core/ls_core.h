@@ -48,6 +48,8 @@ typedef struct {
     bool have_last;
     bool last_pending; /* the last request is still running (deferred) */
     uint32_t last_seq;
+    uint64_t last_req_hash; /* FNV-1a of the last request's bytes: a reused seq must carry the same request */
+    pb_size_t last_tag;     /* the last request's command id */
     uint8_t last_resp[LS_DOWNLINK_MAX];
     size_t last_resp_len;
     uint32_t notice_seq;

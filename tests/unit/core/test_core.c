@@ -1019,6 +1019,60 @@ static void test_signal_rsvp_unanswered_takes_the_default(void **state)
 
 static const double k_home[6] = { 0.0, 0.3, 0.3, 0.0, 0.9, 0.0 };
 
+/* ---------------------------------------------------------------- seq reuse (issue 17) */
+
+/* Send g_rq again with the seq of the previous request; every response to it. */
+static size_t resend_same_seq(uint8_t addr, size_t *first)
+{
+    g_rq.seq = g_seq;
+    memset(&g_up, 0, sizeof g_up);
+    g_up.which_msg = ls_Uplink_request_tag;
+    g_up.msg.request = g_rq;
+    *first = g_nrx;
+    send_uplink(addr);
+    return g_nrx - *first;
+}
+
+static void test_seq_reuse_with_another_request_is_refused(void **state)
+{
+    (void)state;
+    ls_SetSpeedReq *sp = &req(ls_Request_set_speed_tag)->cmd.set_speed;
+    sp->attribute = ls_SpeedType_PERCENT_SPEED;
+    sp->speed = 40.0;
+    assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
+    const uint32_t executed = g_core.sessions[0].executed;
+    /* the identical bytes again: the cached answer, not run a second time */
+    size_t first;
+    assert_int_equal(resend_same_seq(HOST_A, &first), 1);
+    assert_int_equal(g_rx[first].msg.response.ret_code, ls_RetCode_CMD_EXEC_OK);
+    assert_int_equal(g_core.sessions[0].executed, executed);
+    /* the same seq with another value: refused, named, not run */
+    req(ls_Request_set_speed_tag)->cmd.set_speed.attribute = ls_SpeedType_PERCENT_SPEED;
+    g_rq.cmd.set_speed.speed = 80.0;
+    assert_int_equal(resend_same_seq(HOST_A, &first), 1);
+    const ls_Response *r = &g_rx[first].msg.response;
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_ERR);
+    assert_int_equal(r->seq, g_seq);
+    assert_non_null(strstr(r->ret_msg, "reused"));
+    assert_non_null(strstr(r->ret_msg, "setSpeed"));
+    assert_true(fabs(g_core.settings.speed_pct - 40.0) < 1e-9);
+    assert_int_equal(g_core.sessions[0].executed, executed);
+    /* the same seq with another command: refused as well */
+    req(ls_Request_get_units_tag);
+    assert_int_equal(resend_same_seq(HOST_A, &first), 1);
+    assert_int_equal(g_rx[first].msg.response.ret_code, ls_RetCode_CMD_PARAM_ERR);
+    assert_non_null(strstr(g_rx[first].msg.response.ret_msg, "getUnits"));
+    /* the original retransmitted after all that: still its cached answer */
+    req(ls_Request_set_speed_tag)->cmd.set_speed.attribute = ls_SpeedType_PERCENT_SPEED;
+    g_rq.cmd.set_speed.speed = 40.0;
+    assert_int_equal(resend_same_seq(HOST_A, &first), 1);
+    assert_int_equal(g_rx[first].msg.response.ret_code, ls_RetCode_CMD_EXEC_OK);
+    /* a new seq runs normally */
+    g_rq.cmd.set_speed.speed = 80.0;
+    assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
+    assert_true(fabs(g_core.settings.speed_pct - 80.0) < 1e-9);
+}
+
 /* RESTING with HOST_A the owner; a joint move started: its seq. */
 static uint32_t start_move(void)
 {
@@ -1253,6 +1307,7 @@ int main(void)
         cmocka_unit_test_setup(test_rsvp_reply_and_timeout, setup_locked),
         cmocka_unit_test_setup(test_signal_rsvp_reply_before_timeout, setup_locked),
         cmocka_unit_test_setup(test_signal_rsvp_unanswered_takes_the_default, setup_locked),
+        cmocka_unit_test_setup(test_seq_reuse_with_another_request_is_refused, setup_locked),
         cmocka_unit_test(test_deactivate_while_moving_answers_at_rest),
         cmocka_unit_test(test_emergency_fails_the_motion_once_stopped),
         cmocka_unit_test(test_disconnect_during_motion_releases_after_the_stop),
