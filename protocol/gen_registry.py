@@ -7,7 +7,9 @@ wrote beside it (landscape.desc, the schema hash's input). Output:
 
   ls_cmd_table.h / ls_cmd_table.c   the dispatch table: id, name, valid-state
                                     mask, flags, host time-out and handler of
-                                    every command, plus the schema hash.
+                                    every command, plus the schema hash, and
+                                    the names of string and message fields
+                                    (ls_field_name) for errors naming a field.
 
 The host reads the same options from the same descriptors at import time
 (host_tools/src/landscape/registry.py), so there is no second list.
@@ -118,7 +120,15 @@ def main() -> int:
     ]
     for _num, fname, _spec, _mask in cmds:
         hdr.append(f"int32_t ls_h_{fname}(struct ls_core *core, struct ls_call *call);")
-    hdr += ["", "#endif /* LS_CMD_TABLE_H */", ""]
+    hdr += [
+        "",
+        "/* The schema's name of field `tag` of message `msg` (string and message",
+        " * fields, for error messages naming a field), or NULL. */",
+        "const char *ls_field_name(const pb_msgdesc_t *msg, uint32_t tag);",
+        "",
+        "#endif /* LS_CMD_TABLE_H */",
+        "",
+    ]
 
     lo = min(c[0] for c in cmds)
     hi = max(c[0] for c in cmds)
@@ -147,6 +157,44 @@ def main() -> int:
         "    }",
         f"    const ls_cmd_desc_t *d = &ls_cmd_table[tag - {lo}u];",
         "    return d->tag == tag ? d : NULL;",
+        "}",
+        "",
+    ]
+    # Field names for the string and message fields of every message (nanopb's
+    # descriptors carry numbers only).
+    names = []
+    # option types (CommandSpec) are metadata that nanopb skips (landscape.options)
+    meta = {e.message_type.name for e in pb2.DESCRIPTOR.extensions_by_name.values() if e.message_type}
+    for mname, mdesc in sorted(pb2.DESCRIPTOR.message_types_by_name.items()):
+        if mname in meta:
+            continue
+        if mdesc.nested_types:
+            raise SystemExit(f"gen_registry: {mname} has nested message types; name them in ls_field_name")
+        for f in mdesc.fields:
+            if f.type in (f.TYPE_STRING, f.TYPE_MESSAGE):
+                names.append((mname, f.number, f.name))
+    src += [
+        "typedef struct {",
+        "    const pb_msgdesc_t *msg;",
+        "    uint32_t tag;",
+        "    const char *name;",
+        "} ls_field_name_t;",
+        "",
+        "static const ls_field_name_t k_field_names[] = {",
+    ]
+    for mname, num, fname in names:
+        src.append(f"    {{ &ls_{mname}_msg, {num}u, \"{fname}\" }},")
+    src += [
+        "};",
+        "",
+        "const char *ls_field_name(const pb_msgdesc_t *msg, uint32_t tag)",
+        "{",
+        "    for (size_t i = 0; i < sizeof k_field_names / sizeof k_field_names[0]; i++) {",
+        "        if (k_field_names[i].msg == msg && k_field_names[i].tag == tag) {",
+        "            return k_field_names[i].name;",
+        "        }",
+        "    }",
+        "    return NULL;",
         "}",
         "",
     ]

@@ -4,6 +4,7 @@
 #include "ls_core.h"
 
 #include "cmd_sensor.h"
+#include "ls_utf8.h"
 
 #include <stdarg.h>
 #include <stdio.h>
@@ -107,8 +108,11 @@ static int connected_count(const ls_core_t *core)
     return n;
 }
 
-static size_t encode_msg(const ls_Downlink *msg, uint8_t *buf, size_t cap)
+static size_t encode_msg(ls_Downlink *msg, uint8_t *buf, size_t cap)
 {
+    /* Only valid UTF-8 leaves the device: a string cut by a truncation loses
+     * the cut character whole (docs/protocol.md "Strings"). */
+    ls_utf8_repair_msg(ls_Downlink_fields, msg);
     pb_ostream_t os = pb_ostream_from_buffer(buf, cap);
     if (!pb_encode(&os, ls_Downlink_fields, msg)) {
         return 0;
@@ -760,6 +764,17 @@ void ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t
         } else {
             answer_bad_request(core, addr, ls_RetCode_CMD_UNKNOWN_CMD_ERR, core->up.msg.request.seq,
                                "the request carries no command: the host tool must set one");
+        }
+        return;
+    }
+    char where[96];
+    if (!ls_utf8_check_msg(ls_Uplink_fields, &core->up, where, sizeof where)) {
+        /* Every string the device takes in is UTF-8 (docs/protocol.md "Strings"). */
+        core->rx_malformed++;
+        if (core->up.which_msg == ls_Uplink_request_tag) {
+            const ls_cmd_desc_t *d = ls_cmd_find(core->up.msg.request.which_cmd);
+            answer_bad_request(core, addr, ls_RetCode_CMD_PARAM_ERR, core->up.msg.request.seq,
+                               "%s: %s is not valid UTF-8: send text as UTF-8", d != NULL ? d->name : "request", where);
         }
         return;
     }

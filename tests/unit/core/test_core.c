@@ -21,6 +21,7 @@
 #include "ls_core_events.h"
 #include "ls_kin.h"
 #include "ls_units.h"
+#include "ls_utf8.h"
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
@@ -1073,6 +1074,89 @@ static void test_seq_reuse_with_another_request_is_refused(void **state)
     assert_true(fabs(g_core.settings.speed_pct - 80.0) < 1e-9);
 }
 
+/* ---------------------------------------------------------------- UTF-8 (issue 17) */
+
+static void test_utf8_check_and_repair(void **state)
+{
+    (void)state;
+    static const struct {
+        const char *s;
+        size_t bad; /* index of the first bad byte, or SIZE_MAX: valid */
+    } k[] = {
+        { "plain ascii", SIZE_MAX },
+        { "caf\xc3\xa9 \xe2\x82\xac \xf0\x9f\x98\x80", SIZE_MAX },
+        { "ab\xc3", 2 },           /* a character cut in half */
+        { "\xff\xfe", 0 },         /* not UTF-8 at all */
+        { "x\xc0\xaf", 1 },        /* overlong '/' */
+        { "\xe0\x80\xaf", 0 },     /* overlong, 3 bytes */
+        { "\xed\xa0\x80", 0 },     /* a surrogate */
+        { "\xf4\x90\x80\x80", 0 }, /* beyond U+10FFFF */
+        { "a\xe2\x82x", 1 },       /* a continuation missing */
+        { "\x80", 0 },             /* a lone continuation byte */
+        { "\xf4\x8f\xbf\xbf", SIZE_MAX },
+    };
+    for (size_t i = 0; i < sizeof k / sizeof k[0]; i++) {
+        const size_t len = strlen(k[i].s);
+        assert_int_equal(ls_utf8_check(k[i].s, len), k[i].bad == SIZE_MAX ? len : k[i].bad);
+    }
+    char a[] = "ab\xc3";
+    assert_int_equal(ls_utf8_repair(a), 1);
+    assert_string_equal(a, "ab");
+    char b[] = "a\xe2\x82x\xc3\xa9";
+    assert_int_equal(ls_utf8_repair(b), 2);
+    assert_string_equal(b, "ax\xc3\xa9");
+    char c[] = "caf\xc3\xa9";
+    assert_int_equal(ls_utf8_repair(c), 0);
+    assert_string_equal(c, "caf\xc3\xa9");
+}
+
+static void test_strings_that_are_not_utf8_are_refused_naming_the_field(void **state)
+{
+    (void)state;
+    /* a client name of two bytes that are not UTF-8: no session, the field named */
+    ls_ConnectReq *c = &req(ls_Request_connect_tag)->cmd.connect;
+    c->protocol_version = ls_Protocol_PROTOCOL_VERSION;
+    c->schema_hash = LS_SCHEMA_HASH;
+    snprintf(c->client_name, sizeof c->client_name, "\xff\xfe");
+    const ls_Response *r = must(0xF5);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_ERR);
+    assert_non_null(strstr(r->ret_msg, "connect"));
+    assert_non_null(strstr(r->ret_msg, "client_name"));
+    assert_non_null(strstr(r->ret_msg, "UTF-8"));
+    for (int i = 0; i < LS_MAX_SUPERVISORS; i++) {
+        assert_false(g_core.sessions[i].connected && g_core.sessions[i].addr == 0xF5);
+    }
+    /* deep inside a repeated message */
+    ls_PathLoadReq *l = &req(ls_Request_path_load_tag)->cmd.path_load;
+    snprintf(l->path_name, sizeof l->path_name, "p");
+    l->number_of_points = 2;
+    l->tags_count = 2;
+    snprintf(l->tags[1].tag_name, sizeof l->tags[1].tag_name, "t\xc3");
+    r = must(HOST_A);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_ERR);
+    assert_non_null(strstr(r->ret_msg, "pathLoad"));
+    assert_non_null(strstr(r->ret_msg, "tags[1].tag_name at byte 1"));
+}
+
+static void test_what_the_device_shortens_stays_utf8(void **state)
+{
+    (void)state;
+    /* sendCommand quotes at most 40 bytes of an unknown input: "a" + 63 x "é"
+     * puts the cut inside a character */
+    ls_SendCommandReq *sc = &req(ls_Request_send_command_tag)->cmd.send_command;
+    size_t n = 0;
+    sc->input[n++] = 'a';
+    for (int i = 0; i < 63; i++) {
+        sc->input[n++] = (char)0xC3;
+        sc->input[n++] = (char)0xA9;
+    }
+    sc->input[n] = '\0';
+    const ls_Response *r = must(HOST_A);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_ERR);
+    assert_int_equal(ls_utf8_check(r->ret_msg, strlen(r->ret_msg)), strlen(r->ret_msg));
+    assert_non_null(strstr(r->ret_msg, "unknown"));
+}
+
 /* RESTING with HOST_A the owner; a joint move started: its seq. */
 static uint32_t start_move(void)
 {
@@ -1308,6 +1392,9 @@ int main(void)
         cmocka_unit_test_setup(test_signal_rsvp_reply_before_timeout, setup_locked),
         cmocka_unit_test_setup(test_signal_rsvp_unanswered_takes_the_default, setup_locked),
         cmocka_unit_test_setup(test_seq_reuse_with_another_request_is_refused, setup_locked),
+        cmocka_unit_test(test_utf8_check_and_repair),
+        cmocka_unit_test_setup(test_strings_that_are_not_utf8_are_refused_naming_the_field, setup_locked),
+        cmocka_unit_test_setup(test_what_the_device_shortens_stays_utf8, setup_locked),
         cmocka_unit_test(test_deactivate_while_moving_answers_at_rest),
         cmocka_unit_test(test_emergency_fails_the_motion_once_stopped),
         cmocka_unit_test(test_disconnect_during_motion_releases_after_the_stop),
