@@ -58,6 +58,7 @@ class FakeDevice:
         self.drop_responses = 0          # execute, then lose this many responses
         self.silent = False              # never answer
         self.force_codes: dict[str, tuple[int, str]] = {}  # field -> (ret_code, ret_msg)
+        self.rewrite: tuple[bytes, bytes] | None = None  # replace these bytes of every answer (bad UTF-8)
         # observable state
         self.state = pb.IDLE
         self.owner: int | None = None
@@ -192,6 +193,8 @@ class FakeDevice:
                     if s is not None:
                         s.last_seq = req.seq
                         s.cached = out
+                if self.rewrite is not None:
+                    out = out.replace(*self.rewrite)
                 if self.drop_responses > 0:
                     self.drop_responses -= 1
                     continue

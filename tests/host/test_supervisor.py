@@ -13,6 +13,7 @@ from landscape import (
     ControllerTimeoutError,
     LandscapeError,
     NotOwnerError,
+    ProtocolError,
     Supervisor,
     VersionMismatchError,
     WrongStateError,
@@ -298,3 +299,24 @@ def test_multi_frame_request_and_response(bus, notifier, device: FakeDevice) -> 
         rv = sup.send_command("y" * 2000, check=False)
         assert rv.ret_msg == "x" * 1500
         assert device.requests[-1].send_command.input == "y" * 2000
+
+
+def test_an_answer_that_is_not_utf8_fails_its_request_naming_why(bus, notifier, device: FakeDevice) -> None:
+    """A device that cuts a character in half (issue 17): the request fails at once with
+    a ProtocolError naming the undecodable text, not a time-out asking whether
+    landscaped runs."""
+    with sup_on(bus, notifier, timeout_s=2.0, retries=0) as sup:
+        device.force_codes["send_command"] = (ls.CMD_PARAM_ERR, "unknown 'ab\u00e9XY'")
+        device.rewrite = (b"XY", b"\xc3(")  # a lead byte without its continuation
+        t0 = time.monotonic()
+        with pytest.raises(ProtocolError) as ei:
+            sup.send_command("abc")
+        assert time.monotonic() - t0 < 1.0, "waited for the time-out instead of failing at once"
+        msg = str(ei.value)
+        assert "sendCommand" in msg and "not valid UTF-8" in msg and "byte" in msg, msg
+        assert "is landscaped running" not in msg
+        assert sup.protocol_errors == 1
+        # the session goes on: the next answer decodes
+        device.rewrite = None
+        del device.force_codes["send_command"]
+        assert sup.get_motion_control_state().ok

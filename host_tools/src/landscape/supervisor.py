@@ -128,6 +128,93 @@ def mismatch_message(host_version: int, host_hash: int, device_version: int, dev
             f"{device_hash:08X}): install the host tool built from the firmware's tree")
 
 
+
+def _varint(data: bytes, i: int) -> tuple[int, int]:
+    """A protobuf varint at data[i:]: (value, next index); ValueError when cut short."""
+    value = shift = 0
+    while i < len(data) and shift < 64:
+        b = data[i]
+        i += 1
+        value |= (b & 0x7F) << shift
+        if not b & 0x80:
+            return value, i
+        shift += 7
+    raise ValueError("truncated varint")
+
+
+def _fields(data: bytes) -> Iterator[tuple[int, int, int | bytes]]:
+    """(field number, wire type, value) of the top level of a protobuf message."""
+    i = 0
+    while i < len(data):
+        key, i = _varint(data, i)
+        number, wt = key >> 3, key & 7
+        if wt == 0:
+            v, i = _varint(data, i)
+            yield number, wt, v
+        elif wt == 2:
+            n, i = _varint(data, i)
+            if i + n > len(data):
+                raise ValueError("truncated field")
+            yield number, wt, data[i:i + n]
+            i += n
+        elif wt in (1, 5):
+            i += 8 if wt == 1 else 4
+        else:
+            raise ValueError(f"wire type {wt}")
+
+
+def _scan_response_seq(data: bytes) -> int | None:
+    """The seq of an ls.Downlink carrying a response, read at the wire level (for a
+    message the full decode refused), or None."""
+    try:
+        for number, _wt, value in _fields(data):
+            if number == 1 and isinstance(value, bytes):  # Downlink.response
+                for n2, wt2, v2 in _fields(value):
+                    if n2 == 1 and wt2 == 0 and isinstance(v2, int):  # Response.seq
+                        return v2
+    except ValueError:
+        return None
+    return None
+
+
+def _bad_string(msg: bytes, depth: int = 0) -> str | None:
+    """Where a length-delimited field of msg (or of a message inside it) that is
+    neither a message nor UTF-8 text goes wrong, or None."""
+    for _number, wt, value in _fields(msg):
+        if wt != 2 or not isinstance(value, bytes):
+            continue
+        try:
+            value.decode("utf-8")
+            continue
+        except UnicodeDecodeError as e:
+            err = e
+        if depth < 4:
+            try:
+                inner = _bad_string(value, depth + 1)
+            except ValueError:
+                inner = None
+            else:
+                if inner is None:
+                    continue  # a nested message whose strings are fine
+            if inner is not None:
+                return inner
+        return (f"a text field is not valid UTF-8 at byte {err.start} "
+                f"({value[max(0, err.start - 8):err.start + 4]!r})")
+    return None
+
+
+def _undecodable_reason(data: bytes, exc: Exception) -> str:
+    """Why a downlink did not decode, in words a user can act on."""
+    try:
+        why = _bad_string(data)
+    except ValueError:
+        why = None
+    if why is not None:
+        return f"{why}; the firmware must send UTF-8 text: update it"
+    return (f"{exc or 'malformed protobuf'} ({len(data)} bytes): are host tool and firmware built from the "
+            f"same schema?")
+
+
 class Supervisor:
     """One session with the device at `device`, speaking from node `source_address`.
 
@@ -168,6 +255,7 @@ class Supervisor:
         self._seq = 0
         self._pending_seq: int | None = None
         self._pending_resp: pb.Response | None = None
+        self._pending_bad: str | None = None  # why the answer to _pending_seq did not decode
         # final notices by (session epoch, ref_seq): a late notice of an earlier session
         # never ends a request of this one that reused its seq
         self._finals: collections.OrderedDict[tuple[int, int], pb.Notice] = collections.OrderedDict()
@@ -401,6 +489,7 @@ class Supervisor:
         with self._cv:
             self._pending_seq = req.seq
             self._pending_resp = None
+            self._pending_bad = None
             self._mark = self._hist_base + len(self._hist)
         try:
             for attempt in range(tries):
@@ -409,19 +498,23 @@ class Supervisor:
                 self._send(data)
                 deadline = time.monotonic() + per_try
                 with self._cv:
-                    while self._pending_resp is None and self._running:
+                    while self._pending_resp is None and self._pending_bad is None and self._running:
                         left = deadline - time.monotonic()
                         if left <= 0:
                             break
                         self._cv.wait(left)
                     if self._pending_resp is not None:
                         return self._pending_resp
+                    if self._pending_bad is not None:
+                        raise ProtocolError(f"{cmd.name} (seq {req.seq}): the controller answered, but its "
+                                            f"answer does not decode: {self._pending_bad}")
                     if not self._running:
                         raise LandscapeError("the session was closed while waiting for an answer")
         finally:
             with self._cv:
                 self._pending_seq = None
                 self._pending_resp = None
+                self._pending_bad = None
         raise ControllerTimeoutError(
             f"no answer from the controller at address {self.device:#04x} on {self.channel_name} to "
             f"{cmd.name} (seq {req.seq}, {tries} tries of {per_try:g} s): is landscaped running on that "
@@ -497,10 +590,17 @@ class Supervisor:
         dl = pb.Downlink()
         try:
             dl.ParseFromString(data)
-        except DecodeError:
+        except DecodeError as exc:
             self.protocol_errors += 1
-            log.warning("undecodable message from %#04x (%d bytes): is the firmware from this schema?",
-                        self.device, len(data))
+            what = _undecodable_reason(data, exc)
+            seq = _scan_response_seq(data)
+            with self._cv:
+                if seq is not None and seq == self._pending_seq and self._pending_resp is None:
+                    # the request waiting for it fails now, naming why, instead of timing out
+                    self._pending_bad = what
+                    self._cv.notify_all()
+                    return
+            log.warning("undecodable message from %#04x (%d bytes): %s", self.device, len(data), what)
             return
         which = dl.WhichOneof("msg")
         if which == "response":
