@@ -154,9 +154,20 @@ static void cart_limits(const ls_core_t *core, double speed_pct, ls_motion_cart_
 
 static int32_t check_speed_pct(ls_call_t *call, double pct)
 {
-    if (!isfinite(pct) || pct < 0.0 || pct > 100.0) {
+    if (!isfinite(pct) || (pct != 0.0 && pct < LS_RATE_MIN_PCT) || pct > 100.0) {
         return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR,
-                        "speed %.4g %% is out of range: give 0 (the current setSpeed) or a value in (0, 100]", pct);
+                        "speed %.4g %% is out of range: give 0 (the current setSpeed) or a value in [%g, 100]", pct,
+                        LS_RATE_MIN_PCT);
+    }
+    return 0;
+}
+
+/* Names of points and paths are not empty (docs/protocol.md "Limits"). */
+static int32_t check_name(ls_call_t *call, const char *what, const char *field, const char *name)
+{
+    if (name[0] == '\0') {
+        return ls_reply(call, ls_RetCode_CMD_PARAM_ERR, "%s: %s is empty: give the %s a name", what, field,
+                        field[0] == 'p' && field[1] == 'a' ? "path" : "point");
     }
     return 0;
 }
@@ -276,6 +287,9 @@ static int32_t do_move(ls_core_t *core, ls_call_t *call, bool relative)
         return no_arm(call, what);
     }
     int32_t code = check_speed_pct(call, speed_pct);
+    if (code == 0) {
+        code = check_name(call, what, "point_name", point);
+    }
     if (code != 0) {
         return code;
     }
@@ -362,6 +376,10 @@ int32_t ls_h_move_arc(struct ls_core *core, struct ls_call *call)
     if (r->frame != ls_ReferenceFrame_BASE_CARTESIAN_FRAME && r->frame != ls_ReferenceFrame_WORLD_CARTESIAN_FRAME) {
         return ls_reply(call, ls_RetCode_CMD_PARAM_ERR,
                         "moveArc: an arc is Cartesian: use BASE_CARTESIAN_FRAME or WORLD_CARTESIAN_FRAME");
+    }
+    int32_t named = check_name(call, "moveArc", "point_name", r->point_name);
+    if (named != 0) {
+        return named;
     }
     if (r->arc_value_count != 6 || r->goal_value_count != 6) {
         return ls_reply(call, ls_RetCode_CMD_PARAM_ERR,
@@ -919,9 +937,10 @@ static bool path_running(const ls_core_t *core, int i)
 
 static int32_t check_pct(ls_call_t *call, int k, const char *field, double v)
 {
-    if (!isfinite(v) || v < 0.0 || v > 100.0) {
+    if (!isfinite(v) || (v != 0.0 && v < LS_RATE_MIN_PCT) || v > 100.0) {
         return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR,
-                        "pathLoad point %d: %s %.4g is out of range [0, 100] %% (0: the current setting)", k, field, v);
+                        "pathLoad point %d: %s %.4g is out of range: 0 (the current setting) or [%g, 100] %%", k, field,
+                        v, LS_RATE_MIN_PCT);
     }
     return 0;
 }
@@ -1018,6 +1037,10 @@ int32_t ls_h_path_load(struct ls_core *core, struct ls_call *call)
     const ls_PathLoadReq *r = &call->req->cmd.path_load;
     if (core->model == NULL) {
         return no_arm(call, "pathLoad");
+    }
+    int32_t named = check_name(call, "pathLoad", "path_name", r->path_name);
+    if (named != 0) {
+        return named;
     }
     if (r->number_of_points < 1 || (pb_size_t)r->number_of_points != r->tags_count) {
         return ls_reply(call, ls_RetCode_CMD_PARAM_ERR,

@@ -138,10 +138,10 @@ static int32_t check_line(ls_core_t *core, ls_call_t *call, const char *what, co
 static int32_t move_speed(ls_core_t *core, ls_call_t *call, const char *what, const char *field, double pct,
                           double *v_m_s)
 {
-    if (!isfinite(pct) || pct < 0.0 || pct > 100.0) {
+    if (!isfinite(pct) || (pct != 0.0 && pct < LS_RATE_MIN_PCT) || pct > 100.0) {
         return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR,
-                        "%s: %s %.4g %% is out of range: give 0 (the current setSpeed) or a value in (0, 100]", what,
-                        field, pct);
+                        "%s: %s %.4g %% is out of range: give 0 (the current setSpeed) or a value in [%g, 100]", what,
+                        field, pct, LS_RATE_MIN_PCT);
     }
     *v_m_s = pct > 0.0 ? core->model->max_linear_speed_m_s * pct / 100.0 : core->settings.linear_speed_m_s;
     *v_m_s = fmin(*v_m_s, core->model->max_linear_speed_m_s);

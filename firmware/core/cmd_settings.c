@@ -23,10 +23,11 @@ static int32_t no_model(ls_call_t *call, const char *cmd)
  * range in the units the supervisor speaks (`unit`). */
 static int32_t check_rate(ls_call_t *call, const char *what, double v, double max, const char *unit)
 {
-    if (v > 0.0 && v <= max) {
+    const double min = max * LS_RATE_MIN_FRACTION;
+    if (v >= min && v <= max) {
         return ls_RetCode_CMD_EXEC_OK;
     }
-    return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR, "%s %g %s: allowed (0, %g]", what, v, unit, max);
+    return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR, "%s %g %s: allowed [%g, %g]", what, v, unit, min, max);
 }
 
 /* ---------------------------------------------------------------- set commands */
@@ -146,6 +147,30 @@ static int32_t take_pose(ls_core_t *core, ls_call_t *call, const char *what, con
         }
     }
     ls_units_pose_to_si(core->settings.linear, core->settings.angular, v, out);
+    if (core->model != NULL) {
+        static const char *const axes[3] = { "x", "y", "z" };
+        const double reach_m = ls_robot_model_reach_m(core->model);
+        for (int i = 0; i < 3; i++) {
+            if (fabs(out[i]) > reach_m) {
+                return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR,
+                                "%s: %s %g %s is beyond the arm's reach: allowed [-%g, %g] %s", what, axes[i], v[i],
+                                ls_units_linear_name(core->settings.linear),
+                                ls_units_from_si_linear(core->settings.linear, reach_m),
+                                ls_units_from_si_linear(core->settings.linear, reach_m),
+                                ls_units_linear_name(core->settings.linear));
+            }
+        }
+    }
+    for (int i = 3; i < 6; i++) {
+        if (fabs(out[i]) > LS_FRAME_ANGLE_MAX_RAD) {
+            static const char *const rpy[3] = { "roll", "pitch", "yaw" };
+            return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR, "%s: %s %g %s: allowed [-%g, %g] %s", what,
+                            rpy[i - 3], v[i], ls_units_angular_name(core->settings.angular),
+                            ls_units_from_si_angular(core->settings.angular, LS_FRAME_ANGLE_MAX_RAD),
+                            ls_units_from_si_angular(core->settings.angular, LS_FRAME_ANGLE_MAX_RAD),
+                            ls_units_angular_name(core->settings.angular));
+        }
+    }
     return ls_RetCode_CMD_EXEC_OK;
 }
 

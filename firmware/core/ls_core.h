@@ -58,6 +58,17 @@ typedef struct {
     pb_size_t pending_tag; /* command id of the deferred request (last_pending) */
 } ls_session_t;
 
+/* Ranges of numeric parameters (docs/protocol.md "Limits"; one home):
+ * a rate (setSpeed, setAcceleration, a move's or a path point's speed) is 0
+ * where 0 means "the current setting", or at least LS_RATE_MIN_FRACTION of its
+ * maximum: a smaller one (a subnormal such as 1e-300 included) would plan a
+ * motion that never ends. Tool offsets and world frames: each translation
+ * component within the model's reach (ls_robot_model_reach_m), each angle
+ * within +-LS_FRAME_ANGLE_MAX_RAD. Names of points and paths are not empty. */
+#define LS_RATE_MIN_FRACTION 0.001
+#define LS_RATE_MIN_PCT (100.0 * LS_RATE_MIN_FRACTION)
+#define LS_FRAME_ANGLE_MAX_RAD (2.0 * 3.14159265358979323846)
+
 /* Settings of seed 3.2, always in SI (m, rad, s) inside the firmware; the
  * handlers convert from and to the units chosen with setUnits. */
 typedef struct {

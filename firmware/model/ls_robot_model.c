@@ -1,5 +1,7 @@
 #include "ls_robot_model.h"
 
+#include <math.h>
+
 #define PI 3.14159265358979323846
 #define DEG (PI / 180.0)
 
@@ -30,3 +32,12 @@ const ls_robot_model_t ls_robot_model_default = {
     .workspace_min_m = { -0.95, -0.95, 0.02 },
     .workspace_max_m = { 0.95, 0.95, 1.40 },
 };
+
+double ls_robot_model_reach_m(const ls_robot_model_t *m)
+{
+    double r = 0.0;
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        r += sqrt(m->dh[j].a_m * m->dh[j].a_m + m->dh[j].d_m * m->dh[j].d_m);
+    }
+    return r;
+}

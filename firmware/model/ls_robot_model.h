@@ -31,6 +31,12 @@ typedef struct {
     double workspace_min_m[3], workspace_max_m[3]; /* tool tip box, base frame */
 } ls_robot_model_t;
 
+/* How far the flange can be from the base frame's origin at most (m): the
+ * sum of the links' lengths sqrt(a^2 + d^2), a bound on any pose's reach.
+ * Tool offsets and world frames are limited by it (docs/protocol.md
+ * "Limits"). */
+double ls_robot_model_reach_m(const ls_robot_model_t *m);
+
 /* The simulated arm (about the size of a small industrial arm). */
 extern const ls_robot_model_t ls_robot_model_default;
 

@@ -455,24 +455,32 @@ static void test_set_refusals_name_value_and_range(void **state)
     const ls_settings_t before = g_core.settings;
     const char *msg;
     assert_int_equal(set_speed(ls_SpeedType_PERCENT_SPEED, 150.0, &msg), ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
-    assert_string_equal(msg, "PERCENT_SPEED 150 %: allowed (0, 100]");
+    assert_string_equal(msg, "PERCENT_SPEED 150 %: allowed [0.1, 100]");
     assert_int_equal(set_speed(ls_SpeedType_PERCENT_SPEED, 0.0, &msg), ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
     assert_int_equal(set_speed(ls_SpeedType_PERCENT_SPEED, -5.0, &msg), ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    /* issue 17: a subnormal (or anything below 0.1 %) planned a move that never ended */
+    assert_int_equal(set_speed(ls_SpeedType_PERCENT_SPEED, 1e-300, &msg), ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    assert_int_equal(set_accel(ls_AccelType_PERCENT_ACCEL, 1e-300, &msg), ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    assert_string_equal(msg, "PERCENT_ACCEL 1e-300 %: allowed [0.1, 100]");
+    assert_int_equal(set_accel(ls_AccelType_PERCENT_ACCEL, 0.09, &msg), ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    assert_int_equal(set_accel(ls_AccelType_PERCENT_ACCEL, 0.1, &msg), ls_RetCode_CMD_EXEC_OK);
+    assert_int_equal(set_accel(ls_AccelType_PERCENT_ACCEL, 50.0, &msg), ls_RetCode_CMD_EXEC_OK);
+    g_core.settings = before;
     assert_int_equal(set_speed(ls_SpeedType_LINEAR_SPEED, 1.5, &msg), ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
-    assert_string_equal(msg, "LINEAR_SPEED 1.5 meters/s: allowed (0, 1]");
+    assert_string_equal(msg, "LINEAR_SPEED 1.5 meters/s: allowed [0.001, 1]");
     assert_int_equal(set_speed(ls_SpeedType_ANGULAR_SPEED, 3.5, &msg), ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
-    assert_string_equal(msg, "ANGULAR_SPEED 3.5 radians/s: allowed (0, 3]");
+    assert_string_equal(msg, "ANGULAR_SPEED 3.5 radians/s: allowed [0.003, 3]");
     assert_int_equal(set_speed(ls_SpeedType_PERCENT_SPEED, NAN, &msg), ls_RetCode_CMD_PARAM_ERR);
     assert_int_equal(set_speed(ls_SpeedType_LINEAR_SPEED, INFINITY, &msg), ls_RetCode_CMD_PARAM_ERR);
     assert_int_equal(set_speed((ls_SpeedType)3, 10.0, &msg), ls_RetCode_CMD_PARAM_ERR);
     assert_non_null(strstr(msg, "PERCENT_SPEED (0), LINEAR_SPEED (1), ANGULAR_SPEED (2)"));
 
     assert_int_equal(set_accel(ls_AccelType_PERCENT_ACCEL, 100.5, &msg), ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
-    assert_string_equal(msg, "PERCENT_ACCEL 100.5 %: allowed (0, 100]");
+    assert_string_equal(msg, "PERCENT_ACCEL 100.5 %: allowed [0.1, 100]");
     assert_int_equal(set_accel(ls_AccelType_LINEAR_ACCEL, 5.0, &msg), ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
-    assert_string_equal(msg, "LINEAR_ACCEL 5 meters/s^2: allowed (0, 4]");
+    assert_string_equal(msg, "LINEAR_ACCEL 5 meters/s^2: allowed [0.004, 4]");
     assert_int_equal(set_accel(ls_AccelType_ANGULAR_ACCEL, 0.0, &msg), ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
-    assert_string_equal(msg, "ANGULAR_ACCEL 0 radians/s^2: allowed (0, 12]");
+    assert_string_equal(msg, "ANGULAR_ACCEL 0 radians/s^2: allowed [0.012, 12]");
     assert_int_equal(set_accel(ls_AccelType_ANGULAR_ACCEL, -INFINITY, &msg), ls_RetCode_CMD_PARAM_ERR);
     assert_int_equal(set_accel((ls_AccelType)-1, 10.0, &msg), ls_RetCode_CMD_PARAM_ERR);
 
@@ -497,6 +505,37 @@ static void test_set_refusals_name_value_and_range(void **state)
     w->frame_count = 6;
     w->frame[1] = -INFINITY;
     assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_PARAM_ERR);
+    /* issue 17: within the arm's reach (ls_robot_model_reach_m), angles within +-2 pi */
+    const double reach_m = ls_robot_model_reach_m(g_core.model);
+    assert_true(reach_m > 1.0 && reach_m < 2.0);
+    t = &req(ls_Request_set_tool_offset_tag)->cmd.set_tool_offset;
+    t->offset_count = 6;
+    t->offset[2] = 1e308;
+    r = must(HOST_A);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    assert_non_null(strstr(r->ret_msg, "setToolOffset: z 1e+308 meters is beyond the arm's reach"));
+    t = &req(ls_Request_set_tool_offset_tag)->cmd.set_tool_offset;
+    t->offset_count = 6;
+    t->offset[0] = 4.0;
+    assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    w = &req(ls_Request_set_world_cartesian_frame_tag)->cmd.set_world_cartesian_frame;
+    w->frame_count = 6;
+    w->frame[3] = 100.0;
+    r = must(HOST_A);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    assert_non_null(strstr(r->ret_msg, "roll 100 radians"));
+    w = &req(ls_Request_set_world_cartesian_frame_tag)->cmd.set_world_cartesian_frame;
+    w->frame_count = 6;
+    w->frame[1] = -(reach_m + 0.01);
+    assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    /* issue 17: empty names */
+    ls_PathLoadReq *pl = &req(ls_Request_path_load_tag)->cmd.path_load;
+    pl->number_of_points = 1;
+    pl->tags_count = 1;
+    pl->tags[0].joints_count = 6;
+    r = must(HOST_A);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_ERR);
+    assert_string_equal(r->ret_msg, "pathLoad: path_name is empty: give the path a name");
 
     ls_SetUnitsReq *u = &req(ls_Request_set_units_tag)->cmd.set_units;
     u->linear = (ls_LinearUnit)5;
@@ -510,18 +549,26 @@ static void test_set_refusals_name_value_and_range(void **state)
 
     /* all-or-nothing: nothing above changed a setting (the half-valid setUnits included) */
     assert_memory_equal(&g_core.settings, &before, sizeof before);
+    /* and an offset within the reach is taken */
+    t = &req(ls_Request_set_tool_offset_tag)->cmd.set_tool_offset;
+    t->offset_count = 6;
+    t->offset[2] = 0.25;
+    t->offset[5] = -3.0;
+    assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
+    assert_true(g_core.settings.tool_offset[2] == 0.25);
+    g_core.settings = before;
 
     /* the range follows the units */
     set_units(ls_LinearUnit_MILLIMETERS, ls_AngularUnit_DEGREES);
     assert_int_equal(set_speed(ls_SpeedType_LINEAR_SPEED, 2000.0, &msg), ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
-    assert_string_equal(msg, "LINEAR_SPEED 2000 millimeters/s: allowed (0, 1000]");
+    assert_string_equal(msg, "LINEAR_SPEED 2000 millimeters/s: allowed [1, 1000]");
     assert_int_equal(set_speed(ls_SpeedType_LINEAR_SPEED, 1000.0, &msg), ls_RetCode_CMD_EXEC_OK);
     assert_true(g_core.settings.linear_speed_m_s == 1.0);
     assert_int_equal(set_speed(ls_SpeedType_ANGULAR_SPEED, 171.0, &msg), ls_RetCode_CMD_EXEC_OK);
     assert_int_equal(set_speed(ls_SpeedType_ANGULAR_SPEED, 173.0, &msg), ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
-    assert_string_equal(msg, "ANGULAR_SPEED 173 degrees/s: allowed (0, 171.887]");
+    assert_string_equal(msg, "ANGULAR_SPEED 173 degrees/s: allowed [0.171887, 171.887]");
     assert_int_equal(set_accel(ls_AccelType_LINEAR_ACCEL, 4000.5, &msg), ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
-    assert_string_equal(msg, "LINEAR_ACCEL 4000.5 millimeters/s^2: allowed (0, 4000]");
+    assert_string_equal(msg, "LINEAR_ACCEL 4000.5 millimeters/s^2: allowed [4, 4000]");
 }
 
 static void test_set_commands_in_resting_too(void **state)
