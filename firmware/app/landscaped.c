@@ -33,6 +33,7 @@
 #include "faulty_link.h"
 #include "ls_net.h"
 #include "ls_robot_model_sim.h"
+#include "ls_telemetry.h"
 #include "slcan_pty.h"
 
 #ifndef LS_FIRMWARE_VERSION
@@ -330,17 +331,9 @@ static void send_telemetry(void)
     ls_pose_from_xyzrpy(g_core.settings.tool_offset, tool);
     ls_pose_mul(s.flange_pose, tool, tip);
     ls_pose_to_xyzrpy(tip, xyzrpy);
-    struct landscape_tool_pos_t tp = {
-        .tool_x = landscape_tool_pos_tool_x_encode(xyzrpy[0]),
-        .tool_y = landscape_tool_pos_tool_y_encode(xyzrpy[1]),
-        .tool_z = landscape_tool_pos_tool_z_encode(xyzrpy[2]),
-        .tool_time_ms = (uint16_t)((s.t_us / 1000u) & 0xFFFFu),
-    };
-    struct landscape_tool_rpy_t tr = {
-        .tool_roll = landscape_tool_rpy_tool_roll_encode(xyzrpy[3]),
-        .tool_pitch = landscape_tool_rpy_tool_pitch_encode(xyzrpy[4]),
-        .tool_yaw = landscape_tool_rpy_tool_yaw_encode(xyzrpy[5]),
-    };
+    struct landscape_tool_pos_t tp;
+    struct landscape_tool_rpy_t tr;
+    (void)ls_telemetry_tool(xyzrpy, (uint16_t)((s.t_us / 1000u) & 0xFFFFu), &tp, &tr); /* saturates, flags */
     if (landscape_tool_pos_pack(d, &tp, sizeof d) == 8) {
         send_frame(0x1CFF1400u, d);
     }
