@@ -427,3 +427,41 @@ def test_a_long_non_ascii_argument_gets_an_answer_that_decodes(controller: Contr
         assert rv.ret_code == pb.CMD_PARAM_ERR, rv
         assert rv.ret_msg.startswith("sendCommand 'a\u00e9") and "unknown" in rv.ret_msg, rv.ret_msg
         assert sup.protocol_errors == 0
+
+
+# ------------------------------------------------------------------ 5. ranges
+
+
+def test_ranges_refuse_subnormals_far_offsets_and_empty_names(controller: Controller, bus: can.BusABC,
+                                                              notifier: can.Notifier) -> None:
+    with Supervisor(bus, notifier=notifier, client_name="ranges") as sup:
+        watch_tool: list[int] = []
+        sup.on_telemetry(lambda b: watch_tool.append(int(b.signals["tool_saturated"]))
+                         if b.name == "TOOL_RPY" else None)
+        sup.lock()
+        sup.activate()
+        # a subnormal acceleration was accepted and wedged the device (issue 17)
+        rv = sup.set_acceleration(1e-300, check=False)
+        assert rv.ret_code == pb.CMD_PARAM_OUT_OF_RANGE_ERR and "allowed [0.1, 100]" in rv.ret_msg, rv
+        rv = sup.set_speed(0.05, check=False)
+        assert rv.ret_code == pb.CMD_PARAM_OUT_OF_RANGE_ERR, rv
+        rv = sup.move_absolute("p", HOME, speed_pct=1e-300, check=False)
+        assert rv.ret_code == pb.CMD_PARAM_OUT_OF_RANGE_ERR and "[0.1, 100]" in rv.ret_msg, rv
+        # beyond the arm's reach
+        for offset in ([0, 0, 1e308, 0, 0, 0], [4.0, 0, 0, 0, 0, 0]):
+            rv = sup.set_tool_offset(offset, check=False)
+            assert rv.ret_code == pb.CMD_PARAM_OUT_OF_RANGE_ERR and "reach" in rv.ret_msg, rv
+        rv = sup.set_world_cartesian_frame([0, 0, 0, 0, 0, 1e9], check=False)
+        assert rv.ret_code == pb.CMD_PARAM_OUT_OF_RANGE_ERR and "yaw" in rv.ret_msg, rv
+        # empty names
+        rv = sup.move_absolute("", HOME, check=False)
+        assert rv.ret_code == pb.CMD_PARAM_ERR and "point_name is empty" in rv.ret_msg, rv
+        rv = sup.path_load("", [{"joints": HOME}], check=False)
+        assert rv.ret_code == pb.CMD_PARAM_ERR and "path_name is empty" in rv.ret_msg, rv
+        # still usable: the smallest allowed values are taken and a move runs
+        assert sup.set_acceleration(0.1).ok
+        assert sup.set_acceleration(100).ok
+        assert sup.set_tool_offset([0, 0, 0.2, 0, 0, 0]).ok
+        sup.wait_complete(sup.move_absolute("home", HOME, speed_pct=50), timeout_s=20)
+        # the telemetry carries the saturation flags (none in range)
+        assert watch_tool and set(watch_tool) == {0}, watch_tool[-5:]
