@@ -522,7 +522,8 @@ int main(int argc, char **argv)
     while (rc == 0) {
         if (g_stop && shutdown_at == 0) {
             shutdown_at = mono_us();
-            LOG_INFO("%s received", signal_name((int)g_stop));
+            LOG_INFO("%s received at %llu.%06llu s (CLOCK_MONOTONIC)", signal_name((int)g_stop),
+                     (unsigned long long)(shutdown_at / 1000000u), (unsigned long long)(shutdown_at % 1000000u));
             if (g_core.ctl == NULL || !ls_run_shutdown(&g_core, shutdown_at)) {
                 break;
             }
