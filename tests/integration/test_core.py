@@ -146,14 +146,14 @@ def test_speed_and_acceleration_settings(two: tuple[Supervisor, Supervisor]) -> 
     # refusals name the value and the range in the current units, and change nothing
     with pytest.raises(errors.ParamOutOfRangeError) as ei:
         owner.set_speed(150.0, attribute="PERCENT_SPEED")
-    assert "PERCENT_SPEED 150 %: allowed (0, 100]" in str(ei.value)
+    assert "PERCENT_SPEED 150 %: allowed [0.1, 100]" in str(ei.value)
     owner.set_units(linear="MILLIMETERS", angular="DEGREES")
     with pytest.raises(errors.ParamOutOfRangeError) as ei:
         owner.set_speed(2000.0, attribute="LINEAR_SPEED")
-    assert "LINEAR_SPEED 2000 millimeters/s: allowed (0, 1000]" in str(ei.value)
+    assert "LINEAR_SPEED 2000 millimeters/s: allowed [1, 1000]" in str(ei.value)
     with pytest.raises(errors.ParamOutOfRangeError) as ei:
         owner.set_acceleration(-1.0, attribute="ANGULAR_ACCEL")
-    assert "ANGULAR_ACCEL -1 degrees/s^2: allowed (0, 687.549]" in str(ei.value)
+    assert "ANGULAR_ACCEL -1 degrees/s^2: allowed [0.687549, 687.549]" in str(ei.value)
     with pytest.raises(errors.ParamError):
         owner.set_speed(math.nan, attribute="PERCENT_SPEED")
     rsp = _raw(owner, "setSpeed", speed=10.0, attribute=7)
