@@ -135,7 +135,9 @@ def test_owner_heartbeat_loss_deactivates_and_releases(bus: can.BusABC) -> None:
 def test_send_command_vendor_hooks(bus: can.BusABC) -> None:
     with Supervisor(bus, client_name="vendor") as sup:
         helps = sup.request("sendCommand", input="help").result["result"].split()
-        assert helps == ["help", "version", "status", "faults", "rtstats", "config"]
+        assert helps == ["help", "version", "status", "faults", "rtstats", "config", "stopping"]
+        stopping = sup.request("sendCommand", input="stopping").result["result"].splitlines()
+        assert len(stopping) == 6 and stopping[0].startswith("j1 time_s="), stopping
         rt = dict(line.split("=", 1) for line in sup.request("sendCommand", input="rtstats").result["result"].split())
         assert int(rt["cycles"]) > 0 and rt["realtime"] in ("yes", "no")
         cfg = sup.request("sendCommand", input="config").result["result"]
