@@ -251,3 +251,21 @@ def test_verbose_shows_requests_and_answers(channel: str, device: FakeDevice) ->
     assert r.exit_code == 0, r.stderr
     assert "landscape.cli: -> lock {} (via bus)" in r.stderr
     assert "landscape.cli: <- lock seq 2 CMD_EXEC_OK {}" in r.stderr  # seq 1 was connect
+
+
+def test_monitor_names_motion_and_mode_from_the_dbc() -> None:
+    """st_motion and st_control_mode are shown by their DBC value-table names, the
+    newest (5, robot_stopping) included; a value the table lacks shows as its number."""
+    from rich.console import Console
+
+    from landscape.cli import monitor_view
+
+    def shown(motion: int, mode: int) -> str:
+        console = Console(width=120, record=True)
+        console.print(monitor_view({"STATUS": {"st_state": 0, "st_motion": motion, "st_control_mode": mode}},
+                                   "t", []))
+        return console.export_text()
+
+    assert "robot_stopping" in shown(5, 1) and "power_on" in shown(5, 1)
+    assert "robot_stopped_on_command" in shown(4, 0) and "power_off" in shown(4, 0)
+    assert " 9 " in shown(9, 2) or "9\n" in shown(9, 2)

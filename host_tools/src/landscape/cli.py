@@ -26,6 +26,7 @@ from typing import Any, NoReturn
 import click
 from google.protobuf.descriptor import EnumDescriptor, FieldDescriptor
 
+from . import telemetry as tm
 from ._generated import landscape_pb2 as pb
 from .bus import DEFAULT_DEVICE, DEFAULT_HOST, BusSpec
 from .errors import (
@@ -743,13 +744,11 @@ def monitor_view(t: dict[str, dict[str, Any]], title: str, last_notices: Sequenc
     table.add_column("value")
     st = t.get("STATUS", {})
     hb = t.get("HEARTBEAT", {})
-    motion = ["none", "running_trajectory", "robot_paused", "robot_stopped_on_error", "robot_stopped_on_command"]
-    modes = ["power_off", "power_on", "controller_error"]
     if st:
         m, c = int(st.get("st_motion", 0)), int(st.get("st_control_mode", 0))
         table.add_row("state", _state_name(st.get("st_state", 0)))
-        table.add_row("motion", motion[m] if m < len(motion) else str(m))
-        table.add_row("control mode", modes[c] if c < len(modes) else str(c))
+        table.add_row("motion", tm.choice_name("STATUS", "st_motion", m))
+        table.add_row("control mode", tm.choice_name("STATUS", "st_control_mode", c))
         table.add_row("fault", str(st.get("st_fault", 0)))
         table.add_row("cycle", f"{st.get('st_cycle_us', 0)} us, {st.get('st_overruns', 0)} overruns")
     if hb:

@@ -56,6 +56,14 @@ class Broadcast:
     timestamp: float = field(default_factory=time.monotonic)
 
 
+def choice_name(message: str, signal: str, value: int) -> str:
+    """The DBC's name for `value` of an enumerated signal (its VAL_ table), or the
+    number itself when the table has no such entry."""
+    choices: dict[int, object] = dict(database().get_message_by_name(message).get_signal_by_name(signal).choices or {})
+    name = choices.get(value)
+    return str(name) if name is not None else str(value)
+
+
 def decode(frame: can.Message) -> Broadcast | None:
     """The broadcast carried by `frame`, or None when it is not one of the DBC's."""
     if not frame.is_extended_id or frame.is_error_frame or frame.is_remote_frame:
