@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import itertools
+import os
 import re
-import subprocess
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -14,8 +14,16 @@ OUTSIDE = re.compile(r"DESIGN\.md|\.\./shared|house-style\.md|notes/environment\
 
 
 def _tracked() -> list[str]:
-    out = subprocess.run(["git", "ls-files"], cwd=ROOT, capture_output=True, text=True, check=True)
-    return out.stdout.split()
+    """The project's files, by walking the tree: a fresh root or an exported tree has no
+    git (the fresh-root tier found a `git ls-files` here). Build trees, virtual
+    environments and caches are not the project's."""
+    out = ["README.md", "CMakeLists.txt"]
+    for top in TOP:
+        for dirpath, dirnames, filenames in os.walk(ROOT / top):
+            dirnames[:] = [d for d in dirnames if not d.startswith((".", "build", "__pycache__"))
+                           and not d.endswith(".egg-info")]
+            out += [str(Path(dirpath, f).relative_to(ROOT)) for f in filenames]
+    return [f for f in out if (ROOT / f).is_file()]
 
 
 def _expand(ref: str) -> list[str]:
