@@ -122,12 +122,17 @@ def esc(text: str) -> str:
     return text.replace("|", "\\|").replace("\n", " ")
 
 
+def _git(*args: str) -> str:
+    """git's output in ROOT, or "" where there is no git (an exported tree, the fresh root)."""
+    try:
+        return subprocess.run(["git", "-C", str(ROOT), *args], capture_output=True, text=True).stdout.strip()
+    except FileNotFoundError:
+        return ""
+
+
 def render(sections: list[Section], total_s: float) -> str:
-    commit = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True,
-                            text=True).stdout.strip() or "unknown"
-    dirty = subprocess.run(["git", "-C", str(ROOT), "status", "--porcelain", "--", "bench", "firmware", "hal",
-                            "protocol", "host_tools"], capture_output=True, text=True).stdout.strip()
-    if dirty:
+    commit = _git("rev-parse", "--short", "HEAD") or "unknown (no git)"
+    if _git("status", "--porcelain", "--", "bench", "firmware", "hal", "protocol", "host_tools"):
         commit += " + uncommitted changes"
     out = [
         "# Performance",
