@@ -103,12 +103,34 @@ static ls_net_peer_t *get_peer(ls_net_t *net, uint8_t addr)
     return victim;
 }
 
+/* The same bytes to the same peer are already waiting or in flight. A
+ * retransmitted request is answered from the session's cache, byte for byte
+ * the answer already on its way; a second copy would only queue behind the
+ * first (and, when the link loses frames, hold up the answers after it). */
+static bool already_pending(const ls_net_peer_t *p, const uint8_t *buf, size_t len)
+{
+    if (p->tx_tries > 0 && p->isotp.tx_len == len && memcmp(p->isotp.tx_buf, buf, len) == 0) {
+        return true;
+    }
+    for (uint8_t i = 0; i < p->q_count; i++) {
+        const ls_net_msg_t *m = &p->q[(p->q_head + i) % LS_NET_OUTQ];
+        if (m->len == len && memcmp(m->buf, buf, len) == 0) {
+            return true;
+        }
+    }
+    return false;
+}
+
 int ls_net_send_downlink(void *ctx, uint8_t addr, const uint8_t *buf, size_t len)
 {
     ls_net_t *net = ctx;
     ls_net_peer_t *p = get_peer(net, addr);
     if (p == NULL || len > LS_DOWNLINK_MAX) {
         return -1;
+    }
+    if (already_pending(p, buf, len)) {
+        net->tx_deduplicated++;
+        return 0;
     }
     if (p->q_count >= LS_NET_OUTQ) {
         p->q_dropped++;
@@ -265,10 +287,10 @@ void ls_net_describe(void *ctx, char *buf, size_t cap)
     size_t n = 0;
     int w = snprintf(buf, cap,
                      "frames_in=%u\nframes_out=%u\ntx_full=%u\nlink_rx_dropped=%u\nlink_tx_dropped=%u\n"
-                     "peers_evicted=%u\ntx_retried=%u\ntx_given_up=%u\n",
+                     "peers_evicted=%u\ntx_retried=%u\ntx_given_up=%u\ntx_deduplicated=%u\n",
                      (unsigned)net->frames_in, (unsigned)net->frames_out, (unsigned)net->tx_full,
                      (unsigned)link_rx_dropped, (unsigned)link_tx_dropped, (unsigned)net->peers_evicted,
-                     (unsigned)net->tx_retried, (unsigned)net->tx_given_up);
+                     (unsigned)net->tx_retried, (unsigned)net->tx_given_up, (unsigned)net->tx_deduplicated);
     n = w > 0 ? (size_t)w : 0u;
     for (int r = 0; r < LS_ISOTP_N_RESULT_COUNT && n < cap; r++) {
         /* e.g. isotp_unexp_pdu=1: receive and send outcomes together, by ISO name */

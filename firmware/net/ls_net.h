@@ -65,6 +65,7 @@ typedef struct ls_net {
     uint64_t now_us;
     uint32_t frames_in, frames_out, frames_bridged, tx_full, peers_evicted;
     uint32_t tx_retried, tx_given_up;                  /* downlink transfers sent again; downlinks given up */
+    uint32_t tx_deduplicated;                          /* downlinks identical to one still pending: not queued twice */
     uint32_t rx_results_gone[LS_ISOTP_N_RESULT_COUNT]; /* counters of evicted peers */
     uint32_t tx_results_gone[LS_ISOTP_N_RESULT_COUNT];
     uint8_t rxbuf[LS_ISOTP_MAX_PAYLOAD];

@@ -420,8 +420,10 @@ static void test_downlink_queue_is_bounded(void **state)
     ls_net_poll(&g_net, 100);
     assert_int_equal(g_link[0].n_tx, 1); /* the first frame */
     for (int i = 0; i < LS_NET_OUTQ; i++) {
+        msg[1] = (uint8_t)(i + 1); /* distinct messages (identical ones are not queued twice) */
         assert_int_equal(ls_net_send_downlink(&g_net, SUP_A, msg, sizeof msg), 0);
     }
+    msg[1] = 0xEE;
     assert_int_equal(ls_net_send_downlink(&g_net, SUP_A, msg, sizeof msg), -1);
     /* Too long for a downlink: refused. */
     static uint8_t big[LS_DOWNLINK_MAX + 1];
@@ -525,6 +527,33 @@ static void test_a_downlink_sent_again_arrives_once(void **state)
     assert_int_equal(first_frames_to(SUP_A, 0x30), 2);
     assert_int_equal(describe_value("tx_retried"), 1);
     assert_int_equal(describe_value("tx_given_up"), 0);
+}
+
+static void test_an_answer_already_pending_is_not_queued_twice(void **state)
+{
+    (void)state;
+    setup_net(1);
+    uint8_t answer[20] = { 0x41 };
+    uint8_t other[20] = { 0x42 };
+    assert_int_equal(ls_net_send_downlink(&g_net, SUP_A, answer, sizeof answer), 0);
+    ls_net_poll(&g_net, 100); /* in flight, waiting for its flow control */
+    /* The cached answer to a retransmission: the same bytes, once more in flight... */
+    assert_int_equal(ls_net_send_downlink(&g_net, SUP_A, answer, sizeof answer), 0);
+    assert_int_equal(ls_net_send_downlink(&g_net, SUP_A, other, sizeof other), 0);
+    /* ...and once more waiting in the queue. */
+    assert_int_equal(ls_net_send_downlink(&g_net, SUP_A, other, sizeof other), 0);
+    assert_int_equal(describe_value("tx_deduplicated"), 2);
+    /* Another supervisor's identical bytes are its own. */
+    assert_int_equal(ls_net_send_downlink(&g_net, SUP_B, answer, sizeof answer), 0);
+    assert_int_equal(describe_value("tx_deduplicated"), 2);
+    /* Every transfer fails: the answer goes out LS_NET_TX_TRIES times, `other` follows once queued. */
+    uint64_t t = 100;
+    for (int k = 0; k < LS_NET_TX_TRIES; k++) {
+        t += PAST_N_BS_US;
+        ls_net_poll(&g_net, t);
+    }
+    assert_int_equal(first_frames_to(SUP_A, 0x41), LS_NET_TX_TRIES);
+    assert_int_equal(first_frames_to(SUP_A, 0x42), 1);
 }
 
 static void test_lru_eviction_of_idle_links(void **state)
@@ -703,6 +732,7 @@ int main(void)
         cmocka_unit_test(test_downlink_queue_is_bounded),
         cmocka_unit_test(test_a_downlink_without_flow_control_is_sent_again_then_given_up),
         cmocka_unit_test(test_a_downlink_sent_again_arrives_once),
+        cmocka_unit_test(test_an_answer_already_pending_is_not_queued_twice),
         cmocka_unit_test(test_lru_eviction_of_idle_links),
         cmocka_unit_test(test_busy_links_are_not_evicted),
         cmocka_unit_test(test_bridging_between_links),
