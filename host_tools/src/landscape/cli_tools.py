@@ -41,7 +41,7 @@ from .cli import (
 )
 from .demo import StepResult, demo_steps, run_demo
 from .errors import LandscapeError, error_for_code
-from .link import LinkBroker, is_local_line
+from .link import LinkBroker, is_local_line, pid_alive
 from .mcap_log import McapRecorder
 from .paths import build_path_load_requests, load_path_file, request_fields, resolve_settings
 from .plotting import KINDS, plot
@@ -525,12 +525,8 @@ def session_stop_cmd(ctx: click.Context, stop_timeout: float) -> None:
 
 
 def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
+    if not pid_alive(pid):
         return False
-    except PermissionError:
-        return True
     try:  # a child of ours that exited is a zombie until reaped
         done, _ = os.waitpid(pid, os.WNOHANG)
         return done == 0

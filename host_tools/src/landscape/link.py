@@ -87,7 +87,8 @@ class Holder:
     url: str
 
 
-def _alive(pid: int) -> bool:
+def pid_alive(pid: int) -> bool:
+    """Whether a process `pid` exists (another user's counts)."""
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
@@ -108,7 +109,7 @@ def read_holder(channel: str) -> Holder | None:
     except (OSError, ValueError, KeyError, TypeError):
         log.warning("ignoring unreadable link holder file %s", path)
         return None
-    if not _alive(holder.pid):
+    if not pid_alive(holder.pid):
         with contextlib.suppress(FileNotFoundError):
             path.unlink()
         return None
