@@ -116,19 +116,18 @@ def nanopb_runtime() -> Path:
     src = CACHE / f"nanopb-{version.replace(':', '_')}" / f"nanopb-{upstream}"
     if all((src / f).is_file() for f in NANOPB_RUNTIME):
         return src
-    system = [p for p in [Path("/etc/apt/sources.list.d/debian.sources")] if p.is_file()]
-    if not system:
-        raise BenchError("no /etc/apt/sources.list.d/debian.sources to derive a deb-src entry from; "
-                         f"put nanopb's pb_encode.c/pb_decode.c/pb_common.c into {src}/")
+    parts = deb_src_parts()
+    if not parts:
+        raise BenchError("no Debian archive in /etc/apt/sources.list or /etc/apt/sources.list.d/ to derive a deb-src "
+                         f"entry from; put nanopb's pb_encode.c/pb_decode.c/pb_common.c into {src}/")
     src.parent.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="lsbench-nanopb-", dir=src.parent.parent) as tmpdir:
         dest = Path(tmpdir)
         apt = dest / "apt"
         for d in ("parts", "lists/partial", "cache/archives/partial"):
             (apt / d).mkdir(parents=True, exist_ok=True)
-        text = system[0].read_text()
-        (apt / "parts" / "src.sources").write_text(re.sub(r"^Types:.*$", "Types: deb-src", text,
-                                                          flags=re.MULTILINE))
+        for name, text in parts.items():
+            (apt / "parts" / name).write_text(text)
         opts = ["-o", "Dir::Etc::SourceList=/dev/null", "-o", f"Dir::Etc::SourceParts={apt / 'parts'}",
                 "-o", f"Dir::State::Lists={apt / 'lists'}", "-o", f"Dir::Cache={apt / 'cache'}"]
         up = run(["apt-get", *opts, "update"])
@@ -141,24 +140,30 @@ def nanopb_runtime() -> Path:
         if not src.exists():  # another run may have put it there meanwhile
             fetched.rename(src)
     return src
-    system = [p for p in [Path("/etc/apt/sources.list.d/debian.sources")] if p.is_file()]
-    if not system:
-        raise BenchError("no /etc/apt/sources.list.d/debian.sources to derive a deb-src entry from; "
-                           "put nanopb's pb_encode.c/pb_decode.c/pb_common.c into build-bench/nanopb-src/"
-                           f"nanopb-{upstream}/")
-    apt = dest / "apt"
-    for d in ("parts", "lists/partial", "cache/archives/partial"):
-        (apt / d).mkdir(parents=True, exist_ok=True)
-    text = system[0].read_text()
-    (apt / "parts" / "src.sources").write_text(re.sub(r"^Types:.*$", "Types: deb-src", text, flags=re.M))
-    opts = ["-o", "Dir::Etc::SourceList=/dev/null", "-o", f"Dir::Etc::SourceParts={apt / 'parts'}",
-            "-o", f"Dir::State::Lists={apt / 'lists'}", "-o", f"Dir::Cache={apt / 'cache'}"]
-    up = run(["apt-get", *opts, "update"])
-    got = run(["apt-get", *opts, "source", f"nanopb={version}"], cwd=dest) if up.returncode == 0 else up
-    if not all((src / f).is_file() for f in NANOPB_RUNTIME):
-        raise BenchError(f"cannot fetch Debian's nanopb {version} source package: "
-                           f"{(got.stderr or got.stdout).strip()[-200:]}")
-    return src
+
+
+ONE_LINE_DEB = re.compile(r"^(\s*)deb(\s)", re.MULTILINE)
+DEB822_TYPES = re.compile(r"^Types:.*$", re.MULTILINE)
+
+
+def deb_src_parts(etc: Path = Path("/etc/apt")) -> dict[str, str]:
+    """The system's apt sources turned into deb-src sources, one apt SourceParts file per system file.
+
+    Both formats apt reads: the one-line `deb URI suite components` of sources.list and *.list (what a
+    Debian installer and mmdebstrap write), and the deb822 stanzas of *.sources (what Debian 12's cloud
+    images write). Returns {file name: text}; empty when no file names an archive."""
+    out: dict[str, str] = {}
+    one_line = [etc / "sources.list", *sorted((etc / "sources.list.d").glob("*.list"))]
+    for n, path in enumerate(p for p in one_line if p.is_file()):
+        entries = [ONE_LINE_DEB.sub(r"\1deb-src\2", line) for line in path.read_text().splitlines()
+                   if ONE_LINE_DEB.match(line)]
+        if entries:
+            out[f"src{n}.list"] = "\n".join(entries) + "\n"
+    for n, path in enumerate(sorted((etc / "sources.list.d").glob("*.sources"))):
+        text = path.read_text()
+        if DEB822_TYPES.search(text):
+            out[f"src{n}.sources"] = DEB822_TYPES.sub("Types: deb-src", text)
+    return out
 
 
 def map_breakdown(map_text: str) -> dict[str, dict[str, int]]:
