@@ -230,18 +230,27 @@ static void act_stop(void *ctx)
 
 static const ls_config_t *g_cfg_running;
 
+/* How far the control loop's time has fallen behind the clock (hal_linux_rt.h). */
+static uint64_t rt_behind_us(void)
+{
+    hal_rt_stats_t rs;
+    hal_linux_rt_stats(&g_rt, &rs);
+    return rs.behind_us;
+}
+
 static void describe_rt(void *ctx, char *buf, size_t cap)
 {
     ls_ctl_snapshot_t s;
     ls_control_snapshot((ls_control_t *)ctx, &s);
     hal_rt_stats_t rs;
     hal_linux_rt_stats(&g_rt, &rs);
-    snprintf(buf, cap,
-             "cycles=%llu\noverruns=%llu\nmax_late_us=%u\nmax_cycle_us=%u\nrealtime=%s\nmemory_locked=%s\n"
-             "events_lost=%u\n",
-             (unsigned long long)rs.cycles, (unsigned long long)rs.overruns, (unsigned)rs.max_late_us,
-             (unsigned)rs.max_cycle_us, rs.realtime ? "yes" : "no", rs.memory_locked ? "yes" : "no",
-             (unsigned)s.events_lost);
+    snprintf(
+        buf, cap,
+        "cycles=%llu\noverruns=%llu\nbehind_us=%llu\nmax_late_us=%u\nmax_cycle_us=%u\nrealtime=%s\nmemory_locked=%s\n"
+        "events_lost=%u\n",
+        (unsigned long long)rs.cycles, (unsigned long long)rs.overruns, (unsigned long long)rs.behind_us,
+        (unsigned)rs.max_late_us, (unsigned)rs.max_cycle_us, rs.realtime ? "yes" : "no",
+        rs.memory_locked ? "yes" : "no", (unsigned)s.events_lost);
 }
 
 static void describe_config(void *ctx, char *buf, size_t cap)
@@ -522,8 +531,9 @@ int main(int argc, char **argv)
     while (rc == 0) {
         if (g_stop && shutdown_at == 0) {
             shutdown_at = mono_us();
-            LOG_INFO("%s received at %llu.%06llu s (CLOCK_MONOTONIC)", signal_name((int)g_stop),
-                     (unsigned long long)(shutdown_at / 1000000u), (unsigned long long)(shutdown_at % 1000000u));
+            LOG_INFO("%s received at %llu.%06llu s (CLOCK_MONOTONIC), control loop behind by %llu us",
+                     signal_name((int)g_stop), (unsigned long long)(shutdown_at / 1000000u),
+                     (unsigned long long)(shutdown_at % 1000000u), (unsigned long long)rt_behind_us());
             if (g_core.ctl == NULL || !ls_run_shutdown(&g_core, shutdown_at)) {
                 break;
             }
@@ -537,6 +547,11 @@ int main(int argc, char **argv)
                 break;
             }
             if (!g_core.halt.active && flushed_at == 0) {
+                /* The stop is timed in control cycles; overruns (rtstats)
+                 * stretch it in wall time by the growth of behind_us. */
+                LOG_INFO("shutting down: the motion stopped at %llu.%06llu s, control loop behind by %llu us",
+                         (unsigned long long)(t / 1000000u), (unsigned long long)(t % 1000000u),
+                         (unsigned long long)rt_behind_us());
                 flushed_at = t + 1000000u; /* let the links carry the final notices out (ISO-TP flow control) */
             }
             if (flushed_at != 0 && t >= flushed_at) {

@@ -125,6 +125,7 @@ static void *rt_main(void *p)
         atomic_max32(&rt->max_late_us, late / 1000u);
         if (late > period) {
             atomic_fetch_add_explicit(&rt->overruns, 1u, memory_order_relaxed);
+            atomic_fetch_add_explicit(&rt->behind_ns, late, memory_order_relaxed);
             deadline = wake; /* re-base: skip the missed cycles */
         }
         uint64_t now_us = lockstep ? start_us + cycle * period / 1000u : wake / 1000u;
@@ -186,6 +187,7 @@ int hal_linux_rt_start(hal_linux_rt_t *rt, const hal_rt_config_t *cfg, hal_cycle
     atomic_store(&rt->stop, false);
     atomic_store(&rt->cycles, 0u);
     atomic_store(&rt->overruns, 0u);
+    atomic_store(&rt->behind_ns, 0u);
     atomic_store(&rt->max_late_us, 0u);
     atomic_store(&rt->max_cycle_us, 0u);
     atomic_store(&rt->realtime, false);
@@ -255,6 +257,7 @@ void hal_linux_rt_stats(const hal_linux_rt_t *rt, hal_rt_stats_t *out)
     const hal_linux_rt_t *r = rt;
     out->cycles = atomic_load(&r->cycles);
     out->overruns = atomic_load(&r->overruns);
+    out->behind_us = atomic_load(&r->behind_ns) / 1000u;
     out->max_late_us = (uint32_t)atomic_load(&r->max_late_us);
     out->max_cycle_us = (uint32_t)atomic_load(&r->max_cycle_us);
     out->realtime = atomic_load(&r->realtime);

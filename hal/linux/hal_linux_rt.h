@@ -9,7 +9,11 @@
  *
  * Overruns: a cycle whose wake-up comes more than one period after its
  * deadline counts as an overrun, and the schedule is re-based on that
- * wake-up: the missed cycles are skipped, not run back to back.
+ * wake-up: the missed cycles are skipped, not run back to back. Each
+ * re-base puts the loop's time (cycles x period, what motions and the
+ * simulation advance by) behind the clock by that lateness; stats.behind_us
+ * is the sum, so a stop planned to take T s of loop time takes T s plus the
+ * growth of behind_us over it in wall time.
  *
  * Lockstep: fn gets now_us = start_us + cycle * period exactly (virtual
  * time, deterministic for simulation) while the thread still paces at the
@@ -57,6 +61,7 @@ typedef struct hal_linux_rt {
     sem_t ready; /* the thread posts once its scheduling is set up */
     atomic_uint_least64_t cycles;
     atomic_uint_least64_t overruns;
+    atomic_uint_least64_t behind_ns;
     atomic_uint_least32_t max_late_us;
     atomic_uint_least32_t max_cycle_us;
     atomic_bool realtime;

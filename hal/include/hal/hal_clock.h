@@ -25,6 +25,9 @@ uint64_t hal_clock_now_us(const hal_clock_t *clock);
 typedef struct {
     uint64_t cycles;
     uint64_t overruns;     /* cycles that started later than one period after their deadline */
+    uint64_t behind_us;    /* how far the loop's time has fallen behind the clock: the sum of
+                            * the lateness of every overrun (its skipped cycles never run, so
+                            * a motion timed in cycles takes this much longer in wall time) */
     uint32_t max_late_us;  /* worst wake-up latency */
     uint32_t max_cycle_us; /* worst cycle execution time */
     bool realtime;         /* SCHED_FIFO granted */

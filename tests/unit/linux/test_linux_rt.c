@@ -177,6 +177,17 @@ static void test_runs_paced_cycles(void **state)
         /* Every overrun counted is one the recorded wake-ups show. */
         assert_true(st.overruns <= gaps_over_period(&g_rec, 1000u));
     }
+    /* behind_us is exactly how far the wake-ups fell behind the cycle count:
+     * span = (n-1) periods + behind + late(last) - late(first), where a
+     * cycle that is not an overrun is at most one period late. */
+    {
+        int64_t span = (int64_t)(g_rec.now_us[n - 1] - g_rec.now_us[0]);
+        int64_t want = (int64_t)(n - 1) * 1000 + (int64_t)st.behind_us;
+        assert_in_range(span, want - (int64_t)st.max_late_us - 2, want + 1002);
+    }
+    if (st.overruns == 0) {
+        assert_int_equal(st.behind_us, 0);
+    }
     /* Idempotent stop, and a restart on the same storage works. */
     hal_linux_rt_stop(&rt);
     rec_reset();
@@ -235,6 +246,9 @@ static void test_one_slow_cycle_is_one_overrun_without_burst(void **state)
      * show the thread lost the CPU (see gaps_over_period). */
     assert_true(st.overruns >= 1);
     assert_true(st.overruns <= gaps_over_period(&g_rec, 1000u));
+    /* Cycle 51 woke at least 3 ms after cycle 50, so >= 2 ms after its
+     * deadline: the loop's time fell that far behind the clock. */
+    assert_true(st.behind_us >= 2000u);
     if (st.realtime && RT_TIMING_IS_REAL) {
         /* Re-based on cycle 51's wake-up: every later cycle is at least
          * (k-51) periods after it, so no catch-up burst. */
