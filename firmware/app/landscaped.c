@@ -319,7 +319,7 @@ static void send_telemetry(void)
     st.st_overruns = (uint16_t)(rs.overruns > 0xFFFFu ? 0xFFFFu : rs.overruns);
     st.st_cycle_us = (uint16_t)(rs.max_cycle_us > 0xFFFFu ? 0xFFFFu : rs.max_cycle_us);
     if (landscape_status_pack(d, &st, sizeof d) == 8) {
-        send_frame(0x1CFF1000u, d);
+        send_frame(LS_ID_OF_DBC(LANDSCAPE_STATUS_FRAME_ID), d);
     }
     struct landscape_joints_12_t j12 = { landscape_joints_12_j1_encode(s.q_rad[0]),
                                          landscape_joints_12_j2_encode(s.q_rad[1]) };
@@ -328,13 +328,13 @@ static void send_telemetry(void)
     struct landscape_joints_56_t j56 = { landscape_joints_56_j5_encode(s.q_rad[4]),
                                          landscape_joints_56_j6_encode(s.q_rad[5]) };
     if (landscape_joints_12_pack(d, &j12, sizeof d) == 8) {
-        send_frame(0x1CFF1100u, d);
+        send_frame(LS_ID_OF_DBC(LANDSCAPE_JOINTS_12_FRAME_ID), d);
     }
     if (landscape_joints_34_pack(d, &j34, sizeof d) == 8) {
-        send_frame(0x1CFF1200u, d);
+        send_frame(LS_ID_OF_DBC(LANDSCAPE_JOINTS_34_FRAME_ID), d);
     }
     if (landscape_joints_56_pack(d, &j56, sizeof d) == 8) {
-        send_frame(0x1CFF1300u, d);
+        send_frame(LS_ID_OF_DBC(LANDSCAPE_JOINTS_56_FRAME_ID), d);
     }
     double tool[16], tip[16], xyzrpy[6];
     ls_pose_from_xyzrpy(g_core.settings.tool_offset, tool);
@@ -344,10 +344,10 @@ static void send_telemetry(void)
     struct landscape_tool_rpy_t tr;
     (void)ls_telemetry_tool(xyzrpy, (uint16_t)((s.t_us / 1000u) & 0xFFFFu), &tp, &tr); /* saturates, flags */
     if (landscape_tool_pos_pack(d, &tp, sizeof d) == 8) {
-        send_frame(0x1CFF1400u, d);
+        send_frame(LS_ID_OF_DBC(LANDSCAPE_TOOL_POS_FRAME_ID), d);
     }
     if (landscape_tool_rpy_pack(d, &tr, sizeof d) == 8) {
-        send_frame(0x1CFF1500u, d);
+        send_frame(LS_ID_OF_DBC(LANDSCAPE_TOOL_RPY_FRAME_ID), d);
     }
     if (g_core.dio_units > 0) {
         struct landscape_dio_t dio = {
@@ -355,7 +355,7 @@ static void send_telemetry(void)
             .dio_outputs = s.dio[0] & g_core.dio_info[0].output_mask,
         };
         if (landscape_dio_pack(d, &dio, sizeof d) == 8) {
-            send_frame(0x1CFF1600u, d);
+            send_frame(LS_ID_OF_DBC(LANDSCAPE_DIO_FRAME_ID), d);
         }
     }
 }

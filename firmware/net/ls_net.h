@@ -19,6 +19,7 @@
 #include "hal/hal_can.h"
 #include "ls_core.h"
 #include "ls_isotp.h"
+#include "landscape.h" /* cantools: the DBC's frame ids */
 
 #define LS_NET_MAX_LINKS 4
 #define LS_NET_MAX_PEERS 6
@@ -33,8 +34,11 @@
 #define LS_ID_ISOTP_FUNC 0x18DB0000u
 #define LS_ID_MASK_PF 0x1FFF0000u
 #define LS_ID_MASK_SRC 0x1FFFFF00u
-#define LS_ID_EMERGENCY 0x00FF0000u
-#define LS_ID_HEARTBEAT 0x14FF0100u
+/* Broadcast ids come from protocol/landscape.dbc (cantools' header), whose ids
+ * carry the default device address in their low byte: mask it off. */
+#define LS_ID_OF_DBC(frame_id) ((uint32_t)(frame_id)&LS_ID_MASK_SRC)
+#define LS_ID_EMERGENCY LS_ID_OF_DBC(LANDSCAPE_EMERGENCY_FRAME_ID)
+#define LS_ID_HEARTBEAT LS_ID_OF_DBC(LANDSCAPE_HEARTBEAT_FRAME_ID)
 #define LS_ADDR_ALL 0xFFu
 
 typedef struct {
