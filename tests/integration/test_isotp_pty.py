@@ -177,6 +177,7 @@ class Setup:
     stack: isotp.NotifierBasedCanStack
     recorder: FrameRecorder
     host_sent: list[bytes]
+    host_sent_at: list[float]  # time.monotonic() of each host_sent frame, when python-can was handed it
     block_size: int
     st_min_ms: int
 
@@ -197,11 +198,13 @@ def setup(request: pytest.FixtureRequest, peer_exe: str, tmp_path: Path) -> Iter
     peer = Peer(peer_exe, pty, block_size, st_min_ms)
     bus = can.Bus(interface="slcan", channel=str(pty), bitrate=1000000, sleep_after_open=0)
     host_sent: list[bytes] = []
+    host_sent_at: list[float] = []
     real_send = bus.send
 
     def counting_send(msg: can.Message, timeout: float | None = None) -> None:
         if msg.is_extended_id and msg.arbitration_id == ID_TO_DEVICE:
             host_sent.append(bytes(msg.data))
+            host_sent_at.append(time.monotonic())
         real_send(msg, timeout)
 
     bus.send = counting_send  # type: ignore[method-assign]
@@ -214,7 +217,7 @@ def setup(request: pytest.FixtureRequest, peer_exe: str, tmp_path: Path) -> Iter
     stack = isotp.NotifierBasedCanStack(bus, notifier, address=address, params=params)
     stack.start()
     try:
-        yield Setup(peer, stack, recorder, host_sent, block_size, st_min_ms)
+        yield Setup(peer, stack, recorder, host_sent, host_sent_at, block_size, st_min_ms)
     finally:
         stack.stop()
         notifier.stop()
@@ -245,6 +248,7 @@ def echo(s: Setup, payload: bytes) -> None:
     s.peer.log.clear()
     s.recorder.clear()
     s.host_sent.clear()
+    s.host_sent_at.clear()
     s.stack.send(payload)
     got = s.stack.recv(block=True, timeout=TRANSFER_TIMEOUT_S)
     if got is None:
@@ -294,11 +298,15 @@ def echo(s: Setup, payload: bytes) -> None:
         assert device_data[0][:2] == bytes([0x10 | (n >> 8), n & 0xFF])
         assert [f[0] & 0x0F for f in device_data[1:]] == [(i + 1) & 0x0F for i in range(len(device_data) - 1)]
 
-    # STmin: the device's own send times are exact; the host's frames reach
-    # the device through the pty, 2 ms covers one bunched read.
+    # STmin, each side by its own send times: the device's are exact; the
+    # host's are when can-isotp handed each frame to python-can (1 ms covers
+    # the timer granularity). The device's read times cannot judge the host:
+    # a loaded machine delays the reader, and every frame waiting in the pty
+    # then arrives in one read (seen: 62 bytes, all 8 CFs at one instant).
     tx_data = [(t, f) for t, f in tx if pci(f) != 3]
     assert cf_span_s(tx_data) >= min_cf_span_s(n, s.block_size, s.st_min_ms)
-    assert cf_span_s(rx) >= min_cf_span_s(n, s.block_size, s.st_min_ms) - 0.002
+    host_data = list(zip(s.host_sent_at, s.host_sent, strict=True))
+    assert cf_span_s(host_data) >= min_cf_span_s(n, s.block_size, s.st_min_ms) - 0.001
 
 
 def test_echo_every_size(setup: Setup) -> None:
