@@ -133,6 +133,9 @@ def test_run_all_ok_exit_0(channel: str, device: FakeDevice, tmp_path: Path) -> 
     # a required argument is required: a bare move is a usage error, never sent to the device
     (["move-absolute", "p", "joint"], 2, "landscape: error: Missing argument 'VALUES...'"),
     (["move-absolute"], 2, "landscape: error: Missing argument '"),
+    # an enum argument too (click 8.3 on takes an explicit default=None as a value, not as missing)
+    (["move-absolute", "p"], 2, "landscape: error: Missing argument 'FRAME'"),
+    (["get-digital-io"], 2, "landscape: error: Missing argument 'TYPE'"),
     (["set-speed", "--speed", "fast"], 2, "landscape: error: Invalid value for '--speed': 'fast'"),
     (["lock", "extra"], 2, "landscape: error: Got unexpected extra argument (extra)"),
 ])

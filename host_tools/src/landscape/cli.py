@@ -148,8 +148,10 @@ def cli_params(cmd: Command) -> list[click.Parameter]:
                            and f.type == FieldDescriptor.TYPE_STRING)
         ptype: click.ParamType[Any] = (EnumType(field_enum_type(f)) if f.type == FieldDescriptor.TYPE_ENUM
                                        else click.STRING)
-        params.append(click.Argument([f.name], type=ptype, required=not trailing_string,
-                                     default="" if trailing_string else None, metavar=f.name.upper()))
+        if trailing_string:
+            params.append(click.Argument([f.name], type=ptype, required=False, default="", metavar=f.name.upper()))
+        else:  # no default at all: click (8.3 on) takes an explicit default=None as a given value
+            params.append(click.Argument([f.name], type=ptype, required=True, metavar=f.name.upper()))
     if variadic is not None:
         params.append(click.Argument([variadic.name], type=float, nargs=-1, required=True,
                                      metavar=f"{variadic.name.upper()}..."))
