@@ -19,6 +19,7 @@ answers one or more lines, the last one terminal:
     {"op": "telemetry"} -> {"telemetry": {MESSAGE: {signal: value}}}
     {"op": "watch"}     -> {"broadcast": {"name", "sender", "timestamp", "signals"}} and
                            {"notice": {...}} lines until the client closes the connection
+                           ("notices_only": true: the notices alone, for `landscape events`)
     {"op": "stop"}      -> {"stopping": true}, then the server disconnects and exits
     any failure         -> {"error": {"type": "<exception class>", "message": "..."}} (terminal)
 """
@@ -47,6 +48,7 @@ from . import telemetry as tm
 from ._generated import landscape_pb2 as pb
 from .bus import BusSpec, resolve_config
 from .errors import ArgumentError, LandscapeError
+from .notices import format_notice
 from .registry import Command, lookup, message_to_dict
 from .supervisor import RetVal, Supervisor
 
@@ -150,6 +152,7 @@ class SessionServer:
         if self._sock is None:
             self.bind()
         assert self._sock is not None
+        self.sup.on_notice(self._log_notice)
         try:
             while not self._stop.is_set():
                 try:
@@ -163,9 +166,17 @@ class SessionServer:
                 threading.Thread(target=self._client, args=(conn,), daemon=True,
                                  name="landscape-session-client").start()
         finally:
+            with contextlib.suppress(ValueError):
+                self.sup.remove_notice_callback(self._log_notice)
             self._sock.close()
             with contextlib.suppress(FileNotFoundError):
                 self.path.unlink()
+
+    @staticmethod
+    def _log_notice(n: pb.Notice) -> None:
+        """Every notice the session receives goes to its log (the final notices of --no-wait
+        moves included, which no client may be waiting for)."""
+        log.info("notice %s", format_notice(n))
 
     def stop(self) -> None:
         self._stop.set()
@@ -216,7 +227,7 @@ class SessionServer:
                         if not isinstance(obj, dict):
                             raise ArgumentError("each line must be a JSON object")
                         if obj.get("op") == "watch":
-                            self._watch(conn, send)
+                            self._watch(conn, send, notices_only=bool(obj.get("notices_only")))
                             return
                         self._handle(obj, send)
                     except (LandscapeError, ValueError, KeyError, TypeError) as exc:
@@ -248,6 +259,7 @@ class SessionServer:
         timeout_s = obj.get("timeout_s")
         wait_s = obj.get("wait_s")
         sup = self.sup
+        log.info("request %s %s", cmd.name, json.dumps(fields, default=str))
         if cmd.field in ("connect", "disconnect"):
             with self._cmd_lock:
                 self.requests += 1
@@ -279,6 +291,7 @@ class SessionServer:
                 with self._cmd_lock:
                     rv = self._send_request(cmd, fields, timeout_s)
             send({"retval": retval_to_dict(rv)})
+            log.info("answer %s seq %d %s %s", cmd.name, rv.seq, rv.ret_name, rv.ret_msg)
             if rv.started and wait_s is not None:
                 deadline = time.monotonic() + float(wait_s)
                 while not self._stop.is_set():
@@ -307,7 +320,8 @@ class SessionServer:
                     sup.connect()
         return sup.request(cmd, check=False, timeout_s=timeout_s, **fields)
 
-    def _watch(self, conn: socket.socket, send: Callable[[dict[str, Any]], None]) -> None:
+    def _watch(self, conn: socket.socket, send: Callable[[dict[str, Any]], None], *,
+               notices_only: bool = False) -> None:
         q: queue.Queue[dict[str, Any]] = queue.Queue(maxsize=10000)
 
         def on_b(b: tm.Broadcast) -> None:
@@ -319,7 +333,8 @@ class SessionServer:
             with contextlib.suppress(queue.Full):
                 q.put_nowait({"notice": message_to_dict(n), "timestamp": time.monotonic()})
 
-        self.sup.on_telemetry(on_b)
+        if not notices_only:
+            self.sup.on_telemetry(on_b)
         self.sup.on_notice(on_n)
         try:
             while not self._stop.is_set():
@@ -374,6 +389,10 @@ class SessionClient:
         return cls(path, sock)
 
     def close(self) -> None:
+        # Shut the socket down first: a thread blocked reading it (a quiet watch) holds the
+        # reader's lock, which closing the reader would wait for.
+        with contextlib.suppress(OSError):
+            self._sock.shutdown(socket.SHUT_RDWR)
         with contextlib.suppress(OSError):
             self._rf.close()
         with contextlib.suppress(OSError):
@@ -462,10 +481,10 @@ class SessionClient:
     def disconnect(self, check: bool = False) -> RetVal:
         return self.request("disconnect", check=check)
 
-    def watch(self) -> Iterator[tuple[str, Any, float]]:
+    def watch(self, *, notices_only: bool = False) -> Iterator[tuple[str, Any, float]]:
         """Yield ("broadcast", tm.Broadcast, t) and ("notice", ls.Notice, t) from the session
-        until the connection closes (use a client of its own)."""
-        self._send({"op": "watch"})
+        until the connection closes (use a client of its own); notices_only: no broadcasts."""
+        self._send({"op": "watch", "notices_only": notices_only})
         self._sock.settimeout(None)
         for line in self._rf:
             obj = json.loads(line)

@@ -1,0 +1,67 @@
+"""How the host shows notices and units: one text form of a notice for the CLI, the
+session log and `landscape events`, and the units a session speaks in.
+
+Units: the device answers and reports every position in the units its session chose
+with setUnits (getUnits names them: "meters", "millimeters", ..., "radians",
+"degrees"); the DBC broadcasts (telemetry) are always SI (rad, m). The factors below
+are the exact definitions the firmware uses too (firmware/core/ls_units.c: inch =
+25.4 mm, foot = 12 inches, degree = pi/180).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from ._generated import landscape_pb2 as pb
+
+#: Metres per linear unit and radians per angular unit, by the names getUnits answers.
+METERS_PER: dict[str, float] = {"meters": 1.0, "millimeters": 0.001, "centimeters": 0.01, "inches": 0.0254,
+                                "feet": 0.3048}
+RADIANS_PER: dict[str, float] = {"radians": 1.0, "degrees": math.pi / 180.0}
+SYMBOL: dict[str, str] = {"meters": "m", "millimeters": "mm", "centimeters": "cm", "inches": "in", "feet": "ft",
+                          "radians": "rad", "degrees": "deg"}
+
+
+@dataclass(frozen=True)
+class Units:
+    """The linear and angular units of a session (names as getUnits answers them)."""
+
+    linear: str = "meters"
+    angular: str = "radians"
+
+    @classmethod
+    def from_result(cls, result: dict[str, Any]) -> Units:
+        """From a getUnits result; a name the host does not know is kept (shown, not converted)."""
+        return cls(str(result.get("linear_units") or "meters"), str(result.get("angular_units") or "radians"))
+
+    @property
+    def linear_symbol(self) -> str:
+        return SYMBOL.get(self.linear, self.linear)
+
+    @property
+    def angular_symbol(self) -> str:
+        return SYMBOL.get(self.angular, self.angular)
+
+    def describe(self) -> str:
+        return f"{self.linear} and {self.angular}"
+
+    def from_m(self, v: float) -> float:
+        """A length in metres (telemetry) in the session's linear unit."""
+        return v / METERS_PER.get(self.linear, 1.0)
+
+    def from_rad(self, v: float) -> float:
+        """An angle in radians (telemetry) in the session's angular unit."""
+        return v / RADIANS_PER.get(self.angular, 1.0)
+
+
+SI = Units()
+
+
+def format_notice(n: pb.Notice) -> str:
+    """One line for a notice: `KIND event_id key=value ... (ref SEQ) [rsvp ...] final`."""
+    kind = pb.NoticeKind.Name(n.kind)
+    extra = f" (ref {n.ref_seq})" if n.ref_seq else ""
+    if n.kind in (pb.EVENT_RSVP, pb.ALARM_RSVP):
+        extra += f" [rsvp {n.rsvp_id}: default '{n.rsvp_default}' after {n.rsvp_timeout_ms} ms]"
+    return f"{kind} {n.event_id}" + "".join(f" {d}" for d in n.data) + extra + (" final" if n.final else "")
