@@ -142,7 +142,9 @@ def test_record_writes_rows(channel: str, device: FakeDevice, tmp_path: Path, su
         names = {row["name"] for row in rows}
         j12 = [row for row in rows if row["name"] == "JOINTS_12"]
         tool = [row for row in rows if row["name"] == "TOOL_POS"]
-        assert (float(j12[0]["j1"]), float(j12[0]["j2"]), j12[0]["tool_x"], j12[0]["device_time_ms"]) == \
+        # signal columns carry their DBC unit; a name that ends with its unit keeps it once
+        assert {"j1_rad", "tool_x_m", "tool_roll_rad", "tool_time_ms", "st_cycle_us", "st_motion"} <= set(header)
+        assert (float(j12[0]["j1_rad"]), float(j12[0]["j2_rad"]), j12[0]["tool_x_m"], j12[0]["device_time_ms"]) == \
             (0.5, -0.25, "", "")
         dev = [int(row["device_time_ms"]) for row in tool]
         t = [float(row["t_s"]) for row in rows]
@@ -150,7 +152,7 @@ def test_record_writes_rows(channel: str, device: FakeDevice, tmp_path: Path, su
         objs = [json.loads(line) for line in out.read_text().splitlines()]
         names = {o["name"] for o in objs}
         j12 = [o for o in objs if o["name"] == "JOINTS_12"]
-        assert j12[0]["signals"] == {"j1": 0.5, "j2": -0.25} and j12[0]["sender"] == 0x10
+        assert j12[0]["signals"] == {"j1_rad": 0.5, "j2_rad": -0.25} and j12[0]["sender"] == 0x10
         dev = [o["device_time_ms"] for o in objs if o["name"] == "TOOL_POS"]
         t = [o["t_s"] for o in objs]
     assert names == {"JOINTS_12", "JOINTS_34", "JOINTS_56", "TOOL_POS", "TOOL_RPY", "STATUS", "DIO"}

@@ -8,10 +8,11 @@ unwrapped here into a steadily increasing count), else empty.
 
 CSV (`.csv`): one row per broadcast or notice, a fixed header: the time columns,
 `kind` (broadcast or notice), `name` (DBC message or notice event_id), `sender`,
-one column per signal of RECORDED_MESSAGES, then `notice_kind`, `data`
-(';'-joined), `ref_seq`, `final`. A row fills only its own columns.
-JSON lines (`.jsonl`, `.json`, `.ndjson`): one object per row with `signals` or
-`notice` (the Notice as a dict).
+one column per signal of RECORDED_MESSAGES, named with its DBC unit (`j1_rad`,
+`tool_x_m`; `column_name`), then `notice_kind`, `data` (';'-joined), `ref_seq`,
+`final`. A row fills only its own columns. Broadcasts are SI, as the DBC defines them.
+JSON lines (`.jsonl`, `.json`, `.ndjson`): one object per row with `signals` (keyed
+by the same unit-named columns) or `notice` (the Notice as a dict).
 MCAP (`.mcap`): channels with schemas for viewers such as Foxglove, written by
 mcap_log.McapRecorder (`open_recorder` picks the writer from the suffix);
 `read_recording` reads all three.
@@ -44,10 +45,27 @@ class RecordingError(LandscapeError):
     """A recording cannot be written or read."""
 
 
-def signal_columns() -> list[str]:
-    """Every signal of RECORDED_MESSAGES, in DBC order."""
+def column_name(signal: str) -> str:
+    """The column of a DBC signal: its name with its DBC unit (`j1_rad`, `tool_x_m`), unless the
+    name already ends with it (`tool_time_ms`) or it has none (`st_motion`)."""
+    unit = _signal_units().get(signal, "")
+    return f"{signal}_{unit}" if unit and not signal.endswith("_" + unit) else signal
+
+
+def _signal_units() -> dict[str, str]:
     db = tm.database()
-    return [s.name for name in RECORDED_MESSAGES for s in db.get_message_by_name(name).signals]
+    return {s.name: (s.unit or "").replace("/", "_per_") for m in db.messages for s in m.signals}
+
+
+def signal_columns() -> list[str]:
+    """The column of every signal of RECORDED_MESSAGES, in DBC order."""
+    db = tm.database()
+    return [column_name(s.name) for name in RECORDED_MESSAGES for s in db.get_message_by_name(name).signals]
+
+
+def _signal_of_column() -> dict[str, str]:
+    db = tm.database()
+    return {column_name(s.name): s.name for m in db.messages for s in m.signals}
 
 
 def record_format(path: str | Path) -> str:
@@ -122,7 +140,7 @@ class Recorder:
             row: dict[str, Any] = {"host_monotonic_s": round(b.timestamp, 6),
                                    "t_s": round(b.timestamp - self.start_s, 6),
                                    "device_time_ms": dev, "kind": "broadcast", "name": b.name, "sender": b.sender}
-            signals = {k: _plain(v) for k, v in b.signals.items()}
+            signals = {column_name(k): _plain(v) for k, v in b.signals.items()}
             if self._csv is not None:
                 row.update(signals)
                 self._csv.writerow(row)
@@ -189,6 +207,7 @@ def read_recording(path: str | Path) -> Recording:
 
         return recording_from_mcap(p)
     rec = Recording(p)
+    signal_of = _signal_of_column()  # unit-named columns back to DBC signal names
     try:
         f = p.open(newline="", encoding="utf-8")
     except OSError as exc:
@@ -202,8 +221,8 @@ def read_recording(path: str | Path) -> Recording:
                 for row in reader:
                     t = float(row["t_s"])
                     if row["kind"] == "broadcast":
-                        sig = {k: float(v) for k, v in row.items() if v not in ("", None) and k not in
-                               TIME_COLUMNS + ("kind", "name", "sender") + NOTICE_COLUMNS}
+                        sig = {signal_of.get(k, k): float(v) for k, v in row.items() if v not in ("", None)
+                               and k not in TIME_COLUMNS + ("kind", "name", "sender") + NOTICE_COLUMNS}
                         rec.series.setdefault(row["name"], []).append((t, sig))
                     elif row["kind"] == "notice":
                         rec.notices.append((t, row["name"], _data_dict(row["data"].split(";") if row["data"] else [])))
@@ -215,7 +234,7 @@ def read_recording(path: str | Path) -> Recording:
                     t = float(obj["t_s"])
                     if obj["kind"] == "broadcast":
                         rec.series.setdefault(obj["name"], []).append(
-                            (t, {k: float(v) for k, v in obj["signals"].items()}))
+                            (t, {signal_of.get(k, k): float(v) for k, v in obj["signals"].items()}))
                     elif obj["kind"] == "notice":
                         rec.notices.append((t, obj["name"], _data_dict(list(obj["notice"].get("data", [])))))
         except (ValueError, KeyError, TypeError) as exc:
