@@ -39,10 +39,12 @@ def test_text_output(channel: str, device: FakeDevice) -> None:
 
 
 def test_json_output_parses(channel: str, device: FakeDevice) -> None:
+    from landscape.cli import LOCK_NOTE
+
     r = run(channel, "--json", "lock")
     assert r.exit_code == 0
     assert json.loads(r.stdout) == {"command": "lock", "ret_code": 0, "ret_name": "CMD_EXEC_OK", "ret_msg": "",
-                                    "result": {}, "notices": []}
+                                    "result": {}, "notices": [], "note": LOCK_NOTE}
 
 
 def test_connect_prints_device_description(channel: str, device: FakeDevice) -> None:
@@ -272,3 +274,126 @@ def test_monitor_names_motion_and_mode_from_the_dbc() -> None:
     assert "robot_stopping" in shown(5, 1) and "power_on" in shown(5, 1)
     assert "robot_stopped_on_command" in shown(4, 0) and "power_off" in shown(4, 0)
     assert " 9 " in shown(9, 2) or "9\n" in shown(9, 2)
+
+
+def test_shell_takes_lines_while_a_motion_runs(channel: str, device: FakeDevice, tmp_path: Path) -> None:
+    """A motion returns to the prompt at once: a line typed meanwhile runs while the arm moves,
+    and the motion's notices and end print as they arrive."""
+    import threading
+    import time
+
+    from prompt_toolkit.application import create_app_session
+    from prompt_toolkit.input import create_pipe_input
+    from prompt_toolkit.output import DummyOutput
+
+    device.move_time_s = 0.5
+    with create_pipe_input() as inp, create_app_session(input=inp, output=DummyOutput()):
+        inp.send_text("lock\nactivate\nmove-absolute p1 joint 0 -0.5 0 0 0 0\nget-motion-control-state\n")
+
+        def quit_after_the_move() -> None:
+            deadline = time.monotonic() + 20
+            while time.monotonic() < deadline and not any(
+                    q.WhichOneof("cmd") == "get_motion_control_state" for q in device.requests):
+                time.sleep(0.02)
+            while time.monotonic() < deadline and device.state == ls.MOVING:
+                time.sleep(0.02)
+            time.sleep(0.5)  # the final notice reaches the follower
+            inp.send_text("quit\n")
+        threading.Thread(target=quit_after_the_move, daemon=True).start()
+        r = CliRunner().invoke(cli, ["--interface", "virtual", "--channel", channel, "shell"],
+                               env={"XDG_STATE_HOME": str(tmp_path)})
+    assert r.exit_code == 0, r.stderr
+    out = r.stdout
+    assert "move-absolute: CMD_STARTED_OK" in out and "the prompt is free" in out
+    # the query ran while the move was under way, before its end was printed
+    state = out.index("get-motion-control-state: CMD_EXEC_OK")
+    assert "  state: MOVING" in out[state:]
+    assert state < out.index("EVENT moveComplete") < out.index("move-absolute: done (moveComplete)")
+
+
+def test_shell_completion_of_names_options_enums_files_and_values(tmp_path: Path) -> None:
+    from prompt_toolkit.completion import CompleteEvent
+    from prompt_toolkit.document import Document
+
+    from landscape.cli import shell_completer
+
+    (tmp_path / "square.csv").write_text("j1\n0\n")
+    comp = shell_completer(["move-absolute", "move-arc", "path", "path-move", "get-tool", "set-units"],
+                           lambda: ["path-move square", "get-tool gripper", "path-move 'corner run'"])
+
+    def words(text: str) -> set[str]:
+        return {c.text for c in comp.get_completions(Document(text), CompleteEvent(completion_requested=True))}
+    assert words("move-a") == {"move-absolute", "move-arc"}
+    assert {"joint", "joint_frame", "base_cartesian"} <= words("move-absolute p1 ")           # an enum value
+    assert words("move-absolute p1 jo") == {"joint", "joint_frame"}
+    assert "--speed-pct" in words("move-absolute p1 joint 0 0 0 0 0 0 --sp")                  # an option name
+    assert words("set-units millimeters d") == {"degrees"}                                     # 2nd enum
+    assert words("path-move ") == {"square", "'corner run'"}                                   # path names typed before
+    assert words("get-tool g") == {"gripper"}                                                  # tools typed before
+    assert words(f"path load {tmp_path}/sq") == {"uare.csv"}                                   # file names
+    assert "load" in words("path ")
+
+
+def test_one_shot_lock_says_it_ends_with_the_invocation(channel: str, device: FakeDevice, tmp_path: Path) -> None:
+    r = run(channel, "lock")
+    assert r.exit_code == 0, r.stderr
+    assert r.stdout.splitlines()[0] == "lock: CMD_EXEC_OK"
+    assert ("  note: this lock ends when this invocation exits (it disconnects, and the device releases it); to "
+            "keep it across invocations run `landscape session start` first") in r.stdout
+    r = run(channel, "--json", "lock")
+    assert "landscape session start" in json.loads(r.stdout)["note"]
+    # in a run file the lock lives on for the file's later lines: no note
+    script = tmp_path / "lock.ls"
+    script.write_text("lock\nrelease\n")
+    r = run(channel, "run", str(script))
+    assert r.exit_code == 0 and "note:" not in r.stdout
+
+
+@pytest.mark.parametrize("command", ["move-react", "comply"])
+def test_help_of_move_react_and_comply_explains_every_option(command: str) -> None:
+    from landscape.cli import OPTION_HELP
+    from landscape.registry import lookup
+
+    cmd = lookup(command)
+    r = CliRunner().invoke(cli, [command, "--help"], terminal_width=200)
+    assert r.exit_code == 0
+    text = " ".join(r.stdout.split())
+    assert "Example" in text and f"landscape {command} force_sensor" in text
+    for f in cmd.fields():
+        opt = "--" + f.name.replace("_", "-")
+        if opt in text:  # every option carries its own help, with a unit or what the firmware does with it
+            helptext = OPTION_HELP[(cmd.field, f.name)]
+            assert " ".join(helptext.split()) in text, opt
+            assert any(w in helptext for w in ("%", " N", "s ", "linear unit", "not used", "integer")), opt
+
+
+def test_set_units_needs_both_units() -> None:
+    r = CliRunner().invoke(cli, ["--interface", "virtual", "--channel", "nowhere", "set-units", "millimeters"])
+    assert r.exit_code == 2
+    assert one_line_error(r).startswith("landscape: error: Missing argument 'ANGULAR'")
+    r = CliRunner().invoke(cli, ["set-units", "--help"], terminal_width=200)
+    assert "never changes silently" in " ".join(r.stdout.split())
+
+
+def test_monitor_shows_telemetry_in_the_session_units() -> None:
+    """Telemetry is SI; monitor converts it to the session's units and labels every row."""
+    import math
+
+    from rich.console import Console
+
+    from landscape.cli import monitor_view
+    from landscape.notices import Units
+
+    t = {"JOINTS_12": {"j1": math.pi / 2, "j2": 0.0}, "TOOL_POS": {"tool_x": 0.5, "tool_y": 0.0, "tool_z": -0.25},
+         "TOOL_RPY": {"tool_roll": math.pi, "tool_pitch": 0.0, "tool_yaw": 0.0}}
+    console = Console(width=200, record=True)
+    console.print(monitor_view(t, "m", [], Units("millimeters", "degrees")))
+    text = console.export_text()
+    assert "millimeters and degrees (the session's, get-units)" in text
+    assert "joints (deg)" in text and "+90.0000 +0.0000" in text
+    assert "tool xyz (mm)" in text and "+500.0000 +0.0000 -250.0000" in text
+    assert "tool rpy (deg)" in text and "+180.0000" in text
+    console = Console(width=200, record=True)
+    console.print(monitor_view(t, "m", [], None))
+    text = console.export_text()
+    assert "the session's units are unknown" in text and "joints (rad)" in text and "+1.5708" in text

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import csv
 import os
+import re
 import signal
 import subprocess
 import time
@@ -261,3 +262,41 @@ def test_the_shell_survives_help_errors_a_bad_quote_and_ctrl_c(session: Controll
     assert stop_s < STOP_TIME_S
     # the shell went on after all of it, and the arm is paused, not moving unnoticed
     assert "get-motion-control-state: CMD_EXEC_OK: PAUSED" in out
+
+
+def test_events_shows_callbacks_and_the_final_notice_of_a_no_wait_move(session: Controller, tmp_path: Path) -> None:
+    """`landscape events` in one terminal sees the notices of commands from others: a
+    signal-digital-io callback and the end of a --no-wait move nobody waits for; the session's
+    log keeps that end too."""
+    import queue
+    import threading
+
+    ev = popen_cli(session, "events")
+    assert ev.stdout is not None and ev.stderr is not None
+    lines: queue.Queue[str] = queue.Queue()
+    threading.Thread(target=lambda: [lines.put(line) for line in ev.stdout], daemon=True).start()  # type: ignore[union-attr]
+    try:
+        first = lines.get(timeout=30)
+        assert first.startswith("events: device 0x10 on "), first
+        assert "(via the session); positions in meters and radians (get-units); Ctrl-C ends" in first
+        for args in (["set-digital-io", "digital", "--bits-on", "0x10000"],
+                     ["signal-digital-io", "digital", "event", "--bit-string", "0x10000"],
+                     ["move-absolute", "p", "JOINT_FRAME", "0.3", "0", "0", "0", "0", "0", "--no-wait"]):
+            r = session.cli(*args)
+            assert r.returncode == 0, (args, r.stdout, r.stderr)
+        assert r.stdout.startswith("move-absolute: CMD_STARTED_OK")
+        seen: list[str] = []
+        deadline = time.monotonic() + 60
+        while not any(" EVENT moveAbsoluteComplete " in s and s.rstrip().endswith("final") for s in seen):
+            assert time.monotonic() < deadline, seen
+            seen.append(lines.get(timeout=max(0.1, deadline - time.monotonic())))
+    finally:
+        ev.send_signal(signal.SIGINT)
+        code = ev.wait(30)
+    err = ev.stderr.read()
+    no_traceback(err, *seen)
+    assert code == 0, err
+    assert any(" EVENT dioSignal " in s for s in seen), seen
+    assert all(re.match(r"\d\d:\d\d:\d\d\.\d{3} (EVENT|ALARM|EVENT_RSVP|ALARM_RSVP) ", s) for s in seen), seen
+    log_text = "".join(p.read_text() for p in tmp_path.glob("landscape-10-*.log"))
+    assert re.search(r"landscape\.session: notice EVENT moveAbsoluteComplete .*final", log_text), log_text[-2000:]

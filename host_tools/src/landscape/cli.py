@@ -40,9 +40,11 @@ from .errors import (
     VersionMismatchError,
     error_for_code,
 )
+from .notices import SI, Units, format_notice
 from .registry import (
     COMMANDS,
     Command,
+    enum_aliases,
     enum_choices,
     field_enum_type,
     field_message_type,
@@ -139,6 +141,9 @@ def _is_number(fd: FieldDescriptor) -> bool:
 def cli_params(cmd: Command) -> list[click.Parameter]:
     """The click parameters of `cmd`, derived from its request fields (docs/host-tool.md)."""
     fields = cmd.fields()
+
+    def helped(default: str | None, f: FieldDescriptor) -> str | None:
+        return OPTION_HELP.get((cmd.field, f.name), default)
     positional = [f for f in fields if not is_repeated(f)
                   and f.type in (FieldDescriptor.TYPE_STRING, FieldDescriptor.TYPE_ENUM)]
     variadic = next((f for f in fields if is_repeated(f) and f.type in _FLOATS), None)
@@ -161,29 +166,94 @@ def cli_params(cmd: Command) -> list[click.Parameter]:
         opt = "--" + f.name.replace("_", "-")
         if is_repeated(f) and f.type == FieldDescriptor.TYPE_MESSAGE:
             params.append(click.Option([opt, f.name], type=JsonObject(), multiple=True,
-                                       help=f"one {field_message_type(f).name} as a JSON object; repeat per item"))
+                                       help=helped(f"one {field_message_type(f).name} as a JSON object; repeat "
+                                                   f"per item", f)))
         elif is_repeated(f) and _is_number(f):
             params.append(click.Option([opt, f.name], type=CommaNumbers(f.type not in _FLOATS), default=None,
-                                       help="comma-separated numbers"))
+                                       help=helped("comma-separated numbers", f)))
         elif is_repeated(f):
-            params.append(click.Option([opt, f.name], multiple=True, help="repeat per item"))
+            params.append(click.Option([opt, f.name], multiple=True, help=helped("repeat per item", f)))
         elif f.type == FieldDescriptor.TYPE_BOOL:
-            params.append(click.Option([opt + "/--no-" + f.name.replace("_", "-"), f.name], default=False))
+            params.append(click.Option([opt + "/--no-" + f.name.replace("_", "-"), f.name], default=False,
+                                       help=helped(None, f)))
         elif f.type == FieldDescriptor.TYPE_ENUM:  # unreachable today (enums are positional)
-            params.append(click.Option([opt, f.name], type=EnumType(field_enum_type(f)), default=0))
+            params.append(click.Option([opt, f.name], type=EnumType(field_enum_type(f)), default=0,
+                                       help=helped(None, f)))
         elif f.type in _FLOATS:
             d = host_default(f)
-            params.append(click.Option([opt, f.name], type=float, default=0.0 if d is None else d, show_default=True))
+            params.append(click.Option([opt, f.name], type=float, default=0.0 if d is None else d, show_default=True,
+                                       help=helped(None, f)))
         else:
             d = host_default(f)
             params.append(click.Option([opt, f.name], type=IntType(), default=0 if d is None else d,
-                                       show_default=True))
+                                       show_default=True, help=helped(None, f)))
     if not cmd.blocking:
         params.append(click.Option(["--no-wait", "_no_wait"], is_flag=True,
                                    help="return after CMD_STARTED_OK instead of waiting for the final notice"))
         params.append(click.Option(["--wait-timeout", "_wait_timeout"], type=float, default=60.0, show_default=True,
                                    help="seconds to wait for the final notice"))
     return params
+
+
+# ---------------------------------------------------------------- help texts the schema lacks
+
+#: Per-command help beside the schema's summary: what each argument means, in which unit, and
+#: an example (docs/conformance.md has the full behaviour). Units: "linear unit" and "angular
+#: unit" are the session's (set-units, get-units; meters and radians until changed).
+COMMAND_HELP: dict[str, str] = {
+    "set_units": (
+        "Both units are required, in this order: LINEAR (meters, millimeters, centimeters, inches, feet) "
+        "and ANGULAR (radians, degrees); `set-units millimeters` alone is a usage error, so the angular unit "
+        "never changes silently. Every later position, speed and acceleration this session sends or receives "
+        "is in them; telemetry broadcasts (monitor, record) stay SI and are labelled.\n\n"
+        "Example: landscape set-units millimeters degrees"),
+    "move_react": (
+        "A guarded move: straight along MOTION_OFFSETS (x y z in the tool frame at the start, in the linear "
+        "unit; c_x c_y c_z, if given, must be 0) until the sensor crosses the one non-zero threshold, then it "
+        "returns to the crossing and stops. SENSOR_TYPE: force_sensor (components Fx Fy Fz Tx Ty Tz, N and Nm) "
+        "or laser_standoff_sensor (component 0: the distance, in the linear unit; it stops when the distance "
+        "falls below the threshold). Ends with event moveReactComplete (reason=threshold or max_distance, "
+        "pose=, force= or distance=, travelled=) or an alarm.\n\n"
+        "Example (move down 5 cm at 10 % until Fz reaches 5 N): "
+        "landscape move-react force_sensor 0 0 0.05 --thresholds 0,0,5 --motion-speed-pct 10"),
+    "comply": (
+        "A compliant move: travel along x y z of --max-travel while holding the contact force along c_x c_y c_z "
+        "(tool frame at the start, linear unit; travel and compliance direction orthogonal within 5 deg). "
+        "SENSOR_TYPE: a force sensor (force_sensor). THRESHOLDS: Fx Fy Fz [Tx Ty Tz], the target contact force "
+        "in N, along the compliance direction (torques must be 0). Ends with event complyComplete "
+        "(reason=max_travel, pose=, force=, fn_mean/fn_min/fn_max) or an alarm (complyTimeout, "
+        "complyPanicStop).\n\n"
+        "Example (slide 15 cm along x at 3 % pressing 10 N along z, compliance range 5 cm): "
+        "landscape comply force_sensor 0 0 10 --max-travel 0.15,0,0,0,0,0.05 --speed-pct 3 --max-timeout-s 20"),
+}
+
+#: Per-option help (command field, request field) -> text; units in every one.
+OPTION_HELP: dict[tuple[str, str], str] = {
+    ("move_react", "motion_speed_pct"): "speed along the line, % of the maximum linear speed (0: the current "
+                                        "set-speed); e.g. 10",
+    ("move_react", "compliance_speed_pct"): "accepted and not used by this firmware (%)",
+    ("move_react", "thresholds"): "t1,t2,... exactly one non-zero; its position picks the sensor component "
+                                  "(force_sensor: Fx,Fy,Fz,Tx,Ty,Tz in N/Nm; laser_standoff_sensor: distance in "
+                                  "the linear unit); positive: stop when the reading reaches it, negative: when "
+                                  "it falls to it; e.g. 0,0,5 (Fz 5 N)",
+    ("move_react", "gains"): "g1,g2,g3: accepted and not used by this firmware",
+    ("move_react", "envelope_min"): "accepted and not used by this firmware",
+    ("move_react", "envelope_max"): "max: |F| bound in N, force sensors only, above |threshold| (0: none); "
+                                    "beyond it the move stops with alarm moveReactEnvelope; e.g. 20",
+    ("comply", "max_timeout_s"): "seconds before alarm complyTimeout (0: 30 s); e.g. 20",
+    ("comply", "panic_stop_code"): "integer reported as panic_stop_code= in alarm complyPanicStop; e.g. 7",
+    ("comply", "max_travel"): "x,y,z,c_x,c_y,c_z (6 values, tool frame, linear unit): the travel, then the "
+                              "compliance direction and range; e.g. 0.15,0,0,0,0,0.05",
+    ("comply", "proportional_gains"): "Kp per component Fx,Fy,Fz in (linear unit/s)/N (0: 5e-4 m/s/N); "
+                                      "e.g. 0,0,0.0005",
+    ("comply", "differential_gains"): "Kd per component Fx,Fy,Fz in linear unit/N (0: none); e.g. 0,0,0.00001",
+    ("comply", "speed_pct"): "travel speed, % of the maximum linear speed (0: the current set-speed); e.g. 3",
+    ("comply", "compliance_speed_pct"): "largest speed along the compliance direction, % of the maximum "
+                                        "linear speed (0: 1 %); e.g. 1",
+    ("comply", "envelope_min"): "accepted and not used by this firmware",
+    ("comply", "envelope_max"): "max: |F| in N beyond which the move stops at once with alarm complyPanicStop "
+                                "(0: 3 x the target); e.g. 30",
+}
 
 
 # ---------------------------------------------------------------- state shared by the subcommands
@@ -201,6 +271,11 @@ class CliState:
     timeout_s: float | None
     json_out: bool
     no_session: bool = False
+    one_shot: bool = True
+    """False in `run` and the shell, whose lines share one session."""
+    follow_motions: bool = False
+    """The shell: a motion command returns at once and a MotionFollower prints its notices."""
+    followers: list[MotionFollower] = field(default_factory=list)
     sup: Supervisor | None = None
     client: SessionClient | None = None
     failures: list[str] = field(default_factory=list)
@@ -274,11 +349,7 @@ def _fmt_value(v: Any) -> str:
 
 
 def _fmt_notice(n: pb.Notice) -> str:
-    kind = pb.NoticeKind.Name(n.kind)
-    extra = f" (ref {n.ref_seq})" if n.ref_seq else ""
-    if n.kind in (pb.EVENT_RSVP, pb.ALARM_RSVP):
-        extra += f" [rsvp {n.rsvp_id}: default '{n.rsvp_default}' after {n.rsvp_timeout_ms} ms]"
-    return f"  {kind} {n.event_id}" + "".join(f" {d}" for d in n.data) + extra + (" final" if n.final else "")
+    return "  " + format_notice(n)
 
 
 def send(backend: Backend, cmd: Command, fields: dict[str, Any], *, wait_s: float | None) -> RetVal:
@@ -335,13 +406,23 @@ def execute(ctx: click.Context, cmd: Command, fields: dict[str, Any], *, wait: b
     """Run one command in the CLI's session, print its result, then its notices as they
     arrive; raise CommandFailed on failure."""
     st = _state(ctx)
+    if st.follow_motions and wait and not cmd.blocking and not st.json_out and not (
+            st.sup is not None and any(f.running for f in st.followers)):
+        try:
+            return execute_followed(st, cmd, fields, wait_timeout_s)
+        except KeyboardInterrupt:
+            stop_after_interrupt(st, cmd)
+            raise
     backend = st.backend()
     try:
         rv = send(backend, cmd, fields, wait_s=wait_timeout_s if wait else None)
+        note = lock_note(st, cmd, rv, backend)
         if not st.json_out:
             click.echo(f"{cmd.cli_name}: {rv.ret_name}" + (f": {rv.ret_msg}" if rv.ret_msg else ""))
             for k, v in rv.result.items():
                 click.echo(f"  {k}: {_fmt_value(v)}")
+            if note:
+                click.echo(f"  note: {note}")
         notices: list[pb.Notice] = []
         final: pb.Notice | None = None
         if wait:
@@ -352,11 +433,35 @@ def execute(ctx: click.Context, cmd: Command, fields: dict[str, Any], *, wait: b
             stop_after_interrupt(st, cmd)
         raise
     if st.json_out:
-        click.echo(json.dumps({
+        obj: dict[str, Any] = {
             "command": cmd.cli_name, "ret_code": rv.ret_code, "ret_name": rv.ret_name, "ret_msg": rv.ret_msg,
-            "result": rv.result, "notices": [message_to_dict(n) for n in notices]}))
+            "result": rv.result, "notices": [message_to_dict(n) for n in notices]}
+        if note:
+            obj["note"] = note
+        click.echo(json.dumps(obj))
     check_outcome(cmd, rv, final, wait=wait, wait_timeout_s=wait_timeout_s)
     return rv
+
+
+LOCK_NOTE = ("this lock ends when this invocation exits (it disconnects, and the device releases it); "
+             "to keep it across invocations run `landscape session start` first (then `landscape lock`), or put "
+             "the commands in one `landscape run FILE` or `landscape shell`")
+
+
+def lock_note(st: CliState, cmd: Command, rv: RetVal, backend: Backend) -> str | None:
+    """What a one-shot `lock` without a background session says beside its answer."""
+    if cmd.field == "lock" and rv.ok and st.one_shot and isinstance(backend, Supervisor):
+        return LOCK_NOTE
+    return None
+
+
+def session_units(backend: Backend) -> Units | None:
+    """The units the session speaks in (getUnits), or None when the device does not answer them."""
+    try:
+        rv = send(backend, COMMANDS["get_units"], {}, wait_s=None)
+    except LandscapeError:
+        return None
+    return Units.from_result(rv.result) if rv.ok else None
 
 
 def stop_after_interrupt(st: CliState, cmd: Command) -> None:
@@ -367,10 +472,11 @@ def stop_after_interrupt(st: CliState, cmd: Command) -> None:
     old = signal.signal(signal.SIGINT, signal.SIG_IGN)  # a second Ctrl-C must not cut the stop short
     try:
         try:
-            if st.client is not None:
-                # Our connection is mid-stream: the stop goes through a connection of its own.
-                st.client.close()
-                st.client = None
+            if st.client is not None or (st.sup is None and st.follow_motions and not st.no_session):
+                # Our connection may be mid-stream: the stop goes through a connection of its own.
+                if st.client is not None:
+                    st.client.close()
+                    st.client = None
                 stopper = SessionClient.attach(st.socket_path())
                 if stopper is None:
                     raise LandscapeError("the background session went away")
@@ -425,6 +531,8 @@ def make_command(cmd: Command) -> click.Command:
         if f.type == FieldDescriptor.TYPE_ENUM:
             names = " | ".join(v.name for v in field_enum_type(f).values)
             help_text += f"\n\n{f.name.upper()}: {names} (any case; suffix optional)"
+    if cmd.field in COMMAND_HELP:
+        help_text += "\n\n" + COMMAND_HELP[cmd.field]
     params = [] if cmd.field == "connect" else cli_params(cmd)
     if cmd.field == "connect":
         help_text += "\n\nEvery invocation connects first; this command prints the device description."
@@ -588,7 +696,7 @@ for _cmd in COMMANDS.values():
 
 
 #: Subcommands a `run` file or the shell cannot use (they hold the terminal or the session).
-NOT_IN_SCRIPTS = ("run", "shell", "monitor", "record", "plot", "demo", "session")
+NOT_IN_SCRIPTS = ("run", "shell", "monitor", "events", "record", "plot", "demo", "session")
 
 
 def run_line(ctx: click.Context, line: str) -> None:
@@ -627,6 +735,7 @@ def _script_failure(exc: BaseException) -> int | None:
 def run_cmd(ctx: click.Context, file: Any, keep_going: bool) -> None:
     """Run the commands of FILE (one per line, '#' comments) in one session."""
     st = _state(ctx)
+    st.one_shot = False
     first_code = 0
     for lineno, raw in enumerate(file, 1):
         line = raw.strip()
@@ -701,33 +810,227 @@ def shell_line(ctx: click.Context, line: str, names: Sequence[str]) -> bool:
     return True
 
 
+class MotionFollower:
+    """A motion the shell started, followed in a thread of its own: its notices print as they
+    arrive and its end is reported, while the prompt takes the next line (stop-motion above
+    all). Through a background session it owns the connection the notices stream on."""
+
+    def __init__(self, cmd: Command, rv: RetVal, backend: Backend, wait_timeout_s: float) -> None:
+        self.cmd = cmd
+        self.rv = rv
+        self.backend = backend
+        self.wait_timeout_s = wait_timeout_s
+        self.thread = threading.Thread(target=self._run, daemon=True, name=f"landscape-follow-{cmd.cli_name}")
+        self.abandoned = threading.Event()  # the shell is leaving: say nothing more
+
+    def start(self) -> None:
+        self.thread.start()
+
+    @property
+    def running(self) -> bool:
+        return self.thread.is_alive()
+
+    def _run(self) -> None:
+        try:
+            _, final = collect(self.backend, self.rv, wait_timeout_s=self.wait_timeout_s,
+                               on_notice=lambda n: click.echo(_fmt_notice(n)))
+            check_outcome(self.cmd, self.rv, final, wait=True, wait_timeout_s=self.wait_timeout_s)
+            click.echo(f"{self.cmd.cli_name}: done" + (f" ({final.event_id})" if final is not None else ""))
+        except Exception as exc:  # noqa: BLE001 (one line, never a traceback; the shell goes on)
+            if self.abandoned.is_set():
+                return
+            code, msg = classify(exc)
+            click.echo(f"error: {msg}" if code is not None else f"error: {type(exc).__name__}: {_one_line(exc)}",
+                       err=True)
+        finally:
+            if isinstance(self.backend, SessionClient):
+                self.backend.close()
+
+    def abandon(self) -> None:
+        """The shell leaves while the motion has not ended: say what becomes of it, stop following."""
+        self.abandoned.set()
+        if isinstance(self.backend, SessionClient):
+            click.echo(f"shell: {self.cmd.cli_name} has not ended; it goes on in the background session "
+                       f"(`landscape events` follows its notices)", err=True)
+            self.backend.close()
+        else:
+            click.echo(f"shell: {self.cmd.cli_name} has not ended; the shell's session ends, and the device ends "
+                       f"the motion of an owner that disconnects", err=True)
+
+
+def execute_followed(st: CliState, cmd: Command, fields: dict[str, Any], wait_timeout_s: float) -> RetVal:
+    """The shell's way to run a motion: send it, print its answer, and follow it in a
+    MotionFollower so the prompt comes back at once."""
+    backend = st.backend()
+    rv = send(backend, cmd, fields, wait_s=wait_timeout_s)
+    click.echo(f"{cmd.cli_name}: {rv.ret_name}" + (f": {rv.ret_msg}" if rv.ret_msg else ""))
+    for k, v in rv.result.items():
+        click.echo(f"  {k}: {_fmt_value(v)}")
+    if not rv.started:
+        check_outcome(cmd, rv, None, wait=False, wait_timeout_s=wait_timeout_s)
+        return rv
+    if isinstance(backend, SessionClient):
+        st.client = None  # the follower owns this connection; the next line opens another
+    follower = MotionFollower(cmd, rv, backend, wait_timeout_s)
+    st.followers = [f for f in st.followers if f.running] + [follower]
+    click.echo(f"  ({cmd.cli_name} runs; the prompt is free: stop-motion or Ctrl-C pauses it, abort-motion ends it)")
+    follower.start()
+    return rv
+
+
+def _history_values(lines: Sequence[str]) -> dict[str, list[str]]:
+    """Values typed before for each string argument (path names, tools, sensors, ...), newest
+    first, from shell lines: {field name: [values]}."""
+    group = cli
+    out: dict[str, list[str]] = {}
+    for line in lines:
+        try:
+            words = shlex.split(line, comments=True)
+        except ValueError:
+            continue
+        sub = group.commands.get(words[0]) if words else None
+        if sub is None:
+            continue
+        args = words[1:]
+        if isinstance(sub, click.Group):
+            sub = sub.commands.get(args[0]) if args else None
+            args = args[1:]
+            if sub is None:
+                continue
+        positional = [p for p in sub.params if isinstance(p, click.Argument)]
+        for value, param in zip(_positional_words(sub, args), positional, strict=False):
+            if param.type is click.STRING and param.name and value and value not in out.get(param.name, []):
+                out.setdefault(param.name, []).insert(0, value)
+    return out
+
+
+def _positional_words(sub: click.Command, args: Sequence[str]) -> list[str]:
+    """The positional words of `args` for `sub` (options and their values skipped)."""
+    takes_value = {o for p in sub.params if isinstance(p, click.Option) and not p.is_flag
+                   for o in p.opts + p.secondary_opts}
+    out: list[str] = []
+    skip = False
+    for a in args:
+        if skip:
+            skip = False
+            continue
+        if a.startswith("--") or (a.startswith("-") and len(a) > 1 and not a[1].isdigit() and a[1] != "."):
+            skip = a in takes_value
+            continue
+        out.append(a)
+    return out
+
+
+def shell_completer(names: Sequence[str], history: Callable[[], Sequence[str]]) -> Any:
+    """Tab completion for the shell: command names; option names; enum values (any accepted
+    spelling); file names for file arguments; values typed before for string arguments (path
+    names, tool ids, sensor types: the firmware cannot list them)."""
+    from prompt_toolkit.completion import Completer, Completion, PathCompleter
+    from prompt_toolkit.document import Document
+
+    paths = PathCompleter(expanduser=True)
+
+    class ShellCompleter(Completer):
+        def get_completions(self, document: Document, complete_event: Any) -> Any:
+            text = document.text_before_cursor
+            try:
+                words = shlex.split(text)
+            except ValueError:
+                words = text.split()
+            current = "" if not text or text[-1].isspace() else (words.pop() if words else "")
+            if not words or words[0] in ("help", "?"):
+                if len(words) <= 1:
+                    pool = list(names) + ([] if words else ["help", "quit", "exit"])
+                    yield from (Completion(w, -len(current)) for w in pool if w.startswith(current))
+                return
+            sub = cli.commands.get(words[0])
+            args = words[1:]
+            if isinstance(sub, click.Group):
+                if not args:
+                    yield from (Completion(w, -len(current)) for w in sorted(sub.commands) if w.startswith(current))
+                    return
+                sub, args = sub.commands.get(args[0]), args[1:]
+            if sub is None or words[0] in NOT_IN_SCRIPTS:
+                return
+            options = {o: p for p in sub.params if isinstance(p, click.Option) for o in p.opts + p.secondary_opts}
+            if current.startswith("-") and not current[1:2].isdigit():
+                yield from (Completion(o, -len(current)) for o in sorted(options) + ["--help"] if o.startswith(current))
+                return
+            param: click.Parameter | None = None
+            if args and args[-1] in options and not options[args[-1]].is_flag:
+                param = options[args[-1]]  # the value of this option
+            else:
+                positional = [p for p in sub.params if isinstance(p, click.Argument)]
+                i = len(_positional_words(sub, args))
+                if positional:
+                    param = positional[min(i, len(positional) - 1)] if positional[-1].nargs == -1 or \
+                        i < len(positional) else None
+            if param is None:
+                return
+            if isinstance(param.type, EnumType):
+                pool = sorted(enum_aliases(param.type.enum))
+            elif isinstance(param.type, (click.Path, click.File)):
+                yield from paths.get_completions(Document(current, len(current)), complete_event)
+                return
+            elif param.type is click.STRING and param.name:
+                pool = [shlex.quote(v) for v in _history_values(history()).get(param.name, [])]
+            else:
+                return
+            yield from (Completion(w, -len(current)) for w in pool if w.startswith(current))
+
+    return ShellCompleter()
+
+
+def stop_followed(st: CliState) -> bool:
+    """Ctrl-C at the prompt while the shell follows a motion: stop-motion, as during a wait.
+    False when no motion is followed."""
+    running = [f for f in st.followers if f.running]
+    if not running:
+        return False
+    stop_after_interrupt(st, running[-1].cmd)
+    return True
+
+
 @cli.command("shell")
 @click.pass_context
 def shell_cmd(ctx: click.Context) -> None:
-    """Interactive prompt: one session for every line; Tab completes command names.
+    """Interactive prompt: one session for every line; Tab completes command names, option names,
+    enum values, file names and values typed before (path names, tools).
 
-    `help [CMD]` and `CMD --help` show help; errors are reported and the prompt comes
-    back; Ctrl-C during a motion sends stop-motion (the arm pauses) and returns to the
-    prompt; Ctrl-C at the prompt clears the line; quit, exit or Ctrl-D leave."""
+    A motion command returns to the prompt at once (its notices and end print as they arrive), so
+    stop-motion, abort-motion or any other line can be typed while it runs; Ctrl-C while a motion
+    runs sends stop-motion (the arm pauses). `help [CMD]` and `CMD --help` show help; errors are
+    reported and the prompt comes back; Ctrl-C at the prompt otherwise clears the line; quit, exit
+    or Ctrl-D leave."""
     from prompt_toolkit import PromptSession
-    from prompt_toolkit.completion import WordCompleter
     from prompt_toolkit.history import FileHistory
+    from prompt_toolkit.patch_stdout import patch_stdout
 
     group = ctx.find_root().command
     assert isinstance(group, click.Group)
     names = sorted(n for n in group.list_commands(ctx) if n not in NOT_IN_SCRIPTS)
-    session: PromptSession[str] = PromptSession(history=FileHistory(str(_history_path())),
-                                                completer=WordCompleter(names + ["help", "quit"], sentence=True))
-    _state(ctx).backend()
-    while True:
-        try:
-            line = session.prompt("landscape> ")
-        except EOFError:
-            return
-        except KeyboardInterrupt:
-            continue
-        if not shell_line(ctx, line, names):
-            return
+    history = FileHistory(str(_history_path()))
+    session: PromptSession[str] = PromptSession(
+        history=history, completer=shell_completer(names, lambda: list(history.get_strings())[-500:]))
+    st = _state(ctx)
+    st.one_shot = False
+    st.follow_motions = True
+    st.backend()
+    # On a terminal, lines a followed motion prints go above the prompt, which is redrawn.
+    with patch_stdout(raw=True) if sys.stdout.isatty() else contextlib.nullcontext():
+        while True:
+            try:
+                line = session.prompt("landscape> ")
+            except EOFError:
+                break
+            except KeyboardInterrupt:
+                stop_followed(st)
+                continue
+            if not shell_line(ctx, line, names):
+                break
+    for f in st.followers:
+        if f.running:
+            f.abandon()
 
 
 def _state_name(v: Any) -> str:
@@ -737,8 +1040,11 @@ def _state_name(v: Any) -> str:
         return str(v)
 
 
-def monitor_view(t: dict[str, dict[str, Any]], title: str, last_notices: Sequence[pb.Notice]) -> Any:
-    """A rich renderable of the device's telemetry `t` (message name -> signals) and the last notices."""
+def monitor_view(t: dict[str, dict[str, Any]], title: str, last_notices: Sequence[pb.Notice],
+                 units: Units | None = None) -> Any:
+    """A rich renderable of the device's telemetry `t` (message name -> signals, SI as the DBC has
+    them) and the last notices; joints and the tool pose shown in `units` (the session's; None:
+    unknown, shown in SI), every row labelled with its unit."""
     from rich.table import Table
 
     table = Table(title=title, show_header=False)
@@ -756,16 +1062,21 @@ def monitor_view(t: dict[str, dict[str, Any]], title: str, last_notices: Sequenc
     if hb:
         table.add_row("owner", f"{int(hb.get('hb_owner', 0)):#04x}")
         table.add_row("supervisors", str(hb.get("hb_supervisors", 0)))
+    u = units or SI
+    table.add_row("units", f"{u.describe()} (the session's, get-units)" if units is not None
+                  else "meters and radians (telemetry; the session's units are unknown)")
     joints = [t[k][f"j{i}"] for k, r in (("JOINTS_12", (1, 2)), ("JOINTS_34", (3, 4)), ("JOINTS_56", (5, 6)))
               if k in t for i in r]
     if joints:
-        table.add_row("joints (rad)", " ".join(f"{j:+.4f}" for j in joints))
+        table.add_row(f"joints ({u.angular_symbol})", " ".join(f"{u.from_rad(j):+.4f}" for j in joints))
     if "TOOL_POS" in t:
         p = t["TOOL_POS"]
-        table.add_row("tool xyz (m)", f"{p['tool_x']:+.4f} {p['tool_y']:+.4f} {p['tool_z']:+.4f}")
+        table.add_row(f"tool xyz ({u.linear_symbol})",
+                      " ".join(f"{u.from_m(p[k]):+.4f}" for k in ("tool_x", "tool_y", "tool_z")))
     if "TOOL_RPY" in t:
         r = t["TOOL_RPY"]
-        table.add_row("tool rpy (rad)", f"{r['tool_roll']:+.4f} {r['tool_pitch']:+.4f} {r['tool_yaw']:+.4f}")
+        table.add_row(f"tool rpy ({u.angular_symbol})",
+                      " ".join(f"{u.from_rad(r[k]):+.4f}" for k in ("tool_roll", "tool_pitch", "tool_yaw")))
     if "DIO" in t:
         table.add_row("DIO in/out", f"{int(t['DIO']['dio_inputs']):#010x} / {int(t['DIO']['dio_outputs']):#010x}")
     if "EMERGENCY" in t:
@@ -791,6 +1102,7 @@ class TelemetryFeed:
         self._watcher: SessionClient | None = None
         self._thread: threading.Thread | None = None
         client = st.background()
+        self.units = session_units(client if client is not None else st.session())
         if client is None:
             self._sup = st.session()
             self._sup.on_notice(self.notices.append)
@@ -852,14 +1164,15 @@ def monitor_cmd(ctx: click.Context, duration: float | None, once: bool) -> None:
     try:
         if once:
             time.sleep(0.5)
-            console.print(monitor_view(feed.telemetry(), feed.title, list(feed.notices)))
+            console.print(monitor_view(feed.telemetry(), feed.title, list(feed.notices), feed.units))
             return
         end = None if duration is None else time.monotonic() + duration
         try:
-            with Live(monitor_view(feed.telemetry(), feed.title, []), console=console, refresh_per_second=5) as live:
+            with Live(monitor_view(feed.telemetry(), feed.title, [], feed.units), console=console,
+                      refresh_per_second=5) as live:
                 while end is None or time.monotonic() < end:
                     time.sleep(0.2)
-                    live.update(monitor_view(feed.telemetry(), feed.title, list(feed.notices)))
+                    live.update(monitor_view(feed.telemetry(), feed.title, list(feed.notices), feed.units))
         except KeyboardInterrupt:
             pass  # Ctrl-C is how an open-ended monitor ends
     finally:

@@ -7,7 +7,9 @@ runs (CliState.backend), else through the invocation's own session.
 from __future__ import annotations
 
 import json
+import logging
 import os
+import queue
 import select
 import signal
 import subprocess
@@ -38,11 +40,13 @@ from .cli import (
     cli,
     execute,
     send,
+    session_units,
 )
 from .demo import StepResult, demo_steps, run_demo
 from .errors import LandscapeError, error_for_code
 from .link import LinkBroker, is_local_line, pid_alive
 from .mcap_log import McapRecorder
+from .notices import format_notice
 from .paths import build_path_load_requests, load_path_file, request_fields, resolve_settings
 from .plotting import KINDS, plot
 from .recording import Recorder, open_recorder, read_recording
@@ -238,6 +242,87 @@ def record_cmd(ctx: click.Context, file: Path, duration: float | None) -> None:
             extra = f", {rec.frames} CAN frames, {rec.messages} messages on {len(rec.counts)} channels"
         click.echo(f"record: {rec.broadcasts} broadcasts and {rec.notices} notices{extra} in "
                    f"{summary['seconds']:g} s to {file}")
+
+
+@cli.command("events")
+@click.option("--duration", type=click.FloatRange(min=0, min_open=True), default=None,
+              help="seconds to follow (default: until Ctrl-C)")
+@click.pass_context
+def events_cmd(ctx: click.Context, duration: float | None) -> None:
+    """Follow the device's notices live: events, alarms, RSVPs, tags, signal-digital-io callbacks
+    and the final notices of --no-wait moves, one line each with the host's time.
+
+    With a background session running, every notice the session receives (the commands of
+    every terminal); else the notices sent to this invocation's own session. Positions in
+    notices are in the session's units (named in the first line). Ctrl-C ends it (exit 0)."""
+    st = _state(ctx)
+    client = st.background()
+    units = session_units(client if client is not None else st.session())
+    where = f"device {st.device:#04x} on {st.spec.describe()}" + (" (via the session)" if client else "")
+    units_text = (f"positions in {units.describe()} (get-units)" if units is not None
+                  else "units unknown (get-units failed)")
+    if st.json_out:
+        click.echo(json.dumps({"command": "events", "device": st.device, "via_session": client is not None,
+                               "units": None if units is None else {"linear": units.linear,
+                                                                    "angular": units.angular}}))
+    else:
+        click.echo(f"events: {where}; {units_text}; Ctrl-C ends")
+        if client is None:
+            click.echo("events: no background session: only the notices of this invocation's own session show; "
+                       "`landscape session start` to follow every command's", err=True)
+    sys.stdout.flush()
+    q: queue.Queue[tuple[pb.Notice, float]] = queue.Queue(maxsize=10000)
+    stop = _follow_notices(st, client, lambda n, ts: q.put((n, ts)))
+    end = None if duration is None else time.monotonic() + duration
+    try:
+        while end is None or time.monotonic() < end:
+            left = 0.2 if end is None else max(0.0, min(0.2, end - time.monotonic()))
+            try:
+                n, _ = q.get(timeout=left)
+            except queue.Empty:
+                continue
+            now = time.time()
+            if st.json_out:
+                click.echo(json.dumps({"time": round(now, 3), "notice": message_to_dict(n)}))
+            else:
+                click.echo(time.strftime("%H:%M:%S", time.localtime(now)) + f".{int(now * 1000) % 1000:03d} "
+                           + format_notice(n))
+            sys.stdout.flush()
+    except KeyboardInterrupt:
+        pass  # Ctrl-C is how an open-ended follow ends
+    finally:
+        stop()
+
+
+def _follow_notices(st: CliState, client: SessionClient | None,
+                    fn: Callable[[pb.Notice, float], None]) -> Callable[[], None]:
+    """Call fn(notice, host time) for every notice of the background session (a watch connection
+    of its own) or of the invocation's own session; returns the function that stops it."""
+    if client is None:
+        sup = st.session()
+
+        def on_n(n: pb.Notice) -> None:
+            fn(n, time.monotonic())
+        sup.on_notice(on_n)
+        return lambda: sup.remove_notice_callback(on_n)
+    watcher = SessionClient.attach(client.path)
+    if watcher is None:
+        raise SessionError(f"the session at {client.path} went away: check `landscape session status`")
+
+    def pump() -> None:
+        try:
+            for _kind, item, ts in watcher.watch(notices_only=True):
+                fn(item, ts)
+        except (OSError, ValueError, LandscapeError):
+            pass  # stop() closed the connection, or the session stopped
+
+    t = threading.Thread(target=pump, daemon=True, name="landscape-events")
+    t.start()
+
+    def stop_watch() -> None:
+        watcher.close()
+        t.join(2.0)
+    return stop_watch
 
 
 @cli.command("urdf")
@@ -471,6 +556,14 @@ def session_serve_cmd(ctx: click.Context, lock: bool) -> None:
                       "link": broker.url if broker is not None else None}), flush=True)
     devnull = os.open(os.devnull, os.O_WRONLY)
     os.dup2(devnull, 1)
+    # The session log (stderr, the .log file next to the socket): requests, answers and every
+    # notice, so the final notices of --no-wait moves are kept even when nobody follows them.
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter("%(asctime)s %(name)s: %(message)s"))
+    ours = logging.getLogger("landscape")
+    ours.addHandler(handler)
+    ours.setLevel(logging.INFO)
+    ours.propagate = False
     signal.signal(signal.SIGTERM, lambda *_: server.stop())
     signal.signal(signal.SIGINT, lambda *_: server.stop())
     signal.signal(signal.SIGHUP, signal.SIG_IGN)
