@@ -300,3 +300,36 @@ def test_events_shows_callbacks_and_the_final_notice_of_a_no_wait_move(session: 
     assert all(re.match(r"\d\d:\d\d:\d\d\.\d{3} (EVENT|ALARM|EVENT_RSVP|ALARM_RSVP) ", s) for s in seen), seen
     log_text = "".join(p.read_text() for p in tmp_path.glob("landscape-10-*.log"))
     assert re.search(r"landscape\.session: notice EVENT moveAbsoluteComplete .*final", log_text), log_text[-2000:]
+
+
+def test_the_shell_takes_a_typed_stop_while_a_move_runs(session: Controller) -> None:
+    """A move in the shell gives the prompt back: `stop-motion` typed while the arm moves pauses
+    it, `abort-motion` ends it, and the shell reports the move's end."""
+    sh = popen_cli(session, "shell", stdin=subprocess.PIPE)
+    assert sh.stdin is not None
+    sh.stdin.write(f"move-absolute p JOINT_FRAME {' '.join(FAR_A)}\n")
+    sh.stdin.flush()
+    with Supervisor.open_bus(BusSpec("slcan", session.pty), source_address=0x22) as obs:
+        wait_moving(obs)
+        t0 = time.monotonic()
+        sh.stdin.write("stop-motion\n")
+        sh.stdin.flush()
+        stop_s = wait_paused(obs, t0)
+        assert obs.get_motion_control_state().result["state"] == "PAUSED"
+        sh.stdin.write("abort-motion\n")
+        sh.stdin.flush()
+        deadline = time.monotonic() + 20
+        while obs.get_motion_control_state().result["state"] != "RESTING":
+            assert time.monotonic() < deadline, "abort-motion typed in the shell did not end the move"
+            time.sleep(0.05)
+    time.sleep(0.5)  # the end reaches the shell's follower
+    sh.stdin.write("quit\n")
+    sh.stdin.flush()
+    out, err = sh.communicate(timeout=60)
+    print(f"stop-motion typed in the shell -> paused in {stop_s * 1000:.0f} ms (shell line included)")
+    no_traceback(out, err)
+    assert sh.returncode == 0, err
+    assert "the prompt is free" in out
+    assert "stop-motion: CMD_EXEC_OK" in out and "abort-motion: CMD_EXEC_OK" in out
+    assert "move-absolute ended with alarm moveAbsoluteAborted" in err, (out, err)
+    assert stop_s < STOP_TIME_S
