@@ -38,6 +38,10 @@ DEFAULT_DEVICE_ADDRESS: NodeAddress
 DEFAULT_HOST_ADDRESS: NodeAddress
 DEGREES: AngularUnit
 DESCRIPTOR: _descriptor.FileDescriptor
+DISCONNECT_CONFIGURED: DisconnectAction
+DISCONNECT_STOP: DisconnectAction
+DISCONNECT_STOP_DEACTIVATE: DisconnectAction
+DISCONNECT_STOP_DEACTIVATE_RELEASE: DisconnectAction
 EVENT: NoticeKind
 EVENT_RSVP: NoticeKind
 FEET: LinearUnit
@@ -151,38 +155,46 @@ class ComplyRes(_message.Message):
     def __init__(self) -> None: ...
 
 class ConnectReq(_message.Message):
-    __slots__ = ["client_name", "heartbeat_period_ms", "protocol_version", "schema_hash"]
+    __slots__ = ["client_name", "disconnect_action", "heartbeat_period_ms", "protocol_version", "schema_hash"]
     CLIENT_NAME_FIELD_NUMBER: _ClassVar[int]
+    DISCONNECT_ACTION_FIELD_NUMBER: _ClassVar[int]
     HEARTBEAT_PERIOD_MS_FIELD_NUMBER: _ClassVar[int]
     PROTOCOL_VERSION_FIELD_NUMBER: _ClassVar[int]
     SCHEMA_HASH_FIELD_NUMBER: _ClassVar[int]
     client_name: str
+    disconnect_action: DisconnectAction
     heartbeat_period_ms: int
     protocol_version: int
     schema_hash: int
-    def __init__(self, protocol_version: _Optional[int] = ..., schema_hash: _Optional[int] = ..., client_name: _Optional[str] = ..., heartbeat_period_ms: _Optional[int] = ...) -> None: ...
+    def __init__(self, protocol_version: _Optional[int] = ..., schema_hash: _Optional[int] = ..., client_name: _Optional[str] = ..., heartbeat_period_ms: _Optional[int] = ..., disconnect_action: _Optional[_Union[DisconnectAction, str]] = ...) -> None: ...
 
 class ConnectRes(_message.Message):
-    __slots__ = ["device_name", "firmware_version", "heartbeat_timeout_ms", "joint_count", "owner", "protocol_version", "schema_hash", "session_epoch", "state"]
+    __slots__ = ["angular_unit", "device_name", "disconnect_action", "firmware_version", "heartbeat_timeout_ms", "joint_count", "linear_unit", "owner", "protocol_version", "schema_hash", "session_epoch", "state"]
+    ANGULAR_UNIT_FIELD_NUMBER: _ClassVar[int]
     DEVICE_NAME_FIELD_NUMBER: _ClassVar[int]
+    DISCONNECT_ACTION_FIELD_NUMBER: _ClassVar[int]
     FIRMWARE_VERSION_FIELD_NUMBER: _ClassVar[int]
     HEARTBEAT_TIMEOUT_MS_FIELD_NUMBER: _ClassVar[int]
     JOINT_COUNT_FIELD_NUMBER: _ClassVar[int]
+    LINEAR_UNIT_FIELD_NUMBER: _ClassVar[int]
     OWNER_FIELD_NUMBER: _ClassVar[int]
     PROTOCOL_VERSION_FIELD_NUMBER: _ClassVar[int]
     SCHEMA_HASH_FIELD_NUMBER: _ClassVar[int]
     SESSION_EPOCH_FIELD_NUMBER: _ClassVar[int]
     STATE_FIELD_NUMBER: _ClassVar[int]
+    angular_unit: AngularUnit
     device_name: str
+    disconnect_action: DisconnectAction
     firmware_version: str
     heartbeat_timeout_ms: int
     joint_count: int
+    linear_unit: LinearUnit
     owner: bool
     protocol_version: int
     schema_hash: int
     session_epoch: int
     state: State
-    def __init__(self, protocol_version: _Optional[int] = ..., schema_hash: _Optional[int] = ..., device_name: _Optional[str] = ..., joint_count: _Optional[int] = ..., firmware_version: _Optional[str] = ..., heartbeat_timeout_ms: _Optional[int] = ..., state: _Optional[_Union[State, str]] = ..., owner: bool = ..., session_epoch: _Optional[int] = ...) -> None: ...
+    def __init__(self, protocol_version: _Optional[int] = ..., schema_hash: _Optional[int] = ..., device_name: _Optional[str] = ..., joint_count: _Optional[int] = ..., firmware_version: _Optional[str] = ..., heartbeat_timeout_ms: _Optional[int] = ..., state: _Optional[_Union[State, str]] = ..., owner: bool = ..., session_epoch: _Optional[int] = ..., disconnect_action: _Optional[_Union[DisconnectAction, str]] = ..., linear_unit: _Optional[_Union[LinearUnit, str]] = ..., angular_unit: _Optional[_Union[AngularUnit, str]] = ...) -> None: ...
 
 class DeactivateReq(_message.Message):
     __slots__ = []
@@ -213,12 +225,14 @@ class DisconnectRes(_message.Message):
     def __init__(self) -> None: ...
 
 class Downlink(_message.Message):
-    __slots__ = ["notice", "response"]
+    __slots__ = ["notice", "response", "rsvp_ack"]
     NOTICE_FIELD_NUMBER: _ClassVar[int]
     RESPONSE_FIELD_NUMBER: _ClassVar[int]
+    RSVP_ACK_FIELD_NUMBER: _ClassVar[int]
     notice: Notice
     response: Response
-    def __init__(self, response: _Optional[_Union[Response, _Mapping]] = ..., notice: _Optional[_Union[Notice, _Mapping]] = ...) -> None: ...
+    rsvp_ack: RsvpAck
+    def __init__(self, response: _Optional[_Union[Response, _Mapping]] = ..., notice: _Optional[_Union[Notice, _Mapping]] = ..., rsvp_ack: _Optional[_Union[RsvpAck, _Mapping]] = ...) -> None: ...
 
 class GetAccelerationsReq(_message.Message):
     __slots__ = []
@@ -766,6 +780,22 @@ class ResumeMotionRes(_message.Message):
     __slots__ = []
     def __init__(self) -> None: ...
 
+class RsvpAck(_message.Message):
+    __slots__ = ["action", "ref_seq", "ret_code", "ret_msg", "rsvp_id", "session_epoch"]
+    ACTION_FIELD_NUMBER: _ClassVar[int]
+    REF_SEQ_FIELD_NUMBER: _ClassVar[int]
+    RET_CODE_FIELD_NUMBER: _ClassVar[int]
+    RET_MSG_FIELD_NUMBER: _ClassVar[int]
+    RSVP_ID_FIELD_NUMBER: _ClassVar[int]
+    SESSION_EPOCH_FIELD_NUMBER: _ClassVar[int]
+    action: str
+    ref_seq: int
+    ret_code: int
+    ret_msg: str
+    rsvp_id: int
+    session_epoch: int
+    def __init__(self, rsvp_id: _Optional[int] = ..., ret_code: _Optional[int] = ..., ret_msg: _Optional[str] = ..., action: _Optional[str] = ..., ref_seq: _Optional[int] = ..., session_epoch: _Optional[int] = ...) -> None: ...
+
 class RsvpReply(_message.Message):
     __slots__ = ["data", "ret_code", "rsvp_id"]
     DATA_FIELD_NUMBER: _ClassVar[int]
@@ -959,6 +989,9 @@ class AngularUnit(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
     __slots__ = []
 
 class CallbackType(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
+    __slots__ = []
+
+class DisconnectAction(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
     __slots__ = []
 
 class NoticeKind(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
