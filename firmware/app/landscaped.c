@@ -258,10 +258,11 @@ static void describe_config(void *ctx, char *buf, size_t cap)
     (void)ctx;
     const ls_config_t *o = g_cfg_running;
     int n = snprintf(buf, cap,
-                     "config=%s\nname=%s\nnode=0x%02X\nheartbeat_timeout_ms=%u\narm=%s\ndio=%s\nclock=%s\n"
-                     "rate_hz=%u\ntelemetry_hz=%u\nrt_priority=%d\nestop_input=%d\n",
+                     "config=%s\nname=%s\nnode=0x%02X\nheartbeat_timeout_ms=%u\ndisconnect_action=%s\narm=%s\n"
+                     "dio=%s\nclock=%s\nrate_hz=%u\ntelemetry_hz=%u\nrt_priority=%d\nestop_input=%d\n",
                      o->config_path[0] != '\0' ? o->config_path : "(options only)", o->name, (unsigned)o->node,
-                     (unsigned)o->heartbeat_timeout_ms, o->arm, o->dio, o->clock, (unsigned)o->rate_hz,
+                     (unsigned)o->heartbeat_timeout_ms,
+                     ls_core_disconnect_action_name((ls_DisconnectAction)o->disconnect_action), o->arm, o->dio, o->clock, (unsigned)o->rate_hz,
                      (unsigned)o->telemetry_hz, o->rt_priority, o->estop_input);
     for (size_t i = 0; i < o->n_links && n > 0 && (size_t)n < cap; i++) {
         n += snprintf(buf + n, cap - (size_t)n, "link=%s\n", o->links[i]);
@@ -474,6 +475,7 @@ int main(int argc, char **argv)
         .node_addr = opt.node,
         .joint_count = LS_N_JOINTS,
         .heartbeat_timeout_ms = opt.heartbeat_timeout_ms,
+        .disconnect_action = (ls_DisconnectAction)opt.disconnect_action,
     };
     ls_core_io_t io = { .send_downlink = ls_net_send_downlink, .describe = ls_net_describe, .ctx = &g_net };
     g_cfg_running = &opt;

@@ -3,6 +3,7 @@
 #include "ls_config.h"
 
 #include "faulty_link.h"
+#include "landscape.pb.h"
 
 #include <ctype.h>
 #include <errno.h>
@@ -161,6 +162,32 @@ static int set_heartbeat(ls_config_t *cfg, const char *v, char *why, size_t whyl
         return EXPECT("milliseconds 50..600000 (drop a supervisor after this long without heartbeat)");
     }
     return 0;
+}
+
+/* The schema's names (ls.DisconnectAction) in lower case without DISCONNECT_:
+ * the one list is the enum; DISCONNECT_CONFIGURED is not a configuration. */
+static int set_disconnect_action(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    static const char prefix[] = "DISCONNECT_";
+    char names[96];
+    size_t used = 0;
+    names[0] = '\0';
+    for (int a = (int)_ls_DisconnectAction_MIN + 1; a <= (int)_ls_DisconnectAction_MAX; a++) {
+        const char *full = ls_DisconnectAction_name((ls_DisconnectAction)a);
+        char low[48];
+        size_t n = 0;
+        for (const char *c = full + sizeof prefix - 1; *c != '\0' && n + 1 < sizeof low; c++) {
+            low[n++] = (char)tolower((unsigned char)*c);
+        }
+        low[n] = '\0';
+        if (strcmp(v, low) == 0) {
+            cfg->disconnect_action = (uint8_t)a;
+            return 0;
+        }
+        int w = snprintf(names + used, sizeof names - used, "%s%s", used > 0 ? ", " : "", low);
+        used += w > 0 && (size_t)w < sizeof names - used ? (size_t)w : 0u;
+    }
+    return EXPECT("%s (what the disconnect handler does when the owner is lost, seed 2.2)", names);
 }
 
 static int set_link(ls_config_t *cfg, const char *v, char *why, size_t whylen)
@@ -341,6 +368,7 @@ static const key_def_t KEYS[] = {
     { "dio", "inputs", "inputs", false, set_inputs },
     { "dio", "outputs", "outputs", false, set_outputs },
     { "dio", "estop_input", "estop-input", false, set_estop },
+    { "device", "disconnect_action", "disconnect-action", false, set_disconnect_action },
 };
 #define N_KEYS (sizeof KEYS / sizeof KEYS[0])
 
@@ -375,6 +403,7 @@ void ls_config_defaults(ls_config_t *cfg)
     (void)copy_str(cfg->name, sizeof cfg->name, "landscape-sim");
     cfg->node = 0x10;
     cfg->heartbeat_timeout_ms = 1000;
+    cfg->disconnect_action = (uint8_t)ls_DisconnectAction_DISCONNECT_STOP_DEACTIVATE_RELEASE;
     (void)copy_str(cfg->arm, sizeof cfg->arm, "sim");
     (void)copy_str(cfg->dio, sizeof cfg->dio, "sim");
     (void)copy_str(cfg->clock, sizeof cfg->clock, "realtime");
@@ -584,7 +613,10 @@ void ls_config_usage(FILE *f)
             "  --clock realtime|lockstep [hal] clock (default realtime)\n"
             "  --node ADDR               [device] node: node address 1..0xFE on the bus (default 0x10)\n"
             "  --heartbeat-timeout MS    [device] heartbeat_timeout_ms: drop a supervisor after MS\n"
-            "                            without heartbeat, 50..600000 (default 1000)\n"
+            "                            without heartbeat, 50..600000 (default 1000; a supervisor's\n"
+            "                            stated heartbeat period can lengthen it: docs/protocol.md)\n"
+            "  --disconnect-action A     [device] disconnect_action: stop, stop_deactivate or\n"
+            "                            stop_deactivate_release (default), when the owner is lost\n"
             "  --name NAME               [device] name reported at connect (default landscape-sim)\n"
             "  --rate HZ                 [control] rate_hz: control cycles per second, 100..10000 (default 1000)\n"
             "  --telemetry-hz HZ         [control] telemetry_hz: 0..200, 0 = off (default 50)\n"

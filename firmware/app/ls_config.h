@@ -27,6 +27,8 @@ typedef struct {
     char name[32];                 /* name = landscape-sim (1..31 printable characters) */
     uint8_t node;                  /* node = 0x10 (1..0xFE) */
     uint32_t heartbeat_timeout_ms; /* heartbeat_timeout_ms = 1000 (50..600000) */
+    uint8_t disconnect_action;     /* disconnect_action = stop_deactivate_release (ls.DisconnectAction:
+                                      stop, stop_deactivate, stop_deactivate_release) */
     /* [hal] */
     char links[LS_CONFIG_MAX_LINKS][128]; /* link = slcan:pty:PATH | socketcan:IFNAME (repeatable) */
     size_t n_links;

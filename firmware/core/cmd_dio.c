@@ -10,7 +10,11 @@
  * when every bit of bitString is set: on LS_CEV_DIO_CHANGED events
  * (ls_core_on_dio_event) or, with a polling cycle, at each cycle
  * (ls_dio_tick), and always once at the first tick after the answer, so bits
- * that are already set fire at once. Comms thread only. */
+ * that are already set fire at once. With an RSVP callback the watch waits
+ * for the supervisor's answer (docs/protocol.md "RSVP"): accept re-arms it
+ * (it fires again once the bits have been not all set and are all set
+ * again), decline cancels it, no answer within LS_DIO_RSVP_TIMEOUT_MS takes
+ * the default, cancel. Comms thread only. */
 #include <stdio.h>
 #include <string.h>
 
@@ -22,6 +26,9 @@ _Static_assert(LS_CORE_MAX_DIO_UNITS == LS_CTL_MAX_DIO_UNITS, "the core and the 
 
 #define LS_DIO_WRITE_TIMEOUT_US 500000u /* a loop that does not apply a write in this time is not running */
 #define LS_DIO_RSVP_TIMEOUT_MS 2000u    /* how long a dioSignal RSVP waits for its answer */
+#define LS_DIO_RSVP_ACCEPT "rearm"      /* the watch's action on accept (docs/protocol.md "RSVP") */
+#define LS_DIO_RSVP_DECLINE "cancel"    /* on decline */
+#define LS_DIO_RSVP_DEFAULT "cancel"    /* on time-out */
 #define LS_DIO_TYPE "digital"
 
 static int32_t check_type(ls_call_t *call, const char *cmd, const char *type)
@@ -191,6 +198,7 @@ int32_t ls_h_signal_digital_io(struct ls_core *core, struct ls_call *call)
         .bits = rq->bit_string,
         .cb = rq->callback_type,
         .deadline_us = rq->polling_timeout_ms > 0 ? call->now_us + (uint64_t)rq->polling_timeout_ms * 1000u : 0u,
+        .timeout_us = (uint64_t)rq->polling_timeout_ms * 1000u,
         .period_us = (uint64_t)rq->polling_cycle_time_ms * 1000u,
         .next_check_us = call->now_us,
         .check_now = true,
@@ -225,35 +233,50 @@ static bool session_alive(const ls_core_t *core, const ls_dio_watch_t *w)
     return s->connected && s->addr == w->addr;
 }
 
-static void rsvp_done(ls_core_t *core, void *ctx, int32_t ret_code, bool timed_out)
+/* The supervisor's answer decides what the watch does: accept re-arms it,
+ * decline cancels it, no answer cancels it (the default the notice announced). */
+static const char *rsvp_done(ls_core_t *core, void *ctx, int32_t ret_code, bool timed_out, uint64_t now_us)
 {
     ls_dio_watch_t *w = ctx;
+    core->dio.rsvp_last_code = ret_code;
+    if (w->phase != LS_WATCH_AWAIT_RSVP) {
+        return "none";
+    }
     if (timed_out) {
         core->dio.rsvp_timed_out++;
         if (session_alive(core, w)) {
-            /* The default action, announced in the RSVP notice: the watch ends and nothing else happens. */
             char watch[24];
             snprintf(watch, sizeof watch, "watch=%u", (unsigned)w->id);
-            const char *data[] = { watch, "action=continue" };
+            const char *data[] = { watch, "action=" LS_DIO_RSVP_DEFAULT };
             ls_core_notify(core, w->sup, cb_is_alarm(w->cb) ? ls_NoticeKind_ALARM : ls_NoticeKind_EVENT,
                            "dioSignalRsvpTimeout", w->ref_seq, false, data, 2);
         }
-    } else {
-        core->dio.rsvp_replied++;
+        w->phase = LS_WATCH_FREE;
+        return LS_DIO_RSVP_DEFAULT;
     }
-    core->dio.rsvp_last_code = ret_code;
-    w->phase = LS_WATCH_FREE;
+    core->dio.rsvp_replied++;
+    if (ret_code < 0 || !session_alive(core, w)) {
+        w->phase = LS_WATCH_FREE;
+        return LS_DIO_RSVP_DECLINE;
+    }
+    w->phase = LS_WATCH_ARMED;
+    w->await_clear = true; /* the bits are still set: fire on their next rising */
+    w->check_now = true;
+    w->next_check_us = now_us + w->period_us;
+    w->deadline_us = w->timeout_us > 0u ? now_us + w->timeout_us : 0u;
+    return LS_DIO_RSVP_ACCEPT;
 }
 
 static void fire(ls_core_t *core, ls_dio_watch_t *w, uint32_t levels, uint64_t now_us)
 {
     watch_data_t d;
     watch_data(&d, w, levels);
+    w->fired++;
     if (w->cb == ls_CallbackType_CB_EVENT_RSVP || w->cb == ls_CallbackType_CB_ALARM_RSVP) {
         ls_NoticeKind kind =
             w->cb == ls_CallbackType_CB_ALARM_RSVP ? ls_NoticeKind_ALARM_RSVP : ls_NoticeKind_EVENT_RSVP;
-        if (ls_core_rsvp(core, w->sup, kind, "dioSignal", d.v, 4, LS_DIO_RSVP_TIMEOUT_MS, "continue", rsvp_done, w,
-                         now_us) > 0) {
+        if (ls_core_rsvp(core, w->sup, w->ref_seq, kind, "dioSignal", d.v, 4, LS_DIO_RSVP_TIMEOUT_MS,
+                         LS_DIO_RSVP_DEFAULT, rsvp_done, w, now_us) > 0) {
             w->phase = LS_WATCH_AWAIT_RSVP;
             return;
         }
@@ -280,7 +303,9 @@ void ls_core_on_dio_event(ls_core_t *core, uint16_t unit, uint32_t levels, uint3
             continue;
         }
         w->check_now = false;
-        if ((levels & w->bits) == w->bits) {
+        if ((levels & w->bits) != w->bits) {
+            w->await_clear = false;
+        } else if (!w->await_clear) {
             fire(core, w, levels, now_us);
         }
     }
@@ -355,7 +380,9 @@ void ls_dio_tick(ls_core_t *core, uint64_t now_us)
         if (due) {
             uint32_t levels = snap_get(core, &ls)->dio[w->unit];
             w->check_now = false;
-            if ((levels & w->bits) == w->bits) {
+            if ((levels & w->bits) != w->bits) {
+                w->await_clear = false;
+            } else if (!w->await_clear) {
                 fire(core, w, levels, now_us);
                 continue;
             }

@@ -20,6 +20,7 @@
 #include "ls_core_events.h"
 #include "ls_kin.h"
 #include "ls_motion.h"
+#include "ls_units.h"
 
 
 #define PI 3.14159265358979323846
@@ -33,23 +34,15 @@
 
 /* ------------------------------------------------------------- units */
 
-/* Until firmware/core/ls_units.{h,c} is on main: the factors of the seed's
- * units (3.2.1 setUnits). */
+/* The factors of the seed's units (3.2.1 setUnits), from ls_units. */
 static double lin_si(ls_LinearUnit u)
 {
-    switch (u) {
-    case ls_LinearUnit_MILLIMETERS: return 1e-3;
-    case ls_LinearUnit_CENTIMETERS: return 1e-2;
-    case ls_LinearUnit_INCHES: return 0.0254;
-    case ls_LinearUnit_FEET: return 0.3048;
-    case ls_LinearUnit_METERS:
-    default: return 1.0;
-    }
+    return ls_units_to_si_linear(u, 1.0);
 }
 
 static double ang_si(ls_AngularUnit u)
 {
-    return u == ls_AngularUnit_DEGREES ? PI / 180.0 : 1.0;
+    return ls_units_to_si_angular(u, 1.0);
 }
 
 static const char *lin_name(ls_LinearUnit u)
@@ -70,12 +63,9 @@ static const char *ang_name(ls_AngularUnit u)
 }
 
 /* x y z (linear units) roll pitch yaw (angular units) -> SI */
-static void pose6_si(const ls_settings_t *st, const double in[6], double out[6])
+static void pose6_si(ls_units_t un, const double in[6], double out[6])
 {
-    for (int i = 0; i < 3; i++) {
-        out[i] = in[i] * lin_si(st->linear);
-        out[3 + i] = in[3 + i] * ang_si(st->angular);
-    }
+    ls_units_pose_to_si(un.linear, un.angular, in, out);
 }
 
 /* ------------------------------------------------------------- state */
@@ -306,13 +296,14 @@ static int32_t do_move(ls_core_t *core, ls_call_t *call, bool relative)
     char why[128];
     int st;
     const ls_settings_t *set = &core->settings;
+    const ls_units_t un = ls_core_units(core, call->sup);
     if (frame == ls_ReferenceFrame_JOINT_FRAME) {
         if (n_values != LS_N_JOINTS) {
             return count_error(call, what, "values", n_values, LS_N_JOINTS);
         }
         double q1[LS_N_JOINTS];
         for (int j = 0; j < LS_N_JOINTS; j++) {
-            q1[j] = values[j] * ang_si(set->angular) + (relative ? q0[j] : 0.0);
+            q1[j] = values[j] * ang_si(un.angular) + (relative ? q0[j] : 0.0);
         }
         const double sf = (speed_pct > 0.0 ? speed_pct : set->speed_pct) / 100.0;
         st = ls_motion_plan_joint(slot, core->model, q0, q1, sf, set->accel_pct / 100.0, why, sizeof why);
@@ -322,7 +313,7 @@ static int32_t do_move(ls_core_t *core, ls_call_t *call, bool relative)
             return count_error(call, what, "values", n_values, 6);
         }
         double d[6], P0[16], P1[16], W[16], T[16];
-        pose6_si(set, values, d);
+        pose6_si(un, values, d);
         tip_of(core, q0, P0);
         world_pose(core, W);
         if (!relative) {
@@ -397,7 +388,6 @@ int32_t ls_h_move_arc(struct ls_core *core, struct ls_call *call)
     if (slot == NULL) {
         return code;
     }
-    const ls_settings_t *set = &core->settings;
     double P0[16], W[16], F[16], via[16], goal[16];
     tip_of(core, q0, P0);
     world_pose(core, W);
@@ -411,7 +401,7 @@ int32_t ls_h_move_arc(struct ls_core *core, struct ls_call *call)
     double *dst[2] = { via, goal };
     for (int k = 0; k < 2; k++) {
         double d[6], T[16];
-        pose6_si(set, src[k], d);
+        pose6_si(ls_core_units(core, call->sup), src[k], d);
         if (r->offset_type == ls_OffsetType_RELATIVE_DATA) {
             offset_in_frame(F, P0, d, dst[k]);
         } else {
@@ -685,11 +675,14 @@ static void aux_failed(ls_core_t *core, int point, const char *text)
     ls_run_finish(core, LS_RUN_END_AUX_FAILED, extra, 2);
 }
 
-static void rsvp_done(struct ls_core *core, void *ctx, int32_t ret_code, bool timed_out)
+/* A path's `rsvp` (docs/protocol.md "RSVP"): accept continues the path,
+ * decline drops it (the arm is at rest at the point), no answer continues. */
+static const char *rsvp_done(struct ls_core *core, void *ctx, int32_t ret_code, bool timed_out, uint64_t now_us)
 {
     (void)ctx;
+    (void)now_us;
     if (!core->run.active) {
-        return;
+        return "none"; /* the path ended meanwhile */
     }
     if (!timed_out && ret_code < 0) {
         /* The supervisor declined: drop the path (it asked us not to go on);
@@ -703,9 +696,10 @@ static void rsvp_done(struct ls_core *core, void *ctx, int32_t ret_code, bool ti
             snprintf(core->motion_state, sizeof core->motion_state, "robot_stopped_on_command");
         }
         ls_run_finish(core, LS_RUN_END_RSVP_DECLINED, extra, 1);
-        return;
+        return "abort";
     }
     aux_done(core); /* answered, or timed out: the default action is to continue */
+    return "continue";
 }
 
 static void run_aux(ls_core_t *core, const ls_motion_event_t *ev)
@@ -760,7 +754,7 @@ static void run_aux(ls_core_t *core, const ls_motion_event_t *ev)
         aux_done(core);
         return;
     case AUX_RSVP:
-        if (ls_core_rsvp(core, core->run.sup, ls_NoticeKind_EVENT_RSVP, a.name, data, 2,
+        if (ls_core_rsvp(core, core->run.sup, core->run.ref_seq, ls_NoticeKind_EVENT_RSVP, a.name, data, 2,
                          (uint32_t)(a.timeout_s * 1000.0), "continue", rsvp_done, NULL, g_now_us) < 0) {
             aux_done(core); /* nobody to ask (or the table is full): take the default */
         }
@@ -837,7 +831,7 @@ static void joints_text(const ls_core_t *core, const double q[LS_N_JOINTS], char
         size_t len = (size_t)snprintf(out, cap, "joints=");
         for (int j = 0; j < LS_N_JOINTS && len < cap; j++) {
             len += (size_t)snprintf(out + len, cap - len, "%s%.*g", j ? "," : "", prec,
-                                    q[j] / ang_si(core->settings.angular));
+                                    q[j] / ang_si(ls_core_run_units(core).angular));
         }
         if (len < cap) {
             return;
@@ -949,7 +943,7 @@ static int32_t check_pct(ls_call_t *call, int k, const char *field, double v)
 static int32_t load_point(ls_core_t *core, ls_call_t *call, const ls_PathLoadReq *r, int k, path_point_t *pt)
 {
     const ls_TagPoint *tp = &r->tags[k];
-    const ls_settings_t *set = &core->settings;
+    const ls_units_t un = ls_core_units(core, call->sup);
     memset(pt, 0, sizeof *pt);
     pt->used = true;
     pt->frame = r->frame;
@@ -962,14 +956,14 @@ static int32_t load_point(ls_core_t *core, ls_call_t *call, const ls_PathLoadReq
                             LS_N_JOINTS, (unsigned)tp->joints_count);
         }
         for (int j = 0; j < LS_N_JOINTS; j++) {
-            pt->v[j] = tp->joints[j] * ang_si(set->angular);
+            pt->v[j] = tp->joints[j] * ang_si(un.angular);
             if (!pt->relative && (pt->v[j] < core->model->q_min_rad[j] || pt->v[j] > core->model->q_max_rad[j])) {
                 const double lim =
                     pt->v[j] < core->model->q_min_rad[j] ? core->model->q_min_rad[j] : core->model->q_max_rad[j];
                 return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR,
                                 "pathLoad point %d: joint %d: %.4g %s beyond its limit %.4g %s", k, j + 1,
-                                tp->joints[j], ang_name(set->angular), lim / ang_si(set->angular),
-                                ang_name(set->angular));
+                                tp->joints[j], ang_name(un.angular), lim / ang_si(un.angular),
+                                ang_name(un.angular));
             }
         }
     } else {
@@ -979,7 +973,7 @@ static int32_t load_point(ls_core_t *core, ls_call_t *call, const ls_PathLoadReq
                             "yaw), got %u",
                             k, (unsigned)tp->pose_count);
         }
-        pose6_si(set, tp->pose, pt->v);
+        pose6_si(un, tp->pose, pt->v);
         if (!pt->relative) {
             double T[16], W[16], P[16];
             ls_pose_from_xyzrpy(pt->v, T);
@@ -996,8 +990,8 @@ static int32_t load_point(ls_core_t *core, ls_call_t *call, const ls_PathLoadReq
                     return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR,
                                     "pathLoad point %d: axis %s: %.4g %s beyond the workspace limit %.4g %s (base "
                                     "frame)",
-                                    k, ax[i], P[12 + i] / lin_si(set->linear), lin_name(set->linear),
-                                    (P[12 + i] < lo ? lo : hi) / lin_si(set->linear), lin_name(set->linear));
+                                    k, ax[i], P[12 + i] / lin_si(un.linear), lin_name(un.linear),
+                                    (P[12 + i] < lo ? lo : hi) / lin_si(un.linear), lin_name(un.linear));
                 }
             }
         }

@@ -227,6 +227,7 @@ static int32_t plan_and_start(ls_core_t *core, ls_call_t *call, const char *what
 
 int32_t ls_h_move_react(struct ls_core *core, struct ls_call *call)
 {
+    const ls_units_t un = ls_core_units(core, call->sup);
     const char *what = "moveReact";
     const ls_MoveReactReq *r = &call->req->cmd.move_react;
     ls_core_sensor_attach(core);
@@ -243,7 +244,6 @@ int32_t ls_h_move_react(struct ls_core *core, struct ls_call *call)
     }
     const hal_sensor_t *sensor = &core->sensors[si];
     bool length = is_length_sensor(sensor->name);
-    const ls_settings_t *set = &core->settings;
     if (r->motion_offsets_count != 3 && r->motion_offsets_count != 6) {
         return ls_reply(call, ls_RetCode_CMD_PARAM_ERR,
                         "%s: motion_offsets has %u values; give x y z (or x y z c_x c_y c_z) in the tool frame", what,
@@ -266,7 +266,7 @@ int32_t ls_h_move_react(struct ls_core *core, struct ls_call *call)
     plan.kind = LS_REACT_GUARDED;
     double d[3];
     for (int i = 0; i < 3; i++) {
-        d[i] = ls_units_to_si_linear(set->linear, r->motion_offsets[i]);
+        d[i] = ls_units_to_si_linear(un.linear, r->motion_offsets[i]);
     }
     plan.dist_m = norm3(d);
     if (!(plan.dist_m > 1e-9)) {
@@ -306,7 +306,7 @@ int32_t ls_h_move_react(struct ls_core *core, struct ls_call *call)
     plan.component = (uint8_t)comp;
     double t = r->thresholds[comp];
     if (length) {
-        plan.threshold = ls_units_to_si_linear(set->linear, t);
+        plan.threshold = ls_units_to_si_linear(un.linear, t);
         plan.below = true; /* stop when the distance falls below it */
         if (t < 0.0) {
             return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR,
@@ -350,6 +350,7 @@ static double gain_along(const double *g, size_t count, const double n[3])
 
 int32_t ls_h_comply(struct ls_core *core, struct ls_call *call)
 {
+    const ls_units_t un = ls_core_units(core, call->sup);
     const char *what = "comply";
     const ls_ComplyReq *r = &call->req->cmd.comply;
     ls_core_sensor_attach(core);
@@ -375,7 +376,6 @@ int32_t ls_h_comply(struct ls_core *core, struct ls_call *call)
         return ls_reply(call, ls_RetCode_CMD_PARAM_ERR, "%s holds a contact force: use a force sensor, not %s", what,
                         sensor->name);
     }
-    const ls_settings_t *set = &core->settings;
     if (r->max_travel_count != 6) {
         return ls_reply(call, ls_RetCode_CMD_PARAM_ERR,
                         "%s: max_travel has %u values; give x y z (travel) c_x c_y c_z (compliance), tool frame", what,
@@ -403,8 +403,8 @@ int32_t ls_h_comply(struct ls_core *core, struct ls_call *call)
     plan.kind = LS_REACT_COMPLY;
     double d[3], c[3];
     for (int i = 0; i < 3; i++) {
-        d[i] = ls_units_to_si_linear(set->linear, r->max_travel[i]);
-        c[i] = ls_units_to_si_linear(set->linear, r->max_travel[3 + i]);
+        d[i] = ls_units_to_si_linear(un.linear, r->max_travel[i]);
+        c[i] = ls_units_to_si_linear(un.linear, r->max_travel[3 + i]);
     }
     plan.dist_m = norm3(d);
     plan.c_max_m = norm3(c);
@@ -449,9 +449,9 @@ int32_t ls_h_comply(struct ls_core *core, struct ls_call *call)
     }
     /* gains: (linear unit / s) per N and linear unit per N -> SI */
     double kp = gain_along(r->proportional_gains, r->proportional_gains_count, plan.n_tool);
-    plan.kp_m_s_N = kp > 0.0 ? ls_units_to_si_linear(set->linear, kp) : COMPLY_DEFAULT_KP_M_S_N;
+    plan.kp_m_s_N = kp > 0.0 ? ls_units_to_si_linear(un.linear, kp) : COMPLY_DEFAULT_KP_M_S_N;
     plan.kd_m_N =
-        ls_units_to_si_linear(set->linear, gain_along(r->differential_gains, r->differential_gains_count, plan.n_tool));
+        ls_units_to_si_linear(un.linear, gain_along(r->differential_gains, r->differential_gains_count, plan.n_tool));
     if ((code = move_speed(core, call, what, "speed", r->speed_pct, &plan.v_m_s)) != 0) {
         return code;
     }
@@ -482,6 +482,7 @@ int32_t ls_h_comply(struct ls_core *core, struct ls_call *call)
 
 int32_t ls_h_manual_control(struct ls_core *core, struct ls_call *call)
 {
+    const ls_units_t un = ls_core_units(core, call->sup);
     const char *type = call->req->cmd.manual_control.type;
     ls_core_sensor_attach(core);
     double frac;
@@ -527,8 +528,8 @@ int32_t ls_h_manual_control(struct ls_core *core, struct ls_call *call)
         return ls_reply(call, ls_RetCode_CMD_EXEC_OK,
                         "%s jogging on: %.3g %s/s and %.3g %s/s at full deflection%s; motion commands are refused "
                         "until manualControl off",
-                        type, ls_units_from_si_linear(set->linear, jog.v_lin_m_s), ls_units_linear_name(set->linear),
-                        ls_units_from_si_angular(set->angular, jog.v_ang_rad_s), ls_units_angular_name(set->angular),
+                        type, ls_units_from_si_linear(un.linear, jog.v_lin_m_s), ls_units_linear_name(un.linear),
+                        ls_units_from_si_angular(un.angular, jog.v_ang_rad_s), ls_units_angular_name(un.angular),
                         core->state == ls_State_RESTING ? "" : " (moves once activated)");
     }
     if (strncmp(core->motion_state, "manual_", 7) == 0) {
@@ -564,6 +565,7 @@ static void rest(ls_core_t *core)
 
 static void react_end(ls_core_t *core, const ls_ctl_event_t *ev)
 {
+    const ls_units_t un = ls_core_run_units(core); /* the final notice speaks the run's session's units */
     const ls_react_report_t *rep = &ev->react;
     const ls_settings_t *set = &core->settings;
     /* where: the tool tip in the world frame, current units */
@@ -575,7 +577,7 @@ static void react_end(ls_core_t *core, const ls_ctl_event_t *ev)
     ls_pose_inv(W, Wi);
     ls_pose_mul(Wi, tip, wt);
     ls_pose_to_xyzrpy(wt, pose);
-    ls_units_pose_from_si(set->linear, set->angular, pose, pose);
+    ls_units_pose_from_si(un.linear, un.angular, pose, pose);
     char d_reason[40], d_pose[64], d_read[64], d_trav[40], d_extra[4][64];
     const char *data[10];
     size_t n = 0;
@@ -586,7 +588,7 @@ static void react_end(ls_core_t *core, const ls_ctl_event_t *ev)
     values_text("pose", pose, 6, d_pose, sizeof d_pose);
     data[n++] = d_pose;
     if (core->run.length) {
-        double dist = ls_units_from_si_linear(set->linear, rep->reading[0]);
+        double dist = ls_units_from_si_linear(un.linear, rep->reading[0]);
         values_text("distance", &dist, 1, d_read, sizeof d_read);
     } else {
         values_text("force", rep->reading, rep->n_values, d_read, sizeof d_read);
@@ -595,7 +597,7 @@ static void react_end(ls_core_t *core, const ls_ctl_event_t *ev)
     char d_trig[48];
     if (rep->triggered) {
         static const char *const k_ft[] = { "Fx", "Fy", "Fz", "Tx", "Ty", "Tz" };
-        double tv = core->run.length ? ls_units_from_si_linear(set->linear, rep->trigger) : rep->trigger;
+        double tv = core->run.length ? ls_units_from_si_linear(un.linear, rep->trigger) : rep->trigger;
         const char *comp = rep->end == LS_REACT_END_ENVELOPE ? "|F|"
                            : core->run.length                ? "distance"
                            : core->run.component < 6         ? k_ft[core->run.component]
@@ -603,7 +605,7 @@ static void react_end(ls_core_t *core, const ls_ctl_event_t *ev)
         snprintf(d_trig, sizeof d_trig, "trigger=%s:%.6g", comp, tv);
         data[n++] = d_trig;
     }
-    double trav = ls_units_from_si_linear(set->linear, rep->travelled_m);
+    double trav = ls_units_from_si_linear(un.linear, rep->travelled_m);
     values_text("travelled", &trav, 1, d_trav, sizeof d_trav);
     data[n++] = d_trav;
     if (core->run.comply) {

@@ -34,6 +34,7 @@ static int32_t check_rate(ls_call_t *call, const char *what, double v, double ma
 
 int32_t ls_h_set_speed(struct ls_core *core, struct ls_call *call)
 {
+    const ls_units_t un = ls_core_units(core, call->sup);
     const ls_SetSpeedReq *rq = &call->req->cmd.set_speed;
     ls_settings_t *st = &core->settings;
     const double v = rq->speed;
@@ -54,27 +55,27 @@ int32_t ls_h_set_speed(struct ls_core *core, struct ls_call *call)
         if (core->model == NULL) {
             return no_model(call, "setSpeed LINEAR_SPEED");
         }
-        snprintf(unit, sizeof unit, "%s/s", ls_units_linear_name(st->linear));
-        rc = check_rate(call, "LINEAR_SPEED", v, ls_units_from_si_linear(st->linear, core->model->max_linear_speed_m_s),
+        snprintf(unit, sizeof unit, "%s/s", ls_units_linear_name(un.linear));
+        rc = check_rate(call, "LINEAR_SPEED", v, ls_units_from_si_linear(un.linear, core->model->max_linear_speed_m_s),
                         unit);
         if (rc < 0) {
             return rc;
         }
         /* fmin: the range check passed in the user's unit; rounding must not exceed the model's limit in SI */
-        st->linear_speed_m_s = fmin(ls_units_to_si_linear(st->linear, v), core->model->max_linear_speed_m_s);
+        st->linear_speed_m_s = fmin(ls_units_to_si_linear(un.linear, v), core->model->max_linear_speed_m_s);
         return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "LINEAR_SPEED %g %s", v, unit);
     }
     case ls_SpeedType_ANGULAR_SPEED: {
         if (core->model == NULL) {
             return no_model(call, "setSpeed ANGULAR_SPEED");
         }
-        snprintf(unit, sizeof unit, "%s/s", ls_units_angular_name(st->angular));
+        snprintf(unit, sizeof unit, "%s/s", ls_units_angular_name(un.angular));
         rc = check_rate(call, "ANGULAR_SPEED", v,
-                        ls_units_from_si_angular(st->angular, core->model->max_angular_speed_rad_s), unit);
+                        ls_units_from_si_angular(un.angular, core->model->max_angular_speed_rad_s), unit);
         if (rc < 0) {
             return rc;
         }
-        st->angular_speed_rad_s = fmin(ls_units_to_si_angular(st->angular, v), core->model->max_angular_speed_rad_s);
+        st->angular_speed_rad_s = fmin(ls_units_to_si_angular(un.angular, v), core->model->max_angular_speed_rad_s);
         return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "ANGULAR_SPEED %g %s", v, unit);
     }
     }
@@ -85,6 +86,7 @@ int32_t ls_h_set_speed(struct ls_core *core, struct ls_call *call)
 
 int32_t ls_h_set_acceleration(struct ls_core *core, struct ls_call *call)
 {
+    const ls_units_t un = ls_core_units(core, call->sup);
     const ls_SetAccelerationReq *rq = &call->req->cmd.set_acceleration;
     ls_settings_t *st = &core->settings;
     const double v = rq->accel;
@@ -105,25 +107,25 @@ int32_t ls_h_set_acceleration(struct ls_core *core, struct ls_call *call)
         if (core->model == NULL) {
             return no_model(call, "setAcceleration LINEAR_ACCEL");
         }
-        snprintf(unit, sizeof unit, "%s/s^2", ls_units_linear_name(st->linear));
+        snprintf(unit, sizeof unit, "%s/s^2", ls_units_linear_name(un.linear));
         rc = check_rate(call, "LINEAR_ACCEL", v,
-                        ls_units_from_si_linear(st->linear, core->model->max_linear_accel_m_s2), unit);
+                        ls_units_from_si_linear(un.linear, core->model->max_linear_accel_m_s2), unit);
         if (rc < 0) {
             return rc;
         }
-        st->linear_accel_m_s2 = fmin(ls_units_to_si_linear(st->linear, v), core->model->max_linear_accel_m_s2);
+        st->linear_accel_m_s2 = fmin(ls_units_to_si_linear(un.linear, v), core->model->max_linear_accel_m_s2);
         return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "LINEAR_ACCEL %g %s", v, unit);
     case ls_AccelType_ANGULAR_ACCEL:
         if (core->model == NULL) {
             return no_model(call, "setAcceleration ANGULAR_ACCEL");
         }
-        snprintf(unit, sizeof unit, "%s/s^2", ls_units_angular_name(st->angular));
+        snprintf(unit, sizeof unit, "%s/s^2", ls_units_angular_name(un.angular));
         rc = check_rate(call, "ANGULAR_ACCEL", v,
-                        ls_units_from_si_angular(st->angular, core->model->max_angular_accel_rad_s2), unit);
+                        ls_units_from_si_angular(un.angular, core->model->max_angular_accel_rad_s2), unit);
         if (rc < 0) {
             return rc;
         }
-        st->angular_accel_rad_s2 = fmin(ls_units_to_si_angular(st->angular, v), core->model->max_angular_accel_rad_s2);
+        st->angular_accel_rad_s2 = fmin(ls_units_to_si_angular(un.angular, v), core->model->max_angular_accel_rad_s2);
         return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "ANGULAR_ACCEL %g %s", v, unit);
     }
     return ls_reply(call, ls_RetCode_CMD_PARAM_ERR,
@@ -136,6 +138,7 @@ int32_t ls_h_set_acceleration(struct ls_core *core, struct ls_call *call)
 static int32_t take_pose(ls_core_t *core, ls_call_t *call, const char *what, const double *v, pb_size_t n,
                          double out[6])
 {
+    const ls_units_t un = ls_core_units(core, call->sup);
     if (n != 6) {
         return ls_reply(call, ls_RetCode_CMD_PARAM_ERR, "%s takes 6 values (x y z roll pitch yaw), got %u", what,
                         (unsigned)n);
@@ -146,7 +149,7 @@ static int32_t take_pose(ls_core_t *core, ls_call_t *call, const char *what, con
             return ls_reply(call, ls_RetCode_CMD_PARAM_ERR, "%s: %s is %g: give finite values", what, names[i], v[i]);
         }
     }
-    ls_units_pose_to_si(core->settings.linear, core->settings.angular, v, out);
+    ls_units_pose_to_si(un.linear, un.angular, v, out);
     if (core->model != NULL) {
         static const char *const axes[3] = { "x", "y", "z" };
         const double reach_m = ls_robot_model_reach_m(core->model);
@@ -154,10 +157,10 @@ static int32_t take_pose(ls_core_t *core, ls_call_t *call, const char *what, con
             if (fabs(out[i]) > reach_m) {
                 return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR,
                                 "%s: %s %g %s is beyond the arm's reach: allowed [-%g, %g] %s", what, axes[i], v[i],
-                                ls_units_linear_name(core->settings.linear),
-                                ls_units_from_si_linear(core->settings.linear, reach_m),
-                                ls_units_from_si_linear(core->settings.linear, reach_m),
-                                ls_units_linear_name(core->settings.linear));
+                                ls_units_linear_name(un.linear),
+                                ls_units_from_si_linear(un.linear, reach_m),
+                                ls_units_from_si_linear(un.linear, reach_m),
+                                ls_units_linear_name(un.linear));
             }
         }
     }
@@ -165,10 +168,10 @@ static int32_t take_pose(ls_core_t *core, ls_call_t *call, const char *what, con
         if (fabs(out[i]) > LS_FRAME_ANGLE_MAX_RAD) {
             static const char *const rpy[3] = { "roll", "pitch", "yaw" };
             return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR, "%s: %s %g %s: allowed [-%g, %g] %s", what,
-                            rpy[i - 3], v[i], ls_units_angular_name(core->settings.angular),
-                            ls_units_from_si_angular(core->settings.angular, LS_FRAME_ANGLE_MAX_RAD),
-                            ls_units_from_si_angular(core->settings.angular, LS_FRAME_ANGLE_MAX_RAD),
-                            ls_units_angular_name(core->settings.angular));
+                            rpy[i - 3], v[i], ls_units_angular_name(un.angular),
+                            ls_units_from_si_angular(un.angular, LS_FRAME_ANGLE_MAX_RAD),
+                            ls_units_from_si_angular(un.angular, LS_FRAME_ANGLE_MAX_RAD),
+                            ls_units_angular_name(un.angular));
         }
     }
     return ls_RetCode_CMD_EXEC_OK;
@@ -176,6 +179,7 @@ static int32_t take_pose(ls_core_t *core, ls_call_t *call, const char *what, con
 
 int32_t ls_h_set_tool_offset(struct ls_core *core, struct ls_call *call)
 {
+    const ls_units_t un = ls_core_units(core, call->sup);
     const ls_SetToolOffsetReq *rq = &call->req->cmd.set_tool_offset;
     double si[6];
     int32_t rc = take_pose(core, call, "setToolOffset", rq->offset, rq->offset_count, si);
@@ -184,11 +188,12 @@ int32_t ls_h_set_tool_offset(struct ls_core *core, struct ls_call *call)
     }
     memcpy(core->settings.tool_offset, si, sizeof si);
     return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "tool offset set (%s, %s)",
-                    ls_units_linear_name(core->settings.linear), ls_units_angular_name(core->settings.angular));
+                    ls_units_linear_name(un.linear), ls_units_angular_name(un.angular));
 }
 
 int32_t ls_h_set_world_cartesian_frame(struct ls_core *core, struct ls_call *call)
 {
+    const ls_units_t un = ls_core_units(core, call->sup);
     const ls_SetWorldCartesianFrameReq *rq = &call->req->cmd.set_world_cartesian_frame;
     double si[6];
     int32_t rc = take_pose(core, call, "setWorldCartesianFrame", rq->frame, rq->frame_count, si);
@@ -197,7 +202,7 @@ int32_t ls_h_set_world_cartesian_frame(struct ls_core *core, struct ls_call *cal
     }
     memcpy(core->settings.world_frame, si, sizeof si);
     return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "world frame set (%s, %s)",
-                    ls_units_linear_name(core->settings.linear), ls_units_angular_name(core->settings.angular));
+                    ls_units_linear_name(un.linear), ls_units_angular_name(un.angular));
 }
 
 int32_t ls_h_set_units(struct ls_core *core, struct ls_call *call)
@@ -213,8 +218,9 @@ int32_t ls_h_set_units(struct ls_core *core, struct ls_call *call)
         return ls_reply(call, ls_RetCode_CMD_PARAM_ERR,
                         "angular unit %d is not an AngularUnit: allowed RADIANS (0), DEGREES (1)", (int)rq->angular);
     }
-    core->settings.linear = rq->linear;
-    core->settings.angular = rq->angular;
+    /* The caller's session only: other supervisors keep theirs, and the
+     * next session starts in SI (docs/conformance.md, setUnits). */
+    core->sessions[call->sup].units = (ls_units_t){ .linear = rq->linear, .angular = rq->angular };
     return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "units: %s, %s", ls_units_linear_name(rq->linear),
                     ls_units_angular_name(rq->angular));
 }
@@ -223,86 +229,90 @@ int32_t ls_h_set_units(struct ls_core *core, struct ls_call *call)
 
 int32_t ls_h_get_units(struct ls_core *core, struct ls_call *call)
 {
+    const ls_units_t un = ls_core_units(core, call->sup);
     ls_GetUnitsRes *r = &call->res->result.get_units;
-    snprintf(r->linear_units, sizeof r->linear_units, "%s", ls_units_linear_name(core->settings.linear));
-    snprintf(r->angular_units, sizeof r->angular_units, "%s", ls_units_angular_name(core->settings.angular));
+    snprintf(r->linear_units, sizeof r->linear_units, "%s", ls_units_linear_name(un.linear));
+    snprintf(r->angular_units, sizeof r->angular_units, "%s", ls_units_angular_name(un.angular));
     return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "%s, %s", r->linear_units, r->angular_units);
 }
 
 /* Per-joint values in the angular unit: pct % of the model's limits. */
-static pb_size_t joint_rates(const ls_core_t *core, const double *limits, double pct, double *out)
+static pb_size_t joint_rates(ls_units_t un, const double *limits, double pct, double *out)
 {
     for (int j = 0; j < LS_N_JOINTS; j++) {
-        out[j] = ls_units_from_si_angular(core->settings.angular, limits[j] * pct / 100.0);
+        out[j] = ls_units_from_si_angular(un.angular, limits[j] * pct / 100.0);
     }
     return LS_N_JOINTS;
 }
 
 int32_t ls_h_get_velocities(struct ls_core *core, struct ls_call *call)
 {
+    const ls_units_t un = ls_core_units(core, call->sup);
     if (core->model == NULL) {
         return no_model(call, "getVelocities");
     }
     const ls_settings_t *st = &core->settings;
     ls_GetVelocitiesRes *r = &call->res->result.get_velocities;
     r->percent_velocity = st->speed_pct;
-    r->world_linear_velocity = ls_units_from_si_linear(st->linear, st->linear_speed_m_s);
-    r->world_angular_velocity = ls_units_from_si_angular(st->angular, st->angular_speed_rad_s);
-    r->joint_velocities_count = joint_rates(core, core->model->qd_max_rad_s, st->speed_pct, r->joint_velocities);
-    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "%s/s, %s/s", ls_units_linear_name(st->linear),
-                    ls_units_angular_name(st->angular));
+    r->world_linear_velocity = ls_units_from_si_linear(un.linear, st->linear_speed_m_s);
+    r->world_angular_velocity = ls_units_from_si_angular(un.angular, st->angular_speed_rad_s);
+    r->joint_velocities_count = joint_rates(un, core->model->qd_max_rad_s, st->speed_pct, r->joint_velocities);
+    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "%s/s, %s/s", ls_units_linear_name(un.linear),
+                    ls_units_angular_name(un.angular));
 }
 
 int32_t ls_h_get_accelerations(struct ls_core *core, struct ls_call *call)
 {
+    const ls_units_t un = ls_core_units(core, call->sup);
     if (core->model == NULL) {
         return no_model(call, "getAccelerations");
     }
     const ls_settings_t *st = &core->settings;
     ls_GetAccelerationsRes *r = &call->res->result.get_accelerations;
     r->percent_accel = st->accel_pct;
-    r->world_linear_accel = ls_units_from_si_linear(st->linear, st->linear_accel_m_s2);
-    r->world_angular_accel = ls_units_from_si_angular(st->angular, st->angular_accel_rad_s2);
-    r->joint_accels_count = joint_rates(core, core->model->qdd_max_rad_s2, st->accel_pct, r->joint_accels);
-    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "%s/s^2, %s/s^2", ls_units_linear_name(st->linear),
-                    ls_units_angular_name(st->angular));
+    r->world_linear_accel = ls_units_from_si_linear(un.linear, st->linear_accel_m_s2);
+    r->world_angular_accel = ls_units_from_si_angular(un.angular, st->angular_accel_rad_s2);
+    r->joint_accels_count = joint_rates(un, core->model->qdd_max_rad_s2, st->accel_pct, r->joint_accels);
+    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "%s/s^2, %s/s^2", ls_units_linear_name(un.linear),
+                    ls_units_angular_name(un.angular));
 }
 
 int32_t ls_h_get_max_velocities(struct ls_core *core, struct ls_call *call)
 {
+    const ls_units_t un = ls_core_units(core, call->sup);
     if (core->model == NULL) {
         return no_model(call, "getMaxVelocities");
     }
-    const ls_settings_t *st = &core->settings;
     ls_GetMaxVelocitiesRes *r = &call->res->result.get_max_velocities;
-    r->max_world_linear_velocity = ls_units_from_si_linear(st->linear, core->model->max_linear_speed_m_s);
-    r->max_world_angular_velocity = ls_units_from_si_angular(st->angular, core->model->max_angular_speed_rad_s);
-    r->max_joint_velocities_count = joint_rates(core, core->model->qd_max_rad_s, 100.0, r->max_joint_velocities);
-    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "%s/s, %s/s", ls_units_linear_name(st->linear),
-                    ls_units_angular_name(st->angular));
+    r->max_world_linear_velocity = ls_units_from_si_linear(un.linear, core->model->max_linear_speed_m_s);
+    r->max_world_angular_velocity = ls_units_from_si_angular(un.angular, core->model->max_angular_speed_rad_s);
+    r->max_joint_velocities_count = joint_rates(un, core->model->qd_max_rad_s, 100.0, r->max_joint_velocities);
+    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "%s/s, %s/s", ls_units_linear_name(un.linear),
+                    ls_units_angular_name(un.angular));
 }
 
 int32_t ls_h_get_max_accelerations(struct ls_core *core, struct ls_call *call)
 {
+    const ls_units_t un = ls_core_units(core, call->sup);
     if (core->model == NULL) {
         return no_model(call, "getMaxAccelerations");
     }
-    const ls_settings_t *st = &core->settings;
     ls_GetMaxAccelerationsRes *r = &call->res->result.get_max_accelerations;
-    r->max_world_linear_accel = ls_units_from_si_linear(st->linear, core->model->max_linear_accel_m_s2);
-    r->max_world_angular_accel = ls_units_from_si_angular(st->angular, core->model->max_angular_accel_rad_s2);
-    r->max_joint_accels_count = joint_rates(core, core->model->qdd_max_rad_s2, 100.0, r->max_joint_accels);
-    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "%s/s^2, %s/s^2", ls_units_linear_name(st->linear),
-                    ls_units_angular_name(st->angular));
+    r->max_world_linear_accel = ls_units_from_si_linear(un.linear, core->model->max_linear_accel_m_s2);
+    r->max_world_angular_accel = ls_units_from_si_angular(un.angular, core->model->max_angular_accel_rad_s2);
+    r->max_joint_accels_count = joint_rates(un, core->model->qdd_max_rad_s2, 100.0, r->max_joint_accels);
+    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "%s/s^2, %s/s^2", ls_units_linear_name(un.linear),
+                    ls_units_angular_name(un.angular));
 }
 
 int32_t ls_h_get_tool_offsets(struct ls_core *core, struct ls_call *call)
 {
+    const ls_units_t un = ls_core_units(core, call->sup);
     ls_GetToolOffsetsRes *r = &call->res->result.get_tool_offsets;
-    ls_units_pose_from_si(core->settings.linear, core->settings.angular, core->settings.tool_offset, r->offset);
+    ls_units_pose_from_si(un.linear, un.angular, core->settings.tool_offset, r->offset);
     r->offset_count = 6;
     return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "flange -> tool tip (%s, %s)",
-                    ls_units_linear_name(core->settings.linear), ls_units_angular_name(core->settings.angular));
+                    ls_units_linear_name(un.linear), ls_units_angular_name(un.angular));
 }
 
 /* The tool tip in the world frame. settings.world_frame is the world frame's
@@ -310,6 +320,7 @@ int32_t ls_h_get_tool_offsets(struct ls_core *core, struct ls_call *call)
  * world frame"), so T_world_tip = inv(T_base_world) * FK(q) * T_flange_tip. */
 int32_t ls_h_get_robot_position(struct ls_core *core, struct ls_call *call)
 {
+    const ls_units_t un = ls_core_units(core, call->sup);
     if (core->ctl == NULL || core->model == NULL) {
         return ls_reply(call, ls_RetCode_CMD_UNSUPPORTED_ERR,
                         "getRobotPosition: no arm backend is composed in this firmware, there is no position to read");
@@ -331,14 +342,14 @@ int32_t ls_h_get_robot_position(struct ls_core *core, struct ls_call *call)
 
     ls_GetRobotPositionRes *r = &call->res->result.get_robot_position;
     for (int j = 0; j < LS_N_JOINTS; j++) {
-        r->joints[j] = ls_units_from_si_angular(core->settings.angular, snap.q_rad[j]);
+        r->joints[j] = ls_units_from_si_angular(un.angular, snap.q_rad[j]);
     }
     r->joints_count = LS_N_JOINTS;
-    ls_units_pose_from_si(core->settings.linear, core->settings.angular, pose_si, r->world_pose);
+    ls_units_pose_from_si(un.linear, un.angular, pose_si, r->world_pose);
     r->world_pose_count = 6;
     return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "joints in %s; tool tip in the world frame (%s, %s)",
-                    ls_units_angular_name(core->settings.angular), ls_units_linear_name(core->settings.linear),
-                    ls_units_angular_name(core->settings.angular));
+                    ls_units_angular_name(un.angular), ls_units_linear_name(un.linear),
+                    ls_units_angular_name(un.angular));
 }
 
 /* Sensors whose every value is a length (converted to the linear unit).
@@ -351,6 +362,7 @@ static bool sensor_is_length(const char *name)
 
 int32_t ls_h_get_sensor_reading(struct ls_core *core, struct ls_call *call)
 {
+    const ls_units_t un = ls_core_units(core, call->sup);
     const char *want = call->req->cmd.get_sensor_reading.sensor_type;
     size_t idx = core->n_sensors;
     for (size_t i = 0; i < core->n_sensors; i++) {
@@ -395,10 +407,10 @@ int32_t ls_h_get_sensor_reading(struct ls_core *core, struct ls_call *call)
     bool length = sensor_is_length(s->name);
     for (size_t k = 0; k < n; k++) {
         double v = snap.sensor[idx][k];
-        r->current_data[k] = length ? ls_units_from_si_linear(core->settings.linear, v) : v;
+        r->current_data[k] = length ? ls_units_from_si_linear(un.linear, v) : v;
     }
     r->current_data_count = (pb_size_t)n;
     return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "%s: %u values (%s)", s->name, (unsigned)n,
-                    length ? ls_units_linear_name(core->settings.linear)
+                    length ? ls_units_linear_name(un.linear)
                            : "SI: forces N, torques Nm, not scaled by setUnits");
 }

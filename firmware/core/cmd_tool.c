@@ -404,10 +404,11 @@ bool ls_core_tool_on_event(ls_core_t *core, const ls_ctl_event_t *ev)
             char msg[160];
             char off[64];
             double o[6];
-            ls_units_pose_from_si(core->settings.linear, core->settings.angular, core->settings.tool_offset, o);
+            const ls_units_t un = ls_core_units(core, g_op.sup); /* the answer's session */
+            ls_units_pose_from_si(un.linear, un.angular, core->settings.tool_offset, o);
             snprintf(off, sizeof off, "%.4g %.4g %.4g", o[0], o[1], o[2]);
             snprintf(msg, sizeof msg, "%s: %s; tool offset now %s %s", op_name(),
-                     g_op.attach ? g_op.id : "flange (no tool)", off, ls_units_linear_name(core->settings.linear));
+                     g_op.attach ? g_op.id : "flange (no tool)", off, ls_units_linear_name(un.linear));
             op_end(core, ls_RetCode_CMD_EXEC_OK, msg, true);
         }
         return true;

@@ -3,6 +3,7 @@
  *   version  firmware version, protocol version, schema hash
  *   status   state, owner, sessions and their counters
  *   faults   the fault log (oldest first)
+ *   events   the event log (oldest first): RSVP answers with their data, time-outs, refused replies
  *   rtstats  the control loop: cycles, overruns, worst latency and cycle time, SCHED_FIFO, memory lock
  *   config   the running configuration (file and options merged)
  *   stopping the category-1 stop's bound per joint, from the robot model
@@ -40,7 +41,7 @@ int32_t ls_h_send_command(struct ls_core *core, struct ls_call *call)
     ls_SendCommandRes *r = &call->res->result.send_command;
     out_t o = { r->result, sizeof r->result, 0 };
     if (strcmp(in, "help") == 0 || in[0] == '\0') {
-        put(&o, "help\nversion\nstatus\nfaults\nrtstats\nconfig\nstopping\n");
+        put(&o, "help\nversion\nstatus\nfaults\nevents\nrtstats\nconfig\nstopping\n");
     } else if (strcmp(in, "version") == 0) {
         put(&o, "firmware=%s\nprotocol=%u\nschema=%08X\n", core->cfg.firmware_version,
             (unsigned)ls_Protocol_PROTOCOL_VERSION, (unsigned)LS_SCHEMA_HASH);
@@ -48,6 +49,9 @@ int32_t ls_h_send_command(struct ls_core *core, struct ls_call *call)
         put(&o, "state=%s\nowner=", ls_core_state_name(core->state));
         if (core->owner >= 0) {
             put(&o, "0x%02X\n", core->sessions[core->owner].addr);
+        } else if (core->held) {
+            put(&o, "0x%02X lost, lock kept (%s)\n", core->held_addr,
+                ls_core_disconnect_action_name(core->held_action));
         } else {
             put(&o, "none\n");
         }
@@ -60,7 +64,19 @@ int32_t ls_h_send_command(struct ls_core *core, struct ls_call *call)
         for (int i = 0; i < LS_MAX_SUPERVISORS; i++) {
             const ls_session_t *s = &core->sessions[i];
             if (s->connected) {
-                put(&o, "session 0x%02X name=%s executed=%u\n", s->addr, s->name, (unsigned)s->executed);
+                /* executed= stays last: tools read it as the line's tail */
+                put(&o, "session 0x%02X name=%s units=%s,%s heartbeat_timeout_ms=%u disconnect_action=%s executed=%u\n",
+                    s->addr, s->name, ls_units_linear_name(s->units.linear), ls_units_angular_name(s->units.angular),
+                    (unsigned)s->heartbeat_timeout_ms, ls_core_disconnect_action_name(s->disconnect_action),
+                    (unsigned)s->executed);
+            }
+        }
+        for (int i = 0; i < LS_MAX_DIO_WATCHES; i++) {
+            const ls_dio_watch_t *w = &core->dio.watch[i];
+            if (w->phase != LS_WATCH_FREE) {
+                put(&o, "watch %u unit=%u bits=0x%X addr=0x%02X %s fired=%u\n", (unsigned)w->id, (unsigned)w->unit,
+                    (unsigned)w->bits, w->addr, w->phase == LS_WATCH_ARMED ? "armed" : "awaiting_rsvp",
+                    (unsigned)w->fired);
             }
         }
     } else if (strcmp(in, "faults") == 0) {
@@ -72,6 +88,16 @@ int32_t ls_h_send_command(struct ls_core *core, struct ls_call *call)
         }
         if (n == 0) {
             put(&o, "no faults\n");
+        }
+    } else if (strcmp(in, "events") == 0) {
+        uint32_t n = core->event_log_count < LS_EVENT_LOG_LEN ? core->event_log_count : LS_EVENT_LOG_LEN;
+        for (uint32_t k = core->event_log_count - n; k < core->event_log_count; k++) {
+            const ls_event_entry_t *e = &core->event_log[k % LS_EVENT_LOG_LEN];
+            put(&o, "%llu.%03llu %s\n", (unsigned long long)(e->at_us / 1000000u),
+                (unsigned long long)(e->at_us / 1000u % 1000u), e->text);
+        }
+        if (n == 0) {
+            put(&o, "no events\n");
         }
     } else if (strcmp(in, "stopping") == 0) {
         if (core->model == NULL) {

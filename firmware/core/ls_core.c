@@ -52,6 +52,55 @@ const char *ls_core_ret_name(int32_t code)
 
 static int find_session(const ls_core_t *core, uint8_t addr);
 
+const char *ls_core_disconnect_action_name(ls_DisconnectAction a)
+{
+    switch (a) {
+    case ls_DisconnectAction_DISCONNECT_CONFIGURED: return "configured";
+    case ls_DisconnectAction_DISCONNECT_STOP: return "stop";
+    case ls_DisconnectAction_DISCONNECT_STOP_DEACTIVATE: return "stop_deactivate";
+    case ls_DisconnectAction_DISCONNECT_STOP_DEACTIVATE_RELEASE: return "stop_deactivate_release";
+    }
+    return NULL;
+}
+
+/* The configured action, 0 meaning the seed's default. */
+static ls_DisconnectAction configured_action(const ls_core_t *core)
+{
+    return core->cfg.disconnect_action == ls_DisconnectAction_DISCONNECT_CONFIGURED
+               ? ls_DisconnectAction_DISCONNECT_STOP_DEACTIVATE_RELEASE
+               : core->cfg.disconnect_action;
+}
+
+void ls_core_log_event(ls_core_t *core, uint64_t now_us, const char *fmt, ...)
+{
+    ls_event_entry_t *e = &core->event_log[core->event_log_count % LS_EVENT_LOG_LEN];
+    e->at_us = now_us;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(e->text, sizeof e->text, fmt, ap);
+    va_end(ap);
+    core->event_log_count++;
+}
+
+ls_units_t ls_core_units(const ls_core_t *core, int sup)
+{
+    if (sup < 0 || sup >= LS_MAX_SUPERVISORS || !core->sessions[sup].connected) {
+        return LS_UNITS_SI;
+    }
+    return core->sessions[sup].units;
+}
+
+ls_units_t ls_core_run_units(const ls_core_t *core)
+{
+    for (int i = 0; i < LS_MAX_SUPERVISORS; i++) {
+        const ls_session_t *s = &core->sessions[i];
+        if (s->connected && s->addr == core->run.addr && s->epoch == core->run.epoch) {
+            return s->units;
+        }
+    }
+    return LS_UNITS_SI;
+}
+
 void ls_core_init(ls_core_t *core, const ls_core_config_t *cfg, const ls_core_io_t *io, const ls_core_actions_t *act)
 {
     memset(core, 0, sizeof *core);
@@ -223,20 +272,26 @@ void ls_core_emergency(ls_core_t *core, uint64_t now_us)
     fault_as(core, LS_RUN_END_EMERGENCY, "emergency stop frame on the bus", now_us);
 }
 
-void ls_core_owner_lost_alarm(ls_core_t *core, uint8_t addr, const char *why, uint64_t now_us)
+void ls_core_owner_lost_alarm(ls_core_t *core, uint8_t addr, const char *why, ls_DisconnectAction action,
+                              uint64_t now_us)
 {
-    char d1[40], d2[64];
+    const char *name = ls_core_disconnect_action_name(action);
+    char d1[40], d2[64], d3[48];
     snprintf(d1, sizeof d1, "supervisor=0x%02X", addr);
     snprintf(d2, sizeof d2, "reason=%s", why);
-    const char *data[] = { d1, d2, "action=deactivated,released" };
+    snprintf(d3, sizeof d3, "action=%s", name != NULL ? name : "?");
+    const char *data[] = { d1, d2, d3 };
     ls_core_notify(core, -1, ls_NoticeKind_ALARM, "ownerLost", 0, false, data, 3);
     ls_fault_entry_t *e = &core->fault_log[core->fault_log_count % LS_FAULT_LOG_LEN];
     e->at_us = now_us;
-    snprintf(e->text, sizeof e->text, "owner 0x%02X lost (%s): deactivated and released", addr, why);
+    snprintf(e->text, sizeof e->text, "owner 0x%02X lost (%s): action %s", addr, why, name != NULL ? name : "?");
     core->fault_log_count++;
 }
 
-/* Seed 2.2 disconnect handler: stop, deactivate, release; IDLE when nobody is left. */
+/* Seed 2.2 disconnect handler, the owner's session's action (docs/protocol.md
+ * "Disconnect handler"): stop; stop, deactivate; or stop, deactivate,
+ * release. A kept lock waits for the owner's address to connect again. IDLE
+ * when nobody is left and nothing is held. */
 static void drop_session(ls_core_t *core, int i, const char *why, uint64_t now_us)
 {
     ls_session_t *s = &core->sessions[i];
@@ -247,27 +302,42 @@ static void drop_session(ls_core_t *core, int i, const char *why, uint64_t now_u
         core->halt.answer_sup = -1; /* nobody to answer any more */
     }
     if (was_owner) {
+        const ls_DisconnectAction action = s->disconnect_action;
+        const bool release = action == ls_DisconnectAction_DISCONNECT_STOP_DEACTIVATE_RELEASE;
         ls_core_manual_off(core);
         core->owner = -1;
+        if (!release) {
+            core->held = true;
+            core->held_addr = addr;
+            core->held_action = action;
+            snprintf(core->held_name, sizeof core->held_name, "%s", s->name);
+        }
         if (core->state == ls_State_MOVING || core->state == ls_State_PAUSED || core->halt.active) {
-            /* Stop along the path, drives off, then release (ls_run_tick):
-             * the state says MOVING until the drives are off. */
+            /* Stop along the path (drives off unless the action is `stop`),
+             * then release or keep the lock (ls_run_tick): the state says
+             * MOVING until the arm is at rest. */
             bool lost = strcmp(why, "disconnect") != 0;
-            ls_run_halt(core, lost ? LS_RUN_END_OWNER_LOST : LS_RUN_END_DISCONNECT, "", false, -1, now_us);
-            core->halt.release = true;
+            ls_run_halt_owner_lost(core, lost ? LS_RUN_END_OWNER_LOST : LS_RUN_END_DISCONNECT,
+                                   action == ls_DisconnectAction_DISCONNECT_STOP, now_us);
+            core->halt.owner_lost = true;
+            core->halt.release = release;
+            core->halt.lost_action = action;
             core->halt.lost_addr = addr;
             snprintf(core->halt.lost_why, sizeof core->halt.lost_why, "%s", why);
             return;
         }
-        if (core->state == ls_State_RESTING) {
+        if (core->state == ls_State_RESTING && action != ls_DisconnectAction_DISCONNECT_STOP) {
             if (core->act.enable_drives != NULL) {
                 (void)core->act.enable_drives(core->act.ctx, false);
             }
+            core->state = ls_State_LOCKED;
         }
-        core->state = ls_State_UNLOCKED;
-        ls_core_owner_lost_alarm(core, addr, why, now_us);
+        if (release) {
+            core->state = ls_State_UNLOCKED;
+        }
+        ls_core_owner_lost_alarm(core, addr, why, action, now_us);
     }
-    if (connected_count(core) == 0 && !core->halt.active) {
+    if (connected_count(core) == 0 && !core->halt.active && !core->held) {
         core->state = ls_State_IDLE;
     }
 }
@@ -280,33 +350,125 @@ void ls_core_on_heartbeat(ls_core_t *core, uint8_t addr, uint64_t now_us)
     }
 }
 
+static void rsvp_remember(ls_core_t *core, const ls_rsvp_t *r, bool timed_out, const char *action)
+{
+    ls_rsvp_ended_t *e = &core->rsvp_ended[core->rsvp_ended_count % LS_RSVP_ENDED_LEN];
+    core->rsvp_ended_count++;
+    *e = (ls_rsvp_ended_t){
+        .id = r->id, .addr = r->addr, .timed_out = timed_out, .ref_seq = r->ref_seq, .epoch = r->epoch
+    };
+    snprintf(e->action, sizeof e->action, "%s", action != NULL ? action : "");
+}
+
 static void rsvp_tick(ls_core_t *core, uint64_t now_us)
 {
     for (int i = 0; i < LS_MAX_RSVP; i++) {
         ls_rsvp_t *r = &core->rsvp[i];
         if (r->used && now_us >= r->deadline_us) {
+            ls_rsvp_t copy = *r;
             r->used = false;
-            r->done(core, r->ctx, ls_RetCode_CMD_TIMEOUT_ERR, true);
+            const char *action = copy.done(core, copy.ctx, ls_RetCode_CMD_TIMEOUT_ERR, true, now_us);
+            rsvp_remember(core, &copy, true, action);
+            ls_core_log_event(core, now_us, "rsvp %u %s (seq %u) to 0x%02X: no answer, default action %s",
+                              (unsigned)copy.id, copy.event_id, (unsigned)copy.ref_seq, copy.addr,
+                              action != NULL ? action : copy.default_action);
         }
     }
 }
 
-static void rsvp_on_reply(ls_core_t *core, uint8_t addr, const ls_RsvpReply *reply)
+/* The reply's data as "a,b,c" for the event log. */
+static void join_data(const ls_RsvpReply *reply, char *out, size_t cap)
 {
+    size_t n = 0;
+    out[0] = '\0';
+    for (pb_size_t k = 0; k < reply->data_count && n < cap; k++) {
+        int w = snprintf(out + n, cap - n, "%s%s", k > 0 ? "," : "", reply->data[k]);
+        if (w < 0) {
+            return;
+        }
+        n += (size_t)w;
+    }
+}
+
+static void send_rsvp_ack(ls_core_t *core, uint8_t addr, uint32_t id, int32_t code, const char *action,
+                          uint32_t ref_seq, uint32_t epoch, const char *fmt, ...) __attribute__((format(printf, 8, 9)));
+static void send_rsvp_ack(ls_core_t *core, uint8_t addr, uint32_t id, int32_t code, const char *action,
+                          uint32_t ref_seq, uint32_t epoch, const char *fmt, ...)
+{
+    memset(&core->note, 0, sizeof core->note);
+    core->note.which_msg = ls_Downlink_rsvp_ack_tag;
+    ls_RsvpAck *a = &core->note.msg.rsvp_ack;
+    a->rsvp_id = id;
+    a->ret_code = code;
+    a->ref_seq = ref_seq;
+    a->session_epoch = epoch;
+    snprintf(a->action, sizeof a->action, "%s", action);
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(a->ret_msg, sizeof a->ret_msg, fmt, ap);
+    va_end(ap);
+    size_t len = encode_msg(&core->note, core->note_enc, sizeof core->note_enc);
+    if (len > 0) {
+        send_bytes(core, addr, core->note_enc, len);
+    }
+}
+
+/* Every reply gets an RsvpAck: taken (with the action), late, or unknown. */
+static void rsvp_on_reply(ls_core_t *core, uint8_t addr, const ls_RsvpReply *reply, uint64_t now_us)
+{
+    char data[128];
+    join_data(reply, data, sizeof data);
     for (int i = 0; i < LS_MAX_RSVP; i++) {
         ls_rsvp_t *r = &core->rsvp[i];
         if (r->used && r->id == reply->rsvp_id && r->addr == addr) {
+            ls_rsvp_t copy = *r;
             r->used = false;
-            r->done(core, r->ctx, reply->ret_code, false);
+            const char *action = copy.done(core, copy.ctx, reply->ret_code, false, now_us);
+            if (action == NULL) {
+                action = "none";
+            }
+            rsvp_remember(core, &copy, false, action);
+            ls_core_log_event(core, now_us, "rsvp %u %s (seq %u) from 0x%02X: %s %d, action %s, data [%s]",
+                              (unsigned)copy.id, copy.event_id, (unsigned)copy.ref_seq, addr,
+                              reply->ret_code >= 0 ? "accepted" : "declined", (int)reply->ret_code, action, data);
+            send_rsvp_ack(core, addr, copy.id, ls_RetCode_CMD_EXEC_OK, action, copy.ref_seq, copy.epoch,
+                          "rsvp %u (%s): %s, action %s", (unsigned)copy.id, copy.event_id,
+                          reply->ret_code >= 0 ? "accepted" : "declined", action);
             return;
         }
     }
-    /* A late or unknown reply: the default action was already taken. */
+    const uint32_t n = core->rsvp_ended_count < LS_RSVP_ENDED_LEN ? core->rsvp_ended_count : LS_RSVP_ENDED_LEN;
+    for (uint32_t k = 0; k < n; k++) {
+        const ls_rsvp_ended_t *e = &core->rsvp_ended[(core->rsvp_ended_count - 1u - k) % LS_RSVP_ENDED_LEN];
+        if (e->id != reply->rsvp_id || e->addr != addr) {
+            continue;
+        }
+        ls_core_log_event(core, now_us, "rsvp %u from 0x%02X refused: %s, answer %d, data [%s]",
+                          (unsigned)e->id, addr, e->timed_out ? "late" : "already answered", (int)reply->ret_code,
+                          data);
+        if (e->timed_out) {
+            send_rsvp_ack(core, addr, e->id, ls_RetCode_CMD_TIMEOUT_ERR, "", e->ref_seq, e->epoch,
+                          "rsvp %u: late, its time-out had passed and the default action (%s) was taken: answer "
+                          "within rsvp_timeout_ms",
+                          (unsigned)e->id, e->action);
+        } else {
+            send_rsvp_ack(core, addr, e->id, ls_RetCode_CMD_PARAM_ERR, "", e->ref_seq, e->epoch,
+                          "rsvp %u: already answered (action %s): answer each RSVP once", (unsigned)e->id,
+                          e->action);
+        }
+        return;
+    }
+    ls_core_log_event(core, now_us, "rsvp %u from 0x%02X refused: unknown id, answer %d, data [%s]",
+                      (unsigned)reply->rsvp_id, addr, (int)reply->ret_code, data);
+    send_rsvp_ack(core, addr, reply->rsvp_id, ls_RetCode_CMD_PARAM_ERR, "", 0, 0,
+                  "rsvp %u: no RSVP with this id is waiting for 0x%02X: quote the rsvp_id of an RSVP notice sent "
+                  "to you",
+                  (unsigned)reply->rsvp_id, addr);
 }
 
-int32_t ls_core_rsvp(ls_core_t *core, int sup, ls_NoticeKind kind, const char *event_id, const char *const *data,
-                     size_t n_data, uint32_t timeout_ms, const char *default_action, ls_rsvp_done_fn done, void *ctx,
-                     uint64_t now_us)
+int32_t ls_core_rsvp(ls_core_t *core, int sup, uint32_t ref_seq, ls_NoticeKind kind, const char *event_id,
+                     const char *const *data, size_t n_data, uint32_t timeout_ms, const char *default_action,
+                     ls_rsvp_done_fn done, void *ctx, uint64_t now_us)
 {
     if (sup < 0 || sup >= LS_MAX_SUPERVISORS || !core->sessions[sup].connected || done == NULL) {
         return -1;
@@ -332,6 +494,8 @@ int32_t ls_core_rsvp(ls_core_t *core, int sup, ls_NoticeKind kind, const char *e
     n->kind = kind;
     snprintf(n->event_id, sizeof n->event_id, "%s", event_id);
     n->rsvp_id = id;
+    n->ref_seq = ref_seq;
+    n->session_epoch = ref_seq != 0u ? s->epoch : 0u;
     n->rsvp_timeout_ms = timeout_ms;
     snprintf(n->rsvp_default, sizeof n->rsvp_default, "%s", default_action);
     n->notice_seq = ++s->notice_seq;
@@ -347,9 +511,13 @@ int32_t ls_core_rsvp(ls_core_t *core, int sup, ls_NoticeKind kind, const char *e
     *slot = (ls_rsvp_t){ .used = true,
                          .id = id,
                          .addr = s->addr,
+                         .ref_seq = ref_seq,
+                         .epoch = n->session_epoch,
                          .deadline_us = now_us + (uint64_t)timeout_ms * 1000u,
                          .done = done,
                          .ctx = ctx };
+    snprintf(slot->event_id, sizeof slot->event_id, "%s", event_id);
+    snprintf(slot->default_action, sizeof slot->default_action, "%s", default_action);
     send_bytes(core, s->addr, core->note_enc, len);
     return (int32_t)id;
 }
@@ -357,9 +525,9 @@ int32_t ls_core_rsvp(ls_core_t *core, int sup, ls_NoticeKind kind, const char *e
 void ls_core_tick(ls_core_t *core, uint64_t now_us)
 {
     rsvp_tick(core, now_us);
-    uint64_t limit = (uint64_t)core->cfg.heartbeat_timeout_ms * 1000u;
     for (int i = 0; i < LS_MAX_SUPERVISORS; i++) {
         ls_session_t *s = &core->sessions[i];
+        const uint64_t limit = (uint64_t)s->heartbeat_timeout_ms * 1000u;
         if (s->connected && now_us > s->last_heard_us && now_us - s->last_heard_us > limit) {
             core->sessions_dropped++;
             drop_session(core, i, "heartbeat lost", now_us);
@@ -392,6 +560,34 @@ static int32_t do_connect(ls_core_t *core, uint8_t addr, ls_call_t *call)
                         "schema %08X on the host, %08X on the device: install the host tool built from the "
                         "firmware's tree (or update the firmware)",
                         (unsigned)rq->schema_hash, (unsigned)LS_SCHEMA_HASH);
+    }
+    const uint32_t period_ms = rq->heartbeat_period_ms;
+    if (period_ms != 0u && (period_ms < LS_HB_PERIOD_MIN_MS || period_ms > LS_HB_PERIOD_MAX_MS)) {
+        return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR,
+                        "connect: heartbeat_period_ms %u: allowed %u..%u (or 0: not stated, the device's time-out "
+                        "of %u ms applies)",
+                        (unsigned)period_ms, LS_HB_PERIOD_MIN_MS, LS_HB_PERIOD_MAX_MS,
+                        (unsigned)core->cfg.heartbeat_timeout_ms);
+    }
+    const ls_DisconnectAction widest = configured_action(core);
+    ls_DisconnectAction action = rq->disconnect_action;
+    if (ls_core_disconnect_action_name(action) == NULL) {
+        return ls_reply(call, ls_RetCode_CMD_PARAM_ERR,
+                        "connect: disconnect_action %d is not a DisconnectAction: allowed 0 (configured), 1 (stop), "
+                        "2 (stop_deactivate), 3 (stop_deactivate_release)",
+                        (int)action);
+    }
+    if (action == ls_DisconnectAction_DISCONNECT_CONFIGURED) {
+        action = widest;
+    } else if (action > widest) {
+        return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR,
+                        "connect: disconnect_action %s is wider than the configured %s: a session may only "
+                        "narrow it",
+                        ls_core_disconnect_action_name(action), ls_core_disconnect_action_name(widest));
+    }
+    uint32_t timeout_ms = core->cfg.heartbeat_timeout_ms;
+    if (period_ms * LS_HB_MISSED_MAX > timeout_ms) {
+        timeout_ms = period_ms * LS_HB_MISSED_MAX;
     }
     int i = find_session(core, addr);
     if (i < 0) {
@@ -430,9 +626,21 @@ static int32_t do_connect(ls_core_t *core, uint8_t addr, ls_call_t *call)
     }
     rs->session_epoch = s->epoch;
     s->last_heard_us = call->now_us;
-    s->heartbeat_period_ms = rq->heartbeat_period_ms;
+    s->heartbeat_period_ms = period_ms;
+    s->heartbeat_timeout_ms = timeout_ms;
+    s->units = LS_UNITS_SI; /* every session starts in SI (docs/conformance.md, setUnits) */
+    s->disconnect_action = action;
     snprintf(s->name, sizeof s->name, "%s", rq->client_name);
     call->sup = i;
+    if (core->held && core->held_addr == addr) {
+        /* The lost owner is back: the kept lock is its own again. */
+        core->held = false;
+        core->owner = i;
+    }
+    rs->heartbeat_timeout_ms = timeout_ms;
+    rs->disconnect_action = action;
+    rs->linear_unit = s->units.linear;
+    rs->angular_unit = s->units.angular;
     if (core->state == ls_State_IDLE) {
         core->state = ls_State_UNLOCKED;
     }
@@ -539,6 +747,13 @@ static int32_t dispatch(ls_core_t *core, uint8_t addr, ls_call_t *call)
                         d->name, ls_run_end_name(core->halt.why));
     }
     if ((d->flags & LS_CMD_F_OWNER_ONLY) != 0u && core->owner != call->sup) {
+        if (core->owner < 0 && core->held) {
+            return ls_reply(call, ls_RetCode_CMD_NOT_OWNER_ERR,
+                            "%s needs the owner: 0x%02X (%s) was lost and keeps the lock (disconnect action %s) "
+                            "until it connects again",
+                            d->name, core->held_addr, core->held_name,
+                            ls_core_disconnect_action_name(core->held_action));
+        }
         if (core->owner < 0) {
             return ls_reply(call, ls_RetCode_CMD_NOT_OWNER_ERR, "%s needs the owner: lock the device first", d->name);
         }
@@ -641,7 +856,6 @@ static void on_request(ls_core_t *core, uint8_t addr, const ls_Request *rq, cons
         s->last_req_hash = hash;
         s->last_tag = rq->which_cmd;
         s->executed++;
-        s->last_heard_us = now_us;
     }
     if (code == LS_CALL_DEFERRED) {
         if (s != NULL) {
@@ -781,11 +995,8 @@ void ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t
     if (core->up.which_msg == ls_Uplink_request_tag) {
         on_request(core, addr, &core->up.msg.request, buf, len, now_us);
     } else if (core->up.which_msg == ls_Uplink_rsvp_reply_tag) {
-        int sup = find_session(core, addr);
-        if (sup >= 0) {
-            core->sessions[sup].last_heard_us = now_us;
-        }
-        rsvp_on_reply(core, addr, &core->up.msg.rsvp_reply);
+        /* Only HEARTBEAT frames keep a session (docs/protocol.md "Liveness"). */
+        rsvp_on_reply(core, addr, &core->up.msg.rsvp_reply, now_us);
     } else {
         core->rx_malformed++;
     }

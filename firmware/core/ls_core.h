@@ -16,6 +16,7 @@
 #include "ls_cmd_table.h"
 #include "ls_robot_model.h"
 #include "ls_run.h"
+#include "ls_units.h"
 
 struct ls_control;
 
@@ -25,6 +26,15 @@ struct ls_control;
 #define LS_CALL_DEFERRED INT32_MIN /* a handler will answer later */
 #define LS_FAULT_LOG_LEN 16
 #define LS_MAX_RSVP 8
+#define LS_RSVP_ENDED_LEN 8 /* ended RSVPs remembered, so a late reply is told apart from an unknown one */
+#define LS_EVENT_LOG_LEN 16
+/* Liveness (docs/protocol.md "Liveness"): a session ends when no HEARTBEAT
+ * came for max(the configured time-out, LS_HB_MISSED_MAX heartbeat periods).
+ * A supervisor states its period at connect, within these bounds (0: not
+ * stated, the configured time-out alone applies). */
+#define LS_HB_MISSED_MAX 5u
+#define LS_HB_PERIOD_MIN_MS 10u
+#define LS_HB_PERIOD_MAX_MS 2000u
 #define LS_CORE_MAX_DIO_UNITS 4
 #define LS_MAX_DIO_WATCHES 8
 
@@ -42,8 +52,11 @@ typedef struct {
     bool connected;
     uint8_t addr;
     char name[32];
-    uint64_t last_heard_us;
+    uint64_t last_heard_us; /* the last HEARTBEAT (or the connect) */
     uint32_t heartbeat_period_ms;
+    uint32_t heartbeat_timeout_ms; /* this session's time-out (ls_core_tick) */
+    ls_units_t units;              /* what this supervisor reads and writes in (setUnits) */
+    ls_DisconnectAction disconnect_action; /* run when this session's owner is lost */
     /* retransmission cache: the last request's seq and its encoded response */
     bool have_last;
     bool last_pending; /* the last request is still running (deferred) */
@@ -70,10 +83,9 @@ typedef struct {
 #define LS_FRAME_ANGLE_MAX_RAD (2.0 * 3.14159265358979323846)
 
 /* Settings of seed 3.2, always in SI (m, rad, s) inside the firmware; the
- * handlers convert from and to the units chosen with setUnits. */
+ * handlers convert from and to the units of the calling session
+ * (ls_session_t.units, setUnits). */
 typedef struct {
-    ls_LinearUnit linear;
-    ls_AngularUnit angular;
     double speed_pct;           /* PERCENT_SPEED, (0, 100] */
     double accel_pct;           /* PERCENT_ACCEL, (0, 100] */
     double linear_speed_m_s;    /* LINEAR_SPEED, Cartesian moves */
@@ -85,17 +97,39 @@ typedef struct {
 } ls_settings_t;
 
 struct ls_core;
-/* Outcome of an RSVP: the supervisor's ret_code, or timed_out with the default taken. */
-typedef void (*ls_rsvp_done_fn)(struct ls_core *core, void *ctx, int32_t ret_code, bool timed_out);
+/* Outcome of an RSVP: the supervisor's ret_code (>= 0 accept, < 0 decline),
+ * or timed_out with the default taken. Returns the action the device took
+ * (a static string: it goes into the RsvpAck and the event log). */
+typedef const char *(*ls_rsvp_done_fn)(struct ls_core *core, void *ctx, int32_t ret_code, bool timed_out,
+                                       uint64_t now_us);
 
 typedef struct {
     bool used;
     uint32_t id;
     uint8_t addr;
+    uint32_t ref_seq; /* the request that armed it */
+    uint32_t epoch;   /* that request's session epoch */
     uint64_t deadline_us;
     ls_rsvp_done_fn done;
     void *ctx;
+    char event_id[32];
+    char default_action[24];
 } ls_rsvp_t;
+
+/* An RSVP that ended (answered or timed out): a reply that comes later is
+ * refused naming what happened. */
+typedef struct {
+    uint32_t id;
+    uint8_t addr;
+    bool timed_out;
+    uint32_t ref_seq, epoch;
+    char action[24];
+} ls_rsvp_ended_t;
+
+typedef struct {
+    uint64_t at_us;
+    char text[160];
+} ls_event_entry_t;
 
 typedef struct {
     uint64_t at_us;
@@ -115,9 +149,12 @@ typedef struct {
     uint32_t bits;
     ls_CallbackType cb;
     uint64_t deadline_us; /* 0: no time-out */
+    uint64_t timeout_us;  /* pollingTimeOut (0: none): a re-armed watch gets it again */
     uint64_t period_us;   /* 0: checked on every DIO change */
     uint64_t next_check_us;
-    bool check_now; /* first check at the next ls_dio_tick (after the answer went out) */
+    bool check_now;   /* first check at the next ls_dio_tick (after the answer went out) */
+    bool await_clear; /* re-armed by an accepted RSVP: fires again only after the bits were not all set */
+    uint32_t fired;   /* how often it fired */
 } ls_dio_watch_t;
 
 typedef struct {
@@ -141,7 +178,8 @@ typedef struct {
     const char *firmware_version;
     uint8_t node_addr;
     uint8_t joint_count;
-    uint32_t heartbeat_timeout_ms;
+    uint32_t heartbeat_timeout_ms; /* the least time-out of a session (docs/protocol.md "Liveness") */
+    ls_DisconnectAction disconnect_action; /* the widest owner-loss action; 0: stop_deactivate_release */
 } ls_core_config_t;
 
 /* Actions the core asks of the rest of the firmware (drives, motion). */
@@ -178,6 +216,17 @@ typedef struct ls_core {
     ls_settings_t settings;
     ls_rsvp_t rsvp[LS_MAX_RSVP];
     uint32_t rsvp_next_id;
+    ls_rsvp_ended_t rsvp_ended[LS_RSVP_ENDED_LEN];
+    uint32_t rsvp_ended_count;
+    ls_event_entry_t event_log[LS_EVENT_LOG_LEN]; /* sendCommand events */
+    uint32_t event_log_count;
+    /* The owner was lost with a disconnect action that keeps the lock
+     * (stop, stop_deactivate): the device stays locked for that address
+     * until it connects again and is the owner once more. */
+    bool held;
+    uint8_t held_addr;
+    char held_name[32];
+    ls_DisconnectAction held_action;
     ls_State state;
     int owner; /* index in sessions[], -1 when unlocked */
     ls_session_t sessions[LS_MAX_SUPERVISORS];
@@ -234,21 +283,40 @@ void ls_core_notify_to(ls_core_t *core, uint8_t addr, uint32_t epoch, ls_NoticeK
 void ls_core_fault(ls_core_t *core, const char *text, uint64_t now_us);
 /* The same for an EMERGENCY frame on the bus (reason=emergency). */
 void ls_core_emergency(ls_core_t *core, uint64_t now_us);
-/* The alarm ownerLost to everyone and its fault-log entry (ls_run.c calls it
- * when the owner's motion has stopped). */
-void ls_core_owner_lost_alarm(ls_core_t *core, uint8_t addr, const char *why, uint64_t now_us);
+/* The alarm ownerLost to everyone and its fault-log entry naming the
+ * disconnect action taken (ls_run.c calls it when the owner's motion has
+ * stopped). */
+void ls_core_owner_lost_alarm(ls_core_t *core, uint8_t addr, const char *why, ls_DisconnectAction action,
+                              uint64_t now_us);
+
+/* "stop", "stop_deactivate", "stop_deactivate_release" (the schema's names
+ * in lower case without DISCONNECT_); "configured" for 0, NULL outside the enum. */
+const char *ls_core_disconnect_action_name(ls_DisconnectAction a);
+
+/* Append a line to the event log (sendCommand events): RSVP outcomes with
+ * their data. */
+void ls_core_log_event(ls_core_t *core, uint64_t now_us, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+
+/* The units of session `sup` (SI when sup < 0 or not connected). */
+ls_units_t ls_core_units(const ls_core_t *core, int sup);
+/* The units of the session that started the run (SI when it has ended):
+ * the run's notices speak the units of the supervisor that started it. */
+ls_units_t ls_core_run_units(const ls_core_t *core);
 
 /* Answer a request that a handler deferred (LS_CALL_DEFERRED) for session
  * `sup`: the response carries the deferred request's seq and command id. */
 void ls_core_finish_deferred(ls_core_t *core, int sup, int32_t code, const char *msg);
 
-/* Send an RSVP notice to session `sup` and wait (without blocking) for its
- * reply; `done` runs once: with the reply's ret_code, or after timeout_ms with
- * timed_out = true (then the caller takes `default_action`, which the notice
- * announces). Returns the rsvp id (> 0), or -1 when the table is full. */
-int32_t ls_core_rsvp(ls_core_t *core, int sup, ls_NoticeKind kind, const char *event_id, const char *const *data,
-                     size_t n_data, uint32_t timeout_ms, const char *default_action, ls_rsvp_done_fn done, void *ctx,
-                     uint64_t now_us);
+/* Send an RSVP notice to session `sup` about the request `ref_seq` (of
+ * that session: the notice carries its seq and epoch) and wait (without
+ * blocking) for the reply; `done` runs once: with the reply's ret_code, or
+ * after timeout_ms with timed_out = true (then the caller takes
+ * `default_action`, which the notice announces). The reply is answered with
+ * an RsvpAck naming the action `done` returned, and logged with its data.
+ * Returns the rsvp id (> 0), or -1 when the table is full. */
+int32_t ls_core_rsvp(ls_core_t *core, int sup, uint32_t ref_seq, ls_NoticeKind kind, const char *event_id,
+                     const char *const *data, size_t n_data, uint32_t timeout_ms, const char *default_action,
+                     ls_rsvp_done_fn done, void *ctx, uint64_t now_us);
 
 /* Index of the connected session of `addr`, or -1. */
 int ls_core_session_of(const ls_core_t *core, uint8_t addr);

@@ -125,6 +125,7 @@ void ls_run_halt(ls_core_t *core, ls_run_end_t why, const char *text, bool fast,
             h->answer_sup = answer_sup;
         }
         if (fast) {
+            h->keep_drives = false; /* a fault turns the drives off after all */
             post_stop(core, true);
         }
         return;
@@ -147,7 +148,32 @@ void ls_run_halt(ls_core_t *core, ls_run_end_t why, const char *text, bool fast,
     post_stop(core, fast);
 }
 
-/* The arm is at rest with the drives off (or there is no loop to ask). */
+void ls_run_halt_owner_lost(ls_core_t *core, ls_run_end_t why, bool keep_drives, uint64_t now_us)
+{
+    if (core->halt.active || !keep_drives || core->act.stop_motion == NULL) {
+        ls_run_halt(core, why, "", false, -1, now_us);
+        return;
+    }
+    ls_halt_t *h = &core->halt;
+    memset(h, 0, sizeof *h);
+    h->active = true;
+    h->why = why;
+    h->answer_sup = -1;
+    h->since_us = now_us;
+    h->keep_drives = true;
+    if (core->ctl != NULL) {
+        ls_ctl_snapshot_t snap;
+        ls_control_snapshot(core->ctl, &snap);
+        h->start_cycle = snap.cycle;
+    }
+    core->run.wait_active = false;
+    ls_core_manual_off(core);
+    set_motion_state(core, "robot_stopping");
+    core->act.stop_motion(core->act.ctx); /* along the path at the configured deceleration, then paused */
+}
+
+/* The arm is at rest with the drives off (or there is no loop to ask); with
+ * keep_drives, at rest with the motion paused or done. */
 static bool halted(ls_core_t *core, uint64_t now_us)
 {
     ls_halt_t *h = &core->halt;
@@ -160,7 +186,10 @@ static bool halted(ls_core_t *core, uint64_t now_us)
         return true;
     }
     /* two cycles: the one that took the command and one that published after it */
-    if (snap.cycle < h->start_cycle + 2u || snap.enabled || snap.phase != LS_MOTION_IDLE || snap.react_active) {
+    const bool stopped = h->keep_drives
+                             ? (snap.phase == LS_MOTION_IDLE || snap.phase == LS_MOTION_PAUSED)
+                             : (!snap.enabled && snap.phase == LS_MOTION_IDLE && !snap.react_active);
+    if (snap.cycle < h->start_cycle + 2u || !stopped) {
         h->off_since_us = 0;
         return false;
     }
@@ -190,8 +219,20 @@ void ls_run_tick(ls_core_t *core, uint64_t now_us)
         snprintf(d_fault, sizeof d_fault, "fault=%s", h->text);
         n_extra = 1;
     }
+    if (h->keep_drives && core->ctl != NULL) {
+        /* Drop the paused motion: the executor holds nothing, the drives stay on. */
+        ls_ctl_cmd_t c;
+        memset(&c, 0, sizeof c);
+        c.kind = LS_CTL_ABORT;
+        c.ref_seq = core->run.ref_seq;
+        (void)ls_control_post(core->ctl, &c);
+    }
     /* The state first: a supervisor reacting to the notice sees the arm's state. */
-    if (h->release) {
+    if (h->keep_drives) {
+        if (core->state == ls_State_MOVING || core->state == ls_State_PAUSED) {
+            core->state = ls_State_RESTING;
+        }
+    } else if (h->release) {
         core->state = ls_State_UNLOCKED;
         for (int i = 0; i < LS_MAX_SUPERVISORS && core->state == ls_State_UNLOCKED; i++) {
             if (core->sessions[i].connected) {
@@ -207,8 +248,15 @@ void ls_run_tick(ls_core_t *core, uint64_t now_us)
     set_motion_state(core,
                      fault || h->why == LS_RUN_END_OWNER_LOST ? "robot_stopped_on_error" : "robot_stopped_on_command");
     ls_run_finish(core, h->why, extra, n_extra);
-    if (h->release) {
-        ls_core_owner_lost_alarm(core, h->lost_addr, h->lost_why, now_us);
+    if (h->owner_lost) {
+        ls_core_owner_lost_alarm(core, h->lost_addr, h->lost_why, h->lost_action, now_us);
+    }
+    bool anyone = false;
+    for (int i = 0; i < LS_MAX_SUPERVISORS; i++) {
+        anyone = anyone || core->sessions[i].connected;
+    }
+    if (!anyone && !core->held && core->state == ls_State_UNLOCKED) {
+        core->state = ls_State_IDLE;
     }
     if (h->answer_sup >= 0) {
         ls_core_finish_deferred(core, h->answer_sup, ls_RetCode_CMD_EXEC_OK,

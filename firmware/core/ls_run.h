@@ -19,6 +19,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "landscape.pb.h"
 #include "ls_motion.h"
 
 struct ls_core;
@@ -78,7 +79,10 @@ typedef struct {
     ls_run_end_t why;
     char text[72];     /* the fault, or "" */
     int answer_sup;    /* deferred deactivate to answer at the end, -1: none */
-    bool release;      /* owner lost: UNLOCKED at the end (else LOCKED) */
+    bool keep_drives;  /* owner lost with the action `stop`: pause, drop the motion, drives stay on (RESTING) */
+    bool owner_lost;   /* the disconnect handler runs it: the alarm ownerLost at the end */
+    bool release;      /* owner lost: UNLOCKED at the end (else LOCKED, or RESTING with keep_drives) */
+    ls_DisconnectAction lost_action;
     uint8_t lost_addr; /* owner lost: whose */
     char lost_why[24];
     uint64_t since_us;
@@ -104,8 +108,15 @@ void ls_run_finish(struct ls_core *core, ls_run_end_t why, const char *const *ex
  * reason to a fault. */
 void ls_run_halt(struct ls_core *core, ls_run_end_t why, const char *text, bool fast, int answer_sup, uint64_t now_us);
 
+/* The disconnect handler's stop (owner lost or disconnected): as
+ * ls_run_halt at the configured deceleration; keep_drives (action `stop`):
+ * pause along the path and drop the motion with the drives on. A halt
+ * already under way goes on as it is. The caller sets owner_lost, release,
+ * lost_* afterwards. */
+void ls_run_halt_owner_lost(struct ls_core *core, ls_run_end_t why, bool keep_drives, uint64_t now_us);
+
 /* Every comms loop turn: finish a halt once the arm is at rest with the
- * drives off. */
+ * drives off (with keep_drives: at rest, paused). */
 void ls_run_tick(struct ls_core *core, uint64_t now_us);
 
 /* landscaped stops: halt whatever moves at the model's maximum deceleration

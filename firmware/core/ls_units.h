@@ -12,6 +12,17 @@
 
 #include "landscape.pb.h"
 
+/* The units one supervisor session reads and writes in (docs/conformance.md,
+ * setUnits: units belong to the session). Every session starts in SI. */
+typedef struct {
+    ls_LinearUnit linear;
+    ls_AngularUnit angular;
+} ls_units_t;
+
+/* Metres and radians: the units of a new session and of notices that no
+ * session owns. */
+#define LS_UNITS_SI ((ls_units_t){ .linear = ls_LinearUnit_METERS, .angular = ls_AngularUnit_RADIANS })
+
 /* Value in unit u -> metres (and the derived m/s, m/s^2 when v is a rate). */
 double ls_units_to_si_linear(ls_LinearUnit u, double v);
 /* Metres -> unit u. */

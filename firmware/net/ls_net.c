@@ -1,5 +1,7 @@
 #include "ls_net.h"
 
+#include "landscape.h" /* cantools: protocol/landscape.dbc */
+
 #include <stdio.h>
 #include <string.h>
 
@@ -190,8 +192,13 @@ static void route(ls_net_t *net, const hal_can_frame_t *f)
         if (n > 0) {
             ls_core_on_uplink(net->core, source, payload, n, net->now_us);
         }
-    } else if ((f->id & LS_ID_MASK_SRC) == LS_ID_HEARTBEAT && f->len >= 3 && f->data[2] == 1u) {
-        ls_core_on_heartbeat(net->core, source, net->now_us);
+    } else if ((f->id & LS_ID_MASK_SRC) == LS_ID_HEARTBEAT) {
+        /* The DBC's HEARTBEAT, multiplexed by hb_role: a supervisor's (1) keeps its session. */
+        struct landscape_heartbeat_t hb;
+        if (f->len == LANDSCAPE_HEARTBEAT_LENGTH && landscape_heartbeat_unpack(&hb, f->data, f->len) == 0 &&
+            hb.hb_role == LANDSCAPE_HEARTBEAT_HB_ROLE_SUPERVISOR_CHOICE) {
+            ls_core_on_heartbeat(net->core, source, net->now_us);
+        }
     } else if ((f->id & LS_ID_MASK_SRC) == LS_ID_EMERGENCY && source != net->node) {
         ls_core_emergency(net->core, net->now_us);
     }

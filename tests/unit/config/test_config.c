@@ -6,6 +6,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include "landscape.pb.h"
 #include "ls_config.h"
 #include "test_config.h"
 
@@ -71,6 +72,7 @@ static void test_defaults(void **state)
     assert_string_equal(c->name, "landscape-sim");
     assert_int_equal(c->node, 0x10);
     assert_int_equal(c->heartbeat_timeout_ms, 1000);
+    assert_int_equal(c->disconnect_action, ls_DisconnectAction_DISCONNECT_STOP_DEACTIVATE_RELEASE);
     assert_int_equal(c->n_links, 0);
     assert_string_equal(c->arm, "sim");
     assert_string_equal(c->dio, "sim");
@@ -198,6 +200,28 @@ static void test_indented_line_is_its_own_key(void **state)
     assert_int_equal(f->cfg.telemetry_hz, 20);
 }
 
+/* The disconnect handler's action (seed 2.2): the schema's names, from the
+ * file and from the command line; anything else is refused naming them. */
+static void test_disconnect_action(void **state)
+{
+    fx_t *f = *state;
+    assert_int_equal(load(f, "[device]\ndisconnect_action = stop\n"), 0);
+    assert_int_equal(f->cfg.disconnect_action, ls_DisconnectAction_DISCONNECT_STOP);
+    unlink(f->path);
+    assert_int_equal(load(f, "[device]\ndisconnect_action = stop_deactivate\n"), 0);
+    assert_int_equal(f->cfg.disconnect_action, ls_DisconnectAction_DISCONNECT_STOP_DEACTIVATE);
+    assert_int_equal(ARGS(f, "--disconnect-action", "stop_deactivate_release"), 0);
+    assert_int_equal(f->cfg.disconnect_action, ls_DisconnectAction_DISCONNECT_STOP_DEACTIVATE_RELEASE);
+    unlink(f->path);
+    refused(f, "[device]\ndisconnect_action = release\n",
+            "2: [device] disconnect_action: got 'release', expected stop, stop_deactivate, "
+            "stop_deactivate_release (what the disconnect handler does when the owner is lost, seed 2.2)");
+    unlink(f->path);
+    refused(f, "[device]\ndisconnect_action = configured\n",
+            "2: [device] disconnect_action: got 'configured', expected stop, stop_deactivate, "
+            "stop_deactivate_release (what the disconnect handler does when the owner is lost, seed 2.2)");
+}
+
 /* ---- refusals: file, line, key, value, what is allowed ----------------- */
 
 static void test_unknown_key(void **state)
@@ -209,7 +233,8 @@ static void test_unknown_key(void **state)
 static void test_key_in_wrong_section(void **state)
 {
     refused(*state, "[device]\nrate_hz = 500\n",
-            "2: [device] rate_hz: unknown key; expected one of name, node, heartbeat_timeout_ms");
+            "2: [device] rate_hz: unknown key; expected one of name, node, heartbeat_timeout_ms, "
+            "disconnect_action");
 }
 
 static void test_unknown_section(void **state)
@@ -540,7 +565,8 @@ static void test_help(void **state)
     static const char *opts[] = {
         "--config FILE",  "--check",       "--hal sim", "--link SPEC",         "--arm",         "--dio sim",
         "--dio-socket",   "--clock",       "--node",    "--heartbeat-timeout", "--name",        "--rate",
-        "--telemetry-hz", "--rt-priority", "--rt-cpu",  "--no-lock-memory",    "--estop-input", "-h, --help"
+        "--telemetry-hz", "--rt-priority", "--rt-cpu",  "--no-lock-memory",    "--estop-input", "-h, --help",
+        "--disconnect-action"
     };
     for (size_t i = 0; i < sizeof opts / sizeof opts[0]; i++) {
         if (strstr(buf, opts[i]) == NULL) {
@@ -597,6 +623,7 @@ int tc_run_config_tests(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_setup_teardown(test_defaults, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_disconnect_action, setup, teardown),
         cmocka_unit_test_setup_teardown(test_good_file_sets_every_key, setup, teardown),
         cmocka_unit_test_setup_teardown(test_shipped_config_is_valid, setup, teardown),
         cmocka_unit_test_setup_teardown(test_bool_and_number_spellings, setup, teardown),

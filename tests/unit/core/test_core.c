@@ -154,14 +154,21 @@ static void connect_host(uint8_t addr)
     assert_int_equal(must(addr)->ret_code, ls_RetCode_CMD_EXEC_OK);
 }
 
+/* The configuration of the next setup_core (then back to these defaults). */
+static ls_DisconnectAction g_cfg_action = ls_DisconnectAction_DISCONNECT_CONFIGURED;
+static uint32_t g_cfg_timeout_ms = 600000;
+
 /* A core with HOST_A connected and owning the device in `state`, HOST_B connected. */
 static void setup_core(ls_State state)
 {
-    static const ls_core_config_t cfg = { .device_name = "test",
-                                          .firmware_version = "0",
-                                          .node_addr = 0x10,
-                                          .joint_count = 6,
-                                          .heartbeat_timeout_ms = 600000 };
+    const ls_core_config_t cfg = { .device_name = "test",
+                                   .firmware_version = "0",
+                                   .node_addr = 0x10,
+                                   .joint_count = 6,
+                                   .heartbeat_timeout_ms = g_cfg_timeout_ms,
+                                   .disconnect_action = g_cfg_action };
+    g_cfg_action = ls_DisconnectAction_DISCONNECT_CONFIGURED;
+    g_cfg_timeout_ms = 600000;
     const ls_core_io_t io = { .send_downlink = fake_send, .ctx = NULL };
     ls_core_init(&g_core, &cfg, &io, NULL);
     g_core.model = &ls_robot_model_default;
@@ -340,7 +347,7 @@ static void test_units_round_trip(void **state)
     set_units(ls_LinearUnit_MILLIMETERS, ls_AngularUnit_DEGREES);
 
     req(ls_Request_get_units_tag);
-    const ls_Response *r = must(HOST_B); /* any supervisor reads the units */
+    const ls_Response *r = must(HOST_A); /* the session that set them reads them */
     assert_int_equal(r->ret_code, ls_RetCode_CMD_EXEC_OK);
     assert_string_equal(r->result.get_units.linear_units, "millimeters");
     assert_string_equal(r->result.get_units.angular_units, "degrees");
@@ -354,7 +361,7 @@ static void test_units_round_trip(void **state)
     assert_near(g_core.settings.tool_offset[3], M_PI / 2, 1e-15);
 
     req(ls_Request_get_tool_offsets_tag);
-    r = must(HOST_B);
+    r = must(HOST_A);
     assert_int_equal(r->result.get_tool_offsets.offset_count, 6);
     for (int i = 0; i < 6; i++) {
         assert_near(r->result.get_tool_offsets.offset[i], off[i], 1e-9);
@@ -376,7 +383,7 @@ static void test_units_round_trip(void **state)
     assert_near(g_core.settings.angular_speed_rad_s, M_PI / 2, 1e-15);
 
     req(ls_Request_get_velocities_tag);
-    r = must(HOST_B);
+    r = must(HOST_A);
     const ls_GetVelocitiesRes *v = &r->result.get_velocities;
     assert_near(v->percent_velocity, 40.0, 0);
     assert_near(v->world_linear_velocity, 500.0, 1e-9);
@@ -399,20 +406,20 @@ static void test_units_round_trip(void **state)
     ac->accel = 100.0;
     assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
     req(ls_Request_get_accelerations_tag);
-    const ls_GetAccelerationsRes *a = &must(HOST_B)->result.get_accelerations;
+    const ls_GetAccelerationsRes *a = &must(HOST_A)->result.get_accelerations;
     assert_near(a->percent_accel, 100.0, 0);
     assert_near(a->world_linear_accel, 2000.0, 1e-9);
     assert_near(a->world_angular_accel, 360.0, 1e-9);
     assert_near(a->joint_accels[0], 8.0 * 180.0 / M_PI, 1e-9);
 
     req(ls_Request_get_max_velocities_tag);
-    const ls_GetMaxVelocitiesRes *mv = &must(HOST_B)->result.get_max_velocities;
+    const ls_GetMaxVelocitiesRes *mv = &must(HOST_A)->result.get_max_velocities;
     assert_near(mv->max_world_linear_velocity, 1000.0, 1e-9);
     assert_near(mv->max_world_angular_velocity, 3.0 * 180.0 / M_PI, 1e-9);
     assert_int_equal(mv->max_joint_velocities_count, 6);
     assert_near(mv->max_joint_velocities[2], 3.0 * 180.0 / M_PI, 1e-9);
     req(ls_Request_get_max_accelerations_tag);
-    const ls_GetMaxAccelerationsRes *ma = &must(HOST_B)->result.get_max_accelerations;
+    const ls_GetMaxAccelerationsRes *ma = &must(HOST_A)->result.get_max_accelerations;
     assert_near(ma->max_world_linear_accel, 4000.0, 1e-9);
     assert_near(ma->max_world_angular_accel, 12.0 * 180.0 / M_PI, 1e-9);
     assert_near(ma->max_joint_accels[5], 20.0 * 180.0 / M_PI, 1e-9);
@@ -420,11 +427,17 @@ static void test_units_round_trip(void **state)
     /* back to inches: the same SI settings read in the new unit */
     set_units(ls_LinearUnit_INCHES, ls_AngularUnit_RADIANS);
     req(ls_Request_get_tool_offsets_tag);
-    r = must(HOST_B);
+    r = must(HOST_A);
     assert_near(r->result.get_tool_offsets.offset[2], 0.15 / 0.0254, 1e-9);
     assert_near(r->result.get_tool_offsets.offset[3], M_PI / 2, 1e-12);
     req(ls_Request_get_velocities_tag);
-    assert_near(must(HOST_B)->result.get_velocities.world_linear_velocity, 0.5 / 0.0254, 1e-9);
+    assert_near(must(HOST_A)->result.get_velocities.world_linear_velocity, 0.5 / 0.0254, 1e-9);
+    /* the other session reads the same SI settings in its own units, SI */
+    req(ls_Request_get_tool_offsets_tag);
+    r = must(HOST_B);
+    assert_near(r->result.get_tool_offsets.offset[2], 0.15, 1e-12);
+    req(ls_Request_get_velocities_tag);
+    assert_near(must(HOST_B)->result.get_velocities.world_linear_velocity, 0.5, 1e-12);
 }
 
 /* ---------------------------------------------------------------- out-of-range and malformed */
@@ -596,7 +609,7 @@ static void test_robot_position_is_the_tool_tip_in_the_world(void **state)
     set_units(ls_LinearUnit_MILLIMETERS, ls_AngularUnit_DEGREES);
 
     req(ls_Request_get_robot_position_tag);
-    const ls_Response *r = must(HOST_B);
+    const ls_Response *r = must(HOST_A);
     assert_int_equal(r->ret_code, ls_RetCode_CMD_EXEC_OK);
     const ls_GetRobotPositionRes *p = &r->result.get_robot_position;
     assert_int_equal(p->joints_count, 6);
@@ -619,14 +632,14 @@ static void test_robot_position_is_the_tool_tip_in_the_world(void **state)
     g_core.settings.world_frame[5] = M_PI / 2;
     g_core.settings.tool_offset[2] = 0.0;
     req(ls_Request_get_robot_position_tag);
-    p = &must(HOST_B)->result.get_robot_position;
+    p = &must(HOST_A)->result.get_robot_position;
     assert_near(p->world_pose[0], F[13] * 1000.0, 1e-9);
     assert_near(p->world_pose[1], -F[12] * 1000.0, 1e-9);
     assert_near(p->world_pose[2], F[14] * 1000.0, 1e-9);
 
     g_core.ctl = NULL;
     req(ls_Request_get_robot_position_tag);
-    r = must(HOST_B);
+    r = must(HOST_A);
     assert_int_equal(r->ret_code, ls_RetCode_CMD_UNSUPPORTED_ERR);
     assert_non_null(strstr(r->ret_msg, "no arm backend"));
 }
@@ -641,7 +654,7 @@ static void test_sensor_reading(void **state)
 
     ls_GetSensorReadingReq *s = &req(ls_Request_get_sensor_reading_tag)->cmd.get_sensor_reading;
     snprintf(s->sensor_type, sizeof s->sensor_type, "force_sensor");
-    const ls_Response *r = must(HOST_B);
+    const ls_Response *r = must(HOST_A);
     assert_int_equal(r->ret_code, ls_RetCode_CMD_EXEC_OK);
     assert_int_equal(r->result.get_sensor_reading.current_data_count, 6);
     for (int i = 0; i < 6; i++) {
@@ -649,18 +662,21 @@ static void test_sensor_reading(void **state)
     }
     s = &req(ls_Request_get_sensor_reading_tag)->cmd.get_sensor_reading;
     snprintf(s->sensor_type, sizeof s->sensor_type, "laser_standoff_sensor");
-    r = must(HOST_B);
+    r = must(HOST_A);
     assert_int_equal(r->result.get_sensor_reading.current_data_count, 1);
     assert_near(r->result.get_sensor_reading.current_data[0], 237.5, 1e-9);
+    s = &req(ls_Request_get_sensor_reading_tag)->cmd.get_sensor_reading;
+    snprintf(s->sensor_type, sizeof s->sensor_type, "laser_standoff_sensor");
+    assert_near(must(HOST_B)->result.get_sensor_reading.current_data[0], 0.2375, 1e-12); /* B's session: SI */
 
     s = &req(ls_Request_get_sensor_reading_tag)->cmd.get_sensor_reading;
     snprintf(s->sensor_type, sizeof s->sensor_type, "sonar");
-    r = must(HOST_B);
+    r = must(HOST_A);
     assert_int_equal(r->ret_code, ls_RetCode_CMD_UNSUPPORTED_ERR);
     assert_string_equal(r->ret_msg, "no sensor 'sonar': this controller has force_sensor, laser_standoff_sensor");
     g_core.n_sensors = 0;
     req(ls_Request_get_sensor_reading_tag);
-    r = must(HOST_B);
+    r = must(HOST_A);
     assert_int_equal(r->ret_code, ls_RetCode_CMD_UNSUPPORTED_ERR);
     assert_string_equal(r->ret_msg, "no sensor '': this controller has no sensors");
 }
@@ -955,13 +971,53 @@ static int32_t g_done_code;
 static bool g_done_timed_out;
 static int g_done_calls;
 
-static void done_cb(ls_core_t *core, void *ctx, int32_t ret_code, bool timed_out)
+static const char *done_cb(ls_core_t *core, void *ctx, int32_t ret_code, bool timed_out, uint64_t now_us)
 {
+    (void)now_us;
     assert_ptr_equal(core, &g_core);
     assert_ptr_equal(ctx, &g_done_calls);
     g_done_code = ret_code;
     g_done_timed_out = timed_out;
     g_done_calls++;
+    return timed_out ? "default-taken" : (ret_code >= 0 ? "went-on" : "dropped");
+}
+
+static void send_rsvp_reply_data(uint8_t addr, uint32_t id, int32_t code, const char *d0)
+{
+    memset(&g_up, 0, sizeof g_up);
+    g_up.which_msg = ls_Uplink_rsvp_reply_tag;
+    g_up.msg.rsvp_reply.rsvp_id = id;
+    g_up.msg.rsvp_reply.ret_code = code;
+    if (d0 != NULL) {
+        snprintf(g_up.msg.rsvp_reply.data[0], sizeof g_up.msg.rsvp_reply.data[0], "%s", d0);
+        g_up.msg.rsvp_reply.data_count = 1;
+    }
+    send_uplink(addr);
+}
+
+/* The one RsvpAck sent to addr since `from`. */
+static const ls_RsvpAck *the_ack(size_t from, uint8_t addr)
+{
+    const ls_RsvpAck *a = NULL;
+    for (size_t i = from; i < g_nrx; i++) {
+        if (g_rx[i].which_msg == ls_Downlink_rsvp_ack_tag) {
+            assert_null(a);
+            assert_int_equal(g_rx_addr[i], addr);
+            a = &g_rx[i].msg.rsvp_ack;
+        }
+    }
+    assert_non_null(a);
+    return a;
+}
+
+/* The event log (sendCommand events) as the owner reads it. */
+static const char *events_text(void)
+{
+    ls_SendCommandReq *sc = &req(ls_Request_send_command_tag)->cmd.send_command;
+    snprintf(sc->input, sizeof sc->input, "events");
+    const ls_Response *r = must(HOST_A);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_EXEC_OK);
+    return r->result.send_command.result;
 }
 
 static void test_rsvp_reply_and_timeout(void **state)
@@ -970,68 +1026,163 @@ static void test_rsvp_reply_and_timeout(void **state)
     g_done_calls = 0;
     const char *data[] = { "k=v" };
     size_t before = g_nrx;
-    int32_t id = ls_core_rsvp(&g_core, 1, ls_NoticeKind_EVENT_RSVP, "ask", data, 1, 300, "continue", done_cb,
+    const uint32_t epoch_b = g_core.sessions[1].epoch;
+    int32_t id = ls_core_rsvp(&g_core, 1, 77, ls_NoticeKind_EVENT_RSVP, "ask", data, 1, 300, "continue", done_cb,
                               &g_done_calls, g_now);
     assert_true(id > 0);
     const ls_Notice *n = nth_notice(before, 0);
     assert_int_equal(n->rsvp_id, (uint32_t)id);
     assert_int_equal(n->rsvp_timeout_ms, 300);
     assert_string_equal(n->rsvp_default, "continue");
+    assert_int_equal(n->ref_seq, 77); /* the request that armed it */
+    assert_int_equal(n->session_epoch, epoch_b);
     assert_int_equal(g_rx_addr[before], HOST_B);
-    send_rsvp_reply(HOST_A, (uint32_t)id, -7); /* another supervisor cannot answer it */
+
+    /* another supervisor cannot answer it: refused, naming why */
+    before = g_nrx;
+    send_rsvp_reply(HOST_A, (uint32_t)id, -7);
     assert_int_equal(g_done_calls, 0);
-    send_rsvp_reply(HOST_B, (uint32_t)id, -2);
+    const ls_RsvpAck *a = the_ack(before, HOST_A);
+    assert_int_equal(a->ret_code, ls_RetCode_CMD_PARAM_ERR);
+    assert_string_equal(a->action, "");
+    assert_non_null(strstr(a->ret_msg, "no RSVP with this id is waiting for 0x21"));
+
+    /* the addressee declines: acknowledged with the action its owner took */
+    before = g_nrx;
+    send_rsvp_reply_data(HOST_B, (uint32_t)id, -2, "operator=no");
     assert_int_equal(g_done_calls, 1);
     assert_int_equal(g_done_code, -2);
     assert_false(g_done_timed_out);
+    a = the_ack(before, HOST_B);
+    assert_int_equal(a->rsvp_id, (uint32_t)id);
+    assert_int_equal(a->ret_code, ls_RetCode_CMD_EXEC_OK);
+    assert_string_equal(a->action, "dropped");
+    assert_int_equal(a->ref_seq, 77);
+    assert_int_equal(a->session_epoch, epoch_b);
+    /* twice: refused, nothing runs again */
+    before = g_nrx;
+    send_rsvp_reply(HOST_B, (uint32_t)id, 0);
+    assert_int_equal(g_done_calls, 1);
+    a = the_ack(before, HOST_B);
+    assert_int_equal(a->ret_code, ls_RetCode_CMD_PARAM_ERR);
+    assert_non_null(strstr(a->ret_msg, "already answered (action dropped)"));
     ls_core_tick(&g_core, g_now + 400000);
     assert_int_equal(g_done_calls, 1);
 
-    id =
-        ls_core_rsvp(&g_core, 0, ls_NoticeKind_ALARM_RSVP, "ask", data, 1, 300, "abort", done_cb, &g_done_calls, g_now);
+    id = ls_core_rsvp(&g_core, 0, 0, ls_NoticeKind_ALARM_RSVP, "ask", data, 1, 300, "abort", done_cb, &g_done_calls,
+                      g_now);
     ls_core_tick(&g_core, g_now + 299999);
     assert_int_equal(g_done_calls, 1);
     ls_core_tick(&g_core, g_now + 300000);
     assert_int_equal(g_done_calls, 2);
     assert_true(g_done_timed_out);
     assert_int_equal(g_done_code, ls_RetCode_CMD_TIMEOUT_ERR);
-    send_rsvp_reply(HOST_A, (uint32_t)id, 0); /* late: ignored */
+    /* late: refused with CMD_TIMEOUT_ERR naming the default that was taken */
+    before = g_nrx;
+    send_rsvp_reply(HOST_A, (uint32_t)id, 0);
     assert_int_equal(g_done_calls, 2);
+    a = the_ack(before, HOST_A);
+    assert_int_equal(a->ret_code, ls_RetCode_CMD_TIMEOUT_ERR);
+    assert_non_null(strstr(a->ret_msg, "late"));
+    assert_non_null(strstr(a->ret_msg, "default-taken"));
+    /* an id that was never sent */
+    before = g_nrx;
+    send_rsvp_reply(HOST_A, 4242u, 0);
+    assert_int_equal(the_ack(before, HOST_A)->ret_code, ls_RetCode_CMD_PARAM_ERR);
+
+    /* the event log holds every outcome, the reply's data included */
+    const char *log = events_text();
+    assert_non_null(strstr(log, "declined -2, action dropped, data [operator=no]"));
+    assert_non_null(strstr(log, "no answer, default action default-taken"));
+    assert_non_null(strstr(log, "refused: already answered"));
+    assert_non_null(strstr(log, "refused: late"));
+    assert_non_null(strstr(log, "rsvp 4242 from 0x21 refused: unknown id"));
 }
 
-static void test_signal_rsvp_reply_before_timeout(void **state)
+/* A dioSignal RSVP from a watch of HOST_B on bit 0: the notice. */
+static const ls_Notice *dio_rsvp(uint32_t *watch, uint32_t *req_seq)
 {
-    (void)state;
     int32_t code;
-    uint32_t w = signal_dio(HOST_B, 0x1u, 0, 0, ls_CallbackType_CB_EVENT_RSVP, &code);
+    *watch = signal_dio(HOST_B, 0x1u, 0, 0, ls_CallbackType_CB_EVENT_RSVP, &code);
+    *req_seq = g_seq;
     size_t before = g_nrx;
+    g_snap.dio[0] = 0x1u;
     ls_core_on_dio_event(&g_core, 0, 0x1u, 0x1u, g_now += 1000);
     const ls_Notice *n = nth_notice(before, 0);
     assert_non_null(n);
     assert_int_equal(n->kind, ls_NoticeKind_EVENT_RSVP);
     assert_string_equal(n->event_id, "dioSignal");
-    assert_string_equal(n->rsvp_default, "continue");
+    assert_string_equal(n->rsvp_default, "cancel");
     assert_int_equal(n->rsvp_timeout_ms, 2000);
+    assert_int_equal(n->ref_seq, *req_seq);
+    assert_int_equal(n->session_epoch, g_core.sessions[1].epoch);
     char wid[24];
-    snprintf(wid, sizeof wid, "watch=%u", (unsigned)w);
+    snprintf(wid, sizeof wid, "watch=%u", (unsigned)*watch);
     assert_data(n, "unit=0", "bits=0x1", "levels=0x1", wid);
-    uint32_t rid = n->rsvp_id;
-    /* the slot stays taken until the answer */
-    int busy = 0;
+    return n;
+}
+
+static int watches_in(ls_watch_phase_t phase)
+{
+    int k = 0;
     for (int i = 0; i < LS_MAX_DIO_WATCHES; i++) {
-        busy += g_core.dio.watch[i].phase == LS_WATCH_AWAIT_RSVP ? 1 : 0;
+        k += g_core.dio.watch[i].phase == phase ? 1 : 0;
     }
-    assert_int_equal(busy, 1);
-    before = g_nrx;
+    return k;
+}
+
+/* Accept re-arms the watch: it fires again on the bits' next rising edge, not while they stay set. */
+static void test_signal_rsvp_accept_rearms_the_watch(void **state)
+{
+    (void)state;
+    uint32_t w, seq;
+    const uint32_t rid = dio_rsvp(&w, &seq)->rsvp_id;
+    assert_int_equal(watches_in(LS_WATCH_AWAIT_RSVP), 1); /* the slot stays taken until the answer */
+    size_t before = g_nrx;
     send_rsvp_reply(HOST_B, rid, ls_RetCode_CMD_EXEC_OK);
+    const ls_RsvpAck *a = the_ack(before, HOST_B);
+    assert_int_equal(a->ret_code, ls_RetCode_CMD_EXEC_OK);
+    assert_string_equal(a->action, "rearm");
+    assert_int_equal(a->ref_seq, seq);
     assert_int_equal(g_core.dio.rsvp_replied, 1);
-    assert_int_equal(g_core.dio.rsvp_timed_out, 0);
-    assert_int_equal(g_core.dio.rsvp_last_code, 0);
-    ls_core_tick(&g_core, g_now + 3000000);
+    assert_int_equal(watches_in(LS_WATCH_ARMED), 1);
+    /* still set: nothing */
+    before = g_nrx;
+    ls_dio_tick(&g_core, g_now += 1000);
+    ls_core_on_dio_event(&g_core, 0, 0x3u, 0x2u, g_now += 1000);
     assert_int_equal(count_notices(before), 0);
-    for (int i = 0; i < LS_MAX_DIO_WATCHES; i++) {
-        assert_int_equal(g_core.dio.watch[i].phase, LS_WATCH_FREE);
-    }
+    /* cleared, then set again: a second RSVP of the same watch and request */
+    ls_core_on_dio_event(&g_core, 0, 0x0u, 0x3u, g_now += 1000);
+    assert_int_equal(count_notices(before), 0);
+    ls_core_on_dio_event(&g_core, 0, 0x1u, 0x1u, g_now += 1000);
+    assert_int_equal(count_notices(before), 1);
+    const ls_Notice *n = nth_notice(before, 0);
+    assert_int_equal(n->kind, ls_NoticeKind_EVENT_RSVP);
+    assert_int_equal(n->ref_seq, seq);
+    assert_int_not_equal(n->rsvp_id, rid);
+}
+
+/* Decline cancels the watch: nothing fires any more, its slot is free. */
+static void test_signal_rsvp_decline_cancels_the_watch(void **state)
+{
+    (void)state;
+    uint32_t w, seq;
+    const uint32_t rid = dio_rsvp(&w, &seq)->rsvp_id;
+    size_t before = g_nrx;
+    send_rsvp_reply_data(HOST_B, rid, ls_RetCode_CMD_ERR, "why=not now");
+    const ls_RsvpAck *a = the_ack(before, HOST_B);
+    assert_int_equal(a->ret_code, ls_RetCode_CMD_EXEC_OK);
+    assert_string_equal(a->action, "cancel");
+    assert_int_equal(watches_in(LS_WATCH_FREE), LS_MAX_DIO_WATCHES);
+    before = g_nrx;
+    ls_core_on_dio_event(&g_core, 0, 0x0u, 0x1u, g_now += 1000);
+    ls_core_on_dio_event(&g_core, 0, 0x1u, 0x1u, g_now += 1000);
+    ls_dio_tick(&g_core, g_now += 1000);
+    assert_int_equal(count_notices(before), 0);
+    char want[160];
+    snprintf(want, sizeof want, "rsvp %u dioSignal (seq %u) from 0x22: declined -1, action cancel, data [why=not now]",
+             (unsigned)rid, (unsigned)seq);
+    assert_non_null(strstr(events_text(), want));
 }
 
 static void test_signal_rsvp_unanswered_takes_the_default(void **state)
@@ -1043,6 +1194,7 @@ static void test_signal_rsvp_unanswered_takes_the_default(void **state)
     uint64_t t = g_now += 1000;
     ls_core_on_dio_event(&g_core, 0, 0x1u, 0x1u, t);
     assert_int_equal(nth_notice(before, 0)->kind, ls_NoticeKind_ALARM_RSVP);
+    const uint32_t rid = nth_notice(before, 0)->rsvp_id;
     before = g_nrx;
     ls_core_tick(&g_core, t + 1999999);
     assert_int_equal(count_notices(before), 0);
@@ -1057,10 +1209,15 @@ static void test_signal_rsvp_unanswered_takes_the_default(void **state)
     snprintf(wid, sizeof wid, "watch=%u", (unsigned)w);
     assert_int_equal(n->data_count, 2);
     assert_string_equal(n->data[0], wid);
-    assert_string_equal(n->data[1], "action=continue");
-    for (int i = 0; i < LS_MAX_DIO_WATCHES; i++) {
-        assert_int_equal(g_core.dio.watch[i].phase, LS_WATCH_FREE);
-    }
+    assert_string_equal(n->data[1], "action=cancel");
+    assert_int_equal(watches_in(LS_WATCH_FREE), LS_MAX_DIO_WATCHES);
+    /* an answer now is late */
+    before = g_nrx;
+    g_now = t + 2000001;
+    send_rsvp_reply(HOST_A, rid, 0);
+    const ls_RsvpAck *a = the_ack(before, HOST_A);
+    assert_int_equal(a->ret_code, ls_RetCode_CMD_TIMEOUT_ERR);
+    assert_non_null(strstr(a->ret_msg, "default action (cancel)"));
 }
 
 /* ---------------------------------------------------------------- issue 16: the motion lifecycle */
@@ -1344,6 +1501,248 @@ static void test_disconnect_during_motion_releases_after_the_stop(void **state)
     assert_int_not_equal(g_core.sessions[ls_core_session_of(&g_core, HOST_A)].epoch, epoch);
 }
 
+/* ---------------------------------------------------------------- issue 19: the session's contract */
+
+static const ls_Response *connect_with(uint8_t addr, uint32_t period_ms, ls_DisconnectAction action)
+{
+    ls_ConnectReq *c = &req(ls_Request_connect_tag)->cmd.connect;
+    c->protocol_version = ls_Protocol_PROTOCOL_VERSION;
+    c->schema_hash = LS_SCHEMA_HASH;
+    snprintf(c->client_name, sizeof c->client_name, "test-%02X", addr);
+    c->heartbeat_period_ms = period_ms;
+    c->disconnect_action = action;
+    return must(addr);
+}
+
+static void get_units_of(uint8_t addr, const char *linear, const char *angular)
+{
+    req(ls_Request_get_units_tag);
+    const ls_Response *r = must(addr);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_EXEC_OK);
+    assert_string_equal(r->result.get_units.linear_units, linear);
+    assert_string_equal(r->result.get_units.angular_units, angular);
+}
+
+/* Units belong to the session that set them; a new session starts in SI and the connect answer says so. */
+static void test_units_belong_to_the_session(void **state)
+{
+    (void)state;
+    set_units(ls_LinearUnit_MILLIMETERS, ls_AngularUnit_DEGREES);
+    get_units_of(HOST_A, "millimeters", "degrees");
+    get_units_of(HOST_B, "meters", "radians");
+    /* HOST_B's numbers are read in its own units: 0.05 m, not 0.05 mm */
+    ls_SetToolOffsetReq *t = &req(ls_Request_set_tool_offset_tag)->cmd.set_tool_offset;
+    t->offset_count = 6;
+    t->offset[2] = 0.05;
+    assert_int_equal(must(HOST_B)->ret_code, ls_RetCode_CMD_NOT_OWNER_ERR); /* the owner sets; B only reads */
+    t = &req(ls_Request_set_tool_offset_tag)->cmd.set_tool_offset;
+    t->offset_count = 6;
+    t->offset[2] = 50.0; /* mm */
+    assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
+    req(ls_Request_get_tool_offsets_tag);
+    assert_near(must(HOST_B)->result.get_tool_offsets.offset[2], 0.05, 1e-12);
+    /* a new session of the same supervisor starts in SI, and is told so */
+    const ls_Response *r = connect_with(HOST_A, 0, ls_DisconnectAction_DISCONNECT_CONFIGURED);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_EXEC_OK);
+    assert_int_equal(r->result.connect.linear_unit, ls_LinearUnit_METERS);
+    assert_int_equal(r->result.connect.angular_unit, ls_AngularUnit_RADIANS);
+    assert_true(r->result.connect.owner); /* ownership stays with the address */
+    get_units_of(HOST_A, "meters", "radians");
+    req(ls_Request_get_tool_offsets_tag);
+    assert_near(must(HOST_A)->result.get_tool_offsets.offset[2], 0.05, 1e-12);
+}
+
+/* Only HEARTBEAT frames keep a session; its time-out is max(configured, 5 stated periods). */
+static void test_liveness_heartbeats_only_and_the_stated_period(void **state)
+{
+    (void)state;
+    g_cfg_timeout_ms = 1000;
+    setup_core(ls_State_LOCKED);
+    const uint64_t t0 = g_now;
+    const ls_Response *r = connect_with(0x23, 400, ls_DisconnectAction_DISCONNECT_CONFIGURED);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_EXEC_OK);
+    assert_int_equal(r->result.connect.heartbeat_timeout_ms, 2000);
+    r = connect_with(0x24, 100, ls_DisconnectAction_DISCONNECT_CONFIGURED);
+    assert_int_equal(r->result.connect.heartbeat_timeout_ms, 1000); /* never below the configured one */
+    r = connect_with(0x25, 5, ls_DisconnectAction_DISCONNECT_CONFIGURED);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    assert_string_equal(r->ret_msg, "connect: heartbeat_period_ms 5: allowed 10..2000 (or 0: not stated, the "
+                                    "device's time-out of 1000 ms applies)");
+    assert_int_equal(connect_with(0x25, 2001, ls_DisconnectAction_DISCONNECT_CONFIGURED)->ret_code,
+                     ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    assert_int_equal(ls_core_session_of(&g_core, 0x25), -1);
+
+    /* B keeps sending requests but no heartbeat; A sends heartbeats only */
+    g_now = t0 + 900000;
+    req(ls_Request_get_units_tag);
+    assert_int_equal(must(HOST_B)->ret_code, ls_RetCode_CMD_EXEC_OK);
+    ls_core_on_heartbeat(&g_core, HOST_A, t0 + 900000);
+    ls_core_on_heartbeat(&g_core, 0x24, t0 + 900000);
+    ls_core_tick(&g_core, t0 + 1000001);
+    assert_int_equal(ls_core_session_of(&g_core, HOST_B), -1); /* requests do not keep a session */
+    assert_true(ls_core_session_of(&g_core, HOST_A) >= 0);
+    assert_true(ls_core_session_of(&g_core, 0x23) >= 0); /* its own, longer time-out */
+    ls_core_tick(&g_core, t0 + 1900001);
+    assert_int_equal(ls_core_session_of(&g_core, HOST_A), -1);
+    assert_true(ls_core_session_of(&g_core, 0x23) >= 0);
+    ls_core_tick(&g_core, t0 + 2000001);
+    assert_int_equal(ls_core_session_of(&g_core, 0x23), -1);
+    assert_int_equal(g_core.sessions_dropped, 4);
+}
+
+static int g_drive_calls;
+static bool g_drives_on;
+static int g_stop_calls;
+
+static int fake_drives(void *ctx, bool on)
+{
+    (void)ctx;
+    g_drive_calls++;
+    g_drives_on = on;
+    return 0;
+}
+
+static void fake_stop(void *ctx)
+{
+    (void)ctx;
+    g_stop_calls++;
+}
+
+static const ls_Notice *owner_lost_alarm(size_t from)
+{
+    for (size_t i = from; i < g_nrx; i++) {
+        if (g_rx[i].which_msg == ls_Downlink_notice_tag && strcmp(g_rx[i].msg.notice.event_id, "ownerLost") == 0) {
+            return &g_rx[i].msg.notice;
+        }
+    }
+    return NULL;
+}
+
+static const char *fault_log_text(void)
+{
+    ls_SendCommandReq *sc = &req(ls_Request_send_command_tag)->cmd.send_command;
+    snprintf(sc->input, sizeof sc->input, "faults");
+    return must(HOST_B)->result.send_command.result;
+}
+
+/* `stop`: the drives stay on and the lock is kept for the owner's address until it connects again. */
+static void test_disconnect_action_stop_keeps_drives_and_lock(void **state)
+{
+    (void)state;
+    g_cfg_action = ls_DisconnectAction_DISCONNECT_STOP;
+    setup_core(ls_State_RESTING);
+    g_core.act.enable_drives = fake_drives;
+    g_drive_calls = 0;
+    assert_int_equal(g_core.sessions[0].disconnect_action, ls_DisconnectAction_DISCONNECT_STOP);
+    size_t from = g_nrx;
+    req(ls_Request_disconnect_tag);
+    assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
+    assert_int_equal(g_core.state, ls_State_RESTING);
+    assert_int_equal(g_drive_calls, 0);
+    assert_int_equal(g_core.owner, -1);
+    const ls_Notice *n = owner_lost_alarm(from);
+    assert_non_null(n);
+    assert_true(has_data(n, "action=stop"));
+    assert_true(has_data(n, "reason=disconnect"));
+    assert_non_null(strstr(fault_log_text(), "owner 0x21 lost (disconnect): action stop"));
+    /* the lock is kept: another supervisor is told whose it is and why */
+    ls_SetSpeedReq *sp = &req(ls_Request_set_speed_tag)->cmd.set_speed;
+    sp->speed = 50.0;
+    const ls_Response *r = must(HOST_B);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_NOT_OWNER_ERR);
+    assert_string_equal(r->ret_msg, "setSpeed needs the owner: 0x21 (test-21) was lost and keeps the lock "
+                                    "(disconnect action stop) until it connects again");
+    /* nobody left but the lock is held: not IDLE */
+    req(ls_Request_disconnect_tag);
+    assert_int_equal(must(HOST_B)->ret_code, ls_RetCode_CMD_EXEC_OK);
+    assert_int_equal(g_core.state, ls_State_RESTING);
+    /* the owner comes back: its lock again */
+    r = connect_with(HOST_A, 0, ls_DisconnectAction_DISCONNECT_CONFIGURED);
+    assert_true(r->result.connect.owner);
+    assert_int_equal(r->result.connect.state, ls_State_RESTING);
+    sp = &req(ls_Request_set_speed_tag)->cmd.set_speed;
+    sp->speed = 50.0;
+    assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
+}
+
+/* `stop` during a motion: it pauses along the path, is dropped with the drives on, then the notices. */
+static void test_disconnect_action_stop_during_a_motion(void **state)
+{
+    (void)state;
+    g_cfg_action = ls_DisconnectAction_DISCONNECT_STOP;
+    const uint32_t move = start_move();
+    g_core.act.enable_drives = fake_drives;
+    g_core.act.stop_motion = fake_stop;
+    g_drive_calls = 0;
+    g_stop_calls = 0;
+    size_t from = g_nrx, n;
+    g_nposted = 0;
+    ls_core_on_heartbeat(&g_core, HOST_B, g_now + 600000001u);
+    ls_core_tick(&g_core, g_now + 600000001u); /* the owner's heartbeat is lost */
+    assert_int_equal(g_stop_calls, 1);
+    assert_int_equal(g_core.state, ls_State_MOVING);
+    assert_string_equal(g_core.motion_state, "robot_stopping");
+    assert_null(owner_lost_alarm(from));
+    g_snap.cycle += 2;
+    g_snap.phase = LS_MOTION_PAUSED; /* paused on the path, drives still on */
+    ls_run_tick(&g_core, g_now + 600100000u);
+    const ls_Notice *f = the_final(from, move, &n);
+    assert_non_null(f);
+    assert_int_equal(n, 1);
+    assert_true(has_data(f, "reason=ownerLost"));
+    assert_int_equal(g_core.state, ls_State_RESTING);
+    assert_int_equal(g_drive_calls, 0);
+    assert_int_equal(g_posted[g_nposted - 1].kind, LS_CTL_ABORT); /* the executor holds nothing */
+    const ls_Notice *a = owner_lost_alarm(from);
+    assert_non_null(a);
+    assert_true(has_data(a, "action=stop"));
+    assert_true(has_data(a, "reason=heartbeat lost"));
+}
+
+/* `stop_deactivate`: drives off, LOCKED, the lock kept. */
+static void test_disconnect_action_stop_deactivate(void **state)
+{
+    (void)state;
+    g_cfg_action = ls_DisconnectAction_DISCONNECT_STOP_DEACTIVATE;
+    setup_core(ls_State_RESTING);
+    g_core.act.enable_drives = fake_drives;
+    g_drive_calls = 0;
+    size_t from = g_nrx;
+    ls_core_on_heartbeat(&g_core, HOST_B, g_now + 600000001u);
+    ls_core_tick(&g_core, g_now + 600000001u);
+    assert_int_equal(g_drive_calls, 1);
+    assert_false(g_drives_on);
+    assert_int_equal(g_core.state, ls_State_LOCKED);
+    assert_true(g_core.held);
+    const ls_Notice *n = owner_lost_alarm(from);
+    assert_non_null(n);
+    assert_true(has_data(n, "action=stop_deactivate"));
+    assert_non_null(strstr(fault_log_text(), "owner 0x21 lost (heartbeat lost): action stop_deactivate"));
+    req(ls_Request_release_tag);
+    assert_int_equal(must(HOST_B)->ret_code, ls_RetCode_CMD_NOT_OWNER_ERR);
+}
+
+/* A session may narrow the configured action at connect, never widen it. */
+static void test_connect_narrows_the_disconnect_action(void **state)
+{
+    (void)state;
+    setup_core(ls_State_LOCKED);
+    assert_int_equal(g_core.sessions[0].disconnect_action, ls_DisconnectAction_DISCONNECT_STOP_DEACTIVATE_RELEASE);
+    g_cfg_action = ls_DisconnectAction_DISCONNECT_STOP_DEACTIVATE;
+    setup_core(ls_State_LOCKED);
+    const ls_Response *r = connect_with(0x23, 0, ls_DisconnectAction_DISCONNECT_STOP_DEACTIVATE_RELEASE);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    assert_string_equal(r->ret_msg, "connect: disconnect_action stop_deactivate_release is wider than the "
+                                    "configured stop_deactivate: a session may only narrow it");
+    r = connect_with(0x23, 0, (ls_DisconnectAction)7);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_ERR);
+    r = connect_with(0x23, 0, ls_DisconnectAction_DISCONNECT_STOP);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_EXEC_OK);
+    assert_int_equal(r->result.connect.disconnect_action, ls_DisconnectAction_DISCONNECT_STOP);
+    r = connect_with(0x24, 0, ls_DisconnectAction_DISCONNECT_CONFIGURED);
+    assert_int_equal(r->result.connect.disconnect_action, ls_DisconnectAction_DISCONNECT_STOP_DEACTIVATE);
+}
+
 /* A path with one `dio` auxiliary command, started: its seq. */
 static uint32_t start_dio_path(void)
 {
@@ -1436,7 +1835,8 @@ int main(void)
         cmocka_unit_test_setup(test_signal_refusals_and_table_full, setup_locked),
         cmocka_unit_test_setup(test_watches_end_with_their_session, setup_locked),
         cmocka_unit_test_setup(test_rsvp_reply_and_timeout, setup_locked),
-        cmocka_unit_test_setup(test_signal_rsvp_reply_before_timeout, setup_locked),
+        cmocka_unit_test_setup(test_signal_rsvp_accept_rearms_the_watch, setup_locked),
+        cmocka_unit_test_setup(test_signal_rsvp_decline_cancels_the_watch, setup_locked),
         cmocka_unit_test_setup(test_signal_rsvp_unanswered_takes_the_default, setup_locked),
         cmocka_unit_test_setup(test_seq_reuse_with_another_request_is_refused, setup_locked),
         cmocka_unit_test(test_utf8_check_and_repair),
@@ -1447,6 +1847,12 @@ int main(void)
         cmocka_unit_test(test_disconnect_during_motion_releases_after_the_stop),
         cmocka_unit_test(test_aux_dio_waits_for_the_write_then_goes_on),
         cmocka_unit_test(test_aux_dio_refused_at_run_time_fails_the_path_and_leaves_it_usable),
+        cmocka_unit_test_setup(test_units_belong_to_the_session, setup_locked),
+        cmocka_unit_test(test_liveness_heartbeats_only_and_the_stated_period),
+        cmocka_unit_test(test_disconnect_action_stop_keeps_drives_and_lock),
+        cmocka_unit_test(test_disconnect_action_stop_during_a_motion),
+        cmocka_unit_test(test_disconnect_action_stop_deactivate),
+        cmocka_unit_test(test_connect_narrows_the_disconnect_action),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
