@@ -171,11 +171,21 @@ class FakeDevice:
             up = pb.Uplink()
             up.ParseFromString(bytes(data))
             if up.WhichOneof("msg") == "rsvp_reply":
+                r = up.rsvp_reply
                 with self._lock:
-                    self.rsvp_replies.append(up.rsvp_reply)
-                    ev = self._rsvp_waiters.get(up.rsvp_reply.rsvp_id)
-                if ev is not None:
+                    self.rsvp_replies.append(r)
+                    ev = self._rsvp_waiters.get(r.rsvp_id)
+                    fresh = ev is not None and not ev.is_set()
+                if fresh:
+                    assert ev is not None
                     ev.set()
+                    ack = pb.RsvpAck(rsvp_id=r.rsvp_id, ret_code=pb.CMD_EXEC_OK,
+                                     action="continue" if r.ret_code >= 0 else "refuse",
+                                     ret_msg=f"rsvp {r.rsvp_id}: taken")
+                else:  # as the firmware: every reply is acknowledged or refused with the reason
+                    ack = pb.RsvpAck(rsvp_id=r.rsvp_id, ret_code=pb.CMD_PARAM_ERR,
+                                     ret_msg=f"rsvp {r.rsvp_id}: unknown or already answered")
+                stack.send(pb.Downlink(rsvp_ack=ack).SerializeToString())
                 continue
             req = up.request
             with self._lock:

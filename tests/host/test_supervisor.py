@@ -10,9 +10,11 @@ import pytest
 from fake_device import FakeDevice
 from landscape import (
     AlarmError,
+    ArgumentError,
     ControllerTimeoutError,
     LandscapeError,
     NotOwnerError,
+    ParamError,
     ProtocolError,
     Supervisor,
     VersionMismatchError,
@@ -183,6 +185,29 @@ def test_rsvp_handler_answers(bus, notifier, device: FakeDevice) -> None:
         assert device.rsvp_replies[-1].ret_code == ls.CMD_EXEC_OK
 
 
+def test_answer_rsvp_returns_the_devices_acknowledgement(bus, notifier, device: FakeDevice) -> None:
+    device.rsvp_timeout_ms = 2000
+    with sup_on(bus, notifier) as sup:
+        sup.lock()
+        sup.activate()
+        rv = sup.move_absolute("p4", [0] * 6)
+        ask = next(n for n in sup.notices(timeout_s=3) if n.kind == ls.EVENT_RSVP)
+        assert ask.ref_seq == rv.seq
+        ack = sup.decline_rsvp(ask, ["why=not now"])
+        assert (ack.rsvp_id, ack.ret_code, ack.action) == (ask.rsvp_id, ls.CMD_EXEC_OK, "refuse")
+        assert [(r.ret_code, list(r.data)) for r in device.rsvp_replies] == [(ls.CMD_ERR, ["why=not now"])]
+        with pytest.raises(AlarmError, match="moveRefused"):
+            sup.wait_complete(rv, timeout_s=3)
+        # a second answer is refused, naming why; check=False returns the refusal
+        with pytest.raises(ParamError, match="already answered"):
+            sup.accept_rsvp(ask)
+        assert sup.answer_rsvp(ask.rsvp_id, check=False).ret_code == ls.CMD_PARAM_ERR
+        with pytest.raises(ArgumentError, match="is not an RSVP"):
+            sup.answer_rsvp(ls.Notice(kind=ls.EVENT, event_id="tag"))
+        with pytest.raises(ArgumentError, match="a decline is negative"):
+            sup.decline_rsvp(ask, ret_code=0)
+
+
 def test_rsvp_handler_may_call_request(bus, notifier, device: FakeDevice) -> None:
     states: list[str] = []
     with sup_on(bus, notifier) as sup:
@@ -207,9 +232,11 @@ def test_heartbeat_frames_role_1_counter_increments(bus, notifier, device: FakeD
                 frames.append(m)
         assert len(frames) >= 8
         db = tm.database()
-        decoded = [db.decode_message("HEARTBEAT", bytes(f.data)) for f in frames]
+        decoded = [db.decode_message("HEARTBEAT", bytes(f.data), decode_choices=False) for f in frames]
         assert all(f.is_extended_id and f.dlc == 8 for f in frames)
-        assert all(d["hb_role"] == 1 and d["hb_state"] == 0 and d["hb_owner"] == 0 for d in decoded)
+        # the DBC's supervisor payload: hb_counter, hb_role 1, hb_period_ms; every other byte 0
+        assert all(d == {"hb_counter": d["hb_counter"], "hb_role": 1, "hb_period_ms": 20} for d in decoded)
+        assert all(bytes(f.data)[1] == 0 and bytes(f.data)[5:] == b"\0\0\0" for f in frames)
         assert [d["hb_counter"] for d in decoded] == list(range(len(decoded)))
     finally:
         spy_bus.shutdown()

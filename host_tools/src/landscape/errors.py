@@ -55,8 +55,11 @@ _ADVICE = {
                  "then activate again",
     "deactivate": "the device was deactivated: activate to move again",
     "shutdown": "the controller shut down: restart landscaped, then connect, lock and activate",
-    "ownerLost": "the owner's session was lost and the device released: connect, lock and activate again",
-    "disconnect": "the owner disconnected and the device was released: connect, lock and activate again",
+    "ownerLost": "the owner's session was lost and the device took its disconnect action (the ownerLost "
+                 "alarm's action=): connect again (the lost owner gets a kept lock back), then lock and "
+                 "activate as needed",
+    "disconnect": "the owner disconnected and the device took its disconnect action (the ownerLost alarm's "
+                  "action=): connect again, then lock and activate as needed",
     "auxFailed": "the path stopped at that point; the device is still active (RESTING): fix the auxiliary "
                  "command or its I/O, then start the next motion",
     "abortMotion": "the motion was dropped; the device is RESTING and takes the next motion",

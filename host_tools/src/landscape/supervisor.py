@@ -232,7 +232,7 @@ class Supervisor:
                  source_address: int = DEFAULT_HOST, notifier: can.Notifier | None = None,
                  client_name: str = "landscape", heartbeat_period_ms: int = 200, retries: int = 2,
                  timeout_s: float | None = None, channel_name: str | None = None,
-                 owns_bus: bool = False) -> None:
+                 owns_bus: bool = False, disconnect_action: Enum | None = None) -> None:
         if retries < 0:
             raise ArgumentError("retries must be >= 0")
         if heartbeat_period_ms <= 0:
@@ -242,6 +242,8 @@ class Supervisor:
         self.source_address = source_address
         self.client_name = client_name
         self.heartbeat_period_ms = heartbeat_period_ms
+        # None: the device's configured disconnect handler; else narrow it (docs/protocol.md)
+        self.disconnect_action = disconnect_action
         self.retries = retries
         self.timeout_s = timeout_s
         self.channel_name = channel_name or str(getattr(bus, "channel_info", "") or "the bus")
@@ -259,6 +261,8 @@ class Supervisor:
         # final notices by (session epoch, ref_seq): a late notice of an earlier session
         # never ends a request of this one that reused its seq
         self._finals: collections.OrderedDict[tuple[int, int], pb.Notice] = collections.OrderedDict()
+        # the device's RsvpAck to each of our replies, by rsvp_id
+        self._acks: collections.OrderedDict[int, pb.RsvpAck] = collections.OrderedDict()
         self._hist: collections.deque[pb.Notice] = collections.deque(maxlen=1024)
         self._hist_base = 0          # index of _hist[0] among every notice received
         self._read_cursor = 0        # next index notices() yields
@@ -336,10 +340,12 @@ class Supervisor:
             self._seq = 0
         with self._cv:
             self._finals.clear()
+            self._acks.clear()
         self._start_heartbeat()
         rv = self.request("connect", check=False, protocol_version=PROTOCOL_VERSION,
                           schema_hash=SCHEMA_HASH, client_name=self.client_name,
-                          heartbeat_period_ms=self.heartbeat_period_ms)
+                          heartbeat_period_ms=self.heartbeat_period_ms,
+                          disconnect_action=self.disconnect_action)
         res = rv.message if isinstance(rv.message, pb.ConnectRes) else None
         if rv.ret_code == pb.CMD_VERSION_MISMATCH_ERR:
             if res is not None and (res.protocol_version or res.schema_hash):
@@ -433,7 +439,8 @@ class Supervisor:
         reported = False
         while not self._hb_stop.is_set():
             try:
-                self.bus.send(tm.encode("HEARTBEAT", self.source_address, hb_role=1, hb_counter=counter))
+                self.bus.send(tm.encode("HEARTBEAT", self.source_address, hb_role=1, hb_counter=counter,
+                                        hb_period_ms=self.heartbeat_period_ms))
                 reported = False
             except Exception as exc:  # keep beating: a transient bus error must not end the session
                 if not reported:
@@ -564,9 +571,54 @@ class Supervisor:
                 raise BusError(f"cannot send stop-all on {self.channel_name}: {exc}") from None
 
     def send_rsvp_reply(self, rsvp_id: int, ret_code: int = pb.CMD_EXEC_OK, data: Sequence[str] = ()) -> None:
-        """Answer an RSVP notice (no response comes back)."""
+        """Send an RsvpReply without waiting: the device's RsvpAck arrives later
+        (wait_rsvp_ack). ret_code >= 0 accepts, < 0 declines (docs/protocol.md "RSVP")."""
         reply = pb.RsvpReply(rsvp_id=rsvp_id, ret_code=ret_code, data=list(data))
+        with self._cv:
+            self._acks.pop(rsvp_id, None)  # a new answer: wait for its own acknowledgement
         self._send(pb.Uplink(rsvp_reply=reply).SerializeToString())
+
+    def answer_rsvp(self, rsvp: int | pb.Notice, ret_code: int = pb.CMD_EXEC_OK, data: Sequence[str] = (), *,
+                    timeout_s: float = 1.0, check: bool = True) -> pb.RsvpAck:
+        """Answer an RSVP notice (or its rsvp_id) and return the device's RsvpAck, whose
+        `action` says what the device did. ret_code >= 0 accepts, < 0 declines; `data` goes
+        to the device's event log (sendCommand events). A refused reply (late, unknown or
+        already answered) raises its CommandError unless check=False."""
+        rsvp_id = rsvp.rsvp_id if isinstance(rsvp, pb.Notice) else int(rsvp)
+        if isinstance(rsvp, pb.Notice) and rsvp.kind not in RSVP_KINDS:
+            raise ArgumentError(f"notice {rsvp.event_id} is not an RSVP (kind {pb.NoticeKind.Name(rsvp.kind)}): "
+                                f"only EVENT_RSVP and ALARM_RSVP notices take an answer")
+        self.send_rsvp_reply(rsvp_id, ret_code, data)
+        ack = self.wait_rsvp_ack(rsvp_id, timeout_s)
+        if check and ack.ret_code < 0:
+            raise error_for_code(f"rsvp {rsvp_id}", ack.ret_code, ack.ret_msg)
+        return ack
+
+    def accept_rsvp(self, rsvp: int | pb.Notice, data: Sequence[str] = (), **kw: Any) -> pb.RsvpAck:
+        """answer_rsvp with CMD_EXEC_OK."""
+        return self.answer_rsvp(rsvp, pb.CMD_EXEC_OK, data, **kw)
+
+    def decline_rsvp(self, rsvp: int | pb.Notice, data: Sequence[str] = (), *, ret_code: int = pb.CMD_ERR,
+                     **kw: Any) -> pb.RsvpAck:
+        """answer_rsvp with a negative code (CMD_ERR unless told)."""
+        if ret_code >= 0:
+            raise ArgumentError(f"decline_rsvp: ret_code {ret_code} accepts; a decline is negative")
+        return self.answer_rsvp(rsvp, ret_code, data, **kw)
+
+    def wait_rsvp_ack(self, rsvp_id: int, timeout_s: float = 1.0) -> pb.RsvpAck:
+        """The device's RsvpAck to our reply to `rsvp_id`; ControllerTimeoutError after timeout_s."""
+        deadline = time.monotonic() + timeout_s
+        with self._cv:
+            while rsvp_id not in self._acks:
+                if not self._running:
+                    raise LandscapeError("the session was closed while waiting for an RSVP acknowledgement")
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    raise ControllerTimeoutError(
+                        f"no acknowledgement of the reply to rsvp {rsvp_id} within {timeout_s:g} s: is the "
+                        f"controller at {self.device:#04x} still running?")
+                self._cv.wait(left)
+            return self._acks[rsvp_id]
 
     # ------------------------------------------------------------ receiving
 
@@ -622,6 +674,16 @@ class Supervisor:
                         self._finals.popitem(last=False)
                 self._cv.notify_all()
             self._dispatch_q.put(n)
+            return
+        if which == "rsvp_ack":
+            ack = dl.rsvp_ack
+            if ack.ret_code < 0:
+                log.warning("the device refused the reply to rsvp %d: %s", ack.rsvp_id, ack.ret_msg)
+            with self._cv:
+                self._acks[ack.rsvp_id] = ack
+                while len(self._acks) > 256:
+                    self._acks.popitem(last=False)
+                self._cv.notify_all()
             return
         self.protocol_errors += 1
 
@@ -997,3 +1059,13 @@ class ConnectResult:
 
     retval: RetVal
     device: pb.ConnectRes
+
+    @property
+    def units(self) -> tuple[str, str]:
+        """The session's units as the device reports them at connect (a new session is in SI)."""
+        return pb.LinearUnit.Name(self.device.linear_unit), pb.AngularUnit.Name(self.device.angular_unit)
+
+    @property
+    def disconnect_action(self) -> str:
+        """What the device does if this session's owner is lost (ls.DisconnectAction name)."""
+        return pb.DisconnectAction.Name(self.device.disconnect_action)

@@ -42,7 +42,11 @@ def frame_id(name: str, sender: int) -> int:
 def encode(name: str, sender: int, **signals: float) -> can.Message:
     """A broadcast frame; signals not given are 0."""
     msg = database().get_message_by_name(name)
-    values: dict[str, float] = {s.name: 0 for s in msg.signals}
+    mux = next((s for s in msg.signals if s.is_multiplexer), None)
+    selector = signals.get(mux.name, 0) if mux is not None else None
+    # a multiplexed message (HEARTBEAT, by hb_role) carries the signals of its selector only
+    values: dict[str, float] = {s.name: 0 for s in msg.signals
+                                if s.multiplexer_ids is None or selector in s.multiplexer_ids}
     values.update(signals)
     return can.Message(arbitration_id=frame_id(name, sender), is_extended_id=True,
                        data=msg.encode(values), dlc=msg.length)
