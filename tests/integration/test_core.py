@@ -158,11 +158,14 @@ def test_speed_and_acceleration_settings(two: tuple[Supervisor, Supervisor]) -> 
         owner.set_speed(math.nan, attribute="PERCENT_SPEED")
     rsp = _raw(owner, "setSpeed", speed=10.0, attribute=7)
     assert rsp.ret_code == pb.CMD_PARAM_ERR and "attribute 7 is not a SpeedType" in rsp.ret_msg
-    v = observer.get_velocities().result
+    v = owner.get_velocities().result  # in the owner's session's units
     assert v["percent_velocity"] == 40.0
     assert v["world_linear_velocity"] == pytest.approx(500.0, abs=1e-9)
     assert v["world_angular_velocity"] == pytest.approx(math.degrees(1.5), abs=1e-9)
     assert v["joint_velocities"] == pytest.approx([math.degrees(0.4 * q) for q in QD_MAX], abs=1e-9)
+    v = observer.get_velocities().result  # the observer's session is still in SI
+    assert v["world_linear_velocity"] == pytest.approx(0.5, abs=1e-12)
+    assert v["world_angular_velocity"] == pytest.approx(1.5, abs=1e-12)
 
     # only the owner sets; queries work for everyone
     with pytest.raises(errors.NotOwnerError):
@@ -170,18 +173,23 @@ def test_speed_and_acceleration_settings(two: tuple[Supervisor, Supervisor]) -> 
 
 
 def test_units_round_trip_of_the_tool_offset(two: tuple[Supervisor, Supervisor]) -> None:
+    """Units belong to the session that set them (docs/conformance.md, setUnits)."""
     owner, observer = two
+    assert owner.connect_result is not None and owner.connect_result.units == ("METERS", "RADIANS")
     assert observer.get_units().result == {"linear_units": "meters", "angular_units": "radians"}
     owner.set_units(linear="MILLIMETERS", angular="DEGREES")
-    assert observer.get_units().result == {"linear_units": "millimeters", "angular_units": "degrees"}
+    assert owner.get_units().result == {"linear_units": "millimeters", "angular_units": "degrees"}
+    assert observer.get_units().result == {"linear_units": "meters", "angular_units": "radians"}
     offset = [10.0, -20.0, 150.0, 90.0, 0.0, -30.0]
     owner.set_tool_offset(offset)
-    assert observer.get_tool_offsets().result["offset"] == pytest.approx(offset, abs=1e-9)
+    assert owner.get_tool_offsets().result["offset"] == pytest.approx(offset, abs=1e-9)
+    si = [0.01, -0.02, 0.15, math.pi / 2, 0.0, -math.pi / 6]
+    assert observer.get_tool_offsets().result["offset"] == pytest.approx(si, abs=1e-12)
     owner.set_units(linear="INCHES", angular="RADIANS")
-    got = observer.get_tool_offsets().result["offset"]
+    got = owner.get_tool_offsets().result["offset"]
     assert got == pytest.approx([10 / 25.4, -20 / 25.4, 150 / 25.4, math.pi / 2, 0.0, -math.pi / 6], abs=1e-9)
     owner.set_units(linear="FEET", angular="DEGREES")
-    assert observer.get_tool_offsets().result["offset"][2] == pytest.approx(0.15 / 0.3048, abs=1e-12)
+    assert owner.get_tool_offsets().result["offset"][2] == pytest.approx(0.15 / 0.3048, abs=1e-12)
 
     with pytest.raises(errors.ParamError) as ei:
         owner.set_tool_offset([1.0, 2.0, 3.0, 4.0, 5.0])
@@ -190,13 +198,18 @@ def test_units_round_trip_of_the_tool_offset(two: tuple[Supervisor, Supervisor])
         owner.set_world_cartesian_frame([0.0, 0.0, math.inf, 0.0, 0.0, 0.0])
     rsp = _raw(owner, "setUnits", linear=9, angular=0)
     assert rsp.ret_code == pb.CMD_PARAM_ERR and "linear unit 9" in rsp.ret_msg
-    assert observer.get_units().result == {"linear_units": "feet", "angular_units": "degrees"}
+    assert owner.get_units().result == {"linear_units": "feet", "angular_units": "degrees"}
 
     owner.activate()  # set commands are valid at rest too
     owner.set_units(linear="METERS", angular="RADIANS")
-    assert observer.get_tool_offsets().result["offset"] == pytest.approx(
-        [0.01, -0.02, 0.15, math.pi / 2, 0.0, -math.pi / 6], abs=1e-12)
+    assert owner.get_tool_offsets().result["offset"] == pytest.approx(si, abs=1e-12)
     owner.deactivate()
+
+    # a new session starts in SI whatever the last one set, and the connect answer says so
+    owner.set_units(linear="MILLIMETERS", angular="DEGREES")
+    res = owner.connect()
+    assert res.units == ("METERS", "RADIANS")
+    assert owner.get_units().result == {"linear_units": "meters", "angular_units": "radians"}
 
 
 def _norm(v: list[float]) -> float:
@@ -234,7 +247,7 @@ def test_robot_position_follows_world_frame_and_tool(two: tuple[Supervisor, Supe
     want = [a + 0.1 * z for a, z in zip(p0["world_pose"][:3], z_axis, strict=True)]
     assert p2["world_pose"][:3] == pytest.approx(want, abs=1e-5)
     owner.set_units(linear="MILLIMETERS", angular="DEGREES")
-    p3 = observer.get_robot_position().result
+    p3 = owner.get_robot_position().result
     assert p3["joints"] == pytest.approx([math.degrees(q) for q in p2["joints"]], abs=1e-4)
     assert p3["world_pose"][:3] == pytest.approx([1000 * x for x in p2["world_pose"][:3]], abs=1e-3)
     assert _rot([math.radians(a) for a in p3["world_pose"][3:]]) == pytest.approx(_rot(p2["world_pose"][3:]),
@@ -248,7 +261,7 @@ def test_sensor_readings(two: tuple[Supervisor, Supervisor]) -> None:
     laser_m = observer.get_sensor_reading("laser_standoff_sensor").result["current_data"]
     assert len(laser_m) == 1 and 0.0 <= laser_m[0] <= 0.5
     owner.set_units(linear="MILLIMETERS", angular="DEGREES")
-    laser_mm = observer.get_sensor_reading("laser_standoff_sensor").result["current_data"]
+    laser_mm = owner.get_sensor_reading("laser_standoff_sensor").result["current_data"]
     assert laser_mm[0] == pytest.approx(1000 * laser_m[0], abs=1e-3)
     ft_after = observer.get_sensor_reading("force_sensor").result["current_data"]
     assert ft_after == pytest.approx(ft, abs=0.5)  # N and Nm: not scaled by setUnits
@@ -304,7 +317,8 @@ def test_signal_callbacks_on_a_simulated_input(sim: Sim, two: tuple[Supervisor, 
     observer.on_rsvp("dioSignal", lambda n: answered.append(n.rsvp_id) or pb.CMD_EXEC_OK)
     sim.inputs(0, 0xFFFF)
     time.sleep(0.05)
-    watch = observer.signal_digital_io("digital", 0, 0x0006, callback_type=callback).result["watch_id"]
+    watch_rv = observer.signal_digital_io("digital", 0, 0x0006, callback_type=callback)
+    watch = watch_rv.result["watch_id"]
     assert watch > 0
     sim.inputs(0x0002)
     assert _wait_notice(observer, lambda n: n.event_id == "dioSignal", 0.3) is None  # one of two bits
@@ -316,14 +330,24 @@ def test_signal_callbacks_on_a_simulated_input(sim: Sim, two: tuple[Supervisor, 
     assert d["unit"] == "0" and d["bits"] == "0x6" and d["watch"] == str(watch)
     assert int(d["levels"], 16) & 0x6 == 0x6
     if kind in (pb.EVENT_RSVP, pb.ALARM_RSVP):
-        assert n.rsvp_default == "continue" and n.rsvp_timeout_ms == 2000
+        assert n.rsvp_default == "cancel" and n.rsvp_timeout_ms == 2000
+        assert n.ref_seq == watch_rv.seq and n.session_epoch == watch_rv.epoch  # the request that armed it
         deadline = time.monotonic() + 2
         while not answered:
             assert time.monotonic() < deadline, "the RSVP handler did not run"
             time.sleep(0.01)
         assert answered == [n.rsvp_id]
+        ack = observer.wait_rsvp_ack(n.rsvp_id, timeout_s=2.0)
+        assert (ack.ret_code, ack.action) == (pb.CMD_EXEC_OK, "rearm")  # accepted: the watch is armed again
         # answered: no default action follows
         assert _wait_notice(observer, lambda n: n.event_id == "dioSignalRsvpTimeout", 2.5) is None
+        # re-armed: it fires again on the bits' next rising
+        sim.inputs(0, 0x0006)
+        time.sleep(0.05)
+        sim.inputs(0x0006)
+        again = _wait_notice(observer, lambda n: n.event_id == "dioSignal", 2.0)
+        assert again is not None and again.kind == kind and again.ref_seq == watch_rv.seq
+        return
     # once only
     sim.inputs(0, 0x0006)
     time.sleep(0.05)
@@ -343,7 +367,7 @@ def test_unanswered_rsvp_takes_its_default_after_the_timeout(sim: Sim, two: tupl
     done = _wait_notice(owner, lambda n: n.event_id == "dioSignalRsvpTimeout", 4.0)
     elapsed = time.monotonic() - t0
     assert done is not None
-    assert notice_data(done) == {"watch": str(watch), "action": "continue"}
+    assert notice_data(done) == {"watch": str(watch), "action": "cancel"}
     assert 1.5 < elapsed < 3.0  # the 2000 ms the notice announced
     # the watch ended: its slot is free again, and the bits firing again say nothing
     sim.inputs(0, 0x0010)
@@ -431,7 +455,7 @@ def test_killed_owner_process_is_deactivated_and_released(sim: Sim, bus: can.Bus
             victim.wait(timeout=10)
         assert alarm is not None and alarm.kind == pb.ALARM
         assert notice_data(alarm)["supervisor"] == f"0x{VICTIM:02X}"
-        assert notice_data(alarm)["action"] == "deactivated,released"
+        assert notice_data(alarm)["action"] == "stop_deactivate_release"  # the configured default
         assert elapsed < HEARTBEAT_TIMEOUT_S + 0.5  # the time-out plus a scheduling margin
         state = watcher.get_motion_control_state().result
         assert state["state"] == "UNLOCKED" and state["control_mode"] == "power_off"
