@@ -100,6 +100,9 @@ def device_broadcasts(frames: list[Seen], db: Any) -> list[tuple[float, str, dic
         assert len(m.data) == spec.length, f"{spec.name}: {len(m.data)} bytes, the DBC says {spec.length}"
         signals = spec.decode(bytes(m.data), decode_choices=False, scaling=True)
         for s in spec.signals:
+            if s.name not in signals:  # a multiplexed signal of the other selector (HEARTBEAT's hb_role)
+                assert s.multiplexer_ids is not None, f"{spec.name}.{s.name} missing from the frame"
+                continue
             v = signals[s.name]
             assert s.minimum <= v <= s.maximum, f"{spec.name}.{s.name} = {v} outside [{s.minimum}, {s.maximum}]"
         if m.arbitration_id & 0xFF == DEVICE:

@@ -98,7 +98,7 @@ def test_units_belong_to_the_session(bus: can.BusABC) -> None:
             assert "units=meters,radians" in _status_line(b, OTHER)
         # the next session of the same supervisor starts in SI (issue 19: `landscape demo`
         # once failed after a previous session had left degrees set)
-        with Supervisor(bus, source_address=OWNER, client_name="next") as c:
+        with Supervisor(bus, notifier=notifier, source_address=OWNER, client_name="next") as c:
             assert c.connect_result is not None and c.connect_result.units == ("METERS", "RADIANS")
             assert c.get_units().result == {"linear_units": "meters", "angular_units": "radians"}
     finally:
@@ -126,7 +126,7 @@ def test_liveness_follows_the_stated_heartbeat_period(bus: can.BusABC) -> None:
                 time.sleep(0.1)
             assert time.monotonic() - t0 > 1.5
         with pytest.raises(errors.ParamOutOfRangeError, match="heartbeat_period_ms 5000: allowed 10..2000"):
-            with Supervisor(bus, source_address=OWNER, heartbeat_period_ms=5000):
+            with Supervisor(bus, notifier=notifier, source_address=OWNER, heartbeat_period_ms=5000):
                 pass
     finally:
         notifier.stop()

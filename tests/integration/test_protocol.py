@@ -135,7 +135,7 @@ def test_owner_heartbeat_loss_deactivates_and_releases(bus: can.BusABC) -> None:
 def test_send_command_vendor_hooks(bus: can.BusABC) -> None:
     with Supervisor(bus, client_name="vendor") as sup:
         helps = sup.request("sendCommand", input="help").result["result"].split()
-        assert helps == ["help", "version", "status", "faults", "rtstats", "config", "stopping"]
+        assert helps == ["help", "version", "status", "faults", "events", "rtstats", "config", "stopping"]
         stopping = sup.request("sendCommand", input="stopping").result["result"].splitlines()
         assert len(stopping) == 6 and stopping[0].startswith("j1 time_s="), stopping
         rt = dict(line.split("=", 1) for line in sup.request("sendCommand", input="rtstats").result["result"].split())
@@ -143,5 +143,7 @@ def test_send_command_vendor_hooks(bus: can.BusABC) -> None:
         cfg = sup.request("sendCommand", input="config").result["result"]
         assert "arm=sim" in cfg and "link=slcan:pty:" in cfg
         assert "no faults" in sup.request("sendCommand", input="faults").result["result"]
+        assert "no events" in sup.request("sendCommand", input="events").result["result"]
+        assert "disconnect_action=stop_deactivate_release" in cfg
         with pytest.raises(errors.ParamError):
             sup.request("sendCommand", input="reboot")
