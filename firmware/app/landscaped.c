@@ -262,8 +262,8 @@ static void describe_config(void *ctx, char *buf, size_t cap)
                      "dio=%s\nclock=%s\nrate_hz=%u\ntelemetry_hz=%u\nrt_priority=%d\nestop_input=%d\n",
                      o->config_path[0] != '\0' ? o->config_path : "(options only)", o->name, (unsigned)o->node,
                      (unsigned)o->heartbeat_timeout_ms,
-                     ls_core_disconnect_action_name((ls_DisconnectAction)o->disconnect_action), o->arm, o->dio, o->clock, (unsigned)o->rate_hz,
-                     (unsigned)o->telemetry_hz, o->rt_priority, o->estop_input);
+                     ls_core_disconnect_action_name((ls_DisconnectAction)o->disconnect_action), o->arm, o->dio,
+                     o->clock, (unsigned)o->rate_hz, (unsigned)o->telemetry_hz, o->rt_priority, o->estop_input);
     for (size_t i = 0; i < o->n_links && n > 0 && (size_t)n < cap; i++) {
         n += snprintf(buf + n, cap - (size_t)n, "link=%s\n", o->links[i]);
     }

@@ -677,6 +677,9 @@ static void aux_failed(ls_core_t *core, int point, const char *text)
 
 /* A path's `rsvp` (docs/protocol.md "RSVP"): accept continues the path,
  * decline drops it (the arm is at rest at the point), no answer continues. */
+#define LS_PATH_RSVP_ACCEPT "continue"
+#define LS_PATH_RSVP_DECLINE "abort"
+#define LS_PATH_RSVP_DEFAULT LS_PATH_RSVP_ACCEPT
 static const char *rsvp_done(struct ls_core *core, void *ctx, int32_t ret_code, bool timed_out, uint64_t now_us)
 {
     (void)ctx;
@@ -696,10 +699,10 @@ static const char *rsvp_done(struct ls_core *core, void *ctx, int32_t ret_code, 
             snprintf(core->motion_state, sizeof core->motion_state, "robot_stopped_on_command");
         }
         ls_run_finish(core, LS_RUN_END_RSVP_DECLINED, extra, 1);
-        return "abort";
+        return LS_PATH_RSVP_DECLINE;
     }
     aux_done(core); /* answered, or timed out: the default action is to continue */
-    return "continue";
+    return timed_out ? LS_PATH_RSVP_DEFAULT : LS_PATH_RSVP_ACCEPT;
 }
 
 static void run_aux(ls_core_t *core, const ls_motion_event_t *ev)
@@ -755,7 +758,7 @@ static void run_aux(ls_core_t *core, const ls_motion_event_t *ev)
         return;
     case AUX_RSVP:
         if (ls_core_rsvp(core, core->run.sup, core->run.ref_seq, ls_NoticeKind_EVENT_RSVP, a.name, data, 2,
-                         (uint32_t)(a.timeout_s * 1000.0), "continue", rsvp_done, NULL, g_now_us) < 0) {
+                         (uint32_t)(a.timeout_s * 1000.0), LS_PATH_RSVP_DEFAULT, rsvp_done, NULL, g_now_us) < 0) {
             aux_done(core); /* nobody to ask (or the table is full): take the default */
         }
         return;
@@ -962,8 +965,7 @@ static int32_t load_point(ls_core_t *core, ls_call_t *call, const ls_PathLoadReq
                     pt->v[j] < core->model->q_min_rad[j] ? core->model->q_min_rad[j] : core->model->q_max_rad[j];
                 return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR,
                                 "pathLoad point %d: joint %d: %.4g %s beyond its limit %.4g %s", k, j + 1,
-                                tp->joints[j], ang_name(un.angular), lim / ang_si(un.angular),
-                                ang_name(un.angular));
+                                tp->joints[j], ang_name(un.angular), lim / ang_si(un.angular), ang_name(un.angular));
             }
         }
     } else {

@@ -108,8 +108,8 @@ int32_t ls_h_set_acceleration(struct ls_core *core, struct ls_call *call)
             return no_model(call, "setAcceleration LINEAR_ACCEL");
         }
         snprintf(unit, sizeof unit, "%s/s^2", ls_units_linear_name(un.linear));
-        rc = check_rate(call, "LINEAR_ACCEL", v,
-                        ls_units_from_si_linear(un.linear, core->model->max_linear_accel_m_s2), unit);
+        rc = check_rate(call, "LINEAR_ACCEL", v, ls_units_from_si_linear(un.linear, core->model->max_linear_accel_m_s2),
+                        unit);
         if (rc < 0) {
             return rc;
         }
@@ -157,21 +157,18 @@ static int32_t take_pose(ls_core_t *core, ls_call_t *call, const char *what, con
             if (fabs(out[i]) > reach_m) {
                 return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR,
                                 "%s: %s %g %s is beyond the arm's reach: allowed [-%g, %g] %s", what, axes[i], v[i],
-                                ls_units_linear_name(un.linear),
-                                ls_units_from_si_linear(un.linear, reach_m),
-                                ls_units_from_si_linear(un.linear, reach_m),
-                                ls_units_linear_name(un.linear));
+                                ls_units_linear_name(un.linear), ls_units_from_si_linear(un.linear, reach_m),
+                                ls_units_from_si_linear(un.linear, reach_m), ls_units_linear_name(un.linear));
             }
         }
     }
     for (int i = 3; i < 6; i++) {
         if (fabs(out[i]) > LS_FRAME_ANGLE_MAX_RAD) {
             static const char *const rpy[3] = { "roll", "pitch", "yaw" };
-            return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR, "%s: %s %g %s: allowed [-%g, %g] %s", what,
-                            rpy[i - 3], v[i], ls_units_angular_name(un.angular),
-                            ls_units_from_si_angular(un.angular, LS_FRAME_ANGLE_MAX_RAD),
-                            ls_units_from_si_angular(un.angular, LS_FRAME_ANGLE_MAX_RAD),
-                            ls_units_angular_name(un.angular));
+            return ls_reply(
+                call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR, "%s: %s %g %s: allowed [-%g, %g] %s", what, rpy[i - 3],
+                v[i], ls_units_angular_name(un.angular), ls_units_from_si_angular(un.angular, LS_FRAME_ANGLE_MAX_RAD),
+                ls_units_from_si_angular(un.angular, LS_FRAME_ANGLE_MAX_RAD), ls_units_angular_name(un.angular));
         }
     }
     return ls_RetCode_CMD_EXEC_OK;
@@ -187,8 +184,8 @@ int32_t ls_h_set_tool_offset(struct ls_core *core, struct ls_call *call)
         return rc;
     }
     memcpy(core->settings.tool_offset, si, sizeof si);
-    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "tool offset set (%s, %s)",
-                    ls_units_linear_name(un.linear), ls_units_angular_name(un.angular));
+    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "tool offset set (%s, %s)", ls_units_linear_name(un.linear),
+                    ls_units_angular_name(un.angular));
 }
 
 int32_t ls_h_set_world_cartesian_frame(struct ls_core *core, struct ls_call *call)
@@ -201,8 +198,8 @@ int32_t ls_h_set_world_cartesian_frame(struct ls_core *core, struct ls_call *cal
         return rc;
     }
     memcpy(core->settings.world_frame, si, sizeof si);
-    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "world frame set (%s, %s)",
-                    ls_units_linear_name(un.linear), ls_units_angular_name(un.angular));
+    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "world frame set (%s, %s)", ls_units_linear_name(un.linear),
+                    ls_units_angular_name(un.angular));
 }
 
 int32_t ls_h_set_units(struct ls_core *core, struct ls_call *call)
@@ -311,8 +308,8 @@ int32_t ls_h_get_tool_offsets(struct ls_core *core, struct ls_call *call)
     ls_GetToolOffsetsRes *r = &call->res->result.get_tool_offsets;
     ls_units_pose_from_si(un.linear, un.angular, core->settings.tool_offset, r->offset);
     r->offset_count = 6;
-    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "flange -> tool tip (%s, %s)",
-                    ls_units_linear_name(un.linear), ls_units_angular_name(un.angular));
+    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "flange -> tool tip (%s, %s)", ls_units_linear_name(un.linear),
+                    ls_units_angular_name(un.angular));
 }
 
 /* The tool tip in the world frame. settings.world_frame is the world frame's
@@ -411,6 +408,5 @@ int32_t ls_h_get_sensor_reading(struct ls_core *core, struct ls_call *call)
     }
     r->current_data_count = (pb_size_t)n;
     return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "%s: %u values (%s)", s->name, (unsigned)n,
-                    length ? ls_units_linear_name(un.linear)
-                           : "SI: forces N, torques Nm, not scaled by setUnits");
+                    length ? ls_units_linear_name(un.linear) : "SI: forces N, torques Nm, not scaled by setUnits");
 }

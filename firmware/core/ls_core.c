@@ -443,9 +443,8 @@ static void rsvp_on_reply(ls_core_t *core, uint8_t addr, const ls_RsvpReply *rep
         if (e->id != reply->rsvp_id || e->addr != addr) {
             continue;
         }
-        ls_core_log_event(core, now_us, "rsvp %u from 0x%02X refused: %s, answer %d, data [%s]",
-                          (unsigned)e->id, addr, e->timed_out ? "late" : "already answered", (int)reply->ret_code,
-                          data);
+        ls_core_log_event(core, now_us, "rsvp %u from 0x%02X refused: %s, answer %d, data [%s]", (unsigned)e->id, addr,
+                          e->timed_out ? "late" : "already answered", (int)reply->ret_code, data);
         if (e->timed_out) {
             send_rsvp_ack(core, addr, e->id, ls_RetCode_CMD_TIMEOUT_ERR, "", e->ref_seq, e->epoch,
                           "rsvp %u: late, its time-out had passed and the default action (%s) was taken: answer "
@@ -453,8 +452,7 @@ static void rsvp_on_reply(ls_core_t *core, uint8_t addr, const ls_RsvpReply *rep
                           (unsigned)e->id, e->action);
         } else {
             send_rsvp_ack(core, addr, e->id, ls_RetCode_CMD_PARAM_ERR, "", e->ref_seq, e->epoch,
-                          "rsvp %u: already answered (action %s): answer each RSVP once", (unsigned)e->id,
-                          e->action);
+                          "rsvp %u: already answered (action %s): answer each RSVP once", (unsigned)e->id, e->action);
         }
         return;
     }

@@ -54,8 +54,8 @@ typedef struct {
     char name[32];
     uint64_t last_heard_us; /* the last HEARTBEAT (or the connect) */
     uint32_t heartbeat_period_ms;
-    uint32_t heartbeat_timeout_ms; /* this session's time-out (ls_core_tick) */
-    ls_units_t units;              /* what this supervisor reads and writes in (setUnits) */
+    uint32_t heartbeat_timeout_ms;         /* this session's time-out (ls_core_tick) */
+    ls_units_t units;                      /* what this supervisor reads and writes in (setUnits) */
     ls_DisconnectAction disconnect_action; /* run when this session's owner is lost */
     /* retransmission cache: the last request's seq and its encoded response */
     bool have_last;
@@ -178,7 +178,7 @@ typedef struct {
     const char *firmware_version;
     uint8_t node_addr;
     uint8_t joint_count;
-    uint32_t heartbeat_timeout_ms; /* the least time-out of a session (docs/protocol.md "Liveness") */
+    uint32_t heartbeat_timeout_ms;         /* the least time-out of a session (docs/protocol.md "Liveness") */
     ls_DisconnectAction disconnect_action; /* the widest owner-loss action; 0: stop_deactivate_release */
 } ls_core_config_t;
 

@@ -186,9 +186,8 @@ static bool halted(ls_core_t *core, uint64_t now_us)
         return true;
     }
     /* two cycles: the one that took the command and one that published after it */
-    const bool stopped = h->keep_drives
-                             ? (snap.phase == LS_MOTION_IDLE || snap.phase == LS_MOTION_PAUSED)
-                             : (!snap.enabled && snap.phase == LS_MOTION_IDLE && !snap.react_active);
+    const bool stopped = h->keep_drives ? (snap.phase == LS_MOTION_IDLE || snap.phase == LS_MOTION_PAUSED)
+                                        : (!snap.enabled && snap.phase == LS_MOTION_IDLE && !snap.react_active);
     if (snap.cycle < h->start_cycle + 2u || !stopped) {
         h->off_since_us = 0;
         return false;

@@ -77,11 +77,11 @@ typedef struct {
 typedef struct {
     bool active;
     ls_run_end_t why;
-    char text[72];     /* the fault, or "" */
-    int answer_sup;    /* deferred deactivate to answer at the end, -1: none */
-    bool keep_drives;  /* owner lost with the action `stop`: pause, drop the motion, drives stay on (RESTING) */
-    bool owner_lost;   /* the disconnect handler runs it: the alarm ownerLost at the end */
-    bool release;      /* owner lost: UNLOCKED at the end (else LOCKED, or RESTING with keep_drives) */
+    char text[72];    /* the fault, or "" */
+    int answer_sup;   /* deferred deactivate to answer at the end, -1: none */
+    bool keep_drives; /* owner lost with the action `stop`: pause, drop the motion, drives stay on (RESTING) */
+    bool owner_lost;  /* the disconnect handler runs it: the alarm ownerLost at the end */
+    bool release;     /* owner lost: UNLOCKED at the end (else LOCKED, or RESTING with keep_drives) */
     ls_DisconnectAction lost_action;
     uint8_t lost_addr; /* owner lost: whose */
     char lost_why[24];

@@ -563,9 +563,9 @@ static void test_help(void **state)
     fclose(m);
     /* every option of the key table is documented */
     static const char *opts[] = {
-        "--config FILE",  "--check",       "--hal sim", "--link SPEC",         "--arm",         "--dio sim",
-        "--dio-socket",   "--clock",       "--node",    "--heartbeat-timeout", "--name",        "--rate",
-        "--telemetry-hz", "--rt-priority", "--rt-cpu",  "--no-lock-memory",    "--estop-input", "-h, --help",
+        "--config FILE",      "--check",       "--hal sim", "--link SPEC",         "--arm",         "--dio sim",
+        "--dio-socket",       "--clock",       "--node",    "--heartbeat-timeout", "--name",        "--rate",
+        "--telemetry-hz",     "--rt-priority", "--rt-cpu",  "--no-lock-memory",    "--estop-input", "-h, --help",
         "--disconnect-action"
     };
     for (size_t i = 0; i < sizeof opts / sizeof opts[0]; i++) {
