@@ -1,6 +1,4 @@
-#include "ls_net.h"
-
-#include "landscape.h" /* cantools: protocol/landscape.dbc */
+#include "ls_net.h" /* with cantools' landscape.h: protocol/landscape.dbc */
 
 #include <stdio.h>
 #include <string.h>
