@@ -305,10 +305,14 @@ static void send_telemetry(void)
     uint8_t d[8];
     struct landscape_status_t st = {
         .st_state = (uint8_t)g_core.state,
+        /* MOVING with the loop not yet on the plan (the cycle between the
+         * core accepting a move and the loop taking it) is running, so a
+         * STATUS frame never says MOVING and none at once. */
         .st_motion = (uint8_t)(g_core.halt.active                                              ? 5
                                : s.phase == LS_MOTION_RUNNING || s.phase == LS_MOTION_STOPPING ? 1
                                : s.phase == LS_MOTION_PAUSED                                   ? 2
                                : g_core.fault[0] != '\0'                                       ? 3
+                               : g_core.state == ls_State_MOVING                               ? 1
                                                                                                : 0),
         .st_control_mode = (uint8_t)(g_core.fault[0] != '\0' ? 2 : (s.enabled ? 1 : 0)),
         .st_fault = g_core.fault[0] != '\0' ? 1u : 0u,
