@@ -71,6 +71,88 @@ def commands(pb2):
     return out
 
 
+def is_proto3_optional(f) -> bool:
+    """A scalar declared `optional` in proto3 (it sits in a synthetic oneof "_name")."""
+    o = f.containing_oneof
+    return o is not None and o.name == "_" + f.name and f.type != f.TYPE_MESSAGE
+
+
+def ext(f, pb2, name):
+    return f.GetOptions().Extensions[getattr(pb2, name)]
+
+
+def c_literal(f, text: str) -> str:
+    """The C value of an (ls.absent_means) text for field f."""
+    if f.type == f.TYPE_ENUM:
+        enum = f.enum_type
+        if text in enum.values_by_name:
+            return f"ls_{enum.name}_{text}"
+        return f"(ls_{enum.name}){int(text, 0)}"
+    if f.type in (f.TYPE_DOUBLE, f.TYPE_FLOAT):
+        return repr(float(text))
+    if f.type == f.TYPE_BOOL:
+        if text not in ("true", "false"):
+            raise SystemExit(f"gen_registry: {f.full_name}: absent_means of a bool is true or false")
+        return text
+    value = int(text, 0)
+    return f"{value}" + ("u" if f.type in (f.TYPE_UINT32, f.TYPE_FIXED32) else "")
+
+
+def presence_rules(pb2, cmds):
+    """(command field, [(field, 'required'|'default', C value)]) of every command whose
+    request has proto3 `optional` fields; every optional field must carry exactly one of
+    (ls.required) and (ls.absent_means) (docs/protocol.md "Absent fields")."""
+    out = []
+    req = pb2.DESCRIPTOR.message_types_by_name["Request"]
+    for num, fname, _spec, _mask in cmds:
+        mdesc = req.fields_by_number[num].message_type
+        rules = []
+        for f in mdesc.fields:
+            required = ext(f, pb2, "required")
+            absent = ext(f, pb2, "absent_means")
+            if not is_proto3_optional(f):
+                if required or absent:
+                    raise SystemExit(f"gen_registry: {f.full_name} has (ls.required)/(ls.absent_means) but is not "
+                                     f"`optional`: declare it optional so that its absence can be seen")
+                continue
+            if bool(required) == bool(absent):
+                raise SystemExit(f"gen_registry: optional field {f.full_name} needs exactly one of (ls.required) "
+                                 f"and (ls.absent_means)")
+            rules.append((f.name, "required" if required else "default", None if required else c_literal(f, absent)))
+        if rules:
+            out.append((fname, rules))
+    return out
+
+
+def uplink_limits(pb2):
+    """Every bounded (string or repeated) field reachable from ls.Uplink, as
+    (path of field numbers, C message type, field name, is string, is repeated)."""
+    out = []
+
+    def walk(mdesc, path, depth):
+        if depth > 4:
+            raise SystemExit("gen_registry: ls.Uplink nests deeper than FieldLimit.path holds")
+        for f in mdesc.fields:
+            repeated = f.label == f.LABEL_REPEATED
+            if f.type == f.TYPE_MESSAGE:
+                if repeated:
+                    out.append((path + [f.number], mdesc.name, f.name, False, True))
+                walk(f.message_type, path + [f.number], depth + 1)
+            elif f.type == f.TYPE_STRING or repeated:
+                if f.type == f.TYPE_BYTES:
+                    raise SystemExit(f"gen_registry: {f.full_name}: bytes fields are not described")
+                if is_proto3_optional(f) and mdesc.name not in top_requests:
+                    raise SystemExit(f"gen_registry: {f.full_name}: optional fields are handled in requests only")
+                out.append((path + [f.number], mdesc.name, f.name, f.type == f.TYPE_STRING, repeated))
+            elif is_proto3_optional(f) and mdesc.name not in top_requests:
+                raise SystemExit(f"gen_registry: {f.full_name}: optional fields are handled in requests only")
+
+    req = pb2.DESCRIPTOR.message_types_by_name["Request"]
+    top_requests = {f.message_type.name for f in req.oneofs_by_name["cmd"].fields}
+    walk(pb2.DESCRIPTOR.message_types_by_name["Uplink"], [], 0)
+    return out
+
+
 def main() -> int:
     if len(sys.argv) != 3:
         print(__doc__, file=sys.stderr)
@@ -79,6 +161,8 @@ def main() -> int:
     out_dir = Path(sys.argv[2])
     out_dir.mkdir(parents=True, exist_ok=True)
     cmds = commands(pb2)
+    rules = presence_rules(pb2, cmds)
+    limits = uplink_limits(pb2)
     h = schema_hash((Path(sys.argv[1]) / "landscape.desc").read_bytes())
 
     hdr = [
@@ -125,6 +209,23 @@ def main() -> int:
         "/* The schema's name of field `tag` of message `msg` (string and message",
         " * fields, for error messages naming a field), or NULL. */",
         "const char *ls_field_name(const pb_msgdesc_t *msg, uint32_t tag);",
+        "",
+        "/* Presence rules of the requests' `optional` fields (docs/protocol.md \"Absent",
+        " * fields\"): returns the name of the first (ls.required) field of `rq` that is",
+        " * absent (and changes nothing), else applies every absent field's",
+        " * (ls.absent_means) to `rq` and returns NULL. Dispatcher only; O(fields). */",
+        "const char *ls_request_presence(ls_Request *rq);",
+        "",
+        "/* The bound of one string or repeated field of ls.Uplink (describe). */",
+        "typedef struct {",
+        "    uint8_t depth;   /* entries of path */",
+        "    uint8_t path[4]; /* field numbers from ls.Uplink down */",
+        "    uint32_t max_bytes; /* strings: longest UTF-8 text in bytes, else 0 */",
+        "    uint32_t max_count; /* repeated: most items, else 0 */",
+        "} ls_field_limit_t;",
+        "",
+        f"#define LS_FIELD_LIMIT_COUNT {len(limits)}u",
+        "extern const ls_field_limit_t ls_field_limits[LS_FIELD_LIMIT_COUNT];",
         "",
         "#endif /* LS_CMD_TABLE_H */",
         "",
@@ -198,6 +299,41 @@ def main() -> int:
         "}",
         "",
     ]
+    src += [
+        "const char *ls_request_presence(ls_Request *rq)",
+        "{",
+        "    switch (rq->which_cmd) {",
+    ]
+    for fname, frules in rules:
+        src.append(f"    case ls_Request_{fname}_tag:")
+        for name, kind, _v in frules:
+            if kind == "required":
+                src += [f"        if (!rq->cmd.{fname}.has_{name}) {{", f"            return \"{name}\";", "        }"]
+        for name, kind, v in frules:
+            if kind == "default":
+                src += [f"        if (!rq->cmd.{fname}.has_{name}) {{",
+                        f"            rq->cmd.{fname}.{name} = {v};", "        }"]
+        src.append("        break;")
+    src += [
+        "    default: break;",
+        "    }",
+        "    return NULL;",
+        "}",
+        "",
+        "const ls_field_limit_t ls_field_limits[LS_FIELD_LIMIT_COUNT] = {",
+    ]
+    for path, mname, fname, is_str, rep in limits:
+        ptxt = ", ".join(f"{n}u" for n in path)
+        one = f"((ls_{mname} *)0)->{fname}"
+        if is_str and rep:
+            mb = f"(uint32_t)(sizeof {one}[0] - 1u)"
+        elif is_str:
+            mb = f"(uint32_t)(sizeof {one} - 1u)"
+        else:
+            mb = "0u"
+        mc = f"(uint32_t)pb_arraysize(ls_{mname}, {fname})" if rep else "0u"
+        src.append(f"    {{ {len(path)}u, {{ {ptxt} }}, {mb}, {mc} }}, /* {mname}.{fname} */")
+    src += ["};", ""]
     nums = [c[0] for c in cmds]
     if nums != list(range(lo, hi + 1)):
         raise SystemExit("gen_registry: command ids must be contiguous so that ls_cmd_find is O(1)")

@@ -24,12 +24,21 @@
 
 
 #define PI 3.14159265358979323846
-/* Path storage is the firmware's largest static table (about 8 x 256 x 360 B
- * here). A board with little SRAM builds with smaller values, e.g.
- * -DLS_PATH_MAX=2 -DLS_PATH_MAX_POINTS=64 for the whole build (docs/performance.md). */
-#ifndef LS_PATH_MAX
-#define LS_PATH_MAX 8
-#endif
+
+/* The motion library keeps names and tags in LS_MOTION_NAME_LEN bytes and
+ * auxiliary commands in LS_MOTION_AUX_LEN: whatever the schema lets through
+ * (protocol/landscape.options) must fit, never be cut. */
+#define FITS(msg, field, len) _Static_assert(sizeof(((msg *)0)->field) <= (len), #msg "." #field " exceeds " #len)
+FITS(ls_TagPoint, tag_name, LS_MOTION_NAME_LEN);
+FITS(ls_PathLoadReq, path_name, LS_MOTION_NAME_LEN);
+FITS(ls_PathMoveReq, path_name, LS_MOTION_NAME_LEN);
+FITS(ls_PathClearPathReq, path_name, LS_MOTION_NAME_LEN);
+FITS(ls_MoveAbsoluteReq, point_name, LS_MOTION_NAME_LEN);
+FITS(ls_MoveRelativeReq, point_name, LS_MOTION_NAME_LEN);
+FITS(ls_MoveArcReq, point_name, LS_MOTION_NAME_LEN);
+FITS(ls_TagPoint, aux_commands[0], LS_MOTION_AUX_LEN);
+_Static_assert(sizeof(((ls_GetTagIdRes *)0)->path_name) >= LS_MOTION_NAME_LEN, "getTagId must hold a path name");
+_Static_assert(sizeof(((ls_GetTagIdRes *)0)->tag_id) >= LS_MOTION_NAME_LEN, "getTagId must hold a tag");
 
 
 /* ------------------------------------------------------------- units */
@@ -72,7 +81,6 @@ static void pose6_si(ls_units_t un, const double in[6], double out[6])
 
 typedef struct {
     bool used;
-    char name[LS_MOTION_NAME_LEN];
     ls_ReferenceFrame frame;
     bool straight; /* STRAIGHT_MOTION (Cartesian points only) */
     bool relative;
@@ -716,7 +724,7 @@ static void run_aux(ls_core_t *core, const ls_motion_event_t *ev)
         aux_failed(core, (int)ev->index, t);
         return;
     }
-    char d1[48], d2[24];
+    char d1[8 + LS_MOTION_NAME_LEN], d2[24];
     snprintf(d1, sizeof d1, "path=%s", core->run.point);
     snprintf(d2, sizeof d2, "point=%d", (int)ev->index);
     const char *data[] = { d1, d2 };
@@ -896,14 +904,14 @@ void ls_core_on_motion_event(ls_core_t *core, const ls_motion_event_t *ev)
         if (!core->run.active || core->run.react) {
             return;
         }
-        char d1[48], d2[24], d3[24], d4[48];
+        char d1[8 + LS_MOTION_NAME_LEN], d2[24], d3[24], d4[8 + sizeof ev->text];
         snprintf(d1, sizeof d1, "tag=%s", ev->name);
         snprintf(d2, sizeof d2, "index=%d", (int)ev->index);
         snprintf(d3, sizeof d3, "cycle=%d", (int)ev->cycle);
-        snprintf(d4, sizeof d4, "path=%.31s", ev->text);
-        const char *data[] = { d1, d2, d3, d4 };
+        snprintf(d4, sizeof d4, "path=%s", ev->text);
+        const char *data[] = { d1, d2, d3, d4, "dry_run=true" };
         ls_core_notify_to(core, core->run.addr, core->run.epoch, ls_NoticeKind_EVENT, "tag", core->run.ref_seq, false,
-                          data, 4);
+                          data, core->run.dry_run ? 5u : 4u);
         return;
     }
     case LS_MEV_AUX:
@@ -1259,10 +1267,13 @@ int32_t ls_h_path_move(struct ls_core *core, struct ls_call *call)
         return ls_reply(call, ls_RetCode_CMD_PARAM_ERR, "pathMove: there is no path named '%s': pathLoad it first",
                         r->path_name);
     }
-    if (r->number_of_cycles < 0 || r->number_of_cycles > 1000000) {
+    /* An absent number_of_cycles is 1 by now (seed 3.5.2; the schema's
+     * (ls.absent_means), applied by the dispatcher): only an explicit 0 is
+     * a dry run. */
+    if (r->number_of_cycles < 0 || r->number_of_cycles > LS_PATH_MAX_CYCLES) {
         return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR,
-                        "pathMove: number_of_cycles %d is out of range [0, 1000000] (0: dry run)",
-                        (int)r->number_of_cycles);
+                        "pathMove: number_of_cycles %d is out of range [0, %d] (0: dry run)", (int)r->number_of_cycles,
+                        LS_PATH_MAX_CYCLES);
     }
     ls_ctl_snapshot_t snap;
     ls_control_snapshot(core->ctl, &snap);
@@ -1284,5 +1295,13 @@ int32_t ls_h_path_move(struct ls_core *core, struct ls_call *call)
     (void)ls_motion_plan_path(slot, &g_prog, cycles, dry, r->path_name);
     snprintf(g_tag_path, sizeof g_tag_path, "%s", r->path_name);
     g_tag_last[0] = '\0';
-    return start_plan(core, call, slot, "pathMove", r->path_name, i);
+    int32_t started = start_plan(core, call, slot, "pathMove", r->path_name, i);
+    if (started == ls_RetCode_CMD_STARTED_OK && dry) {
+        /* Every notice of a dry run says so (its tag events and its final notice). */
+        core->run.dry_run = true;
+        return ls_reply(call, ls_RetCode_CMD_STARTED_OK,
+                        "pathMove started as a dry run (number_of_cycles 0): one cycle without auxiliary "
+                        "commands; expect pathMoveComplete with dry_run=true, or an alarm");
+    }
+    return started;
 }

@@ -75,6 +75,26 @@ static bool is_length_sensor(const char *name)
     return strcmp(name, "laser_standoff_sensor") == 0;
 }
 
+/* Force/torque components, in the order of a force sensor's values. */
+static const char *const k_ft[] = { "Fx", "Fy", "Fz", "Tx", "Ty", "Tz" };
+
+const char *ls_core_sensor_component(const hal_sensor_t *s, size_t k, const char **unit_si)
+{
+    if (s == NULL || s->name == NULL || k >= s->n_values) {
+        return NULL;
+    }
+    if (is_length_sensor(s->name)) {
+        *unit_si = "m";
+        return k == 0 ? "distance" : "value";
+    }
+    if (k < sizeof k_ft / sizeof k_ft[0]) {
+        *unit_si = k < 3 ? "N" : "Nm";
+        return k_ft[k];
+    }
+    *unit_si = "";
+    return "value";
+}
+
 /* The sensor called `name`, or an answer naming the ones there are. */
 static int32_t find_sensor(ls_core_t *core, ls_call_t *call, const char *what, const char *name, size_t *idx)
 {
@@ -596,7 +616,6 @@ static void react_end(ls_core_t *core, const ls_ctl_event_t *ev)
     data[n++] = d_read;
     char d_trig[48];
     if (rep->triggered) {
-        static const char *const k_ft[] = { "Fx", "Fy", "Fz", "Tx", "Ty", "Tz" };
         double tv = core->run.length ? ls_units_from_si_linear(un.linear, rep->trigger) : rep->trigger;
         const char *comp = rep->end == LS_REACT_END_ENVELOPE ? "|F|"
                            : core->run.length                ? "distance"

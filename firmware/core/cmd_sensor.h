@@ -27,6 +27,10 @@ bool ls_core_tool_on_event(ls_core_t *core, const ls_ctl_event_t *ev);
  * the owner lost): the next owner must switch it on itself. */
 void ls_core_manual_off(ls_core_t *core);
 
+/* The name of value `k` of sensor `s` ("Fx", ..., "distance") and its SI unit
+ * in *unit_si ("N", "Nm", "m"), or NULL past its last value (describe). */
+const char *ls_core_sensor_component(const hal_sensor_t *s, size_t k, const char **unit_si);
+
 /* cmd_tool.c: the name of the held tool, "none" when none. */
 const char *ls_core_tool_held(void);
 

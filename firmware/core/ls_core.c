@@ -716,9 +716,29 @@ static const char *how_to_reach(uint8_t mask, ls_State now)
     return "see docs/state-machine.md";
 }
 
-static int32_t dispatch(ls_core_t *core, uint8_t addr, ls_call_t *call)
+/* The schema's presence rules (docs/protocol.md "Absent fields"): nonzero
+ * after answering CMD_PARAM_ERR naming a required field that is absent, else
+ * 0 with every absent field's default applied to `rq` (call->req). Checked
+ * after the state and owner checks, so that those answers do not depend on
+ * what a request carries. */
+static int check_presence(ls_call_t *call, const ls_cmd_desc_t *d, ls_Request *rq)
 {
-    const ls_Request *rq = call->req;
+    const char *missing = ls_request_presence(rq);
+    if (missing == NULL) {
+        return 0;
+    }
+    /* proto3 would read an absent field as 0, which here is a real value
+     * (JOINT_FRAME, PERCENT_SPEED, unit 0, ...): refuse rather than guess. */
+    (void)ls_reply(call, ls_RetCode_CMD_PARAM_ERR,
+                   "%s: %s is missing: it is required (absent is not 0); send it, also when it is 0 "
+                   "(docs/protocol.md \"Absent fields\")",
+                   d->name, missing);
+    return 1;
+}
+
+/* `rq` is call->req, writable: absent fields get their schema default here. */
+static int32_t dispatch(ls_core_t *core, uint8_t addr, ls_call_t *call, ls_Request *rq)
+{
     const ls_cmd_desc_t *d = ls_cmd_find(rq->which_cmd);
     if (d == NULL) {
         return ls_reply(call, ls_RetCode_CMD_UNKNOWN_CMD_ERR,
@@ -726,7 +746,7 @@ static int32_t dispatch(ls_core_t *core, uint8_t addr, ls_call_t *call)
                         (unsigned)rq->which_cmd);
     }
     if (rq->which_cmd == ls_Request_connect_tag) {
-        return do_connect(core, addr, call);
+        return check_presence(call, d, rq) != 0 ? ls_RetCode_CMD_PARAM_ERR : do_connect(core, addr, call);
     }
     if (call->sup < 0) {
         return ls_reply(call, ls_RetCode_CMD_NOT_CONNECTED_ERR,
@@ -758,6 +778,9 @@ static int32_t dispatch(ls_core_t *core, uint8_t addr, ls_call_t *call)
         return ls_reply(call, ls_RetCode_CMD_NOT_OWNER_ERR,
                         "%s needs the owner: supervisor 0x%02X (%s) owns the device; queries still work", d->name,
                         core->sessions[core->owner].addr, core->sessions[core->owner].name);
+    }
+    if (check_presence(call, d, rq) != 0) {
+        return ls_RetCode_CMD_PARAM_ERR;
     }
     call->res->which_result = rq->which_cmd; /* result tag mirrors the command id */
     return d->handler(core, call);
@@ -796,12 +819,23 @@ static uint64_t request_hash(const uint8_t *buf, size_t len)
     return h;
 }
 
-static void on_request(ls_core_t *core, uint8_t addr, const ls_Request *rq, const uint8_t *raw, size_t raw_len,
+static void on_request(ls_core_t *core, uint8_t addr, ls_Request *rq, const uint8_t *raw, size_t raw_len,
                        uint64_t now_us)
 {
     int sup = find_session(core, addr);
     ls_session_t *s = sup >= 0 ? &core->sessions[sup] : NULL;
     const uint64_t hash = request_hash(raw, raw_len);
+    if (rq->seq == 0u && rq->which_cmd != ls_Request_connect_tag) {
+        /* seq 0 is what proto3 sends when the client set none: such a request
+         * could never be told from a retransmission of the one before it
+         * (docs/protocol.md "Sequence numbers"). Not cached, nothing runs. */
+        const ls_cmd_desc_t *d = ls_cmd_find(rq->which_cmd);
+        answer_bad_request(core, addr, ls_RetCode_CMD_PARAM_ERR, 0u,
+                           "%s: seq is 0 (not set): every request but connect needs a seq > 0, a new one "
+                           "for each request (docs/protocol.md \"Sequence numbers\")",
+                           d != NULL ? d->name : "request");
+        return;
+    }
     if (s != NULL && s->have_last && rq->seq == s->last_seq && rq->which_cmd != ls_Request_connect_tag &&
         hash != s->last_req_hash) {
         /* The same seq, another request: answering from the cache would
@@ -844,7 +878,9 @@ static void on_request(ls_core_t *core, uint8_t addr, const ls_Request *rq, cons
     ls_Response *res = &core->down.msg.response;
     res->seq = rq->seq;
     ls_call_t call = { .core = core, .sup = sup, .req = rq, .res = res, .now_us = now_us };
-    int32_t code = dispatch(core, addr, &call);
+    /* disconnect ends the session it answers: its answer still carries that epoch */
+    res->session_epoch = s != NULL ? s->epoch : 0u;
+    int32_t code = dispatch(core, addr, &call, rq);
     sup = call.sup; /* connect may have created the session */
     s = sup >= 0 && core->sessions[sup].connected ? &core->sessions[sup] : NULL;
     if (s != NULL) {

@@ -37,6 +37,14 @@ struct ls_control;
 #define LS_HB_PERIOD_MAX_MS 2000u
 #define LS_CORE_MAX_DIO_UNITS 4
 #define LS_MAX_DIO_WATCHES 8
+/* Path queues: LS_PATH_MAX names of LS_PATH_MAX_POINTS points (ls_motion.h).
+ * Path storage is the firmware's largest static table (about 8 x 256 x 420 B
+ * here). A board with little SRAM builds with smaller values, e.g.
+ * -DLS_PATH_MAX=2 -DLS_PATH_MAX_POINTS=64 for the whole build (docs/performance.md). */
+#ifndef LS_PATH_MAX
+#define LS_PATH_MAX 8
+#endif
+#define LS_PATH_MAX_CYCLES 1000000 /* pathMove number_of_cycles */
 
 /* How the core talks to the bus: implemented by the network layer (or a test). */
 typedef struct {
@@ -51,7 +59,7 @@ typedef struct {
 typedef struct {
     bool connected;
     uint8_t addr;
-    char name[32];
+    char name[sizeof(((ls_ConnectReq *)0)->client_name)];
     uint64_t last_heard_us; /* the last HEARTBEAT (or the connect) */
     uint32_t heartbeat_period_ms;
     uint32_t heartbeat_timeout_ms;         /* this session's time-out (ls_core_tick) */

@@ -73,13 +73,16 @@ void ls_run_finish(ls_core_t *core, ls_run_end_t why, const char *const *extra, 
     if (!r->active) {
         return;
     }
-    char d_point[48], d_reason[32];
+    char d_point[8 + LS_MOTION_NAME_LEN], d_reason[32];
     snprintf(d_point, sizeof d_point, "point=%s", r->point);
     snprintf(d_reason, sizeof d_reason, "reason=%s", ls_run_end_name(why));
-    const char *data[8] = { d_point, d_reason };
+    const char *data[9] = { d_point, d_reason };
     size_t n = 2;
-    for (size_t k = 0; k < n_extra && n < sizeof data / sizeof data[0]; k++) {
+    for (size_t k = 0; k < n_extra && n < sizeof data / sizeof data[0] - 1u; k++) {
         data[n++] = extra[k];
+    }
+    if (r->dry_run) {
+        data[n++] = "dry_run=true";
     }
     char id[40];
     snprintf(id, sizeof id, "%s%s", r->seed_name, end_suffix(why));

@@ -50,6 +50,7 @@ typedef struct {
     char seed_name[24]; /* "moveAbsolute", "pathMove", "comply", ... */
     char point[LS_MOTION_NAME_LEN];
     int path;          /* index of the path queue it runs, -1 for single moves */
+    bool dry_run;      /* pathMove with number_of_cycles 0: its notices carry dry_run=true */
     bool stop_pending; /* stopMotion waits for the pause */
     int stop_sup;
     /* path auxiliary `wait` in progress */

@@ -26,7 +26,7 @@
 #include "ls_robot_model.h"
 #include "ls_traj.h"
 
-#define LS_MOTION_NAME_LEN 32
+#define LS_MOTION_NAME_LEN 64  /* names and tags: 63 bytes of UTF-8 (protocol/landscape.options) */
 #define LS_MOTION_MAX_EVENTS 4 /* per cycle */
 #define LS_MOTION_AUX_PER_POINT 4
 #define LS_MOTION_AUX_LEN 48

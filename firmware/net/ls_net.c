@@ -3,6 +3,10 @@
 #include <stdio.h>
 #include <string.h>
 
+/* Every downlink is one ISO-TP message: the largest the schema allows must fit
+ * (protocol/landscape.options bounds it; describe is the largest answer). */
+_Static_assert(LS_DOWNLINK_MAX <= LS_ISOTP_MAX_PAYLOAD, "ls.Downlink can exceed one ISO-TP message");
+
 static int isotp_send_frame(void *ctx, uint32_t can_id, const uint8_t *data, uint8_t len)
 {
     ls_net_t *net = ctx;

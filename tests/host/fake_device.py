@@ -6,8 +6,9 @@ checks, heartbeat tracking (a session ends when its supervisor's heartbeat
 stops for longer than the time-out; an owner's lock goes with it), lock,
 release, activate, deactivate, get-motion-control-state, seq caching (a
 retransmitted seq is answered from the cache, never executed twice), pathLoad
-and pathClearPath (named paths, at most 32 points per message as the firmware)
-and two non-blocking commands: moveAbsolute, which sends a tag event, an RSVP
+and pathClearPath (named paths, at most 32 points per message as the firmware),
+describe (the limits of the committed landscape.options, no devices) and two
+non-blocking commands: moveAbsolute, which sends a tag event, an RSVP
 and then its final event or alarm, and pathMove, which sends one tag event per
 tagged point and cycle, then pathComplete. It broadcasts HEARTBEAT, STATUS,
 JOINTS_12/34/56, TOOL_POS (with a device time stamp), TOOL_RPY and DIO every
@@ -28,6 +29,7 @@ import isotp
 from landscape import telemetry as tm
 from landscape._generated import landscape_pb2 as pb
 from landscape.bus import ISOTP_PARAMS
+from landscape.limits import max_count, max_string_bytes
 from landscape.registry import PROTOCOL_VERSION, SCHEMA_HASH
 
 
@@ -245,6 +247,18 @@ class FakeDevice:
             self._drop(host)
             resp.disconnect.SetInParent()
             return answer(pb.CMD_EXEC_OK)
+        if which == "describe":
+            r = resp.describe
+            r.max_sessions, r.max_paths, r.max_points_per_path = len(self.sessions) or 1, 8, 256
+            tags = max_count("PathLoadReq", "tags")
+            name = max_string_bytes("PathLoadReq", "path_name")
+            tag = max_string_bytes("TagPoint", "tag_name")
+            assert tags is not None and name is not None and tag is not None
+            n_load = pb.Request.DESCRIPTOR.fields_by_name["path_load"].number
+            r.field_limits.add(path=[1, n_load, 1], max_bytes=name)
+            r.field_limits.add(path=[1, n_load, 6], max_count=tags)
+            r.field_limits.add(path=[1, n_load, 6, 3], max_bytes=tag)
+            return answer(pb.CMD_EXEC_OK)
         if which == "get_motion_control_state":
             r = resp.get_motion_control_state
             r.motion_control_state = "robot_at_rest"
@@ -311,8 +325,9 @@ class FakeDevice:
                 return answer(pb.CMD_PARAM_ERR, f"no path '{pm.path_name}': pathLoad it first")
             if pm.number_of_cycles < 0:
                 return answer(pb.CMD_PARAM_OUT_OF_RANGE_ERR, "number_of_cycles: must be >= 0")
+            cycles = pm.number_of_cycles if pm.HasField("number_of_cycles") else 1  # seed 3.5.2
             self.state = pb.MOVING
-            threading.Thread(target=self._run_path, args=(host, req.seq, pm.path_name, pm.number_of_cycles,
+            threading.Thread(target=self._run_path, args=(host, req.seq, pm.path_name, cycles,
                                                           list(self.paths[pm.path_name])), daemon=True).start()
             resp.path_move.SetInParent()
             return answer(pb.CMD_STARTED_OK)

@@ -69,13 +69,13 @@ def test_non_blocking_waits_and_prints_notices(channel: str, device: FakeDevice,
     assert lines[:4] == ["> lock", "lock: CMD_EXEC_OK", "> activate", "activate: CMD_EXEC_OK"]
     assert lines[4] == "> move-absolute p1 joint 0 -0.5 0 0 0 0 --speed-pct 20"
     assert lines[5] == "move-absolute: CMD_STARTED_OK"
-    assert lines[6].startswith("  EVENT tag tag=p1 path= (ref 4)")
-    assert lines[7].startswith("  EVENT_RSVP confirmMove point=p1 (ref 4) [rsvp 1: default 'continue'")
-    assert lines[8] == "  EVENT moveComplete point=p1 rsvp=default (ref 4) final"
+    assert lines[6].startswith("  EVENT tag tag=p1 path= (ref 5)")
+    assert lines[7].startswith("  EVENT_RSVP confirmMove point=p1 (ref 5) [rsvp 1: default 'continue'")
+    assert lines[8] == "  EVENT moveComplete point=p1 rsvp=default (ref 5) final"
     move = [q for q in device.requests if q.WhichOneof("cmd") == "move_absolute"][0]
     assert move.move_absolute == ls.MoveAbsoluteReq(point_name="p1", frame=ls.JOINT_FRAME,
                                                     values=[0, -0.5, 0, 0, 0, 0], speed_pct=20)
-    assert [q.seq for q in device.requests] == [1, 2, 3, 4, 5]  # one session for the whole file
+    assert [q.seq for q in device.requests] == [1, 2, 3, 4, 5, 6]  # one session for the whole file
 
 
 def test_json_non_blocking_with_notices_and_alarm(channel: str, device: FakeDevice, tmp_path: Path) -> None:
@@ -103,7 +103,7 @@ def test_run_stops_at_first_error(channel: str, device: FakeDevice, tmp_path: Pa
     script.write_text("release\nlock\n")
     r = run(channel, "run", str(script))
     assert r.exit_code == 3
-    assert [q.WhichOneof("cmd") for q in device.requests] == ["connect", "release", "disconnect"]
+    assert [q.WhichOneof("cmd") for q in device.requests] == ["connect", "describe", "release", "disconnect"]
     assert r.stderr.splitlines()[0].startswith(f"{script}:1: release: CMD_NOT_OWNER_ERR")
 
 
@@ -112,7 +112,7 @@ def test_run_keep_going(channel: str, device: FakeDevice, tmp_path: Path) -> Non
     script.write_text("release\nfly away\nmove-absolute p sideways 1\nlock\n")
     r = run(channel, "run", "--keep-going", str(script))
     assert r.exit_code == 3
-    assert [q.WhichOneof("cmd") for q in device.requests] == ["connect", "release", "lock", "disconnect"]
+    assert [q.WhichOneof("cmd") for q in device.requests] == ["connect", "describe", "release", "lock", "disconnect"]
     err = r.stderr.splitlines()
     assert err[1] == f"{script}:2: unknown command 'fly' (landscape --help lists them)"
     assert err[2].startswith(f"{script}:3: Invalid value for 'FRAME': 'sideways' is not a ReferenceFrame")
@@ -194,7 +194,7 @@ def test_shell_one_session_with_completion_names(channel: str, device: FakeDevic
     assert "lock: CMD_EXEC_OK" in r.stdout and "  owner: True" in r.stdout
     assert r.stderr.splitlines() == ["error: unknown command 'fly' (landscape --help lists them)",
                                      "error: Got unexpected extra argument (extra)"]
-    assert [q.seq for q in device.requests] == [1, 2, 3, 4]
+    assert [q.seq for q in device.requests] == [1, 2, 3, 4, 5]  # connect, describe, then the lines
     assert (tmp_path / "landscape" / "history").read_text().count("\n+") == 5
 
 
@@ -214,7 +214,7 @@ def test_run_file_with_an_unclosed_quote_is_one_line(channel: str, device: FakeD
     assert "Traceback" not in r.stderr
     assert r.stderr.splitlines()[0] == (f"{script}:2: cannot split the line into words (no closing quotation): "
                                         f"close the quote or escape it with a backslash")
-    assert [q.WhichOneof("cmd") for q in device.requests] == ["connect", "lock", "disconnect"]
+    assert [q.WhichOneof("cmd") for q in device.requests] == ["connect", "describe", "lock", "disconnect"]
 
 
 def test_shell_lines_never_end_the_shell(channel: str, device: FakeDevice, tmp_path: Path) -> None:
@@ -255,7 +255,7 @@ def test_verbose_shows_requests_and_answers(channel: str, device: FakeDevice) ->
     r = run(channel, "-v", "lock")
     assert r.exit_code == 0, r.stderr
     assert "landscape.cli: -> lock {} (via bus)" in r.stderr
-    assert "landscape.cli: <- lock seq 2 CMD_EXEC_OK {}" in r.stderr  # seq 1 was connect
+    assert "landscape.cli: <- lock seq 3 CMD_EXEC_OK {}" in r.stderr  # seq 1 was connect, 2 describe
 
 
 def test_monitor_names_motion_and_mode_from_the_dbc() -> None:

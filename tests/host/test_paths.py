@@ -27,7 +27,7 @@ CSV_POSE = ("x,y,z,roll,pitch,yaw,tag_name,tag_index,time_delay_s,transition_spe
 def test_limits_come_from_the_options_file() -> None:
     assert (max_count("PathLoadReq", "tags"), max_count("TagPoint", "joints"), max_count("TagPoint", "aux_commands"),
             max_string_bytes("TagPoint", "tag_name"), max_string_bytes("TagPoint", "aux_commands"),
-            max_string_bytes("GetUnitsRes", "linear")) == (32, 8, 4, 31, 47, 15)
+            max_string_bytes("GetUnitsRes", "linear")) == (32, 8, 4, 63, 47, 15)
     assert max_count("TagPoint", "tag_name") is None
     assert paths.PATH_LOAD_MAX_POINTS == 32
 
@@ -112,8 +112,8 @@ POSE = "x,y,z,roll,pitch,yaw"
     ("csv", f"{POSE},accel_pct\n1,2,3,4,5,6,-1\n", "f: line 2: accel_pct: -1 is outside 0..100"),
     ("csv", f"{POSE},transition_speed_pct\n1,2,3,4,5,6,200\n", "f: line 2: transition_speed_pct: 200 is outside"),
     ("csv", f"{POSE},time_delay_s\n1,2,3,4,5,6,-0.5\n", "f: line 2: time_delay_s: -0.5 is negative"),
-    ("csv", f"{POSE},tag_name\n1,2,3,4,5,6,{'t' * 32}\n", f"f: line 2: tag_name: '{'t' * 32}' is 32 bytes; the "
-                                                         f"firmware holds at most 31"),
+    ("csv", f"{POSE},tag_name\n1,2,3,4,5,6,{'t' * 64}\n", f"f: line 2: tag_name: '{'t' * 64}' is 64 bytes; the "
+                                                         f"firmware holds at most 63"),
     ("csv", f"{POSE},aux\n1,2,3,4,5,6,a;b;c;d;e\n", "f: line 2: aux: 5 commands; the firmware holds at most 4 "
                                                     "per point"),
     ("csv", f"{POSE},aux\n1,2,3,4,5,6,{'a' * 48}\n", "f: line 2: aux: '" + "a" * 48 + "' is 48 bytes; the firmware "
@@ -174,8 +174,8 @@ def test_frame_must_match_the_coordinates() -> None:
     cart = parse_path_text(CSV_POSE, "csv", "c.csv")
     with pytest.raises(PathFileError, match="c.csv: frame: JOINT_FRAME needs joint values"):
         resolve_settings(cart, frame="joint")
-    with pytest.raises(PathFileError, match="path name: '" + "n" * 32 + "' is 32 bytes"):
-        resolve_settings(cart, path_name="n" * 32)
+    with pytest.raises(PathFileError, match="path name: '" + "n" * 64 + "' is 64 bytes"):
+        resolve_settings(cart, path_name="n" * 64)
 
 
 # ---------------------------------------------------------------- chunking
@@ -221,10 +221,12 @@ def test_limits_are_parameters() -> None:
     pts = [_point(i) for i in range(5)]
     assert [len(r.path_load.tags) for r in build_path_load_requests("p", pts, max_points=2)] == [2, 2, 1]
     alone = [uplink_size(build_path_load_requests("p", [p])[0]) for p in pts]
-    assert alone == [72, 74, 74, 74, 74]  # seq (5) + 6 packed doubles (50) + name, index (0: absent), envelope
-    assert len(build_path_load_requests("p", pts, max_message_bytes=74)) == 5
-    with pytest.raises(ArgumentError, match=r"point 0 alone needs 72 bytes, more than one message holds \(71\)"):
-        build_path_load_requests("p", pts, max_message_bytes=71)
+    # seq (5) + 6 packed doubles (50) + name, index (0: absent), envelope; frame, motion_type and
+    # offset_type are sent also when 0 (required: docs/protocol.md "Absent fields")
+    assert alone == [78, 80, 80, 80, 80]
+    assert len(build_path_load_requests("p", pts, max_message_bytes=80)) == 5
+    with pytest.raises(ArgumentError, match=r"point 0 alone needs 78 bytes, more than one message holds \(77\)"):
+        build_path_load_requests("p", pts, max_message_bytes=77)
     with pytest.raises(ArgumentError, match="path 'p': no points to load"):
         build_path_load_requests("p", [])
     reqs = build_path_load_requests("p", [{"joints": [1, 2, 3, 4, 5, 6], "tag_name": "a"}])
@@ -244,7 +246,7 @@ def test_supervisor_path_load_points(bus, notifier, device: FakeDevice) -> None:
     assert [len(r.path_load.tags) for r in loads] == [len(s) for s in _chunks(75)]
     assert seen == list(zip(_cumulative(_chunks(75)), [75] * len(loads), strict=True))
     assert [t.tag_index for r in loads for t in r.path_load.tags] == list(range(75))
-    assert [r.seq for r in loads] == list(range(3, 3 + len(loads)))
+    assert [r.seq for r in loads] == list(range(4, 4 + len(loads)))  # after connect, describe, lock
     assert max(device.uplink_sizes) <= 4095
     assert device.paths["big"] == [t for r in loads for t in r.path_load.tags]
 
@@ -286,7 +288,7 @@ def test_supervisor_path_load_points_forwards_call_options(bus, notifier, device
     with Supervisor(bus, notifier=notifier, channel_name="virtual:test", retries=0) as sup:
         sup.lock()
         device.silent = True
-        with pytest.raises(ControllerTimeoutError, match=r"to pathLoad \(seq 3, 1 tries of 0\.07 s\)"):
+        with pytest.raises(ControllerTimeoutError, match=r"to pathLoad \(seq 4, 1 tries of 0\.07 s\)"):
             sup.path_load_points("p", [_point(i) for i in range(3)], timeout_s=0.07, check=False)
         device.silent = False
         sup.path_load_points("p", [_point(i) for i in range(1000)], timeout_s=5.0)

@@ -15,7 +15,7 @@ REQUEST_FIELDS = [f.name for f in ls.Request.DESCRIPTOR.oneofs_by_name["cmd"].fi
 
 def test_registry_covers_every_request_field_in_schema_order() -> None:
     assert list(COMMANDS) == REQUEST_FIELDS
-    assert len(COMMANDS) == 42
+    assert len(COMMANDS) == 43
     for f in ls.Request.DESCRIPTOR.oneofs_by_name["cmd"].fields:
         c = COMMANDS[f.name]
         spec = f.message_type.GetOptions().Extensions[ls.cmd]
@@ -140,8 +140,31 @@ def test_repeated_fields_detected() -> None:
     assert is_repeated(f["values"]) and not is_repeated(f["point_name"])
 
 
-def test_host_default_fills_fields_the_caller_leaves_out() -> None:
-    from landscape.registry import build_request
-    assert build_request("pathMove", path_name="p").path_move.number_of_cycles == 1
-    assert build_request("pathMove", path_name="p", number_of_cycles=0).path_move.number_of_cycles == 0
+def test_absent_fields_stay_absent_and_the_schema_says_what_absent_means() -> None:
+    """docs/protocol.md "Absent fields": the host sends what the caller gives; the device
+    applies (ls.absent_means) and refuses a request without an (ls.required) field."""
+    from landscape.registry import absent_means, build_request, missing_required, required_fields
+    pm = build_request("pathMove", path_name="p").path_move
+    assert not pm.HasField("number_of_cycles")
+    assert absent_means(ls.PathMoveReq.DESCRIPTOR.fields_by_name["number_of_cycles"]) == 1
+    zero = build_request("pathMove", path_name="p", number_of_cycles=0).path_move
+    assert zero.HasField("number_of_cycles") and zero.number_of_cycles == 0  # 0 is sent: the dry run
+    assert [f.name for f in required_fields("moveAbsolute")] == ["frame"]
+    assert missing_required(build_request("moveAbsolute", point_name="p")) == ["frame"]
+    assert missing_required(build_request("moveAbsolute", point_name="p", frame="joint")) == []
+    assert missing_required(build_request("pathLoad", path_name="p")) == ["frame", "motion_type", "offset_type",
+                                                                           "number_of_points"]
     assert build_request("moveAbsolute", point_name="p").move_absolute.speed_pct == 0.0
+
+
+def test_every_optional_request_field_says_what_its_absence_means() -> None:
+    """The generator's rule, seen from the host: an `optional` field is required or has a default."""
+    from landscape.registry import COMMANDS, absent_means, is_required
+    seen = 0
+    for cmd in COMMANDS.values():
+        for fd in cmd.fields():
+            o = fd.containing_oneof
+            if o is not None and o.name == "_" + fd.name:
+                seen += 1
+                assert is_required(fd) != (absent_means(fd) is not None), fd.full_name
+    assert seen >= 20

@@ -41,9 +41,12 @@ def test_handshake_ok(bus, notifier, device: FakeDevice) -> None:
         assert first.seq == 1 and first.WhichOneof("cmd") == "connect"
         assert (first.connect.protocol_version, first.connect.schema_hash, first.connect.client_name,
                 first.connect.heartbeat_period_ms) == (PROTOCOL_VERSION, SCHEMA_HASH, "pytest", 200)
+        # the handshake reads the device description once (docs/protocol.md "Device description")
+        assert device.requests[1].WhichOneof("cmd") == "describe"
+        assert sup.description is not None and sup.description.limit("pathLoad.tags").max_count == 32
         assert sup.get_motion_control_state().result["state"] == "UNLOCKED"
-        assert [r.seq for r in device.requests] == [1, 2]
-    assert device.requests[-1].WhichOneof("cmd") == "disconnect" and device.requests[-1].seq == 3
+        assert [r.seq for r in device.requests] == [1, 2, 3]
+    assert device.requests[-1].WhichOneof("cmd") == "disconnect" and device.requests[-1].seq == 4
     assert device.sessions == {}
 
 
@@ -70,12 +73,12 @@ def test_retransmission_uses_same_seq_and_executes_once(bus, notifier, device: F
     with sup_on(bus, notifier, timeout_s=0.15) as sup:
         device.drop_responses = 1
         rv = sup.lock()
-        assert rv.ret_code == ls.CMD_EXEC_OK and rv.seq == 2
+        assert rv.ret_code == ls.CMD_EXEC_OK and rv.seq == 3  # after connect and describe
         locks = [r for r in device.requests if r.WhichOneof("cmd") == "lock"]
-        assert [r.seq for r in locks] == [2, 2]
+        assert [r.seq for r in locks] == [3, 3]
         assert device.executions["lock"] == 1
         assert device.owner == 0xF1
-        assert sup.get_motion_control_state().seq == 3
+        assert sup.get_motion_control_state().seq == 4
 
 
 def test_time_out_names_address_channel_and_command(bus, notifier, device: FakeDevice) -> None:
@@ -86,9 +89,9 @@ def test_time_out_names_address_channel_and_command(bus, notifier, device: FakeD
             sup.get_tag_id()
         assert 0.28 < time.monotonic() - t0 < 1.0
         assert str(ei.value) == ("no answer from the controller at address 0x10 on virtual:test to getTagId "
-                                 "(seq 2, 3 tries of 0.1 s): is landscaped running on that channel with node "
+                                 "(seq 3, 3 tries of 0.1 s): is landscaped running on that channel with node "
                                  "address 0x10?")
-        assert [r.seq for r in device.requests if r.WhichOneof("cmd") == "get_tag_id"] == [2, 2, 2]
+        assert [r.seq for r in device.requests if r.WhichOneof("cmd") == "get_tag_id"] == [3, 3, 3]
         device.silent = False
 
 
@@ -263,8 +266,8 @@ def test_device_drops_owner_when_heartbeat_stops(bus, notifier, device: FakeDevi
         assert device.owner is None and 0xF1 not in device.sessions
         with pytest.raises(errors.NotConnectedError):
             sup.get_tag_id()
-        sup.connect()  # a new session: seq starts again at 1
-        assert device.requests[-1].seq == 1 and sup.get_tag_id(check=False).seq == 2
+        sup.connect()  # a new session: seq starts again at 1 (connect), 2 (describe)
+        assert [r.seq for r in device.requests[-2:]] == [1, 2] and sup.get_tag_id(check=False).seq == 3
 
 
 def test_two_supervisors_share_one_bus_and_notifier(bus, notifier, device: FakeDevice) -> None:
@@ -284,7 +287,7 @@ def test_two_supervisors_share_one_bus_and_notifier(bus, notifier, device: FakeD
         tb.start()
         ta.join(10)
         tb.join(10)
-        assert results["a"] == list(range(3, 23)) and results["b"] == list(range(3, 23))
+        assert results["a"] == list(range(4, 24)) and results["b"] == list(range(4, 24))
         assert a.get_motion_control_state().result["owner"] is True
         assert b.get_motion_control_state().result["owner"] is False
     assert device.sessions == {}
@@ -310,8 +313,8 @@ def test_request_before_open_and_bad_arguments(bus, notifier, device: FakeDevice
     with sup:
         with pytest.raises(errors.ArgumentError, match="no field 'speed'"):
             sup.request("move_absolute", speed=3)
-        assert len(device.requests) == 1  # nothing sent, no seq used
-        assert sup.lock().seq == 2
+        assert len(device.requests) == 2  # connect and describe; nothing sent, no seq used
+        assert sup.lock().seq == 3
 
 
 def test_oversized_request_is_refused_locally(bus, notifier, device: FakeDevice) -> None:
@@ -347,3 +350,30 @@ def test_an_answer_that_is_not_utf8_fails_its_request_naming_why(bus, notifier, 
         device.rewrite = None
         del device.force_codes["send_command"]
         assert sup.get_motion_control_state().ok
+
+
+def test_requests_beyond_the_described_limits_are_refused_before_sending(bus, notifier,
+                                                                          device: FakeDevice) -> None:
+    with sup_on(bus, notifier) as sup:
+        sent = len(device.requests)
+        with pytest.raises(errors.ArgumentError, match=r"pathLoad.path_name is 64 bytes .* at most 63 \(describe\)"):
+            sup.path_load("p" * 64, [{"joints": [0.0] * 6}])
+        with pytest.raises(errors.ArgumentError, match=r"pathLoad.tags has 33 items; the device holds at most 32"):
+            sup.path_load("p", [{"joints": [0.0] * 6}] * 33)
+        with pytest.raises(errors.ArgumentError, match=r"pathLoad.tags.tag_name is 64 bytes"):
+            sup.path_load("p", [{"joints": [0.0] * 6, "tag_name": "\u00e9" * 32}])  # 32 characters, 64 bytes
+        assert len(device.requests) == sent  # nothing went out
+        device.state = ls.LOCKED
+        device.owner = 0xF1
+        assert sup.path_load("p" * 63, [{"joints": [0.0] * 6, "tag_name": "t" * 63}]).ok  # at the limits: sent
+
+
+def test_path_move_leaves_cycles_to_the_device(bus, notifier, device: FakeDevice) -> None:
+    with sup_on(bus, notifier) as sup:
+        device.state, device.owner = ls.LOCKED, 0xF1
+        sup.path_load("p", [{"joints": [0.0] * 6}])
+        device.state = ls.RESTING
+        sup.wait_complete(sup.path_move("p"), timeout_s=5)
+        assert not device.requests[-1].path_move.HasField("number_of_cycles")  # absent: the device runs 1
+        sup.wait_complete(sup.path_move("p", number_of_cycles=0), timeout_s=5)
+        assert device.requests[-1].path_move.HasField("number_of_cycles")  # 0 sent: the dry run

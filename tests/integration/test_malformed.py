@@ -20,6 +20,8 @@ import pytest
 
 from conftest import Controller
 from landscape._generated import landscape_pb2 as pb
+from landscape.errors import ArgumentError
+from landscape.registry import COMMANDS
 from landscape.supervisor import Supervisor
 
 DEVICE = 0x10
@@ -308,7 +310,8 @@ def test_unknown_uplink_kind_is_dropped_and_counted(sup: Supervisor, reader: Rea
     assert int(status(sup)["rx_malformed"]) - before == 1
 
 
-@pytest.mark.parametrize("number", [2, 15, 58, 100, 536870911], ids=lambda n: f"field{n}")
+@pytest.mark.parametrize("number", [2, 15, 1 + max(c.number for c in COMMANDS.values()), 100, 536870911],
+                         ids=lambda n: f"field{n}")
 def test_unknown_command_id_is_answered_with_unknown_cmd(sup: Supervisor, reader: Reader, number: int) -> None:
     """An ls.Request whose command field is not in the schema: protobuf drops the
     unknown field, so the firmware sees a request without a command."""
@@ -337,8 +340,8 @@ def test_request_without_a_command_is_answered_with_unknown_cmd(sup: Supervisor,
     (pb.Request(move_absolute=pb.MoveAbsoluteReq(point_name="p1", values=[0.0] * 100)), "moveAbsolute"),
     (pb.Request(send_command=pb.SendCommandReq(input="s" * 3000)), "sendCommand"),
     (pb.Request(path_load=pb.PathLoadReq(path_name="p", tags=[pb.TagPoint(joints=[0] * 6)] * 40)), "pathLoad"),
-    (pb.Request(connect=pb.ConnectReq(client_name="c" * 33)), "connect"),
-], ids=["point_name-200", "values-100", "input-3000", "tags-40", "client_name-33"])
+    (pb.Request(connect=pb.ConnectReq(client_name="c" * 64)), "connect"),  # names hold 63 bytes
+], ids=["point_name-200", "values-100", "input-3000", "tags-40", "client_name-64"])
 def test_request_over_the_static_sizes_is_answered_with_param_err(sup: Supervisor, reader: Reader,
                                                                   request_: pb.Request, name: str) -> None:
     before = int(status(sup)["rx_malformed"])
@@ -399,7 +402,13 @@ def test_status_counts_transport_drops(bus: can.BusABC, sup: Supervisor) -> None
     assert int(st["isotp_buffer_ovflw"]) >= 1
 
 
-def test_oversize_request_through_the_library_gets_param_err_not_a_timeout(sup: Supervisor) -> None:
+def test_oversize_request_through_the_library_is_refused_before_sending(sup: Supervisor) -> None:
+    before = int(status(sup)["rx_malformed"])
+    with pytest.raises(ArgumentError, match=r"moveAbsolute.point_name is 200 bytes .* at most 63 \(describe\)"):
+        sup.move_absolute("p" * 200, [0.0] * 6, check=False, timeout_s=0.5)
+    assert int(status(sup)["rx_malformed"]) == before  # nothing reached the device
+    # a host without the description still gets the device's answer, not a time-out
+    sup.description = None
     t0 = time.monotonic()
     rv = sup.move_absolute("p" * 200, [0.0] * 6, check=False, timeout_s=0.5)
     assert rv.ret_code == pb.CMD_PARAM_ERR

@@ -10,7 +10,7 @@ import pytest
 
 from landscape import errors
 from landscape._generated import landscape_pb2 as pb
-from landscape.registry import COMMANDS, lookup
+from landscape.registry import COMMANDS, SCHEMA_HASH, lookup
 from landscape.supervisor import Supervisor
 
 
@@ -92,7 +92,8 @@ def test_connect_with_another_schema_is_refused(bus: can.BusABC) -> None:
                          schema_hash=0x12345678, client_name="old")
         assert rv.ret_code == pb.CMD_VERSION_MISMATCH_ERR
         assert "host tool" in rv.ret_msg and "12345678" in rv.ret_msg
-        rv = sup.request("connect", check=False, protocol_version=pb.PROTOCOL_VERSION + 1, client_name="new")
+        rv = sup.request("connect", check=False, protocol_version=pb.PROTOCOL_VERSION + 1,
+                         schema_hash=SCHEMA_HASH, client_name="new")
         assert rv.ret_code == pb.CMD_VERSION_MISMATCH_ERR
         assert "firmware" in rv.ret_msg
 

@@ -460,14 +460,14 @@ def test_reused_seq_with_another_request_is_refused(tmp_path: Path) -> None:
             assert sup.set_speed(40).ok
             seq = sup._seq
             # a retransmission (the same bytes): the cached answer, not run again
-            again = _send_with_seq(sup, "setSpeed", seq, speed=40.0)
+            again = _send_with_seq(sup, "setSpeed", seq, speed=40.0, attribute="percent")
             assert (again.seq, again.ret_code) == (seq, pb.CMD_EXEC_OK), again
             # the same seq, another value: refused, naming the reuse, and not run
-            other = _send_with_seq(sup, "setSpeed", seq, speed=80.0)
+            other = _send_with_seq(sup, "setSpeed", seq, speed=80.0, attribute="percent")
             assert (other.seq, other.ret_code) == (seq, pb.CMD_PARAM_ERR), other
             assert "reused" in other.ret_msg and "setSpeed" in other.ret_msg, other.ret_msg
             # the same seq, another command: refused too
-            move = _send_with_seq(sup, "moveAbsolute", seq, point_name="x", values=HOME)
+            move = _send_with_seq(sup, "moveAbsolute", seq, point_name="x", frame="joint", values=HOME)
             assert (move.seq, move.ret_code) == (seq, pb.CMD_PARAM_ERR), move
             assert "moveAbsolute" in move.ret_msg, move.ret_msg
             # the speed is still the first request's

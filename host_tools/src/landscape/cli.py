@@ -24,11 +24,13 @@ from pathlib import Path
 from typing import Any, NoReturn
 
 import click
+from google.protobuf import json_format
 from google.protobuf.descriptor import EnumDescriptor, FieldDescriptor
 
 from . import telemetry as tm
 from ._generated import landscape_pb2 as pb
 from .bus import DEFAULT_DEVICE, DEFAULT_HOST, BusSpec
+from .description import DeviceDescription
 from .errors import (
     AlarmError,
     ArgumentError,
@@ -44,11 +46,11 @@ from .notices import SI, Units, format_notice
 from .registry import (
     COMMANDS,
     Command,
+    absent_means,
     enum_aliases,
     enum_choices,
     field_enum_type,
     field_message_type,
-    host_default,
     is_repeated,
     message_to_dict,
     parse_enum,
@@ -180,11 +182,11 @@ def cli_params(cmd: Command) -> list[click.Parameter]:
             params.append(click.Option([opt, f.name], type=EnumType(field_enum_type(f)), default=0,
                                        help=helped(None, f)))
         elif f.type in _FLOATS:
-            d = host_default(f)
+            d = absent_means(f)
             params.append(click.Option([opt, f.name], type=float, default=0.0 if d is None else d, show_default=True,
                                        help=helped(None, f)))
         else:
-            d = host_default(f)
+            d = absent_means(f)
             params.append(click.Option([opt, f.name], type=IntType(), default=0 if d is None else d,
                                        show_default=True, help=helped(None, f)))
     if not cmd.blocking:
@@ -419,8 +421,14 @@ def execute(ctx: click.Context, cmd: Command, fields: dict[str, Any], *, wait: b
         note = lock_note(st, cmd, rv, backend)
         if not st.json_out:
             click.echo(f"{cmd.cli_name}: {rv.ret_name}" + (f": {rv.ret_msg}" if rv.ret_msg else ""))
-            for k, v in rv.result.items():
-                click.echo(f"  {k}: {_fmt_value(v)}")
+            if cmd.field == "describe" and rv.ok:
+                res = rv.message if isinstance(rv.message, pb.DescribeRes) else \
+                    json_format.ParseDict(rv.result, pb.DescribeRes())  # through a background session
+                for line in DeviceDescription(res).lines():
+                    click.echo(f"  {line}")
+            else:
+                for k, v in rv.result.items():
+                    click.echo(f"  {k}: {_fmt_value(v)}")
             if note:
                 click.echo(f"  note: {note}")
         notices: list[pb.Notice] = []

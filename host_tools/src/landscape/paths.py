@@ -44,8 +44,8 @@ SUFFIXES: dict[str, str] = {".csv": "csv", ".yaml": "yaml", ".yml": "yaml", ".js
 
 #: Points the firmware holds in one pathLoad message (PathLoadReq.tags max_count).
 PATH_LOAD_MAX_POINTS: int = max_count("PathLoadReq", "tags") or 32
-MAX_PATH_NAME_BYTES: int = max_string_bytes("PathLoadReq", "path_name") or 31
-MAX_TAG_NAME_BYTES: int = max_string_bytes("TagPoint", "tag_name") or 31
+MAX_PATH_NAME_BYTES: int = max_string_bytes("PathLoadReq", "path_name") or 63
+MAX_TAG_NAME_BYTES: int = max_string_bytes("TagPoint", "tag_name") or 63
 MAX_AUX_COMMANDS: int = max_count("TagPoint", "aux_commands") or 4
 MAX_AUX_BYTES: int = max_string_bytes("TagPoint", "aux_commands") or 47
 #: The largest seq: requests are sized with it so that any seq the supervisor picks fits.

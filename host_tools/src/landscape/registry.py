@@ -33,7 +33,8 @@ if TYPE_CHECKING:
 # protoc's .pyi declares the schema's extensions as plain FieldDescriptors; the protobuf stubs
 # index Extensions[] by a typed extension handle. These casts state what the schema says.
 _CMD_OPTION = cast("_ExtensionFieldDescriptor[MessageOptions, pb.CommandSpec]", pb.cmd)
-_HOST_DEFAULT_OPTION = cast("_ExtensionFieldDescriptor[FieldOptions, str]", pb.host_default)
+_ABSENT_MEANS_OPTION = cast("_ExtensionFieldDescriptor[FieldOptions, str]", pb.absent_means)
+_REQUIRED_OPTION = cast("_ExtensionFieldDescriptor[FieldOptions, bool]", pb.required)
 
 
 def descriptor_of(msg: Message | type[Message]) -> Descriptor:
@@ -307,12 +308,27 @@ def set_fields(msg: Message, values: Mapping[str, Any], where: str = "") -> Mess
     return msg
 
 
-def host_default(fd: FieldDescriptor) -> Any:
-    """The schema's (ls.host_default) of a scalar field, parsed to its type, or None."""
-    text = fd.GetOptions().Extensions[_HOST_DEFAULT_OPTION]
+def absent_means(fd: FieldDescriptor) -> Any:
+    """What the device applies when the `optional` field `fd` is absent: its schema
+    (ls.absent_means) parsed to the field's type (pathMove number_of_cycles: 1), or None."""
+    text = fd.GetOptions().Extensions[_ABSENT_MEANS_OPTION]
     if not text:
         return None
+    if fd.type == FieldDescriptor.TYPE_ENUM:
+        return parse_enum(field_enum_type(fd), text)
     return float(text) if fd.type in (FieldDescriptor.TYPE_DOUBLE, FieldDescriptor.TYPE_FLOAT) else int(text, 0)
+
+
+def is_required(fd: FieldDescriptor) -> bool:
+    """True for an `optional` field the device refuses a request without ((ls.required):
+    its absence would otherwise read as 0, which is a real value such as JOINT_FRAME)."""
+    return bool(fd.GetOptions().Extensions[_REQUIRED_OPTION])
+
+
+def required_fields(command: str | Command) -> tuple[FieldDescriptor, ...]:
+    """The fields a request of `command` must carry (docs/protocol.md "Absent fields")."""
+    cmd = command if isinstance(command, Command) else lookup(command)
+    return tuple(fd for fd in cmd.fields() if is_required(fd))
 
 
 def build_request(command: str | Command, seq: int = 0, **fields: Any) -> pb.Request:
@@ -320,18 +336,26 @@ def build_request(command: str | Command, seq: int = 0, **fields: Any) -> pb.Req
 
     Enum fields take numbers, names or short names; repeated fields take
     sequences; message fields take messages or dicts. Unknown fields and bad
-    values raise ArgumentError naming the field. A field the caller leaves
-    out takes its schema host_default when it has one (pathMove cycles: 1).
+    values raise ArgumentError naming the field. A field the caller leaves out
+    stays absent: the device applies its (ls.absent_means) (pathMove cycles: 1)
+    and refuses a request without an (ls.required) one, naming it
+    (``missing_required`` says so before sending).
     """
     cmd = command if isinstance(command, Command) else lookup(command)
     req = pb.Request(seq=seq)
     sub = getattr(req, cmd.field)
     sub.SetInParent()
-    for fd in cmd.fields():
-        if fd.name not in fields and host_default(fd) is not None:
-            fields[fd.name] = host_default(fd)
     set_fields(sub, fields, cmd.name)
     return req
+
+
+def missing_required(req: pb.Request) -> list[str]:
+    """The (ls.required) fields `req` lacks, by name (empty: none)."""
+    which = req.WhichOneof("cmd")
+    if which is None:
+        return []
+    sub = getattr(req, which)
+    return [fd.name for fd in required_fields(COMMANDS[which]) if not sub.HasField(fd.name)]
 
 
 def message_to_dict(msg: Message) -> dict[str, Any]:

@@ -39,6 +39,7 @@ from .bus import (
     physical_address,
     release_bus,
 )
+from .description import DeviceDescription
 from .errors import (
     AlarmError,
     ArgumentError,
@@ -50,6 +51,7 @@ from .errors import (
     error_for_code,
     ret_name,
 )
+from .limits import max_string_bytes
 from .paths import build_path_load_requests, request_fields
 from .registry import PROTOCOL_VERSION, SCHEMA_HASH, Command, build_request, lookup, message_to_dict
 
@@ -237,6 +239,10 @@ class Supervisor:
             raise ArgumentError("retries must be >= 0")
         if heartbeat_period_ms <= 0:
             raise ArgumentError("heartbeat_period_ms must be > 0")
+        name_max = max_string_bytes("ConnectReq", "client_name")
+        if name_max is not None and len(client_name.encode("utf-8")) > name_max:
+            raise ArgumentError(f"client_name is {len(client_name.encode('utf-8'))} bytes of UTF-8; the device "
+                                f"holds at most {name_max}: shorten it")
         self.bus = bus
         self.device = device
         self.source_address = source_address
@@ -286,6 +292,9 @@ class Supervisor:
         self.connected = False
         self.device_info: pb.ConnectRes | None = None
         self.connect_result: ConnectResult | None = None
+        #: What the device published about itself (describe), read once per session at connect;
+        #: every request is checked against its limits before it is sent.
+        self.description: DeviceDescription | None = None
 
     # ------------------------------------------------------------ construction helpers
 
@@ -365,8 +374,33 @@ class Supervisor:
                                                         res.protocol_version, res.schema_hash))
         self.device_info = res
         self.connected = True
+        self.description = None
+        self.description = self._read_description()
         self.connect_result = ConnectResult(rv, res)
         return self.connect_result
+
+    def _read_description(self) -> DeviceDescription:
+        """The device's describe answer, read once per session. It is the largest answer (about
+        200 frames): on a link that loses frames it may not come through, so after two tries
+        the session goes on with the limits of the host's copy of the schema (a warning says
+        so) instead of failing the connect."""
+        cmd = lookup("describe")
+        req = build_request(cmd)
+        with self._req_lock:
+            self._seq += 1
+            req.seq = self._seq
+            try:
+                resp = self._transact(cmd, req, None, tries=min(2, 1 + self.retries))
+            except ControllerTimeoutError as exc:
+                log.warning("the device's description did not come through (%s); checking requests against "
+                            "this host tool's copy of the limits", exc)
+                return DeviceDescription.host_copy()
+        rv = self._retval(cmd, resp)
+        if not rv.ok or not isinstance(rv.message, pb.DescribeRes):
+            self._quiet_disconnect()
+            raise ProtocolError(f"the device did not describe itself ({rv.ret_name}: {rv.ret_msg}): its limits "
+                                f"are unknown; is the firmware built from this tool's tree?")
+        return DeviceDescription(rv.message)
 
     def disconnect(self, **opts: Unpack[CallOptions]) -> RetVal:
         """End the session at once (an owner's disconnect runs the device's disconnect handler)."""
@@ -472,6 +506,8 @@ class Supervisor:
         """
         cmd = command if isinstance(command, Command) else lookup(command)
         req = build_request(cmd, 0, **fields)
+        if self.description is not None:
+            self.description.check_request(req)
         if not self._running:
             raise LandscapeError("the session is not open: use `with Supervisor(bus) as sup:`")
         if cmd.field != "connect" and cmd.field != "disconnect" and not self.connected:
@@ -485,14 +521,15 @@ class Supervisor:
             raise error_for_code(cmd.name, rv.ret_code, rv.ret_msg)
         return rv
 
-    def _transact(self, cmd: Command, req: pb.Request, timeout_s: float | None) -> pb.Response:
+    def _transact(self, cmd: Command, req: pb.Request, timeout_s: float | None,
+                  tries: int | None = None) -> pb.Response:
         data = pb.Uplink(request=req).SerializeToString()
         if len(data) > MAX_MESSAGE_BYTES:
             raise ArgumentError(f"{cmd.name}: the request is {len(data)} bytes, more than one ISO-TP "
                                 f"message holds ({MAX_MESSAGE_BYTES}); split it (e.g. several path-load calls)")
         per_try = timeout_s if timeout_s is not None else (
             self.timeout_s if self.timeout_s is not None else cmd.host_timeout_ms / 1000.0)
-        tries = 1 + self.retries
+        tries = 1 + self.retries if tries is None else tries
         with self._cv:
             self._pending_seq = req.seq
             self._pending_resp = None
@@ -978,9 +1015,10 @@ class Supervisor:
     def path_clear_path(self, path_name: str, **opts: Unpack[CallOptions]) -> RetVal:
         return self.request("path_clear_path", path_name=path_name, **opts)
 
-    def path_move(self, path_name: str, *, number_of_cycles: int = 1, **opts: Unpack[CallOptions]) -> RetVal:
-        """Run a loaded path `number_of_cycles` times (seed: 1 when omitted; 0: dry run without
-        auxiliary commands)."""
+    def path_move(self, path_name: str, *, number_of_cycles: int | None = None,
+                  **opts: Unpack[CallOptions]) -> RetVal:
+        """Run a loaded path `number_of_cycles` times (None: left out, the device runs it once as
+        seed 3.5.2 says; 0: a dry run without auxiliary commands, whose notices say dry_run=true)."""
         return self.request("path_move", path_name=path_name, number_of_cycles=number_of_cycles, **opts)
 
     def stop_motion(self, **opts: Unpack[CallOptions]) -> RetVal:
@@ -1051,6 +1089,11 @@ class Supervisor:
 
     def send_command(self, input: str, **opts: Unpack[CallOptions]) -> RetVal:  # noqa: A002 (schema name)
         return self.request("send_command", input=input, **opts)
+
+    def describe(self, **opts: Unpack[CallOptions]) -> RetVal:
+        """Read the device's description (limits, DIO map, sensors, tools, joints, workspace; SI).
+        connect() already read it once for this session: see ``description``."""
+        return self.request("describe", **opts)
 
 
 @dataclass

@@ -149,7 +149,9 @@ static void connect_host(uint8_t addr)
 {
     ls_ConnectReq *c = &req(ls_Request_connect_tag)->cmd.connect;
     c->protocol_version = ls_Protocol_PROTOCOL_VERSION;
+    c->has_protocol_version = true;
     c->schema_hash = LS_SCHEMA_HASH;
+    c->has_schema_hash = true;
     snprintf(c->client_name, sizeof c->client_name, "test-%02X", addr);
     assert_int_equal(must(addr)->ret_code, ls_RetCode_CMD_EXEC_OK);
 }
@@ -231,7 +233,9 @@ static void test_every_command_in_every_state(void **state)
             req(d->tag);
             if (d->tag == ls_Request_connect_tag) {
                 g_rq.cmd.connect.protocol_version = ls_Protocol_PROTOCOL_VERSION;
+                g_rq.cmd.connect.has_protocol_version = true;
                 g_rq.cmd.connect.schema_hash = LS_SCHEMA_HASH;
+                g_rq.cmd.connect.has_schema_hash = true;
             }
             const ls_Response *r = send_req(HOST_A);
             bool valid = (d->states & (uint8_t)k_states[s]) != 0u;
@@ -270,7 +274,9 @@ static void test_owner_only_commands_refuse_non_owners(void **state)
                 req(d->tag);
                 if (d->tag == ls_Request_connect_tag) {
                     g_rq.cmd.connect.protocol_version = ls_Protocol_PROTOCOL_VERSION;
+                    g_rq.cmd.connect.has_protocol_version = true;
                     g_rq.cmd.connect.schema_hash = LS_SCHEMA_HASH;
+                    g_rq.cmd.connect.has_schema_hash = true;
                 }
                 const ls_Response *r = send_req(HOST_A);
                 int32_t code = r != NULL ? r->ret_code : LS_CALL_DEFERRED;
@@ -337,7 +343,9 @@ static void set_units(ls_LinearUnit lu, ls_AngularUnit au)
 {
     ls_SetUnitsReq *u = &req(ls_Request_set_units_tag)->cmd.set_units;
     u->linear = lu;
+    u->has_linear = true;
     u->angular = au;
+    u->has_angular = true;
     assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
 }
 
@@ -369,15 +377,21 @@ static void test_units_round_trip(void **state)
 
     ls_SetSpeedReq *sp = &req(ls_Request_set_speed_tag)->cmd.set_speed;
     sp->attribute = ls_SpeedType_LINEAR_SPEED;
+    sp->has_attribute = true;
     sp->speed = 500.0; /* mm/s */
+    sp->has_speed = true;
     assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
     sp = &req(ls_Request_set_speed_tag)->cmd.set_speed;
     sp->attribute = ls_SpeedType_ANGULAR_SPEED;
+    sp->has_attribute = true;
     sp->speed = 90.0; /* deg/s */
+    sp->has_speed = true;
     assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
     sp = &req(ls_Request_set_speed_tag)->cmd.set_speed;
     sp->attribute = ls_SpeedType_PERCENT_SPEED;
+    sp->has_attribute = true;
     sp->speed = 40.0;
+    sp->has_speed = true;
     assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
     assert_near(g_core.settings.linear_speed_m_s, 0.5, 1e-15);
     assert_near(g_core.settings.angular_speed_rad_s, M_PI / 2, 1e-15);
@@ -395,15 +409,21 @@ static void test_units_round_trip(void **state)
 
     ls_SetAccelerationReq *ac = &req(ls_Request_set_acceleration_tag)->cmd.set_acceleration;
     ac->attribute = ls_AccelType_LINEAR_ACCEL;
+    ac->has_attribute = true;
     ac->accel = 2000.0; /* mm/s^2 */
+    ac->has_accel = true;
     assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
     ac = &req(ls_Request_set_acceleration_tag)->cmd.set_acceleration;
     ac->attribute = ls_AccelType_ANGULAR_ACCEL;
+    ac->has_attribute = true;
     ac->accel = 360.0; /* deg/s^2 */
+    ac->has_accel = true;
     assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
     ac = &req(ls_Request_set_acceleration_tag)->cmd.set_acceleration;
     ac->attribute = ls_AccelType_PERCENT_ACCEL;
+    ac->has_attribute = true;
     ac->accel = 100.0;
+    ac->has_accel = true;
     assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
     req(ls_Request_get_accelerations_tag);
     const ls_GetAccelerationsRes *a = &must(HOST_A)->result.get_accelerations;
@@ -446,7 +466,9 @@ static int32_t set_speed(ls_SpeedType t, double v, const char **msg)
 {
     ls_SetSpeedReq *sp = &req(ls_Request_set_speed_tag)->cmd.set_speed;
     sp->attribute = t;
+    sp->has_attribute = true;
     sp->speed = v;
+    sp->has_speed = true;
     const ls_Response *r = must(HOST_A);
     *msg = r->ret_msg;
     return r->ret_code;
@@ -456,7 +478,9 @@ static int32_t set_accel(ls_AccelType t, double v, const char **msg)
 {
     ls_SetAccelerationReq *a = &req(ls_Request_set_acceleration_tag)->cmd.set_acceleration;
     a->attribute = t;
+    a->has_attribute = true;
     a->accel = v;
+    a->has_accel = true;
     const ls_Response *r = must(HOST_A);
     *msg = r->ret_msg;
     return r->ret_code;
@@ -544,6 +568,7 @@ static void test_set_refusals_name_value_and_range(void **state)
     /* issue 17: empty names */
     ls_PathLoadReq *pl = &req(ls_Request_path_load_tag)->cmd.path_load;
     pl->number_of_points = 1;
+    pl->has_frame = pl->has_motion_type = pl->has_offset_type = pl->has_number_of_points = true;
     pl->tags_count = 1;
     pl->tags[0].joints_count = 6;
     r = must(HOST_A);
@@ -552,12 +577,16 @@ static void test_set_refusals_name_value_and_range(void **state)
 
     ls_SetUnitsReq *u = &req(ls_Request_set_units_tag)->cmd.set_units;
     u->linear = (ls_LinearUnit)5;
+    u->has_linear = true;
+    u->has_angular = true; /* present (RADIANS): the refusal is the linear unit's */
     r = must(HOST_A);
     assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_ERR);
     assert_non_null(strstr(r->ret_msg, "linear unit 5"));
     u = &req(ls_Request_set_units_tag)->cmd.set_units;
     u->linear = ls_LinearUnit_MILLIMETERS;
+    u->has_linear = true;
     u->angular = (ls_AngularUnit)2;
+    u->has_angular = true;
     assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_PARAM_ERR);
 
     /* all-or-nothing: nothing above changed a setting (the half-valid setUnits included) */
@@ -688,6 +717,7 @@ static const ls_Response *set_dio(const char *type, int32_t unit, uint32_t on, u
     ls_SetDigitalIOReq *d = &req(ls_Request_set_digital_io_tag)->cmd.set_digital_io;
     snprintf(d->type, sizeof d->type, "%s", type);
     d->unit_id = unit;
+    d->has_unit_id = true;
     d->bits_on = on;
     d->bits_off = off;
     return send_req(HOST_A);
@@ -747,14 +777,17 @@ static void test_set_digital_io_answers_when_applied(void **state)
 
     ls_GetDigitalIOReq *g = &req(ls_Request_get_digital_io_tag)->cmd.get_digital_io;
     snprintf(g->type, sizeof g->type, "digital");
+    g->has_unit_id = true; /* unit 0 */
     const ls_Response *r = must(HOST_B);
     assert_int_equal(r->ret_code, ls_RetCode_CMD_EXEC_OK);
     assert_int_equal(r->result.get_digital_io.bits_on, 0x00030005u);
     g = &req(ls_Request_get_digital_io_tag)->cmd.get_digital_io;
     snprintf(g->type, sizeof g->type, "digital");
+    g->has_unit_id = true; /* unit 0 */
     g->unit_id = 3;
+    g->has_unit_id = true;
     assert_int_equal(must(HOST_B)->ret_code, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
-    req(ls_Request_get_digital_io_tag);
+    req(ls_Request_get_digital_io_tag)->cmd.get_digital_io.has_unit_id = true;
     assert_int_equal(must(HOST_B)->ret_code, ls_RetCode_CMD_PARAM_ERR); /* type "" */
 
     /* a write the backend refused: the levels do not follow */
@@ -781,10 +814,13 @@ static uint32_t signal_dio(uint8_t addr, uint32_t bits, int32_t timeout_ms, int3
 {
     ls_SignalDigitalIOReq *s = &req(ls_Request_signal_digital_io_tag)->cmd.signal_digital_io;
     snprintf(s->type, sizeof s->type, "digital");
+    s->has_unit_id = s->has_callback_type = true; /* unit 0, CB_EVENT */
     s->bit_string = bits;
     s->polling_timeout_ms = timeout_ms;
     s->polling_cycle_time_ms = cycle_ms;
     s->callback_type = cb;
+    s->has_callback_type = true;
+    s->has_unit_id = true; /* unit 0 */
     const ls_Response *r = must(addr);
     *code = r->ret_code;
     return r->ret_code == ls_RetCode_CMD_EXEC_OK ? r->result.signal_digital_io.watch_id : 0u;
@@ -911,6 +947,7 @@ static void test_signal_refusals_and_table_full(void **state)
     assert_int_equal(code, ls_RetCode_CMD_PARAM_ERR);
     ls_SignalDigitalIOReq *s = &req(ls_Request_signal_digital_io_tag)->cmd.signal_digital_io;
     snprintf(s->type, sizeof s->type, "digital");
+    s->has_unit_id = s->has_callback_type = true; /* unit 0, CB_EVENT */
     s->bit_string = 1;
     s->polling_timeout_ms = -1;
     const ls_Response *r = must(HOST_A);
@@ -918,6 +955,7 @@ static void test_signal_refusals_and_table_full(void **state)
     assert_string_equal(r->ret_msg, "signalDigitalIO: pollingTimeOut -1 ms: allowed 0 (no time-out) or more");
     s = &req(ls_Request_signal_digital_io_tag)->cmd.signal_digital_io;
     snprintf(s->type, sizeof s->type, "digital");
+    s->has_unit_id = s->has_callback_type = true; /* unit 0, CB_EVENT */
     s->bit_string = 1;
     s->polling_cycle_time_ms = -5;
     assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
@@ -926,6 +964,7 @@ static void test_signal_refusals_and_table_full(void **state)
     g_core.dio_info[0].output_mask = 0x00FF0000u;
     s = &req(ls_Request_signal_digital_io_tag)->cmd.signal_digital_io;
     snprintf(s->type, sizeof s->type, "digital");
+    s->has_unit_id = s->has_callback_type = true; /* unit 0, CB_EVENT */
     s->bit_string = 0x01000001u;
     r = must(HOST_A);
     assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
@@ -933,8 +972,11 @@ static void test_signal_refusals_and_table_full(void **state)
                         "signalDigitalIO: bits 0x1000000 are not lines of unit 0: its lines are 0x00FFFFFF");
     s = &req(ls_Request_signal_digital_io_tag)->cmd.signal_digital_io;
     snprintf(s->type, sizeof s->type, "dig");
+    s->has_unit_id = s->has_callback_type = true; /* the refusal is the type's */
     s->bit_string = 1;
-    assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_PARAM_ERR);
+    const ls_Response *bad_type = must(HOST_A);
+    assert_int_equal(bad_type->ret_code, ls_RetCode_CMD_PARAM_ERR);
+    assert_null(strstr(bad_type->ret_msg, "missing"));
 
     for (int i = 0; i < LS_MAX_DIO_WATCHES; i++) {
         assert_int_equal(signal_dio(HOST_A, 0x1u, 0, 0, ls_CallbackType_CB_EVENT, &code), (uint32_t)i + 1u);
@@ -1243,7 +1285,9 @@ static void test_seq_reuse_with_another_request_is_refused(void **state)
     (void)state;
     ls_SetSpeedReq *sp = &req(ls_Request_set_speed_tag)->cmd.set_speed;
     sp->attribute = ls_SpeedType_PERCENT_SPEED;
+    sp->has_attribute = true;
     sp->speed = 40.0;
+    sp->has_speed = true;
     assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
     const uint32_t executed = g_core.sessions[0].executed;
     /* the identical bytes again: the cached answer, not run a second time */
@@ -1253,7 +1297,9 @@ static void test_seq_reuse_with_another_request_is_refused(void **state)
     assert_int_equal(g_core.sessions[0].executed, executed);
     /* the same seq with another value: refused, named, not run */
     req(ls_Request_set_speed_tag)->cmd.set_speed.attribute = ls_SpeedType_PERCENT_SPEED;
+    g_rq.cmd.set_speed.has_attribute = true;
     g_rq.cmd.set_speed.speed = 80.0;
+    g_rq.cmd.set_speed.has_speed = true;
     assert_int_equal(resend_same_seq(HOST_A, &first), 1);
     const ls_Response *r = &g_rx[first].msg.response;
     assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_ERR);
@@ -1269,11 +1315,14 @@ static void test_seq_reuse_with_another_request_is_refused(void **state)
     assert_non_null(strstr(g_rx[first].msg.response.ret_msg, "getUnits"));
     /* the original retransmitted after all that: still its cached answer */
     req(ls_Request_set_speed_tag)->cmd.set_speed.attribute = ls_SpeedType_PERCENT_SPEED;
+    g_rq.cmd.set_speed.has_attribute = true;
     g_rq.cmd.set_speed.speed = 40.0;
+    g_rq.cmd.set_speed.has_speed = true;
     assert_int_equal(resend_same_seq(HOST_A, &first), 1);
     assert_int_equal(g_rx[first].msg.response.ret_code, ls_RetCode_CMD_EXEC_OK);
     /* a new seq runs normally */
     g_rq.cmd.set_speed.speed = 80.0;
+    g_rq.cmd.set_speed.has_speed = true;
     assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
     assert_true(fabs(g_core.settings.speed_pct - 80.0) < 1e-9);
 }
@@ -1320,7 +1369,9 @@ static void test_strings_that_are_not_utf8_are_refused_naming_the_field(void **s
     /* a client name of two bytes that are not UTF-8: no session, the field named */
     ls_ConnectReq *c = &req(ls_Request_connect_tag)->cmd.connect;
     c->protocol_version = ls_Protocol_PROTOCOL_VERSION;
+    c->has_protocol_version = true;
     c->schema_hash = LS_SCHEMA_HASH;
+    c->has_schema_hash = true;
     snprintf(c->client_name, sizeof c->client_name, "\xff\xfe");
     const ls_Response *r = must(0xF5);
     assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_ERR);
@@ -1334,6 +1385,7 @@ static void test_strings_that_are_not_utf8_are_refused_naming_the_field(void **s
     ls_PathLoadReq *l = &req(ls_Request_path_load_tag)->cmd.path_load;
     snprintf(l->path_name, sizeof l->path_name, "p");
     l->number_of_points = 2;
+    l->has_frame = l->has_motion_type = l->has_offset_type = l->has_number_of_points = true;
     l->tags_count = 2;
     snprintf(l->tags[1].tag_name, sizeof l->tags[1].tag_name, "t\xc3");
     r = must(HOST_A);
@@ -1372,6 +1424,7 @@ static uint32_t start_move(void)
     ls_MoveAbsoluteReq *m = &req(ls_Request_move_absolute_tag)->cmd.move_absolute;
     snprintf(m->point_name, sizeof m->point_name, "p1");
     m->frame = ls_ReferenceFrame_JOINT_FRAME;
+    m->has_frame = true;
     m->values_count = 6;
     for (int j = 0; j < 6; j++) {
         m->values[j] = k_home[j] + (j == 0 ? 0.5 : 0.0);
@@ -1507,7 +1560,9 @@ static const ls_Response *connect_with(uint8_t addr, uint32_t period_ms, ls_Disc
 {
     ls_ConnectReq *c = &req(ls_Request_connect_tag)->cmd.connect;
     c->protocol_version = ls_Protocol_PROTOCOL_VERSION;
+    c->has_protocol_version = true;
     c->schema_hash = LS_SCHEMA_HASH;
+    c->has_schema_hash = true;
     snprintf(c->client_name, sizeof c->client_name, "test-%02X", addr);
     c->heartbeat_period_ms = period_ms;
     c->disconnect_action = action;
@@ -1648,6 +1703,7 @@ static void test_disconnect_action_stop_keeps_drives_and_lock(void **state)
     /* the lock is kept: another supervisor is told whose it is and why */
     ls_SetSpeedReq *sp = &req(ls_Request_set_speed_tag)->cmd.set_speed;
     sp->speed = 50.0;
+    sp->has_speed = sp->has_attribute = true; /* PERCENT_SPEED */
     const ls_Response *r = must(HOST_B);
     assert_int_equal(r->ret_code, ls_RetCode_CMD_NOT_OWNER_ERR);
     assert_string_equal(r->ret_msg, "setSpeed needs the owner: 0x21 (test-21) was lost and keeps the lock "
@@ -1662,6 +1718,7 @@ static void test_disconnect_action_stop_keeps_drives_and_lock(void **state)
     assert_int_equal(r->result.connect.state, ls_State_RESTING);
     sp = &req(ls_Request_set_speed_tag)->cmd.set_speed;
     sp->speed = 50.0;
+    sp->has_speed = sp->has_attribute = true; /* PERCENT_SPEED */
     assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
 }
 
@@ -1754,8 +1811,11 @@ static uint32_t start_dio_path(void)
     ls_PathLoadReq *l = &req(ls_Request_path_load_tag)->cmd.path_load;
     snprintf(l->path_name, sizeof l->path_name, "io");
     l->frame = ls_ReferenceFrame_JOINT_FRAME;
+    l->has_frame = true;
     l->motion_type = ls_MotionType_JOINT_MOTION;
+    l->has_motion_type = true;
     l->number_of_points = 1;
+    l->has_frame = l->has_motion_type = l->has_offset_type = l->has_number_of_points = true;
     l->tags_count = 1;
     l->tags[0].joints_count = 6;
     memcpy(l->tags[0].joints, k_home, sizeof k_home);
@@ -1766,6 +1826,7 @@ static uint32_t start_dio_path(void)
     ls_PathMoveReq *m = &req(ls_Request_path_move_tag)->cmd.path_move;
     snprintf(m->path_name, sizeof m->path_name, "io");
     m->number_of_cycles = 1;
+    m->has_number_of_cycles = true;
     const ls_Response *r = must(HOST_A);
     assert_int_equal(r->ret_code, ls_RetCode_CMD_STARTED_OK);
     /* the executor arrives at point 0 and announces the command */
@@ -1816,6 +1877,239 @@ static void test_aux_dio_refused_at_run_time_fails_the_path_and_leaves_it_usable
     assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
 }
 
+/* ---------------------------------------------------------------- issue 19: presence, seq 0, describe */
+
+static void test_absent_required_fields_are_refused_naming_them(void **state)
+{
+    (void)state;
+    g_core.state = ls_State_RESTING;
+    /* a joint move without its frame: refused, named, nothing planned */
+    ls_MoveAbsoluteReq *m = &req(ls_Request_move_absolute_tag)->cmd.move_absolute;
+    snprintf(m->point_name, sizeof m->point_name, "p1");
+    m->values_count = 6;
+    const ls_Response *r = must(HOST_A);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_ERR);
+    assert_non_null(strstr(r->ret_msg, "moveAbsolute: frame is missing"));
+    assert_int_equal(r->which_result, 0);
+    assert_int_equal(g_core.state, ls_State_RESTING);
+    assert_false(g_core.run.active);
+    /* a speed without its attribute: the setting is unchanged */
+    const double before = g_core.settings.speed_pct;
+    req(ls_Request_set_speed_tag)->cmd.set_speed.speed = 1.0;
+    g_rq.cmd.set_speed.has_speed = true;
+    r = must(HOST_A);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_ERR);
+    assert_non_null(strstr(r->ret_msg, "setSpeed: attribute is missing"));
+    assert_true(g_core.settings.speed_pct == before);
+    /* unit 0 is a real unit: an absent unit_id is not it */
+    req(ls_Request_get_digital_io_tag);
+    snprintf(g_rq.cmd.get_digital_io.type, sizeof g_rq.cmd.get_digital_io.type, "digital");
+    r = must(HOST_B);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_ERR);
+    assert_non_null(strstr(r->ret_msg, "getDigitalIO: unit_id is missing"));
+    g_rq.cmd.get_digital_io.has_unit_id = true; /* present and 0 */
+    assert_int_equal(must(HOST_B)->ret_code, ls_RetCode_CMD_EXEC_OK);
+    /* connect without a schema hash: refused, no session */
+    ls_ConnectReq *c = &req(ls_Request_connect_tag)->cmd.connect;
+    c->protocol_version = ls_Protocol_PROTOCOL_VERSION;
+    c->has_protocol_version = true;
+    c->schema_hash = LS_SCHEMA_HASH;
+    r = must(0xF5);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_ERR);
+    assert_non_null(strstr(r->ret_msg, "connect: schema_hash is missing"));
+    assert_int_equal(ls_core_session_of(&g_core, 0xF5), -1);
+    /* the state and owner checks come first: their answers do not depend on the fields */
+    req(ls_Request_move_absolute_tag);
+    r = must(HOST_B);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_NOT_OWNER_ERR);
+    g_core.state = ls_State_LOCKED;
+    req(ls_Request_move_absolute_tag);
+    assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_WRONG_STATE_ERR);
+}
+
+static void test_seq_0_is_refused_after_connect(void **state)
+{
+    (void)state;
+    /* connect with seq 0 is fine (the seq a client that sets none sends) ... */
+    ls_ConnectReq *c = &req(ls_Request_connect_tag)->cmd.connect;
+    c->protocol_version = ls_Protocol_PROTOCOL_VERSION;
+    c->has_protocol_version = true;
+    c->schema_hash = LS_SCHEMA_HASH;
+    c->has_schema_hash = true;
+    memset(&g_up, 0, sizeof g_up);
+    g_up.which_msg = ls_Uplink_request_tag;
+    g_up.msg.request = g_rq; /* seq 0 */
+    size_t from = g_nrx;
+    send_uplink(0xF5);
+    assert_int_equal(g_nrx, from + 1);
+    assert_int_equal(g_rx[from].msg.response.ret_code, ls_RetCode_CMD_EXEC_OK);
+    /* ... but a lock with seq 0 after it is not its retransmission: refused, nothing runs */
+    req(ls_Request_lock_tag);
+    g_core.owner = -1;
+    g_core.state = ls_State_UNLOCKED;
+    memset(&g_up, 0, sizeof g_up);
+    g_up.which_msg = ls_Uplink_request_tag;
+    g_up.msg.request = g_rq;
+    from = g_nrx;
+    send_uplink(0xF5);
+    assert_int_equal(g_nrx, from + 1);
+    const ls_Response *r = &g_rx[from].msg.response;
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_ERR);
+    assert_non_null(strstr(r->ret_msg, "lock: seq is 0"));
+    assert_int_equal(g_core.owner, -1);
+    assert_int_equal(g_core.state, ls_State_UNLOCKED);
+}
+
+static uint32_t start_tagged_path(bool give_cycles, int32_t cycles, const char **msg)
+{
+    setup_core(ls_State_RESTING);
+    atomic_store(&g_ctl.plan_slot_busy, false);
+    atomic_store(&g_ctl.cmd_tail, atomic_load(&g_ctl.cmd_head));
+    memcpy(g_snap.q_cmd_rad, k_home, sizeof k_home);
+    g_snap.enabled = true;
+    static const char k_path[] = "a-path-name-of-sixty-three-bytes-which-is-what-names-hold-now-x";
+    req(ls_Request_path_clear_path_tag); /* the path queues are static: start from none */
+    snprintf(g_rq.cmd.path_clear_path.path_name, sizeof g_rq.cmd.path_clear_path.path_name, "%s", k_path);
+    (void)must(HOST_A);
+    ls_PathLoadReq *l = &req(ls_Request_path_load_tag)->cmd.path_load;
+    /* names and tags hold 63 bytes (protocol/landscape.options) */
+    snprintf(l->path_name, sizeof l->path_name, "%s", k_path);
+    assert_int_equal(strlen(l->path_name), 63);
+    l->frame = ls_ReferenceFrame_JOINT_FRAME;
+    l->has_frame = true;
+    l->motion_type = ls_MotionType_JOINT_MOTION;
+    l->has_motion_type = true;
+    l->offset_type = ls_OffsetType_ABSOLUTE_DATA;
+    l->has_offset_type = true;
+    l->number_of_points = 1;
+    l->has_frame = l->has_motion_type = l->has_offset_type = l->has_number_of_points = true;
+    l->tags_count = 1;
+    l->tags[0].joints_count = 6;
+    memcpy(l->tags[0].joints, k_home, sizeof k_home);
+    l->tags[0].joints[0] += 0.2;
+    snprintf(l->tags[0].tag_name, sizeof l->tags[0].tag_name, "%s",
+             "a-tag-of-sixty-three-bytes-so-long-that-it-did-not-fit-before-x");
+    assert_int_equal(strlen(l->tags[0].tag_name), 63);
+    l->tags[0].aux_commands_count = 1;
+    snprintf(l->tags[0].aux_commands[0], sizeof l->tags[0].aux_commands[0], "event reached");
+    assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
+    ls_PathMoveReq *m = &req(ls_Request_path_move_tag)->cmd.path_move;
+    snprintf(m->path_name, sizeof m->path_name, "%s", k_path);
+    m->number_of_cycles = cycles;
+    m->has_number_of_cycles = give_cycles;
+    const ls_Response *r = must(HOST_A);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_STARTED_OK);
+    *msg = r->ret_msg;
+    return r->seq;
+}
+
+static void finish_path(uint32_t seq, const ls_Notice **tag, const ls_Notice **fin)
+{
+    size_t from = g_nrx, n;
+    ls_motion_event_t ev = { .kind = LS_MEV_TAG, .ref_seq = seq, .index = 0, .cycle = 1 };
+    snprintf(ev.name, sizeof ev.name, "%s", "a-tag-of-sixty-three-bytes-so-long-that-it-did-not-fit-before-x");
+    snprintf(ev.text, sizeof ev.text, "%s", g_core.run.point);
+    ls_core_on_motion_event(&g_core, &ev);
+    *tag = nth_notice(from, 0);
+    assert_non_null(*tag);
+    assert_string_equal((*tag)->event_id, "tag");
+    ls_motion_event_t done = { .kind = LS_MEV_DONE, .ref_seq = seq };
+    ls_core_on_motion_event(&g_core, &done);
+    *fin = the_final(from, seq, &n);
+    assert_non_null(*fin);
+    assert_int_equal(n, 1);
+    assert_string_equal((*fin)->event_id, "pathMoveComplete");
+}
+
+static void test_path_move_cycles_absent_is_one_zero_is_a_dry_run_that_says_so(void **state)
+{
+    (void)state;
+    const char *msg;
+    const ls_Notice *tag, *fin;
+    /* absent: one real cycle (seed 3.5.2), auxiliary commands run */
+    uint32_t seq = start_tagged_path(false, 0, &msg);
+    assert_int_equal(g_ctl.plan_slot.cycles, 1);
+    assert_false(g_ctl.plan_slot.dry_run);
+    assert_null(strstr(msg, "dry run"));
+    finish_path(seq, &tag, &fin);
+    assert_true(has_data(tag, "tag=a-tag-of-sixty-three-bytes-so-long-that-it-did-not-fit-before-x"));
+    assert_true(has_data(tag, "path=a-path-name-of-sixty-three-bytes-which-is-what-names-hold-now-x"));
+    assert_false(has_data(tag, "dry_run=true"));
+    assert_true(has_data(fin, "point=a-path-name-of-sixty-three-bytes-which-is-what-names-hold-now-x"));
+    assert_false(has_data(fin, "dry_run=true"));
+    /* 0 given: the dry run, and every notice says so */
+    seq = start_tagged_path(true, 0, &msg);
+    assert_int_equal(g_ctl.plan_slot.cycles, 1);
+    assert_true(g_ctl.plan_slot.dry_run);
+    assert_non_null(strstr(msg, "dry run"));
+    finish_path(seq, &tag, &fin);
+    assert_true(has_data(tag, "dry_run=true"));
+    assert_true(has_data(fin, "dry_run=true"));
+    assert_true(has_data(fin, "reason=complete"));
+    /* 2 given: two cycles */
+    seq = start_tagged_path(true, 2, &msg);
+    assert_int_equal(g_ctl.plan_slot.cycles, 2);
+    assert_false(g_ctl.plan_slot.dry_run);
+}
+
+static void test_describe_publishes_the_limits_from_their_homes(void **state)
+{
+    (void)state;
+    req(ls_Request_describe_tag);
+    const ls_Response *r = must(HOST_B); /* any session, not only the owner */
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_EXEC_OK);
+    assert_int_equal(r->which_result, ls_Response_describe_tag);
+    const ls_DescribeRes *d = &r->result.describe;
+    assert_int_equal(d->max_sessions, LS_MAX_SUPERVISORS);
+    assert_int_equal(d->max_paths, LS_PATH_MAX);
+    assert_int_equal(d->max_points_per_path, LS_PATH_MAX_POINTS);
+    assert_int_equal(d->max_dio_watches, LS_MAX_DIO_WATCHES);
+    assert_int_equal(d->max_cycles, LS_PATH_MAX_CYCLES);
+    assert_true(d->min_rate_pct == LS_RATE_MIN_PCT);
+    /* field limits: the nanopb sizes, e.g. pathLoad.tags (32) and its tag_name (63 bytes) */
+    assert_int_equal(d->field_limits_count, LS_FIELD_LIMIT_COUNT);
+    bool saw_tags = false, saw_tag_name = false, saw_client = false;
+    for (pb_size_t i = 0; i < d->field_limits_count; i++) {
+        const ls_FieldLimit *f = &d->field_limits[i];
+        if (f->path_count == 3 && f->path[0] == ls_Uplink_request_tag && f->path[1] == ls_Request_path_load_tag &&
+            f->path[2] == ls_PathLoadReq_tags_tag) {
+            assert_int_equal(f->max_count, pb_arraysize(ls_PathLoadReq, tags));
+            assert_int_equal(f->max_bytes, 0);
+            saw_tags = true;
+        }
+        if (f->path_count == 4 && f->path[1] == ls_Request_path_load_tag && f->path[3] == ls_TagPoint_tag_name_tag) {
+            assert_int_equal(f->max_bytes, 63);
+            saw_tag_name = true;
+        }
+        if (f->path_count == 3 && f->path[1] == ls_Request_connect_tag && f->path[2] == ls_ConnectReq_client_name_tag) {
+            assert_true(f->max_bytes >= 63);
+            saw_client = true;
+        }
+    }
+    assert_true(saw_tags && saw_tag_name && saw_client);
+    /* the DIO map, the sensors with their components, the model */
+    assert_int_equal(d->dio_units_count, 1);
+    assert_int_equal(d->dio_units[0].output_mask, 0xFFFF0000u);
+    assert_int_equal(d->dio_units[0].input_mask, 0x0000FFFFu);
+    assert_int_equal(d->sensors_count, 2);
+    assert_string_equal(d->sensors[0].name, "force_sensor");
+    assert_int_equal(d->sensors[0].components_count, 6);
+    assert_string_equal(d->sensors[0].components[2].name, "Fz");
+    assert_string_equal(d->sensors[0].components[2].unit, "N");
+    assert_string_equal(d->sensors[0].components[5].unit, "Nm");
+    assert_string_equal(d->sensors[1].components[0].name, "distance");
+    assert_string_equal(d->sensors[1].components[0].unit, "m");
+    assert_int_equal(d->tools_count, 0); /* no tool changer composed here */
+    const ls_robot_model_t *mdl = &ls_robot_model_default;
+    assert_int_equal(d->joints_count, LS_N_JOINTS);
+    assert_true(d->joints[1].min_rad == mdl->q_min_rad[1] && d->joints[1].max_rad == mdl->q_max_rad[1]);
+    assert_true(d->joints[5].max_velocity_rad_s == mdl->qd_max_rad_s[5]);
+    assert_true(d->max_linear_speed_m_s == mdl->max_linear_speed_m_s);
+    assert_int_equal(d->workspace_max_m_count, 3);
+    assert_true(d->workspace_max_m[2] == mdl->workspace_max_m[2]);
+    assert_true(d->reach_m == ls_robot_model_reach_m(mdl));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1853,6 +2147,10 @@ int main(void)
         cmocka_unit_test(test_disconnect_action_stop_during_a_motion),
         cmocka_unit_test(test_disconnect_action_stop_deactivate),
         cmocka_unit_test(test_connect_narrows_the_disconnect_action),
+        cmocka_unit_test_setup(test_absent_required_fields_are_refused_naming_them, setup_locked),
+        cmocka_unit_test_setup(test_seq_0_is_refused_after_connect, setup_locked),
+        cmocka_unit_test(test_path_move_cycles_absent_is_one_zero_is_a_dry_run_that_says_so),
+        cmocka_unit_test_setup(test_describe_publishes_the_limits_from_their_homes, setup_locked),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

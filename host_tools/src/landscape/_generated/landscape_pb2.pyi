@@ -5,6 +5,7 @@ from google.protobuf import descriptor as _descriptor
 from google.protobuf import message as _message
 from typing import ClassVar as _ClassVar, Iterable as _Iterable, Mapping as _Mapping, Optional as _Optional, Union as _Union
 
+ABSENT_MEANS_FIELD_NUMBER: _ClassVar[int]
 ABSOLUTE_DATA: OffsetType
 ALARM: NoticeKind
 ALARM_RSVP: NoticeKind
@@ -46,7 +47,6 @@ EVENT: NoticeKind
 EVENT_RSVP: NoticeKind
 FEET: LinearUnit
 FUNCTIONAL_ALL_DEVICES: NodeAddress
-HOST_DEFAULT_FIELD_NUMBER: _ClassVar[int]
 IDLE: State
 INCHES: LinearUnit
 ISOTP_FUNCTIONAL_BASE: IsotpId
@@ -68,6 +68,7 @@ PROTOCOL_NONE: Protocol
 PROTOCOL_VERSION: Protocol
 RADIANS: AngularUnit
 RELATIVE_DATA: OffsetType
+REQUIRED_FIELD_NUMBER: _ClassVar[int]
 RESTING: State
 SLEW_MOTION: MotionType
 STATE_NONE: State
@@ -75,8 +76,9 @@ STRAIGHT_MOTION: MotionType
 TOOL_FRAME: ReferenceFrame
 UNLOCKED: State
 WORLD_CARTESIAN_FRAME: ReferenceFrame
+absent_means: _descriptor.FieldDescriptor
 cmd: _descriptor.FieldDescriptor
-host_default: _descriptor.FieldDescriptor
+required: _descriptor.FieldDescriptor
 
 class AbortMotionReq(_message.Message):
     __slots__ = []
@@ -216,6 +218,64 @@ class DeactivateToolRes(_message.Message):
     __slots__ = []
     def __init__(self) -> None: ...
 
+class DescribeReq(_message.Message):
+    __slots__ = []
+    def __init__(self) -> None: ...
+
+class DescribeRes(_message.Message):
+    __slots__ = ["dio_units", "field_limits", "frame_angle_max_rad", "joints", "max_angular_accel_rad_s2", "max_angular_speed_rad_s", "max_cycles", "max_dio_watches", "max_linear_accel_m_s2", "max_linear_speed_m_s", "max_paths", "max_points_per_path", "max_sessions", "min_rate_pct", "reach_m", "robot_model", "sensors", "tools", "workspace_max_m", "workspace_min_m"]
+    DIO_UNITS_FIELD_NUMBER: _ClassVar[int]
+    FIELD_LIMITS_FIELD_NUMBER: _ClassVar[int]
+    FRAME_ANGLE_MAX_RAD_FIELD_NUMBER: _ClassVar[int]
+    JOINTS_FIELD_NUMBER: _ClassVar[int]
+    MAX_ANGULAR_ACCEL_RAD_S2_FIELD_NUMBER: _ClassVar[int]
+    MAX_ANGULAR_SPEED_RAD_S_FIELD_NUMBER: _ClassVar[int]
+    MAX_CYCLES_FIELD_NUMBER: _ClassVar[int]
+    MAX_DIO_WATCHES_FIELD_NUMBER: _ClassVar[int]
+    MAX_LINEAR_ACCEL_M_S2_FIELD_NUMBER: _ClassVar[int]
+    MAX_LINEAR_SPEED_M_S_FIELD_NUMBER: _ClassVar[int]
+    MAX_PATHS_FIELD_NUMBER: _ClassVar[int]
+    MAX_POINTS_PER_PATH_FIELD_NUMBER: _ClassVar[int]
+    MAX_SESSIONS_FIELD_NUMBER: _ClassVar[int]
+    MIN_RATE_PCT_FIELD_NUMBER: _ClassVar[int]
+    REACH_M_FIELD_NUMBER: _ClassVar[int]
+    ROBOT_MODEL_FIELD_NUMBER: _ClassVar[int]
+    SENSORS_FIELD_NUMBER: _ClassVar[int]
+    TOOLS_FIELD_NUMBER: _ClassVar[int]
+    WORKSPACE_MAX_M_FIELD_NUMBER: _ClassVar[int]
+    WORKSPACE_MIN_M_FIELD_NUMBER: _ClassVar[int]
+    dio_units: _containers.RepeatedCompositeFieldContainer[DioUnitInfo]
+    field_limits: _containers.RepeatedCompositeFieldContainer[FieldLimit]
+    frame_angle_max_rad: float
+    joints: _containers.RepeatedCompositeFieldContainer[JointLimit]
+    max_angular_accel_rad_s2: float
+    max_angular_speed_rad_s: float
+    max_cycles: int
+    max_dio_watches: int
+    max_linear_accel_m_s2: float
+    max_linear_speed_m_s: float
+    max_paths: int
+    max_points_per_path: int
+    max_sessions: int
+    min_rate_pct: float
+    reach_m: float
+    robot_model: str
+    sensors: _containers.RepeatedCompositeFieldContainer[SensorInfo]
+    tools: _containers.RepeatedScalarFieldContainer[str]
+    workspace_max_m: _containers.RepeatedScalarFieldContainer[float]
+    workspace_min_m: _containers.RepeatedScalarFieldContainer[float]
+    def __init__(self, max_sessions: _Optional[int] = ..., max_paths: _Optional[int] = ..., max_points_per_path: _Optional[int] = ..., max_dio_watches: _Optional[int] = ..., max_cycles: _Optional[int] = ..., min_rate_pct: _Optional[float] = ..., frame_angle_max_rad: _Optional[float] = ..., field_limits: _Optional[_Iterable[_Union[FieldLimit, _Mapping]]] = ..., dio_units: _Optional[_Iterable[_Union[DioUnitInfo, _Mapping]]] = ..., sensors: _Optional[_Iterable[_Union[SensorInfo, _Mapping]]] = ..., tools: _Optional[_Iterable[str]] = ..., robot_model: _Optional[str] = ..., joints: _Optional[_Iterable[_Union[JointLimit, _Mapping]]] = ..., max_linear_speed_m_s: _Optional[float] = ..., max_angular_speed_rad_s: _Optional[float] = ..., max_linear_accel_m_s2: _Optional[float] = ..., max_angular_accel_rad_s2: _Optional[float] = ..., workspace_min_m: _Optional[_Iterable[float]] = ..., workspace_max_m: _Optional[_Iterable[float]] = ..., reach_m: _Optional[float] = ...) -> None: ...
+
+class DioUnitInfo(_message.Message):
+    __slots__ = ["input_mask", "output_mask", "unit_id"]
+    INPUT_MASK_FIELD_NUMBER: _ClassVar[int]
+    OUTPUT_MASK_FIELD_NUMBER: _ClassVar[int]
+    UNIT_ID_FIELD_NUMBER: _ClassVar[int]
+    input_mask: int
+    output_mask: int
+    unit_id: int
+    def __init__(self, unit_id: _Optional[int] = ..., input_mask: _Optional[int] = ..., output_mask: _Optional[int] = ...) -> None: ...
+
 class DisconnectReq(_message.Message):
     __slots__ = []
     def __init__(self) -> None: ...
@@ -233,6 +293,16 @@ class Downlink(_message.Message):
     response: Response
     rsvp_ack: RsvpAck
     def __init__(self, response: _Optional[_Union[Response, _Mapping]] = ..., notice: _Optional[_Union[Notice, _Mapping]] = ..., rsvp_ack: _Optional[_Union[RsvpAck, _Mapping]] = ...) -> None: ...
+
+class FieldLimit(_message.Message):
+    __slots__ = ["max_bytes", "max_count", "path"]
+    MAX_BYTES_FIELD_NUMBER: _ClassVar[int]
+    MAX_COUNT_FIELD_NUMBER: _ClassVar[int]
+    PATH_FIELD_NUMBER: _ClassVar[int]
+    max_bytes: int
+    max_count: int
+    path: _containers.RepeatedScalarFieldContainer[int]
+    def __init__(self, path: _Optional[_Iterable[int]] = ..., max_bytes: _Optional[int] = ..., max_count: _Optional[int] = ...) -> None: ...
 
 class GetAccelerationsReq(_message.Message):
     __slots__ = []
@@ -407,6 +477,18 @@ class GetVelocitiesRes(_message.Message):
     world_angular_velocity: float
     world_linear_velocity: float
     def __init__(self, percent_velocity: _Optional[float] = ..., world_linear_velocity: _Optional[float] = ..., world_angular_velocity: _Optional[float] = ..., joint_velocities: _Optional[_Iterable[float]] = ...) -> None: ...
+
+class JointLimit(_message.Message):
+    __slots__ = ["max_accel_rad_s2", "max_rad", "max_velocity_rad_s", "min_rad"]
+    MAX_ACCEL_RAD_S2_FIELD_NUMBER: _ClassVar[int]
+    MAX_RAD_FIELD_NUMBER: _ClassVar[int]
+    MAX_VELOCITY_RAD_S_FIELD_NUMBER: _ClassVar[int]
+    MIN_RAD_FIELD_NUMBER: _ClassVar[int]
+    max_accel_rad_s2: float
+    max_rad: float
+    max_velocity_rad_s: float
+    min_rad: float
+    def __init__(self, min_rad: _Optional[float] = ..., max_rad: _Optional[float] = ..., max_velocity_rad_s: _Optional[float] = ..., max_accel_rad_s2: _Optional[float] = ...) -> None: ...
 
 class LockReq(_message.Message):
     __slots__ = []
@@ -587,7 +669,7 @@ class ReleaseRes(_message.Message):
     def __init__(self) -> None: ...
 
 class Request(_message.Message):
-    __slots__ = ["abort_motion", "activate", "activate_tool", "comply", "connect", "deactivate", "deactivate_tool", "disconnect", "get_accelerations", "get_digital_io", "get_end_effector_state", "get_max_accelerations", "get_max_velocities", "get_motion_control_state", "get_robot_position", "get_sensor_reading", "get_tag_id", "get_tool", "get_tool_offsets", "get_units", "get_velocities", "lock", "manual_control", "move_absolute", "move_arc", "move_react", "move_relative", "path_clear_path", "path_load", "path_move", "put_tool", "release", "resume_motion", "send_command", "seq", "set_acceleration", "set_digital_io", "set_speed", "set_tool_offset", "set_units", "set_world_cartesian_frame", "signal_digital_io", "stop_motion"]
+    __slots__ = ["abort_motion", "activate", "activate_tool", "comply", "connect", "deactivate", "deactivate_tool", "describe", "disconnect", "get_accelerations", "get_digital_io", "get_end_effector_state", "get_max_accelerations", "get_max_velocities", "get_motion_control_state", "get_robot_position", "get_sensor_reading", "get_tag_id", "get_tool", "get_tool_offsets", "get_units", "get_velocities", "lock", "manual_control", "move_absolute", "move_arc", "move_react", "move_relative", "path_clear_path", "path_load", "path_move", "put_tool", "release", "resume_motion", "send_command", "seq", "set_acceleration", "set_digital_io", "set_speed", "set_tool_offset", "set_units", "set_world_cartesian_frame", "signal_digital_io", "stop_motion"]
     ABORT_MOTION_FIELD_NUMBER: _ClassVar[int]
     ACTIVATE_FIELD_NUMBER: _ClassVar[int]
     ACTIVATE_TOOL_FIELD_NUMBER: _ClassVar[int]
@@ -595,6 +677,7 @@ class Request(_message.Message):
     CONNECT_FIELD_NUMBER: _ClassVar[int]
     DEACTIVATE_FIELD_NUMBER: _ClassVar[int]
     DEACTIVATE_TOOL_FIELD_NUMBER: _ClassVar[int]
+    DESCRIBE_FIELD_NUMBER: _ClassVar[int]
     DISCONNECT_FIELD_NUMBER: _ClassVar[int]
     GET_ACCELERATIONS_FIELD_NUMBER: _ClassVar[int]
     GET_DIGITAL_IO_FIELD_NUMBER: _ClassVar[int]
@@ -638,6 +721,7 @@ class Request(_message.Message):
     connect: ConnectReq
     deactivate: DeactivateReq
     deactivate_tool: DeactivateToolReq
+    describe: DescribeReq
     disconnect: DisconnectReq
     get_accelerations: GetAccelerationsReq
     get_digital_io: GetDigitalIOReq
@@ -674,10 +758,10 @@ class Request(_message.Message):
     set_world_cartesian_frame: SetWorldCartesianFrameReq
     signal_digital_io: SignalDigitalIOReq
     stop_motion: StopMotionReq
-    def __init__(self, seq: _Optional[int] = ..., connect: _Optional[_Union[ConnectReq, _Mapping]] = ..., disconnect: _Optional[_Union[DisconnectReq, _Mapping]] = ..., lock: _Optional[_Union[LockReq, _Mapping]] = ..., release: _Optional[_Union[ReleaseReq, _Mapping]] = ..., activate: _Optional[_Union[ActivateReq, _Mapping]] = ..., deactivate: _Optional[_Union[DeactivateReq, _Mapping]] = ..., set_speed: _Optional[_Union[SetSpeedReq, _Mapping]] = ..., set_acceleration: _Optional[_Union[SetAccelerationReq, _Mapping]] = ..., set_tool_offset: _Optional[_Union[SetToolOffsetReq, _Mapping]] = ..., set_world_cartesian_frame: _Optional[_Union[SetWorldCartesianFrameReq, _Mapping]] = ..., set_units: _Optional[_Union[SetUnitsReq, _Mapping]] = ..., get_units: _Optional[_Union[GetUnitsReq, _Mapping]] = ..., get_velocities: _Optional[_Union[GetVelocitiesReq, _Mapping]] = ..., get_accelerations: _Optional[_Union[GetAccelerationsReq, _Mapping]] = ..., get_max_velocities: _Optional[_Union[GetMaxVelocitiesReq, _Mapping]] = ..., get_max_accelerations: _Optional[_Union[GetMaxAccelerationsReq, _Mapping]] = ..., get_tool_offsets: _Optional[_Union[GetToolOffsetsReq, _Mapping]] = ..., get_robot_position: _Optional[_Union[GetRobotPositionReq, _Mapping]] = ..., get_motion_control_state: _Optional[_Union[GetMotionControlStateReq, _Mapping]] = ..., get_tag_id: _Optional[_Union[GetTagIdReq, _Mapping]] = ..., move_relative: _Optional[_Union[MoveRelativeReq, _Mapping]] = ..., move_absolute: _Optional[_Union[MoveAbsoluteReq, _Mapping]] = ..., move_arc: _Optional[_Union[MoveArcReq, _Mapping]] = ..., path_load: _Optional[_Union[PathLoadReq, _Mapping]] = ..., path_clear_path: _Optional[_Union[PathClearPathReq, _Mapping]] = ..., path_move: _Optional[_Union[PathMoveReq, _Mapping]] = ..., stop_motion: _Optional[_Union[StopMotionReq, _Mapping]] = ..., resume_motion: _Optional[_Union[ResumeMotionReq, _Mapping]] = ..., abort_motion: _Optional[_Union[AbortMotionReq, _Mapping]] = ..., get_sensor_reading: _Optional[_Union[GetSensorReadingReq, _Mapping]] = ..., move_react: _Optional[_Union[MoveReactReq, _Mapping]] = ..., comply: _Optional[_Union[ComplyReq, _Mapping]] = ..., manual_control: _Optional[_Union[ManualControlReq, _Mapping]] = ..., get_end_effector_state: _Optional[_Union[GetEndEffectorStateReq, _Mapping]] = ..., get_tool: _Optional[_Union[GetToolReq, _Mapping]] = ..., put_tool: _Optional[_Union[PutToolReq, _Mapping]] = ..., activate_tool: _Optional[_Union[ActivateToolReq, _Mapping]] = ..., deactivate_tool: _Optional[_Union[DeactivateToolReq, _Mapping]] = ..., set_digital_io: _Optional[_Union[SetDigitalIOReq, _Mapping]] = ..., get_digital_io: _Optional[_Union[GetDigitalIOReq, _Mapping]] = ..., signal_digital_io: _Optional[_Union[SignalDigitalIOReq, _Mapping]] = ..., send_command: _Optional[_Union[SendCommandReq, _Mapping]] = ...) -> None: ...
+    def __init__(self, seq: _Optional[int] = ..., connect: _Optional[_Union[ConnectReq, _Mapping]] = ..., disconnect: _Optional[_Union[DisconnectReq, _Mapping]] = ..., lock: _Optional[_Union[LockReq, _Mapping]] = ..., release: _Optional[_Union[ReleaseReq, _Mapping]] = ..., activate: _Optional[_Union[ActivateReq, _Mapping]] = ..., deactivate: _Optional[_Union[DeactivateReq, _Mapping]] = ..., set_speed: _Optional[_Union[SetSpeedReq, _Mapping]] = ..., set_acceleration: _Optional[_Union[SetAccelerationReq, _Mapping]] = ..., set_tool_offset: _Optional[_Union[SetToolOffsetReq, _Mapping]] = ..., set_world_cartesian_frame: _Optional[_Union[SetWorldCartesianFrameReq, _Mapping]] = ..., set_units: _Optional[_Union[SetUnitsReq, _Mapping]] = ..., get_units: _Optional[_Union[GetUnitsReq, _Mapping]] = ..., get_velocities: _Optional[_Union[GetVelocitiesReq, _Mapping]] = ..., get_accelerations: _Optional[_Union[GetAccelerationsReq, _Mapping]] = ..., get_max_velocities: _Optional[_Union[GetMaxVelocitiesReq, _Mapping]] = ..., get_max_accelerations: _Optional[_Union[GetMaxAccelerationsReq, _Mapping]] = ..., get_tool_offsets: _Optional[_Union[GetToolOffsetsReq, _Mapping]] = ..., get_robot_position: _Optional[_Union[GetRobotPositionReq, _Mapping]] = ..., get_motion_control_state: _Optional[_Union[GetMotionControlStateReq, _Mapping]] = ..., get_tag_id: _Optional[_Union[GetTagIdReq, _Mapping]] = ..., move_relative: _Optional[_Union[MoveRelativeReq, _Mapping]] = ..., move_absolute: _Optional[_Union[MoveAbsoluteReq, _Mapping]] = ..., move_arc: _Optional[_Union[MoveArcReq, _Mapping]] = ..., path_load: _Optional[_Union[PathLoadReq, _Mapping]] = ..., path_clear_path: _Optional[_Union[PathClearPathReq, _Mapping]] = ..., path_move: _Optional[_Union[PathMoveReq, _Mapping]] = ..., stop_motion: _Optional[_Union[StopMotionReq, _Mapping]] = ..., resume_motion: _Optional[_Union[ResumeMotionReq, _Mapping]] = ..., abort_motion: _Optional[_Union[AbortMotionReq, _Mapping]] = ..., get_sensor_reading: _Optional[_Union[GetSensorReadingReq, _Mapping]] = ..., move_react: _Optional[_Union[MoveReactReq, _Mapping]] = ..., comply: _Optional[_Union[ComplyReq, _Mapping]] = ..., manual_control: _Optional[_Union[ManualControlReq, _Mapping]] = ..., get_end_effector_state: _Optional[_Union[GetEndEffectorStateReq, _Mapping]] = ..., get_tool: _Optional[_Union[GetToolReq, _Mapping]] = ..., put_tool: _Optional[_Union[PutToolReq, _Mapping]] = ..., activate_tool: _Optional[_Union[ActivateToolReq, _Mapping]] = ..., deactivate_tool: _Optional[_Union[DeactivateToolReq, _Mapping]] = ..., set_digital_io: _Optional[_Union[SetDigitalIOReq, _Mapping]] = ..., get_digital_io: _Optional[_Union[GetDigitalIOReq, _Mapping]] = ..., signal_digital_io: _Optional[_Union[SignalDigitalIOReq, _Mapping]] = ..., send_command: _Optional[_Union[SendCommandReq, _Mapping]] = ..., describe: _Optional[_Union[DescribeReq, _Mapping]] = ...) -> None: ...
 
 class Response(_message.Message):
-    __slots__ = ["abort_motion", "activate", "activate_tool", "comply", "connect", "deactivate", "deactivate_tool", "disconnect", "get_accelerations", "get_digital_io", "get_end_effector_state", "get_max_accelerations", "get_max_velocities", "get_motion_control_state", "get_robot_position", "get_sensor_reading", "get_tag_id", "get_tool", "get_tool_offsets", "get_units", "get_velocities", "lock", "manual_control", "move_absolute", "move_arc", "move_react", "move_relative", "path_clear_path", "path_load", "path_move", "put_tool", "release", "resume_motion", "ret_code", "ret_msg", "send_command", "seq", "session_epoch", "set_acceleration", "set_digital_io", "set_speed", "set_tool_offset", "set_units", "set_world_cartesian_frame", "signal_digital_io", "stop_motion"]
+    __slots__ = ["abort_motion", "activate", "activate_tool", "comply", "connect", "deactivate", "deactivate_tool", "describe", "disconnect", "get_accelerations", "get_digital_io", "get_end_effector_state", "get_max_accelerations", "get_max_velocities", "get_motion_control_state", "get_robot_position", "get_sensor_reading", "get_tag_id", "get_tool", "get_tool_offsets", "get_units", "get_velocities", "lock", "manual_control", "move_absolute", "move_arc", "move_react", "move_relative", "path_clear_path", "path_load", "path_move", "put_tool", "release", "resume_motion", "ret_code", "ret_msg", "send_command", "seq", "session_epoch", "set_acceleration", "set_digital_io", "set_speed", "set_tool_offset", "set_units", "set_world_cartesian_frame", "signal_digital_io", "stop_motion"]
     ABORT_MOTION_FIELD_NUMBER: _ClassVar[int]
     ACTIVATE_FIELD_NUMBER: _ClassVar[int]
     ACTIVATE_TOOL_FIELD_NUMBER: _ClassVar[int]
@@ -685,6 +769,7 @@ class Response(_message.Message):
     CONNECT_FIELD_NUMBER: _ClassVar[int]
     DEACTIVATE_FIELD_NUMBER: _ClassVar[int]
     DEACTIVATE_TOOL_FIELD_NUMBER: _ClassVar[int]
+    DESCRIBE_FIELD_NUMBER: _ClassVar[int]
     DISCONNECT_FIELD_NUMBER: _ClassVar[int]
     GET_ACCELERATIONS_FIELD_NUMBER: _ClassVar[int]
     GET_DIGITAL_IO_FIELD_NUMBER: _ClassVar[int]
@@ -731,6 +816,7 @@ class Response(_message.Message):
     connect: ConnectRes
     deactivate: DeactivateRes
     deactivate_tool: DeactivateToolRes
+    describe: DescribeRes
     disconnect: DisconnectRes
     get_accelerations: GetAccelerationsRes
     get_digital_io: GetDigitalIORes
@@ -770,7 +856,7 @@ class Response(_message.Message):
     set_world_cartesian_frame: SetWorldCartesianFrameRes
     signal_digital_io: SignalDigitalIORes
     stop_motion: StopMotionRes
-    def __init__(self, seq: _Optional[int] = ..., ret_code: _Optional[int] = ..., ret_msg: _Optional[str] = ..., session_epoch: _Optional[int] = ..., connect: _Optional[_Union[ConnectRes, _Mapping]] = ..., disconnect: _Optional[_Union[DisconnectRes, _Mapping]] = ..., lock: _Optional[_Union[LockRes, _Mapping]] = ..., release: _Optional[_Union[ReleaseRes, _Mapping]] = ..., activate: _Optional[_Union[ActivateRes, _Mapping]] = ..., deactivate: _Optional[_Union[DeactivateRes, _Mapping]] = ..., set_speed: _Optional[_Union[SetSpeedRes, _Mapping]] = ..., set_acceleration: _Optional[_Union[SetAccelerationRes, _Mapping]] = ..., set_tool_offset: _Optional[_Union[SetToolOffsetRes, _Mapping]] = ..., set_world_cartesian_frame: _Optional[_Union[SetWorldCartesianFrameRes, _Mapping]] = ..., set_units: _Optional[_Union[SetUnitsRes, _Mapping]] = ..., get_units: _Optional[_Union[GetUnitsRes, _Mapping]] = ..., get_velocities: _Optional[_Union[GetVelocitiesRes, _Mapping]] = ..., get_accelerations: _Optional[_Union[GetAccelerationsRes, _Mapping]] = ..., get_max_velocities: _Optional[_Union[GetMaxVelocitiesRes, _Mapping]] = ..., get_max_accelerations: _Optional[_Union[GetMaxAccelerationsRes, _Mapping]] = ..., get_tool_offsets: _Optional[_Union[GetToolOffsetsRes, _Mapping]] = ..., get_robot_position: _Optional[_Union[GetRobotPositionRes, _Mapping]] = ..., get_motion_control_state: _Optional[_Union[GetMotionControlStateRes, _Mapping]] = ..., get_tag_id: _Optional[_Union[GetTagIdRes, _Mapping]] = ..., move_relative: _Optional[_Union[MoveRelativeRes, _Mapping]] = ..., move_absolute: _Optional[_Union[MoveAbsoluteRes, _Mapping]] = ..., move_arc: _Optional[_Union[MoveArcRes, _Mapping]] = ..., path_load: _Optional[_Union[PathLoadRes, _Mapping]] = ..., path_clear_path: _Optional[_Union[PathClearPathRes, _Mapping]] = ..., path_move: _Optional[_Union[PathMoveRes, _Mapping]] = ..., stop_motion: _Optional[_Union[StopMotionRes, _Mapping]] = ..., resume_motion: _Optional[_Union[ResumeMotionRes, _Mapping]] = ..., abort_motion: _Optional[_Union[AbortMotionRes, _Mapping]] = ..., get_sensor_reading: _Optional[_Union[GetSensorReadingRes, _Mapping]] = ..., move_react: _Optional[_Union[MoveReactRes, _Mapping]] = ..., comply: _Optional[_Union[ComplyRes, _Mapping]] = ..., manual_control: _Optional[_Union[ManualControlRes, _Mapping]] = ..., get_end_effector_state: _Optional[_Union[GetEndEffectorStateRes, _Mapping]] = ..., get_tool: _Optional[_Union[GetToolRes, _Mapping]] = ..., put_tool: _Optional[_Union[PutToolRes, _Mapping]] = ..., activate_tool: _Optional[_Union[ActivateToolRes, _Mapping]] = ..., deactivate_tool: _Optional[_Union[DeactivateToolRes, _Mapping]] = ..., set_digital_io: _Optional[_Union[SetDigitalIORes, _Mapping]] = ..., get_digital_io: _Optional[_Union[GetDigitalIORes, _Mapping]] = ..., signal_digital_io: _Optional[_Union[SignalDigitalIORes, _Mapping]] = ..., send_command: _Optional[_Union[SendCommandRes, _Mapping]] = ...) -> None: ...
+    def __init__(self, seq: _Optional[int] = ..., ret_code: _Optional[int] = ..., ret_msg: _Optional[str] = ..., session_epoch: _Optional[int] = ..., connect: _Optional[_Union[ConnectRes, _Mapping]] = ..., disconnect: _Optional[_Union[DisconnectRes, _Mapping]] = ..., lock: _Optional[_Union[LockRes, _Mapping]] = ..., release: _Optional[_Union[ReleaseRes, _Mapping]] = ..., activate: _Optional[_Union[ActivateRes, _Mapping]] = ..., deactivate: _Optional[_Union[DeactivateRes, _Mapping]] = ..., set_speed: _Optional[_Union[SetSpeedRes, _Mapping]] = ..., set_acceleration: _Optional[_Union[SetAccelerationRes, _Mapping]] = ..., set_tool_offset: _Optional[_Union[SetToolOffsetRes, _Mapping]] = ..., set_world_cartesian_frame: _Optional[_Union[SetWorldCartesianFrameRes, _Mapping]] = ..., set_units: _Optional[_Union[SetUnitsRes, _Mapping]] = ..., get_units: _Optional[_Union[GetUnitsRes, _Mapping]] = ..., get_velocities: _Optional[_Union[GetVelocitiesRes, _Mapping]] = ..., get_accelerations: _Optional[_Union[GetAccelerationsRes, _Mapping]] = ..., get_max_velocities: _Optional[_Union[GetMaxVelocitiesRes, _Mapping]] = ..., get_max_accelerations: _Optional[_Union[GetMaxAccelerationsRes, _Mapping]] = ..., get_tool_offsets: _Optional[_Union[GetToolOffsetsRes, _Mapping]] = ..., get_robot_position: _Optional[_Union[GetRobotPositionRes, _Mapping]] = ..., get_motion_control_state: _Optional[_Union[GetMotionControlStateRes, _Mapping]] = ..., get_tag_id: _Optional[_Union[GetTagIdRes, _Mapping]] = ..., move_relative: _Optional[_Union[MoveRelativeRes, _Mapping]] = ..., move_absolute: _Optional[_Union[MoveAbsoluteRes, _Mapping]] = ..., move_arc: _Optional[_Union[MoveArcRes, _Mapping]] = ..., path_load: _Optional[_Union[PathLoadRes, _Mapping]] = ..., path_clear_path: _Optional[_Union[PathClearPathRes, _Mapping]] = ..., path_move: _Optional[_Union[PathMoveRes, _Mapping]] = ..., stop_motion: _Optional[_Union[StopMotionRes, _Mapping]] = ..., resume_motion: _Optional[_Union[ResumeMotionRes, _Mapping]] = ..., abort_motion: _Optional[_Union[AbortMotionRes, _Mapping]] = ..., get_sensor_reading: _Optional[_Union[GetSensorReadingRes, _Mapping]] = ..., move_react: _Optional[_Union[MoveReactRes, _Mapping]] = ..., comply: _Optional[_Union[ComplyRes, _Mapping]] = ..., manual_control: _Optional[_Union[ManualControlRes, _Mapping]] = ..., get_end_effector_state: _Optional[_Union[GetEndEffectorStateRes, _Mapping]] = ..., get_tool: _Optional[_Union[GetToolRes, _Mapping]] = ..., put_tool: _Optional[_Union[PutToolRes, _Mapping]] = ..., activate_tool: _Optional[_Union[ActivateToolRes, _Mapping]] = ..., deactivate_tool: _Optional[_Union[DeactivateToolRes, _Mapping]] = ..., set_digital_io: _Optional[_Union[SetDigitalIORes, _Mapping]] = ..., get_digital_io: _Optional[_Union[GetDigitalIORes, _Mapping]] = ..., signal_digital_io: _Optional[_Union[SignalDigitalIORes, _Mapping]] = ..., send_command: _Optional[_Union[SendCommandRes, _Mapping]] = ..., describe: _Optional[_Union[DescribeRes, _Mapping]] = ...) -> None: ...
 
 class ResumeMotionReq(_message.Message):
     __slots__ = []
@@ -817,6 +903,22 @@ class SendCommandRes(_message.Message):
     RESULT_FIELD_NUMBER: _ClassVar[int]
     result: str
     def __init__(self, result: _Optional[str] = ...) -> None: ...
+
+class SensorComponent(_message.Message):
+    __slots__ = ["name", "unit"]
+    NAME_FIELD_NUMBER: _ClassVar[int]
+    UNIT_FIELD_NUMBER: _ClassVar[int]
+    name: str
+    unit: str
+    def __init__(self, name: _Optional[str] = ..., unit: _Optional[str] = ...) -> None: ...
+
+class SensorInfo(_message.Message):
+    __slots__ = ["components", "name"]
+    COMPONENTS_FIELD_NUMBER: _ClassVar[int]
+    NAME_FIELD_NUMBER: _ClassVar[int]
+    components: _containers.RepeatedCompositeFieldContainer[SensorComponent]
+    name: str
+    def __init__(self, name: _Optional[str] = ..., components: _Optional[_Iterable[_Union[SensorComponent, _Mapping]]] = ...) -> None: ...
 
 class SetAccelerationReq(_message.Message):
     __slots__ = ["accel", "attribute"]

@@ -1,0 +1,125 @@
+/* describe (ours): the device publishes every limit a client must respect,
+ * so that no client learns one from a refusal (docs/protocol.md "Device
+ * description"). Each figure is read from its one home: the field bounds
+ * from the table protocol/gen_registry.py derives from landscape.options,
+ * table sizes from the core's headers, the DIO map, sensors and tool rack
+ * from the composed HAL, joint and Cartesian limits from the robot model.
+ * Everything is SI, whatever setUnits chose. */
+#include <stdio.h>
+#include <string.h>
+
+#include "cmd_sensor.h"
+#include "ls_core.h"
+
+_Static_assert(LS_FIELD_LIMIT_COUNT <= pb_arraysize(ls_DescribeRes, field_limits),
+               "landscape.options: raise ls.DescribeRes.field_limits max_count to hold every bounded uplink field");
+_Static_assert(pb_arraysize(ls_FieldLimit, path) >= sizeof(((ls_field_limit_t *)0)->path),
+               "FieldLimit.path must hold the generated paths");
+_Static_assert(LS_CORE_MAX_DIO_UNITS <= pb_arraysize(ls_DescribeRes, dio_units),
+               "landscape.options: ls.DescribeRes.dio_units must hold LS_CORE_MAX_DIO_UNITS");
+_Static_assert(LS_N_JOINTS <= pb_arraysize(ls_DescribeRes, joints), "ls.DescribeRes.joints must hold every joint");
+
+static void describe_limits(ls_DescribeRes *r)
+{
+    for (size_t i = 0; i < LS_FIELD_LIMIT_COUNT; i++) {
+        const ls_field_limit_t *g = &ls_field_limits[i];
+        ls_FieldLimit *f = &r->field_limits[r->field_limits_count++];
+        for (uint8_t k = 0; k < g->depth; k++) {
+            f->path[f->path_count++] = g->path[k];
+        }
+        f->max_bytes = g->max_bytes;
+        f->max_count = g->max_count;
+    }
+}
+
+/* Returns false when the HAL has more than the message holds (the answer
+ * then says so instead of publishing a partial list as if it were whole). */
+static bool describe_devices(const ls_core_t *core, ls_DescribeRes *r)
+{
+    bool whole = true;
+    if (core->dio_units > LS_CORE_MAX_DIO_UNITS) {
+        whole = false;
+    }
+    for (uint16_t u = 0; u < core->dio_units && u < LS_CORE_MAX_DIO_UNITS; u++) {
+        ls_DioUnitInfo *d = &r->dio_units[r->dio_units_count++];
+        d->unit_id = u;
+        d->input_mask = core->dio_info[u].input_mask;
+        d->output_mask = core->dio_info[u].output_mask;
+    }
+    for (size_t i = 0; i < core->n_sensors; i++) {
+        const hal_sensor_t *s = &core->sensors[i];
+        if (r->sensors_count >= pb_arraysize(ls_DescribeRes, sensors) || s->name == NULL) {
+            whole = false;
+            break;
+        }
+        ls_SensorInfo *o = &r->sensors[r->sensors_count++];
+        snprintf(o->name, sizeof o->name, "%s", s->name);
+        const char *unit = "";
+        const char *comp;
+        for (size_t k = 0; (comp = ls_core_sensor_component(s, k, &unit)) != NULL; k++) {
+            if (o->components_count >= pb_arraysize(ls_SensorInfo, components)) {
+                whole = false;
+                break;
+            }
+            ls_SensorComponent *c = &o->components[o->components_count++];
+            snprintf(c->name, sizeof c->name, "%s", comp);
+            snprintf(c->unit, sizeof c->unit, "%s", unit);
+        }
+    }
+    if (core->tool != NULL && core->tool->ops != NULL && core->tool->ops->name != NULL) {
+        const char *name;
+        for (int i = 0; (name = core->tool->ops->name(core->tool->self, i)) != NULL; i++) {
+            if (r->tools_count >= pb_arraysize(ls_DescribeRes, tools) || strlen(name) >= sizeof r->tools[0]) {
+                whole = false;
+                break;
+            }
+            snprintf(r->tools[r->tools_count++], sizeof r->tools[0], "%s", name);
+        }
+    }
+    return whole;
+}
+
+static void describe_model(const ls_robot_model_t *m, ls_DescribeRes *r)
+{
+    snprintf(r->robot_model, sizeof r->robot_model, "%s", m->name != NULL ? m->name : "");
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        ls_JointLimit *l = &r->joints[r->joints_count++];
+        l->min_rad = m->q_min_rad[j];
+        l->max_rad = m->q_max_rad[j];
+        l->max_velocity_rad_s = m->qd_max_rad_s[j];
+        l->max_accel_rad_s2 = m->qdd_max_rad_s2[j];
+    }
+    r->max_linear_speed_m_s = m->max_linear_speed_m_s;
+    r->max_angular_speed_rad_s = m->max_angular_speed_rad_s;
+    r->max_linear_accel_m_s2 = m->max_linear_accel_m_s2;
+    r->max_angular_accel_rad_s2 = m->max_angular_accel_rad_s2;
+    for (int k = 0; k < 3; k++) {
+        r->workspace_min_m[r->workspace_min_m_count++] = m->workspace_min_m[k];
+        r->workspace_max_m[r->workspace_max_m_count++] = m->workspace_max_m[k];
+    }
+    r->reach_m = ls_robot_model_reach_m(m);
+}
+
+int32_t ls_h_describe(struct ls_core *core, struct ls_call *call)
+{
+    ls_DescribeRes *r = &call->res->result.describe;
+    r->max_sessions = LS_MAX_SUPERVISORS;
+    r->max_paths = LS_PATH_MAX;
+    r->max_points_per_path = LS_PATH_MAX_POINTS;
+    r->max_dio_watches = LS_MAX_DIO_WATCHES;
+    r->max_cycles = LS_PATH_MAX_CYCLES;
+    r->min_rate_pct = LS_RATE_MIN_PCT;
+    r->frame_angle_max_rad = LS_FRAME_ANGLE_MAX_RAD;
+    describe_limits(r);
+    bool whole = describe_devices(core, r);
+    if (core->model != NULL) {
+        describe_model(core->model, r);
+    }
+    if (!whole) {
+        return ls_reply(call, ls_RetCode_CMD_EXEC_OK,
+                        "described, but the HAL has more sensors, components or tools than describe holds "
+                        "(protocol/landscape.options): the lists are cut");
+    }
+    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "%s",
+                    core->model != NULL ? "described (SI units)" : "described (SI units); no arm is composed");
+}

@@ -1,0 +1,79 @@
+"""Issue 19 item 2 against the running controller: the device describes itself, the host
+library reads it once per session and checks requests against it before sending, names and
+tags of 63 bytes go through whole, and `landscape describe` prints it."""
+from __future__ import annotations
+
+import can
+import pytest
+
+from conftest import Controller
+from landscape import errors
+from landscape.supervisor import Supervisor, notice_data
+
+HOME = [0.0, 0.3, 0.3, 0.0, 0.9, 0.0]
+NAME63 = "path-" + "n" * 53 + "-end."  # 63 bytes
+TAG63 = "tag-" + "\u00e9" * 27 + "-end."  # 63 bytes of UTF-8, 36 characters
+
+
+def executed(sup: Supervisor) -> int:
+    """Requests the device executed for this session (sendCommand status)."""
+    text = sup.send_command("status").result["result"]
+    line = next(x for x in text.splitlines() if x.startswith(f"session 0x{sup.source_address:02X}"))
+    return int(line.split("executed=")[1].split()[0])
+
+
+def test_the_description_read_at_connect(bus: can.BusABC) -> None:
+    assert len(NAME63.encode()) == 63 and len(TAG63.encode()) == 63
+    with Supervisor(bus, client_name="describe-" + "c" * 54) as sup:  # a 63-byte client name connects
+        d = sup.description
+        assert d is not None
+        r = d.res
+        assert (r.max_sessions, r.max_paths, r.max_points_per_path, r.max_dio_watches) == (4, 8, 256, 8)
+        assert [(u.unit_id, u.input_mask, u.output_mask) for u in r.dio_units] == [(0, 0x0000FFFF, 0xFFFF0000)]
+        assert d.sensors["force_sensor"] == [("Fx", "N"), ("Fy", "N"), ("Fz", "N"), ("Tx", "Nm"), ("Ty", "Nm"),
+                                             ("Tz", "Nm")]
+        assert d.sensors["laser_standoff_sensor"] == [("distance", "m")]
+        assert d.tools == ["gripper", "probe"]
+        assert r.robot_model and len(r.joints) == 6 and all(j.min_rad < j.max_rad for j in r.joints)
+        assert r.max_linear_speed_m_s > 0 and len(r.workspace_max_m) == 3
+        for name in ("connect.client_name", "pathLoad.path_name", "pathLoad.tags.tag_name", "moveAbsolute.point_name",
+                     "getTool.tool_id", "getSensorReading.sensor_type"):
+            assert d.limit(name).max_bytes == 63, name
+        assert d.limit("pathLoad.tags").max_count == 32
+        assert d.limit("pathLoad.tags.aux_commands").max_count == 4
+        # the same answer when asked again, in another unit system
+        again = sup.describe().message
+        assert again == r
+
+
+def test_limits_are_checked_before_sending_and_63_bytes_go_through(bus: can.BusABC) -> None:
+    with Supervisor(bus, client_name="names") as sup:
+        sup.lock()
+        sup.activate()
+        before = executed(sup)
+        with pytest.raises(errors.ArgumentError, match=r"pathLoad.path_name is 64 bytes .* at most 63 \(describe\)"):
+            sup.path_load(NAME63 + "x", [{"joints": HOME}])
+        with pytest.raises(errors.ArgumentError, match=r"pathLoad.tags has 33 items"):
+            sup.path_load("p", [{"joints": HOME}] * 33)
+        assert executed(sup) == before + 1  # the status request itself: nothing else reached the device
+        sup.wait_complete(sup.move_absolute("home", HOME), timeout_s=30)
+        q1 = [HOME[0] + 0.2, *HOME[1:]]
+        assert sup.path_load(NAME63, [{"joints": q1, "tag_name": TAG63}]).ok
+        rv = sup.path_move(NAME63)  # number_of_cycles left out: one cycle
+        final = sup.wait_complete(rv, timeout_s=30)
+        assert notice_data(final)["point"] == NAME63 and "dry_run" not in notice_data(final)
+        assert sup.get_tag_id().result == {"path_name": NAME63, "tag_id": TAG63}
+        rv = sup.path_move(NAME63, number_of_cycles=0)
+        assert "dry run" in rv.ret_msg
+        final = sup.wait_complete(rv, timeout_s=30)
+        assert notice_data(final)["dry_run"] == "true"
+        sup.deactivate()
+        sup.release()
+
+
+def test_cli_describe(controller: Controller) -> None:
+    out = controller.cli("describe")
+    assert out.returncode == 0, out.stderr
+    for part in ("dio unit 0: inputs 0x0000FFFF outputs 0xFFFF0000", "sensor force_sensor: Fx[N]",
+                 "tools: gripper, probe", "limit pathLoad.tags: 32 items", "joint 6: ["):
+        assert part in out.stdout, (part, out.stdout)
