@@ -1,0 +1,305 @@
+"""Issue 19, acceptance: a client written from the contract alone.
+
+This module imports nothing of the `landscape` package: only python-can, can-isotp and
+the classes protoc generates from protocol/landscape.proto while the test runs. What it
+knows of the wire comes from docs/protocol.md (addresses, ISO-TP addressing, the schema
+hash recipe, seq rules, absent fields, the device description, notices); where the docs
+were not enough, the docs were fixed, not this file.
+
+The session is a sequence of small steps (RawClient methods and the step_* functions), so
+that later items (an RSVP answered with decline) add a step, not a new client.
+"""
+from __future__ import annotations
+
+import hashlib
+import importlib.util
+import subprocess
+import threading
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+import can
+import isotp
+import pytest
+
+from conftest import Controller, open_slcan
+
+ROOT = Path(__file__).resolve().parents[2]
+
+# docs/protocol.md "Identifiers and priorities"
+DEVICE = 0x10          # landscaped's default node address
+HOST = 0xF1            # a supervisor's default address
+HEARTBEAT_ID = 0x14FF0100  # | sender address; hb_role (byte 2) 1 = supervisor
+HEARTBEAT_PERIOD_S = 0.2
+
+
+# ---------------------------------------------------------------- the schema, at test time
+
+def compile_schema(out: Path) -> ModuleType:
+    """protoc --python_out from protocol/landscape.proto into `out`; the module it wrote."""
+    subprocess.run(["protoc", "-I", str(ROOT / "protocol"), "-I", "/usr/include", f"--python_out={out}",
+                    str(ROOT / "protocol" / "landscape.proto")], check=True, capture_output=True, timeout=60)
+    spec = importlib.util.spec_from_file_location("raw_landscape_pb2", out / "landscape_pb2.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def schema_hash() -> int:
+    """docs/protocol.md "Schema hash": the first 4 bytes, big-endian, of the SHA-256 of the
+    FileDescriptorSet `protoc -I protocol -I /usr/include --descriptor_set_out` writes."""
+    desc = subprocess.run(["protoc", "-I", "protocol", "-I", "/usr/include", "--descriptor_set_out=/dev/stdout",
+                           "protocol/landscape.proto"], cwd=ROOT, check=True, capture_output=True, timeout=60).stdout
+    return int.from_bytes(hashlib.sha256(desc).digest()[:4], "big")
+
+
+# ---------------------------------------------------------------- the client
+
+class RawClient:
+    """One session over ISO-TP normal fixed 29-bit addressing (docs/protocol.md "ISO-TP
+    parameters"), with the supervisor HEARTBEAT sent every 200 ms."""
+
+    def __init__(self, bus: can.BusABC, pb: ModuleType) -> None:
+        self.bus = bus
+        self.pb = pb
+        self.seq = 0
+        self.epoch = 0
+        self.notices: list[Any] = []
+        self._notifier = can.Notifier(bus, [], timeout=0.01)
+        address = isotp.Address(isotp.AddressingMode.NormalFixed_29bits, source_address=HOST,
+                                target_address=DEVICE)
+        self._stack = isotp.NotifierBasedCanStack(bus, self._notifier, address=address,
+                                                  params={"blocking_send": False})
+        self._stop = threading.Event()
+        self._hb = threading.Thread(target=self._heartbeat, daemon=True)
+
+    def __enter__(self) -> RawClient:
+        self._stack.start()
+        self._hb.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._stop.set()
+        self._hb.join(2)
+        self._stack.stop()
+        self._notifier.stop()
+
+    def _heartbeat(self) -> None:
+        # docs/protocol.md "Liveness": byte 0 hb_counter (+1 per frame), byte 2 hb_role 1,
+        # bytes 3-4 hb_period_ms little-endian (the period stated at connect), the rest 0
+        period_ms = int(HEARTBEAT_PERIOD_S * 1000)
+        counter = 0
+        while not self._stop.is_set():
+            data = bytes([counter, 0, 1, period_ms & 0xFF, period_ms >> 8, 0, 0, 0])
+            self.bus.send(can.Message(arbitration_id=HEARTBEAT_ID | HOST, is_extended_id=True, data=data))
+            counter = (counter + 1) & 0xFF
+            self._stop.wait(HEARTBEAT_PERIOD_S)
+
+    def send(self, uplink: Any) -> None:
+        self._stack.send(uplink.SerializeToString())
+
+    def _receive(self, timeout_s: float) -> Any | None:
+        data = self._stack.recv(block=True, timeout=timeout_s)
+        if data is None:
+            return None
+        down = self.pb.Downlink()
+        down.ParseFromString(bytes(data))
+        if down.WhichOneof("msg") == "notice":
+            self.notices.append(down.notice)
+        return down
+
+    def exchange(self, request: Any, timeout_s: float = 5.0) -> Any:
+        """Send `request` as it is and return the Response carrying its seq; notices that
+        arrive meanwhile are kept in self.notices."""
+        self.send(self.pb.Uplink(request=request))
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            down = self._receive(deadline - time.monotonic())
+            if down is not None and down.WhichOneof("msg") == "response" and down.response.seq == request.seq:
+                return down.response
+        raise AssertionError(f"no answer to seq {request.seq} ({request.WhichOneof('cmd')}) within {timeout_s} s")
+
+    def call(self, timeout_s: float = 5.0, **command: Any) -> Any:
+        """Send one request with a new seq > 0 (docs/protocol.md "Sequence numbers")."""
+        self.seq += 1
+        return self.exchange(self.pb.Request(seq=self.seq, **command), timeout_s)
+
+    def ok(self, **command: Any) -> Any:
+        res = self.call(**command)
+        assert res.ret_code in (self.pb.CMD_EXEC_OK, self.pb.CMD_STARTED_OK), \
+            f"{list(command)}: {self.pb.RetCode.Name(res.ret_code)} {res.ret_msg}"
+        assert self.epoch == 0 or res.session_epoch == self.epoch  # 0: the connect that opens it
+        return res
+
+    def final(self, seq: int, timeout_s: float = 30.0) -> Any:
+        """The one final notice of the non-blocking request `seq` of this session
+        (matched by ref_seq and session_epoch: docs/protocol.md "Session epoch")."""
+        deadline = time.monotonic() + timeout_s
+        while True:
+            for n in self.notices:
+                if n.final and n.ref_seq == seq and n.session_epoch == self.epoch:
+                    return n
+            left = deadline - time.monotonic()
+            assert left > 0, f"no final notice for seq {seq} within {timeout_s} s: {list(self.notices)}"
+            self._receive(min(left, 0.2))
+
+    def of(self, seq: int) -> list[Any]:
+        """Every notice received about request `seq` of this session, in order."""
+        return [n for n in self.notices if n.ref_seq == seq and n.session_epoch == self.epoch]
+
+
+def data(notice: Any) -> dict[str, str]:
+    return dict(item.partition("=")[::2] for item in notice.data)
+
+
+# ---------------------------------------------------------------- the steps of a session
+
+def step_connect(c: RawClient) -> Any:
+    pb = c.pb
+    res = c.ok(connect=pb.ConnectReq(protocol_version=pb.PROTOCOL_VERSION, schema_hash=schema_hash(),
+                                     client_name="raw-client",
+                                     heartbeat_period_ms=int(HEARTBEAT_PERIOD_S * 1000)))
+    assert res.connect.schema_hash == schema_hash()
+    c.epoch = res.connect.session_epoch
+    assert c.epoch > 0 and res.session_epoch == c.epoch
+    return res.connect
+
+
+def step_describe(c: RawClient) -> Any:
+    d = c.ok(describe=c.pb.DescribeReq()).describe
+    assert d.max_paths > 0 and d.max_points_per_path > 0
+    assert len(d.joints) == 6 and all(j.min_rad < j.max_rad for j in d.joints)
+    assert len(d.workspace_min_m) == 3 and len(d.workspace_max_m) == 3
+    return d
+
+
+def limit(c: RawClient, d: Any, *names: str) -> Any:
+    """The FieldLimit of request field path `names` (e.g. "path_load", "tags"): FieldLimit.path
+    holds field numbers from ls.Uplink down (docs/protocol.md "Device description")."""
+    desc = c.pb.Uplink.DESCRIPTOR.fields_by_name["request"]
+    path = [desc.number]
+    msg = desc.message_type
+    for name in names:
+        fd = msg.fields_by_name[name]
+        path.append(fd.number)
+        msg = fd.message_type
+    found = [fl for fl in d.field_limits if list(fl.path) == path]
+    assert len(found) == 1, f"the description has no limit for {names}"
+    return found[0]
+
+
+def step_take_control(c: RawClient) -> None:
+    c.ok(lock=c.pb.LockReq())
+    c.ok(activate=c.pb.ActivateReq())
+
+
+def joints_now(c: RawClient) -> list[float]:
+    return list(c.ok(get_robot_position=c.pb.GetRobotPositionReq()).get_robot_position.joints)
+
+
+def within(d: Any, q: list[float]) -> list[float]:
+    """q kept 0.05 rad inside the published joint limits."""
+    return [min(max(v, j.min_rad + 0.05), j.max_rad - 0.05) for v, j in zip(q, d.joints, strict=True)]
+
+
+def step_move(c: RawClient, d: Any) -> Any:
+    pb = c.pb
+    q = joints_now(c)
+    target = within(d, [q[0] + 0.2, *q[1:]])
+    res = c.ok(move_absolute=pb.MoveAbsoluteReq(point_name="raw-move", frame=pb.JOINT_FRAME, values=target))
+    assert res.ret_code == pb.CMD_STARTED_OK
+    n = c.final(res.seq)
+    assert n.kind == pb.EVENT and n.event_id == "moveAbsoluteComplete", n
+    assert data(n)["reason"] == "complete" and data(n)["point"] == "raw-move"
+    return n
+
+
+def step_two_cycle_path(c: RawClient, d: Any) -> list[Any]:
+    pb = c.pb
+    q = joints_now(c)
+    points = [pb.TagPoint(joints=within(d, [q[0] - 0.15, *q[1:]]), tag_name="first"),
+              pb.TagPoint(joints=within(d, [q[0], q[1] + 0.1, *q[2:]]), tag_name="second")]
+    assert len(points) <= limit(c, d, "path_load", "tags").max_count
+    assert len(b"second") <= limit(c, d, "path_load", "tags", "tag_name").max_bytes
+    loaded = c.ok(path_load=pb.PathLoadReq(path_name="raw-path", frame=pb.JOINT_FRAME, motion_type=pb.JOINT_MOTION,
+                                           offset_type=pb.ABSOLUTE_DATA, number_of_points=len(points),
+                                           tags=points))
+    assert loaded.path_load.points_in_path == 2
+    res = c.ok(path_move=pb.PathMoveReq(path_name="raw-path", number_of_cycles=2))
+    assert res.ret_code == pb.CMD_STARTED_OK
+    n = c.final(res.seq, timeout_s=60)
+    assert n.kind == pb.EVENT and n.event_id == "pathMoveComplete", n
+    assert data(n)["reason"] == "complete" and "dry_run" not in data(n)
+    tags = [data(t) for t in c.of(res.seq) if t.event_id == "tag"]
+    assert [(t["tag"], t["cycle"]) for t in tags] == [("first", "1"), ("second", "1"), ("first", "2"),
+                                                      ("second", "2")]
+    assert all(t["path"] == "raw-path" for t in tags)
+    return tags
+
+
+def step_give_back(c: RawClient) -> None:
+    c.ok(deactivate=c.pb.DeactivateReq())
+    c.ok(release=c.pb.ReleaseReq())
+
+
+def step_disconnect(c: RawClient) -> None:
+    c.ok(disconnect=c.pb.DisconnectReq())
+    # the session is gone: the next request (a new seq) is refused
+    res = c.call(get_motion_control_state=c.pb.GetMotionControlStateReq())
+    assert res.ret_code == c.pb.CMD_NOT_CONNECTED_ERR
+
+
+# ---------------------------------------------------------------- the tests
+
+@pytest.fixture
+def raw(controller: Controller, tmp_path: Path) -> Iterator[RawClient]:
+    pb = compile_schema(tmp_path)
+    bus = open_slcan(controller.pty)
+    try:
+        with RawClient(bus, pb) as client:
+            yield client
+    finally:
+        bus.shutdown()
+
+
+def test_a_session_from_the_contract_alone(raw: RawClient) -> None:
+    step_connect(raw)
+    d = step_describe(raw)
+    step_take_control(raw)
+    step_move(raw, d)
+    step_two_cycle_path(raw, d)
+    step_give_back(raw)
+    step_disconnect(raw)
+
+
+def test_what_the_contract_refuses(raw: RawClient) -> None:
+    """The rules of docs/protocol.md that a careless client meets first: seq 0 after
+    connect, an absent required field, an absent number_of_cycles (one cycle, not a dry run)."""
+    pb = raw.pb
+    step_connect(raw)
+    d = step_describe(raw)
+    # seq 0 is not a seq: refused, nothing runs
+    res = raw.exchange(pb.Request(seq=0, lock=pb.LockReq()))
+    assert res.ret_code == pb.CMD_PARAM_ERR and "seq is 0" in res.ret_msg
+    state = raw.ok(get_motion_control_state=pb.GetMotionControlStateReq()).get_motion_control_state.state
+    assert state == pb.UNLOCKED
+    step_take_control(raw)
+    # a move without its frame: refused naming the field
+    res = raw.call(move_absolute=pb.MoveAbsoluteReq(point_name="p", values=joints_now(raw)))
+    assert res.ret_code == pb.CMD_PARAM_ERR and "frame is missing" in res.ret_msg
+    # pathMove without number_of_cycles runs once (seed 3.5.2), with its auxiliary command
+    q = joints_now(raw)
+    point = pb.TagPoint(joints=within(d, [q[0] + 0.1, *q[1:]]), tag_name="only", aux_commands=["event aux"])
+    raw.ok(path_load=pb.PathLoadReq(path_name="once", frame=pb.JOINT_FRAME, motion_type=pb.JOINT_MOTION,
+                                    offset_type=pb.ABSOLUTE_DATA, number_of_points=1, tags=[point]))
+    res = raw.ok(path_move=pb.PathMoveReq(path_name="once"))
+    n = raw.final(res.seq)
+    assert n.event_id == "pathMoveComplete" and "dry_run" not in data(n)
+    assert [data(t)["cycle"] for t in raw.of(res.seq) if t.event_id == "tag"] == ["1"]
+    assert any(x.event_id == "aux" for x in raw.notices), "the auxiliary command did not run"
+    step_give_back(raw)
+    step_disconnect(raw)
