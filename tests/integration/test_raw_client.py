@@ -6,17 +6,19 @@ knows of the wire comes from docs/protocol.md (addresses, ISO-TP addressing, the
 hash recipe, seq rules, absent fields, the device description, notices); where the docs
 were not enough, the docs were fixed, not this file.
 
-The session is a sequence of small steps (RawClient methods and the step_* functions), so
-that later items (an RSVP answered with decline) add a step, not a new client.
+The session is a sequence of small steps (RawClient methods and the step_* functions):
+connect, read the description, take control, a move, a two-cycle tagged path, an RSVP
+answered with decline and its effect, give control back, disconnect.
 """
 from __future__ import annotations
 
 import hashlib
 import importlib.util
+import socket
 import subprocess
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from types import ModuleType
 from typing import Any
@@ -25,7 +27,7 @@ import can
 import isotp
 import pytest
 
-from conftest import Controller, open_slcan
+from conftest import open_slcan, start_controller
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -69,6 +71,7 @@ class RawClient:
         self.seq = 0
         self.epoch = 0
         self.notices: list[Any] = []
+        self.acks: list[Any] = []  # RsvpAck: the device's answer to each RsvpReply
         self._notifier = can.Notifier(bus, [], timeout=0.01)
         address = isotp.Address(isotp.AddressingMode.NormalFixed_29bits, source_address=HOST,
                                 target_address=DEVICE)
@@ -110,6 +113,8 @@ class RawClient:
         down.ParseFromString(bytes(data))
         if down.WhichOneof("msg") == "notice":
             self.notices.append(down.notice)
+        elif down.WhichOneof("msg") == "rsvp_ack":
+            self.acks.append(down.rsvp_ack)
         return down
 
     def exchange(self, request: Any, timeout_s: float = 5.0) -> Any:
@@ -135,17 +140,26 @@ class RawClient:
         assert self.epoch == 0 or res.session_epoch == self.epoch  # 0: the connect that opens it
         return res
 
+    def wait_for(self, pool: list[Any], match: Callable[[Any], bool], timeout_s: float) -> Any | None:
+        """The first item of `pool` (self.notices or self.acks) that matches, receiving
+        while there is none; None after timeout_s."""
+        deadline = time.monotonic() + timeout_s
+        while True:
+            for item in pool:
+                if match(item):
+                    return item
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return None
+            self._receive(min(left, 0.05))
+
     def final(self, seq: int, timeout_s: float = 30.0) -> Any:
         """The one final notice of the non-blocking request `seq` of this session
         (matched by ref_seq and session_epoch: docs/protocol.md "Session epoch")."""
-        deadline = time.monotonic() + timeout_s
-        while True:
-            for n in self.notices:
-                if n.final and n.ref_seq == seq and n.session_epoch == self.epoch:
-                    return n
-            left = deadline - time.monotonic()
-            assert left > 0, f"no final notice for seq {seq} within {timeout_s} s: {list(self.notices)}"
-            self._receive(min(left, 0.2))
+        n = self.wait_for(self.notices, lambda n: n.final and n.ref_seq == seq and n.session_epoch == self.epoch,
+                          timeout_s)
+        assert n is not None, f"no final notice for seq {seq} within {timeout_s} s: {list(self.notices)}"
+        return n
 
     def of(self, seq: int) -> list[Any]:
         """Every notice received about request `seq` of this session, in order."""
@@ -241,6 +255,51 @@ def step_two_cycle_path(c: RawClient, d: Any) -> list[Any]:
     return tags
 
 
+def set_inputs(dio_socket: Path, on: int, off: int = 0) -> None:
+    """The simulated inputs, through the sim world's control socket (test equipment standing
+    in for the wiring, not the protocol)."""
+    with socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM) as s:
+        s.sendto(f"in {on:x} {off:x}".encode(), str(dio_socket))
+
+
+def step_rsvp_decline(c: RawClient, dio_socket: Path) -> None:
+    """docs/protocol.md "RSVP": a signalDigitalIO watch with an RSVP callback asks when its
+    bits rise; decline cancels the watch, the reply's data reaches the event log, and the
+    reply is acknowledged (a second answer to the same id is refused)."""
+    pb = c.pb
+    bit = 0x20
+    set_inputs(dio_socket, 0, bit)
+    armed = c.ok(signal_digital_io=pb.SignalDigitalIOReq(type="digital", unit_id=0, bit_string=bit,
+                                                         callback_type=pb.CB_EVENT_RSVP))
+    watch = armed.signal_digital_io.watch_id
+    set_inputs(dio_socket, bit)
+    ask = c.wait_for(c.notices, lambda n: n.event_id == "dioSignal" and n.kind == pb.EVENT_RSVP, 3.0)
+    assert ask is not None, "no RSVP when the watched bit rose"
+    assert (ask.ref_seq, ask.session_epoch) == (armed.seq, c.epoch)  # the request that armed it
+    assert ask.rsvp_default == "cancel" and ask.rsvp_timeout_ms > 0
+
+    c.send(pb.Uplink(rsvp_reply=pb.RsvpReply(rsvp_id=ask.rsvp_id, ret_code=pb.CMD_ERR, data=["raw=decline"])))
+    ack = c.wait_for(c.acks, lambda a: a.rsvp_id == ask.rsvp_id, 2.0)
+    assert ack is not None, "the reply was not acknowledged"
+    assert (ack.ret_code, ack.action, ack.ref_seq) == (pb.CMD_EXEC_OK, "cancel", armed.seq)
+
+    # the effect: the watch is gone, and the bit rising again asks nothing
+    status = c.ok(send_command=pb.SendCommandReq(input="status")).send_command.result
+    assert f"watch {watch} " not in status, status
+    before = {id(n) for n in c.notices}
+    set_inputs(dio_socket, 0, bit)
+    time.sleep(0.05)
+    set_inputs(dio_socket, bit)
+    late = c.wait_for(c.notices, lambda n: id(n) not in before and n.event_id.startswith("dioSignal"), 1.0)
+    assert late is None, f"the declined watch fired again: {late}"
+    events = c.ok(send_command=pb.SendCommandReq(input="events")).send_command.result
+    assert "declined -1, action cancel, data [raw=decline]" in events, events
+
+    c.send(pb.Uplink(rsvp_reply=pb.RsvpReply(rsvp_id=ask.rsvp_id, ret_code=pb.CMD_EXEC_OK)))
+    again = c.wait_for(c.acks, lambda a: a.rsvp_id == ask.rsvp_id and a is not ack, 2.0)
+    assert again is not None and again.ret_code == pb.CMD_PARAM_ERR and "already answered" in again.ret_msg
+
+
 def step_give_back(c: RawClient) -> None:
     c.ok(deactivate=c.pb.DeactivateReq())
     c.ok(release=c.pb.ReleaseReq())
@@ -256,22 +315,37 @@ def step_disconnect(c: RawClient) -> None:
 # ---------------------------------------------------------------- the tests
 
 @pytest.fixture
-def raw(controller: Controller, tmp_path: Path) -> Iterator[RawClient]:
+def dio_socket(tmp_path: Path) -> Path:
+    return tmp_path / "dio.sock"
+
+
+@pytest.fixture
+def raw(tmp_path: Path, dio_socket: Path) -> Iterator[RawClient]:
     pb = compile_schema(tmp_path)
+    controller = start_controller(tmp_path / "ls0", "--dio-socket", str(dio_socket))
     bus = open_slcan(controller.pty)
     try:
+        deadline = time.monotonic() + 10
+        while not dio_socket.exists():
+            assert time.monotonic() < deadline, "landscaped made no DIO control socket"
+            time.sleep(0.02)
         with RawClient(bus, pb) as client:
             yield client
     finally:
         bus.shutdown()
+        code = controller.stop()
+        log = controller.log.read_text(errors="replace")
+        assert code == 0, f"landscaped exited with {code}:\n{log[-4000:]}"
+        assert "Sanitizer" not in log, log[-4000:]
 
 
-def test_a_session_from_the_contract_alone(raw: RawClient) -> None:
+def test_a_session_from_the_contract_alone(raw: RawClient, dio_socket: Path) -> None:
     step_connect(raw)
     d = step_describe(raw)
     step_take_control(raw)
     step_move(raw, d)
     step_two_cycle_path(raw, d)
+    step_rsvp_decline(raw, dio_socket)
     step_give_back(raw)
     step_disconnect(raw)
 
