@@ -77,3 +77,24 @@ def test_cli_describe(controller: Controller) -> None:
     for part in ("dio unit 0: inputs 0x0000FFFF outputs 0xFFFF0000", "sensor force_sensor: Fx[N]",
                  "tools: gripper, probe", "limit pathLoad.tags: 32 items", "joint 6: ["):
         assert part in out.stdout, (part, out.stdout)
+
+
+def test_shell_completion_offers_what_the_device_describes(bus: can.BusABC) -> None:
+    """The shell completes sensor types and tool ids from the device's description (the
+    tools of its rack, its sensors), not only from values typed before."""
+    from prompt_toolkit.completion import CompleteEvent
+    from prompt_toolkit.document import Document
+
+    from landscape.cli import published_choices, shell_completer
+
+    with Supervisor(bus, client_name="completion") as sup:
+        published = published_choices(sup)
+        assert published("tool_id") == ["gripper", "probe"]
+        assert published("sensor_type") == ["force_sensor", "laser_standoff_sensor"]
+        assert published("path_name") == []  # free text: the device does not list it
+        comp = shell_completer(["get-tool", "get-sensor-reading"], lambda: ["get-tool wrench"], published)
+
+        def words(text: str) -> list[str]:
+            return [c.text for c in comp.get_completions(Document(text), CompleteEvent(completion_requested=True))]
+        assert words("get-tool ") == ["gripper", "probe", "wrench"]  # the rack's first, then typed before
+        assert words("get-sensor-reading l") == ["laser_standoff_sensor"]

@@ -422,9 +422,7 @@ def execute(ctx: click.Context, cmd: Command, fields: dict[str, Any], *, wait: b
         if not st.json_out:
             click.echo(f"{cmd.cli_name}: {rv.ret_name}" + (f": {rv.ret_msg}" if rv.ret_msg else ""))
             if cmd.field == "describe" and rv.ok:
-                res = rv.message if isinstance(rv.message, pb.DescribeRes) else \
-                    json_format.ParseDict(rv.result, pb.DescribeRes())  # through a background session
-                for line in DeviceDescription(res).lines():
+                for line in _description_of(rv).lines():
                     click.echo(f"  {line}")
             else:
                 for k, v in rv.result.items():
@@ -886,6 +884,30 @@ def execute_followed(st: CliState, cmd: Command, fields: dict[str, Any], wait_ti
     return rv
 
 
+def _description_of(rv: RetVal) -> DeviceDescription:
+    """The DeviceDescription of a describe answer, from our own session or a background one."""
+    res = rv.message if isinstance(rv.message, pb.DescribeRes) else \
+        json_format.ParseDict(rv.result, pb.DescribeRes())  # through a background session
+    return DeviceDescription(res)
+
+
+def published_choices(backend: Backend) -> Callable[[str], list[str]]:
+    """The values the device publishes (describe) for a string argument, by its name: sensor
+    types and tool ids; empty for free text, and when the device does not describe itself
+    (completion then offers only values typed before). Our own session read it at connect;
+    a background session is asked once."""
+    desc: DeviceDescription | None = None
+    if isinstance(backend, Supervisor):
+        desc = backend.description
+    else:
+        try:
+            rv = send(backend, COMMANDS["describe"], {}, wait_s=None)
+            desc = _description_of(rv) if rv.ok else None
+        except LandscapeError as exc:
+            log.warning("no device description for completion: %s", exc)
+    return (lambda field: desc.choices("", field)) if desc is not None else (lambda field: [])
+
+
 def _history_values(lines: Sequence[str]) -> dict[str, list[str]]:
     """Values typed before for each string argument (path names, tools, sensors, ...), newest
     first, from shell lines: {field name: [values]}."""
@@ -929,10 +951,12 @@ def _positional_words(sub: click.Command, args: Sequence[str]) -> list[str]:
     return out
 
 
-def shell_completer(names: Sequence[str], history: Callable[[], Sequence[str]]) -> Any:
+def shell_completer(names: Sequence[str], history: Callable[[], Sequence[str]],
+                    published: Callable[[str], list[str]] = lambda field: []) -> Any:
     """Tab completion for the shell: command names; option names; enum values (any accepted
-    spelling); file names for file arguments; values typed before for string arguments (path
-    names, tool ids, sensor types: the firmware cannot list them)."""
+    spelling); file names for file arguments; for string arguments, the values the device
+    publishes (`published`: sensor types, tool ids from its description), then values typed
+    before (path names and the rest)."""
     from prompt_toolkit.completion import Completer, Completion, PathCompleter
     from prompt_toolkit.document import Document
 
@@ -981,7 +1005,9 @@ def shell_completer(names: Sequence[str], history: Callable[[], Sequence[str]]) 
                 yield from paths.get_completions(Document(current, len(current)), complete_event)
                 return
             elif param.type is click.STRING and param.name:
-                pool = [shlex.quote(v) for v in _history_values(history()).get(param.name, [])]
+                offered = published(param.name)
+                typed = [v for v in _history_values(history()).get(param.name, []) if v not in offered]
+                pool = [shlex.quote(v) for v in [*offered, *typed]]
             else:
                 return
             yield from (Completion(w, -len(current)) for w in pool if w.startswith(current))
@@ -1003,7 +1029,8 @@ def stop_followed(st: CliState) -> bool:
 @click.pass_context
 def shell_cmd(ctx: click.Context) -> None:
     """Interactive prompt: one session for every line; Tab completes command names, option names,
-    enum values, file names and values typed before (path names, tools).
+    enum values, file names, the sensors and tools the device describes, and values typed before
+    (path names).
 
     A motion command returns to the prompt at once (its notices and end print as they arrive), so
     stop-motion, abort-motion or any other line can be typed while it runs; Ctrl-C while a motion
@@ -1018,12 +1045,12 @@ def shell_cmd(ctx: click.Context) -> None:
     assert isinstance(group, click.Group)
     names = sorted(n for n in group.list_commands(ctx) if n not in NOT_IN_SCRIPTS)
     history = FileHistory(str(_history_path()))
-    session: PromptSession[str] = PromptSession(
-        history=history, completer=shell_completer(names, lambda: list(history.get_strings())[-500:]))
     st = _state(ctx)
     st.one_shot = False
     st.follow_motions = True
-    st.backend()
+    published = published_choices(st.backend())
+    session: PromptSession[str] = PromptSession(
+        history=history, completer=shell_completer(names, lambda: list(history.get_strings())[-500:], published))
     # On a terminal, lines a followed motion prints go above the prompt, which is redrawn.
     with patch_stdout(raw=True) if sys.stdout.isatty() else contextlib.nullcontext():
         while True:
