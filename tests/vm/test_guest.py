@@ -446,8 +446,10 @@ def test_two_supervisors_in_separate_processes(controller: Landscaped, tmp_path:
     script = tmp_path / "b.lsc"
     script.write_text("lock\nactivate\nmove-absolute pb JOINT_FRAME 0 0.2 0 0 0 0 --speed-pct 50\n"
                       "deactivate\nrelease\n")
+    # Both supervisors wait 5 s per try: the guest runs under TCG next to two 1 kHz control
+    # loops, and a loaded fresh-root run saw the CLI's default 1 s pass three times at connect.
     other = subprocess.Popen([str(CLI), "--interface", "socketcan", "--channel", CAN_IF, "--device", "0x11",
-                              "--source-address", "0xF3", "run", str(script)],
+                              "--source-address", "0xF3", "--timeout", "5", "run", str(script)],
                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     bus = can.Bus(interface="socketcan", channel=CAN_IF)
     try:
