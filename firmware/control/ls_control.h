@@ -57,7 +57,7 @@ typedef enum {
     LS_CTL_HALT,        /* as DISABLE, stopping along the path at the model's maximum deceleration */
 } ls_ctl_kind_t;
 
-#define LS_CTL_TOOL_ID_LEN 32
+#define LS_CTL_TOOL_ID_LEN 64 /* a tool id of the schema (63 bytes) and its NUL */
 
 typedef struct {
     ls_ctl_kind_t kind;

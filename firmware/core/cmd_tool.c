@@ -27,6 +27,10 @@
 #include "ls_motion.h"
 #include "ls_units.h"
 
+/* A tool id the schema lets through fits the loop's command whole. */
+_Static_assert(sizeof(((ls_GetToolReq *)0)->tool_id) <= LS_CTL_TOOL_ID_LEN,
+               "LS_CTL_TOOL_ID_LEN must hold ls.GetToolReq.tool_id");
+
 /* The approach point is this far from the rack pose, back along the flange's
  * z axis (the tool points into the rack). */
 #define APPROACH_M 0.10
@@ -184,8 +188,9 @@ static int plan_step(ls_core_t *core, const double q0[LS_N_JOINTS], char *why, s
 
 static void step_failed(ls_core_t *core, const char *why)
 {
-    char msg[200];
-    /* why: at most 100 characters, so the whole text fits msg (-Wformat-truncation at -O3). */
+    char msg[256];
+    /* why: at most 100 characters, so the whole text fits msg with a 63-byte tool id
+     * (-Wformat-truncation at -O3). */
     snprintf(msg, sizeof msg, "%s %s stopped at step %d: %.100s; the arm holds where it is", op_name(), g_op.id,
              g_op.step, why);
     op_end(core, ls_RetCode_CMD_ERR, msg, true);
@@ -371,8 +376,8 @@ bool ls_core_tool_on_event(ls_core_t *core, const ls_ctl_event_t *ev)
         return true;
     }
     if (ev->kind == LS_CEV_FAULT) {
-        char msg[160];
-        snprintf(msg, sizeof msg, "%s %.31s stopped by a fault: %.60s", op_name(), g_op.id, ev->text);
+        char msg[192];
+        snprintf(msg, sizeof msg, "%s %s stopped by a fault: %.60s", op_name(), g_op.id, ev->text);
         op_end(core, ls_RetCode_CMD_FAULT_ERR, msg, false);
         return false;
     }
