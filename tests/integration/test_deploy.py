@@ -3,9 +3,8 @@ for real with dpkg (the CI machine is a throwaway root), the systemd unit,
 `--check` on this machine and configuration errors as the user sees them.
 
 The configuration checks run on two executables: ls_config_driver (makes the
-same calls as landscaped's main) and landscaped itself. Until landscaped is
-wired to ls_config (it has no --config yet) its cases are reported as xfail,
-with the reason, never skipped silently."""
+same calls as landscaped's main) and landscaped itself (its --config and
+--check), and both must agree."""
 from __future__ import annotations
 
 import grp
