@@ -4,7 +4,7 @@ for real with dpkg (the CI machine is a throwaway root), the systemd unit,
 
 The configuration checks run on two executables: ls_config_driver (makes the
 same calls as landscaped's main) and landscaped itself (its --config and
---check), and both must agree."""
+--check): the same cases run on each."""
 from __future__ import annotations
 
 import grp
