@@ -115,6 +115,22 @@ static bool is_fault(ls_run_end_t why)
     return why == LS_RUN_END_FAULT || why == LS_RUN_END_EMERGENCY;
 }
 
+/* What every halt does as it begins, after its fields are set: note the loop
+ * cycle it starts at, end a program's wait and manual control, and report
+ * robot_stopping. */
+static void halt_enter(ls_core_t *core)
+{
+    ls_halt_t *h = &core->halt;
+    if (core->ctl != NULL) {
+        ls_ctl_snapshot_t snap;
+        ls_control_snapshot(core->ctl, &snap);
+        h->start_cycle = snap.cycle;
+    }
+    core->run.wait_active = false;
+    ls_core_manual_off(core);
+    set_motion_state(core, "robot_stopping");
+}
+
 void ls_run_halt(ls_core_t *core, ls_run_end_t why, const char *text, bool fast, int answer_sup, uint64_t now_us)
 {
     ls_halt_t *h = &core->halt;
@@ -139,15 +155,7 @@ void ls_run_halt(ls_core_t *core, ls_run_end_t why, const char *text, bool fast,
     h->answer_sup = answer_sup;
     h->since_us = now_us;
     snprintf(h->text, sizeof h->text, "%s", text != NULL ? text : "");
-    h->start_cycle = 0;
-    if (core->ctl != NULL) {
-        ls_ctl_snapshot_t snap;
-        ls_control_snapshot(core->ctl, &snap);
-        h->start_cycle = snap.cycle;
-    }
-    core->run.wait_active = false;
-    ls_core_manual_off(core);
-    set_motion_state(core, "robot_stopping");
+    halt_enter(core);
     post_stop(core, fast);
 }
 
@@ -164,14 +172,7 @@ void ls_run_halt_owner_lost(ls_core_t *core, ls_run_end_t why, bool keep_drives,
     h->answer_sup = -1;
     h->since_us = now_us;
     h->keep_drives = true;
-    if (core->ctl != NULL) {
-        ls_ctl_snapshot_t snap;
-        ls_control_snapshot(core->ctl, &snap);
-        h->start_cycle = snap.cycle;
-    }
-    core->run.wait_active = false;
-    ls_core_manual_off(core);
-    set_motion_state(core, "robot_stopping");
+    halt_enter(core);
     core->act.stop_motion(core->act.ctx); /* along the path at the configured deceleration, then paused */
 }
 
