@@ -55,8 +55,9 @@ int32_t ls_h_send_command(struct ls_core *core, struct ls_call *call)
         } else {
             put(&o, "none\n");
         }
-        put(&o, "fault=%s\nrx_malformed=%u\ntx_lost=%u\nsessions_dropped=%u\n", core->fault,
-            (unsigned)core->rx_malformed, (unsigned)core->tx_lost, (unsigned)core->sessions_dropped);
+        put(&o, "fault=%s\nrx_malformed=%u\ntx_lost=%u\nsessions_dropped=%u\nhb_refused=%u\nconnects_refused=%u\n",
+            core->fault, (unsigned)core->rx_malformed, (unsigned)core->tx_lost, (unsigned)core->sessions_dropped,
+            (unsigned)core->hb_refused, (unsigned)core->connects_refused);
         if (core->io.describe != NULL && o.len < o.cap) {
             core->io.describe(core->io.ctx, o.buf + o.len, o.cap - o.len);
             o.len += strlen(o.buf + o.len);
@@ -65,10 +66,12 @@ int32_t ls_h_send_command(struct ls_core *core, struct ls_call *call)
             const ls_session_t *s = &core->sessions[i];
             if (s->connected) {
                 /* executed= stays last: tools read it as the line's tail */
-                put(&o, "session 0x%02X name=%s units=%s,%s heartbeat_timeout_ms=%u disconnect_action=%s executed=%u\n",
+                put(&o,
+                    "session 0x%02X name=%s units=%s,%s heartbeat_timeout_ms=%u disconnect_action=%s hb_refused=%u "
+                    "executed=%u\n",
                     s->addr, s->name, ls_units_linear_name(s->units.linear), ls_units_angular_name(s->units.angular),
                     (unsigned)s->heartbeat_timeout_ms, ls_core_disconnect_action_name(s->disconnect_action),
-                    (unsigned)s->executed);
+                    (unsigned)s->hb_refused, (unsigned)s->executed);
             }
         }
         for (int i = 0; i < LS_MAX_DIO_WATCHES; i++) {

@@ -342,12 +342,37 @@ static void drop_session(ls_core_t *core, int i, const char *why, uint64_t now_u
     }
 }
 
-void ls_core_on_heartbeat(ls_core_t *core, uint8_t addr, uint64_t now_us)
+void ls_core_on_heartbeat(ls_core_t *core, uint8_t addr, uint32_t token, uint64_t now_us)
 {
     int i = find_session(core, addr);
-    if (i >= 0) {
-        core->sessions[i].last_heard_us = now_us;
+    if (i < 0) {
+        return; /* not ours: e.g. a supervisor of another device on this bus */
     }
+    ls_session_t *s = &core->sessions[i];
+    if (token != s->hb_token) {
+        /* A bare heartbeat, or another client's on this address: it must not
+         * keep alive a session whose supervisor is gone. */
+        s->hb_refused++;
+        core->hb_refused++;
+        return;
+    }
+    s->last_heard_us = now_us;
+}
+
+/* The session's heartbeat token: nonzero (a bare heartbeat never matches),
+ * 24 bits, new at every connect. Not a secret (every node on the bus sees it
+ * in the heartbeats): it tells clients apart, it does not authenticate them. */
+static uint32_t heartbeat_token(uint64_t nonce, uint32_t epoch, uint64_t now_us)
+{
+    const uint64_t words[3] = { nonce, epoch, now_us };
+    uint64_t h = 0xcbf29ce484222325u;
+    for (size_t w = 0; w < 3; w++) {
+        for (unsigned b = 0; b < 64u; b += 8u) {
+            h = (h ^ ((words[w] >> b) & 0xFFu)) * 0x100000001b3u;
+        }
+    }
+    uint32_t t = (uint32_t)((h ^ (h >> 24) ^ (h >> 48)) & LS_HB_TOKEN_MASK);
+    return t != 0u ? t : 1u;
 }
 
 static void rsvp_remember(ls_core_t *core, const ls_rsvp_t *r, bool timed_out, const char *action)
@@ -546,6 +571,7 @@ static int32_t do_connect(ls_core_t *core, uint8_t addr, ls_call_t *call)
     snprintf(rs->firmware_version, sizeof rs->firmware_version, "%s", core->cfg.firmware_version);
     rs->joint_count = core->cfg.joint_count;
     rs->heartbeat_timeout_ms = core->cfg.heartbeat_timeout_ms;
+    rs->client_nonce = rq->client_nonce; /* an error carries no result: only an accepted connect's */
     if (rq->protocol_version != (uint32_t)ls_Protocol_PROTOCOL_VERSION) {
         bool host_older = rq->protocol_version < (uint32_t)ls_Protocol_PROTOCOL_VERSION;
         return ls_reply(call, ls_RetCode_CMD_VERSION_MISMATCH_ERR,
@@ -588,6 +614,19 @@ static int32_t do_connect(ls_core_t *core, uint8_t addr, ls_call_t *call)
         timeout_ms = period_ms * LS_HB_MISSED_MAX;
     }
     int i = find_session(core, addr);
+    if (i >= 0 && core->sessions[i].nonce != rq->client_nonce) {
+        /* Another client on a live session's address: it would take that
+         * session's answers and ownership (docs/protocol.md "Identity"). Nothing
+         * of that session changes, its cache included. */
+        const ls_session_t *live = &core->sessions[i];
+        call->sup = -1;
+        call->res->session_epoch = 0u;
+        core->connects_refused++;
+        return ls_reply(call, ls_RetCode_CMD_NOT_OWNER_ERR,
+                        "connect: address 0x%02X is in use by another client, \"%s\"%s: pass another "
+                        "--source-address, or none to let the host pick a free one",
+                        addr, live->name, core->owner == i ? " (the owner)" : "");
+    }
     if (i < 0) {
         for (int k = 0; k < LS_MAX_SUPERVISORS; k++) {
             if (!core->sessions[k].connected) {
@@ -623,6 +662,9 @@ static int32_t do_connect(ls_core_t *core, uint8_t addr, ls_call_t *call)
         core->epoch_next = 1u;
     }
     rs->session_epoch = s->epoch;
+    s->nonce = rq->client_nonce;
+    s->hb_token = heartbeat_token(s->nonce, s->epoch, call->now_us);
+    rs->heartbeat_token = s->hb_token;
     s->last_heard_us = call->now_us;
     s->heartbeat_period_ms = period_ms;
     s->heartbeat_timeout_ms = timeout_ms;

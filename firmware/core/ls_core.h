@@ -35,6 +35,9 @@ struct ls_control;
 #define LS_HB_MISSED_MAX 5u
 #define LS_HB_PERIOD_MIN_MS 10u
 #define LS_HB_PERIOD_MAX_MS 2000u
+/* Identity (docs/protocol.md "Identity"): a session's heartbeat token is
+ * nonzero and fits the DBC's 24-bit HEARTBEAT.hb_token (protocol/landscape.dbc). */
+#define LS_HB_TOKEN_MASK 0xFFFFFFu
 #define LS_CORE_MAX_DIO_UNITS 4
 #define LS_MAX_DIO_WATCHES 8
 /* Path queues: LS_PATH_MAX names of LS_PATH_MAX_POINTS points (ls_motion.h).
@@ -60,7 +63,10 @@ typedef struct {
     bool connected;
     uint8_t addr;
     char name[sizeof(((ls_ConnectReq *)0)->client_name)];
-    uint64_t last_heard_us; /* the last HEARTBEAT (or the connect) */
+    uint64_t last_heard_us; /* the last HEARTBEAT carrying hb_token (or the connect) */
+    uint64_t nonce;         /* ConnectReq.client_nonce: who this session is */
+    uint32_t hb_token;      /* ConnectRes.heartbeat_token: what its heartbeats carry */
+    uint32_t hb_refused;    /* heartbeats from its address without its token */
     uint32_t heartbeat_period_ms;
     uint32_t heartbeat_timeout_ms;         /* this session's time-out (ls_core_tick) */
     ls_units_t units;                      /* what this supervisor reads and writes in (setUnits) */
@@ -248,6 +254,8 @@ typedef struct ls_core {
     uint32_t rx_malformed;     /* uplinks that did not decode */
     uint32_t tx_lost;          /* downlinks the network could not queue */
     uint32_t sessions_dropped; /* heartbeat time-outs */
+    uint32_t hb_refused;       /* heartbeats that did not carry their session's token */
+    uint32_t connects_refused; /* connects from an address in use by another client */
     /* scratch (kept here, not on the stack: the messages are large) */
     ls_Uplink up;
     ls_Downlink down; /* the response being built (handlers write into it) */
@@ -270,8 +278,12 @@ void ls_core_init(ls_core_t *core, const ls_core_config_t *cfg, const ls_core_io
 /* One ISO-TP message from the supervisor at `addr` (an encoded ls.Uplink). */
 void ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t len, uint64_t now_us);
 
-/* A HEARTBEAT frame from a supervisor. */
-void ls_core_on_heartbeat(ls_core_t *core, uint8_t addr, uint64_t now_us);
+/* A supervisor's HEARTBEAT frame from `addr` carrying `token` (hb_token).
+ * It keeps the session of `addr` only when `token` is that session's
+ * heartbeat token; else it is counted (hb_refused) and changes nothing. A
+ * heartbeat from an address without a session here (a supervisor of another
+ * device) is ignored. O(LS_MAX_SUPERVISORS), no allocation. */
+void ls_core_on_heartbeat(ls_core_t *core, uint8_t addr, uint32_t token, uint64_t now_us);
 
 /* Liveness: drops sessions whose heartbeat stopped. Call every loop turn. */
 void ls_core_tick(ls_core_t *core, uint64_t now_us);

@@ -195,11 +195,12 @@ static void route(ls_net_t *net, const hal_can_frame_t *f)
             ls_core_on_uplink(net->core, source, payload, n, net->now_us);
         }
     } else if ((f->id & LS_ID_MASK_SRC) == LS_ID_HEARTBEAT) {
-        /* The DBC's HEARTBEAT, multiplexed by hb_role: a supervisor's (1) keeps its session. */
+        /* The DBC's HEARTBEAT, multiplexed by hb_role: a supervisor's (1)
+         * keeps its session when it carries the session's token. */
         struct landscape_heartbeat_t hb;
         if (f->len == LANDSCAPE_HEARTBEAT_LENGTH && landscape_heartbeat_unpack(&hb, f->data, f->len) == 0 &&
             hb.hb_role == LANDSCAPE_HEARTBEAT_HB_ROLE_SUPERVISOR_CHOICE) {
-            ls_core_on_heartbeat(net->core, source, net->now_us);
+            ls_core_on_heartbeat(net->core, source, hb.hb_token, net->now_us);
         }
     } else if ((f->id & LS_ID_MASK_SRC) == LS_ID_EMERGENCY && source != net->node) {
         ls_core_emergency(net->core, net->now_us);

@@ -2,8 +2,10 @@
 
 It speaks ISO-TP (can-isotp, normal fixed 29-bit addressing) to a fixed set of
 supervisor addresses and implements: connect/disconnect with version and hash
-checks, heartbeat tracking (a session ends when its supervisor's heartbeat
-stops for longer than the time-out; an owner's lock goes with it), lock,
+checks and one client per address (a connect with another client_nonce on a live
+session's address is refused), heartbeat tracking (only a heartbeat carrying the
+session's token keeps it; a session ends when they stop for longer than the
+time-out; an owner's lock goes with it), lock,
 release, activate, deactivate, get-motion-control-state, seq caching (a
 retransmitted seq is answered from the cache, never executed twice), pathLoad
 and pathClearPath (named paths, at most 32 points per message as the firmware),
@@ -41,6 +43,8 @@ class Session:
     last_heartbeat: float = 0.0
     heartbeats: list[dict[str, Any]] = field(default_factory=list)
     notice_seq: int = 0
+    nonce: int = 0       # ConnectReq.client_nonce: who this session is
+    token: int = 0       # ConnectRes.heartbeat_token: what its heartbeats must carry
 
 
 class FakeDevice:
@@ -70,6 +74,8 @@ class FakeDevice:
         self.rsvp_replies: list[pb.RsvpReply] = []
         self.requests: list[pb.Request] = []
         self.uplink_sizes: list[int] = []   # bytes of every request message received
+        self.hb_refused = 0                 # heartbeats without their session's token
+        self._token_next = 0x0A0B01
         self.paths: dict[str, list[pb.TagPoint]] = {}
         self.point_time_s = 0.01
         self._t0 = time.monotonic()
@@ -125,8 +131,10 @@ class FakeDevice:
             if b.sender in self.heartbeats:
                 self.heartbeats[b.sender].append(dict(b.signals))
             s = self.sessions.get(b.sender)
-            if s is not None:
+            if s is not None and b.signals.get("hb_token") == s.token:
                 s.last_heartbeat = time.monotonic()
+            elif s is not None:
+                self.hb_refused += 1
 
     def _housekeeping(self) -> None:
         counter = 0
@@ -230,12 +238,19 @@ class FakeDevice:
             res = pb.ConnectRes(protocol_version=self.version, schema_hash=self.schema_hash,
                                 device_name="fake", joint_count=6, firmware_version="fake-1",
                                 heartbeat_timeout_ms=self.heartbeat_timeout_ms, state=self.state,
-                                owner=self.owner == host)
+                                owner=self.owner == host, client_nonce=c.client_nonce)
             if self.refuse_mismatch and (c.protocol_version != self.version or c.schema_hash != self.schema_hash):
                 resp.connect.CopyFrom(res)
                 return answer(pb.CMD_VERSION_MISMATCH_ERR,
                               f"device protocol {self.version} schema {self.schema_hash:08X}")
-            self.sessions[host] = Session(host, last_heartbeat=time.monotonic())
+            live = self.sessions.get(host)
+            if live is not None and live.nonce != c.client_nonce:  # as the firmware: one client per address
+                resp.connect.CopyFrom(res)
+                return answer(pb.CMD_NOT_OWNER_ERR, f"connect: address 0x{host:02X} is in use by another client")
+            self._token_next += 1
+            self.sessions[host] = Session(host, last_heartbeat=time.monotonic(), nonce=c.client_nonce,
+                                          token=self._token_next & 0xFFFFFF)
+            res.heartbeat_token = self._token_next & 0xFFFFFF
             if self.state == pb.IDLE:
                 self.state = pb.UNLOCKED
             res.state = self.state

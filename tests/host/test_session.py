@@ -62,7 +62,7 @@ def test_session_start_status_stop_and_a_lock_that_lives_on(pty_device: tuple[Fa
     dev, pty = pty_device
     r = slcan(pty, "session", "start")
     assert r.exit_code == 0, r.stderr
-    sock = socket_path(BusSpec("slcan", pty), 0x10, 0xF1)
+    sock = socket_path(BusSpec("slcan", pty), 0x10, None)  # started without -s
     assert sock.parent == runtime_dir and sock.name.startswith("landscape-10-") and sock.exists()
     started, shared = r.stdout.splitlines()
     assert started.startswith("session started: pid ") and started.endswith(f"socket {sock}")
@@ -155,7 +155,7 @@ def _stale_socket(path: Path) -> None:
 
 
 def test_stale_socket_is_removed_with_a_message(channel: str, device: FakeDevice, runtime_dir: Path) -> None:
-    sock = socket_path(BusSpec("virtual", channel), 0x10, 0xF1)
+    sock = socket_path(BusSpec("virtual", channel), 0x10, None)
     _stale_socket(sock)
     r = CliRunner().invoke(cli, ["--interface", "virtual", "--channel", channel, "get-motion-control-state"])
     assert r.exit_code == 0, r.stderr
@@ -174,7 +174,7 @@ def in_process_session(bus, notifier, device: FakeDevice, channel: str, runtime_
     """A session server in a thread of the test process (the virtual bus cannot leave it)."""
     sup = Supervisor(bus, notifier=notifier, channel_name=f"virtual:{channel}")
     sup.open()
-    server = SessionServer(sup, socket_path(BusSpec("virtual", channel), 0x10, 0xF1), channel=f"virtual:{channel}")
+    server = SessionServer(sup, socket_path(BusSpec("virtual", channel), 0x10, None), channel=f"virtual:{channel}")
     server.bind()
     t = threading.Thread(target=server.serve_forever, daemon=True)
     t.start()
@@ -232,3 +232,5 @@ def test_socket_path_is_bounded(monkeypatch: pytest.MonkeyPatch, bus, notifier) 
     assert socket_path(BusSpec("virtual", "x"), 0x22, 0xF1).name.startswith("landscape-22-")
     assert socket_path(BusSpec("virtual", "x"), 0x22, 0xF1) != socket_path(BusSpec("virtual", "y"), 0x22, 0xF1)
     assert socket_path(BusSpec("virtual", "x"), 0x22, 0xF1) != socket_path(BusSpec("virtual", "x"), 0x22, 0xF2)
+    # a session started without -s is found by every invocation without -s, whatever address it took
+    assert socket_path(BusSpec("virtual", "x"), 0x22, None) != socket_path(BusSpec("virtual", "x"), 0x22, 0xF1)

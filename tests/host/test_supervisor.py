@@ -227,8 +227,11 @@ def test_rsvp_handler_may_call_request(bus, notifier, device: FakeDevice) -> Non
 def test_heartbeat_frames_role_1_counter_increments(bus, notifier, device: FakeDevice, channel: str) -> None:
     spy_bus = can.Bus(interface="virtual", channel=channel)
     try:
-        with sup_on(bus, notifier, heartbeat_period_ms=20):
+        with sup_on(bus, notifier, heartbeat_period_ms=20) as sup:
             time.sleep(0.25)
+            assert sup.device_info is not None
+            token = sup.device_info.heartbeat_token
+        assert 0 < token <= 0xFFFFFF
         frames = []
         while (m := spy_bus.recv(timeout=0)) is not None:
             if m.arbitration_id == 0x14FF01F1:
@@ -237,9 +240,10 @@ def test_heartbeat_frames_role_1_counter_increments(bus, notifier, device: FakeD
         db = tm.database()
         decoded = [db.decode_message("HEARTBEAT", bytes(f.data), decode_choices=False) for f in frames]
         assert all(f.is_extended_id and f.dlc == 8 for f in frames)
-        # the DBC's supervisor payload: hb_counter, hb_role 1, hb_period_ms; every other byte 0
-        assert all(d == {"hb_counter": d["hb_counter"], "hb_role": 1, "hb_period_ms": 20} for d in decoded)
-        assert all(bytes(f.data)[1] == 0 and bytes(f.data)[5:] == b"\0\0\0" for f in frames)
+        # the DBC's supervisor payload: hb_counter, hb_role 1, hb_period_ms, the session's hb_token; byte 1 0
+        assert all(d == {"hb_counter": d["hb_counter"], "hb_role": 1, "hb_period_ms": 20, "hb_token": token}
+                   for d in decoded)
+        assert all(bytes(f.data)[1] == 0 and bytes(f.data)[5:] == token.to_bytes(3, "little") for f in frames)
         assert [d["hb_counter"] for d in decoded] == list(range(len(decoded)))
     finally:
         spy_bus.shutdown()

@@ -161,11 +161,11 @@ def test_every_broadcast_decodes_and_the_heartbeat_tells_the_state(bench: Bench,
 
 def test_supervisor_heartbeat_decodes_with_the_source_dbc(db: Any) -> None:
     """The host encodes its heartbeat with its packaged copy of the DBC; the source file agrees."""
-    msg = tm.encode("HEARTBEAT", HOST, hb_role=1, hb_counter=7, hb_period_ms=200)
+    msg = tm.encode("HEARTBEAT", HOST, hb_role=1, hb_counter=7, hb_period_ms=200, hb_token=0x123456)
     assert msg.arbitration_id == 0x14FF0100 | HOST and len(msg.data) == 8
     assert db.get_message_by_name("HEARTBEAT").decode(bytes(msg.data), decode_choices=False) == {
-        "hb_counter": 7, "hb_role": 1, "hb_period_ms": 200}
-    assert bytes(msg.data) == bytes([7, 0, 1, 200, 0, 0, 0, 0])
+        "hb_counter": 7, "hb_role": 1, "hb_period_ms": 200, "hb_token": 0x123456}
+    assert bytes(msg.data) == bytes([7, 0, 1, 200, 0, 0x56, 0x34, 0x12])
 
 
 def test_dbc_ids_follow_the_documented_layout(db: Any) -> None:

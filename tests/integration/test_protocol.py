@@ -89,11 +89,11 @@ def test_two_supervisors_share_one_bus(bus: can.BusABC) -> None:
 def test_connect_with_another_schema_is_refused(bus: can.BusABC) -> None:
     with Supervisor(bus) as sup:
         rv = sup.request("connect", check=False, protocol_version=pb.PROTOCOL_VERSION,
-                         schema_hash=0x12345678, client_name="old")
+                         schema_hash=0x12345678, client_nonce=sup.nonce, client_name="old")
         assert rv.ret_code == pb.CMD_VERSION_MISMATCH_ERR
         assert "host tool" in rv.ret_msg and "12345678" in rv.ret_msg
         rv = sup.request("connect", check=False, protocol_version=pb.PROTOCOL_VERSION + 1,
-                         schema_hash=SCHEMA_HASH, client_name="new")
+                         schema_hash=SCHEMA_HASH, client_nonce=sup.nonce, client_name="new")
         assert rv.ret_code == pb.CMD_VERSION_MISMATCH_ERR
         assert "firmware" in rv.ret_msg
 

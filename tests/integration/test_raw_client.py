@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import hashlib
 import importlib.util
+import secrets
 import socket
 import subprocess
 import threading
@@ -33,7 +34,7 @@ ROOT = Path(__file__).resolve().parents[2]
 
 # docs/protocol.md "Identifiers and priorities"
 DEVICE = 0x10          # landscaped's default node address
-HOST = 0xF1            # a supervisor's default address
+HOST = 0xF1            # the first address of the hosts' pool (docs/protocol.md "Addresses")
 HEARTBEAT_ID = 0x14FF0100  # | sender address; hb_role (byte 2) 1 = supervisor
 HEARTBEAT_PERIOD_S = 0.2
 
@@ -70,6 +71,10 @@ class RawClient:
         self.pb = pb
         self.seq = 0
         self.epoch = 0
+        # docs/protocol.md "Identity": a random nonce with every connect; the heartbeat
+        # token the connect answers goes into every heartbeat (0 until then)
+        self.nonce = secrets.randbits(64)
+        self.token = 0
         self.notices: list[Any] = []
         self.acks: list[Any] = []  # RsvpAck: the device's answer to each RsvpReply
         self._notifier = can.Notifier(bus, [], timeout=0.01)
@@ -93,11 +98,13 @@ class RawClient:
 
     def _heartbeat(self) -> None:
         # docs/protocol.md "Liveness": byte 0 hb_counter (+1 per frame), byte 2 hb_role 1,
-        # bytes 3-4 hb_period_ms little-endian (the period stated at connect), the rest 0
+        # bytes 3-4 hb_period_ms little-endian (the period stated at connect), bytes 5-7
+        # hb_token little-endian (ConnectRes.heartbeat_token), byte 1 0
         period_ms = int(HEARTBEAT_PERIOD_S * 1000)
         counter = 0
         while not self._stop.is_set():
-            data = bytes([counter, 0, 1, period_ms & 0xFF, period_ms >> 8, 0, 0, 0])
+            t = self.token
+            data = bytes([counter, 0, 1, period_ms & 0xFF, period_ms >> 8, t & 0xFF, (t >> 8) & 0xFF, t >> 16])
             self.bus.send(can.Message(arbitration_id=HEARTBEAT_ID | HOST, is_extended_id=True, data=data))
             counter = (counter + 1) & 0xFF
             self._stop.wait(HEARTBEAT_PERIOD_S)
@@ -175,9 +182,12 @@ def data(notice: Any) -> dict[str, str]:
 def step_connect(c: RawClient) -> Any:
     pb = c.pb
     res = c.ok(connect=pb.ConnectReq(protocol_version=pb.PROTOCOL_VERSION, schema_hash=schema_hash(),
-                                     client_name="raw-client",
+                                     client_nonce=c.nonce, client_name="raw-client",
                                      heartbeat_period_ms=int(HEARTBEAT_PERIOD_S * 1000)))
     assert res.connect.schema_hash == schema_hash()
+    assert res.connect.client_nonce == c.nonce  # the answer to our own connect
+    assert 0 < res.connect.heartbeat_token <= 0xFFFFFF
+    c.token = res.connect.heartbeat_token
     c.epoch = res.connect.session_epoch
     assert c.epoch > 0 and res.session_epoch == c.epoch
     return res.connect
@@ -351,9 +361,12 @@ def test_a_session_from_the_contract_alone(raw: RawClient, dio_socket: Path) -> 
 
 
 def test_what_the_contract_refuses(raw: RawClient) -> None:
-    """The rules of docs/protocol.md that a careless client meets first: seq 0 after
-    connect, an absent required field, an absent number_of_cycles (one cycle, not a dry run)."""
+    """The rules of docs/protocol.md that a careless client meets first: a connect without
+    its nonce, seq 0 after connect, an absent required field, an absent number_of_cycles (one
+    cycle, not a dry run)."""
     pb = raw.pb
+    res = raw.call(connect=pb.ConnectReq(protocol_version=pb.PROTOCOL_VERSION, schema_hash=schema_hash()))
+    assert res.ret_code == pb.CMD_PARAM_ERR and "client_nonce is missing" in res.ret_msg, res.ret_msg
     step_connect(raw)
     d = step_describe(raw)
     # seq 0 is not a seq: refused, nothing runs

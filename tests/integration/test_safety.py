@@ -486,7 +486,7 @@ def test_strings_that_are_not_utf8_are_refused_naming_the_field(controller: Cont
     reader = Reader(bus, notifier, 0xF5, listen=False)
     try:
         up = pb.Uplink(request=pb.Request(seq=1, connect=pb.ConnectReq(
-            protocol_version=PROTOCOL_VERSION, schema_hash=SCHEMA_HASH, client_name="ZZ")))
+            protocol_version=PROTOCOL_VERSION, schema_hash=SCHEMA_HASH, client_nonce=5, client_name="ZZ")))
         data = up.SerializeToString()
         assert data.count(b"ZZ") == 1
         reader.send(data.replace(b"ZZ", b"\xff\xfe"))

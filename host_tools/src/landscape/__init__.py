@@ -7,6 +7,7 @@
 from ._generated import landscape_pb2 as ls
 from .bus import BusSpec, open_bus
 from .errors import (
+    AddressInUseError,
     AlarmError,
     ArgumentError,
     BusError,
@@ -40,7 +41,7 @@ __all__ = [
     "COMMANDS", "Command", "PROTOCOL_VERSION", "SCHEMA_HASH", "build_request", "lookup", "error_for_code",
     "LandscapeError", "BusError", "ControllerTimeoutError", "VersionMismatchError", "ProtocolError",
     "AlarmError", "ArgumentError", "CommandError", "GenericCommandError", "ParamError", "ParamOutOfRangeError",
-    "WrongStateError", "NotOwnerError", "BusyError", "DeviceTimeoutError", "NotConnectedError",
+    "WrongStateError", "NotOwnerError", "AddressInUseError", "BusyError", "DeviceTimeoutError", "NotConnectedError",
     "NotImplementedByDeviceError", "UnsupportedError", "VersionMismatchCommandError", "FaultError",
     "UnknownCommandError", "NoResourcesError",
     "PathFile", "PathFileError", "build_path_load_requests", "load_path_file", "parse_path_text",

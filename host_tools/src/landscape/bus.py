@@ -30,6 +30,14 @@ log = logging.getLogger("landscape.bus")
 
 DEFAULT_DEVICE: int = pb.DEFAULT_DEVICE_ADDRESS
 DEFAULT_HOST: int = pb.DEFAULT_HOST_ADDRESS
+#: The addresses a supervisor picks a free one from when none is pinned (docs/protocol.md "Addresses").
+HOST_POOL: tuple[int, ...] = tuple(range(pb.DEFAULT_HOST_ADDRESS, pb.HOST_ADDRESS_POOL_LAST + 1))
+#: How long a supervisor without a pinned address listens for other supervisors' heartbeats before it
+#: picks one: 1.5 periods of the library's default heartbeat (200 ms). A supervisor beating slower may
+#: go unheard; the device then refuses the connect (address in use) and the next address is tried.
+ADDRESS_LISTEN_S = 0.3
+#: How many addresses a supervisor tries when the device refuses its connect as "in use".
+ADDRESS_TRIES = 4
 FUNCTIONAL_ALL: int = pb.FUNCTIONAL_ALL_DEVICES
 PHYSICAL_BASE: int = pb.ISOTP_PHYSICAL_BASE
 FUNCTIONAL_BASE: int = pb.ISOTP_FUNCTIONAL_BASE

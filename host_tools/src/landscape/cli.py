@@ -29,7 +29,7 @@ from google.protobuf.descriptor import EnumDescriptor, FieldDescriptor
 
 from . import telemetry as tm
 from ._generated import landscape_pb2 as pb
-from .bus import DEFAULT_DEVICE, DEFAULT_HOST, BusSpec
+from .bus import DEFAULT_DEVICE, HOST_POOL, BusSpec
 from .description import DeviceDescription
 from .errors import (
     AlarmError,
@@ -269,7 +269,8 @@ Backend = Supervisor | SessionClient
 class CliState:
     spec: BusSpec
     device: int
-    source_address: int
+    source_address: int | None
+    """--source-address; None: the session picks a free one (docs/host-tool.md "Addresses")."""
     timeout_s: float | None
     json_out: bool
     no_session: bool = False
@@ -300,7 +301,10 @@ class CliState:
 
     def _refuse_second_supervisor(self) -> None:
         """--no-session while the background session speaks from the same address: two
-        supervisors with one address would take each other's answers."""
+        supervisors with one address would take each other's answers. Without a pinned address
+        our own session picks another free one."""
+        if self.source_address is None:
+            return
         running = SessionClient.attach(self.socket_path())
         if running is None:
             return
@@ -662,8 +666,10 @@ def _print_version(ctx: click.Context, param: click.Parameter, value: bool) -> N
 @click.option("--bitrate", "-b", type=int, default=None, help="bit rate (slcan default 1000000)")
 @click.option("--device", "-d", default=f"{DEFAULT_DEVICE:#04x}", show_default=True, callback=lambda c, p, v: _addr(v),
               help="node address of the controller")
-@click.option("--source-address", "-s", default=f"{DEFAULT_HOST:#04x}", show_default=True,
-              callback=lambda c, p, v: _addr(v), help="node address of this supervisor")
+@click.option("--source-address", "-s", default=None, metavar="ADDR",
+              callback=lambda c, p, v: None if v is None else _addr(v),
+              help=f"node address of this supervisor (default: a free one of {HOST_POOL[0]:#04x}.."
+                   f"{HOST_POOL[-1]:#04x}, picked at connect)")
 @click.option("--timeout", "-t", type=float, default=None,
               help="seconds to wait for each response try (default: the command's host_timeout_ms)")
 @click.option("--can-context", default=None, metavar="NAME",
@@ -679,7 +685,7 @@ def _print_version(ctx: click.Context, param: click.Parameter, value: bool) -> N
               help="print the tool's version, protocol version and schema hash, then exit")
 @click.pass_context
 def cli(ctx: click.Context, interface: str | None, channel: str | None, bitrate: int | None, device: int,
-        source_address: int, timeout: float | None, can_context: str | None, can_config: str | None,
+        source_address: int | None, timeout: float | None, can_context: str | None, can_config: str | None,
         no_session: bool, json_out: bool, verbose: int) -> None:
     """Command a LandScape controller (landscaped) over CAN.
 

@@ -49,7 +49,7 @@ from .mcap_log import McapRecorder
 from .notices import format_notice
 from .paths import build_path_load_requests, load_path_file, request_fields, resolve_settings
 from .plotting import KINDS, plot
-from .recording import Recorder, open_recorder, read_recording
+from .recording import Recorder, open_recorder, read_recording, record_format
 from .registry import lookup, message_to_dict
 from .session import SessionClient, SessionError, SessionServer
 from .supervisor import RetVal, Supervisor
@@ -208,6 +208,8 @@ def record_cmd(ctx: click.Context, file: Path, duration: float | None) -> None:
     MCAP for .mcap (joint states, link transforms for the URDF of `landscape urdf`, tool pose,
     status, DIO, notices as logs, raw CAN frames), CSV for .csv, JSON lines for .jsonl/.json/.ndjson."""
     st = _state(ctx)
+    record_format(file)  # a name it cannot record to fails before the bus is opened
+    st.backend()  # connect first (picking a free address takes a moment): --duration is recording time
     rec = open_recorder(file)
     t0 = time.monotonic()
     progress = sys.stderr.isatty() and not st.json_out
@@ -465,7 +467,10 @@ def _global_args(st: CliState) -> list[str]:
                        ("--timeout", st.timeout_s)):
         if value is not None:
             out += [opt, str(value)]
-    return out + ["--device", f"{st.device:#04x}", "--source-address", f"{st.source_address:#04x}"]
+    out += ["--device", f"{st.device:#04x}"]
+    if st.source_address is not None:  # else the session picks a free address itself
+        out += ["--source-address", f"{st.source_address:#04x}"]
+    return out
 
 
 def _no_session(st: CliState) -> SessionError:

@@ -115,6 +115,12 @@ class NotOwnerError(CommandError):
     hint = "only the supervisor that locked may do this: lock first, or wait for the owner to release"
 
 
+class AddressInUseError(NotOwnerError):
+    """connect was refused: another client has a live session on this source address."""
+
+    hint = ""
+
+
 class BusyError(CommandError):
     code = pb.CMD_BUSY_ERR
     hint = "a previous command is still running; wait for it or stop-motion"

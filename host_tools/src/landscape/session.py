@@ -67,12 +67,15 @@ class SessionError(LandscapeError):
     """No session runs, or the session process does not answer."""
 
 
-def socket_path(spec: BusSpec, device: int, source_address: int) -> Path:
-    """Where the session of `device` on the bus of `spec`, spoken to from `source_address`,
-    listens: $XDG_RUNTIME_DIR/landscape-<device>-<hash>.sock (else the temp directory).
-    The hash covers the resolved interface and channel, the source address and the user."""
+def socket_path(spec: BusSpec, device: int, source_address: int | None) -> Path:
+    """Where the session of `device` on the bus of `spec` listens: $XDG_RUNTIME_DIR/landscape-
+    <device>-<hash>.sock (else the temp directory). The hash covers the resolved interface and
+    channel, the user and the source address the invocation pinned (--source-address), or "auto"
+    when it pinned none: a session started without -s is found by every invocation without -s,
+    whichever free address it took."""
     cfg = resolve_config(spec, strict=False)
-    key = f"{cfg.get('interface')}:{cfg.get('channel')}:{source_address:02x}:{os.getuid()}"
+    addr = "auto" if source_address is None else f"{source_address:02x}"
+    key = f"{cfg.get('interface')}:{cfg.get('channel')}:{addr}:{os.getuid()}"
     digest = hashlib.sha256(key.encode()).hexdigest()[:12]
     base = os.environ.get("XDG_RUNTIME_DIR") or tempfile.gettempdir()
     return Path(base) / f"landscape-{device:02x}-{digest}.sock"

@@ -15,6 +15,7 @@ from __future__ import annotations
 import collections
 import logging
 import queue
+import secrets
 import threading
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
@@ -29,8 +30,11 @@ from google.protobuf.message import DecodeError, Message
 from . import telemetry as tm
 from ._generated import landscape_pb2 as pb
 from .bus import (
+    ADDRESS_LISTEN_S,
+    ADDRESS_TRIES,
     DEFAULT_DEVICE,
     DEFAULT_HOST,
+    HOST_POOL,
     ISOTP_PARAMS,
     MAX_MESSAGE_BYTES,
     BusSpec,
@@ -41,6 +45,7 @@ from .bus import (
 )
 from .description import DeviceDescription
 from .errors import (
+    AddressInUseError,
     AlarmError,
     ArgumentError,
     BusError,
@@ -220,6 +225,13 @@ def _undecodable_reason(data: bytes, exc: Exception) -> str:
 class Supervisor:
     """One session with the device at `device`, speaking from node `source_address`.
 
+    `source_address` None (the default): open() picks a free address of the hosts' pool
+    (0xF1..0xFE): it listens for other supervisors' heartbeats for ADDRESS_LISTEN_S, takes the
+    lowest address not heard, and moves on to the next when the device refuses the connect
+    because another client holds that address (docs/protocol.md "Addresses"). A number pins
+    the address. Either way the session is this object's: it sends a random `nonce` with every
+    connect and the device's heartbeat token with every heartbeat ("Identity").
+
     Use as a context manager::
 
         with Supervisor(bus) as sup:
@@ -231,7 +243,7 @@ class Supervisor:
     """
 
     def __init__(self, bus: can.BusABC, *, device: int = DEFAULT_DEVICE,
-                 source_address: int = DEFAULT_HOST, notifier: can.Notifier | None = None,
+                 source_address: int | None = None, notifier: can.Notifier | None = None,
                  client_name: str = "landscape", heartbeat_period_ms: int = 200, retries: int = 2,
                  timeout_s: float | None = None, channel_name: str | None = None,
                  owns_bus: bool = False, disconnect_action: Enum | None = None) -> None:
@@ -245,7 +257,14 @@ class Supervisor:
                                 f"holds at most {name_max}: shorten it")
         self.bus = bus
         self.device = device
-        self.source_address = source_address
+        #: True when the caller chose the address; else open() picks a free one.
+        self.address_pinned = source_address is not None
+        self.source_address = source_address if source_address is not None else DEFAULT_HOST
+        #: Who this supervisor is to the device: drawn once, sent with every connect (a
+        #: reconnect of this object is the same client, another object is another client).
+        self.nonce = secrets.randbits(64)
+        self._hb_token = 0  # ConnectRes.heartbeat_token of the current session
+        self._heard: dict[int, float] = {}  # supervisor address -> when its heartbeat was last heard
         self.client_name = client_name
         self.heartbeat_period_ms = heartbeat_period_ms
         # None: the device's configured disconnect handler; else narrow it (docs/protocol.md)
@@ -253,7 +272,7 @@ class Supervisor:
         self.retries = retries
         self.timeout_s = timeout_s
         self.channel_name = channel_name or str(getattr(bus, "channel_info", "") or "the bus")
-        self._address = physical_address(device, source_address)
+        self._address = physical_address(device, self.source_address)
         self._notifier = notifier
         self._owns_notifier = notifier is None
         self._owns_bus = owns_bus
@@ -323,10 +342,41 @@ class Supervisor:
             raise LandscapeError("this Supervisor is already open")
         try:
             self._start_transport()
-            return self.connect()
+            if self.address_pinned:
+                return self.connect()
+            return self._connect_from_a_free_address()
         except BaseException:
             self.close()
             raise
+
+    def _connect_from_a_free_address(self) -> ConnectResult:
+        """Listen for other supervisors, then connect from the lowest address of the pool nobody
+        uses; on a refusal "in use by another client" try the next (ADDRESS_TRIES in all)."""
+        start = time.monotonic()
+        self._stop.wait(ADDRESS_LISTEN_S)
+        with self._tm_lock:
+            taken = {a for a, t in self._heard.items() if t >= start - ADDRESS_LISTEN_S}
+        refused: list[str] = []
+        for addr in [a for a in HOST_POOL if a not in taken][:ADDRESS_TRIES]:
+            self._use_address(addr)
+            try:
+                return self.connect()
+            except AddressInUseError as exc:
+                log.info("source address %#04x is in use (%s); trying the next", addr, exc.ret_msg)
+                refused.append(f"{addr:#04x}")
+        heard = ", ".join(f"{a:#04x}" for a in sorted(taken)) or "none"
+        raise AddressInUseError(
+            "connect", pb.CMD_NOT_OWNER_ERR,
+            f"no free supervisor address on {self.channel_name}: heard heartbeats from {heard}, the device "
+            f"refused {', '.join(refused) or 'none'} as in use by other clients (pool {HOST_POOL[0]:#04x}.."
+            f"{HOST_POOL[-1]:#04x}); end a supervisor you do not need, or pin a free address with "
+            f"--source-address (source_address=)")
+
+    def _use_address(self, addr: int) -> None:
+        self.source_address = addr
+        self._address = physical_address(self.device, addr)
+        if self._stack is not None:
+            self._stack.set_address(self._address)
 
     def _start_transport(self) -> None:
         if self._notifier is None:
@@ -350,12 +400,19 @@ class Supervisor:
         with self._cv:
             self._finals.clear()
             self._acks.clear()
-        self._start_heartbeat()
         rv = self.request("connect", check=False, protocol_version=PROTOCOL_VERSION,
-                          schema_hash=SCHEMA_HASH, client_name=self.client_name,
+                          schema_hash=SCHEMA_HASH, client_nonce=self.nonce, client_name=self.client_name,
                           heartbeat_period_ms=self.heartbeat_period_ms,
                           disconnect_action=self.disconnect_action)
         res = rv.message if isinstance(rv.message, pb.ConnectRes) else None
+        if res is not None and res.client_nonce != self.nonce and rv.ret_code != pb.CMD_VERSION_MISMATCH_ERR:
+            # the answer to another client's connect on this address (two connecting at once)
+            raise AddressInUseError("connect", pb.CMD_NOT_OWNER_ERR,
+                                    f"another client is connecting from {self.source_address:#04x} at the same "
+                                    f"time: pass another --source-address (source_address=), or leave it out "
+                                    f"and let the host pick a free one")
+        if rv.ret_code == pb.CMD_NOT_OWNER_ERR:
+            raise AddressInUseError("connect", rv.ret_code, rv.ret_msg)
         if rv.ret_code == pb.CMD_VERSION_MISMATCH_ERR:
             if res is not None and (res.protocol_version or res.schema_hash):
                 raise VersionMismatchError(mismatch_message(PROTOCOL_VERSION, SCHEMA_HASH,
@@ -373,7 +430,9 @@ class Supervisor:
             raise VersionMismatchError(mismatch_message(PROTOCOL_VERSION, SCHEMA_HASH,
                                                         res.protocol_version, res.schema_hash))
         self.device_info = res
+        self._hb_token = res.heartbeat_token
         self.connected = True
+        self._start_heartbeat()
         self.description = None
         self.description = self._read_description()
         self.connect_result = ConnectResult(rv, res)
@@ -474,7 +533,7 @@ class Supervisor:
         while not self._hb_stop.is_set():
             try:
                 self.bus.send(tm.encode("HEARTBEAT", self.source_address, hb_role=1, hb_counter=counter,
-                                        hb_period_ms=self.heartbeat_period_ms))
+                                        hb_period_ms=self.heartbeat_period_ms, hb_token=self._hb_token))
                 reported = False
             except Exception as exc:  # keep beating: a transient bus error must not end the session
                 if not reported:
@@ -856,9 +915,13 @@ class Supervisor:
 
     def _on_frame(self, frame: can.Message) -> None:
         b = tm.decode(frame)
-        if b is None or b.sender != self.device:
+        if b is None:
             return
         if b.name == "HEARTBEAT" and b.signals.get("hb_role", 0) != 0:
+            with self._tm_lock:  # another supervisor's: its address is taken
+                self._heard[b.sender] = time.monotonic()
+            return
+        if b.sender != self.device:
             return
         with self._tm_lock:
             self._telemetry[b.name] = b

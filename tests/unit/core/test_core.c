@@ -145,6 +145,19 @@ static void send_rsvp_reply(uint8_t addr, uint32_t id, int32_t code)
     send_uplink(addr);
 }
 
+/* The client nonce of the test's supervisor at `addr` (one client per address). */
+static uint64_t nonce_of(uint8_t addr)
+{
+    return 0x1D0000000000A000u | addr;
+}
+
+/* A heartbeat from `addr` carrying the token of its session (0: none). */
+static void beat(uint8_t addr, uint64_t now_us)
+{
+    int i = ls_core_session_of(&g_core, addr);
+    ls_core_on_heartbeat(&g_core, addr, i >= 0 ? g_core.sessions[i].hb_token : 0u, now_us);
+}
+
 static void connect_host(uint8_t addr)
 {
     ls_ConnectReq *c = &req(ls_Request_connect_tag)->cmd.connect;
@@ -152,6 +165,8 @@ static void connect_host(uint8_t addr)
     c->has_protocol_version = true;
     c->schema_hash = LS_SCHEMA_HASH;
     c->has_schema_hash = true;
+    c->client_nonce = nonce_of(addr);
+    c->has_client_nonce = true;
     snprintf(c->client_name, sizeof c->client_name, "test-%02X", addr);
     assert_int_equal(must(addr)->ret_code, ls_RetCode_CMD_EXEC_OK);
 }
@@ -236,6 +251,8 @@ static void test_every_command_in_every_state(void **state)
                 g_rq.cmd.connect.has_protocol_version = true;
                 g_rq.cmd.connect.schema_hash = LS_SCHEMA_HASH;
                 g_rq.cmd.connect.has_schema_hash = true;
+                g_rq.cmd.connect.client_nonce = nonce_of(HOST_A);
+                g_rq.cmd.connect.has_client_nonce = true;
             }
             const ls_Response *r = send_req(HOST_A);
             bool valid = (d->states & (uint8_t)k_states[s]) != 0u;
@@ -277,6 +294,8 @@ static void test_owner_only_commands_refuse_non_owners(void **state)
                     g_rq.cmd.connect.has_protocol_version = true;
                     g_rq.cmd.connect.schema_hash = LS_SCHEMA_HASH;
                     g_rq.cmd.connect.has_schema_hash = true;
+                    g_rq.cmd.connect.client_nonce = nonce_of(HOST_A);
+                    g_rq.cmd.connect.has_client_nonce = true;
                 }
                 const ls_Response *r = send_req(HOST_A);
                 int32_t code = r != NULL ? r->ret_code : LS_CALL_DEFERRED;
@@ -1372,6 +1391,8 @@ static void test_strings_that_are_not_utf8_are_refused_naming_the_field(void **s
     c->has_protocol_version = true;
     c->schema_hash = LS_SCHEMA_HASH;
     c->has_schema_hash = true;
+    c->client_nonce = nonce_of(0xF5);
+    c->has_client_nonce = true;
     snprintf(c->client_name, sizeof c->client_name, "\xff\xfe");
     const ls_Response *r = must(0xF5);
     assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_ERR);
@@ -1554,6 +1575,108 @@ static void test_disconnect_during_motion_releases_after_the_stop(void **state)
     assert_int_not_equal(g_core.sessions[ls_core_session_of(&g_core, HOST_A)].epoch, epoch);
 }
 
+/* ---------------------------------------------------------------- issue 17: one supervisor per address */
+
+static const ls_Response *connect_as(uint8_t addr, uint64_t nonce, const char *name)
+{
+    ls_ConnectReq *c = &req(ls_Request_connect_tag)->cmd.connect;
+    c->protocol_version = ls_Protocol_PROTOCOL_VERSION;
+    c->has_protocol_version = true;
+    c->schema_hash = LS_SCHEMA_HASH;
+    c->has_schema_hash = true;
+    c->client_nonce = nonce;
+    c->has_client_nonce = true;
+    snprintf(c->client_name, sizeof c->client_name, "%s", name);
+    return must(addr);
+}
+
+/* Another client on the owner's address is refused and changes nothing; the
+ * same client (its nonce) reconnects and is the owner again. */
+static void test_a_second_client_on_a_live_address_is_refused(void **state)
+{
+    (void)state;
+    const int a = ls_core_session_of(&g_core, HOST_A);
+    assert_int_equal(g_core.owner, a);
+    const uint32_t epoch = g_core.sessions[a].epoch;
+    const uint32_t token = g_core.sessions[a].hb_token;
+    req(ls_Request_get_units_tag);
+    assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
+    const uint32_t cached_seq = g_core.sessions[a].last_seq;
+
+    const ls_Response *r = connect_as(HOST_A, nonce_of(HOST_A) ^ 0x5555u, "recorder");
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_NOT_OWNER_ERR);
+    assert_string_equal(r->ret_msg, "connect: address 0x21 is in use by another client, \"test-21\" (the owner): "
+                                    "pass another --source-address, or none to let the host pick a free one");
+    assert_int_equal(r->session_epoch, 0);
+    assert_false(r->result.connect.owner);
+    assert_int_equal(r->result.connect.heartbeat_token, 0);
+    assert_int_equal(g_core.connects_refused, 1);
+    /* the owner's session is untouched: same epoch, token, owner, retransmission cache */
+    assert_int_equal(ls_core_session_of(&g_core, HOST_A), a);
+    assert_int_equal(g_core.owner, a);
+    assert_int_equal(g_core.sessions[a].epoch, epoch);
+    assert_int_equal(g_core.sessions[a].hb_token, token);
+    assert_int_equal(g_core.sessions[a].last_seq, cached_seq);
+    assert_string_equal(g_core.sessions[a].name, "test-21");
+
+    /* a non-owner's address: refused too, without "the owner" */
+    r = connect_as(HOST_B, 7u, "other");
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_NOT_OWNER_ERR);
+    assert_non_null(strstr(r->ret_msg, "address 0x22 is in use by another client, \"test-22\": pass"));
+
+    /* the same client again: a reconnect, new epoch and token, still the owner */
+    r = connect_as(HOST_A, nonce_of(HOST_A), "test-21");
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_EXEC_OK);
+    assert_true(r->result.connect.owner);
+    assert_int_equal(g_core.owner, a);
+    assert_true(r->result.connect.session_epoch != epoch);
+    assert_int_equal(r->result.connect.heartbeat_token, g_core.sessions[a].hb_token);
+    assert_true(g_core.sessions[a].hb_token != 0u && g_core.sessions[a].hb_token <= LS_HB_TOKEN_MASK);
+    assert_true(r->result.connect.client_nonce == nonce_of(HOST_A)); /* the answer to this connect */
+
+    /* once the session has ended the address is free for anyone */
+    req(ls_Request_release_tag);
+    assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
+    req(ls_Request_disconnect_tag);
+    assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
+    r = connect_as(HOST_A, 99u, "newcomer");
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_EXEC_OK);
+    assert_false(r->result.connect.owner);
+}
+
+/* Only a heartbeat carrying the session's token keeps it: bare ones, wrong
+ * ones and another session's token are counted and change nothing. */
+static void test_heartbeats_keep_a_session_only_with_its_token(void **state)
+{
+    (void)state;
+    const uint64_t t0 = g_now;
+    const int a = ls_core_session_of(&g_core, HOST_A);
+    const int b = ls_core_session_of(&g_core, HOST_B);
+    const uint32_t tok_a = g_core.sessions[a].hb_token;
+    const uint32_t tok_b = g_core.sessions[b].hb_token;
+    assert_true(tok_a != 0u && tok_b != 0u && tok_a != tok_b);
+    const uint64_t late = t0 + 500000000u;                   /* well inside the 600 s time-out */
+    ls_core_on_heartbeat(&g_core, HOST_A, 0u, late);         /* bare */
+    ls_core_on_heartbeat(&g_core, HOST_A, tok_a ^ 1u, late); /* wrong */
+    ls_core_on_heartbeat(&g_core, HOST_A, tok_b, late);      /* B's token from A's address */
+    ls_core_on_heartbeat(&g_core, 0x30, 0u, late);           /* no session here: not ours, not counted */
+    beat(HOST_B, late);
+    assert_int_equal(g_core.hb_refused, 3);
+    assert_int_equal(g_core.sessions[a].hb_refused, 3);
+    assert_int_equal(g_core.sessions[b].hb_refused, 0);
+    assert_int_equal(g_core.sessions[a].last_heard_us, t0);
+    assert_int_equal(g_core.sessions[b].last_heard_us, late);
+    ls_core_tick(&g_core, t0 + 600000001u);
+    assert_int_equal(ls_core_session_of(&g_core, HOST_A), -1); /* the bare heartbeats did not keep it */
+    assert_int_equal(ls_core_session_of(&g_core, HOST_B), b);
+    assert_int_equal(g_core.owner, -1); /* the owner was lost: the disconnect action ran */
+    assert_int_equal(g_core.state, ls_State_UNLOCKED);
+    req(ls_Request_send_command_tag);
+    snprintf(g_rq.cmd.send_command.input, sizeof g_rq.cmd.send_command.input, "status");
+    const ls_Response *r = must(HOST_B);
+    assert_non_null(strstr(r->result.send_command.result, "hb_refused=3\n"));
+}
+
 /* ---------------------------------------------------------------- issue 19: the session's contract */
 
 static const ls_Response *connect_with(uint8_t addr, uint32_t period_ms, ls_DisconnectAction action)
@@ -1563,6 +1686,8 @@ static const ls_Response *connect_with(uint8_t addr, uint32_t period_ms, ls_Disc
     c->has_protocol_version = true;
     c->schema_hash = LS_SCHEMA_HASH;
     c->has_schema_hash = true;
+    c->client_nonce = nonce_of(addr);
+    c->has_client_nonce = true;
     snprintf(c->client_name, sizeof c->client_name, "test-%02X", addr);
     c->heartbeat_period_ms = period_ms;
     c->disconnect_action = action;
@@ -1631,8 +1756,8 @@ static void test_liveness_heartbeats_only_and_the_stated_period(void **state)
     g_now = t0 + 900000;
     req(ls_Request_get_units_tag);
     assert_int_equal(must(HOST_B)->ret_code, ls_RetCode_CMD_EXEC_OK);
-    ls_core_on_heartbeat(&g_core, HOST_A, t0 + 900000);
-    ls_core_on_heartbeat(&g_core, 0x24, t0 + 900000);
+    beat(HOST_A, t0 + 900000);
+    beat(0x24, t0 + 900000);
     ls_core_tick(&g_core, t0 + 1000001);
     assert_int_equal(ls_core_session_of(&g_core, HOST_B), -1); /* requests do not keep a session */
     assert_true(ls_core_session_of(&g_core, HOST_A) >= 0);
@@ -1734,7 +1859,7 @@ static void test_disconnect_action_stop_during_a_motion(void **state)
     g_stop_calls = 0;
     size_t from = g_nrx, n;
     g_nposted = 0;
-    ls_core_on_heartbeat(&g_core, HOST_B, g_now + 600000001u);
+    beat(HOST_B, g_now + 600000001u);
     ls_core_tick(&g_core, g_now + 600000001u); /* the owner's heartbeat is lost */
     assert_int_equal(g_stop_calls, 1);
     assert_int_equal(g_core.state, ls_State_MOVING);
@@ -1765,7 +1890,7 @@ static void test_disconnect_action_stop_deactivate(void **state)
     g_core.act.enable_drives = fake_drives;
     g_drive_calls = 0;
     size_t from = g_nrx;
-    ls_core_on_heartbeat(&g_core, HOST_B, g_now + 600000001u);
+    beat(HOST_B, g_now + 600000001u);
     ls_core_tick(&g_core, g_now + 600000001u);
     assert_int_equal(g_drive_calls, 1);
     assert_false(g_drives_on);
@@ -1918,6 +2043,16 @@ static void test_absent_required_fields_are_refused_naming_them(void **state)
     assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_ERR);
     assert_non_null(strstr(r->ret_msg, "connect: schema_hash is missing"));
     assert_int_equal(ls_core_session_of(&g_core, 0xF5), -1);
+    /* ... and without a client nonce (who it is: docs/protocol.md "Identity") */
+    c = &req(ls_Request_connect_tag)->cmd.connect;
+    c->protocol_version = ls_Protocol_PROTOCOL_VERSION;
+    c->has_protocol_version = true;
+    c->schema_hash = LS_SCHEMA_HASH;
+    c->has_schema_hash = true;
+    r = must(0xF5);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_ERR);
+    assert_non_null(strstr(r->ret_msg, "connect: client_nonce is missing"));
+    assert_int_equal(ls_core_session_of(&g_core, 0xF5), -1);
     /* the state and owner checks come first: their answers do not depend on the fields */
     req(ls_Request_move_absolute_tag);
     r = must(HOST_B);
@@ -1936,6 +2071,8 @@ static void test_seq_0_is_refused_after_connect(void **state)
     c->has_protocol_version = true;
     c->schema_hash = LS_SCHEMA_HASH;
     c->has_schema_hash = true;
+    c->client_nonce = nonce_of(0xF5);
+    c->has_client_nonce = true;
     memset(&g_up, 0, sizeof g_up);
     g_up.which_msg = ls_Uplink_request_tag;
     g_up.msg.request = g_rq; /* seq 0 */
@@ -2149,6 +2286,8 @@ int main(void)
         cmocka_unit_test(test_connect_narrows_the_disconnect_action),
         cmocka_unit_test_setup(test_absent_required_fields_are_refused_naming_them, setup_locked),
         cmocka_unit_test_setup(test_seq_0_is_refused_after_connect, setup_locked),
+        cmocka_unit_test_setup(test_a_second_client_on_a_live_address_is_refused, setup_locked),
+        cmocka_unit_test_setup(test_heartbeats_keep_a_session_only_with_its_token, setup_locked),
         cmocka_unit_test(test_path_move_cycles_absent_is_one_zero_is_a_dry_run_that_says_so),
         cmocka_unit_test_setup(test_describe_publishes_the_limits_from_their_homes, setup_locked),
     };

@@ -106,6 +106,7 @@ typedef struct {
     uint8_t buf[LS_ISOTP_MAX_PAYLOAD];
     size_t len;
     char text[64];
+    uint32_t token; /* a heartbeat's hb_token */
     uint64_t now_us;
 } call_t;
 
@@ -116,7 +117,7 @@ static ls_core_t *const CORE = (ls_core_t *)&g_calls; /* an address the double c
 static size_t g_echo_len;                             /* > 0: answer each uplink with this many bytes */
 
 void __wrap_ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t len, uint64_t now_us);
-void __wrap_ls_core_on_heartbeat(ls_core_t *core, uint8_t addr, uint64_t now_us);
+void __wrap_ls_core_on_heartbeat(ls_core_t *core, uint8_t addr, uint32_t token, uint64_t now_us);
 void __wrap_ls_core_emergency(ls_core_t *core, uint64_t now_us);
 
 static call_t *record(ls_core_t *core, call_kind_t kind, uint8_t addr, uint64_t now_us)
@@ -146,9 +147,9 @@ void __wrap_ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf,
     }
 }
 
-void __wrap_ls_core_on_heartbeat(ls_core_t *core, uint8_t addr, uint64_t now_us)
+void __wrap_ls_core_on_heartbeat(ls_core_t *core, uint8_t addr, uint32_t token, uint64_t now_us)
 {
-    (void)record(core, CALL_HEARTBEAT, addr, now_us);
+    record(core, CALL_HEARTBEAT, addr, now_us)->token = token;
 }
 
 void __wrap_ls_core_emergency(ls_core_t *core, uint64_t now_us)
@@ -314,7 +315,10 @@ static void test_heartbeats(void **state)
     (void)state;
     setup_net(1);
     uint8_t hb[8] = { 0 };
-    hb[2] = 1; /* role: supervisor */
+    hb[2] = 1;    /* role: supervisor */
+    hb[5] = 0x56; /* hb_token, 24 bits little-endian in bytes 5..7 (protocol/landscape.dbc) */
+    hb[6] = 0x34;
+    hb[7] = 0x12;
     link_put(&g_link[0], LS_ID_HEARTBEAT | SUP_A, HAL_CAN_F_EXT, hb, 8);
     hb[2] = 0; /* a controller's heartbeat (another device) */
     link_put(&g_link[0], LS_ID_HEARTBEAT | 0x02u, HAL_CAN_F_EXT, hb, 8);
@@ -324,6 +328,7 @@ static void test_heartbeats(void **state)
     assert_int_equal(g_ncalls, 1);
     assert_int_equal(g_calls[0].kind, CALL_HEARTBEAT);
     assert_int_equal(g_calls[0].addr, SUP_A);
+    assert_int_equal(g_calls[0].token, 0x123456);
     assert_int_equal(g_calls[0].now_us, 3000);
 }
 

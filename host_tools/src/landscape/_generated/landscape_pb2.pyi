@@ -47,6 +47,7 @@ EVENT: NoticeKind
 EVENT_RSVP: NoticeKind
 FEET: LinearUnit
 FUNCTIONAL_ALL_DEVICES: NodeAddress
+HOST_ADDRESS_POOL_LAST: NodeAddress
 IDLE: State
 INCHES: LinearUnit
 ISOTP_FUNCTIONAL_BASE: IsotpId
@@ -157,26 +158,30 @@ class ComplyRes(_message.Message):
     def __init__(self) -> None: ...
 
 class ConnectReq(_message.Message):
-    __slots__ = ["client_name", "disconnect_action", "heartbeat_period_ms", "protocol_version", "schema_hash"]
+    __slots__ = ["client_name", "client_nonce", "disconnect_action", "heartbeat_period_ms", "protocol_version", "schema_hash"]
     CLIENT_NAME_FIELD_NUMBER: _ClassVar[int]
+    CLIENT_NONCE_FIELD_NUMBER: _ClassVar[int]
     DISCONNECT_ACTION_FIELD_NUMBER: _ClassVar[int]
     HEARTBEAT_PERIOD_MS_FIELD_NUMBER: _ClassVar[int]
     PROTOCOL_VERSION_FIELD_NUMBER: _ClassVar[int]
     SCHEMA_HASH_FIELD_NUMBER: _ClassVar[int]
     client_name: str
+    client_nonce: int
     disconnect_action: DisconnectAction
     heartbeat_period_ms: int
     protocol_version: int
     schema_hash: int
-    def __init__(self, protocol_version: _Optional[int] = ..., schema_hash: _Optional[int] = ..., client_name: _Optional[str] = ..., heartbeat_period_ms: _Optional[int] = ..., disconnect_action: _Optional[_Union[DisconnectAction, str]] = ...) -> None: ...
+    def __init__(self, protocol_version: _Optional[int] = ..., schema_hash: _Optional[int] = ..., client_name: _Optional[str] = ..., heartbeat_period_ms: _Optional[int] = ..., disconnect_action: _Optional[_Union[DisconnectAction, str]] = ..., client_nonce: _Optional[int] = ...) -> None: ...
 
 class ConnectRes(_message.Message):
-    __slots__ = ["angular_unit", "device_name", "disconnect_action", "firmware_version", "heartbeat_timeout_ms", "joint_count", "linear_unit", "owner", "protocol_version", "schema_hash", "session_epoch", "state"]
+    __slots__ = ["angular_unit", "client_nonce", "device_name", "disconnect_action", "firmware_version", "heartbeat_timeout_ms", "heartbeat_token", "joint_count", "linear_unit", "owner", "protocol_version", "schema_hash", "session_epoch", "state"]
     ANGULAR_UNIT_FIELD_NUMBER: _ClassVar[int]
+    CLIENT_NONCE_FIELD_NUMBER: _ClassVar[int]
     DEVICE_NAME_FIELD_NUMBER: _ClassVar[int]
     DISCONNECT_ACTION_FIELD_NUMBER: _ClassVar[int]
     FIRMWARE_VERSION_FIELD_NUMBER: _ClassVar[int]
     HEARTBEAT_TIMEOUT_MS_FIELD_NUMBER: _ClassVar[int]
+    HEARTBEAT_TOKEN_FIELD_NUMBER: _ClassVar[int]
     JOINT_COUNT_FIELD_NUMBER: _ClassVar[int]
     LINEAR_UNIT_FIELD_NUMBER: _ClassVar[int]
     OWNER_FIELD_NUMBER: _ClassVar[int]
@@ -185,10 +190,12 @@ class ConnectRes(_message.Message):
     SESSION_EPOCH_FIELD_NUMBER: _ClassVar[int]
     STATE_FIELD_NUMBER: _ClassVar[int]
     angular_unit: AngularUnit
+    client_nonce: int
     device_name: str
     disconnect_action: DisconnectAction
     firmware_version: str
     heartbeat_timeout_ms: int
+    heartbeat_token: int
     joint_count: int
     linear_unit: LinearUnit
     owner: bool
@@ -196,7 +203,7 @@ class ConnectRes(_message.Message):
     schema_hash: int
     session_epoch: int
     state: State
-    def __init__(self, protocol_version: _Optional[int] = ..., schema_hash: _Optional[int] = ..., device_name: _Optional[str] = ..., joint_count: _Optional[int] = ..., firmware_version: _Optional[str] = ..., heartbeat_timeout_ms: _Optional[int] = ..., state: _Optional[_Union[State, str]] = ..., owner: bool = ..., session_epoch: _Optional[int] = ..., disconnect_action: _Optional[_Union[DisconnectAction, str]] = ..., linear_unit: _Optional[_Union[LinearUnit, str]] = ..., angular_unit: _Optional[_Union[AngularUnit, str]] = ...) -> None: ...
+    def __init__(self, protocol_version: _Optional[int] = ..., schema_hash: _Optional[int] = ..., device_name: _Optional[str] = ..., joint_count: _Optional[int] = ..., firmware_version: _Optional[str] = ..., heartbeat_timeout_ms: _Optional[int] = ..., state: _Optional[_Union[State, str]] = ..., owner: bool = ..., session_epoch: _Optional[int] = ..., disconnect_action: _Optional[_Union[DisconnectAction, str]] = ..., linear_unit: _Optional[_Union[LinearUnit, str]] = ..., angular_unit: _Optional[_Union[AngularUnit, str]] = ..., heartbeat_token: _Optional[int] = ..., client_nonce: _Optional[int] = ...) -> None: ...
 
 class DeactivateReq(_message.Message):
     __slots__ = []
