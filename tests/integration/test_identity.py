@@ -87,11 +87,14 @@ def session_line(text: str, addr: int) -> str | None:
 
 # ---------------------------------------------------------------- identity in connect
 
-def test_a_second_client_on_the_owners_address_is_refused_naming_it(buses: list[can.BusABC]) -> None:
-    with Supervisor(buses[0], source_address=FIRST, client_name="owner") as owner:
+def test_a_second_client_on_the_owners_address_is_refused_naming_it(rig: Rig) -> None:
+    owner_bus = open_slcan(rig.ptys[0])
+    with Supervisor(owner_bus, source_address=FIRST, client_name="owner", owns_bus=True) as owner:
         owner.lock()
         epoch = owner.connect_result.device.session_epoch if owner.connect_result else 0
-        intruder = Supervisor(buses[1], source_address=FIRST, client_name="recorder")
+        # opened now, as a program that starts later does (a bus opened earlier holds the owner's answers)
+        intruder = Supervisor(open_slcan(rig.ptys[1]), source_address=FIRST, client_name="recorder",
+                              owns_bus=True)
         with pytest.raises(AddressInUseError) as exc:
             intruder.open()
         msg = str(exc.value)
@@ -147,6 +150,7 @@ def test_heartbeats_without_the_token_do_not_keep_an_abandoned_session(buses: li
         assert notice_data(alarm)["supervisor"] == f"0x{victim_addr:02X}"
         assert notice_data(alarm)["reason"] == "heartbeat lost"
         assert notice_data(alarm)["action"] == "stop_deactivate_release"
+        print(f"{token} heartbeats every 0.1 s: ownerLost {elapsed:.3f} s after the last real one")
         assert elapsed < HEARTBEAT_TIMEOUT_S + 0.6, elapsed
         st = observer.get_motion_control_state().result
         assert st["state"] == "UNLOCKED" and st["control_mode"] == "power_off"

@@ -406,11 +406,11 @@ class Supervisor:
                           disconnect_action=self.disconnect_action)
         res = rv.message if isinstance(rv.message, pb.ConnectRes) else None
         if res is not None and res.client_nonce != self.nonce and rv.ret_code != pb.CMD_VERSION_MISMATCH_ERR:
-            # the answer to another client's connect on this address (two connecting at once)
+            # the answer to another client's connect: another client speaks from this address
             raise AddressInUseError("connect", pb.CMD_NOT_OWNER_ERR,
-                                    f"another client is connecting from {self.source_address:#04x} at the same "
-                                    f"time: pass another --source-address (source_address=), or leave it out "
-                                    f"and let the host pick a free one")
+                                    f"the answer on {self.source_address:#04x} accepts another client's connect "
+                                    f"(its nonce is not ours): another client uses this address: pass another "
+                                    f"--source-address, or none to let the host pick a free one")
         if rv.ret_code == pb.CMD_NOT_OWNER_ERR:
             raise AddressInUseError("connect", rv.ret_code, rv.ret_msg)
         if rv.ret_code == pb.CMD_VERSION_MISMATCH_ERR:
