@@ -293,7 +293,7 @@ def bench_footprint(quick: bool) -> Section:
             "Heap: the firmware's own objects reference no allocator (checked with `arm-none-eabi-nm -u` on each "
             "object). The allocator comes from newlib-nano itself: `vsnprintf` (the core formats answers with it) "
             "references `_realloc_r` for its growing-string mode (`asprintf`), which a fixed-buffer `snprintf` "
-            "never takes, and `strtod` (firmware/core/cmd_motion.c) uses gdtoa's big-number helpers, which call "
+            "never takes, and `strtod` (firmware/core/cmd_aux.c) uses gdtoa's big-number helpers, which call "
             "`_calloc_r`/`_malloc_r` for long inputs and can reach `__assert_func` -> `fiprintf` -> stdio (hence the "
             "nosys stubs). With `_sbrk` failing, that code can never obtain memory (strtod then fails on such input). "
             "To have no allocator in the image at all, the core would need its own formatter and number parser.")

@@ -143,22 +143,6 @@ static void act_stop(void *ctx)
     (void)ls_control_post((ls_control_t *)ctx, &cmd);
 }
 
-static void drain_control_events(uint64_t now)
-{
-    ls_ctl_event_t ev;
-    while (ls_control_next_event(&g_ctl, &ev)) {
-        switch (ev.kind) {
-        case LS_CEV_MOTION: ls_core_on_motion_event(&g_core, &ev.motion); break;
-        case LS_CEV_FAULT:
-            ls_core_fault(&g_core, ev.text, now);
-            ls_core_motion_failed(&g_core, 0, ev.text);
-            break;
-        case LS_CEV_DIO_CHANGED: ls_core_on_dio_event(&g_core, ev.dio.unit, ev.dio.on, ev.dio.off, now); break;
-        case LS_CEV_CMD_FAILED: ls_core_motion_failed(&g_core, ev.ref_seq, ev.text); break;
-        }
-    }
-}
-
 int main(void)
 {
     ls_core_config_t cfg = {
@@ -196,9 +180,7 @@ int main(void)
             next_cycle = t + 1000u;
         }
         ls_net_poll(&g_net, t);
-        drain_control_events(t);
         ls_core_tick(&g_core, t);
-        ls_core_motion_tick(&g_core, t);
         if (t >= next_hb) {
             struct landscape_heartbeat_t hb = { .hb_counter = hb_counter++, .hb_state = (uint8_t)g_core.state };
             hal_can_frame_t f = { .id = LS_ID_HEARTBEAT | 0x10u, .flags = HAL_CAN_F_EXT, .len = 8 };

@@ -269,25 +269,10 @@ static void describe_config(void *ctx, char *buf, size_t cap)
     }
 }
 
-static void drain_control_events(uint64_t now)
+static void core_log_warn(void *ctx, const char *line)
 {
-    ls_ctl_event_t ev;
-    while (ls_control_next_event(&g_ctl, &ev)) {
-        switch (ev.kind) {
-        case LS_CEV_MOTION: ls_core_on_motion_event(&g_core, &ev.motion); break;
-        case LS_CEV_FAULT: ls_core_fault(&g_core, ev.text, now); break; /* its halt ends the motion */
-        case LS_CEV_DIO_CHANGED: ls_core_on_dio_event(&g_core, ev.dio.unit, ev.dio.on, ev.dio.off, now); break;
-        case LS_CEV_CMD_FAILED: {
-            char d[80];
-            snprintf(d, sizeof d, "reason=%s", ev.text);
-            const char *data[] = { d };
-            ls_core_notify(&g_core, g_core.owner, ls_NoticeKind_ALARM, "commandFailed", ev.ref_seq, false, data, 1);
-            ls_core_motion_failed(&g_core, ev.ref_seq, ev.text);
-            LOG_WARN("control loop: %s", ev.text);
-            break;
-        }
-        }
-    }
+    (void)ctx;
+    LOG_WARN("%s", line);
 }
 
 static void send_frame(uint32_t base, const uint8_t *data)
@@ -429,7 +414,6 @@ static int compose(const ls_config_t *o)
                                .world_step = g_world_open ? hal_sim_world_step : NULL };
     ls_control_init(&g_ctl, &cc);
     g_core.ctl = &g_ctl;
-    ls_core_sensor_attach(&g_core); /* the sensor/tool handlers see their loop events from the start */
     if (o->estop_input >= 0) {
         ls_ctl_cmd_t cmd = { .kind = LS_CTL_ESTOP_LINE, .dio = { 0, 1u << (unsigned)o->estop_input, 0 } };
         (void)ls_control_post(&g_ctl, &cmd);
@@ -487,6 +471,7 @@ int main(int argc, char **argv)
                               .stop_motion = act_stop,
                               .halt = act_halt,
                               .describe_rt = describe_rt,
+                              .log_warn = core_log_warn,
                               .describe_config = describe_config,
                               .ctx = &g_ctl };
     ls_core_init(&g_core, &cfg, &io, &act);
@@ -578,11 +563,7 @@ int main(int argc, char **argv)
         (void)poll(fds, n, 1);
         uint64_t now = mono_us();
         ls_net_poll(&g_net, now);
-        drain_control_events(now);
         ls_core_tick(&g_core, now);
-        ls_run_tick(&g_core, now);
-        ls_dio_tick(&g_core, now);
-        ls_core_motion_tick(&g_core, now);
         if (now >= next_hb) {
             send_heartbeat(&g_net, &g_core, hb_counter++);
             next_hb = now + 200000u;

@@ -49,24 +49,14 @@ static void ev_push(ls_control_t *c, const ls_ctl_event_t *ev)
 
 bool ls_control_next_event(ls_control_t *c, ls_ctl_event_t *out)
 {
-    for (;;) {
-        unsigned tail = atomic_load_explicit(&c->ev_tail, memory_order_relaxed);
-        unsigned head = atomic_load_explicit(&c->ev_head, memory_order_acquire);
-        if (tail == head) {
-            return false;
-        }
-        *out = c->ev_ring[tail % LS_CTL_QUEUE_LEN];
-        atomic_store_explicit(&c->ev_tail, tail + 1u, memory_order_release);
-        if (c->filter == NULL || !c->filter(c->filter_ctx, out)) {
-            return true;
-        }
+    unsigned tail = atomic_load_explicit(&c->ev_tail, memory_order_relaxed);
+    unsigned head = atomic_load_explicit(&c->ev_head, memory_order_acquire);
+    if (tail == head) {
+        return false;
     }
-}
-
-void ls_control_set_event_filter(ls_control_t *c, ls_control_event_filter_t fn, void *ctx)
-{
-    c->filter_ctx = ctx;
-    c->filter = fn;
+    *out = c->ev_ring[tail % LS_CTL_QUEUE_LEN];
+    atomic_store_explicit(&c->ev_tail, tail + 1u, memory_order_release);
+    return true;
 }
 
 bool ls_control_post(ls_control_t *c, const ls_ctl_cmd_t *cmd)

@@ -21,7 +21,7 @@
  *
  * Comms thread API: ls_control_post, ls_control_plan_slot/ls_control_start_plan,
  * ls_control_react_slot/ls_control_start_react, ls_control_set_manual,
- * ls_control_set_event_filter, ls_control_snapshot, ls_control_next_event. */
+ * ls_control_snapshot, ls_control_next_event. */
 #ifndef LS_CONTROL_H
 #define LS_CONTROL_H
 
@@ -99,10 +99,6 @@ typedef struct {
     ls_react_report_t react; /* LS_MEV_REACT_END: the reading and the force statistics */
 } ls_ctl_event_t;
 
-/* Comms thread: sees every event before ls_control_next_event returns it;
- * returning true consumes it (next_event then goes on to the next one). */
-typedef bool (*ls_control_event_filter_t)(void *ctx, const ls_ctl_event_t *ev);
-
 /* What the comms thread may read at any time (copied under a seqlock). */
 typedef struct {
     uint64_t cycle;
@@ -160,8 +156,6 @@ typedef struct ls_control {
     ls_react_plan_t react_slot;
     atomic_bool react_slot_busy;
     atomic_bool manual_on; /* written by ls_control_set_manual: plans are refused meanwhile */
-    ls_control_event_filter_t filter;
-    void *filter_ctx;
     /* loop -> comms */
     ls_ctl_event_t ev_ring[LS_CTL_QUEUE_LEN];
     atomic_uint ev_head, ev_tail;
@@ -215,8 +209,6 @@ bool ls_control_start_react(ls_control_t *c, uint32_t ref_seq);
 /* Jogging on (dev and jog non-NULL) or off (dev NULL). false when the queue is full. */
 bool ls_control_set_manual(ls_control_t *c, const hal_manual_t *dev, const ls_jog_config_t *jog, uint32_t ref_seq);
 bool ls_control_manual_on(ls_control_t *c);
-/* Install the comms thread's event filter (NULL: none). Call from the comms thread. */
-void ls_control_set_event_filter(ls_control_t *c, ls_control_event_filter_t fn, void *ctx);
 /* A consistent copy of the loop's state: true when `out` is the latest one
  * the loop published. Bounded: at most LS_CTL_SNAPSHOT_TRIES copies of
  * sizeof(ls_ctl_snapshot_t) bytes, no waiting.

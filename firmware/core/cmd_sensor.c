@@ -13,6 +13,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "cmd_motion.h"
 #include "cmd_sensor.h"
 #include "ls_control.h"
 #include "ls_core.h"
@@ -43,27 +44,8 @@ typedef struct {
     char seed_name[16];
 } react_run_t;
 
-static char g_manual[16] = "off";
-static int g_manual_sup = -1;
-static ls_motion_seg_t g_check; /* scratch for the reachability check of a move's line */
 
 /* ------------------------------------------------------------- helpers */
-
-static int32_t no_arm(ls_call_t *call, const char *what)
-{
-    return ls_reply(call, ls_RetCode_CMD_UNSUPPORTED_ERR,
-                    "%s: no arm is composed in this controller (start landscaped with an arm backend)", what);
-}
-
-static bool all_finite(const double *v, size_t n)
-{
-    for (size_t i = 0; i < n; i++) {
-        if (!isfinite(v[i])) {
-            return false;
-        }
-    }
-    return true;
-}
 
 static double norm3(const double v[3])
 {
@@ -118,14 +100,9 @@ static int32_t refuse_if_manual(ls_core_t *core, ls_call_t *call, const char *wh
 {
     if (core->ctl != NULL && ls_control_manual_on(core->ctl)) {
         return ls_reply(call, ls_RetCode_CMD_BUSY_ERR, "%s: manualControl %s is on: send manualControl off first", what,
-                        g_manual);
+                        core->sensor.mode);
     }
     return 0;
-}
-
-static void tool_pose(const ls_core_t *core, double T[16])
-{
-    ls_pose_from_xyzrpy(core->settings.tool_offset, T);
 }
 
 /* Check that the tip can go in a straight line from its pose at q0 to
@@ -144,9 +121,9 @@ static int32_t check_line(ls_core_t *core, ls_call_t *call, const char *what, co
         .joint_speed_frac = 1.0,
     };
     double tool[16];
-    tool_pose(core, tool);
+    ls_mcmd_tool_pose(core, tool);
     char why[128];
-    int st = ls_motion_seg_line(&g_check, m, q0, tool, tip1, &lim, why, sizeof why);
+    int st = ls_motion_seg_line(&core->sensor.check, m, q0, tool, tip1, &lim, why, sizeof why);
     if (st < 0) {
         return ls_reply(call, st == LS_MOTION_ERANGE ? ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR : ls_RetCode_CMD_PARAM_ERR,
                         "%s refused, nothing moved: %s", what, why);
@@ -222,7 +199,7 @@ static int32_t plan_and_start(ls_core_t *core, ls_call_t *call, const char *what
     plan->a_m_s2 = fmin(set->linear_accel_m_s2, core->model->max_linear_accel_m_s2);
     plan->a_stop_m_s2 = core->model->max_linear_accel_m_s2;
     snprintf(plan->sensor, sizeof plan->sensor, "%s", sensor->name);
-    tool_pose(core, plan->tool);
+    ls_mcmd_tool_pose(core, plan->tool);
 
     ls_ctl_snapshot_t snap;
     ls_control_snapshot(core->ctl, &snap);
@@ -250,9 +227,8 @@ int32_t ls_h_move_react(struct ls_core *core, struct ls_call *call)
     const ls_units_t un = ls_core_units(core, call->sup);
     const char *what = "moveReact";
     const ls_MoveReactReq *r = &call->req->cmd.move_react;
-    ls_core_sensor_attach(core);
     if (core->ctl == NULL || core->model == NULL) {
-        return no_arm(call, what);
+        return ls_mcmd_no_arm(call, what);
     }
     int32_t code = refuse_if_manual(core, call, what);
     if (code != 0) {
@@ -269,8 +245,9 @@ int32_t ls_h_move_react(struct ls_core *core, struct ls_call *call)
                         "%s: motion_offsets has %u values; give x y z (or x y z c_x c_y c_z) in the tool frame", what,
                         (unsigned)r->motion_offsets_count);
     }
-    if (!all_finite(r->motion_offsets, r->motion_offsets_count) || !all_finite(r->thresholds, r->thresholds_count) ||
-        !all_finite(r->envelope_max, r->envelope_max_count)) {
+    if (!ls_mcmd_all_finite(r->motion_offsets, r->motion_offsets_count) ||
+        !ls_mcmd_all_finite(r->thresholds, r->thresholds_count) ||
+        !ls_mcmd_all_finite(r->envelope_max, r->envelope_max_count)) {
         return ls_reply(call, ls_RetCode_CMD_PARAM_ERR, "%s: values must be finite numbers", what);
     }
     for (size_t k = 3; k < r->motion_offsets_count; k++) {
@@ -373,9 +350,8 @@ int32_t ls_h_comply(struct ls_core *core, struct ls_call *call)
     const ls_units_t un = ls_core_units(core, call->sup);
     const char *what = "comply";
     const ls_ComplyReq *r = &call->req->cmd.comply;
-    ls_core_sensor_attach(core);
     if (core->ctl == NULL || core->model == NULL) {
-        return no_arm(call, what);
+        return ls_mcmd_no_arm(call, what);
     }
     if (core->state == ls_State_MOVING) {
         return ls_reply(call, ls_RetCode_CMD_BUSY_ERR,
@@ -406,10 +382,10 @@ int32_t ls_h_comply(struct ls_core *core, struct ls_call *call)
                         "%s: thresholds has %u values; give the target Fx Fy Fz (N) [Tx Ty Tz]", what,
                         (unsigned)r->thresholds_count);
     }
-    if (!all_finite(r->max_travel, 6) || !all_finite(r->thresholds, r->thresholds_count) ||
-        !all_finite(r->proportional_gains, r->proportional_gains_count) ||
-        !all_finite(r->differential_gains, r->differential_gains_count) ||
-        !all_finite(r->envelope_max, r->envelope_max_count) || !isfinite(r->max_timeout_s)) {
+    if (!ls_mcmd_all_finite(r->max_travel, 6) || !ls_mcmd_all_finite(r->thresholds, r->thresholds_count) ||
+        !ls_mcmd_all_finite(r->proportional_gains, r->proportional_gains_count) ||
+        !ls_mcmd_all_finite(r->differential_gains, r->differential_gains_count) ||
+        !ls_mcmd_all_finite(r->envelope_max, r->envelope_max_count) || !isfinite(r->max_timeout_s)) {
         return ls_reply(call, ls_RetCode_CMD_PARAM_ERR, "%s: values must be finite numbers", what);
     }
     for (size_t k = 3; k < r->thresholds_count; k++) {
@@ -504,7 +480,6 @@ int32_t ls_h_manual_control(struct ls_core *core, struct ls_call *call)
 {
     const ls_units_t un = ls_core_units(core, call->sup);
     const char *type = call->req->cmd.manual_control.type;
-    ls_core_sensor_attach(core);
     double frac;
     if (strcmp(type, "teachpendant") == 0) {
         frac = JOG_FRAC_TEACHPENDANT;
@@ -517,7 +492,7 @@ int32_t ls_h_manual_control(struct ls_core *core, struct ls_call *call)
                         "manualControl: unknown type '%s': give teachpendant, spaceball or off", type);
     }
     if (core->ctl == NULL || core->model == NULL) {
-        return no_arm(call, "manualControl");
+        return ls_mcmd_no_arm(call, "manualControl");
     }
     if (frac > 0.0 && (core->manual == NULL || core->manual->read == NULL)) {
         return ls_reply(call, ls_RetCode_CMD_UNSUPPORTED_ERR,
@@ -532,7 +507,7 @@ int32_t ls_h_manual_control(struct ls_core *core, struct ls_call *call)
         jog.v_ang_rad_s = frac * m->max_angular_speed_rad_s;
         jog.a_lin_m_s2 = fmin(set->linear_accel_m_s2, m->max_linear_accel_m_s2);
         jog.a_ang_rad_s2 = fmin(set->angular_accel_rad_s2, m->max_angular_accel_rad_s2);
-        tool_pose(core, jog.tool);
+        ls_mcmd_tool_pose(core, jog.tool);
         ok = ls_control_set_manual(core->ctl, core->manual, &jog, call->req->seq);
     } else {
         ok = ls_control_set_manual(core->ctl, NULL, NULL, call->req->seq);
@@ -541,8 +516,8 @@ int32_t ls_h_manual_control(struct ls_core *core, struct ls_call *call)
         return ls_reply(call, ls_RetCode_CMD_BUSY_ERR,
                         "manualControl: the control loop's command queue is full; try again");
     }
-    snprintf(g_manual, sizeof g_manual, "%s", type);
-    g_manual_sup = frac > 0.0 ? call->sup : -1;
+    snprintf(core->sensor.mode, sizeof core->sensor.mode, "%s", type);
+    core->sensor.sup = frac > 0.0 ? call->sup : -1;
     if (frac > 0.0) {
         snprintf(core->motion_state, sizeof core->motion_state, "manual_%s", type);
         return ls_reply(call, ls_RetCode_CMD_EXEC_OK,
@@ -560,14 +535,14 @@ int32_t ls_h_manual_control(struct ls_core *core, struct ls_call *call)
 
 void ls_core_manual_off(ls_core_t *core)
 {
-    if (g_manual_sup < 0 && strcmp(g_manual, "off") == 0) {
+    if (core->sensor.sup < 0 && strcmp(core->sensor.mode, "off") == 0) {
         return;
     }
     if (core->ctl != NULL) {
         (void)ls_control_set_manual(core->ctl, NULL, NULL, 0);
     }
-    snprintf(g_manual, sizeof g_manual, "off");
-    g_manual_sup = -1;
+    snprintf(core->sensor.mode, sizeof core->sensor.mode, "off");
+    core->sensor.sup = -1;
     if (strncmp(core->motion_state, "manual_", 7) == 0) {
         snprintf(core->motion_state, sizeof core->motion_state, "robot_at_rest");
     }
@@ -591,7 +566,7 @@ static void react_end(ls_core_t *core, const ls_ctl_event_t *ev)
     /* where: the tool tip in the world frame, current units */
     double F[16], T[16], W[16], Wi[16], tip[16], wt[16], pose[6];
     ls_kin_fk(core->model, ev->motion.q_rad, F);
-    tool_pose(core, T);
+    ls_mcmd_tool_pose(core, T);
     ls_pose_mul(F, T, tip);
     ls_pose_from_xyzrpy(set->world_frame, W);
     ls_pose_inv(W, Wi);
@@ -659,26 +634,25 @@ static void jog_event(ls_core_t *core, const ls_ctl_event_t *ev)
     if (ev->motion.index == 0) {
         /* drives on with manual control on: only the supervisor that
          * switched it on may jog; a new owner gets it switched off. */
-        if (g_manual_sup < 0 || core->owner != g_manual_sup) {
+        if (core->sensor.sup < 0 || core->owner != core->sensor.sup) {
             (void)ls_control_set_manual(core->ctl, NULL, NULL, 0);
-            snprintf(g_manual, sizeof g_manual, "off");
-            g_manual_sup = -1;
+            snprintf(core->sensor.mode, sizeof core->sensor.mode, "off");
+            core->sensor.sup = -1;
             return;
         }
         if (core->state == ls_State_RESTING) {
-            snprintf(core->motion_state, sizeof core->motion_state, "manual_%s", g_manual);
+            snprintf(core->motion_state, sizeof core->motion_state, "manual_%s", core->sensor.mode);
         }
         return;
     }
     char d1[72];
     snprintf(d1, sizeof d1, "reason=%s", ev->motion.text);
     const char *data[] = { d1 };
-    ls_core_notify(core, g_manual_sup, ls_NoticeKind_EVENT, "manualLimit", 0, false, data, 1);
+    ls_core_notify(core, core->sensor.sup, ls_NoticeKind_EVENT, "manualLimit", 0, false, data, 1);
 }
 
-static bool on_event(void *ctx, const ls_ctl_event_t *ev)
+bool ls_core_sensor_on_event(ls_core_t *core, const ls_ctl_event_t *ev)
 {
-    ls_core_t *core = (ls_core_t *)ctx;
     if (ls_core_tool_on_event(core, ev)) {
         return true;
     }
@@ -714,11 +688,4 @@ static bool on_event(void *ctx, const ls_ctl_event_t *ev)
     case LS_CEV_DIO_CHANGED: return false;
     }
     return false;
-}
-
-void ls_core_sensor_attach(ls_core_t *core)
-{
-    if (core->ctl != NULL && core->ctl->filter != on_event) {
-        ls_control_set_event_filter(core->ctl, on_event, core);
-    }
 }

@@ -2,11 +2,10 @@
  * control (firmware/core/cmd_sensor.c) and the end effector
  * (firmware/core/cmd_tool.c). Private to the core.
  *
- * Their completions come back from the control loop as events. The handlers
- * install one event filter on the loop (ls_control_set_event_filter) the
- * first time any of them runs, so the loop's events for the moves, jogs and
- * tool changes they started reach them before landscaped hands the rest to
- * the other handlers. Everything here runs in the comms thread. */
+ * Their completions come back from the control loop as events: ls_core_tick
+ * hands every event to ls_core_sensor_on_event first, so the events of the
+ * moves, jogs and tool changes they started reach them before the other
+ * handlers. Everything here runs in the comms thread. */
 #ifndef LS_CMD_SENSOR_H
 #define LS_CMD_SENSOR_H
 
@@ -15,8 +14,9 @@
 #include "ls_control.h"
 #include "ls_core.h"
 
-/* Install the event filter on core->ctl (idempotent; no-op without a loop). */
-void ls_core_sensor_attach(ls_core_t *core);
+/* An event of the control loop; true when it was one of a move, jog or tool
+ * change these handlers started (consumed), false to pass it on. */
+bool ls_core_sensor_on_event(ls_core_t *core, const ls_ctl_event_t *ev);
 
 /* cmd_tool.c: an event of the loop; true when it was the tool code's own
  * (consumed), false to pass it on (it may still have acted on it: a fault
@@ -30,8 +30,5 @@ void ls_core_manual_off(ls_core_t *core);
 /* The name of value `k` of sensor `s` ("Fx", ..., "distance") and its SI unit
  * in *unit_si ("N", "Nm", "m"), or NULL past its last value (describe). */
 const char *ls_core_sensor_component(const hal_sensor_t *s, size_t k, const char **unit_si);
-
-/* cmd_tool.c: the name of the held tool, "none" when none. */
-const char *ls_core_tool_held(void);
 
 #endif

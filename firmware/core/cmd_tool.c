@@ -36,40 +36,8 @@ _Static_assert(sizeof(((ls_GetToolReq *)0)->tool_id) <= LS_CTL_TOOL_ID_LEN,
 #define APPROACH_M 0.10
 /* Speed of the straight lines into and out of the rack. */
 #define RACK_SPEED_M_S 0.05
-/* Tool names the error message for an unknown tool offers, when the tool
- * changer knows them (hal_tool_ops_t has no enumeration yet). */
 
 enum { STEP_APPROACH = 1, STEP_IN, STEP_COUPLE, STEP_OUT };
-
-typedef struct {
-    bool active;
-    bool attach; /* getTool (true) or putTool */
-    int sup;
-    uint32_t ref_seq;
-    int step;
-    char id[LS_CTL_TOOL_ID_LEN];
-    double rack[16], approach[16]; /* flange poses, base frame */
-    double offset[6];              /* the tool's offset, SI */
-} tool_op_t;
-
-typedef struct {
-    bool active;
-    bool on;
-    int sup;
-    uint32_t ref_seq;
-    uint32_t bits;
-} bits_op_t;
-
-static char g_held[LS_CTL_TOOL_ID_LEN] = "none";
-static uint32_t g_bits;
-static tool_op_t g_op;
-static double g_q_hold[LS_N_JOINTS]; /* set-point where the last step ended */
-static bits_op_t g_bits_op;
-
-const char *ls_core_tool_held(void)
-{
-    return g_held;
-}
 
 /* ------------------------------------------------------------- helpers */
 
@@ -123,19 +91,19 @@ static void rest(ls_core_t *core)
 /* End the tool change with an answer. */
 static void op_end(ls_core_t *core, int32_t code, const char *msg, bool to_rest)
 {
-    if (!g_op.active) {
+    if (!core->tool_cmds.op.active) {
         return;
     }
-    g_op.active = false;
+    core->tool_cmds.op.active = false;
     if (to_rest) {
         rest(core);
     }
-    ls_core_finish_deferred(core, g_op.sup, code, msg);
+    ls_core_finish_deferred(core, core->tool_cmds.op.sup, code, msg);
 }
 
-static const char *op_name(void)
+static const char *op_name(const ls_core_t *core)
 {
-    return g_op.attach ? "getTool" : "putTool";
+    return core->tool_cmds.op.attach ? "getTool" : "putTool";
 }
 
 /* Plan the next motion step into the plan slot and start it. 0, or -1 with why. */
@@ -149,9 +117,9 @@ static int plan_step(ls_core_t *core, const double q0[LS_N_JOINTS], char *why, s
     const ls_robot_model_t *m = core->model;
     char w[128] = "";
     int st;
-    if (g_op.step == STEP_APPROACH) {
+    if (core->tool_cmds.op.step == STEP_APPROACH) {
         double q1[LS_N_JOINTS];
-        if (ls_kin_ik_nearest(m, g_op.approach, q0, q1) != LS_KIN_OK) {
+        if (ls_kin_ik_nearest(m, core->tool_cmds.op.approach, q0, q1) != LS_KIN_OK) {
             snprintf(why, whylen, "the approach point above the rack is out of reach");
             return -1;
         }
@@ -170,16 +138,16 @@ static int plan_step(ls_core_t *core, const double q0[LS_N_JOINTS], char *why, s
         double flange_tool[16];
         const double zero[6] = { 0 };
         ls_pose_from_xyzrpy(zero, flange_tool);
-        const double *goal = g_op.step == STEP_IN ? g_op.rack : g_op.approach;
+        const double *goal = core->tool_cmds.op.step == STEP_IN ? core->tool_cmds.op.rack : core->tool_cmds.op.approach;
         st = ls_motion_plan_line(slot, m, q0, flange_tool, goal, &lim, w, sizeof w);
     }
     if (st < 0) {
         snprintf(why, whylen, "%.100s", w);
         return -1;
     }
-    slot->ref_seq = g_op.ref_seq;
-    snprintf(slot->name, sizeof slot->name, "%s", g_op.id);
-    if (!ls_control_start_plan(core->ctl, g_op.ref_seq)) {
+    slot->ref_seq = core->tool_cmds.op.ref_seq;
+    snprintf(slot->name, sizeof slot->name, "%s", core->tool_cmds.op.id);
+    if (!ls_control_start_plan(core->ctl, core->tool_cmds.op.ref_seq)) {
         snprintf(why, whylen, "the control loop's command queue is full");
         return -1;
     }
@@ -191,8 +159,8 @@ static void step_failed(ls_core_t *core, const char *why)
     char msg[256];
     /* why: at most 100 characters, so the whole text fits msg with a 63-byte tool id
      * (-Wformat-truncation at -O3). */
-    snprintf(msg, sizeof msg, "%s %s stopped at step %d: %.100s; the arm holds where it is", op_name(), g_op.id,
-             g_op.step, why);
+    snprintf(msg, sizeof msg, "%s %s stopped at step %d: %.100s; the arm holds where it is", op_name(core),
+             core->tool_cmds.op.id, core->tool_cmds.op.step, why);
     op_end(core, ls_RetCode_CMD_ERR, msg, true);
 }
 
@@ -201,7 +169,6 @@ static void step_failed(ls_core_t *core, const char *why)
 static int32_t change(ls_core_t *core, ls_call_t *call, const char *id, bool attach)
 {
     const char *what = attach ? "getTool" : "putTool";
-    ls_core_sensor_attach(core);
     if (core->ctl == NULL || core->model == NULL) {
         return ls_reply(call, ls_RetCode_CMD_UNSUPPORTED_ERR, "%s: no arm is composed in this controller", what);
     }
@@ -215,22 +182,22 @@ static int32_t change(ls_core_t *core, ls_call_t *call, const char *id, bool att
     if (strcmp(id, "none") == 0 || core->tool->ops->rack_pose(core->tool->self, id, rack6) != HAL_OK) {
         return unknown_tool(core, call, what, id);
     }
-    bool holding = strcmp(g_held, "none") != 0;
+    bool holding = strcmp(core->tool_cmds.held, "none") != 0;
     if (attach && holding) {
-        return ls_reply(call, ls_RetCode_CMD_ERR, "getTool %s: holding %s: put back %s first (putTool %s)", id, g_held,
-                        g_held, g_held);
+        return ls_reply(call, ls_RetCode_CMD_ERR, "getTool %s: holding %s: put back %s first (putTool %s)", id,
+                        core->tool_cmds.held, core->tool_cmds.held, core->tool_cmds.held);
     }
     if (!attach && !holding) {
         return ls_reply(call, ls_RetCode_CMD_ERR, "putTool %s: no tool is held, nothing to put back", id);
     }
-    if (!attach && strcmp(g_held, id) != 0) {
-        return ls_reply(call, ls_RetCode_CMD_PARAM_ERR, "putTool %s: the held tool is %s: putTool %s", id, g_held,
-                        g_held);
+    if (!attach && strcmp(core->tool_cmds.held, id) != 0) {
+        return ls_reply(call, ls_RetCode_CMD_PARAM_ERR, "putTool %s: the held tool is %s: putTool %s", id,
+                        core->tool_cmds.held, core->tool_cmds.held);
     }
-    if (g_op.active) {
+    if (core->tool_cmds.op.active) {
         return ls_reply(call, ls_RetCode_CMD_BUSY_ERR, "%s: a tool change is in progress", what);
     }
-    tool_op_t op;
+    ls_tool_op_t op;
     memset(&op, 0, sizeof op);
     op.attach = attach;
     op.sup = call->sup;
@@ -248,13 +215,13 @@ static int32_t change(ls_core_t *core, ls_call_t *call, const char *id, bool att
     }
     ls_ctl_snapshot_t snap;
     ls_control_snapshot(core->ctl, &snap);
-    g_op = op;
+    core->tool_cmds.op = op;
     char why[128];
     if (plan_step(core, snap.q_cmd_rad, why, sizeof why) != 0) {
-        g_op.active = false;
+        core->tool_cmds.op.active = false;
         return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR, "%s %s refused, nothing moved: %s", what, id, why);
     }
-    g_op.active = true;
+    core->tool_cmds.op.active = true;
     core->state = ls_State_MOVING;
     snprintf(core->motion_state, sizeof core->motion_state, "changing_tool");
     return LS_CALL_DEFERRED;
@@ -275,25 +242,25 @@ int32_t ls_h_put_tool(struct ls_core *core, struct ls_call *call)
 static int32_t bits(ls_core_t *core, ls_call_t *call, const char *id, uint32_t field, bool on)
 {
     const char *what = on ? "activateTool" : "deactivateTool";
-    ls_core_sensor_attach(core);
     if (core->ctl == NULL || !have_changer(core)) {
         return no_changer(call, what);
     }
-    if (strcmp(g_held, id) != 0 || strcmp(id, "none") == 0) {
-        return ls_reply(call, ls_RetCode_CMD_PARAM_ERR, "%s %s: the held tool is %s%s", what, id, g_held,
-                        strcmp(g_held, "none") == 0 ? " (getTool first)" : "");
+    if (strcmp(core->tool_cmds.held, id) != 0 || strcmp(id, "none") == 0) {
+        return ls_reply(call, ls_RetCode_CMD_PARAM_ERR, "%s %s: the held tool is %s%s", what, id, core->tool_cmds.held,
+                        strcmp(core->tool_cmds.held, "none") == 0 ? " (getTool first)" : "");
     }
     if (field == 0) {
         return ls_reply(call, ls_RetCode_CMD_PARAM_ERR, "%s %s: bit_field is 0: name the bits to %s", what, id,
                         on ? "set" : "clear");
     }
-    if (g_bits_op.active) {
+    if (core->tool_cmds.bits_op.active) {
         return ls_reply(call, ls_RetCode_CMD_BUSY_ERR, "%s: the previous tool bit command is still running", what);
     }
     if (!post_tool(core, LS_CTL_TOOL_BITS, call->req->seq, id, false, on ? field : 0u, on ? 0u : field)) {
         return ls_reply(call, ls_RetCode_CMD_BUSY_ERR, "%s: the control loop's command queue is full; try again", what);
     }
-    g_bits_op = (bits_op_t){ .active = true, .on = on, .sup = call->sup, .ref_seq = call->req->seq, .bits = field };
+    core->tool_cmds.bits_op =
+        (ls_bits_op_t){ .active = true, .on = on, .sup = call->sup, .ref_seq = call->req->seq, .bits = field };
     return LS_CALL_DEFERRED;
 }
 
@@ -312,33 +279,34 @@ int32_t ls_h_deactivate_tool(struct ls_core *core, struct ls_call *call)
 int32_t ls_h_get_end_effector_state(struct ls_core *core, struct ls_call *call)
 {
     ls_GetEndEffectorStateRes *r = &call->res->result.get_end_effector_state;
-    snprintf(r->current_ee, sizeof r->current_ee, "%s", g_held);
-    if (strcmp(g_held, "none") == 0) {
+    snprintf(r->current_ee, sizeof r->current_ee, "%s", core->tool_cmds.held);
+    if (strcmp(core->tool_cmds.held, "none") == 0) {
         snprintf(r->ee_state, sizeof r->ee_state, "flange (no tool)");
     } else {
-        snprintf(r->ee_state, sizeof r->ee_state, "bits=0x%X", (unsigned)g_bits);
+        snprintf(r->ee_state, sizeof r->ee_state, "bits=0x%X", (unsigned)core->tool_cmds.bits);
     }
     return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "%s%s", have_changer(core) ? "" : "no tool changer: ",
-                    strcmp(g_held, "none") == 0 ? "no tool held" : "tool held");
+                    strcmp(core->tool_cmds.held, "none") == 0 ? "no tool held" : "tool held");
 }
 
 /* ------------------------------------------------------------- loop events */
 
 static void bits_event(ls_core_t *core, const ls_ctl_event_t *ev)
 {
-    g_bits_op.active = false;
-    g_bits = ev->dio.on;
+    core->tool_cmds.bits_op.active = false;
+    core->tool_cmds.bits = ev->dio.on;
     char msg[160];
     int st = ev->motion.index;
     if (st < 0) {
         snprintf(msg, sizeof msg, "%s: bits 0x%X refused by %.31s (HAL status %d): the tool has no such bits",
-                 g_bits_op.on ? "activateTool" : "deactivateTool", (unsigned)g_bits_op.bits, g_held, st);
-        ls_core_finish_deferred(core, g_bits_op.sup,
+                 core->tool_cmds.bits_op.on ? "activateTool" : "deactivateTool", (unsigned)core->tool_cmds.bits_op.bits,
+                 core->tool_cmds.held, st);
+        ls_core_finish_deferred(core, core->tool_cmds.bits_op.sup,
                                 st == HAL_EINVAL ? ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR : ls_RetCode_CMD_ERR, msg);
         return;
     }
-    snprintf(msg, sizeof msg, "%s bits now 0x%X", g_held, (unsigned)g_bits);
-    ls_core_finish_deferred(core, g_bits_op.sup, ls_RetCode_CMD_EXEC_OK, msg);
+    snprintf(msg, sizeof msg, "%s bits now 0x%X", core->tool_cmds.held, (unsigned)core->tool_cmds.bits);
+    ls_core_finish_deferred(core, core->tool_cmds.bits_op.sup, ls_RetCode_CMD_EXEC_OK, msg);
 }
 
 static void coupled(ls_core_t *core, const ls_ctl_event_t *ev)
@@ -350,17 +318,17 @@ static void coupled(ls_core_t *core, const ls_ctl_event_t *ev)
         step_failed(core, why);
         return;
     }
-    if (g_op.attach) {
-        snprintf(g_held, sizeof g_held, "%s", g_op.id);
-        memcpy(core->settings.tool_offset, g_op.offset, sizeof core->settings.tool_offset);
+    if (core->tool_cmds.op.attach) {
+        snprintf(core->tool_cmds.held, sizeof core->tool_cmds.held, "%s", core->tool_cmds.op.id);
+        memcpy(core->settings.tool_offset, core->tool_cmds.op.offset, sizeof core->settings.tool_offset);
     } else {
-        snprintf(g_held, sizeof g_held, "none");
+        snprintf(core->tool_cmds.held, sizeof core->tool_cmds.held, "none");
         memset(core->settings.tool_offset, 0, sizeof core->settings.tool_offset);
     }
-    g_bits = ev->dio.on;
-    g_op.step = STEP_OUT;
+    core->tool_cmds.bits = ev->dio.on;
+    core->tool_cmds.op.step = STEP_OUT;
     char why[128];
-    if (plan_step(core, g_q_hold, why, sizeof why) != 0) {
+    if (plan_step(core, core->tool_cmds.q_hold, why, sizeof why) != 0) {
         step_failed(core, why);
     }
 }
@@ -368,20 +336,20 @@ static void coupled(ls_core_t *core, const ls_ctl_event_t *ev)
 bool ls_core_tool_on_event(ls_core_t *core, const ls_ctl_event_t *ev)
 {
     if (ev->kind == LS_CEV_MOTION && ev->motion.kind == LS_MEV_TOOL) {
-        if (g_bits_op.active && ev->ref_seq == g_bits_op.ref_seq) {
+        if (core->tool_cmds.bits_op.active && ev->ref_seq == core->tool_cmds.bits_op.ref_seq) {
             bits_event(core, ev);
-        } else if (g_op.active && ev->ref_seq == g_op.ref_seq) {
+        } else if (core->tool_cmds.op.active && ev->ref_seq == core->tool_cmds.op.ref_seq) {
             coupled(core, ev);
         }
         return true;
     }
     if (ev->kind == LS_CEV_FAULT) {
         char msg[192];
-        snprintf(msg, sizeof msg, "%s %s stopped by a fault: %.60s", op_name(), g_op.id, ev->text);
+        snprintf(msg, sizeof msg, "%s %s stopped by a fault: %.60s", op_name(core), core->tool_cmds.op.id, ev->text);
         op_end(core, ls_RetCode_CMD_FAULT_ERR, msg, false);
         return false;
     }
-    if (!g_op.active || ev->ref_seq != g_op.ref_seq) {
+    if (!core->tool_cmds.op.active || ev->ref_seq != core->tool_cmds.op.ref_seq) {
         return false;
     }
     if (ev->kind == LS_CEV_CMD_FAILED) {
@@ -394,26 +362,28 @@ bool ls_core_tool_on_event(ls_core_t *core, const ls_ctl_event_t *ev)
     switch (ev->motion.kind) {
     case LS_MEV_DONE: {
         char why[128];
-        memcpy(g_q_hold, ev->motion.q_rad, sizeof g_q_hold);
-        if (g_op.step == STEP_APPROACH) {
-            g_op.step = STEP_IN;
-            if (plan_step(core, g_q_hold, why, sizeof why) != 0) {
+        memcpy(core->tool_cmds.q_hold, ev->motion.q_rad, sizeof core->tool_cmds.q_hold);
+        if (core->tool_cmds.op.step == STEP_APPROACH) {
+            core->tool_cmds.op.step = STEP_IN;
+            if (plan_step(core, core->tool_cmds.q_hold, why, sizeof why) != 0) {
                 step_failed(core, why);
             }
-        } else if (g_op.step == STEP_IN) {
-            g_op.step = STEP_COUPLE;
-            if (!post_tool(core, LS_CTL_TOOL_COUPLE, g_op.ref_seq, g_op.id, g_op.attach, 0, 0)) {
+        } else if (core->tool_cmds.op.step == STEP_IN) {
+            core->tool_cmds.op.step = STEP_COUPLE;
+            if (!post_tool(core, LS_CTL_TOOL_COUPLE, core->tool_cmds.op.ref_seq, core->tool_cmds.op.id,
+                           core->tool_cmds.op.attach, 0, 0)) {
                 step_failed(core, "the control loop's command queue is full");
             }
         } else {
             char msg[160];
             char off[64];
             double o[6];
-            const ls_units_t un = ls_core_units(core, g_op.sup); /* the answer's session */
+            const ls_units_t un = ls_core_units(core, core->tool_cmds.op.sup); /* the answer's session */
             ls_units_pose_from_si(un.linear, un.angular, core->settings.tool_offset, o);
             snprintf(off, sizeof off, "%.4g %.4g %.4g", o[0], o[1], o[2]);
-            snprintf(msg, sizeof msg, "%s: %s; tool offset now %s %s", op_name(),
-                     g_op.attach ? g_op.id : "flange (no tool)", off, ls_units_linear_name(un.linear));
+            snprintf(msg, sizeof msg, "%s: %s; tool offset now %s %s", op_name(core),
+                     core->tool_cmds.op.attach ? core->tool_cmds.op.id : "flange (no tool)", off,
+                     ls_units_linear_name(un.linear));
             op_end(core, ls_RetCode_CMD_EXEC_OK, msg, true);
         }
         return true;
@@ -424,7 +394,8 @@ bool ls_core_tool_on_event(ls_core_t *core, const ls_ctl_event_t *ev)
         return false;
     case LS_MEV_FAULT: {
         char msg[160];
-        snprintf(msg, sizeof msg, "%s %.31s stopped by a fault: %.60s", op_name(), g_op.id, ev->motion.text);
+        snprintf(msg, sizeof msg, "%s %.31s stopped by a fault: %.60s", op_name(core), core->tool_cmds.op.id,
+                 ev->motion.text);
         op_end(core, ls_RetCode_CMD_FAULT_ERR, msg, false);
         return false;
     }

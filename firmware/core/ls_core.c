@@ -4,6 +4,8 @@
 #include "ls_core.h"
 
 #include "cmd_sensor.h"
+#include "ls_control.h"
+#include "ls_core_events.h"
 #include "ls_utf8.h"
 
 #include <stdarg.h>
@@ -122,6 +124,9 @@ void ls_core_init(ls_core_t *core, const ls_core_config_t *cfg, const ls_core_io
     core->epoch_next = 1;
     core->run.path = -1;
     core->halt.answer_sup = -1;
+    snprintf(core->sensor.mode, sizeof core->sensor.mode, "off");
+    core->sensor.sup = -1;
+    snprintf(core->tool_cmds.held, sizeof core->tool_cmds.held, "none");
 }
 
 int ls_core_session_of(const ls_core_t *core, uint8_t addr)
@@ -545,8 +550,43 @@ int32_t ls_core_rsvp(ls_core_t *core, int sup, uint32_t ref_seq, ls_NoticeKind k
     return (int32_t)id;
 }
 
+/* The one route of the control loop's events into the core. The moves,
+ * jogs and tool changes that cmd_sensor.c and cmd_tool.c started take
+ * their own events first; the rest go to the motion executor's side
+ * (cmd_motion_events.c), the fault latch and the DIO watches. */
+static void on_loop_event(ls_core_t *core, const ls_ctl_event_t *ev, uint64_t now_us)
+{
+    if (ls_core_sensor_on_event(core, ev)) {
+        return;
+    }
+    switch (ev->kind) {
+    case LS_CEV_MOTION: ls_core_on_motion_event(core, &ev->motion); break;
+    case LS_CEV_FAULT: ls_core_fault(core, ev->text, now_us); break; /* its halt ends the motion */
+    case LS_CEV_DIO_CHANGED: ls_core_on_dio_event(core, ev->dio.unit, ev->dio.on, ev->dio.off, now_us); break;
+    case LS_CEV_CMD_FAILED: {
+        char d[80];
+        snprintf(d, sizeof d, "reason=%s", ev->text);
+        const char *data[] = { d };
+        ls_core_notify(core, core->owner, ls_NoticeKind_ALARM, "commandFailed", ev->ref_seq, false, data, 1);
+        ls_core_motion_failed(core, ev->ref_seq, ev->text);
+        if (core->act.log_warn != NULL) {
+            char line[112];
+            snprintf(line, sizeof line, "control loop: %s", ev->text);
+            core->act.log_warn(core->act.ctx, line);
+        }
+        break;
+    }
+    }
+}
+
 void ls_core_tick(ls_core_t *core, uint64_t now_us)
 {
+    if (core->ctl != NULL) {
+        ls_ctl_event_t ev;
+        while (ls_control_next_event(core->ctl, &ev)) {
+            on_loop_event(core, &ev, now_us);
+        }
+    }
     rsvp_tick(core, now_us);
     for (int i = 0; i < LS_MAX_SUPERVISORS; i++) {
         ls_session_t *s = &core->sessions[i];
@@ -556,6 +596,9 @@ void ls_core_tick(ls_core_t *core, uint64_t now_us)
             drop_session(core, i, "heartbeat lost", now_us);
         }
     }
+    ls_run_tick(core, now_us);
+    ls_dio_tick(core, now_us);
+    ls_core_motion_tick(core, now_us);
 }
 
 /* ---- connect / disconnect: the only commands that create or end a session */

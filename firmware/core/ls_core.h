@@ -14,6 +14,7 @@
 #include "hal/hal_dio.h"
 #include "landscape.pb.h"
 #include "ls_cmd_table.h"
+#include "ls_core_state.h"
 #include "ls_robot_model.h"
 #include "ls_run.h"
 #include "ls_units.h"
@@ -40,13 +41,6 @@ struct ls_control;
 #define LS_HB_TOKEN_MASK 0xFFFFFFu
 #define LS_CORE_MAX_DIO_UNITS 4
 #define LS_MAX_DIO_WATCHES 8
-/* Path queues: LS_PATH_MAX names of LS_PATH_MAX_POINTS points (ls_motion.h).
- * Path storage is the firmware's largest static table (about 8 x 256 x 420 B
- * here). A board with little SRAM builds with smaller values, e.g.
- * -DLS_PATH_MAX=2 -DLS_PATH_MAX_POINTS=64 for the whole build (docs/performance.md). */
-#ifndef LS_PATH_MAX
-#define LS_PATH_MAX 8
-#endif
 #define LS_PATH_MAX_CYCLES 1000000 /* pathMove number_of_cycles */
 
 /* How the core talks to the bus: implemented by the network layer (or a test). */
@@ -210,6 +204,8 @@ typedef struct {
      * the running configuration, as key=value lines. */
     void (*describe_rt)(void *ctx, char *buf, size_t cap);
     void (*describe_config)(void *ctx, char *buf, size_t cap);
+    /* Optional: a warning for the device's log (a command the control loop refused). */
+    void (*log_warn)(void *ctx, const char *line);
     void *ctx;
 } ls_core_actions_t;
 
@@ -244,11 +240,14 @@ typedef struct ls_core {
     ls_State state;
     int owner; /* index in sessions[], -1 when unlocked */
     ls_session_t sessions[LS_MAX_SUPERVISORS];
-    char fault[96];        /* latched fault, empty when none */
-    char motion_state[32]; /* seed 3.3.1 motionControlState (docs/state-machine.md) */
-    ls_run_t run;          /* the started motion (ls_run.h) */
-    ls_halt_t halt;        /* a stop that ends with the drives off (ls_run.h) */
-    uint32_t epoch_next;   /* the next session epoch */
+    char fault[96];           /* latched fault, empty when none */
+    char motion_state[32];    /* seed 3.3.1 motionControlState (docs/state-machine.md) */
+    ls_run_t run;             /* the started motion (ls_run.h) */
+    ls_halt_t halt;           /* a stop that ends with the drives off (ls_run.h) */
+    uint32_t epoch_next;      /* the next session epoch */
+    ls_motion_cmds_t motion;  /* path queues, the program being run, getTagId */
+    ls_sensor_cmds_t sensor;  /* manual control */
+    ls_tool_cmds_t tool_cmds; /* the end effector */
     ls_fault_entry_t fault_log[LS_FAULT_LOG_LEN];
     uint32_t fault_log_count;
     uint32_t rx_malformed;     /* uplinks that did not decode */
@@ -285,7 +284,11 @@ void ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t
  * device) is ignored. O(LS_MAX_SUPERVISORS), no allocation. */
 void ls_core_on_heartbeat(ls_core_t *core, uint8_t addr, uint32_t token, uint64_t now_us);
 
-/* Liveness: drops sessions whose heartbeat stopped. Call every loop turn. */
+/* Everything the core does with time, once every comms loop turn: it takes
+ * the control loop's events (the one route by which they reach the core),
+ * times out RSVPs, drops sessions whose heartbeat stopped, and advances
+ * the halt (ls_run_tick), the DIO watches (ls_dio_tick) and a path's
+ * auxiliary commands (ls_core_motion_tick). */
 void ls_core_tick(ls_core_t *core, uint64_t now_us);
 
 /* Send a notice (event, alarm) to one session (sup >= 0) or to all (sup < 0). */

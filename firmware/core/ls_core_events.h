@@ -1,5 +1,6 @@
 /* What the comms thread calls when the control loop reports something.
- * Motion events: firmware/core/cmd_motion.c. DIO changes: firmware/core/cmd_dio.c. */
+ * Motion events: firmware/core/cmd_motion_events.c; a path's auxiliary
+ * commands: cmd_aux.c. DIO changes: firmware/core/cmd_dio.c. */
 #ifndef LS_CORE_EVENTS_H
 #define LS_CORE_EVENTS_H
 

@@ -42,7 +42,7 @@ typedef enum {
 
 typedef struct {
     bool active;    /* started and its final notice not sent yet */
-    bool react;     /* moveReact / comply (cmd_sensor.c), else a planned motion (cmd_motion.c) */
+    bool react;     /* moveReact / comply (cmd_sensor.c), else a planned motion (cmd_move.c, cmd_path_program.c) */
     int sup;        /* session that started it */
     uint8_t addr;   /* its address: the final notice goes there */
     uint32_t epoch; /* its session epoch */

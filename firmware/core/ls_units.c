@@ -71,6 +71,27 @@ const char *ls_units_angular_name(ls_AngularUnit u)
     return "unknown";
 }
 
+const char *ls_units_linear_symbol(ls_LinearUnit u)
+{
+    switch (u) {
+    case ls_LinearUnit_METERS: return "m";
+    case ls_LinearUnit_MILLIMETERS: return "mm";
+    case ls_LinearUnit_CENTIMETERS: return "cm";
+    case ls_LinearUnit_INCHES: return "in";
+    case ls_LinearUnit_FEET: return "ft";
+    }
+    return "?";
+}
+
+const char *ls_units_angular_symbol(ls_AngularUnit u)
+{
+    switch (u) {
+    case ls_AngularUnit_RADIANS: return "rad";
+    case ls_AngularUnit_DEGREES: return "deg";
+    }
+    return "?";
+}
+
 bool ls_units_linear_valid(ls_LinearUnit u)
 {
     return !isnan(linear_factor(u));

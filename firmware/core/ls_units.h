@@ -37,6 +37,11 @@ const char *ls_units_linear_name(ls_LinearUnit u);
 /* "radians", "degrees"; "unknown" otherwise. */
 const char *ls_units_angular_name(ls_AngularUnit u);
 
+/* The symbols for messages: "m", "mm", "cm", "in", "ft"; "rad", "deg";
+ * "?" outside the schema. */
+const char *ls_units_linear_symbol(ls_LinearUnit u);
+const char *ls_units_angular_symbol(ls_AngularUnit u);
+
 /* Whether u is one of the schema's values (nanopb stores any int in an enum field). */
 bool ls_units_linear_valid(ls_LinearUnit u);
 bool ls_units_angular_valid(ls_AngularUnit u);

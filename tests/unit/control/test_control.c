@@ -435,39 +435,6 @@ static void test_event_ring_empty_full_and_events_lost(void **state)
     assert_int_equal(snap(f).events_lost, 3);
 }
 
-static bool filter_dio(void *ctx, const ls_ctl_event_t *ev)
-{
-    int *n = ctx;
-    if (ev->kind == LS_CEV_DIO_CHANGED) {
-        (*n)++;
-        return true;
-    }
-    return false;
-}
-
-static void test_event_filter_consumes_what_it_takes(void **state)
-{
-    (void)state;
-    fx_t *f = fx_init(false);
-    int taken = 0;
-    ls_control_set_event_filter(&f->ctl, filter_dio, &taken);
-    f->dio_state.levels[1] = 0x10; /* an input edge: LS_CEV_DIO_CHANGED */
-    f->dio_state.fail_write = 1;
-    post_dio(f, LS_CTL_DIO_WRITE, 5, 0, 1, 0); /* LS_CEV_CMD_FAILED */
-    cycle(f);
-    assert_int_equal(next(f, LS_CEV_CMD_FAILED).ref_seq, 5);
-    assert_no_event(f);
-    assert_int_equal(taken, 1);
-    ls_control_set_event_filter(&f->ctl, NULL, NULL);
-    f->dio_state.levels[1] = 0x30;
-    cycle(f);
-    ls_ctl_event_t ev = next(f, LS_CEV_DIO_CHANGED);
-    assert_int_equal(ev.dio.unit, 1);
-    assert_int_equal(ev.dio.on, 0x30);
-    assert_int_equal(ev.dio.off, 0x20); /* the bits that changed */
-    assert_int_equal(snap(f).dio[1], 0x30);
-}
-
 /* ---------------------------------------------------------------- plan slot */
 
 static void test_plan_slot_hand_over(void **state)
@@ -1090,7 +1057,6 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_command_ring_full_then_empty),
         cmocka_unit_test(test_event_ring_empty_full_and_events_lost),
-        cmocka_unit_test(test_event_filter_consumes_what_it_takes),
         cmocka_unit_test(test_plan_slot_hand_over),
         cmocka_unit_test(test_plan_slot_freed_when_ring_full_or_start_refused),
         cmocka_unit_test(test_enable_and_disable),

@@ -1,0 +1,78 @@
+/* Private to the core: what the motion handlers share. The handlers are
+ * split by what they do:
+ *   cmd_motion.c         pose maths, limits, checks, handing a plan over (below)
+ *   cmd_move.c           moveAbsolute/Relative/Arc, stop/resume/abort, getTagId
+ *   cmd_path.c           the path queues: pathLoad, pathClearPath
+ *   cmd_path_program.c   pathMove: the program builder
+ *   cmd_aux.c            a path's auxiliary commands: parser and runner
+ *   cmd_motion_events.c  the executor's events -> state and notices
+ * Their storage is core->motion (ls_core_state.h). Comms thread only. */
+#ifndef LS_CMD_MOTION_H
+#define LS_CMD_MOTION_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "ls_control.h"
+#include "ls_core.h"
+#include "ls_motion.h"
+
+/* ------------------------------------------------------------- cmd_motion.c */
+
+/* Answer a planner's refusal: CMD_PARAM_OUT_OF_RANGE_ERR for LS_MOTION_ERANGE,
+ * CMD_PARAM_ERR otherwise; "nothing moved". */
+int32_t ls_mcmd_refused(ls_call_t *call, int status, const char *what, const char *why);
+/* The control loop's snapshot; false (and *snap untouched) without a loop. */
+bool ls_mcmd_snapshot(ls_core_t *core, ls_ctl_snapshot_t *snap);
+/* Flange -> tool tip, base -> world (the settings), as poses. */
+void ls_mcmd_tool_pose(const ls_core_t *core, double T[16]);
+void ls_mcmd_world_pose(const ls_core_t *core, double T[16]);
+/* Tool-tip pose (base frame) of joints q. */
+void ls_mcmd_tip_of(const ls_core_t *core, const double q[LS_N_JOINTS], double P[16]);
+/* A relative Cartesian offset d (x y z roll pitch yaw, SI) applied to the
+ * tip pose P in the axes of frame F (base: identity, world: the world frame). */
+void ls_mcmd_offset_in_frame(const double F[16], const double P[16], const double d[6], double out[16]);
+/* Cartesian limits of a move at speed_pct (0: the LINEAR_/ANGULAR_ settings). */
+void ls_mcmd_cart_limits(const ls_core_t *core, double speed_pct, ls_motion_cart_limits_t *lim);
+/* Checks that answer the refusal themselves: 0 when good, else the code. */
+int32_t ls_mcmd_check_speed_pct(ls_call_t *call, double pct);
+int32_t ls_mcmd_check_name(ls_call_t *call, const char *what, const char *field, const char *name);
+bool ls_mcmd_all_finite(const double *v, size_t n);
+/* CMD_UNSUPPORTED_ERR: no arm is composed. */
+int32_t ls_mcmd_no_arm(ls_call_t *call, const char *what);
+/* The plan slot, or NULL after answering CMD_BUSY_ERR in *code. */
+ls_motion_plan_t *ls_mcmd_take_slot(ls_core_t *core, ls_call_t *call, const char *what, int32_t *code);
+/* Hand the plan in the slot over and enter MOVING (the answer: STARTED_OK). */
+int32_t ls_mcmd_start_plan(ls_core_t *core, ls_call_t *call, ls_motion_plan_t *slot, const char *seed_name,
+                           const char *point, int path);
+/* Post a command without arguments to the loop; false when its queue is full. */
+bool ls_mcmd_post(ls_core_t *core, ls_ctl_kind_t kind, uint32_t ref_seq);
+
+/* ------------------------------------------------------------- cmd_path.c */
+
+/* Index of the path queue named `name`, or -1. */
+int ls_path_find(const ls_core_t *core, const char *name);
+/* Empty path queue i (no-op outside 0..LS_PATH_MAX-1). */
+void ls_path_delete(ls_core_t *core, int i);
+
+/* ------------------------------------------------------------- cmd_aux.c */
+
+typedef enum { LS_AUX_DIO = 1, LS_AUX_WAIT, LS_AUX_EVENT, LS_AUX_RSVP } ls_aux_kind_t;
+
+typedef struct {
+    ls_aux_kind_t kind;
+    uint16_t unit;
+    uint32_t on, off; /* dio: bits to set, bits to clear; wait: on = mask */
+    double timeout_s;
+    char name[LS_MOTION_NAME_LEN];
+} ls_aux_t;
+
+/* Parse one auxiliary command; 0, or -1 with `why` saying what is expected. */
+int ls_aux_parse(const char *text, ls_aux_t *a, char *why, size_t whylen);
+/* The DIO unit and bits a `dio` or `wait` names exist here; 0 or -1 with `why`. */
+int ls_aux_check_io(const ls_core_t *core, const ls_aux_t *a, char *why, size_t whylen);
+/* The executor reached a point's auxiliary command (LS_MEV_AUX): run it. */
+void ls_aux_run(ls_core_t *core, const ls_motion_event_t *ev);
+
+#endif

@@ -1,0 +1,102 @@
+/* The comms-thread side of the motion executor's events: a motion done,
+ * paused, faulted, a tag or an auxiliary command reached. Each becomes the
+ * state change and the notice of docs/state-machine.md, to the session that
+ * started the motion. */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "cmd_motion.h"
+#include "ls_core_events.h"
+#include "ls_control.h"
+#include "ls_kin.h"
+#include "ls_units.h"
+
+static void joints_text(const ls_core_t *core, const double q[LS_N_JOINTS], char *out, size_t cap)
+{
+    /* Fit the notice's 64 characters: fewer digits when needed. */
+    for (int prec = 6; prec >= 3; prec--) {
+        size_t len = (size_t)snprintf(out, cap, "joints=");
+        for (int j = 0; j < LS_N_JOINTS && len < cap; j++) {
+            len += (size_t)snprintf(out + len, cap - len, "%s%.*g", j ? "," : "", prec,
+                                    q[j] / ls_units_to_si_angular(ls_core_run_units(core).angular, 1.0));
+        }
+        if (len < cap) {
+            return;
+        }
+    }
+}
+
+void ls_core_on_motion_event(ls_core_t *core, const ls_motion_event_t *ev)
+{
+    if (ev == NULL) {
+        return;
+    }
+    switch (ev->kind) {
+    case LS_MEV_DONE: {
+        if (!core->run.active || core->run.react || ev->ref_seq != core->run.ref_seq) {
+            return; /* a motion we already gave up (abort) */
+        }
+        char d2[64];
+        joints_text(core, ev->q_rad, d2, sizeof d2);
+        const char *extra[] = { d2 };
+        if (!core->halt.active && (core->state == ls_State_MOVING || core->state == ls_State_PAUSED)) {
+            core->state = ls_State_RESTING;
+            snprintf(core->motion_state, sizeof core->motion_state, "robot_at_rest");
+        }
+        /* It completed, even when a halt was already stopping it. */
+        ls_run_finish(core, LS_RUN_END_COMPLETE, extra, 1);
+        return;
+    }
+    case LS_MEV_PAUSED:
+        if (core->halt.active) {
+            return; /* a halt's stop: the drives go off next */
+        }
+        if (core->state == ls_State_MOVING) {
+            core->state = ls_State_PAUSED;
+            snprintf(core->motion_state, sizeof core->motion_state, "robot_paused");
+        }
+        if (core->run.stop_pending) {
+            core->run.stop_pending = false;
+            ls_core_finish_deferred(core, core->run.stop_sup, ls_RetCode_CMD_EXEC_OK,
+                                    "paused on the planned path: resumeMotion continues, abortMotion drops it");
+        }
+        return;
+    case LS_MEV_FAULT: {
+        char t[80];
+        snprintf(t, sizeof t, "%s", ev->text);
+        if (core->ctl != NULL) {
+            ls_ctl_snapshot_t snap;
+            ls_control_snapshot(core->ctl, &snap);
+            if (snap.t_us > core->motion.now_us) {
+                core->motion.now_us = snap.t_us;
+            }
+        }
+        ls_core_fault(core, t, core->motion.now_us); /* ends the run once the drives are off */
+        return;
+    }
+    case LS_MEV_TAG: {
+        snprintf(core->motion.tag_path, sizeof core->motion.tag_path, "%.*s", (int)sizeof core->motion.tag_path - 1,
+                 ev->text);
+        snprintf(core->motion.tag_last, sizeof core->motion.tag_last, "%s", ev->name);
+        if (!core->run.active || core->run.react) {
+            return;
+        }
+        char d1[8 + LS_MOTION_NAME_LEN], d2[24], d3[24], d4[8 + sizeof ev->text];
+        snprintf(d1, sizeof d1, "tag=%s", ev->name);
+        snprintf(d2, sizeof d2, "index=%d", (int)ev->index);
+        snprintf(d3, sizeof d3, "cycle=%d", (int)ev->cycle);
+        snprintf(d4, sizeof d4, "path=%s", ev->text);
+        const char *data[] = { d1, d2, d3, d4, "dry_run=true" };
+        ls_core_notify_to(core, core->run.addr, core->run.epoch, ls_NoticeKind_EVENT, "tag", core->run.ref_seq, false,
+                          data, core->run.dry_run ? 5u : 4u);
+        return;
+    }
+    case LS_MEV_AUX:
+        if (core->run.active && !core->run.react && !core->halt.active) {
+            ls_aux_run(core, ev);
+        }
+        return;
+    default: return;
+    }
+}

@@ -1,0 +1,97 @@
+/* Storage of the command handlers (firmware/core/cmd_*.c), owned by
+ * ls_core_t like every other piece of the core's state: the path queues and
+ * the program being run (cmd_path.c, cmd_path_program.c), the last tag
+ * reached (cmd_motion_events.c), manual control (cmd_sensor.c) and the end
+ * effector (cmd_tool.c). ls_core_init gives every field its start value.
+ *
+ * Only types here, no functions: the core's header includes it, the
+ * handlers' private headers include the core's. */
+#ifndef LS_CORE_STATE_H
+#define LS_CORE_STATE_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "landscape.pb.h"
+#include "ls_control.h"
+#include "ls_motion.h"
+
+/* Path queues: LS_PATH_MAX names of LS_PATH_MAX_POINTS points (ls_motion.h).
+ * Path storage is the firmware's largest static table (about 8 x 256 x 420 B
+ * here). A board with little SRAM builds with smaller values, e.g.
+ * -DLS_PATH_MAX=2 -DLS_PATH_MAX_POINTS=64 for the whole build (docs/performance.md). */
+#ifndef LS_PATH_MAX
+#define LS_PATH_MAX 8
+#endif
+
+/* One point of a path queue as pathLoad checked it, in SI. */
+typedef struct {
+    bool used;
+    ls_ReferenceFrame frame;
+    bool straight; /* STRAIGHT_MOTION (Cartesian points only) */
+    bool relative;
+    double v[LS_N_JOINTS]; /* SI: joints (rad), or x y z (m) roll pitch yaw (rad) */
+    char tag[LS_MOTION_NAME_LEN];
+    int32_t tag_index;
+    double delay_s, blend_pct, speed_pct, accel_pct;
+    uint8_t n_aux;
+    char aux[LS_MOTION_AUX_PER_POINT][LS_MOTION_AUX_LEN];
+} ls_path_point_t;
+
+typedef struct {
+    bool used;
+    char name[LS_MOTION_NAME_LEN];
+    uint16_t n;
+    ls_path_point_t pt[LS_PATH_MAX_POINTS];
+} ls_path_t;
+
+/* Seed 3.4-3.6: the path queues, the program of the path being run, the
+ * last tag reached (getTagId). */
+typedef struct {
+    ls_path_t paths[LS_PATH_MAX];
+    ls_motion_program_t prog;
+    char tag_path[LS_MOTION_NAME_LEN];
+    char tag_last[LS_MOTION_NAME_LEN];
+    uint64_t now_us;        /* the comms thread's clock at the last tick */
+    ls_ctl_snapshot_t snap; /* scratch (large: not on the stack) */
+} ls_motion_cmds_t;
+
+/* Seed 3.7.2-3.7.4: manual control. */
+typedef struct {
+    char mode[16];         /* "off", or the manualControl mode that is on */
+    int sup;               /* the session that switched it on, -1 when off */
+    ls_motion_seg_t check; /* scratch for the reachability check of a move's line */
+} ls_sensor_cmds_t;
+
+/* getTool/putTool in progress: the rack's approach, the way in, the
+ * coupling and the way out. */
+typedef struct {
+    bool active;
+    bool attach; /* getTool (true) or putTool */
+    int sup;
+    uint32_t ref_seq;
+    int step;
+    char id[LS_CTL_TOOL_ID_LEN];
+    double rack[16], approach[16]; /* flange poses, base frame */
+    double offset[6];              /* the tool's offset, SI */
+} ls_tool_op_t;
+
+/* setToolBits in progress. */
+typedef struct {
+    bool active;
+    bool on;
+    int sup;
+    uint32_t ref_seq;
+    uint32_t bits;
+} ls_bits_op_t;
+
+/* Seed 3.8: the end effector. */
+typedef struct {
+    char held[LS_CTL_TOOL_ID_LEN]; /* "none" when no tool is held */
+    uint32_t bits;
+    ls_tool_op_t op;
+    double q_hold[LS_N_JOINTS]; /* set-point where the last step ended */
+    ls_bits_op_t bits_op;
+} ls_tool_cmds_t;
+
+#endif
