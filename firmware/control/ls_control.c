@@ -363,51 +363,62 @@ static void stop_then_disable(ls_control_t *c, bool fast)
     c->disable_pending = false;
 }
 
+/* LS_CTL_ENABLE: drives on, holding where the arm is. */
+static void enable_drives(ls_control_t *c, const ls_ctl_cmd_t *cmd)
+{
+    c->disable_pending = false;
+    if (c->cfg.arm == NULL || hal_arm_enable(c->cfg.arm, true) < 0) {
+        cmd_failed(c, cmd->ref_seq, "the drives could not be enabled");
+        return;
+    }
+    /* Hold where the arm is, not where an old command pointed. */
+    ls_motion_hold(&c->motion, c->q);
+    memcpy(c->q_cmd, c->q, sizeof c->q_cmd);
+    c->enabled = true;
+    if (c->manual != NULL) {
+        ls_react_jog_halt(&c->react);
+        jog_ready(c, cmd->ref_seq);
+    }
+}
+
+/* LS_CTL_START: the plan in the plan slot becomes the motion. */
+static void start_plan(ls_control_t *c, const ls_ctl_cmd_t *cmd)
+{
+    if (!c->enabled || c->react.active || c->manual != NULL || ls_motion_start(&c->motion, &c->plan_slot) != 0) {
+        cmd_failed(c, cmd->ref_seq,
+                   !c->enabled         ? "the drives are off"
+                   : c->manual != NULL ? "manualControl is on: switch it off first"
+                                       : "a motion is already running");
+    }
+    atomic_store_explicit(&c->plan_slot_busy, false, memory_order_release);
+}
+
+/* LS_CTL_REACT_START: the plan in the react slot becomes the sensor-guided move. */
+static void start_react(ls_control_t *c, const ls_ctl_cmd_t *cmd)
+{
+    int si = sensor_index(c, c->react_slot.sensor);
+    if (!c->enabled || busy(c) || c->manual != NULL || si < 0 ||
+        ls_react_start(&c->react, &c->react_slot, c->q_cmd, c->cfg.sensors[si].n_values) != 0) {
+        cmd_failed(c, cmd->ref_seq,
+                   !c->enabled         ? "the drives are off"
+                   : busy(c)           ? "a motion is already running"
+                   : c->manual != NULL ? "manualControl is on: switch it off first"
+                   : si < 0            ? "the move's sensor is not composed"
+                                       : "the sensor-guided move was refused");
+    } else {
+        c->react_sensor = si;
+    }
+    atomic_store_explicit(&c->react_slot_busy, false, memory_order_release);
+}
+
 static void handle_command(ls_control_t *c, const ls_ctl_cmd_t *cmd)
 {
     switch (cmd->kind) {
-    case LS_CTL_ENABLE:
-        c->disable_pending = false;
-        if (c->cfg.arm == NULL || hal_arm_enable(c->cfg.arm, true) < 0) {
-            cmd_failed(c, cmd->ref_seq, "the drives could not be enabled");
-            return;
-        }
-        /* Hold where the arm is, not where an old command pointed. */
-        ls_motion_hold(&c->motion, c->q);
-        memcpy(c->q_cmd, c->q, sizeof c->q_cmd);
-        c->enabled = true;
-        if (c->manual != NULL) {
-            ls_react_jog_halt(&c->react);
-            jog_ready(c, cmd->ref_seq);
-        }
-        return;
+    case LS_CTL_ENABLE: enable_drives(c, cmd); return;
     case LS_CTL_DISABLE:
     case LS_CTL_HALT: stop_then_disable(c, cmd->kind == LS_CTL_HALT); return;
-    case LS_CTL_START:
-        if (!c->enabled || c->react.active || c->manual != NULL || ls_motion_start(&c->motion, &c->plan_slot) != 0) {
-            cmd_failed(c, cmd->ref_seq,
-                       !c->enabled         ? "the drives are off"
-                       : c->manual != NULL ? "manualControl is on: switch it off first"
-                                           : "a motion is already running");
-        }
-        atomic_store_explicit(&c->plan_slot_busy, false, memory_order_release);
-        return;
-    case LS_CTL_REACT_START: {
-        int si = sensor_index(c, c->react_slot.sensor);
-        if (!c->enabled || busy(c) || c->manual != NULL || si < 0 ||
-            ls_react_start(&c->react, &c->react_slot, c->q_cmd, c->cfg.sensors[si].n_values) != 0) {
-            cmd_failed(c, cmd->ref_seq,
-                       !c->enabled         ? "the drives are off"
-                       : busy(c)           ? "a motion is already running"
-                       : c->manual != NULL ? "manualControl is on: switch it off first"
-                       : si < 0            ? "the move's sensor is not composed"
-                                           : "the sensor-guided move was refused");
-        } else {
-            c->react_sensor = si;
-        }
-        atomic_store_explicit(&c->react_slot_busy, false, memory_order_release);
-        return;
-    }
+    case LS_CTL_START: start_plan(c, cmd); return;
+    case LS_CTL_REACT_START: start_react(c, cmd); return;
     case LS_CTL_STOP:
         if (c->react.active) {
             ls_react_stop(&c->react);

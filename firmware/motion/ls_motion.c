@@ -794,10 +794,9 @@ static void arrive(ls_motion_t *m, const ls_motion_seg_t *s, ls_motion_events_t 
     }
 }
 
-void ls_motion_step(ls_motion_t *m, double dt_s, const double q_meas[LS_N_JOINTS], double q_cmd[LS_N_JOINTS],
-                    double qd_cmd[LS_N_JOINTS], ls_motion_events_t *ev)
+/* A planned joint that the measured one does not follow faults the motion. */
+static void check_following(ls_motion_t *m, const double q_meas[LS_N_JOINTS], ls_motion_events_t *ev)
 {
-    double qd[LS_N_JOINTS] = { 0 };
     if (m->phase != LS_MOTION_IDLE && m->phase != LS_MOTION_PAUSED && q_meas != NULL) {
         for (int j = 0; j < LS_N_JOINTS; j++) {
             const double e = q_meas[j] - m->q_cmd[j];
@@ -807,75 +806,91 @@ void ls_motion_step(ls_motion_t *m, double dt_s, const double q_meas[LS_N_JOINTS
             }
         }
     }
+}
+
+/* One step along segment s (and the next one while blending into it):
+ * the set-point and its velocity qd, arrival at the segment's end (tags,
+ * auxiliary commands, dwell, the next segment), and the pause that ends a
+ * stop. */
+static void move_step(ls_motion_t *m, const ls_motion_seg_t *s, double dt_s, double qd[LS_N_JOINTS],
+                      ls_motion_events_t *ev)
+{
+    const double dtau = ls_timescale_step(&m->ts, dt_s);
+    const ls_motion_seg_t *nx = NULL;
+    m->t_s += dtau;
+    if (m->blending_) {
+        m->t_next_s_ += dtau;
+        nx = next_seg(m);
+    } else if (s->overlap_s > 0.0 && m->t_s >= s->traj.duration_s - s->overlap_s) {
+        nx = next_seg(m);
+        if (nx != NULL) {
+            m->blending_ = true;
+            m->t_next_s_ = m->t_s - (s->traj.duration_s - s->overlap_s);
+        }
+    }
+    double q[LS_N_JOINTS];
+    int ks = seg_position(m, s, m->t_s, q, qd);
+    if (ks == LS_KIN_OK && m->blending_ && nx != NULL) {
+        double q2[LS_N_JOINTS], qd2[LS_N_JOINTS];
+        ks = seg_position(m, nx, m->t_next_s_, q2, qd2);
+        for (int j = 0; j < LS_N_JOINTS; j++) {
+            q[j] += q2[j] - nx->q0[j];
+            qd[j] += qd2[j];
+        }
+    }
+    if (ks != LS_KIN_OK) {
+        fault(m, ev, "no joint solution on the planned path (IK status %d): stopped", ks);
+    } else {
+        if (s->kind == LS_SEG_JOINT) {
+            for (int j = 0; j < LS_N_JOINTS; j++) {
+                qd[j] *= m->ts.r;
+            }
+        } else {
+            for (int j = 0; j < LS_N_JOINTS; j++) {
+                qd[j] = (q[j] - m->q_cmd[j]) / dt_s;
+            }
+        }
+        memcpy(m->q_cmd, q, sizeof m->q_cmd);
+        if (m->t_s >= s->traj.duration_s) {
+            arrive(m, s, ev);
+            if (m->blending_) {
+                /* The next segment is under way: make it the current one. */
+                const double t_next = m->t_next_s_;
+                m->blending_ = false;
+                advance(m, ev, false);
+                m->t_s = t_next;
+            } else if (s->n_aux > 0 && !m->plan.dry_run) {
+                m->sub_ = SUB_AUX;
+                m->aux_k_ = 0;
+                for (int j = 0; j < LS_N_JOINTS; j++) {
+                    qd[j] = 0.0;
+                }
+                announce_aux(m, s, ev);
+            } else {
+                for (int j = 0; j < LS_N_JOINTS; j++) {
+                    qd[j] = 0.0;
+                }
+                after_aux(m, s, ev);
+            }
+        }
+        if (m->phase == LS_MOTION_STOPPING && m->sub_ == SUB_MOVE && ls_timescale_settled(&m->ts) && m->ts.r == 0.0) {
+            for (int j = 0; j < LS_N_JOINTS; j++) {
+                qd[j] = 0.0;
+            }
+            pause_now(m, ev);
+        }
+    }
+}
+
+void ls_motion_step(ls_motion_t *m, double dt_s, const double q_meas[LS_N_JOINTS], double q_cmd[LS_N_JOINTS],
+                    double qd_cmd[LS_N_JOINTS], ls_motion_events_t *ev)
+{
+    double qd[LS_N_JOINTS] = { 0 };
+    check_following(m, q_meas, ev);
     if ((m->phase == LS_MOTION_RUNNING || m->phase == LS_MOTION_STOPPING) && dt_s > 0.0) {
         const ls_motion_seg_t *s = plan_seg(&m->plan, m->seg_i_, m->cycle_);
         if (m->sub_ == SUB_MOVE) {
-            const double dtau = ls_timescale_step(&m->ts, dt_s);
-            const ls_motion_seg_t *nx = NULL;
-            m->t_s += dtau;
-            if (m->blending_) {
-                m->t_next_s_ += dtau;
-                nx = next_seg(m);
-            } else if (s->overlap_s > 0.0 && m->t_s >= s->traj.duration_s - s->overlap_s) {
-                nx = next_seg(m);
-                if (nx != NULL) {
-                    m->blending_ = true;
-                    m->t_next_s_ = m->t_s - (s->traj.duration_s - s->overlap_s);
-                }
-            }
-            double q[LS_N_JOINTS];
-            int ks = seg_position(m, s, m->t_s, q, qd);
-            if (ks == LS_KIN_OK && m->blending_ && nx != NULL) {
-                double q2[LS_N_JOINTS], qd2[LS_N_JOINTS];
-                ks = seg_position(m, nx, m->t_next_s_, q2, qd2);
-                for (int j = 0; j < LS_N_JOINTS; j++) {
-                    q[j] += q2[j] - nx->q0[j];
-                    qd[j] += qd2[j];
-                }
-            }
-            if (ks != LS_KIN_OK) {
-                fault(m, ev, "no joint solution on the planned path (IK status %d): stopped", ks);
-            } else {
-                if (s->kind == LS_SEG_JOINT) {
-                    for (int j = 0; j < LS_N_JOINTS; j++) {
-                        qd[j] *= m->ts.r;
-                    }
-                } else {
-                    for (int j = 0; j < LS_N_JOINTS; j++) {
-                        qd[j] = (q[j] - m->q_cmd[j]) / dt_s;
-                    }
-                }
-                memcpy(m->q_cmd, q, sizeof m->q_cmd);
-                if (m->t_s >= s->traj.duration_s) {
-                    arrive(m, s, ev);
-                    if (m->blending_) {
-                        /* The next segment is under way: make it the current one. */
-                        const double t_next = m->t_next_s_;
-                        m->blending_ = false;
-                        advance(m, ev, false);
-                        m->t_s = t_next;
-                    } else if (s->n_aux > 0 && !m->plan.dry_run) {
-                        m->sub_ = SUB_AUX;
-                        m->aux_k_ = 0;
-                        for (int j = 0; j < LS_N_JOINTS; j++) {
-                            qd[j] = 0.0;
-                        }
-                        announce_aux(m, s, ev);
-                    } else {
-                        for (int j = 0; j < LS_N_JOINTS; j++) {
-                            qd[j] = 0.0;
-                        }
-                        after_aux(m, s, ev);
-                    }
-                }
-                if (m->phase == LS_MOTION_STOPPING && m->sub_ == SUB_MOVE && ls_timescale_settled(&m->ts) &&
-                    m->ts.r == 0.0) {
-                    for (int j = 0; j < LS_N_JOINTS; j++) {
-                        qd[j] = 0.0;
-                    }
-                    pause_now(m, ev);
-                }
-            }
+            move_step(m, s, dt_s, qd, ev);
         } else if (m->phase == LS_MOTION_STOPPING) {
             pause_now(m, ev); /* at rest at a point */
         } else if (m->sub_ == SUB_AUX) {

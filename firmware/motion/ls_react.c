@@ -297,6 +297,190 @@ static void save_reading(ls_react_t *r, const double *reading)
     memcpy(r->report.reading, reading, r->report.n_values * sizeof reading[0]);
 }
 
+/* moveReact: run to the threshold (or the envelope, or the distance),
+ * brake, come back to where the reading crossed, settle. False when the
+ * move ended (finish() has reported it). */
+static bool guarded_step(ls_react_t *r, const double *reading, double env, double dt_s,
+                         const double q_meas[LS_N_JOINTS], ls_motion_events_t *ev)
+{
+    const ls_react_plan_t *p = &r->plan;
+    switch (r->phase_) {
+    case PH_RUN:
+        if (p->envelope > 0.0 && env > p->envelope) {
+            r->end_ = LS_REACT_END_ENVELOPE;
+        } else if (crossed(p, reading)) {
+            r->end_ = LS_REACT_END_THRESHOLD;
+        }
+        if (r->end_ != 0) {
+            r->report.triggered = true;
+            r->report.trigger = r->end_ == LS_REACT_END_ENVELOPE ? env : reading[p->component];
+            r->s_trigger_ = r->s_;
+            r->phase_ = PH_BRAKE;
+            r->v_ = toward_zero(r->v_, p->a_stop_m_s2, dt_s);
+            break;
+        }
+        r->v_ = profile_speed(r->v_, p->v_m_s, p->a_m_s2, p->dist_m - r->s_, dt_s);
+        if (p->dist_m - r->s_ <= 1e-9 || (r->v_ < 1e-9 && r->s_ > 0.0)) {
+            r->s_ = p->dist_m;
+            r->v_ = 0.0;
+            r->end_ = LS_REACT_END_MAX_DISTANCE;
+            r->phase_ = PH_SETTLE;
+            r->t_ = 0.0;
+        }
+        break;
+    case PH_BRAKE:
+        r->v_ = toward_zero(r->v_, p->a_stop_m_s2, dt_s);
+        if (r->v_ == 0.0) {
+            r->phase_ = PH_RETURN;
+        }
+        break;
+    case PH_RETURN: {
+        /* Back to where the reading crossed: the overshoot of the stop
+         * would otherwise keep pressing with the contact's stiffness. */
+        double back = r->s_ - r->s_trigger_;
+        double vr = p->v_m_s < LS_REACT_RETURN_SPEED_M_S ? p->v_m_s : LS_REACT_RETURN_SPEED_M_S;
+        double sp = profile_speed(-r->v_, vr, p->a_m_s2, back, dt_s);
+        r->v_ = -sp;
+        if (back <= 1e-9 || (sp < 1e-9 && back < 1e-6)) {
+            r->s_ = r->s_trigger_;
+            r->v_ = 0.0;
+            r->phase_ = PH_SETTLE;
+            r->t_ = 0.0;
+        }
+        break;
+    }
+    case PH_SETTLE:
+        r->v_ = 0.0;
+        if (r->t_ >= SETTLE_AFTER_RETURN_S) {
+            finish(r, r->end_, q_meas, ev);
+            return false;
+        }
+        break;
+    default: break;
+    }
+    return true;
+}
+
+/* comply: seek contact, hold the target force with a PD on its error while
+ * travelling, brake on a time-out; a panic force ends it at once. False when
+ * the move ended (finish() has reported it). */
+static bool comply_step(ls_react_t *r, const double *reading, double env, double dt_s, const double q_meas[LS_N_JOINTS],
+                        ls_motion_events_t *ev)
+{
+    const ls_react_plan_t *p = &r->plan;
+    double fn = dot3(reading, p->n_tool);
+    if (r->phase_ != PH_BRAKE) {
+        if (env > p->panic_N) {
+            /* Panic: stop at once, no braking ramp (comply speeds are low). */
+            r->v_ = r->vc_ = 0.0;
+            finish(r, LS_REACT_END_PANIC, q_meas, ev);
+            return false;
+        }
+        if (r->t_ > p->timeout_s) {
+            r->end_ = LS_REACT_END_TIMEOUT;
+            r->phase_ = PH_BRAKE;
+        }
+    }
+    /* PD on the force error, as a correction speed along n. */
+    double e = p->f_target_N - fn;
+    double de = r->have_e_ ? (e - r->e_prev_) / dt_s : 0.0;
+    r->have_e_ = true;
+    r->e_prev_ = e;
+    double alpha = dt_s / (DERIV_FILTER_TAU_S + dt_s);
+    r->de_f_ += alpha * (de - r->de_f_);
+    double vc = p->kp_m_s_N * e + p->kd_m_N * r->de_f_;
+    if (vc > p->vc_max_m_s) {
+        vc = p->vc_max_m_s;
+    } else if (vc < -p->vc_max_m_s) {
+        vc = -p->vc_max_m_s;
+    }
+    switch (r->phase_) {
+    case PH_SEEK:
+        /* No contact yet: approach at the correction speed (the PD's
+         * output for the whole target would be slow with a stable gain). */
+        if ((p->f_target_N > 0.0 ? fn : -fn) >= LS_REACT_SEEK_FRACTION * fabs(p->f_target_N)) {
+            r->phase_ = PH_CONTACT;
+            r->vc_ = vc;
+        } else {
+            r->vc_ = p->f_target_N > 0.0 ? p->vc_max_m_s : -p->vc_max_m_s;
+        }
+        break;
+    case PH_CONTACT:
+        r->vc_ = vc;
+        if (fabs(e) <= LS_REACT_CONTACT_BAND * fabs(p->f_target_N)) {
+            r->phase_ = PH_RUN;
+        }
+        break;
+    case PH_RUN:
+        r->vc_ = vc;
+        r->v_ = profile_speed(r->v_, p->v_m_s, p->a_m_s2, p->dist_m - r->s_, dt_s);
+        r->travel_t_ += dt_s;
+        if (r->travel_t_ >= LS_REACT_SETTLE_S) {
+            r->report.fn_mean_N += fn;
+            r->report.fn_min_N = fmin(r->report.fn_min_N, fn);
+            r->report.fn_max_N = fmax(r->report.fn_max_N, fn);
+            r->report.fn_samples++;
+        }
+        if (p->dist_m - r->s_ <= 1e-9 || (r->v_ < 1e-9 && r->s_ > 0.0)) {
+            r->s_ = p->dist_m;
+            r->v_ = 0.0;
+            finish(r, LS_REACT_END_MAX_DISTANCE, q_meas, ev);
+            return false;
+        }
+        break;
+    case PH_BRAKE:
+        r->vc_ = 0.0;
+        r->v_ = toward_zero(r->v_, p->a_stop_m_s2, dt_s);
+        if (r->v_ == 0.0) {
+            finish(r, r->end_, q_meas, ev);
+            return false;
+        }
+        break;
+    default: break;
+    }
+    return true;
+}
+
+/* Advance the tip along the travel (s) and the compliance direction (c)
+ * and solve for the joints. */
+static void advance_tip(ls_react_t *r, double dt_s, bool comply, const double q_meas[LS_N_JOINTS],
+                        double q_cmd[LS_N_JOINTS], double qd_cmd[LS_N_JOINTS], ls_motion_events_t *ev)
+{
+    const ls_react_plan_t *p = &r->plan;
+    double s_new = r->s_ + r->v_ * dt_s;
+    if (r->phase_ == PH_RUN && s_new > p->dist_m) {
+        s_new = p->dist_m;
+    }
+    double c_new = r->c_ + r->vc_ * dt_s;
+    if (c_new > p->c_max_m) {
+        c_new = p->c_max_m;
+    } else if (c_new < -p->c_max_m) {
+        c_new = -p->c_max_m;
+    }
+    if (!comply) {
+        c_new = 0.0;
+    }
+    double P[16];
+    memcpy(P, r->P0_, sizeof P);
+    for (int i = 0; i < 3; i++) {
+        P[12 + i] += s_new * r->d_[i] + c_new * r->n_[i];
+    }
+    double q_new[LS_N_JOINTS];
+    char why[64];
+    if (solve(r->model, P, r->tool_inv_, r->q_cmd_, dt_s, q_new, why, sizeof why) != 0) {
+        r->v_ = r->vc_ = 0.0;
+        finish(r, LS_REACT_END_UNREACHABLE, q_meas, ev);
+        return;
+    }
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        qd_cmd[j] = (q_new[j] - r->q_cmd_[j]) / dt_s;
+    }
+    memcpy(r->q_cmd_, q_new, sizeof r->q_cmd_);
+    memcpy(q_cmd, q_new, sizeof r->q_cmd_);
+    r->s_ = s_new;
+    r->c_ = c_new;
+}
+
 void ls_react_step(ls_react_t *r, double dt_s, const double q_meas[LS_N_JOINTS], const double *reading,
                    double q_cmd[LS_N_JOINTS], double qd_cmd[LS_N_JOINTS], ls_motion_events_t *ev)
 {
@@ -337,166 +521,13 @@ void ls_react_step(ls_react_t *r, double dt_s, const double q_meas[LS_N_JOINTS],
             emit(ev, LS_MEV_PAUSED, p->ref_seq, 0, "paused", q_meas);
         }
     } else if (!comply) {
-        switch (r->phase_) {
-        case PH_RUN:
-            if (p->envelope > 0.0 && env > p->envelope) {
-                r->end_ = LS_REACT_END_ENVELOPE;
-            } else if (crossed(p, reading)) {
-                r->end_ = LS_REACT_END_THRESHOLD;
-            }
-            if (r->end_ != 0) {
-                r->report.triggered = true;
-                r->report.trigger = r->end_ == LS_REACT_END_ENVELOPE ? env : reading[p->component];
-                r->s_trigger_ = r->s_;
-                r->phase_ = PH_BRAKE;
-                r->v_ = toward_zero(r->v_, p->a_stop_m_s2, dt_s);
-                break;
-            }
-            r->v_ = profile_speed(r->v_, p->v_m_s, p->a_m_s2, p->dist_m - r->s_, dt_s);
-            if (p->dist_m - r->s_ <= 1e-9 || (r->v_ < 1e-9 && r->s_ > 0.0)) {
-                r->s_ = p->dist_m;
-                r->v_ = 0.0;
-                r->end_ = LS_REACT_END_MAX_DISTANCE;
-                r->phase_ = PH_SETTLE;
-                r->t_ = 0.0;
-            }
-            break;
-        case PH_BRAKE:
-            r->v_ = toward_zero(r->v_, p->a_stop_m_s2, dt_s);
-            if (r->v_ == 0.0) {
-                r->phase_ = PH_RETURN;
-            }
-            break;
-        case PH_RETURN: {
-            /* Back to where the reading crossed: the overshoot of the stop
-             * would otherwise keep pressing with the contact's stiffness. */
-            double back = r->s_ - r->s_trigger_;
-            double vr = p->v_m_s < LS_REACT_RETURN_SPEED_M_S ? p->v_m_s : LS_REACT_RETURN_SPEED_M_S;
-            double sp = profile_speed(-r->v_, vr, p->a_m_s2, back, dt_s);
-            r->v_ = -sp;
-            if (back <= 1e-9 || (sp < 1e-9 && back < 1e-6)) {
-                r->s_ = r->s_trigger_;
-                r->v_ = 0.0;
-                r->phase_ = PH_SETTLE;
-                r->t_ = 0.0;
-            }
-            break;
+        if (!guarded_step(r, reading, env, dt_s, q_meas, ev)) {
+            return;
         }
-        case PH_SETTLE:
-            r->v_ = 0.0;
-            if (r->t_ >= SETTLE_AFTER_RETURN_S) {
-                finish(r, r->end_, q_meas, ev);
-                return;
-            }
-            break;
-        default: break;
-        }
-    } else {
-        double fn = dot3(reading, p->n_tool);
-        if (r->phase_ != PH_BRAKE) {
-            if (env > p->panic_N) {
-                /* Panic: stop at once, no braking ramp (comply speeds are low). */
-                r->v_ = r->vc_ = 0.0;
-                finish(r, LS_REACT_END_PANIC, q_meas, ev);
-                return;
-            }
-            if (r->t_ > p->timeout_s) {
-                r->end_ = LS_REACT_END_TIMEOUT;
-                r->phase_ = PH_BRAKE;
-            }
-        }
-        /* PD on the force error, as a correction speed along n. */
-        double e = p->f_target_N - fn;
-        double de = r->have_e_ ? (e - r->e_prev_) / dt_s : 0.0;
-        r->have_e_ = true;
-        r->e_prev_ = e;
-        double alpha = dt_s / (DERIV_FILTER_TAU_S + dt_s);
-        r->de_f_ += alpha * (de - r->de_f_);
-        double vc = p->kp_m_s_N * e + p->kd_m_N * r->de_f_;
-        if (vc > p->vc_max_m_s) {
-            vc = p->vc_max_m_s;
-        } else if (vc < -p->vc_max_m_s) {
-            vc = -p->vc_max_m_s;
-        }
-        switch (r->phase_) {
-        case PH_SEEK:
-            /* No contact yet: approach at the correction speed (the PD's
-             * output for the whole target would be slow with a stable gain). */
-            if ((p->f_target_N > 0.0 ? fn : -fn) >= LS_REACT_SEEK_FRACTION * fabs(p->f_target_N)) {
-                r->phase_ = PH_CONTACT;
-                r->vc_ = vc;
-            } else {
-                r->vc_ = p->f_target_N > 0.0 ? p->vc_max_m_s : -p->vc_max_m_s;
-            }
-            break;
-        case PH_CONTACT:
-            r->vc_ = vc;
-            if (fabs(e) <= LS_REACT_CONTACT_BAND * fabs(p->f_target_N)) {
-                r->phase_ = PH_RUN;
-            }
-            break;
-        case PH_RUN:
-            r->vc_ = vc;
-            r->v_ = profile_speed(r->v_, p->v_m_s, p->a_m_s2, p->dist_m - r->s_, dt_s);
-            r->travel_t_ += dt_s;
-            if (r->travel_t_ >= LS_REACT_SETTLE_S) {
-                r->report.fn_mean_N += fn;
-                r->report.fn_min_N = fmin(r->report.fn_min_N, fn);
-                r->report.fn_max_N = fmax(r->report.fn_max_N, fn);
-                r->report.fn_samples++;
-            }
-            if (p->dist_m - r->s_ <= 1e-9 || (r->v_ < 1e-9 && r->s_ > 0.0)) {
-                r->s_ = p->dist_m;
-                r->v_ = 0.0;
-                finish(r, LS_REACT_END_MAX_DISTANCE, q_meas, ev);
-                return;
-            }
-            break;
-        case PH_BRAKE:
-            r->vc_ = 0.0;
-            r->v_ = toward_zero(r->v_, p->a_stop_m_s2, dt_s);
-            if (r->v_ == 0.0) {
-                finish(r, r->end_, q_meas, ev);
-                return;
-            }
-            break;
-        default: break;
-        }
-    }
-
-    /* Advance the tip and solve for the joints. */
-    double s_new = r->s_ + r->v_ * dt_s;
-    if (r->phase_ == PH_RUN && s_new > p->dist_m) {
-        s_new = p->dist_m;
-    }
-    double c_new = r->c_ + r->vc_ * dt_s;
-    if (c_new > p->c_max_m) {
-        c_new = p->c_max_m;
-    } else if (c_new < -p->c_max_m) {
-        c_new = -p->c_max_m;
-    }
-    if (!comply) {
-        c_new = 0.0;
-    }
-    double P[16];
-    memcpy(P, r->P0_, sizeof P);
-    for (int i = 0; i < 3; i++) {
-        P[12 + i] += s_new * r->d_[i] + c_new * r->n_[i];
-    }
-    double q_new[LS_N_JOINTS];
-    char why[64];
-    if (solve(r->model, P, r->tool_inv_, r->q_cmd_, dt_s, q_new, why, sizeof why) != 0) {
-        r->v_ = r->vc_ = 0.0;
-        finish(r, LS_REACT_END_UNREACHABLE, q_meas, ev);
+    } else if (!comply_step(r, reading, env, dt_s, q_meas, ev)) {
         return;
     }
-    for (int j = 0; j < LS_N_JOINTS; j++) {
-        qd_cmd[j] = (q_new[j] - r->q_cmd_[j]) / dt_s;
-    }
-    memcpy(r->q_cmd_, q_new, sizeof r->q_cmd_);
-    memcpy(q_cmd, q_new, sizeof r->q_cmd_);
-    r->s_ = s_new;
-    r->c_ = c_new;
+    advance_tip(r, dt_s, comply, q_meas, q_cmd, qd_cmd, ev);
 }
 
 /* ------------------------------------------------------------- jog */
