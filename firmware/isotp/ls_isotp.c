@@ -354,6 +354,8 @@ static void on_ff(ls_isotp_link_t *l, const uint8_t *d, uint8_t len, uint64_t no
     }
     memcpy(l->rx_buf, d + 2, FF_DATA);
     l->rx_len = (uint16_t)msg_len;
+    const uint64_t cap_us = ls_isotp_rx_cap_us(&l->cfg, l->rx_len);
+    l->rx_end_us = now_us > UINT64_MAX - cap_us ? UINT64_MAX : now_us + cap_us;
     l->rx_got = FF_DATA;
     l->rx_sn = 1;
     l->rx_bs_left = l->cfg.block_size;
@@ -399,9 +401,17 @@ static void expire(ls_isotp_link_t *l, uint64_t now_us)
     if (l->tx_state == LS_ISOTP_TX_WAIT_FC && now_us >= l->tx_deadline_us) {
         tx_finish(l, LS_ISOTP_N_TIMEOUT_BS);
     }
-    if (l->rx_state == LS_ISOTP_RX_RECEIVING && now_us >= l->rx_deadline_us) {
+    if (l->rx_state == LS_ISOTP_RX_RECEIVING && (now_us >= l->rx_deadline_us || now_us >= l->rx_end_us)) {
         rx_abort(l, LS_ISOTP_N_TIMEOUT_CR);
     }
+}
+
+uint64_t ls_isotp_rx_cap_us(const ls_isotp_config_t *cfg, uint16_t msg_len)
+{
+    const uint32_t cfs = msg_len > FF_DATA ? (msg_len - FF_DATA + CF_DATA - 1u) / CF_DATA : 0u;
+    const uint32_t block = cfg->block_size != 0 ? cfg->block_size : LS_ISOTP_RX_CAP_BLOCK;
+    const uint32_t blocks = (cfs + block - 1u) / block;
+    return (uint64_t)cfg->n_cr_timeout_us * (1u + blocks);
 }
 
 void ls_isotp_on_frame(ls_isotp_link_t *l, const uint8_t *data, uint8_t len, uint64_t now_us)
@@ -465,8 +475,9 @@ uint64_t ls_isotp_next_deadline_us(const ls_isotp_link_t *l)
     if (l->tx_state == LS_ISOTP_TX_WAIT_FC && l->tx_deadline_us < t) {
         t = l->tx_deadline_us;
     }
-    if (l->rx_state == LS_ISOTP_RX_RECEIVING && l->rx_deadline_us < t) {
-        t = l->rx_deadline_us;
+    if (l->rx_state == LS_ISOTP_RX_RECEIVING) {
+        const uint64_t rx_t = l->rx_deadline_us < l->rx_end_us ? l->rx_deadline_us : l->rx_end_us;
+        t = rx_t < t ? rx_t : t;
     }
     return t;
 }

@@ -21,6 +21,13 @@
 #include <stdint.h>
 
 #define LS_ISOTP_MAX_PAYLOAD 4095u /* classic ISO-TP without the 32-bit escape */
+/* A reception's whole time is bounded by its announced length: at most
+ * N_Cr x (1 + its blocks of consecutive frames), a block being the BS we ask
+ * for (LS_ISOTP_RX_CAP_BLOCK when we ask BS 0). N_Cr alone restarts at every
+ * consecutive frame, so a sender trickling one frame per N_Cr could hold a
+ * 4095-byte reception for 585 N_Cr; with the cap it is 1 + 74 N_Cr at most.
+ * Past the cap the reception ends as N_TIMEOUT_CR. */
+#define LS_ISOTP_RX_CAP_BLOCK 8u
 
 /* Result of a transfer (N_Result of the standard), also the error counters' index. */
 typedef enum {
@@ -75,7 +82,8 @@ typedef struct {
     uint8_t rx_buf[LS_ISOTP_MAX_PAYLOAD];
     uint16_t rx_len, rx_got;
     uint8_t rx_sn, rx_bs_left;
-    uint64_t rx_deadline_us;
+    uint64_t rx_deadline_us; /* N_Cr: the next consecutive frame */
+    uint64_t rx_end_us;      /* the whole reception (LS_ISOTP_RX_CAP_BLOCK) */
     bool rx_fc_pending; /* a flow control frame waits for room in the CAN queue */
     uint8_t rx_fc_status;
 
@@ -117,6 +125,9 @@ int ls_isotp_init(ls_isotp_link_t *l, const ls_isotp_config_t *cfg, uint32_t tx_
  *    waiting out N_Bs. Take messages every loop turn to avoid this.
  *  - A CF while not receiving counts N_UNEXP_PDU; a CF with the wrong SN
  *    aborts the reception (N_WRONG_SN).
+ *  - A reception ends with N_TIMEOUT_CR when no CF came within N_Cr, and also
+ *    when it is not complete within its cap (LS_ISOTP_RX_CAP_BLOCK): a
+ *    trickle of frames does not keep it alive.
  * Sender policy (tx_results): an FC while not waiting for one counts
  * N_UNEXP_PDU and is ignored; an FC.CTS sends the CFs that are due at once. */
 void ls_isotp_on_frame(ls_isotp_link_t *l, const uint8_t *data, uint8_t len, uint64_t now_us);
@@ -159,6 +170,10 @@ size_t ls_isotp_decode_single(const uint8_t *data, uint8_t len, uint8_t *out, si
 /* Encode a single frame for a payload of 1..7 bytes into `frame` (8 bytes).
  * Returns the CAN data length to send (padded to 8 if `pad`), 0 on bad length. */
 uint8_t ls_isotp_encode_single(const uint8_t *payload, size_t len, bool pad, uint8_t pad_byte, uint8_t frame[8]);
+
+/* The cap of a reception of `msg_len` bytes under `cfg` (LS_ISOTP_RX_CAP_BLOCK),
+ * in microseconds. */
+uint64_t ls_isotp_rx_cap_us(const ls_isotp_config_t *cfg, uint16_t msg_len);
 
 /* Convert an STmin byte to microseconds per ISO 15765-2 (reserved values mean 127 ms). */
 uint32_t ls_isotp_stmin_to_us(uint8_t st_min);

@@ -683,6 +683,44 @@ static void test_rx_n_cr_timeout(void **state)
     assert_int_equal(ls_isotp_take_rx(&fx.b, fx.out, sizeof(fx.out)), 0);
 }
 
+/* N_Cr restarts at every CF, so a trickle (one CF just inside N_Cr) would
+ * hold a 4095-byte reception for 585 N_Cr; the cap ends it after
+ * 1 + ceil(585 / BS 8) = 75 N_Cr, and one at full speed is untouched. */
+static void test_rx_trickle_is_capped_by_the_announced_length(void **state)
+{
+    (void)state;
+    setup_links(NULL, NULL);
+    ls_isotp_config_t c;
+    ls_isotp_default_config(&c);
+    const uint64_t cap_us = 75u * 1000000u;
+    assert_int_equal(ls_isotp_rx_cap_us(&c, 4095), cap_us);
+    assert_int_equal(ls_isotp_rx_cap_us(&c, 30), 2u * 1000000u); /* 4 CFs: one block */
+    rx_ff(4095, 0);
+    uint8_t sn = 1;
+    uint64_t t = 0;
+    while (t + 900000u < cap_us) {
+        t += 900000u; /* inside N_Cr every time */
+        rx_cf(sn, 0x11, t);
+        sn = (uint8_t)((sn + 1u) & 0xFu);
+        assert_int_equal(fx.b.rx_state, LS_ISOTP_RX_RECEIVING);
+    }
+    assert_int_equal(ls_isotp_next_deadline_us(&fx.b), cap_us);
+    poll_at(&fx.b, &fx.cb, cap_us - 1u);
+    assert_int_equal(fx.b.rx_state, LS_ISOTP_RX_RECEIVING);
+    poll_at(&fx.b, &fx.cb, cap_us);
+    assert_int_equal(fx.b.rx_state, LS_ISOTP_RX_IDLE);
+    assert_int_equal(fx.b.rx_results[LS_ISOTP_N_TIMEOUT_CR], 1);
+    /* A 4095-byte reception at full speed completes. */
+    rx_ff(4095, cap_us + 1u);
+    sn = 1;
+    for (int i = 0; i < 585; i++) {
+        rx_cf(sn, 0x22, cap_us + 2u + (uint64_t)i);
+        sn = (uint8_t)((sn + 1u) & 0xFu);
+    }
+    assert_int_equal(fx.b.rx_results[LS_ISOTP_N_OK], 1);
+    assert_int_equal(ls_isotp_take_rx(&fx.b, fx.out, sizeof(fx.out)), 4095);
+}
+
 static void test_rx_wrong_sn(void **state)
 {
     (void)state;
@@ -1121,6 +1159,7 @@ int main(void)
         cmocka_unit_test(test_rx_block_size_fc_after_each_block),
         cmocka_unit_test(test_rx_sn_wraps),
         cmocka_unit_test(test_rx_n_cr_timeout),
+        cmocka_unit_test(test_rx_trickle_is_capped_by_the_announced_length),
         cmocka_unit_test(test_rx_wrong_sn),
         cmocka_unit_test(test_rx_cf_while_idle),
         cmocka_unit_test(test_rx_ff_during_reception_restarts),
