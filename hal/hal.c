@@ -53,6 +53,11 @@ void hal_can_close(hal_can_link_t *link)
     }
 }
 
+int hal_can_hold_open(hal_can_link_t *link, bool hold)
+{
+    return HAL_CALL(link, hold_open, hold);
+}
+
 int hal_dio_unit_count(hal_dio_t *dio)
 {
     return HAL_CALL0(dio, unit_count);

@@ -87,7 +87,9 @@ static void can_close(void *self)
     (void)self;
 }
 
-static const hal_can_ops_t can_ops = { can_send, can_recv, can_poll_fd, can_status, can_close };
+static const hal_can_ops_t can_ops = {
+    .send = can_send, .recv = can_recv, .poll_fd = can_poll_fd, .status = can_status, .close = can_close
+};
 
 static int arm_enable(void *self, bool on)
 {

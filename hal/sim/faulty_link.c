@@ -287,12 +287,19 @@ static void f_close(void *self)
     memset(f, 0, sizeof *f);
 }
 
+static int f_hold_open(void *self, bool hold)
+{
+    faulty_t *f = self;
+    return hal_can_hold_open(&f->inner, hold);
+}
+
 static const hal_can_ops_t g_ops = {
     .send = f_send,
     .recv = f_recv,
     .poll_fd = f_poll_fd,
     .status = f_status,
     .close = f_close,
+    .hold_open = f_hold_open,
 };
 
 static bool rate_ok(double p)

@@ -1,6 +1,7 @@
 /* SLCAN over a pseudo-terminal. Frames are only sent while the channel is
  * open (the host sent 'O'), so nothing stale piles up in the pty while no
- * supervisor is attached; commands are acknowledged with CR like a Lawicel
+ * supervisor is attached; while sessions live on the link (hal_can_hold_open)
+ * a 'C' is deferred until the last one ends; commands are acknowledged with CR like a Lawicel
  * adapter (BEL on error). Transmitted frames are not acknowledged with 'z'
  * (python-can ignores it and the device->host direction is the slower one). */
 #include "slcan_pty.h"
@@ -23,6 +24,8 @@ typedef struct {
     int master;
     int slave_keep; /* our own slave fd: keeps the master from seeing EIO while no host is attached */
     bool open;      /* the host sent 'O' */
+    bool held;      /* sessions live on this link (hal_can_hold_open) */
+    bool close_due; /* a 'C' came while held: carried out when the hold ends */
     char path[256];
     char lock_path[262]; /* path + ".lock" */
     int lock_fd;         /* holds flock(LOCK_EX) on lock_path while the link lives */
@@ -100,12 +103,25 @@ static void handle_line(slcan_pty_t *p, const char *line, size_t len, hal_can_fr
         p->st.rx_frames++;
         return;
     case LS_SLCAN_OPEN:
-        /* Drop whatever was written while nobody listened. */
-        tcflush(p->master, TCOFLUSH);
-        p->tlen = 0;
+        p->close_due = false;
+        if (!(p->open && p->held)) {
+            /* Drop whatever was written while nobody listened; while
+             * sessions live on the link their frames in flight stay. */
+            tcflush(p->master, TCOFLUSH);
+            p->tlen = 0;
+        }
         p->open = true;
         break;
-    case LS_SLCAN_CLOSE: p->open = false; break;
+    case LS_SLCAN_CLOSE:
+        if (p->held && p->open) {
+            /* One client's close (python-can's shutdown) must not mute
+             * the others' sessions: acknowledged, carried out later. */
+            p->close_due = true;
+            p->st.close_held++;
+        } else {
+            p->open = false;
+        }
+        break;
     case LS_SLCAN_BITRATE: p->st.bitrate = m.bitrate; break;
     case LS_SLCAN_EMPTY: return; /* python-can sends a bare CR to clear the adapter's buffer */
     case LS_SLCAN_VERSION:
@@ -142,6 +158,17 @@ static int pty_recv(void *self, hal_can_frame_t *frame)
         p->rlen = (size_t)r;
         p->rpos = 0;
     }
+}
+
+static int pty_hold_open(void *self, bool hold)
+{
+    slcan_pty_t *p = self;
+    p->held = hold;
+    if (!hold && p->close_due) {
+        p->close_due = false;
+        p->open = false;
+    }
+    return HAL_OK;
 }
 
 static int pty_poll_fd(void *self)
@@ -181,6 +208,7 @@ static const hal_can_ops_t g_ops = {
     .poll_fd = pty_poll_fd,
     .status = pty_status,
     .close = pty_close,
+    .hold_open = pty_hold_open,
 };
 
 /* flock `lock_path` for this process: the fd, or -1 with msg set. */

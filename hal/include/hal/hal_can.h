@@ -36,6 +36,7 @@ typedef struct {
     uint32_t tx_dropped;
     uint32_t error_frames; /* error frames / error reports seen */
     uint32_t bitrate;      /* bit/s, 0 when unknown */
+    uint32_t close_held;   /* requests of the far side to close the channel deferred by hal_can_hold_open */
 } hal_can_status_t;
 
 typedef struct {
@@ -51,6 +52,14 @@ typedef struct {
     int (*status)(void *self, hal_can_status_t *out);
     /* Release everything the link holds (fds, symlinks). Idempotent. */
     void (*close)(void *self);
+    /* Optional. `hold` true: sessions live on this link, so a request of
+     * one client on the far side to close the channel (SLCAN `C`, which
+     * python-can sends at every shutdown) must not mute it for the others:
+     * it is acknowledged and deferred (counted in close_held), and an open
+     * request (`O`) does not discard output in flight. `hold` false carries
+     * out a deferred close. NULL: the backend has no such request
+     * (SocketCAN). */
+    int (*hold_open)(void *self, bool hold);
 } hal_can_ops_t;
 
 typedef struct {
@@ -64,5 +73,6 @@ int hal_can_recv(hal_can_link_t *link, hal_can_frame_t *frame);
 int hal_can_poll_fd(hal_can_link_t *link);
 int hal_can_status(hal_can_link_t *link, hal_can_status_t *out);
 void hal_can_close(hal_can_link_t *link);
+int hal_can_hold_open(hal_can_link_t *link, bool hold);
 
 #endif

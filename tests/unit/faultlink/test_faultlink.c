@@ -71,7 +71,9 @@ static void fake_close(void *self)
     ((fake_t *)self)->closed++;
 }
 
-static const hal_can_ops_t fake_ops = { fake_send, fake_recv, fake_poll_fd, fake_status, fake_close };
+static const hal_can_ops_t fake_ops = {
+    .send = fake_send, .recv = fake_recv, .poll_fd = fake_poll_fd, .status = fake_status, .close = fake_close
+};
 
 static hal_can_link_t fake_link(void)
 {

@@ -37,6 +37,7 @@ static void test_null_entries_are_unsupported(void **state)
         assert_int_equal(hal_can_recv(links[i], &f), HAL_EUNSUPPORTED);
         assert_int_equal(hal_can_poll_fd(links[i]), -1);
         assert_int_equal(hal_can_status(links[i], &cs), HAL_EUNSUPPORTED);
+        assert_int_equal(hal_can_hold_open(links[i], true), HAL_EUNSUPPORTED);
         hal_can_close(links[i]);
     }
     hal_dio_t dio_no_ops = { .ops = NULL, .self = &self };
