@@ -6,6 +6,34 @@
 /* Every downlink is one ISO-TP message: the largest the schema allows must fit
  * (protocol/landscape.options bounds it; describe is the largest answer). */
 _Static_assert(LS_DOWNLINK_MAX <= LS_ISOTP_MAX_PAYLOAD, "ls.Downlink can exceed one ISO-TP message");
+/* Every session keeps its link and sources without one still find some. */
+_Static_assert(LS_NET_MAX_PEERS >= LS_MAX_SUPERVISORS + 2, "too few ISO-TP links for the sessions");
+_Static_assert(LS_NET_MAX_LINKS <= 127, "ls_net_peer_t.link is an int8_t");
+
+bool ls_net_bucket_take(ls_net_bucket_t *b, uint32_t rate_per_s, uint32_t burst, uint64_t now_us)
+{
+    const uint64_t full = (uint64_t)burst * 1000u;
+    if (!b->primed) {
+        b->primed = true;
+        b->milli = full;
+        b->last_us = now_us;
+    } else if (now_us > b->last_us) {
+        /* rate tokens per 1e6 us = rate thousandths per 1e3 us; the last
+         * stamp only moves when something was added, so slow rates still
+         * refill when polled often */
+        const uint64_t dt_us = now_us - b->last_us;
+        const uint64_t add = dt_us > full * 1000u ? full : dt_us * rate_per_s / 1000u;
+        if (add > 0) {
+            b->milli = b->milli + add > full ? full : b->milli + add;
+            b->last_us = now_us;
+        }
+    }
+    if (b->milli < 1000u) {
+        return false;
+    }
+    b->milli -= 1000u;
+    return true;
+}
 
 static int isotp_send_frame(void *ctx, uint32_t can_id, const uint8_t *data, uint8_t len)
 {
@@ -24,7 +52,6 @@ void ls_net_init(ls_net_t *net, uint8_t node, ls_core_t *core)
     memset(net, 0, sizeof *net);
     net->node = node;
     net->core = core;
-    net->sending_link = -1;
     ls_isotp_default_config(&net->isotp_cfg);
 }
 
@@ -41,9 +68,6 @@ int ls_net_send_frame(ls_net_t *net, const hal_can_frame_t *frame)
 {
     int ok = 0;
     for (size_t i = 0; i < net->n_links; i++) {
-        if ((int)i == net->sending_link) {
-            continue;
-        }
         if (hal_can_send(&net->links[i], frame) >= 0) {
             ok++;
         } else {
@@ -67,29 +91,58 @@ static ls_net_peer_t *find_peer(ls_net_t *net, uint8_t addr)
     return NULL;
 }
 
-/* A peer for `addr`: an existing one, a free slot, or the least recently used
- * idle one (a supervisor that went away without a word). */
+static bool peer_idle(const ls_net_peer_t *c)
+{
+    return !ls_isotp_tx_busy(&c->isotp) && c->isotp.rx_state == LS_ISOTP_RX_IDLE && c->q_count == 0 &&
+           c->tx_tries == 0;
+}
+
+/* Pick the better victim of `a` and `b` (either may be NULL): the one made
+ * progress least recently. */
+static ls_net_peer_t *older(ls_net_peer_t *a, ls_net_peer_t *b)
+{
+    if (a == NULL) {
+        return b;
+    }
+    return b != NULL && b->last_used_us < a->last_used_us ? b : a;
+}
+
+/* A peer for `addr`: an existing one, a free slot, or one of a source
+ * without a session (ls_net.h LS_NET_MAX_PEERS): the least recently used
+ * idle one (a supervisor that went away without a word), else the busy one
+ * that made progress least recently, answers before receptions. */
 static ls_net_peer_t *get_peer(ls_net_t *net, uint8_t addr)
 {
     ls_net_peer_t *p = find_peer(net, addr);
     if (p != NULL) {
         return p;
     }
-    ls_net_peer_t *victim = NULL;
+    ls_net_peer_t *victim = NULL, *idle = NULL, *sending = NULL, *receiving = NULL;
     for (size_t i = 0; i < LS_NET_MAX_PEERS; i++) {
         ls_net_peer_t *c = &net->peers[i];
         if (!c->used) {
             victim = c;
             break;
         }
-        bool idle = !ls_isotp_tx_busy(&c->isotp) && c->isotp.rx_state == LS_ISOTP_RX_IDLE && c->q_count == 0 &&
-                    c->tx_tries == 0;
-        if (idle && (victim == NULL || c->last_used_us < victim->last_used_us)) {
-            victim = c;
+        if (ls_core_session_of(net->core, c->addr) >= 0) {
+            continue; /* reserved: a live session's link */
+        }
+        if (peer_idle(c)) {
+            idle = older(idle, c);
+        } else if (c->isotp.rx_state == LS_ISOTP_RX_IDLE) {
+            sending = older(sending, c);
+        } else {
+            receiving = older(receiving, c);
         }
     }
     if (victim == NULL) {
-        return NULL;
+        victim = idle != NULL ? idle : sending != NULL ? sending : receiving;
+        if (victim == NULL) {
+            return NULL; /* every link belongs to a session */
+        }
+        if (victim != idle) {
+            net->peers_preempted++;
+        }
     }
     if (victim->used) {
         net->peers_evicted++;
@@ -101,6 +154,8 @@ static ls_net_peer_t *get_peer(ls_net_t *net, uint8_t addr)
     memset(victim, 0, sizeof *victim);
     victim->used = true;
     victim->addr = addr;
+    victim->link = -1;
+    victim->last_used_us = net->now_us;
     uint32_t tx_id = LS_ID_ISOTP_PHYS | ((uint32_t)addr << 8) | net->node;
     uint32_t rx_id = LS_ID_ISOTP_PHYS | ((uint32_t)net->node << 8) | addr;
     (void)ls_isotp_init(&victim->isotp, &net->isotp_cfg, tx_id, rx_id, isotp_send_frame, net);
@@ -168,7 +223,7 @@ static void settle_tx(ls_net_t *net, ls_net_peer_t *p, uint64_t now_us)
     net->tx_given_up++;
 }
 
-static void route(ls_net_t *net, const hal_can_frame_t *f)
+static void route(ls_net_t *net, const hal_can_frame_t *f, size_t from)
 {
     if ((f->flags & HAL_CAN_F_EXT) == 0u || (f->flags & HAL_CAN_F_RTR) != 0u) {
         return; /* everything of ours is a 29-bit data frame */
@@ -180,6 +235,7 @@ static void route(ls_net_t *net, const hal_can_frame_t *f)
         ls_net_peer_t *p = get_peer(net, source);
         if (p != NULL) {
             p->last_used_us = net->now_us;
+            p->link = (int8_t)from;
             ls_isotp_on_frame(&p->isotp, f->data, f->len, net->now_us);
             /* Take a completed message at once: the next frame of this
              * batch may already be the sender's next request. */
@@ -207,6 +263,54 @@ static void route(ls_net_t *net, const hal_can_frame_t *f)
     }
 }
 
+/* Copy a frame received on link `from` to every other link, within each
+ * output link's forward budget (ls_net.h LS_NET_FWD_RATE_FPS). */
+static void forward(ls_net_t *net, const hal_can_frame_t *f, size_t from)
+{
+    const bool emergency = (f->flags & HAL_CAN_F_EXT) != 0u && (f->id & LS_ID_MASK_SRC) == LS_ID_EMERGENCY;
+    for (size_t i = 0; i < net->n_links; i++) {
+        if (i == from) {
+            continue;
+        }
+        const bool ok = emergency ? ls_net_bucket_take(&net->fwd_emergency[i], LS_NET_FWD_EMERGENCY_RATE_FPS,
+                                                       LS_NET_FWD_EMERGENCY_BURST, net->now_us)
+                                  : ls_net_bucket_take(&net->fwd[i], LS_NET_FWD_RATE_FPS, LS_NET_FWD_BURST, net->now_us);
+        if (!ok) {
+            if (emergency) {
+                net->fwd_emergency_dropped++;
+            } else {
+                net->fwd_dropped++;
+            }
+            continue;
+        }
+        if (hal_can_send(&net->links[i], f) >= 0) {
+            net->frames_bridged++;
+        } else {
+            net->tx_full++;
+        }
+    }
+}
+
+/* A link is held open while a peer whose frames came on it has a live
+ * session or downlinks still to send (hal_can_hold_open). */
+static void hold_links(ls_net_t *net)
+{
+    bool held[LS_NET_MAX_LINKS] = { false };
+    for (size_t i = 0; i < LS_NET_MAX_PEERS; i++) {
+        const ls_net_peer_t *p = &net->peers[i];
+        if (p->used && p->link >= 0 && (size_t)p->link < net->n_links &&
+            (!peer_idle(p) || ls_core_session_of(net->core, p->addr) >= 0)) {
+            held[p->link] = true;
+        }
+    }
+    for (size_t i = 0; i < net->n_links; i++) {
+        if (held[i] != net->link_held[i]) {
+            net->link_held[i] = held[i];
+            (void)hal_can_hold_open(&net->links[i], held[i]);
+        }
+    }
+}
+
 void ls_net_poll(ls_net_t *net, uint64_t now_us)
 {
     net->now_us = now_us;
@@ -216,12 +320,9 @@ void ls_net_poll(ls_net_t *net, uint64_t now_us)
         for (int k = 0; k < 256 && hal_can_recv(&net->links[i], &f) == 1; k++) {
             net->frames_in++;
             if (net->n_links > 1) {
-                net->sending_link = (int)i;
-                (void)ls_net_send_frame(net, &f);
-                net->sending_link = -1;
-                net->frames_bridged++;
+                forward(net, &f, i);
             }
-            route(net, &f);
+            route(net, &f, i);
         }
     }
     for (size_t i = 0; i < LS_NET_MAX_PEERS; i++) {
@@ -248,6 +349,7 @@ void ls_net_poll(ls_net_t *net, uint64_t now_us)
             }
         }
     }
+    hold_links(net);
 }
 
 uint64_t ls_net_next_deadline_us(const ls_net_t *net)
@@ -286,21 +388,26 @@ void ls_net_describe(void *ctx, char *buf, size_t cap)
             }
         }
     }
-    uint32_t link_rx_dropped = 0, link_tx_dropped = 0;
+    uint32_t link_rx_dropped = 0, link_tx_dropped = 0, link_close_held = 0;
     for (size_t i = 0; i < net->n_links; i++) {
         hal_can_status_t st;
+        memset(&st, 0, sizeof st);
         if (hal_can_status(&net->links[i], &st) >= 0) {
             link_rx_dropped += st.rx_dropped;
             link_tx_dropped += st.tx_dropped;
+            link_close_held += st.close_held;
         }
     }
     size_t n = 0;
     int w = snprintf(buf, cap,
                      "frames_in=%u\nframes_out=%u\ntx_full=%u\nlink_rx_dropped=%u\nlink_tx_dropped=%u\n"
-                     "peers_evicted=%u\ntx_retried=%u\ntx_given_up=%u\ntx_deduplicated=%u\n",
+                     "peers_evicted=%u\npeers_preempted=%u\ntx_retried=%u\ntx_given_up=%u\ntx_deduplicated=%u\n"
+                     "frames_bridged=%u\nfwd_dropped=%u\nfwd_emergency_dropped=%u\nlink_close_held=%u\n",
                      (unsigned)net->frames_in, (unsigned)net->frames_out, (unsigned)net->tx_full,
                      (unsigned)link_rx_dropped, (unsigned)link_tx_dropped, (unsigned)net->peers_evicted,
-                     (unsigned)net->tx_retried, (unsigned)net->tx_given_up, (unsigned)net->tx_deduplicated);
+                     (unsigned)net->peers_preempted, (unsigned)net->tx_retried, (unsigned)net->tx_given_up,
+                     (unsigned)net->tx_deduplicated, (unsigned)net->frames_bridged, (unsigned)net->fwd_dropped,
+                     (unsigned)net->fwd_emergency_dropped, (unsigned)link_close_held);
     n = w > 0 ? (size_t)w : 0u;
     for (int r = 0; r < LS_ISOTP_N_RESULT_COUNT && n < cap; r++) {
         /* e.g. isotp_unexp_pdu=1: receive and send outcomes together, by ISO name */

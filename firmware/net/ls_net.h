@@ -22,8 +22,26 @@
 #include "landscape.h" /* cantools: the DBC's frame ids */
 
 #define LS_NET_MAX_LINKS 4
+/* ISO-TP links, one per source address, so a source holds at most one
+ * reception (of at most LS_ISOTP_MAX_PAYLOAD bytes, its time capped by
+ * LS_ISOTP_RX_CAP_BLOCK). The link of an address with a live session is
+ * reserved: never evicted nor preempted. A source without one takes a free
+ * link, else the least recently used idle link of another such source,
+ * else it preempts the busy one of another such source that made progress
+ * least recently (answers to session-less sources before receptions), so a
+ * flood from changing addresses churns among itself and a new supervisor
+ * can still connect (docs/protocol.md "Budgets under floods"). */
 #define LS_NET_MAX_PEERS 6
 #define LS_NET_OUTQ 8
+/* Bridged frames (a frame received on one link, copied to the others): a
+ * token bucket per output link, LS_NET_FWD_RATE_FPS frames/s with bursts of
+ * LS_NET_FWD_BURST; EMERGENCY frames have a bucket of their own so a flood
+ * of other frames cannot keep a stop from the other segments. Frames over
+ * the budget are dropped and counted (fwd_dropped, fwd_emergency_dropped). */
+#define LS_NET_FWD_RATE_FPS 2000u
+#define LS_NET_FWD_BURST 256u
+#define LS_NET_FWD_EMERGENCY_RATE_FPS 20u
+#define LS_NET_FWD_EMERGENCY_BURST 4u
 /* Transfers of one downlink before it is given up: a transfer that fails
  * (no flow control within N_Bs, ...) is sent again from its first frame,
  * so a supervisor that was slow for a moment still gets its answer or
@@ -46,10 +64,21 @@ typedef struct {
     uint8_t buf[LS_DOWNLINK_MAX];
 } ls_net_msg_t;
 
+/* A token bucket: starts full (`burst` tokens), refills at `rate` per second. */
+typedef struct {
+    bool primed;
+    uint64_t last_us;
+    uint64_t milli; /* thousandths of a token */
+} ls_net_bucket_t;
+
+/* Take one token at `now_us`: true when there was one. O(1), no clock read. */
+bool ls_net_bucket_take(ls_net_bucket_t *b, uint32_t rate_per_s, uint32_t burst, uint64_t now_us);
+
 typedef struct {
     bool used;
     uint8_t addr;
-    uint64_t last_used_us;
+    int8_t link;           /* the link its last frame came from, -1: none yet */
+    uint64_t last_used_us; /* its last frame, or the last downlink queued for it */
     ls_isotp_link_t isotp;
     ls_net_msg_t q[LS_NET_OUTQ];
     uint8_t q_head, q_count;
@@ -63,11 +92,15 @@ typedef struct ls_net {
     ls_core_t *core;
     hal_can_link_t links[LS_NET_MAX_LINKS];
     size_t n_links;
-    int sending_link; /* the link a frame came from is skipped when bridging */
     ls_net_peer_t peers[LS_NET_MAX_PEERS];
     ls_isotp_config_t isotp_cfg;
     uint64_t now_us;
     uint32_t frames_in, frames_out, frames_bridged, tx_full, peers_evicted;
+    uint32_t peers_preempted;                     /* busy links of session-less sources taken for another */
+    uint32_t fwd_dropped, fwd_emergency_dropped;  /* bridged frames over a link's forward budget */
+    ls_net_bucket_t fwd[LS_NET_MAX_LINKS];        /* forward budget per output link */
+    ls_net_bucket_t fwd_emergency[LS_NET_MAX_LINKS];
+    bool link_held[LS_NET_MAX_LINKS]; /* told the link: sessions live on it (hal_can_hold_open) */
     uint32_t tx_retried, tx_given_up;                  /* downlink transfers sent again; downlinks given up */
     uint32_t tx_deduplicated;                          /* downlinks identical to one still pending: not queued twice */
     uint32_t rx_results_gone[LS_ISOTP_N_RESULT_COUNT]; /* counters of evicted peers */
@@ -79,7 +112,9 @@ void ls_net_init(ls_net_t *net, uint8_t node, ls_core_t *core);
 /* Add an opened link (copied). Returns 0, or -1 when the table is full. */
 int ls_net_add_link(ls_net_t *net, const hal_can_link_t *link);
 /* Receive and route every pending frame, run ISO-TP timers, deliver complete
- * messages to the core and start queued transmissions. */
+ * messages to the core and start queued transmissions. Tells each link
+ * whether sessions live on it (hal_can_hold_open: a peer whose last frame
+ * came on it has a session in the core, or downlinks still to send). */
 void ls_net_poll(ls_net_t *net, uint64_t now_us);
 /* Send one frame on every link (broadcasts). Returns 0 when at least one link took it. */
 int ls_net_send_frame(ls_net_t *net, const hal_can_frame_t *frame);

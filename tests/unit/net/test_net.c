@@ -41,6 +41,8 @@ typedef struct {
     size_t n_tx;
     int refuse_send; /* send returns HAL_EAGAIN */
     int closed;
+    int held;       /* the last hal_can_hold_open */
+    int hold_calls; /* how often it changed */
 } fake_link_t;
 
 static int link_send(void *self, const hal_can_frame_t *frame)
@@ -78,8 +80,16 @@ static void link_close(void *self)
     ((fake_link_t *)self)->closed++;
 }
 
+static int link_hold_open(void *self, bool hold)
+{
+    fake_link_t *l = self;
+    l->held = hold ? 1 : 0;
+    l->hold_calls++;
+    return HAL_OK;
+}
+
 static const hal_can_ops_t LINK_OPS = {
-    .send = link_send, .recv = link_recv, .status = link_status, .close = link_close
+    .send = link_send, .recv = link_recv, .status = link_status, .close = link_close, .hold_open = link_hold_open
 };
 
 static void link_put(fake_link_t *l, uint32_t id, uint8_t flags, const uint8_t *data, uint8_t len)
@@ -119,6 +129,10 @@ static size_t g_echo_len;                             /* > 0: answer each uplink
 void __wrap_ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t len, uint64_t now_us);
 void __wrap_ls_core_on_heartbeat(ls_core_t *core, uint8_t addr, uint32_t token, uint64_t now_us);
 void __wrap_ls_core_emergency(ls_core_t *core, uint64_t now_us);
+int __wrap_ls_core_session_of(const ls_core_t *core, uint8_t addr);
+
+/* Addresses the double says have a live session. */
+static bool g_session[256];
 
 static call_t *record(ls_core_t *core, call_kind_t kind, uint8_t addr, uint64_t now_us)
 {
@@ -157,6 +171,12 @@ void __wrap_ls_core_emergency(ls_core_t *core, uint64_t now_us)
     (void)record(core, CALL_EMERGENCY, 0, now_us);
 }
 
+int __wrap_ls_core_session_of(const ls_core_t *core, uint8_t addr)
+{
+    assert_ptr_equal(core, CORE);
+    return g_session[addr] ? 0 : -1;
+}
+
 /* ---------------------------------------------------------------- fixture */
 
 static fake_link_t g_link[3];
@@ -165,6 +185,7 @@ static void setup_net(size_t n_links)
 {
     memset(g_link, 0, sizeof g_link);
     memset(g_calls, 0, sizeof g_calls);
+    memset(g_session, 0, sizeof g_session);
     g_ncalls = 0;
     g_echo_len = 0;
     ls_net_init(&g_net, NODE, CORE);
@@ -609,7 +630,9 @@ static void test_busy_links_are_not_evicted(void **state)
     assert_true(peer_used(0x30));
     assert_true(peer_used(0x31));
     assert_false(peer_used(0x32)); /* the oldest idle one */
-    /* All busy: a new supervisor finds no link and its frame is dropped. */
+    /* All busy, none with a session: a new source preempts the one that made
+     * progress least recently, answers to session-less sources first (0x31),
+     * then receptions (0x30, whose first frame is the oldest). */
     for (uint8_t i = 0; i < LS_NET_MAX_PEERS; i++) {
         ls_net_peer_t *p = &g_net.peers[i];
         if (p->addr != 0x30 && p->addr != 0x31) {
@@ -618,11 +641,185 @@ static void test_busy_links_are_not_evicted(void **state)
         }
     }
     ls_net_poll(&g_net, 9000);
+    const uint8_t ff3[8] = { 0x10, 0x40, 1, 2, 3, 4, 5, 6 };
+    link_put(&g_link[0], phys(NODE, 0x41), HAL_CAN_F_EXT, ff3, 8);
+    ls_net_poll(&g_net, 9100);
+    assert_true(peer_used(0x41));
+    assert_false(peer_used(0x31));
+    assert_true(peer_used(0x30));
+    assert_int_equal(describe_value("peers_preempted"), 1);
+    link_put(&g_link[0], phys(NODE, 0x42), HAL_CAN_F_EXT, ff3, 8);
+    ls_net_poll(&g_net, 9200);
+    assert_true(peer_used(0x42));
+    assert_false(peer_used(0x30));
+    assert_int_equal(describe_value("peers_preempted"), 2);
+    /* Every link belongs to a session: a new source finds none, its frame is dropped. */
+    for (uint8_t i = 0; i < LS_NET_MAX_PEERS; i++) {
+        g_session[g_net.peers[i].addr] = true;
+    }
     before = g_ncalls;
-    ping(0x41, 9100);
+    ping(0x43, 9300);
     assert_int_equal(g_ncalls, before);
-    assert_false(peer_used(0x41));
-    assert_int_equal(ls_net_send_downlink(&g_net, 0x41, ans, sizeof ans), -1);
+    assert_false(peer_used(0x43));
+    assert_int_equal(ls_net_send_downlink(&g_net, 0x43, ans, sizeof ans), -1);
+}
+
+/* ---------------------------------------------------------------- budgets under floods (issue 17) */
+
+/* The issue's floods: first frames announcing 4095 B from changing sources
+ * every few ms, and single frames from changing sources each answered. A
+ * session's link is never taken, it is answered all along, and a new
+ * supervisor's multi-frame connect arrives whole. */
+static void test_floods_neither_evict_a_session_nor_keep_a_new_supervisor_out(void **state)
+{
+    (void)state;
+    setup_net(1);
+    static sup_t owner, newcomer;
+    sup_init(&owner, SUP_A, &g_link[0]);
+    sup_init(&newcomer, SUP_B, &g_link[0]);
+    g_echo_len = 20; /* every uplink is answered, as the core does (NOT_CONNECTED to the flood) */
+    uint64_t t = 1000;
+    const uint8_t hello[] = { 0x01 };
+    assert_int_equal(ls_isotp_send(&owner.tp, hello, sizeof hello, t), LS_ISOTP_OK);
+    ls_net_poll(&g_net, t);
+    g_session[SUP_A] = true; /* its connect made a session */
+    size_t seen_owner = 0, seen_new = 0;
+    static uint8_t connect_req[60];
+    memset(connect_req, 0x5A, sizeof connect_req);
+    bool sent_connect = false;
+    size_t owner_answers = 0, uplinks_new = 0, uplinks_owner = 0;
+    uint8_t got[LS_ISOTP_MAX_PAYLOAD];
+    for (int turn = 0; turn < 2000; turn++) {
+        t += 1000; /* 1 ms turns, 2 s in all */
+        /* flood: a first frame from one of 12 changing sources every 2 ms, a
+         * single frame from another changing source every 5 ms */
+        if (turn % 2 == 0) {
+            const uint8_t ff[8] = { 0x1F, 0xFF, 1, 2, 3, 4, 5, 6 };
+            link_put(&g_link[0], phys(NODE, (uint8_t)(0x60 + (turn / 2) % 12)), HAL_CAN_F_EXT, ff, 8);
+        }
+        if (turn % 5 == 0) {
+            const uint8_t req[] = { 0x77 };
+            put_sf(&g_link[0], phys(NODE, (uint8_t)(0x80 + (turn / 5) % 64)), req, 1);
+        }
+        /* the owner asks every 50 ms; the newcomer connects after 0.5 s */
+        if (turn % 50 == 0 && !ls_isotp_tx_busy(&owner.tp)) {
+            assert_int_equal(ls_isotp_send(&owner.tp, hello, sizeof hello, t), LS_ISOTP_OK);
+        }
+        if (turn == 500) {
+            assert_int_equal(ls_isotp_send(&newcomer.tp, connect_req, sizeof connect_req, t), LS_ISOTP_OK);
+            sent_connect = true;
+        }
+        size_t before = g_ncalls;
+        ls_net_poll(&g_net, t);
+        for (size_t i = before; i < g_ncalls; i++) {
+            uplinks_owner += g_calls[i].addr == SUP_A ? 1u : 0u;
+            uplinks_new += g_calls[i].addr == SUP_B && g_calls[i].len == sizeof connect_req ? 1u : 0u;
+        }
+        g_ncalls = 0; /* the record is bounded; what matters is counted above */
+        sup_hear(&owner, &g_link[0], &seen_owner, t);
+        sup_hear(&newcomer, &g_link[0], &seen_new, t);
+        ls_isotp_poll(&owner.tp, t);
+        ls_isotp_poll(&newcomer.tp, t);
+        owner_answers += ls_isotp_take_rx(&owner.tp, got, sizeof got) > 0 ? 1u : 0u;
+        if (g_link[0].n_tx > LINK_Q - 64) { /* keep the fake link's record from filling */
+            g_link[0].n_tx = 0;
+            seen_owner = seen_new = 0;
+        }
+    }
+    assert_true(sent_connect);
+    assert_int_equal(uplinks_new, 1);            /* the newcomer's connect arrived whole */
+    assert_int_equal(uplinks_owner, 1 + 40);     /* every owner request reached the core */
+    assert_true(owner_answers >= 40);            /* and was answered */
+    assert_true(peer_used(SUP_A));
+    assert_int_equal(describe_value("peers_preempted") > 0, 1);
+}
+
+/* A token bucket: full at first, refills at its rate, never above the burst,
+ * and polled every microsecond still refills (no rounding away). */
+static void test_token_bucket(void **state)
+{
+    (void)state;
+    ls_net_bucket_t b = { 0 };
+    assert_true(ls_net_bucket_take(&b, 10, 2, 0));
+    assert_true(ls_net_bucket_take(&b, 10, 2, 0));
+    assert_false(ls_net_bucket_take(&b, 10, 2, 0));
+    assert_false(ls_net_bucket_take(&b, 10, 2, 50000)); /* half a token */
+    assert_true(ls_net_bucket_take(&b, 10, 2, 100000));
+    int taken = 0;
+    for (uint64_t t = 100001; t <= 200000; t++) {
+        taken += ls_net_bucket_take(&b, 10, 2, t) ? 1 : 0;
+    }
+    assert_int_equal(taken, 1);
+    /* a long pause fills it to the burst, no more */
+    taken = 0;
+    for (int i = 0; i < 5; i++) {
+        taken += ls_net_bucket_take(&b, 10, 2, 100000000) ? 1 : 0;
+    }
+    assert_int_equal(taken, 2);
+}
+
+/* A flood on one link reaches the others at most at the forward budget;
+ * EMERGENCY frames have their own budget, so the flood cannot hold one back. */
+static void test_bridged_frames_are_capped_per_output_link(void **state)
+{
+    (void)state;
+    setup_net(2);
+    const uint8_t d[8] = { 0 };
+    for (int i = 0; i < 500; i++) {
+        link_put(&g_link[0], 0x1CFF1042u, HAL_CAN_F_EXT, d, 8);
+    }
+    ls_net_poll(&g_net, 1000);
+    ls_net_poll(&g_net, 1000); /* 256 frames a turn: all 500 read at one instant */
+    assert_int_equal(g_link[1].n_tx, LS_NET_FWD_BURST);
+    assert_int_equal(describe_value("fwd_dropped"), 500 - LS_NET_FWD_BURST);
+    /* the other link's own traffic is not touched: nothing goes back to link 0 */
+    assert_int_equal(g_link[0].n_tx, 0);
+    /* an EMERGENCY frame behind the flood still crosses, up to its own burst */
+    for (unsigned i = 0; i < LS_NET_FWD_EMERGENCY_BURST + 1u; i++) {
+        link_put(&g_link[0], LS_ID_EMERGENCY | 0x33u, HAL_CAN_F_EXT, d, 8);
+    }
+    ls_net_poll(&g_net, 1000);
+    assert_int_equal(g_link[1].n_tx, LS_NET_FWD_BURST + LS_NET_FWD_EMERGENCY_BURST);
+    assert_int_equal(g_link[1].tx[LS_NET_FWD_BURST].id, LS_ID_EMERGENCY | 0x33u);
+    assert_int_equal(describe_value("fwd_emergency_dropped"), 1);
+    /* the budget refills at its rate: 100 ms later, 200 frames */
+    for (int i = 0; i < 300; i++) {
+        link_put(&g_link[0], 0x1CFF1042u, HAL_CAN_F_EXT, d, 8);
+    }
+    ls_net_poll(&g_net, 1000 + 100000);
+    ls_net_poll(&g_net, 1000 + 100000);
+    assert_int_equal(g_link[1].n_tx, LS_NET_FWD_BURST + LS_NET_FWD_EMERGENCY_BURST + LS_NET_FWD_RATE_FPS / 10u);
+    assert_int_equal(describe_value("frames_bridged"), LS_NET_FWD_BURST + LS_NET_FWD_EMERGENCY_BURST +
+                                                           LS_NET_FWD_RATE_FPS / 10u);
+}
+
+/* A link is held open while a session lives on it (its peer's frames came on
+ * it) or its downlinks are still under way; released after. */
+static void test_links_with_sessions_are_held_open(void **state)
+{
+    (void)state;
+    setup_net(2);
+    const uint8_t req[] = { 0x01 };
+    put_sf(&g_link[1], phys(NODE, SUP_A), req, 1);
+    g_session[SUP_A] = true;
+    ls_net_poll(&g_net, 1000);
+    assert_int_equal(g_link[1].held, 1);
+    assert_int_equal(g_link[0].held, 0);
+    assert_int_equal(g_link[0].hold_calls, 0); /* told only on a change */
+    ls_net_poll(&g_net, 2000);
+    assert_int_equal(g_link[1].hold_calls, 1);
+    /* the session ends with its answer still to send: held until it is out */
+    g_session[SUP_A] = false;
+    uint8_t ans[20] = { 9 };
+    assert_int_equal(ls_net_send_downlink(&g_net, SUP_A, ans, sizeof ans), 0);
+    ls_net_poll(&g_net, 3000);
+    assert_int_equal(g_link[1].held, 1);
+    for (int k = 0; k <= LS_NET_TX_TRIES; k++) { /* nobody takes it: given up */
+        ls_net_poll(&g_net, 3000 + (uint64_t)(k + 1) * PAST_N_BS_US);
+    }
+    assert_int_equal(describe_value("tx_given_up"), 1);
+    assert_int_equal(g_link[1].held, 0);
+    assert_int_equal(g_link[1].hold_calls, 2);
 }
 
 /* ---------------------------------------------------------------- bridging */
@@ -740,6 +937,10 @@ int main(void)
         cmocka_unit_test(test_an_answer_already_pending_is_not_queued_twice),
         cmocka_unit_test(test_lru_eviction_of_idle_links),
         cmocka_unit_test(test_busy_links_are_not_evicted),
+        cmocka_unit_test(test_floods_neither_evict_a_session_nor_keep_a_new_supervisor_out),
+        cmocka_unit_test(test_token_bucket),
+        cmocka_unit_test(test_bridged_frames_are_capped_per_output_link),
+        cmocka_unit_test(test_links_with_sessions_are_held_open),
         cmocka_unit_test(test_bridging_between_links),
         cmocka_unit_test(test_single_link_does_not_echo),
         cmocka_unit_test(test_send_frame_on_every_link_and_full_queues),
