@@ -2,7 +2,7 @@
  *   help     the list below
  *   version  firmware version, protocol version, schema hash
  *   status   state, owner, sessions and their counters
- *   faults   the fault log (oldest first)
+ *   faults   the flood counters, then the fault log (oldest first; the first entries and the latest)
  *   events   the event log (oldest first): RSVP answers with their data, time-outs, refused replies
  *   rtstats  the control loop: cycles, overruns, worst latency and cycle time, SCHED_FIFO, memory lock
  *   config   the running configuration (file and options merged)
@@ -83,15 +83,24 @@ int32_t ls_h_send_command(struct ls_core *core, struct ls_call *call)
             }
         }
     } else if (strcmp(in, "faults") == 0) {
-        uint32_t n = core->fault_log_count < LS_FAULT_LOG_LEN ? core->fault_log_count : LS_FAULT_LOG_LEN;
-        for (uint32_t k = core->fault_log_count - n; k < core->fault_log_count; k++) {
-            const ls_fault_entry_t *e = &core->fault_log[k % LS_FAULT_LOG_LEN];
+        uint32_t n = 0, dropped = 0;
+        (void)ls_core_fault_entry(core, 0, &n, &dropped);
+        /* first, one line: the counters of floods (docs/protocol.md "Budgets under floods") */
+        put(&o, "logged=%u dropped=%u alarms_suppressed=%u emergency_frames=%u\n", (unsigned)core->fault_log_count,
+            (unsigned)dropped, (unsigned)core->alarms_suppressed, (unsigned)core->emergency_frames);
+        for (uint32_t k = 0; k < n; k++) {
+            const ls_fault_entry_t *e = ls_core_fault_entry(core, k, NULL, NULL);
+            if (k == LS_FAULT_LOG_FIRST && dropped > 0) {
+                put(&o, "... %u entries dropped (the first %d and the latest %d are kept)\n", (unsigned)dropped,
+                    LS_FAULT_LOG_FIRST, LS_FAULT_LOG_LATEST);
+            }
             put(&o, "%llu.%03llu %s\n", (unsigned long long)(e->at_us / 1000000u),
                 (unsigned long long)(e->at_us / 1000u % 1000u), e->text);
         }
         if (n == 0) {
             put(&o, "no faults\n");
         }
+
     } else if (strcmp(in, "events") == 0) {
         uint32_t n = core->event_log_count < LS_EVENT_LOG_LEN ? core->event_log_count : LS_EVENT_LOG_LEN;
         for (uint32_t k = core->event_log_count - n; k < core->event_log_count; k++) {

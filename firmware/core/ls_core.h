@@ -25,7 +25,20 @@ struct ls_control;
 #define LS_DOWNLINK_MAX ls_Downlink_size
 #define LS_UPLINK_MAX 4095u
 #define LS_CALL_DEFERRED INT32_MIN /* a handler will answer later */
-#define LS_FAULT_LOG_LEN 16
+/* The fault log keeps its first LS_FAULT_LOG_FIRST entries (the start of a
+ * cascade) and a ring of the latest LS_FAULT_LOG_LATEST; the entries in
+ * between are dropped and counted (sendCommand faults). */
+#define LS_FAULT_LOG_FIRST 4
+#define LS_FAULT_LOG_LATEST 12
+#define LS_FAULT_LOG_LEN (LS_FAULT_LOG_FIRST + LS_FAULT_LOG_LATEST)
+/* Alarm rate limit (docs/protocol.md "Budgets under floods"): a fault (an
+ * EMERGENCY frame included) always latches and stops at once; its alarm and
+ * fault-log entry go out at once too, but repeats of the same text within
+ * LS_ALARM_WINDOW_MS are counted instead, and at the end of each window with
+ * repeats one alarm LS_ALARM_SUPPRESSED_EVENT says how many (and is logged).
+ * The window runs on while the repeats go on. */
+#define LS_ALARM_WINDOW_MS 1000u
+#define LS_ALARM_SUPPRESSED_EVENT "alarmsSuppressed"
 #define LS_MAX_RSVP 8
 #define LS_RSVP_ENDED_LEN 8 /* ended RSVPs remembered, so a late reply is told apart from an unknown one */
 #define LS_EVENT_LOG_LEN 16
@@ -144,6 +157,14 @@ typedef struct {
     char text[80];
 } ls_fault_entry_t;
 
+/* The alarm rate limit's window (LS_ALARM_WINDOW_MS). */
+typedef struct {
+    bool open;
+    uint64_t since_us;   /* start of the window */
+    char text[80];       /* the alarm whose repeats it counts */
+    uint32_t suppressed; /* repeats within the window */
+} ls_alarm_window_t;
+
 /* signalDigitalIO watches and setDigitalIO writes in flight (firmware/core/cmd_dio.c). */
 typedef enum { LS_WATCH_FREE = 0, LS_WATCH_ARMED, LS_WATCH_AWAIT_RSVP } ls_watch_phase_t;
 
@@ -248,8 +269,11 @@ typedef struct ls_core {
     ls_motion_cmds_t motion;  /* path queues, the program being run, getTagId */
     ls_sensor_cmds_t sensor;  /* manual control */
     ls_tool_cmds_t tool_cmds; /* the end effector */
-    ls_fault_entry_t fault_log[LS_FAULT_LOG_LEN];
-    uint32_t fault_log_count;
+    ls_fault_entry_t fault_log[LS_FAULT_LOG_LEN]; /* the first LS_FAULT_LOG_FIRST, then a ring */
+    uint32_t fault_log_count;                     /* entries ever logged */
+    ls_alarm_window_t alarm_window;
+    uint32_t alarms_suppressed; /* repeats not sent (LS_ALARM_WINDOW_MS) */
+    uint32_t emergency_frames;  /* EMERGENCY frames taken (each one stops) */
     uint32_t rx_malformed;     /* uplinks that did not decode */
     uint32_t tx_lost;          /* downlinks the network could not queue */
     uint32_t sessions_dropped; /* heartbeat time-outs */
@@ -304,8 +328,16 @@ void ls_core_notify_to(ls_core_t *core, uint8_t addr, uint32_t epoch, ls_NoticeK
  * motion along its path at the model's maximum deceleration, then drives off
  * (ACTIVE -> LOCKED once they are off; the motion's final notice then). */
 void ls_core_fault(ls_core_t *core, const char *text, uint64_t now_us);
-/* The same for an EMERGENCY frame on the bus (reason=emergency). */
+/* The same for an EMERGENCY frame on the bus (reason=emergency). Repeats of
+ * the alarm within LS_ALARM_WINDOW_MS are counted, not sent; the stop is
+ * never delayed. */
 void ls_core_emergency(ls_core_t *core, uint64_t now_us);
+/* Append to the fault log (the first LS_FAULT_LOG_FIRST entries stay). */
+void ls_core_log_fault(ls_core_t *core, uint64_t now_us, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+/* The fault log's entry k (0 = oldest kept), NULL past the end; *n_kept and
+ * *dropped (entries between the first and the latest that were overwritten)
+ * when not NULL. */
+const ls_fault_entry_t *ls_core_fault_entry(const ls_core_t *core, uint32_t k, uint32_t *n_kept, uint32_t *dropped);
 /* The alarm ownerLost to everyone and its fault-log entry naming the
  * disconnect action taken (ls_run.c calls it when the owner's motion has
  * stopped). */

@@ -143,8 +143,9 @@ void ls_run_halt(ls_core_t *core, ls_run_end_t why, const char *text, bool fast,
         if (answer_sup >= 0) {
             h->answer_sup = answer_sup;
         }
-        if (fast) {
+        if (fast && !h->fast) {
             h->keep_drives = false; /* a fault turns the drives off after all */
+            h->fast = true;
             post_stop(core, true);
         }
         return;
@@ -154,6 +155,7 @@ void ls_run_halt(ls_core_t *core, ls_run_end_t why, const char *text, bool fast,
     h->why = why;
     h->answer_sup = answer_sup;
     h->since_us = now_us;
+    h->fast = fast;
     snprintf(h->text, sizeof h->text, "%s", text != NULL ? text : "");
     halt_enter(core);
     post_stop(core, fast);

@@ -81,6 +81,7 @@ typedef struct {
     char text[72];    /* the fault, or "" */
     int answer_sup;   /* deferred deactivate to answer at the end, -1: none */
     bool keep_drives; /* owner lost with the action `stop`: pause, drop the motion, drives stay on (RESTING) */
+    bool fast;        /* the stop at the model's maximum deceleration is posted: repeats post nothing more */
     bool owner_lost;  /* the disconnect handler runs it: the alarm ownerLost at the end */
     bool release;     /* owner lost: UNLOCKED at the end (else LOCKED, or RESTING with keep_drives) */
     ls_DisconnectAction lost_action;
