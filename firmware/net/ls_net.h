@@ -38,8 +38,8 @@
  * LS_NET_FWD_BURST; EMERGENCY frames have a bucket of their own so a flood
  * of other frames cannot keep a stop from the other segments. Frames over
  * the budget are dropped and counted (fwd_dropped, fwd_emergency_dropped). */
-#define LS_NET_FWD_RATE_FPS 2000u
-#define LS_NET_FWD_BURST 256u
+#define LS_NET_FWD_RATE_FPS 1000u
+#define LS_NET_FWD_BURST 128u
 #define LS_NET_FWD_EMERGENCY_RATE_FPS 20u
 #define LS_NET_FWD_EMERGENCY_BURST 4u
 /* Transfers of one downlink before it is given up: a transfer that fails

@@ -11,7 +11,8 @@ and each test asserts what must still work meanwhile:
 - 500 EMERGENCY frames/s: one stop (one final notice), one `fault` alarm at an observer
   and `alarmsSuppressed` alarms whose counts add up to the frames, the fault log keeps its
   first entry, no downlink lost;
-- a flood on a second link reaches the first at most at the forward budget;
+- a flood on a second link (a saturated bus, 8,000 frames/s) reaches the first at most
+  at the forward budget, and the owner on the first is answered meanwhile;
 - one `C` line written on the pty (python-can's shutdown) does not mute the owner.
 
 The figures go to docs/reliability.md section 8 ("Floods"); run with -s to see them.
@@ -49,8 +50,10 @@ FLOOD_S = 3.0
 ISOTP_PHYS = 0x18DA0000
 EMERGENCY_ID = 0x00FF0000  # docs/protocol.md "Identifiers and priorities"
 # ls_net.h: the forward budget of bridged frames per output link
-FWD_RATE_FPS = 2000
-FWD_BURST = 256
+FWD_RATE_FPS = 1000
+FWD_BURST = 128
+#: a saturated 1 Mbit/s bus: about 7,800 extended 8-byte frames/s
+BUS_FPS = 8000
 
 FIGURES: list[str] = []
 
@@ -79,8 +82,8 @@ class Rig:
 
 
 @contextlib.contextmanager
-def rig(tmp_path: Path, *extra: str) -> Iterator[Rig]:
-    c = start_controller(tmp_path / "ls0", "--telemetry-hz", str(TELEMETRY_HZ), *extra)
+def rig(tmp_path: Path, *extra: str, telemetry_hz: int = TELEMETRY_HZ) -> Iterator[Rig]:
+    c = start_controller(tmp_path / "ls0", "--telemetry-hz", str(telemetry_hz), *extra)
     bus = open_slcan(c.pty)
     notifier = can.Notifier(bus, [], timeout=0.01)
     r = Rig(c, bus, notifier, None)  # type: ignore[arg-type]
@@ -286,40 +289,72 @@ def test_an_emergency_flood_gives_one_stop_and_a_suppressed_count(tmp_path: Path
 # ------------------------------------------------------------------ bridged floods
 
 
+class RawFlood(threading.Thread):
+    """Writes SLCAN frame lines straight into a pty at BUS_FPS, 80 lines a write every
+    10 ms: a saturated bus, without python-can's per-frame cost in this process."""
+
+    LINE = b"T1CFF1042" + b"8" + b"00" * 8 + b"\r"
+
+    def __init__(self, path: str) -> None:
+        super().__init__(daemon=True, name="raw-flood")
+        self.fd = os.open(path, os.O_WRONLY | os.O_NOCTTY)
+        self.sent = 0
+        self.halt = threading.Event()
+
+    def run(self) -> None:
+        per_write = BUS_FPS // 100
+        chunk = self.LINE * per_write
+        t_next = time.monotonic()
+        while not self.halt.is_set():
+            os.write(self.fd, chunk)
+            self.sent += per_write
+            t_next += 0.01
+            self.halt.wait(max(0.0, t_next - time.monotonic()))
+
+    def __enter__(self) -> RawFlood:
+        self.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.halt.set()
+        self.join(5)
+        os.close(self.fd)
+
+
 def test_the_forward_budget_caps_a_flood_from_another_link(tmp_path: Path) -> None:
     second = tmp_path / "ls1"
-    with rig(tmp_path, "--link", f"slcan:pty:{second}") as r:
-        flood_bus = open_slcan(str(second))
-        seen = {"n": 0, "first": 0.0, "last": 0.0}
+    # telemetry at 10 Hz: the bridged 1,000 frames/s and the device's own stay within what
+    # python-can reads from a pty on a loaded 2-core machine (about 1,300 frames/s measured)
+    with rig(tmp_path, "--link", f"slcan:pty:{second}", telemetry_hz=10) as r:
+        seen = {"n": 0, "last": 0.0}
 
         def count(msg: can.Message) -> None:
             if msg.arbitration_id == 0x1CFF1042:
-                now = time.monotonic()
-                seen["first"] = seen["first"] or now
-                seen["last"] = now
+                seen["last"] = time.monotonic()
                 seen["n"] += 1
 
         r.notifier.add_listener(count)
-        frame = can.Message(arbitration_id=0x1CFF1042, is_extended_id=True, data=bytes(8))
         try:
             answers = []
             t0 = time.monotonic()
-            with Flood(flood_bus, 0.01, lambda k: [frame] * 200) as f:  # as fast as python-can writes
-                while time.monotonic() - t0 < 1.0:
+            with RawFlood(str(second)) as f:
+                while time.monotonic() - t0 < 2.0:
                     answers.append(timed(r.owner.get_motion_control_state))
-            elapsed = time.monotonic() - t0
+                    time.sleep(0.05)
             time.sleep(0.5)
             st = counters(r.owner)
         finally:
             r.notifier.remove_listener(count)
-            flood_bus.shutdown()
-    bound = FWD_BURST + FWD_RATE_FPS * (elapsed + 0.1)
-    figure(f"forward budget: {f.sent} frames in {elapsed:.2f} s on the second link, {seen['n']} bridged to the "
-           f"first (bound {bound:.0f}), fwd_dropped {st['fwd_dropped']}, worst answer "
+    span = seen["last"] - t0
+    bound = FWD_BURST + FWD_RATE_FPS * (span + 0.05)
+    figure(f"forward budget: {f.sent} frames on the second link, {seen['n']} bridged to the first within "
+           f"{span:.2f} s (bound {bound:.0f}), fwd_dropped {st['fwd_dropped']}, worst answer "
            f"{max(answers) * 1000:.0f} ms")
     assert f.sent > 2 * bound, f"only {f.sent} frames sent: too few to show a cap of {bound:.0f}"
-    assert seen["n"] <= bound, f"{seen['n']} frames bridged, the budget allows {bound:.0f}"
-    assert st["fwd_dropped"] >= f.sent - seen["n"] - 10
+    assert seen["n"] <= bound, f"{seen['n']} frames bridged in {span:.2f} s, the budget allows {bound:.0f}"
+    assert st["fwd_dropped"] > 0
+    assert st["frames_bridged"] + st["fwd_dropped"] >= f.sent - 200  # at most a pty buffer not yet read
+    assert seen["n"] >= FWD_RATE_FPS * span * 0.5, "the budget should pass frames too"
     assert max(answers) <= ANSWER_BOUND_S
 
 
