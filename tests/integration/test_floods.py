@@ -382,11 +382,15 @@ def test_a_close_from_another_client_does_not_mute_the_owner(tmp_path: Path) -> 
             done = r.owner.wait_complete(r.owner.move_absolute("far", FAR_J1, speed_pct=50), timeout_s=20)
             assert done.event_id == "moveAbsoluteComplete", done
             assert counters(r.owner)["link_close_held"] == 1
-            # a second client opens and shuts down as python-can does: the owner still hears
-            other = open_slcan(r.c.pty)
-            other.shutdown()
+            # python-can's open sequence from another writer (C, S8, a bare CR, O, O) and its
+            # shutdown C: the owner still hears. (Not a second python-can bus: opening one
+            # flushes the shared tty's input, cutting a line that makes the first bus's
+            # reader thread raise and stop, a host-side failure that no device can prevent.)
+            for text in (b"C\r", b"S8\r", b"\r", b"O\r", b"O\r", b"C\r"):
+                os.write(fd, text)
             time.sleep(0.2)
             assert r.owner.get_motion_control_state().ok
+            assert counters(r.owner)["link_close_held"] == 3
             # the session ends: the deferred close takes effect, the device falls silent...
             r.owner.close()
             time.sleep(0.3)
