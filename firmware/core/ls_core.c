@@ -244,7 +244,8 @@ void ls_core_notify_to(ls_core_t *core, uint8_t addr, uint32_t epoch, ls_NoticeK
 void ls_core_log_fault(ls_core_t *core, uint64_t now_us, const char *fmt, ...)
 {
     const uint32_t k = core->fault_log_count;
-    const uint32_t slot = k < LS_FAULT_LOG_FIRST ? k : LS_FAULT_LOG_FIRST + (k - LS_FAULT_LOG_FIRST) % LS_FAULT_LOG_LATEST;
+    const uint32_t slot =
+        k < LS_FAULT_LOG_FIRST ? k : LS_FAULT_LOG_FIRST + (k - LS_FAULT_LOG_FIRST) % LS_FAULT_LOG_LATEST;
     ls_fault_entry_t *e = &core->fault_log[slot];
     e->at_us = now_us;
     va_list ap;

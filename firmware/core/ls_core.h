@@ -261,24 +261,24 @@ typedef struct ls_core {
     ls_State state;
     int owner; /* index in sessions[], -1 when unlocked */
     ls_session_t sessions[LS_MAX_SUPERVISORS];
-    char fault[96];           /* latched fault, empty when none */
-    char motion_state[32];    /* seed 3.3.1 motionControlState (docs/state-machine.md) */
-    ls_run_t run;             /* the started motion (ls_run.h) */
-    ls_halt_t halt;           /* a stop that ends with the drives off (ls_run.h) */
-    uint32_t epoch_next;      /* the next session epoch */
-    ls_motion_cmds_t motion;  /* path queues, the program being run, getTagId */
-    ls_sensor_cmds_t sensor;  /* manual control */
-    ls_tool_cmds_t tool_cmds; /* the end effector */
+    char fault[96];                               /* latched fault, empty when none */
+    char motion_state[32];                        /* seed 3.3.1 motionControlState (docs/state-machine.md) */
+    ls_run_t run;                                 /* the started motion (ls_run.h) */
+    ls_halt_t halt;                               /* a stop that ends with the drives off (ls_run.h) */
+    uint32_t epoch_next;                          /* the next session epoch */
+    ls_motion_cmds_t motion;                      /* path queues, the program being run, getTagId */
+    ls_sensor_cmds_t sensor;                      /* manual control */
+    ls_tool_cmds_t tool_cmds;                     /* the end effector */
     ls_fault_entry_t fault_log[LS_FAULT_LOG_LEN]; /* the first LS_FAULT_LOG_FIRST, then a ring */
     uint32_t fault_log_count;                     /* entries ever logged */
     ls_alarm_window_t alarm_window;
     uint32_t alarms_suppressed; /* repeats not sent (LS_ALARM_WINDOW_MS) */
     uint32_t emergency_frames;  /* EMERGENCY frames taken (each one stops) */
-    uint32_t rx_malformed;     /* uplinks that did not decode */
-    uint32_t tx_lost;          /* downlinks the network could not queue */
-    uint32_t sessions_dropped; /* heartbeat time-outs */
-    uint32_t hb_refused;       /* heartbeats that did not carry their session's token */
-    uint32_t connects_refused; /* connects from an address in use by another client */
+    uint32_t rx_malformed;      /* uplinks that did not decode */
+    uint32_t tx_lost;           /* downlinks the network could not queue */
+    uint32_t sessions_dropped;  /* heartbeat time-outs */
+    uint32_t hb_refused;        /* heartbeats that did not carry their session's token */
+    uint32_t connects_refused;  /* connects from an address in use by another client */
     /* scratch (kept here, not on the stack: the messages are large) */
     ls_Uplink up;
     ls_Downlink down; /* the response being built (handlers write into it) */

@@ -84,7 +84,7 @@ typedef struct {
     uint8_t rx_sn, rx_bs_left;
     uint64_t rx_deadline_us; /* N_Cr: the next consecutive frame */
     uint64_t rx_end_us;      /* the whole reception (LS_ISOTP_RX_CAP_BLOCK) */
-    bool rx_fc_pending; /* a flow control frame waits for room in the CAN queue */
+    bool rx_fc_pending;      /* a flow control frame waits for room in the CAN queue */
     uint8_t rx_fc_status;
 
     /* sender */

@@ -93,8 +93,7 @@ static ls_net_peer_t *find_peer(ls_net_t *net, uint8_t addr)
 
 static bool peer_idle(const ls_net_peer_t *c)
 {
-    return !ls_isotp_tx_busy(&c->isotp) && c->isotp.rx_state == LS_ISOTP_RX_IDLE && c->q_count == 0 &&
-           c->tx_tries == 0;
+    return !ls_isotp_tx_busy(&c->isotp) && c->isotp.rx_state == LS_ISOTP_RX_IDLE && c->q_count == 0 && c->tx_tries == 0;
 }
 
 /* Pick the better victim of `a` and `b` (either may be NULL): the one made
@@ -272,9 +271,10 @@ static void forward(ls_net_t *net, const hal_can_frame_t *f, size_t from)
         if (i == from) {
             continue;
         }
-        const bool ok = emergency ? ls_net_bucket_take(&net->fwd_emergency[i], LS_NET_FWD_EMERGENCY_RATE_FPS,
-                                                       LS_NET_FWD_EMERGENCY_BURST, net->now_us)
-                                  : ls_net_bucket_take(&net->fwd[i], LS_NET_FWD_RATE_FPS, LS_NET_FWD_BURST, net->now_us);
+        const bool ok = emergency
+                            ? ls_net_bucket_take(&net->fwd_emergency[i], LS_NET_FWD_EMERGENCY_RATE_FPS,
+                                                 LS_NET_FWD_EMERGENCY_BURST, net->now_us)
+                            : ls_net_bucket_take(&net->fwd[i], LS_NET_FWD_RATE_FPS, LS_NET_FWD_BURST, net->now_us);
         if (!ok) {
             if (emergency) {
                 net->fwd_emergency_dropped++;

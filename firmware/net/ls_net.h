@@ -96,11 +96,11 @@ typedef struct ls_net {
     ls_isotp_config_t isotp_cfg;
     uint64_t now_us;
     uint32_t frames_in, frames_out, frames_bridged, tx_full, peers_evicted;
-    uint32_t peers_preempted;                     /* busy links of session-less sources taken for another */
-    uint32_t fwd_dropped, fwd_emergency_dropped;  /* bridged frames over a link's forward budget */
-    ls_net_bucket_t fwd[LS_NET_MAX_LINKS];        /* forward budget per output link */
+    uint32_t peers_preempted;                    /* busy links of session-less sources taken for another */
+    uint32_t fwd_dropped, fwd_emergency_dropped; /* bridged frames over a link's forward budget */
+    ls_net_bucket_t fwd[LS_NET_MAX_LINKS];       /* forward budget per output link */
     ls_net_bucket_t fwd_emergency[LS_NET_MAX_LINKS];
-    bool link_held[LS_NET_MAX_LINKS]; /* told the link: sessions live on it (hal_can_hold_open) */
+    bool link_held[LS_NET_MAX_LINKS];                  /* told the link: sessions live on it (hal_can_hold_open) */
     uint32_t tx_retried, tx_given_up;                  /* downlink transfers sent again; downlinks given up */
     uint32_t tx_deduplicated;                          /* downlinks identical to one still pending: not queued twice */
     uint32_t rx_results_gone[LS_ISOTP_N_RESULT_COUNT]; /* counters of evicted peers */

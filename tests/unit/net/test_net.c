@@ -727,9 +727,9 @@ static void test_floods_neither_evict_a_session_nor_keep_a_new_supervisor_out(vo
         }
     }
     assert_true(sent_connect);
-    assert_int_equal(uplinks_new, 1);            /* the newcomer's connect arrived whole */
-    assert_int_equal(uplinks_owner, 40);         /* every owner request of the loop reached the core */
-    assert_true(owner_answers >= 40);            /* and was answered */
+    assert_int_equal(uplinks_new, 1);    /* the newcomer's connect arrived whole */
+    assert_int_equal(uplinks_owner, 40); /* every owner request of the loop reached the core */
+    assert_true(owner_answers >= 40);    /* and was answered */
     assert_true(peer_used(SUP_A));
     assert_int_equal(describe_value("peers_preempted") > 0, 1);
 }
@@ -789,8 +789,8 @@ static void test_bridged_frames_are_capped_per_output_link(void **state)
     ls_net_poll(&g_net, 1000 + 100000);
     ls_net_poll(&g_net, 1000 + 100000);
     assert_int_equal(g_link[1].n_tx, LS_NET_FWD_BURST + LS_NET_FWD_EMERGENCY_BURST + LS_NET_FWD_RATE_FPS / 10u);
-    assert_int_equal(describe_value("frames_bridged"), LS_NET_FWD_BURST + LS_NET_FWD_EMERGENCY_BURST +
-                                                           LS_NET_FWD_RATE_FPS / 10u);
+    assert_int_equal(describe_value("frames_bridged"),
+                     LS_NET_FWD_BURST + LS_NET_FWD_EMERGENCY_BURST + LS_NET_FWD_RATE_FPS / 10u);
 }
 
 /* A link is held open while a session lives on it (its peer's frames came on
