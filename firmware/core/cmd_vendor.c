@@ -58,10 +58,6 @@ int32_t ls_h_send_command(struct ls_core *core, struct ls_call *call)
         put(&o, "fault=%s\nrx_malformed=%u\ntx_lost=%u\nsessions_dropped=%u\nhb_refused=%u\nconnects_refused=%u\n",
             core->fault, (unsigned)core->rx_malformed, (unsigned)core->tx_lost, (unsigned)core->sessions_dropped,
             (unsigned)core->hb_refused, (unsigned)core->connects_refused);
-        if (core->io.describe != NULL && o.len < o.cap) {
-            core->io.describe(core->io.ctx, o.buf + o.len, o.cap - o.len);
-            o.len += strlen(o.buf + o.len);
-        }
         for (int i = 0; i < LS_MAX_SUPERVISORS; i++) {
             const ls_session_t *s = &core->sessions[i];
             if (s->connected) {
@@ -81,6 +77,12 @@ int32_t ls_h_send_command(struct ls_core *core, struct ls_call *call)
                     (unsigned)w->bits, w->addr, w->phase == LS_WATCH_ARMED ? "armed" : "awaiting_rsvp",
                     (unsigned)w->fired);
             }
+        }
+        /* the transport's counters last: when the 1 KiB runs out (four sessions
+         * with long names, watches) it ends inside them, not inside the sessions */
+        if (core->io.describe != NULL && o.len < o.cap) {
+            core->io.describe(core->io.ctx, o.buf + o.len, o.cap - o.len);
+            o.len += strlen(o.buf + o.len);
         }
     } else if (strcmp(in, "faults") == 0) {
         uint32_t n = 0, dropped = 0;
