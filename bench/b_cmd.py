@@ -12,6 +12,12 @@ import can
 import isotp
 
 from common import BIN, BUILD, BenchError, Row, Section, fmt_ratio, median, need, percentile, pty_peer
+from landscape._generated import landscape_pb2 as pb
+
+# The ids of one request frame and its echo: ISO-TP normal fixed addressing
+# between the default host and device addresses (protocol/landscape.proto).
+TO_DEVICE = pb.ISOTP_PHYSICAL_BASE | pb.DEFAULT_DEVICE_ADDRESS << 8 | pb.DEFAULT_HOST_ADDRESS
+FROM_DEVICE = pb.ISOTP_PHYSICAL_BASE | pb.DEFAULT_HOST_ADDRESS << 8 | pb.DEFAULT_DEVICE_ADDRESS
 
 
 def slcan_bus(link: Path) -> can.BusABC:
@@ -41,14 +47,14 @@ def frame_round_trips(link: Path, runs: int) -> list[float]:
     try:
         out = []
         for k in range(runs + 5):
-            msg = can.Message(arbitration_id=0x18DA10F1, is_extended_id=True, data=bytes([1, k & 0xFF] + [0xCC] * 6))
+            msg = can.Message(arbitration_id=TO_DEVICE, is_extended_id=True, data=bytes([1, k & 0xFF] + [0xCC] * 6))
             t0 = time.perf_counter()
             bus.send(msg)
             while True:
                 got = bus.recv(timeout=2.0)
                 if got is None:
                     raise BenchError(f"no echo of a frame from bench_frame_echo on {link} within 2 s")
-                if got.arbitration_id == 0x18DAF110 and got.data[1] == (k & 0xFF):
+                if got.arbitration_id == FROM_DEVICE and got.data[1] == (k & 0xFF):
                     break
             if k >= 5:
                 out.append(time.perf_counter() - t0)

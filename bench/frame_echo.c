@@ -1,7 +1,7 @@
 /* bench_frame_echo: the floor of a command round trip on the SLCAN pty.
  * Answers every CAN frame at once with the same frame, id unchanged apart
  * from swapping the two address bytes of a normal-fixed 29-bit ISO-TP id
- * (0x18DA10F1 -> 0x18DAF110), so a host stack sees a single-frame answer
+ * (base|<device><host> -> base|<host><device>), so a host stack sees a single-frame answer
  * from the device. No ISO-TP, no protocol: just the link both ways.
  * Usage: bench_frame_echo PATH; runs until SIGTERM/SIGINT. */
 #include <errno.h>
@@ -10,6 +10,10 @@
 #include <stdio.h>
 
 #include "hal/hal_can.h"
+#include "landscape.pb.h"
+
+#define PHYS ((uint32_t)ls_IsotpId_ISOTP_PHYSICAL_BASE)
+#define PF_MASK 0xFFFF0000u /* the id without its target and source bytes */
 #include "slcan_pty.h"
 
 static volatile sig_atomic_t stop_;
@@ -43,8 +47,8 @@ int main(int argc, char **argv)
         hal_can_frame_t f;
         int r;
         while ((r = hal_can_recv(&can, &f)) == 1) {
-            if ((f.flags & HAL_CAN_F_EXT) != 0 && (f.id & 0xFFFF0000u) == 0x18DA0000u) {
-                f.id = 0x18DA0000u | ((f.id & 0xFFu) << 8) | ((f.id >> 8) & 0xFFu);
+            if ((f.flags & HAL_CAN_F_EXT) != 0 && (f.id & PF_MASK) == PHYS) {
+                f.id = PHYS | ((f.id & 0xFFu) << 8) | ((f.id >> 8) & 0xFFu);
             }
             if (hal_can_send(&can, &f) == HAL_OK) {
                 echoed++;

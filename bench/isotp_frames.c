@@ -12,10 +12,15 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "landscape.pb.h"
 #include "ls_isotp.h"
 
-#define ID_A_TO_B 0x18DA10F1u
-#define ID_B_TO_A 0x18DAF110u
+/* A supervisor at the default host address and a device at the default
+ * device address (protocol/landscape.proto). */
+#define DEV ((uint32_t)ls_NodeAddress_DEFAULT_DEVICE_ADDRESS)
+#define HOST ((uint32_t)ls_NodeAddress_DEFAULT_HOST_ADDRESS)
+#define ID_A_TO_B ((uint32_t)ls_IsotpId_ISOTP_PHYSICAL_BASE | DEV << 8 | HOST)
+#define ID_B_TO_A ((uint32_t)ls_IsotpId_ISOTP_PHYSICAL_BASE | HOST << 8 | DEV)
 #define QUEUE_LEN 1024u
 
 typedef struct {

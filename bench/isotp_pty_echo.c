@@ -14,11 +14,15 @@
 #include <time.h>
 
 #include "hal/hal_can.h"
+#include "landscape.pb.h"
 #include "ls_isotp.h"
 #include "slcan_pty.h"
 
-#define RX_ID 0x18DA10F1u
-#define TX_ID 0x18DAF110u
+/* The device's side of the default host <-> device pair (protocol/landscape.proto). */
+#define DEV ((uint32_t)ls_NodeAddress_DEFAULT_DEVICE_ADDRESS)
+#define HOST ((uint32_t)ls_NodeAddress_DEFAULT_HOST_ADDRESS)
+#define RX_ID ((uint32_t)ls_IsotpId_ISOTP_PHYSICAL_BASE | DEV << 8 | HOST)
+#define TX_ID ((uint32_t)ls_IsotpId_ISOTP_PHYSICAL_BASE | HOST << 8 | DEV)
 
 static volatile sig_atomic_t stop_;
 static hal_can_link_t can_;

@@ -48,8 +48,9 @@
  * notice (docs/protocol.md, "ISO-TP parameters"). */
 #define LS_NET_TX_TRIES 3
 
-#define LS_ID_ISOTP_PHYS 0x18DA0000u
-#define LS_ID_ISOTP_FUNC 0x18DB0000u
+/* The schema declares them (protocol/landscape.proto IsotpId, NodeAddress). */
+#define LS_ID_ISOTP_PHYS ((uint32_t)ls_IsotpId_ISOTP_PHYSICAL_BASE)
+#define LS_ID_ISOTP_FUNC ((uint32_t)ls_IsotpId_ISOTP_FUNCTIONAL_BASE)
 #define LS_ID_MASK_PF 0x1FFF0000u
 #define LS_ID_MASK_SRC 0x1FFFFF00u
 /* Broadcast ids come from protocol/landscape.dbc (cantools' header), whose ids
@@ -57,7 +58,7 @@
 #define LS_ID_OF_DBC(frame_id) ((uint32_t)(frame_id)&LS_ID_MASK_SRC)
 #define LS_ID_EMERGENCY LS_ID_OF_DBC(LANDSCAPE_EMERGENCY_FRAME_ID)
 #define LS_ID_HEARTBEAT LS_ID_OF_DBC(LANDSCAPE_HEARTBEAT_FRAME_ID)
-#define LS_ADDR_ALL 0xFFu
+#define LS_ADDR_ALL ((uint32_t)ls_NodeAddress_FUNCTIONAL_ALL_DEVICES)
 
 typedef struct {
     uint16_t len;

@@ -39,7 +39,7 @@ def db() -> Any:
 
 
 def is_isotp(can_id: int) -> bool:
-    return can_id & 0x1FFF0000 in (0x18DA0000, 0x18DB0000)
+    return can_id & 0x1FFF0000 in (pb.ISOTP_PHYSICAL_BASE, pb.ISOTP_FUNCTIONAL_BASE)
 
 
 @dataclass

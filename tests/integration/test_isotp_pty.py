@@ -36,11 +36,15 @@ import isotp
 import pytest
 
 from conftest import BUILD
+from landscape._generated import landscape_pb2 as pb
 
-HOST_ADDR = 0xF1
-DEVICE_ADDR = 0x10
-ID_TO_DEVICE = 0x18DA0000 | (DEVICE_ADDR << 8) | HOST_ADDR  # 0x18DA10F1
-ID_TO_HOST = 0x18DA0000 | (HOST_ADDR << 8) | DEVICE_ADDR  # 0x18DAF110
+HOST_ADDR = pb.DEFAULT_HOST_ADDRESS
+DEVICE_ADDR = pb.DEFAULT_DEVICE_ADDRESS
+# ISO 15765-2 normal fixed addressing: the ids can-isotp computes itself
+# (isotp.AddressingMode.NormalFixed_29bits); the test would fail if the
+# schema's base disagreed with it.
+ID_TO_DEVICE = pb.ISOTP_PHYSICAL_BASE | (DEVICE_ADDR << 8) | HOST_ADDR
+ID_TO_HOST = pb.ISOTP_PHYSICAL_BASE | (HOST_ADDR << 8) | DEVICE_ADDR
 SIZES = [1, 7, 8, 62, 63, 100, 1000, 4095]
 PARAMS = [(0, 0), (0, 1), (8, 0), (8, 1)]  # (block size, STmin ms), the same on both sides
 TRANSFER_TIMEOUT_S = 10.0
