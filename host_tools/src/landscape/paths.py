@@ -10,7 +10,11 @@ or a list in YAML/JSON). A YAML/JSON file may instead be a mapping with
 
 ``load_path_file`` reads and checks the whole file before anything is sent;
 the first problem is one PathFileError naming the file, the row (CSV line) or
-index (``points[i]``) and the field. ``build_path_load_requests`` is the pure
+index (``points[i]``) and the field. Given the device's limit (``max_points``:
+the points one path holds, ``describe``'s max_points_per_path), it refuses a
+file with more points, or more bytes than that many points can take
+(``max_file_bytes``), before parsing it all: a huge file costs neither time
+nor memory. ``build_path_load_requests`` is the pure
 builder that splits points into requests the firmware can hold: at most
 PATH_LOAD_MAX_POINTS points and MAX_MESSAGE_BYTES bytes per ISO-TP message.
 """
@@ -20,6 +24,7 @@ import csv
 import io
 import json
 import math
+import sys
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -48,9 +53,36 @@ MAX_PATH_NAME_BYTES: int = max_string_bytes("PathLoadReq", "path_name") or 63
 MAX_TAG_NAME_BYTES: int = max_string_bytes("TagPoint", "tag_name") or 63
 MAX_AUX_COMMANDS: int = max_count("TagPoint", "aux_commands") or 4
 MAX_AUX_BYTES: int = max_string_bytes("TagPoint", "aux_commands") or 47
+#: The most text one point (or the header) of a path file may take: a point whose text is
+#: longer than one ISO-TP message is not a point the device could take anyway.
+MAX_POINT_TEXT_BYTES: int = MAX_MESSAGE_BYTES
 #: The largest seq: requests are sized with it so that any seq the supervisor picks fits.
 _SEQ_MAX = 0xFFFFFFFF
 _INT32 = (-(2**31), 2**31 - 1)
+_SHOWN_CHARS = 80
+
+
+def shown(raw: Any, *, quote: bool = True) -> str:
+    """`raw` as it appears in a message: text quoted (unless `quote` is False), cut after
+    _SHOWN_CHARS characters (a 5,000-digit number is named by its length, not printed)."""
+    text = raw if isinstance(raw, str) else repr(raw)
+    if len(text) <= _SHOWN_CHARS:
+        return f"'{text}'" if quote and isinstance(raw, str) else text
+    return f"'{text[:_SHOWN_CHARS]}...' ({len(text)} characters)"
+
+
+class _LongInteger(str):
+    """An integer literal of a JSON file too long to be any field's value, kept as its text
+    (Python refuses int() of more than 4300 digits, and reading it would be slow)."""
+
+
+def _json_int(text: str) -> int | _LongInteger:
+    return int(text) if len(text) <= 32 else _LongInteger(text)
+
+
+def max_file_bytes(max_points: int) -> int:
+    """The most bytes a path file of at most `max_points` points may have."""
+    return (max_points + 1) * MAX_POINT_TEXT_BYTES
 
 
 class PathFileError(ArgumentError):
@@ -99,13 +131,16 @@ def _number(raw: Any, err: Callable[[str], PathFileError]) -> float:
         try:
             v = float(raw.strip())
         except ValueError:
-            raise err(f"'{raw}' is not a number") from None
+            raise err(f"{shown(raw)} is not a number") from None
     elif isinstance(raw, (int, float)):
-        v = float(raw)
+        try:
+            v = float(raw)
+        except OverflowError:
+            v = math.inf
     else:
-        raise err(f"{raw!r} is not a number")
+        raise err(f"{shown(raw)} is not a number")
     if not math.isfinite(v):
-        raise err(f"{raw!r} is not a finite number")
+        raise err(f"{shown(raw)} is not a finite number")
     return v
 
 
@@ -117,23 +152,26 @@ def _integer(raw: Any, err: Callable[[str], PathFileError]) -> int:
     elif isinstance(raw, float) and raw.is_integer():
         v = int(raw)
     elif isinstance(raw, str):
+        text = raw.strip()
+        if len(text) > 32:  # far beyond 32 bits; int() of thousands of digits is refused (or slow)
+            raise err(f"{shown(raw)} is not an integer in {_INT32[0]}..{_INT32[1]}")
         try:
-            v = int(raw.strip(), 0)
+            v = int(text, 0)
         except ValueError:
-            raise err(f"'{raw}' is not an integer") from None
+            raise err(f"{shown(raw)} is not an integer") from None
     else:
-        raise err(f"{raw!r} is not an integer")
+        raise err(f"{shown(raw)} is not an integer")
     if not _INT32[0] <= v <= _INT32[1]:
-        raise err(f"{v} is outside {_INT32[0]}..{_INT32[1]}")
+        raise err(f"{shown(str(v), quote=False)} is outside {_INT32[0]}..{_INT32[1]}")
     return v
 
 
 def _text(raw: Any, max_bytes: int, err: Callable[[str], PathFileError]) -> str:
-    if not isinstance(raw, str):
-        raise err(f"{raw!r} is not text")
+    if not isinstance(raw, str) or isinstance(raw, _LongInteger):
+        raise err(f"{shown(raw)} is not text")
     n = len(raw.encode("utf-8"))
     if n > max_bytes:
-        raise err(f"'{raw}' is {n} bytes; the firmware holds at most {max_bytes}")
+        raise err(f"{shown(raw)} is {n} bytes; the firmware holds at most {max_bytes}")
     return raw
 
 
@@ -143,11 +181,11 @@ def _aux(raw: Any, err: Callable[[str], PathFileError]) -> list[str]:
     elif isinstance(raw, (list, tuple)):
         items = list(raw)
     else:
-        raise err(f"{raw!r} is not a ';'-separated string or a list of commands")
+        raise err(f"{shown(raw)} is not a ';'-separated string or a list of commands")
     out: list[str] = []
     for item in items:
         if not isinstance(item, str):
-            raise err(f"{item!r} is not a command (text)")
+            raise err(f"{shown(item)} is not a command (text)")
         cmd = item.strip()
         if not cmd:
             if isinstance(raw, str):
@@ -155,7 +193,7 @@ def _aux(raw: Any, err: Callable[[str], PathFileError]) -> list[str]:
             raise err("an empty command")
         n = len(cmd.encode("utf-8"))
         if n > MAX_AUX_BYTES:
-            raise err(f"'{cmd}' is {n} bytes; the firmware holds at most {MAX_AUX_BYTES} per command")
+            raise err(f"{shown(cmd)} is {n} bytes; the firmware holds at most {MAX_AUX_BYTES} per command")
         out.append(cmd)
     if len(out) > MAX_AUX_COMMANDS:
         raise err(f"{len(out)} commands; the firmware holds at most {MAX_AUX_COMMANDS} per point")
@@ -175,7 +213,8 @@ def point_from_mapping(values: Mapping[str, Any], kind: str, n_joints: int, file
 
     for key in values:
         if key not in POINT_KEYS:
-            raise PathFileError(file, where, str(key), f"unknown field; a point has {', '.join(_key_help())}")
+            raise PathFileError(file, where, shown(str(key), quote=False),
+                                f"unknown field; a point has {', '.join(_key_help())}")
     p = pb.TagPoint()
     if kind == "cartesian":
         for key in POSE_KEYS:
@@ -239,13 +278,25 @@ def _kind_of(keys: Sequence[str], file: str, where: str) -> tuple[str, int]:
 # ---------------------------------------------------------------- files
 
 
-def _parse_csv(text: str, file: str) -> PathFile:
+def _too_many(file: str, where: str, max_points: int) -> PathFileError:
+    return PathFileError(file, where, None, f"more than {max_points} points: the device holds at most {max_points} "
+                                            f"per path (describe: max_points_per_path); split the file into paths "
+                                            f"of at most {max_points} points")
+
+
+def _parse_csv(text: str, file: str, max_points: int | None = None) -> PathFile:
     rows = csv.reader(io.StringIO(text))
     header: list[str] | None = None
     points: list[pb.TagPoint] = []
     locations: list[str] = []
     kind, n_joints = "", 0
-    for row in rows:
+    while True:
+        try:
+            row = next(rows)
+        except StopIteration:
+            break
+        except csv.Error as exc:  # a NUL byte, a cell beyond the csv module's field limit
+            raise PathFileError(file, f"line {rows.line_num}", None, f"not a CSV row: {exc}") from None
         line = rows.line_num
         if not row or all(not c.strip() for c in row):
             continue
@@ -253,13 +304,15 @@ def _parse_csv(text: str, file: str) -> PathFile:
             header = [c.strip() for c in row]
             for c in header:
                 if c not in POINT_KEYS:
-                    raise PathFileError(file, f"line {line}", c or "(empty column name)",
+                    raise PathFileError(file, f"line {line}", shown(c, quote=False) if c else "(empty column name)",
                                         f"unknown column; columns are {', '.join(_key_help())}")
             dup = next((c for c in header if header.count(c) > 1), None)
             if dup is not None:
                 raise PathFileError(file, f"line {line}", dup, "column named twice")
             kind, n_joints = _kind_of(header, file, f"line {line}")
             continue
+        if max_points is not None and len(points) >= max_points:
+            raise _too_many(file, f"line {line}", max_points)
         if len(row) != len(header):
             raise PathFileError(file, f"line {line}", None,
                                 f"{len(row)} cells, the header names {len(header)} columns")
@@ -274,12 +327,13 @@ def _parse_csv(text: str, file: str) -> PathFile:
     return PathFile(file, points, kind, locations=locations)
 
 
-def _parse_tree(data: Any, file: str) -> PathFile:
+def _parse_tree(data: Any, file: str, max_points: int | None = None) -> PathFile:
     settings: dict[str, Any] = {}
     if isinstance(data, Mapping):
         for key in data:
             if key not in FILE_KEYS:
-                raise PathFileError(file, "", str(key), f"unknown key; a path file has {', '.join(FILE_KEYS)}")
+                raise PathFileError(file, "", shown(str(key), quote=False),
+                                    f"unknown key; a path file has {', '.join(FILE_KEYS)}")
         if "points" not in data:
             raise PathFileError(file, "", "points", "missing: list the points under 'points'")
         settings = {k: v for k, v in data.items() if k != "points" and v is not None}
@@ -291,6 +345,8 @@ def _parse_tree(data: Any, file: str) -> PathFile:
                             "expected a list of points (mappings with x, y, z, roll, pitch, yaw or j1..jN)")
     if not items:
         raise PathFileError(file, "", "points", "no points")
+    if max_points is not None and len(items) > max_points:
+        raise _too_many(file, f"points[{max_points}]", max_points)
     pf = PathFile(file, [], "")
     if "path" in settings:
         pf.path_name = _check_path_name(settings["path"], file, "path")
@@ -305,7 +361,7 @@ def _parse_tree(data: Any, file: str) -> PathFile:
     for i, item in enumerate(items):
         where = f"points[{i}]"
         if not isinstance(item, Mapping):
-            raise PathFileError(file, where, None, f"{item!r} is not a mapping of point fields")
+            raise PathFileError(file, where, None, f"{shown(item)} is not a mapping of point fields")
         if i == 0:
             kind, n_joints = _kind_of([str(k) for k in item], file, where)
         pf.points.append(point_from_mapping(item, kind, n_joints, file, where))
@@ -324,45 +380,75 @@ def _check_path_name(raw: Any, file: str, what: str) -> str:
     return name
 
 
-def parse_path_text(text: str, fmt: str, file: str = "<text>") -> PathFile:
-    """Parse and check path-file `text` of format "csv", "yaml" or "json" (pure)."""
+def parse_path_text(text: str, fmt: str, file: str = "<text>", *, max_points: int | None = None) -> PathFile:
+    """Parse and check path-file `text` of format "csv", "yaml" or "json" (pure). With
+    `max_points`, more points than that is an error (the device's limit)."""
     if fmt == "csv":
-        return _parse_csv(text, file)
-    if fmt == "json":
-        try:
-            data = json.loads(text)
-        except json.JSONDecodeError as exc:
-            raise PathFileError(file, f"line {exc.lineno}", None, f"not valid JSON: {exc.msg}") from None
-        return _parse_tree(data, file)
-    if fmt == "yaml":
-        import yaml
+        return _parse_csv(text, file, max_points)
+    if fmt not in ("json", "yaml"):
+        raise ArgumentError(f"unknown path file format '{fmt}': use csv, yaml or json")
+    try:
+        if fmt == "json":
+            try:
+                data = json.loads(text, parse_int=_json_int)
+            except json.JSONDecodeError as exc:
+                raise PathFileError(file, f"line {exc.lineno}", None, f"not valid JSON: {exc.msg}") from None
+        else:
+            import yaml
 
-        try:
-            data = yaml.safe_load(text)
-        except yaml.YAMLError as exc:
-            mark = getattr(exc, "problem_mark", None)
-            where = f"line {mark.line + 1}" if mark is not None else ""
-            problem = getattr(exc, "problem", None) or str(exc)
-            raise PathFileError(file, where, None, f"not valid YAML: {problem}") from None
-        if data is None:
-            raise PathFileError(file, "", None, "empty file: list the points")
-        return _parse_tree(data, file)
-    raise ArgumentError(f"unknown path file format '{fmt}': use csv, yaml or json")
+            try:
+                data = yaml.safe_load(text)
+            except yaml.YAMLError as exc:
+                mark = getattr(exc, "problem_mark", None)
+                where = f"line {mark.line + 1}" if mark is not None else ""
+                problem = getattr(exc, "problem", None) or str(exc)
+                raise PathFileError(file, where, None, f"not valid YAML: {problem}") from None
+    except RecursionError:
+        raise PathFileError(file, "", None, "nested too deeply: a path file is a list of points (or a mapping "
+                                            "with 'points')") from None
+    except PathFileError:
+        raise
+    except ValueError as exc:  # YAML: an integer of more than sys.get_int_max_str_digits() digits
+        problem = (f"an integer of more than {sys.get_int_max_str_digits()} digits: no field of a point takes "
+                   f"such a number" if "digits" in str(exc) else f"a value cannot be read: {_one_line(str(exc))}")
+        raise PathFileError(file, "", None, problem) from None
+    if data is None:
+        raise PathFileError(file, "", None, "empty file: list the points")
+    try:
+        return _parse_tree(data, file, max_points)
+    except RecursionError:
+        raise PathFileError(file, "", None, "nested too deeply: a path file is a list of points") from None
 
 
-def load_path_file(path: str | Path) -> PathFile:
-    """Read and check a whole path file; the format comes from its extension."""
+def _one_line(text: str) -> str:
+    return " ".join(text.split())
+
+
+def load_path_file(path: str | Path, *, max_points: int | None = None) -> PathFile:
+    """Read and check a whole path file; the format comes from its extension. With
+    `max_points` (the device's points per path), a file of more points, or of more than
+    max_file_bytes(max_points) bytes, is refused without reading it all."""
     p = Path(path)
     fmt = SUFFIXES.get(p.suffix.lower())
     if fmt is None:
         raise PathFileError(str(p), "", None, f"unknown file type '{p.suffix}': use .csv, .yaml, .yml or .json")
+    limit = None if max_points is None else max_file_bytes(max_points)
     try:
-        text = p.read_text(encoding="utf-8")
+        with p.open("rb") as f:
+            raw = f.read() if limit is None else f.read(limit + 1)
     except OSError as exc:
         raise PathFileError(str(p), "", None, f"cannot read it: {exc.strerror or exc}") from None
-    except UnicodeDecodeError:
-        raise PathFileError(str(p), "", None, "not UTF-8 text") from None
-    return parse_path_text(text, fmt, str(p))
+    if limit is not None and max_points is not None and len(raw) > limit:
+        raise PathFileError(str(p), "", None, f"more than {limit} bytes: a path of at most {max_points} points "
+                                              f"(the device's limit, describe: max_points_per_path) takes at most "
+                                              f"{MAX_POINT_TEXT_BYTES} bytes per point; split the file")
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = raw.count(b"\n", 0, exc.start) + 1
+        raise PathFileError(str(p), f"line {line}", None, f"not UTF-8 text (byte {raw[exc.start]:#04x} at offset "
+                                                          f"{exc.start}): save the file as UTF-8") from None
+    return parse_path_text(text, fmt, str(p), max_points=max_points)
 
 
 def resolve_settings(pf: PathFile, *, path_name: str | None = None, frame: int | str | None = None,
