@@ -77,6 +77,7 @@ class FakeDevice:
         self.hb_refused = 0                 # heartbeats without their session's token
         self._token_next = 0x0A0B01
         self.paths: dict[str, list[pb.TagPoint]] = {}
+        self.max_points_per_path = 1000     # described (describe) and enforced alike
         self.point_time_s = 0.01
         self._t0 = time.monotonic()
         self._rsvp_waiters: dict[int, threading.Event] = {}
@@ -264,7 +265,7 @@ class FakeDevice:
             return answer(pb.CMD_EXEC_OK)
         if which == "describe":
             r = resp.describe
-            r.max_sessions, r.max_paths, r.max_points_per_path = len(self.sessions) or 1, 8, 256
+            r.max_sessions, r.max_paths, r.max_points_per_path = len(self.sessions) or 1, 8, self.max_points_per_path
             tags = max_count("PathLoadReq", "tags")
             name = max_string_bytes("PathLoadReq", "path_name")
             tag = max_string_bytes("TagPoint", "tag_name")
@@ -322,8 +323,8 @@ class FakeDevice:
                 return answer(pb.CMD_PARAM_ERR, f"tags: {len(pl.tags)} points, at most 32 per message")
             if pl.number_of_points != len(pl.tags):
                 return answer(pb.CMD_PARAM_ERR, f"number_of_points {pl.number_of_points} != {len(pl.tags)} tags")
-            if len(self.paths.get(pl.path_name, [])) + len(pl.tags) > 1000:
-                return answer(pb.CMD_NO_RESOURCES_ERR, "a path holds at most 1000 points")
+            if len(self.paths.get(pl.path_name, [])) + len(pl.tags) > self.max_points_per_path:
+                return answer(pb.CMD_NO_RESOURCES_ERR, f"a path holds at most {self.max_points_per_path} points")
             self.paths.setdefault(pl.path_name, []).extend(pl.tags)
             resp.path_load.points_in_path = len(self.paths[pl.path_name])
             return answer(pb.CMD_EXEC_OK)

@@ -83,7 +83,8 @@ def test_path_load_bad_file_sends_nothing(channel: str, device: FakeDevice, tmp_
     r = run(channel, "path", "load", str(f))
     assert r.exit_code == 2
     assert single_error(r) == f"landscape: error: {f}: points[1]: j2: 'fast' is not a number"
-    assert device.requests == []
+    # the session opened (the file is read with the device's points per path), no point was sent
+    assert [q.WhichOneof("cmd") for q in device.requests] == ["connect", "describe", "disconnect"]
 
 
 def test_path_load_refused_midway(channel: str, device: FakeDevice, tmp_path: Path) -> None:

@@ -18,6 +18,7 @@ from .errors import (
     FaultError,
     GenericCommandError,
     LandscapeError,
+    LinkLostError,
     NoResourcesError,
     NotConnectedError,
     NotImplementedByDeviceError,
@@ -39,7 +40,7 @@ from .supervisor import ConnectResult, RetVal, Supervisor, mismatch_message, not
 __all__ = [
     "ls", "BusSpec", "open_bus", "Supervisor", "RetVal", "ConnectResult", "mismatch_message", "notice_data",
     "COMMANDS", "Command", "PROTOCOL_VERSION", "SCHEMA_HASH", "build_request", "lookup", "error_for_code",
-    "LandscapeError", "BusError", "ControllerTimeoutError", "VersionMismatchError", "ProtocolError",
+    "LandscapeError", "BusError", "LinkLostError", "ControllerTimeoutError", "VersionMismatchError", "ProtocolError",
     "AlarmError", "ArgumentError", "CommandError", "GenericCommandError", "ParamError", "ParamOutOfRangeError",
     "WrongStateError", "NotOwnerError", "AddressInUseError", "BusyError", "DeviceTimeoutError", "NotConnectedError",
     "NotImplementedByDeviceError", "UnsupportedError", "VersionMismatchCommandError", "FaultError",

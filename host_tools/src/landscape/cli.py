@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, NoReturn
 
+import can
 import click
 from google.protobuf import json_format
 from google.protobuf.descriptor import EnumDescriptor, FieldDescriptor
@@ -38,6 +39,7 @@ from .errors import (
     CommandError,
     ControllerTimeoutError,
     LandscapeError,
+    LinkLostError,
     ProtocolError,
     VersionMismatchError,
     error_for_code,
@@ -68,6 +70,15 @@ class CommandFailed(LandscapeError):
 
     def __init__(self, message: str, code: int = EXIT_COMMAND) -> None:
         super().__init__(message)
+        self.code = code
+
+
+class AlreadyReported(LandscapeError):
+    """The invocation ends with exit code `code`; its one line was printed already (the shell
+    printed the line of a lost device as it happened)."""
+
+    def __init__(self, code: int) -> None:
+        super().__init__("")
         self.code = code
 
 
@@ -282,6 +293,8 @@ class CliState:
     sup: Supervisor | None = None
     client: SessionClient | None = None
     failures: list[str] = field(default_factory=list)
+    lost: LinkLostError | None = None
+    """The shell: the device went away (reported once, as it happened); the shell ends with exit 4."""
 
     def socket_path(self) -> Path:
         return socket_path(self.spec, self.device, self.source_address)
@@ -570,6 +583,8 @@ class LandscapeGroup(click.Group):
         return code
 
     def run(self, args: Sequence[str] | None, prog_name: str, **extra: Any) -> int:
+        old_hook = threading.excepthook
+        threading.excepthook = _thread_failed
         try:
             super().main(args=list(args) if args is not None else None, prog_name=prog_name,
                          standalone_mode=False, **extra)
@@ -590,14 +605,29 @@ class LandscapeGroup(click.Group):
             code, line = classify(exc)
             if code is None:
                 raise
-            click.echo(f"{prog_name}: {line}", err=True)
+            if line:
+                click.echo(f"{prog_name}: {line}", err=True)
             return code
+        finally:
+            threading.excepthook = old_hook
+
+
+def _thread_failed(args: threading.ExceptHookArgs) -> None:
+    """An exception that ended a thread of a library below us (python-can, can-isotp) when
+    the link died: logged (-vv shows it), never a traceback; the command's own error line
+    says what happened."""
+    if args.exc_type is SystemExit:
+        return
+    log.debug("thread %s ended: %s: %s", args.thread.name if args.thread else "?",
+              args.exc_type.__name__, args.exc_value)
 
 
 def classify(exc: BaseException) -> tuple[int | None, str]:
     """Exit code and one-line message of an exception (None: not ours, re-raise)."""
     if isinstance(exc, KeyboardInterrupt):
         return EXIT_INTERRUPTED, "interrupted"
+    if isinstance(exc, AlreadyReported):
+        return exc.code, ""
     if isinstance(exc, CommandFailed):
         return exc.code, _one_line(exc)
     if isinstance(exc, ArgumentError):
@@ -606,6 +636,8 @@ def classify(exc: BaseException) -> tuple[int | None, str]:
         return EXIT_COMMAND, _one_line(exc)
     if isinstance(exc, (BusError, ControllerTimeoutError)):
         return EXIT_BUS, _one_line(exc)
+    if isinstance(exc, can.CanError):  # python-can below us: the bus failed under a command
+        return EXIT_BUS, f"the CAN bus failed: {_one_line(exc)}"
     if isinstance(exc, VersionMismatchError):
         return EXIT_VERSION, "version mismatch: " + _one_line(exc)
     if isinstance(exc, (ProtocolError, LandscapeError)):
@@ -740,16 +772,38 @@ def _script_failure(exc: BaseException) -> int | None:
     return None  # bus, time-out, version: the session is gone; stop
 
 
+def read_script(file: str) -> tuple[str, list[str]]:
+    """(name, lines) of a `run` script: '-' is stdin. ArgumentError (exit 2, one line) for a
+    file that cannot be read or is not UTF-8 text."""
+    name = "<stdin>" if file == "-" else file
+    try:
+        if file == "-":
+            data = sys.stdin.buffer.read()
+        else:
+            with open(file, "rb") as f:
+                data = f.read()
+    except OSError as exc:
+        raise ArgumentError(f"{name}: cannot read it: {exc.strerror or exc}") from None
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = data.count(b"\n", 0, exc.start) + 1
+        raise ArgumentError(f"{name}: line {line}: not UTF-8 text (byte {data[exc.start]:#04x} at offset "
+                            f"{exc.start}): save the script as UTF-8") from None
+    return name, text.splitlines()
+
+
 @cli.command("run")
-@click.argument("file", type=click.File("r"))
+@click.argument("file", type=click.Path(allow_dash=True))
 @click.option("--keep-going", "-k", is_flag=True, help="run the remaining lines after a failing one")
 @click.pass_context
-def run_cmd(ctx: click.Context, file: Any, keep_going: bool) -> None:
-    """Run the commands of FILE (one per line, '#' comments) in one session."""
+def run_cmd(ctx: click.Context, file: str, keep_going: bool) -> None:
+    """Run the commands of FILE (one per line, '#' comments; '-': stdin) in one session."""
     st = _state(ctx)
     st.one_shot = False
     first_code = 0
-    for lineno, raw in enumerate(file, 1):
+    name, lines = read_script(file)
+    for lineno, raw in enumerate(lines, 1):
         line = raw.strip()
         if not line or line.startswith("#"):
             continue
@@ -762,13 +816,13 @@ def run_cmd(ctx: click.Context, file: Any, keep_going: bool) -> None:
             if code is None:
                 raise
             msg = exc.format_message() if isinstance(exc, click.UsageError) else str(exc)
-            click.echo(f"{file.name}:{lineno}: {_one_line(msg)}", err=True)
+            click.echo(f"{name}:{lineno}: {_one_line(msg)}", err=True)
             first_code = first_code or code
             if not keep_going:
                 break
     if first_code:
-        raise CommandFailed(f"{file.name}: stopped at a failing line" if not keep_going
-                            else f"{file.name}: some lines failed", first_code)
+        raise CommandFailed(f"{name}: stopped at a failing line" if not keep_going
+                            else f"{name}: some lines failed", first_code)
 
 
 def _history_path() -> Path:
@@ -814,8 +868,13 @@ def shell_line(ctx: click.Context, line: str, names: Sequence[str]) -> bool:
         click.echo("interrupted", err=True)
     except Exception as exc:  # noqa: BLE001 (one line, never a traceback; the shell goes on)
         code, msg = classify(exc)
-        click.echo(msg if code is not None else f"error: {type(exc).__name__}: {_one_line(exc)}", err=True)
         st = _state(ctx)
+        if isinstance(exc, LinkLostError):
+            if st.lost is None:  # a follower may have said it already
+                click.echo(msg, err=True)
+                st.lost = exc
+            return False  # the device is gone: nothing more this shell can do
+        click.echo(msg if code is not None else f"error: {type(exc).__name__}: {_one_line(exc)}", err=True)
         if code in (EXIT_BUS, EXIT_VERSION, EXIT_ERROR) and st.client is not None:
             st.client.close()   # a broken session connection is opened afresh by the next line
             st.client = None
@@ -827,11 +886,13 @@ class MotionFollower:
     arrive and its end is reported, while the prompt takes the next line (stop-motion above
     all). Through a background session it owns the connection the notices stream on."""
 
-    def __init__(self, cmd: Command, rv: RetVal, backend: Backend, wait_timeout_s: float) -> None:
+    def __init__(self, cmd: Command, rv: RetVal, backend: Backend, wait_timeout_s: float,
+                 st: CliState | None = None) -> None:
         self.cmd = cmd
         self.rv = rv
         self.backend = backend
         self.wait_timeout_s = wait_timeout_s
+        self.st = st
         self.thread = threading.Thread(target=self._run, daemon=True, name=f"landscape-follow-{cmd.cli_name}")
         self.abandoned = threading.Event()  # the shell is leaving: say nothing more
 
@@ -852,6 +913,10 @@ class MotionFollower:
             if self.abandoned.is_set():
                 return
             code, msg = classify(exc)
+            if isinstance(exc, LinkLostError) and self.st is not None:
+                if self.st.lost is not None:
+                    return  # said once
+                self.st.lost = exc  # the shell ends at its next line with exit 4
             click.echo(f"error: {msg}" if code is not None else f"error: {type(exc).__name__}: {_one_line(exc)}",
                        err=True)
         finally:
@@ -883,7 +948,7 @@ def execute_followed(st: CliState, cmd: Command, fields: dict[str, Any], wait_ti
         return rv
     if isinstance(backend, SessionClient):
         st.client = None  # the follower owns this connection; the next line opens another
-    follower = MotionFollower(cmd, rv, backend, wait_timeout_s)
+    follower = MotionFollower(cmd, rv, backend, wait_timeout_s, st)
     st.followers = [f for f in st.followers if f.running] + [follower]
     click.echo(f"  ({cmd.cli_name} runs; the prompt is free: stop-motion or Ctrl-C pauses it, abort-motion ends it)")
     follower.start()
@@ -1059,7 +1124,7 @@ def shell_cmd(ctx: click.Context) -> None:
         history=history, completer=shell_completer(names, lambda: list(history.get_strings())[-500:], published))
     # On a terminal, lines a followed motion prints go above the prompt, which is redrawn.
     with patch_stdout(raw=True) if sys.stdout.isatty() else contextlib.nullcontext():
-        while True:
+        while st.lost is None:
             try:
                 line = session.prompt("landscape> ")
             except EOFError:
@@ -1067,11 +1132,13 @@ def shell_cmd(ctx: click.Context) -> None:
             except KeyboardInterrupt:
                 stop_followed(st)
                 continue
-            if not shell_line(ctx, line, names):
+            if st.lost is not None or not shell_line(ctx, line, names):
                 break
     for f in st.followers:
         if f.running:
             f.abandon()
+    if st.lost is not None:
+        raise AlreadyReported(EXIT_BUS)  # its line was printed when it happened
 
 
 def _state_name(v: Any) -> str:
@@ -1142,6 +1209,8 @@ class TelemetryFeed:
         self._sup: Supervisor | None = None
         self._watcher: SessionClient | None = None
         self._thread: threading.Thread | None = None
+        self._closing = False
+        self.error: LandscapeError | None = None
         client = st.background()
         self.units = session_units(client if client is not None else st.session())
         if client is None:
@@ -1167,8 +1236,17 @@ class TelemetryFeed:
                         self._latest[item.name] = dict(item.signals)
                 else:
                     self.notices.append(item)
-        except (OSError, ValueError, LandscapeError):
-            pass  # close() ended the connection, or the session stopped
+        except (OSError, ValueError, LandscapeError) as exc:
+            if not self._closing:
+                self.error = exc if isinstance(exc, LandscapeError) else SessionError(
+                    f"the session at {watcher.path} went away ({exc}): check `landscape session status`")
+
+    def check(self) -> None:
+        """Raise what ended the feed: the device went away (LinkLostError), the session stopped."""
+        if self._sup is not None:
+            self._sup.check_link()
+        if self.error is not None:
+            raise self.error
 
     def telemetry(self) -> dict[str, dict[str, Any]]:
         if self._sup is not None:
@@ -1177,6 +1255,7 @@ class TelemetryFeed:
             return {k: dict(v) for k, v in self._latest.items()}
 
     def close(self) -> None:
+        self._closing = True
         if self._sup is not None:
             with contextlib.suppress(ValueError):
                 self._sup.remove_notice_callback(self.notices.append)
@@ -1205,6 +1284,7 @@ def monitor_cmd(ctx: click.Context, duration: float | None, once: bool) -> None:
     try:
         if once:
             time.sleep(0.5)
+            feed.check()
             console.print(monitor_view(feed.telemetry(), feed.title, list(feed.notices), feed.units))
             return
         end = None if duration is None else time.monotonic() + duration
@@ -1213,6 +1293,7 @@ def monitor_cmd(ctx: click.Context, duration: float | None, once: bool) -> None:
                       refresh_per_second=5) as live:
                 while end is None or time.monotonic() < end:
                     time.sleep(0.2)
+                    feed.check()
                     live.update(monitor_view(feed.telemetry(), feed.title, list(feed.notices), feed.units))
         except KeyboardInterrupt:
             pass  # Ctrl-C is how an open-ended monitor ends

@@ -31,6 +31,7 @@ from .cli import (
     CliState,
     CommandFailed,
     EnumType,
+    _description_of,
     _fmt_notice,
     _fmt_value,
     _one_line,
@@ -69,6 +70,20 @@ def path_group() -> None:
     """Load named paths from point files (CSV, YAML, JSON), run and clear them."""
 
 
+def path_points_limit(backend: Supervisor | SessionClient) -> int | None:
+    """The points one path holds on the device (describe: max_points_per_path): the bound a
+    path file is read with. None when the device did not describe itself (a lossy link:
+    the session checks requests against the host's copy of the schema, which has no tables)."""
+    if isinstance(backend, Supervisor):
+        desc = backend.description
+    else:
+        rv = send(backend, lookup("describe"), {}, wait_s=None)
+        desc = _description_of(rv) if rv.ok else None
+    if desc is None or not desc.from_device:
+        return None
+    return int(desc.res.max_points_per_path) or None
+
+
 @path_group.command("load")
 @click.argument("file", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("--name", "path_name", default=None, help="path name (default: the file's `path`, else its stem)")
@@ -81,14 +96,15 @@ def path_group() -> None:
 @click.pass_context
 def path_load_cmd(ctx: click.Context, file: Path, path_name: str | None, frame: int | None,
                   motion_type: int | None, offset_type: int | None) -> None:
-    """Append the points of FILE to a path: the whole file is checked first, then sent in
-    as many pathLoad messages as the firmware needs (docs/host-tool.md lists the columns)."""
+    """Append the points of FILE to a path: the whole file is checked first (against the
+    device's points per path), then sent in as many pathLoad messages as the firmware needs
+    (docs/host-tool.md lists the columns)."""
     st = _state(ctx)
-    pf = load_path_file(file)  # a bad file never reaches the device
+    backend = st.backend()
+    pf = load_path_file(file, max_points=path_points_limit(backend))  # a bad file never reaches the device
     s = resolve_settings(pf, path_name=path_name, frame=frame, motion_type=motion_type, offset_type=offset_type)
     reqs = build_path_load_requests(s.path_name, pf.points, frame=s.frame, motion_type=s.motion_type,
                                     offset_type=s.offset_type)
-    backend = st.backend()
     cmd = lookup("path_load")
     total = len(pf.points)
     bar = None
@@ -156,9 +172,43 @@ def path_run_cmd(ctx: click.Context, name: str, cycles: int, wait_timeout: float
 # ---------------------------------------------------------------- record, plot
 
 
-def start_recording(st: CliState, rec: Recorder | McapRecorder) -> Callable[[], None]:
+class Follow:
+    """What follows the device for record, events and the demo: call it (or stop()) to stop;
+    check() raises what ended it early (the device went away, the session stopped)."""
+
+    def __init__(self, stop: Callable[[], None] = lambda: None, sup: Supervisor | None = None) -> None:
+        self.on_stop = stop
+        self._sup = sup
+        self.stopping = False
+        self.error: LandscapeError | None = None
+
+    def __call__(self) -> None:
+        self.stop()
+
+    def stop(self) -> None:
+        self.stopping = True
+        self.on_stop()
+
+    def check(self) -> None:
+        if self._sup is not None:
+            self._sup.check_link()
+        if self.error is not None:
+            raise self.error
+
+    def pump(self, watcher: SessionClient, items: Callable[[], Any], fn: Callable[[str, Any, float], None]) -> None:
+        """In a thread: feed fn from a watch connection until stop(), or record why it ended."""
+        try:
+            for kind, item, ts in items():
+                fn(kind, item, ts)
+        except (OSError, ValueError, LandscapeError) as exc:
+            if not self.stopping:
+                self.error = exc if isinstance(exc, LandscapeError) else SessionError(
+                    f"the session at {watcher.path} went away ({exc}): check `landscape session status`")
+
+
+def start_recording(st: CliState, rec: Recorder | McapRecorder) -> Follow:
     """Feed `rec` from the background session (a watch connection of its own) or from the
-    invocation's own session; returns the function that stops it. Raw CAN frames (MCAP) come
+    invocation's own session; returns the Follow that stops it. Raw CAN frames (MCAP) come
     from the own session only: the background session forwards broadcasts and notices."""
     client = st.background()
     if client is None:
@@ -174,28 +224,27 @@ def start_recording(st: CliState, rec: Recorder | McapRecorder) -> Callable[[], 
             sup.remove_notice_callback(rec.notice)
             if frames is not None:
                 sup.remove_frame_listener(frames)
-        return stop_own
+        return Follow(stop_own, sup)
     watcher = SessionClient.attach(client.path)
     if watcher is None:
         raise SessionError(f"the session at {client.path} went away: check `landscape session status`")
 
-    def pump() -> None:
-        try:
-            for kind, item, ts in watcher.watch():
-                if kind == "broadcast":
-                    rec.broadcast(item)
-                else:
-                    rec.notice(item, ts)
-        except (OSError, ValueError, LandscapeError):
-            pass  # stop() closed the connection
+    def feed(kind: str, item: Any, ts: float) -> None:
+        if kind == "broadcast":
+            rec.broadcast(item)
+        else:
+            rec.notice(item, ts)
 
-    t = threading.Thread(target=pump, daemon=True, name="landscape-record")
-    t.start()
+    follow = Follow()
+    t = threading.Thread(target=follow.pump, args=(watcher, watcher.watch, feed), daemon=True,
+                         name="landscape-record")
 
     def stop_watch() -> None:
         watcher.close()
         t.join(2.0)
-    return stop_watch
+    follow.on_stop = stop_watch
+    t.start()
+    return follow
 
 
 @cli.command("record")
@@ -219,6 +268,7 @@ def record_cmd(ctx: click.Context, file: Path, duration: float | None) -> None:
             next_report = t0 + 1.0
             while duration is None or time.monotonic() - t0 < duration:
                 time.sleep(0.05 if duration is None else min(0.05, max(0.0, duration - (time.monotonic() - t0))))
+                stop.check()
                 if progress and time.monotonic() >= next_report:
                     next_report += 1.0
                     click.echo(f"\rrecord: {time.monotonic() - t0:5.0f} s, {rec.broadcasts} broadcasts, "
@@ -282,6 +332,7 @@ def events_cmd(ctx: click.Context, duration: float | None) -> None:
             try:
                 n, _ = q.get(timeout=left)
             except queue.Empty:
+                stop.check()
                 continue
             now = time.time()
             if st.json_out:
@@ -297,34 +348,34 @@ def events_cmd(ctx: click.Context, duration: float | None) -> None:
 
 
 def _follow_notices(st: CliState, client: SessionClient | None,
-                    fn: Callable[[pb.Notice, float], None]) -> Callable[[], None]:
+                    fn: Callable[[pb.Notice, float], None]) -> Follow:
     """Call fn(notice, host time) for every notice of the background session (a watch connection
-    of its own) or of the invocation's own session; returns the function that stops it."""
+    of its own) or of the invocation's own session; returns the Follow that stops it."""
     if client is None:
         sup = st.session()
 
         def on_n(n: pb.Notice) -> None:
             fn(n, time.monotonic())
         sup.on_notice(on_n)
-        return lambda: sup.remove_notice_callback(on_n)
+        return Follow(lambda: sup.remove_notice_callback(on_n), sup)
     watcher = SessionClient.attach(client.path)
     if watcher is None:
         raise SessionError(f"the session at {client.path} went away: check `landscape session status`")
+    follow = Follow()
 
-    def pump() -> None:
-        try:
-            for _kind, item, ts in watcher.watch(notices_only=True):
-                fn(item, ts)
-        except (OSError, ValueError, LandscapeError):
-            pass  # stop() closed the connection, or the session stopped
+    def notices() -> Any:
+        return watcher.watch(notices_only=True)
 
-    t = threading.Thread(target=pump, daemon=True, name="landscape-events")
-    t.start()
+    def feed(_kind: str, item: Any, ts: float) -> None:
+        fn(item, ts)
+    t = threading.Thread(target=follow.pump, args=(watcher, notices, feed), daemon=True, name="landscape-events")
 
     def stop_watch() -> None:
         watcher.close()
         t.join(2.0)
-    return stop_watch
+    follow.on_stop = stop_watch
+    t.start()
+    return follow
 
 
 @cli.command("urdf")
@@ -370,12 +421,13 @@ def demo_cmd(ctx: click.Context, record_file: Path | None, plot_file: Path | Non
     """Lock, activate, joint moves, a tagged Cartesian path, deactivate, release. Commands this
     firmware does not implement are skipped; exit 0 when every implemented step succeeded."""
     st = _state(ctx)
-    steps = demo_steps(load_path_file(path_file) if path_file is not None else None)
+    backend = st.backend()
+    steps = demo_steps(load_path_file(path_file, max_points=path_points_limit(backend))
+                       if path_file is not None else None)
     rec_path = record_file
     if plot_file is not None and rec_path is None:
         rec_path = Path(tempfile.mkstemp(prefix="landscape-demo-", suffix=".csv")[1])
     rec = open_recorder(rec_path) if rec_path is not None else None
-    backend = st.backend()
     if isinstance(backend, Supervisor):
         backend.on_rsvp(None, lambda n: None)  # confirm every RSVP: the demo goes on
     info = send(backend, lookup("connect"), {}, wait_s=None)

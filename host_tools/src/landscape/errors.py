@@ -19,6 +19,12 @@ class BusError(LandscapeError):
     """The CAN bus or channel could not be opened or written."""
 
 
+class LinkLostError(BusError):
+    """The device went away in the middle of a session: the link closed (landscaped exited,
+    the adapter was unplugged) or its heartbeat stopped. Nothing more can be done in this
+    session; the message says what happened."""
+
+
 class ControllerTimeoutError(LandscapeError):
     """No controller answered in time (after the retransmissions)."""
 

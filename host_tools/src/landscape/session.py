@@ -158,6 +158,14 @@ class SessionServer:
         self.sup.on_notice(self._log_notice)
         try:
             while not self._stop.is_set():
+                why = self.sup.link_problem()
+                if why is not None:
+                    # The device is gone: every waiting client gets the error (their loops check
+                    # it too), then the session ends, so no later invocation uses a dead session.
+                    log.error("%s; the session stops", self.sup._link_lost_error(why))
+                    time.sleep(0.5)
+                    self.stop()
+                    break
                 try:
                     conn, _ = self._sock.accept()
                 except TimeoutError:
@@ -298,6 +306,7 @@ class SessionServer:
             if rv.started and wait_s is not None:
                 deadline = time.monotonic() + float(wait_s)
                 while not self._stop.is_set():
+                    sup.check_link()  # LinkLostError: the client gets it as its terminal line
                     left = deadline - time.monotonic()
                     if left <= 0:
                         break
@@ -341,6 +350,11 @@ class SessionServer:
         self.sup.on_notice(on_n)
         try:
             while not self._stop.is_set():
+                why = self.sup.link_problem()
+                if why is not None:
+                    err = self.sup._link_lost_error(why)
+                    send({"error": {"type": type(err).__name__, "message": str(err)}})
+                    return
                 try:
                     item = q.get(timeout=0.2)
                 except queue.Empty:
@@ -491,8 +505,11 @@ class SessionClient:
         self._sock.settimeout(None)
         for line in self._rf:
             obj = json.loads(line)
+            if "error" in obj:
+                raise error_from_dict(obj["error"])
             if "broadcast" in obj:
                 b = obj["broadcast"]
                 yield "broadcast", tm.Broadcast(b["name"], b["sender"], b["signals"], b["timestamp"]), b["timestamp"]
             elif "notice" in obj:
                 yield "notice", json_format.ParseDict(obj["notice"], pb.Notice()), obj.get("timestamp", 0.0)
+        raise SessionError(f"the session at {self.path} closed the connection: check `landscape session status`")

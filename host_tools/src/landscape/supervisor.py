@@ -13,6 +13,7 @@ heartbeat sender. Telemetry callbacks run in the Notifier's thread.
 from __future__ import annotations
 
 import collections
+import errno
 import logging
 import queue
 import secrets
@@ -51,6 +52,7 @@ from .errors import (
     BusError,
     ControllerTimeoutError,
     LandscapeError,
+    LinkLostError,
     ProtocolError,
     VersionMismatchError,
     error_for_code,
@@ -222,6 +224,36 @@ def _undecodable_reason(data: bytes, exc: Exception) -> str:
             f"same schema?")
 
 
+#: errno values of a write that means the line is gone (a pty whose other end closed, an
+#: unplugged adapter), not a passing congestion.
+_GONE_ERRNOS = frozenset({errno.EIO, errno.EBADF, errno.ENXIO, errno.ENODEV, errno.EPIPE})
+
+
+def _line_gone(exc: BaseException) -> bool:
+    """Whether a send error says the line itself is gone."""
+    cause: BaseException | None = exc
+    while cause is not None:
+        if isinstance(cause, OSError) and cause.errno in _GONE_ERRNOS:
+            return True
+        cause = cause.__cause__ or cause.__context__
+    return False
+
+
+class _LinkWatch(can.Listener):
+    """The supervisor's listener on the Notifier: frames go to _on_frame; a read error (the
+    line closed) marks the link lost instead of ending the Notifier's thread with a traceback."""
+
+    def __init__(self, sup: Supervisor) -> None:
+        self.sup = sup
+
+    def on_message_received(self, msg: can.Message) -> None:
+        self.sup._on_frame(msg)
+
+    def on_error(self, exc: Exception) -> None:
+        self.sup._link_failed(f"the link closed ({exc.__cause__ or exc})")
+        time.sleep(0.05)  # the Notifier calls recv again at once: do not spin on a dead line
+
+
 class Supervisor:
     """One session with the device at `device`, speaking from node `source_address`.
 
@@ -299,6 +331,9 @@ class Supervisor:
         self._telemetry: dict[str, tm.Broadcast] = {}
         self._tm_lock = threading.Lock()
         self.device_last_seen: float | None = None
+        self._device_heard: float | None = None  # time.monotonic() of the device's last HEARTBEAT
+        self._lost: str | None = None            # why the link is gone (LinkLostError), None while it lives
+        self._watch: _LinkWatch | None = None
         self.protocol_errors = 0
 
         self._stack: isotp.NotifierBasedCanStack | None = None
@@ -382,11 +417,22 @@ class Supervisor:
         if self._notifier is None:
             self._notifier = can.Notifier(self.bus, [], timeout=0.05)
         self._stop.clear()
+        self._lost = None
+        self._device_heard = None
         self._stack = isotp.NotifierBasedCanStack(self.bus, self._notifier, address=self._address,
                                                   params=dict(ISOTP_PARAMS),
                                                   error_handler=self._isotp_error)
+        inner_tx = self._stack.txfn
+
+        def tx(msg: Any) -> None:  # in the stack's thread: an error there would end it with a traceback
+            try:
+                inner_tx(msg)
+            except Exception as exc:
+                self._link_failed(f"cannot send on it ({exc.__cause__ or exc})")
+        self._stack.txfn = tx
         self._stack.start()
-        self._notifier.add_listener(self._on_frame)
+        self._watch = _LinkWatch(self)
+        self._notifier.add_listener(self._watch)
         self._running = True
         for fn, name in ((self._rx_loop, "rx"), (self._dispatch_loop, "dispatch")):
             t = threading.Thread(target=fn, name=f"landscape-{name}-{self.source_address:02x}", daemon=True)
@@ -477,7 +523,7 @@ class Supervisor:
 
     def close(self) -> None:
         """Disconnect (best effort) and stop everything this Supervisor started. Idempotent."""
-        if self.connected and self._running:
+        if self.connected and self._running and self.link_problem() is None:
             try:
                 self.request("disconnect", check=False, timeout_s=min(self.timeout_s or 0.5, 0.5))
             except LandscapeError:
@@ -487,11 +533,16 @@ class Supervisor:
         self._running = False
         self._stop.set()
         self._dispatch_q.put(None)
-        if self._notifier is not None:
+        if self._owns_notifier and self._notifier is not None:
+            # first, while our listener still takes a dead line's read errors (else the
+            # Notifier's thread would end on one with a traceback)
+            self._notifier.stop()
+        if self._notifier is not None and self._watch is not None:
             try:
-                self._notifier.remove_listener(self._on_frame)
+                self._notifier.remove_listener(self._watch)
             except ValueError:
                 pass
+            self._watch = None
         if self._stack is not None:
             self._stack.stop()
             self._stack = None
@@ -501,13 +552,57 @@ class Supervisor:
         self._threads.clear()
         with self._cv:
             self._cv.notify_all()
-        if self._owns_notifier and self._notifier is not None:
-            self._notifier.stop()
+        if self._owns_notifier:
             self._notifier = None
         if self._owns_bus:
-            self.bus.shutdown()
+            try:
+                self.bus.shutdown()
+            except (can.CanError, OSError) as exc:  # a line that is gone cannot be closed cleanly
+                log.debug("closing %s: %s", self.channel_name, exc)
             release_bus(self.bus)
             self._owns_bus = False
+
+    # ------------------------------------------------------------ liveness of the link and the device
+
+    def _link_failed(self, why: str) -> None:
+        """The transport's threads report a dead line here (never raise there)."""
+        with self._cv:
+            if self._lost is None:
+                self._lost = why
+                log.debug("link %s lost: %s", self.channel_name, why)
+            self._cv.notify_all()
+
+    def device_silence_limit_s(self) -> float | None:
+        """How long the device may stay silent before it counts as gone: twice the session's
+        heartbeat time-out (after which the device itself would drop us); None before connect."""
+        info = self.device_info
+        if info is None or not info.heartbeat_timeout_ms:
+            return None
+        return 2.0 * info.heartbeat_timeout_ms / 1000.0
+
+    def link_problem(self) -> str | None:
+        """Why the device is gone (the link closed, a send failed, its HEARTBEAT stopped for
+        longer than device_silence_limit_s()), or None while it lives. A device whose heartbeat
+        was never seen is not judged by it."""
+        if self._lost is not None:
+            return self._lost
+        limit = self.device_silence_limit_s()
+        heard = self._device_heard
+        if self.connected and limit is not None and heard is not None:
+            silent = time.monotonic() - heard
+            if silent > limit:
+                return f"no heartbeat from it for {silent:.1f} s"
+        return None
+
+    def check_link(self) -> None:
+        """Raise LinkLostError when link_problem() names one (for loops that only wait)."""
+        why = self.link_problem()
+        if why is not None:
+            raise self._link_lost_error(why)
+
+    def _link_lost_error(self, why: str) -> LinkLostError:
+        return LinkLostError(f"landscaped at {self.device:#04x} on {self.channel_name} stopped answering: {why}: "
+                             f"is it still running? Start it again, then rerun the command")
 
     # ------------------------------------------------------------ heartbeat
 
@@ -536,7 +631,9 @@ class Supervisor:
                                         hb_period_ms=self.heartbeat_period_ms, hb_token=self._hb_token))
                 reported = False
             except Exception as exc:  # keep beating: a transient bus error must not end the session
-                if not reported:
+                if _line_gone(exc):
+                    self._link_failed(f"cannot send on it ({exc.__cause__ or exc})")
+                elif not reported and self._lost is None:
                     log.warning("heartbeat: cannot send on %s: %s", self.channel_name, exc)
                     reported = True
             counter = (counter + 1) & 0xFF
@@ -598,6 +695,7 @@ class Supervisor:
             for attempt in range(tries):
                 if attempt:
                     log.info("%s: no answer to seq %d, retransmitting", cmd.name, req.seq)
+                self.check_link()
                 self._send(data)
                 deadline = time.monotonic() + per_try
                 with self._cv:
@@ -605,7 +703,11 @@ class Supervisor:
                         left = deadline - time.monotonic()
                         if left <= 0:
                             break
-                        self._cv.wait(left)
+                        if self.link_problem() is not None:
+                            break
+                        self._cv.wait(min(left, 0.2))
+                    if self._pending_resp is None and self._pending_bad is None:
+                        self.check_link()
                     if self._pending_resp is not None:
                         return self._pending_resp
                     if self._pending_bad is not None:
@@ -708,12 +810,13 @@ class Supervisor:
             while rsvp_id not in self._acks:
                 if not self._running:
                     raise LandscapeError("the session was closed while waiting for an RSVP acknowledgement")
+                self.check_link()
                 left = deadline - time.monotonic()
                 if left <= 0:
                     raise ControllerTimeoutError(
                         f"no acknowledgement of the reply to rsvp {rsvp_id} within {timeout_s:g} s: is the "
                         f"controller at {self.device:#04x} still running?")
-                self._cv.wait(left)
+                self._cv.wait(min(left, 0.2))
             return self._acks[rsvp_id]
 
     # ------------------------------------------------------------ receiving
@@ -855,10 +958,11 @@ class Supervisor:
         while True:
             with self._cv:
                 while self._read_cursor >= self._hist_end and self._running:
+                    self.check_link()
                     left = None if deadline is None else deadline - time.monotonic()
                     if left is not None and left <= 0:
                         return
-                    self._cv.wait(left if left is not None else 0.5)
+                    self._cv.wait(min(left, 0.2) if left is not None else 0.2)
                 if self._read_cursor >= self._hist_end:
                     return
                 self._read_cursor = max(self._read_cursor, self._hist_base)
@@ -878,12 +982,13 @@ class Supervisor:
             while key not in self._finals:
                 if not self._running:
                     raise LandscapeError("the session was closed while waiting for a completion")
+                self.check_link()
                 left = None if deadline is None else deadline - time.monotonic()
                 if left is not None and left <= 0:
                     raise ControllerTimeoutError(
                         f"{retval.name} (seq {retval.seq}) did not complete within {timeout_s:g} s: "
                         f"check get-motion-control-state, or stop-motion")
-                self._cv.wait(left if left is not None else 0.5)
+                self._cv.wait(min(left, 0.2) if left is not None else 0.2)
             n = self._finals[key]
         if n.kind in ALARM_KINDS:
             raise AlarmError(n, retval.name)
@@ -906,10 +1011,11 @@ class Supervisor:
                             return n
                 if not self._running:
                     raise LandscapeError("the session was closed while waiting for a tag")
+                self.check_link()
                 left = None if deadline is None else deadline - time.monotonic()
                 if left is not None and left <= 0:
                     raise ControllerTimeoutError(f"tag '{tag_name}' not reached within {timeout_s:g} s")
-                self._cv.wait(left if left is not None else 0.5)
+                self._cv.wait(min(left, 0.2) if left is not None else 0.2)
 
     # ------------------------------------------------------------ telemetry
 
@@ -927,6 +1033,7 @@ class Supervisor:
             self._telemetry[b.name] = b
             if b.name == "HEARTBEAT":
                 self.device_last_seen = b.timestamp
+                self._device_heard = time.monotonic()
         for cb in list(self._telemetry_cbs):
             try:
                 cb(b)

@@ -1,0 +1,185 @@
+"""landscaped killed (SIGKILL) in the middle of a command: the CLI ends with exit 4 and one
+line naming what happened, no traceback, within seconds (issue 17, item 7; docs/host-tool.md,
+"Errors and exit codes").
+
+Each case starts a landscaped of its own (the fixture of conftest.py would fail the test
+on the non-zero exit that SIGKILL is), runs the command as a process, waits until the
+command is under way (a line on stdout, or the time it takes to get going), kills the
+controller and times the CLI's exit from the kill.
+"""
+from __future__ import annotations
+
+import os
+import select
+import signal
+import subprocess
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from conftest import CLI, Controller, start_controller
+from landscape.link import lock_holder_pid
+
+FAR = ["1.2", "-0.3", "1.2", "0.5", "0.9", "1.0"]
+#: From the kill to the CLI's exit: the link closes at once (the pty's master goes), or the
+#: device's heartbeat stays away for twice the session time-out (2 s): well within this.
+EXIT_WITHIN_S = 8.0
+#: prompt_toolkit's own line when the shell's stdin is a pipe (not an error of ours)
+PROMPT_TOOLKIT_NOTE = "Warning: Input is not a terminal"
+
+
+@pytest.fixture
+def doomed(tmp_path: Path) -> Iterator[Controller]:
+    c = start_controller(tmp_path / "ls0")
+    try:
+        yield c
+    finally:
+        if c.proc.poll() is None:
+            c.proc.kill()
+        c.proc.wait(10)
+
+
+def popen(c: Controller, *args: str, stdin: int | None = subprocess.DEVNULL) -> subprocess.Popen[str]:
+    return subprocess.Popen([str(CLI), "--interface", "slcan", "--channel", c.pty, *args], stdin=stdin,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def wait_for_line(proc: subprocess.Popen[str], text: str, timeout_s: float = 30.0) -> list[str]:
+    """stdout lines of `proc` up to the first containing `text`."""
+    assert proc.stdout is not None
+    seen: list[str] = []
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        ready, _, _ = select.select([proc.stdout], [], [], 0.2)
+        if ready:
+            line = proc.stdout.readline()
+            if not line:
+                break
+            seen.append(line)
+            if text in line:
+                return seen
+    proc.kill()
+    raise AssertionError(f"'{text}' not seen; stdout so far: {seen}; stderr: {proc.communicate()[1]}")
+
+
+def kill_and_finish(c: Controller, proc: subprocess.Popen[str]) -> tuple[str, float]:
+    """SIGKILL the controller; (the CLI's stderr, seconds from the kill to its exit)."""
+    t0 = time.monotonic()
+    c.proc.send_signal(signal.SIGKILL)
+    try:
+        _, err = proc.communicate(timeout=EXIT_WITHIN_S + 22)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        raise AssertionError(f"the CLI did not exit within {EXIT_WITHIN_S + 22} s of the kill") from None
+    return err, time.monotonic() - t0
+
+
+def assert_one_line_exit_4(proc: subprocess.Popen[str], err: str, took_s: float) -> None:
+    assert "Traceback" not in err and "Exception in thread" not in err, err
+    assert proc.returncode == 4, (proc.returncode, err)
+    lines = [line for line in err.splitlines() if not line.startswith("events: no background session: ")]
+    assert len(lines) == 1, err
+    assert lines[0].startswith("landscape: landscaped at 0x10 on slcan:"), lines[0]
+    assert " stopped answering: " in lines[0] and lines[0].endswith("then rerun the command"), lines[0]
+    assert took_s < EXIT_WITHIN_S, took_s
+
+
+def script(tmp_path: Path, *lines: str) -> str:
+    f = tmp_path / "s.ls"
+    f.write_text("\n".join(lines) + "\n")
+    return str(f)
+
+
+def test_a_long_move(doomed: Controller, tmp_path: Path) -> None:
+    s = script(tmp_path, "lock", "activate", "set-speed percent --speed 3",
+               "move-absolute p JOINT_FRAME " + " ".join(FAR) + " --wait-timeout 120")
+    proc = popen(doomed, "run", s)
+    wait_for_line(proc, "move-absolute: CMD_STARTED_OK")
+    err, took = kill_and_finish(doomed, proc)
+    assert_one_line_exit_4(proc, err, took)
+
+
+def test_path_run_does_not_wait_out_its_time_out(doomed: Controller, tmp_path: Path) -> None:
+    points = tmp_path / "far.csv"
+    points.write_text("j1,j2,j3,j4,j5,j6,tag_name\n" + ",".join(FAR) + ",a\n" + "0,0,0,0,0,0,b\n")
+    s = script(tmp_path, "lock", "activate", "set-speed percent --speed 3", f"path load {points}",
+               "path run far --cycles 5 --wait-timeout 300")
+    proc = popen(doomed, "run", s)
+    wait_for_line(proc, "path-move: CMD_STARTED_OK")
+    err, took = kill_and_finish(doomed, proc)
+    assert_one_line_exit_4(proc, err, took)
+
+
+@pytest.mark.parametrize("command", [["record", "{tmp}/r.csv", "--duration", "60"],
+                                     ["monitor", "--duration", "60"], ["events", "--duration", "60"]])
+def test_record_monitor_events(doomed: Controller, tmp_path: Path, command: list[str]) -> None:
+    proc = popen(doomed, *[c.format(tmp=tmp_path) for c in command])
+    deadline = time.monotonic() + 30
+    while lock_holder_pid(doomed.pty) != proc.pid:  # it has opened the pty ...
+        assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()
+        time.sleep(0.05)
+    time.sleep(1.5)  # ... and connected (a handshake and a describe: tens of ms unloaded)
+    assert proc.poll() is None, proc.communicate()
+    err, took = kill_and_finish(doomed, proc)
+    assert_one_line_exit_4(proc, err, took)
+
+
+def test_the_shell_says_it_once_and_ends_with_exit_4(doomed: Controller) -> None:
+    proc = popen(doomed, "shell", stdin=subprocess.PIPE)
+    assert proc.stdin is not None
+    proc.stdin.write("lock\nactivate\nset-speed percent --speed 3\nmove-absolute p JOINT_FRAME "
+                     + " ".join(FAR) + "\n")
+    proc.stdin.flush()
+    wait_for_line(proc, "move-absolute: CMD_STARTED_OK")
+    t0 = time.monotonic()
+    doomed.proc.send_signal(signal.SIGKILL)
+    assert proc.stderr is not None
+    first = ""
+    while " stopped answering: " not in first:
+        ready, _, _ = select.select([proc.stderr], [], [], max(0.0, t0 + EXIT_WITHIN_S - time.monotonic()))
+        assert ready, "the shell said nothing after the kill"
+        first = proc.stderr.readline()
+        assert first, "the shell's stderr closed"
+        if first.startswith(PROMPT_TOOLKIT_NOTE):
+            first = ""
+    took = time.monotonic() - t0
+    proc.stdin.write("get-motion-control-state\n")  # the next line ends the shell
+    proc.stdin.close()
+    assert proc.stdout is not None
+    proc.stdout.read()
+    rest = proc.stderr.read()
+    proc.wait(30)
+    err = first + rest
+    assert "Traceback" not in err and "Exception in thread" not in err, err
+    assert proc.returncode == 4, err
+    lines = [line for line in err.splitlines() if not line.startswith(PROMPT_TOOLKIT_NOTE)]
+    assert len(lines) == 1 and " stopped answering: " in first, err
+    assert took < EXIT_WITHIN_S
+
+
+def test_a_background_session_and_its_clients(doomed: Controller, tmp_path: Path) -> None:
+    os.environ["XDG_RUNTIME_DIR"] = str(tmp_path)
+    try:
+        r = doomed.cli("session", "start", "--lock")
+        assert r.returncode == 0, r.stderr
+        for cmd in (["activate"], ["set-speed", "percent", "--speed", "3"]):
+            r = doomed.cli(*cmd)
+            assert r.returncode == 0, (cmd, r.stderr)
+        mv = popen(doomed, "move-absolute", "p", "JOINT_FRAME", *FAR, "--wait-timeout", "120")
+        wait_for_line(mv, "move-absolute: CMD_STARTED_OK")
+        err, took = kill_and_finish(doomed, mv)
+        assert_one_line_exit_4(mv, err, took)
+        # the session process noticed too and stopped: later invocations do not use a dead session
+        deadline = time.monotonic() + 10
+        while time.monotonic() < deadline:
+            r = doomed.cli("session", "status")
+            if r.returncode == 1:
+                break
+            time.sleep(0.2)
+        assert r.returncode == 1 and "no session runs" in r.stderr, (r.returncode, r.stdout, r.stderr)
+        assert "Traceback" not in r.stderr
+    finally:
+        doomed.cli("session", "stop")
+        os.environ.pop("XDG_RUNTIME_DIR", None)
