@@ -23,10 +23,10 @@
  *  - a deferred answer comes while its session lives and the loop runs;
  *  - the loop's command ring never holds more than its size.
  *
- * Tool changer and jogging are left out: their state lives in file-scope
- * variables of cmd_tool.c and cmd_sensor.c that ls_core_init does not reset,
- * so they would leak from one input into the next. Paths do too
- * (cmd_motion.c): every input starts by clearing the names of the pool. */
+ * Every input starts from ls_core_init and ls_control_init: the core keeps
+ * all its state in ls_core_t, so nothing carries from one input into the
+ * next. The tool changer and jogging are not composed (no hal_tool_t,
+ * hal_manual_t): their commands answer CMD_UNSUPPORTED_ERR here. */
 #include <stdbool.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -37,10 +37,8 @@
 #include <pb_decode.h>
 #include <pb_encode.h>
 
-#include "cmd_sensor.h"
 #include "ls_control.h"
 #include "ls_core.h"
-#include "ls_core_events.h"
 #include "ls_utf8.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
@@ -243,7 +241,8 @@ static unsigned g_req_answers;
 static ls_Response g_req_resp; /* that answer */
 static unsigned g_step_downlinks;
 static uint32_t g_last_rsvp[N_SUP];
-static ls_Downlink g_dl; /* scratch: large */
+static uint32_t g_token[N_SUP]; /* each supervisor's heartbeat token (its last ConnectRes) */
+static ls_Downlink g_dl;        /* scratch: large */
 
 static int sup_of_addr(uint8_t addr)
 {
@@ -284,6 +283,9 @@ static void on_response(uint8_t addr, const ls_Response *r)
     const int sup = sup_of_addr(addr);
     if (sup < 0) {
         __builtin_trap(); /* an answer to an address that never asked */
+    }
+    if (r->ret_code >= 0 && r->which_result == ls_Response_connect_tag) {
+        g_token[sup] = r->result.connect.heartbeat_token;
     }
     if (g_in_request && sup == g_req_sup && (r->seq == g_req_seq || g_req_any)) {
         g_req_answers++;
@@ -426,32 +428,10 @@ static void check_state(void)
 
 /* ---------------------------------------------------------------- time */
 
-static void drain_control_events(void)
-{
-    ls_ctl_event_t ev;
-    while (ls_control_next_event(&g_ctl, &ev)) {
-        switch (ev.kind) {
-        case LS_CEV_MOTION: ls_core_on_motion_event(&g_core, &ev.motion); break;
-        case LS_CEV_FAULT: ls_core_fault(&g_core, ev.text, g_now); break;
-        case LS_CEV_DIO_CHANGED: ls_core_on_dio_event(&g_core, ev.dio.unit, ev.dio.on, ev.dio.off, g_now); break;
-        case LS_CEV_CMD_FAILED: {
-            const char *d[] = { "reason=fuzz" };
-            ls_core_notify(&g_core, g_core.owner, ls_NoticeKind_ALARM, "commandFailed", ev.ref_seq, false, d, 1);
-            ls_core_motion_failed(&g_core, ev.ref_seq, ev.text);
-            break;
-        }
-        }
-    }
-}
-
 static void comms_turn(void)
 {
     g_step_downlinks = 0;
-    drain_control_events();
-    ls_core_tick(&g_core, g_now);
-    ls_run_tick(&g_core, g_now);
-    ls_dio_tick(&g_core, g_now);
-    ls_core_motion_tick(&g_core, g_now);
+    ls_core_tick(&g_core, g_now); /* takes the loop's events, times, halts, DIO, aux (ls_core.h) */
 }
 
 /* Let `dt_us` pass: a loop cycle and a comms turn every CYCLE_US, at most
@@ -464,7 +444,7 @@ static void advance(uint64_t dt_us, bool heartbeats)
         g_now += CYCLE_US;
         if (heartbeats && n % 10u == 0u) {
             for (int i = 0; i < N_SUP; i++) {
-                ls_core_on_heartbeat(&g_core, k_addr[i], g_now);
+                ls_core_on_heartbeat(&g_core, k_addr[i], g_token[i], g_now);
             }
         }
         ls_control_cycle(&g_ctl, g_now);
@@ -473,7 +453,7 @@ static void advance(uint64_t dt_us, bool heartbeats)
     g_now = end;
     if (heartbeats) { /* the supervisors beat on while the loop stalls */
         for (int i = 0; i < N_SUP; i++) {
-            ls_core_on_heartbeat(&g_core, k_addr[i], g_now);
+            ls_core_on_heartbeat(&g_core, k_addr[i], g_token[i], g_now);
         }
     }
     comms_turn();
@@ -701,6 +681,10 @@ static void request(void)
         if ((take8() & 3u) != 3u) {
             rq->cmd.connect.heartbeat_period_ms = 100;
         }
+        if ((take8() & 3u) != 3u) { /* the same client again (else the fuzzed nonce: another one) */
+            rq->cmd.connect.has_client_nonce = true;
+            rq->cmd.connect.client_nonce = 0x1000u + (uint64_t)sup;
+        }
     }
     pb_ostream_t os = pb_ostream_from_buffer(g_enc, sizeof g_enc);
     if (!pb_encode(&os, ls_Uplink_fields, &g_up)) {
@@ -773,51 +757,14 @@ static void setup(void)
     };
     ls_control_init(&g_ctl, &cc);
     g_core.ctl = &g_ctl;
-    ls_core_sensor_attach(&g_core);
     g_now = 1000000;
     memset(g_deferred, 0, sizeof g_deferred);
     memset(g_last_rsvp, 0, sizeof g_last_rsvp);
     memset(g_seq, 0, sizeof g_seq);
     memset(g_last_len, 0, sizeof g_last_len);
+    memset(g_token, 0, sizeof g_token);
     g_n_answered = 0;
     g_ledger_full = false;
-}
-
-/* Paths live in cmd_motion.c's statics: clear the pool's names, as a
- * supervisor at 0x7E would, so no input sees another's paths. */
-static void clear_paths(void)
-{
-    static const uint8_t k_clear_addr = 0x7E;
-    uint32_t seq = 0;
-    const pb_size_t steps[] = { ls_Request_connect_tag, ls_Request_lock_tag };
-    for (size_t i = 0; i < sizeof steps / sizeof steps[0] + N_NAMES + 2u; i++) {
-        memset(&g_up, 0, sizeof g_up);
-        g_up.which_msg = ls_Uplink_request_tag;
-        ls_Request *rq = &g_up.msg.request;
-        rq->seq = ++seq;
-        if (i < 2u) {
-            rq->which_cmd = steps[i];
-            if (i == 0) {
-                rq->cmd.connect.has_protocol_version = true;
-                rq->cmd.connect.protocol_version = ls_Protocol_PROTOCOL_VERSION;
-                rq->cmd.connect.has_schema_hash = true;
-                rq->cmd.connect.schema_hash = LS_SCHEMA_HASH;
-            }
-        } else if (i < 2u + N_NAMES) {
-            rq->which_cmd = ls_Request_path_clear_path_tag;
-            snprintf(rq->cmd.path_clear_path.path_name, sizeof rq->cmd.path_clear_path.path_name, "%s",
-                     k_names[i - 2u]);
-        } else {
-            rq->which_cmd = (pb_size_t)(i == 2u + N_NAMES ? ls_Request_release_tag : ls_Request_disconnect_tag);
-        }
-        pb_ostream_t os = pb_ostream_from_buffer(g_enc, sizeof g_enc);
-        if (pb_encode(&os, ls_Uplink_fields, &g_up)) {
-            ls_core_on_uplink(&g_core, k_clear_addr, g_enc, os.bytes_written, g_now);
-        }
-    }
-    if (ls_core_session_of(&g_core, k_clear_addr) >= 0 || g_core.state != ls_State_IDLE) {
-        __builtin_trap(); /* the clean-up session must leave nothing behind */
-    }
 }
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
@@ -828,11 +775,6 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         g_trace = t != NULL && t[0] == '1';
     }
     setup();
-    /* the clean-up session's answers are not the supervisors' business */
-    g_core.io.send_downlink = NULL;
-    clear_paths();
-    g_core.io.send_downlink = send_downlink;
-    g_core.tx_lost = 0;
     const uint8_t *p = data;
     const uint8_t *const end = data + size;
     while (end - p >= 2) {
@@ -854,7 +796,12 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         case 4:
         case 5: request(); break;
         case 6:
-        case 7: ls_core_on_heartbeat(&g_core, k_addr[take8() % N_SUP], g_now); break;
+        case 7: {
+            const int sup = take8() % N_SUP;
+            const uint8_t b = take8(); /* mostly its token; else another (refused: hb_refused) */
+            ls_core_on_heartbeat(&g_core, k_addr[sup], b < 200u ? g_token[sup] : take32(), g_now);
+            break;
+        }
         case 8: advance((uint64_t)take8() * 1000u, (op & 0x10u) != 0u); break;
         case 9: advance((uint64_t)take8() * 50000u, (op & 0x10u) != 0u); break;
         case 10: rsvp_reply(); break;

@@ -108,7 +108,7 @@ def request(sup: int, command: str, how: int = 0, **values: Any) -> bytes:
     fd = pb.Request.DESCRIPTOR.fields_by_name[command]
     args = bytes([sup, fd.number, how]) + fields(fd.message_type, values)
     if command == "connect":
-        args += b"\x00\x00"  # right version and schema, heartbeat period 100 ms
+        args += b"\x00\x00\x00"  # right version and schema, heartbeat period 100 ms, its own nonce
     return step(OP_REQUEST, args)
 
 
