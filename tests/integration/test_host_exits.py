@@ -77,6 +77,7 @@ def kill_and_finish(c: Controller, proc: subprocess.Popen[str]) -> tuple[str, fl
 
 
 def assert_one_line_exit_4(proc: subprocess.Popen[str], err: str, took_s: float) -> None:
+    print(f"exit {proc.returncode} {took_s:.2f} s after the kill: {err.strip().splitlines()[-1:]}")  # pytest -s
     assert "Traceback" not in err and "Exception in thread" not in err, err
     assert proc.returncode == 4, (proc.returncode, err)
     lines = [line for line in err.splitlines() if not line.startswith("events: no background session: ")]
@@ -156,6 +157,7 @@ def test_the_shell_says_it_once_and_ends_with_exit_4(doomed: Controller) -> None
     assert proc.returncode == 4, err
     lines = [line for line in err.splitlines() if not line.startswith(PROMPT_TOOLKIT_NOTE)]
     assert len(lines) == 1 and " stopped answering: " in first, err
+    print(f"shell: the line {took:.2f} s after the kill: {first.strip()}")  # pytest -s
     assert took < EXIT_WITHIN_S
 
 
