@@ -7,7 +7,8 @@ code:
 
     0 success; 1 protocol or other error; 2 usage (bad arguments, unknown command);
     3 the device answered an error or a command ended with an alarm;
-    4 bus cannot be opened or no controller answers; 5 version mismatch; 130 interrupted.
+    4 bus cannot be opened, no controller answers, or it went away mid-command;
+    5 version mismatch; 130 interrupted.
 """
 from __future__ import annotations
 
