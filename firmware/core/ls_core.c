@@ -1036,6 +1036,7 @@ static void on_request(ls_core_t *core, uint8_t addr, ls_Request *rq, const uint
         core->down.which_msg = ls_Downlink_response_tag;
         ls_Response *busy = &core->down.msg.response;
         busy->seq = rq->seq;
+        busy->session_epoch = s->epoch;
         busy->ret_code = ls_RetCode_CMD_BUSY_ERR;
         snprintf(busy->ret_msg, sizeof busy->ret_msg, "%s (seq %u) is still running: wait for its answer",
                  pd != NULL ? pd->name : "a blocking command", (unsigned)s->last_seq);
@@ -1151,6 +1152,9 @@ static void answer_bad_request(ls_core_t *core, uint8_t addr, int32_t code, uint
     ls_Response *res = &core->down.msg.response;
     res->seq = seq;
     res->ret_code = code;
+    /* Every answer carries the epoch of the session it answers (docs/protocol.md). */
+    const int sup = find_session(core, addr);
+    res->session_epoch = sup >= 0 ? core->sessions[sup].epoch : 0u;
     va_list ap;
     va_start(ap, fmt);
     vsnprintf(res->ret_msg, sizeof res->ret_msg, fmt, ap);

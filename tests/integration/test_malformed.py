@@ -434,6 +434,8 @@ def test_a_request_while_a_blocking_one_runs_is_refused_and_the_first_still_answ
     assert busy.ret_msg.startswith(f"stopMotion (seq {stop_seq}) is still running")
     stopped = reader.response(stop_seq)
     assert stopped.ret_code == pb.CMD_EXEC_OK
+    # both answers name this session's epoch (a refusal too: it answers this session)
+    assert busy.session_epoch == stopped.session_epoch != 0
     assert sup.get_motion_control_state().result["state"] == "PAUSED"
     sup.abort_motion()
     sup.deactivate()

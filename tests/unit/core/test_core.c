@@ -1325,6 +1325,8 @@ static void test_seq_reuse_with_another_request_is_refused(void **state)
     assert_int_equal(r->seq, g_seq);
     assert_non_null(strstr(r->ret_msg, "reused"));
     assert_non_null(strstr(r->ret_msg, "setSpeed"));
+    assert_int_not_equal(r->session_epoch, 0);
+    assert_int_equal(r->session_epoch, g_core.sessions[0].epoch); /* the refusal is this session's */
     assert_true(fabs(g_core.settings.speed_pct - 40.0) < 1e-9);
     assert_int_equal(g_core.sessions[0].executed, executed);
     /* the same seq with another command: refused as well */
