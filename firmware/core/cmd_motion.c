@@ -52,17 +52,25 @@ void ls_mcmd_world_pose(const ls_core_t *core, double T[16])
     ls_pose_from_xyzrpy(core->settings.world_frame, T);
 }
 
-void ls_mcmd_cart_limits(const ls_core_t *core, double speed_pct, ls_motion_cart_limits_t *lim)
+void ls_mcmd_cart_limits(const ls_core_t *core, double speed_pct, double accel_pct, ls_motion_cart_limits_t *lim)
 {
     const ls_robot_model_t *m = core->model;
     const ls_settings_t *st = &core->settings;
-    lim->v_lin_m_s = speed_pct > 0.0 ? m->max_linear_speed_m_s * speed_pct / 100.0 : st->linear_speed_m_s;
-    lim->v_ang_rad_s = speed_pct > 0.0 ? m->max_angular_speed_rad_s * speed_pct / 100.0 : st->angular_speed_rad_s;
+    /* A percent of the move or point wins; else the kind of the most recent
+     * setSpeed / setAcceleration call: PERCENT_* scales the model's
+     * Cartesian maxima (seed 3.2.1: "globally to both joint and Cartesian
+     * moves"), LINEAR_* / ANGULAR_* give the values themselves. */
+    const double sp = speed_pct > 0.0 ? speed_pct : (st->cart_speed_from_pct ? st->speed_pct : 0.0);
+    const double ap = accel_pct > 0.0 ? accel_pct : (st->cart_accel_from_pct ? st->accel_pct : 0.0);
+    lim->v_lin_m_s = sp > 0.0 ? m->max_linear_speed_m_s * sp / 100.0 : st->linear_speed_m_s;
+    lim->v_ang_rad_s = sp > 0.0 ? m->max_angular_speed_rad_s * sp / 100.0 : st->angular_speed_rad_s;
+    lim->a_lin_m_s2 = ap > 0.0 ? m->max_linear_accel_m_s2 * ap / 100.0 : st->linear_accel_m_s2;
+    lim->a_ang_rad_s2 = ap > 0.0 ? m->max_angular_accel_rad_s2 * ap / 100.0 : st->angular_accel_rad_s2;
     lim->v_lin_m_s = fmin(lim->v_lin_m_s, m->max_linear_speed_m_s);
     lim->v_ang_rad_s = fmin(lim->v_ang_rad_s, m->max_angular_speed_rad_s);
-    lim->a_lin_m_s2 = fmin(st->linear_accel_m_s2, m->max_linear_accel_m_s2);
-    lim->a_ang_rad_s2 = fmin(st->angular_accel_rad_s2, m->max_angular_accel_rad_s2);
-    /* Jerk follows the acceleration setting's share of the maximum. */
+    lim->a_lin_m_s2 = fmin(lim->a_lin_m_s2, m->max_linear_accel_m_s2);
+    lim->a_ang_rad_s2 = fmin(lim->a_ang_rad_s2, m->max_angular_accel_rad_s2);
+    /* Jerk follows the acceleration's share of the maximum. */
     lim->j_lin_m_s3 = m->max_linear_jerk_m_s3 * lim->a_lin_m_s2 / m->max_linear_accel_m_s2;
     lim->j_ang_rad_s3 = m->max_angular_jerk_rad_s3 * lim->a_ang_rad_s2 / m->max_angular_accel_rad_s2;
     lim->joint_speed_frac = 1.0;

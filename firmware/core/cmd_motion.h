@@ -33,8 +33,10 @@ void ls_mcmd_tip_of(const ls_core_t *core, const double q[LS_N_JOINTS], double P
 /* A relative Cartesian offset d (x y z roll pitch yaw, SI) applied to the
  * tip pose P in the axes of frame F (base: identity, world: the world frame). */
 void ls_mcmd_offset_in_frame(const double F[16], const double P[16], const double d[6], double out[16]);
-/* Cartesian limits of a move at speed_pct (0: the LINEAR_/ANGULAR_ settings). */
-void ls_mcmd_cart_limits(const ls_core_t *core, double speed_pct, ls_motion_cart_limits_t *lim);
+/* Cartesian limits of a move at speed_pct and accel_pct of the model's
+ * Cartesian maxima; 0 for either: the settings (the kind of the most recent
+ * setSpeed / setAcceleration call decides, docs/protocol.md). */
+void ls_mcmd_cart_limits(const ls_core_t *core, double speed_pct, double accel_pct, ls_motion_cart_limits_t *lim);
 /* Checks that answer the refusal themselves: 0 when good, else the code. */
 int32_t ls_mcmd_check_speed_pct(ls_call_t *call, double pct);
 int32_t ls_mcmd_check_name(ls_call_t *call, const char *what, const char *field, const char *name);

@@ -100,7 +100,7 @@ static int32_t do_move(ls_core_t *core, ls_call_t *call, bool relative)
             ls_mcmd_offset_in_frame(frame == ls_ReferenceFrame_WORLD_CARTESIAN_FRAME ? W : I, P0, d, P1);
         }
         ls_motion_cart_limits_t lim;
-        ls_mcmd_cart_limits(core, speed_pct, &lim);
+        ls_mcmd_cart_limits(core, speed_pct, 0.0, &lim);
         double tool[16];
         ls_mcmd_tool_pose(core, tool);
         st = ls_motion_plan_line(slot, core->model, q0, tool, P1, &lim, why, sizeof why);
@@ -178,7 +178,7 @@ int32_t ls_h_move_arc(struct ls_core *core, struct ls_call *call)
         }
     }
     ls_motion_cart_limits_t lim;
-    ls_mcmd_cart_limits(core, 0.0, &lim);
+    ls_mcmd_cart_limits(core, 0.0, 0.0, &lim);
     double tool[16];
     ls_mcmd_tool_pose(core, tool);
     char why[128];

@@ -46,7 +46,7 @@ static int plan_point(ls_core_t *core, const ls_path_point_t *pt, const double q
     }
     if (pt->straight) {
         ls_motion_cart_limits_t lim;
-        ls_mcmd_cart_limits(core, pt->speed_pct, &lim);
+        ls_mcmd_cart_limits(core, pt->speed_pct, pt->accel_pct, &lim);
         int st = ls_motion_seg_line(s, core->model, q_prev, tool, P_target, &lim, why, whylen);
         memcpy(q_target, s->q1, LS_N_JOINTS * sizeof(double));
         return st;
@@ -111,7 +111,7 @@ static int build_program(ls_core_t *core, const ls_path_t *p, const double q_sta
         int st;
         if (pt0->frame != ls_ReferenceFrame_JOINT_FRAME && pt0->straight) {
             ls_motion_cart_limits_t lim;
-            ls_mcmd_cart_limits(core, pt0->speed_pct, &lim);
+            ls_mcmd_cart_limits(core, pt0->speed_pct, pt0->accel_pct, &lim);
             double tool[16];
             ls_mcmd_tool_pose(core, tool);
             st = ls_motion_seg_line(s, core->model, q_prev, tool, P_first, &lim, w, sizeof w);

@@ -50,6 +50,7 @@ int32_t ls_h_set_speed(struct ls_core *core, struct ls_call *call)
             return rc;
         }
         st->speed_pct = v;
+        st->cart_speed_from_pct = true;
         return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "PERCENT_SPEED %g %%", v);
     case ls_SpeedType_LINEAR_SPEED: {
         if (core->model == NULL) {
@@ -62,6 +63,7 @@ int32_t ls_h_set_speed(struct ls_core *core, struct ls_call *call)
             return rc;
         }
         /* fmin: the range check passed in the user's unit; rounding must not exceed the model's limit in SI */
+        st->cart_speed_from_pct = false;
         st->linear_speed_m_s = fmin(ls_units_to_si_linear(un.linear, v), core->model->max_linear_speed_m_s);
         return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "LINEAR_SPEED %g %s", v, unit);
     }
@@ -75,6 +77,7 @@ int32_t ls_h_set_speed(struct ls_core *core, struct ls_call *call)
         if (rc < 0) {
             return rc;
         }
+        st->cart_speed_from_pct = false;
         st->angular_speed_rad_s = fmin(ls_units_to_si_angular(un.angular, v), core->model->max_angular_speed_rad_s);
         return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "ANGULAR_SPEED %g %s", v, unit);
     }
@@ -102,6 +105,7 @@ int32_t ls_h_set_acceleration(struct ls_core *core, struct ls_call *call)
             return rc;
         }
         st->accel_pct = v;
+        st->cart_accel_from_pct = true;
         return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "PERCENT_ACCEL %g %%", v);
     case ls_AccelType_LINEAR_ACCEL:
         if (core->model == NULL) {
@@ -113,6 +117,7 @@ int32_t ls_h_set_acceleration(struct ls_core *core, struct ls_call *call)
         if (rc < 0) {
             return rc;
         }
+        st->cart_accel_from_pct = false;
         st->linear_accel_m_s2 = fmin(ls_units_to_si_linear(un.linear, v), core->model->max_linear_accel_m_s2);
         return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "LINEAR_ACCEL %g %s", v, unit);
     case ls_AccelType_ANGULAR_ACCEL:
@@ -125,6 +130,7 @@ int32_t ls_h_set_acceleration(struct ls_core *core, struct ls_call *call)
         if (rc < 0) {
             return rc;
         }
+        st->cart_accel_from_pct = false;
         st->angular_accel_rad_s2 = fmin(ls_units_to_si_angular(un.angular, v), core->model->max_angular_accel_rad_s2);
         return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "ANGULAR_ACCEL %g %s", v, unit);
     }

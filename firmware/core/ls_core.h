@@ -113,6 +113,12 @@ typedef struct {
     double angular_speed_rad_s; /* ANGULAR_SPEED, Cartesian moves */
     double linear_accel_m_s2;
     double angular_accel_rad_s2;
+    /* Which kind of setSpeed / setAcceleration call came last, per quantity:
+     * true after PERCENT_*, false after LINEAR_* or ANGULAR_* (and at start).
+     * It decides the limits of Cartesian moves (docs/protocol.md "Speed and
+     * acceleration"). */
+    bool cart_speed_from_pct;
+    bool cart_accel_from_pct;
     double tool_offset[6]; /* flange -> tool tip: x y z roll pitch yaw */
     double world_frame[6]; /* base -> world: x y z roll pitch yaw */
 } ls_settings_t;
