@@ -206,8 +206,8 @@ def main() -> int:
         hdr.append(f"int32_t ls_h_{fname}(struct ls_core *core, struct ls_call *call);")
     hdr += [
         "",
-        "/* The schema's name of field `tag` of message `msg` (string and message",
-        " * fields, for error messages naming a field), or NULL. */",
+        "/* The schema's name of field `tag` of message `msg` (string, bytes, message",
+        " * and repeated fields, for error messages naming a field), or NULL. */",
         "const char *ls_field_name(const pb_msgdesc_t *msg, uint32_t tag);",
         "",
         "/* Presence rules of the requests' `optional` fields (docs/protocol.md \"Absent",
@@ -261,8 +261,8 @@ def main() -> int:
         "}",
         "",
     ]
-    # Field names for the string and message fields of every message (nanopb's
-    # descriptors carry numbers only).
+    # Field names for the string, bytes, message and repeated fields of every
+    # message (nanopb's descriptors carry numbers only).
     names = []
     # option types (CommandSpec) are metadata that nanopb skips (landscape.options)
     meta = {e.message_type.name for e in pb2.DESCRIPTOR.extensions_by_name.values() if e.message_type}
@@ -272,7 +272,7 @@ def main() -> int:
         if mdesc.nested_types:
             raise SystemExit(f"gen_registry: {mname} has nested message types; name them in ls_field_name")
         for f in mdesc.fields:
-            if f.type in (f.TYPE_STRING, f.TYPE_MESSAGE):
+            if f.type in (f.TYPE_STRING, f.TYPE_BYTES, f.TYPE_MESSAGE) or f.label == f.LABEL_REPEATED:
                 names.append((mname, f.number, f.name))
     src += [
         "typedef struct {",

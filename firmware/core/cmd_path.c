@@ -56,10 +56,16 @@ static int32_t load_point(ls_core_t *core, ls_call_t *call, const ls_PathLoadReq
     pt->straight = r->motion_type == ls_MotionType_STRAIGHT_MOTION;
     pt->relative = r->offset_type == ls_OffsetType_RELATIVE_DATA;
     if (r->frame == ls_ReferenceFrame_JOINT_FRAME) {
-        if (tp->joints_count != LS_N_JOINTS || !ls_mcmd_all_finite(tp->joints, LS_N_JOINTS)) {
+        /* The seed's tag_struct carries up to 24 jointvals; this arm has
+         * LS_N_JOINTS and uses exactly that many. */
+        if (tp->joints_count != LS_N_JOINTS) {
             return ls_reply(call, ls_RetCode_CMD_PARAM_ERR,
-                            "pathLoad point %d: JOINT_FRAME needs %d finite joint values in `joints`, got %u", k,
-                            LS_N_JOINTS, (unsigned)tp->joints_count);
+                            "pathLoad point %d: `joints` has %u values, this arm has %d joints: give exactly %d "
+                            "(JOINT_FRAME)",
+                            k, (unsigned)tp->joints_count, LS_N_JOINTS, LS_N_JOINTS);
+        }
+        if (!ls_mcmd_all_finite(tp->joints, LS_N_JOINTS)) {
+            return ls_reply(call, ls_RetCode_CMD_PARAM_ERR, "pathLoad point %d: `joints` must be finite numbers", k);
         }
         for (int j = 0; j < LS_N_JOINTS; j++) {
             pt->v[j] = tp->joints[j] * ls_units_to_si_angular(un.angular, 1.0);

@@ -7,6 +7,7 @@
 #include "ls_control.h"
 #include "ls_core_events.h"
 #include "ls_utf8.h"
+#include "ls_wire.h"
 
 #include <stdarg.h>
 #include <stdio.h>
@@ -1172,6 +1173,15 @@ void ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t
         /* Answer so the host does not wait for a time-out. */
         bool scanned = scan_request(buf, len, &seq, &cmd);
         const ls_cmd_desc_t *d = scanned ? ls_cmd_find((pb_size_t)cmd) : NULL;
+        char where[120];
+        if (ls_wire_find_overflow(ls_Uplink_fields, &core->up, buf, len, where, sizeof where)) {
+            /* "request." is the envelope: name the field as the command has it */
+            const char *field = strncmp(where, "request.", 8) == 0 ? where + 8 : where;
+            answer_bad_request(core, addr, ls_RetCode_CMD_PARAM_ERR, seq,
+                               "%s did not decode (%s): %s (protocol/landscape.options): send fewer",
+                               d != NULL ? d->name : "the message", PB_GET_ERROR(&is), field);
+            return;
+        }
         answer_bad_request(core, addr, ls_RetCode_CMD_PARAM_ERR, seq,
                            "%s did not decode (%s): a value exceeds the firmware's limits "
                            "(protocol/landscape.options) or the schemas differ",

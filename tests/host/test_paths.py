@@ -27,7 +27,7 @@ CSV_POSE = ("x,y,z,roll,pitch,yaw,tag_name,tag_index,time_delay_s,transition_spe
 def test_limits_come_from_the_options_file() -> None:
     assert (max_count("PathLoadReq", "tags"), max_count("TagPoint", "joints"), max_count("TagPoint", "aux_commands"),
             max_string_bytes("TagPoint", "tag_name"), max_string_bytes("TagPoint", "aux_commands"),
-            max_string_bytes("GetUnitsRes", "linear")) == (32, 8, 4, 63, 47, 15)
+            max_string_bytes("GetUnitsRes", "linear")) == (32, 24, 4, 63, 47, 15)
     assert max_count("TagPoint", "tag_name") is None
     assert paths.PATH_LOAD_MAX_POINTS == 32
 
@@ -96,7 +96,7 @@ POSE = "x,y,z,roll,pitch,yaw"
     ("csv", "", "f: empty file: the first row names the columns"),
     ("csv", f"{POSE}\n", "f: no points below the header"),
     ("csv", f"{POSE},colour\n1,2,3,4,5,6,red\n", "f: line 1: colour: unknown column; columns are "
-                                                 "x, y, z, roll, pitch, yaw, j1..j8, tag_name"),
+                                                 "x, y, z, roll, pitch, yaw, j1..j24, tag_name"),
     ("csv", "x,x,y,z,roll,pitch,yaw\n", "f: line 1: x: column named twice"),
     ("csv", "x,y,z,roll,pitch,yaw,j1\n", "f: line 1: j1: the file mixes Cartesian (x..yaw) and joint (j1..)"),
     ("csv", "tag_name,speed_pct\n", "f: line 1: no coordinates: name x, y, z, roll, pitch, yaw or j1..jN"),
@@ -147,7 +147,7 @@ POSE = "x,y,z,roll,pitch,yaw"
     ("json", "[{\"j1\": 0, \"speed\": 3}]", "f: points[0]: speed: unknown field; a point has"),
     ("yaml", "points: [\n  - {x: 1\n", "f: line 2: not valid YAML: expected the node content, but found '-'"),
     ("yaml", "", "f: empty file: list the points"),
-    ("yaml", "- {j1: 0, j9: 1}", "f: points[0]: j9: unknown field"),
+    ("yaml", "- {j1: 0, j25: 1}", "f: points[0]: j25: unknown field"),
 ])
 def test_every_validation_error(fmt: str, text: str, message: str) -> None:
     with pytest.raises(PathFileError) as ei:

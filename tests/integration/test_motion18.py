@@ -12,6 +12,7 @@ from collections.abc import Iterator
 import can
 import pytest
 from conftest import Controller
+from landscape import errors
 from landscape._generated import landscape_pb2 as pb
 from landscape.supervisor import Supervisor
 from test_motion import HOME, WATCH, JointWatch, _rpy, fk
@@ -89,3 +90,29 @@ def test_point_percents_scale_straight_path_segments(sup: Supervisor) -> None:
         sup.wait_complete(sup.path_move(f"s{pct:.0f}", number_of_cycles=1), timeout_s=30)
         took[pct] = time.monotonic() - t0
     assert took[10.0] / took[90.0] > 3.0, took
+
+
+# ---------------------------------------------------------------- 2. tag_struct's jointvals
+
+def test_24_jointvals_decode_and_the_arm_names_its_joint_count(sup: Supervisor) -> None:
+    vals = [0.1] * 24
+    with pytest.raises(errors.ParamError) as ei:
+        sup.path_load("j24", [{"joints": vals}])
+    msg = str(ei.value)
+    assert "did not decode" not in msg
+    assert "`joints` has 24 values, this arm has 6 joints" in msg
+
+
+def test_25_jointvals_are_refused_naming_the_field_and_its_limit(sup: Supervisor) -> None:
+    # The library refuses it before sending (the device's published limit) ...
+    with pytest.raises(errors.ArgumentError, match="joints"):
+        sup.path_load("j25", [{"joints": [0.1] * 25}])
+    # ... and the firmware names the field and the limit when it gets it anyway.
+    desc, sup.description = sup.description, None
+    try:
+        rv = sup.path_load("j25", [{"joints": list(HOME)}, {"joints": [0.1] * 25}], check=False)
+    finally:
+        sup.description = desc
+    assert rv.ret_code == pb.CMD_PARAM_ERR
+    assert "path_load.tags[1].joints has 25 values, at most 24" in rv.ret_msg, rv.ret_msg
+    assert sup.get_motion_control_state().ok  # and it serves on
