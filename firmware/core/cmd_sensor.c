@@ -353,12 +353,6 @@ int32_t ls_h_comply(struct ls_core *core, struct ls_call *call)
     if (core->ctl == NULL || core->model == NULL) {
         return ls_mcmd_no_arm(call, what);
     }
-    if (core->state == ls_State_MOVING) {
-        return ls_reply(call, ls_RetCode_CMD_BUSY_ERR,
-                        "%s: combining compliance with a running motion is not supported: wait for it to complete "
-                        "(or stopMotion and abortMotion), then call comply at rest",
-                        what);
-    }
     int32_t code = refuse_if_manual(core, call, what);
     if (code != 0) {
         return code;

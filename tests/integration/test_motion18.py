@@ -14,6 +14,7 @@ import pytest
 from conftest import Controller
 from landscape import errors
 from landscape._generated import landscape_pb2 as pb
+from landscape.registry import lookup
 from landscape.supervisor import Supervisor
 from test_motion import HOME, WATCH, JointWatch, _rpy, fk
 
@@ -116,3 +117,16 @@ def test_25_jointvals_are_refused_naming_the_field_and_its_limit(sup: Supervisor
     assert rv.ret_code == pb.CMD_PARAM_ERR
     assert "path_load.tags[1].joints has 25 values, at most 24" in rv.ret_msg, rv.ret_msg
     assert sup.get_motion_control_state().ok  # and it serves on
+
+
+# ---------------------------------------------------------------- 3. comply's states
+
+def test_comply_is_valid_at_rest_only(sup: Supervisor) -> None:
+    assert [pb.State.Name(s) for s in lookup("comply").states] == ["RESTING"]
+    rv = sup.move_absolute("far", [1.0, 0.3, 0.3, 0.0, 0.9, 0.0], speed_pct=10)
+    try:
+        assert sup.get_motion_control_state().result["state"] == "MOVING"
+        with pytest.raises(errors.WrongStateError):
+            sup.comply("force_sensor", [0.0, 0.0, 10.0], max_travel=[0.05, 0, 0, 0, 0, 0.05])
+    finally:
+        sup.wait_complete(rv, timeout_s=30)

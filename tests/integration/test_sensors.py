@@ -163,9 +163,9 @@ def test_comply_refusals(rig: Rig) -> None:
     with pytest.raises(errors.ParamError) as ei:
         sup.comply("force_sensor", [5.0, 0.0, 10.0], max_travel=[0.05, 0, 0, 0, 0, 0.05])
     assert "along the compliance direction" in str(ei.value)
-    # from MOVING: combining is not supported, said so
+    # from MOVING: not one of its states (docs/conformance.md says why), said so
     rv = sup.move_relative("slow", [0.3, 0, 0, 0, 0, 0], speed_pct=5.0)
-    with pytest.raises(errors.BusyError) as ei:
+    with pytest.raises(errors.WrongStateError) as ei:
         sup.comply("force_sensor", [0.0, 0.0, 10.0], max_travel=[0.05, 0, 0, 0, 0, 0.05])
-    assert "not supported" in str(ei.value)
+    assert "comply is valid in RESTING, the device is MOVING" in str(ei.value)
     sup.wait_complete(rv, timeout_s=20)
