@@ -53,7 +53,7 @@ static int32_t load_point(ls_core_t *core, ls_call_t *call, const ls_PathLoadReq
     memset(pt, 0, sizeof *pt);
     pt->used = true;
     pt->frame = r->frame;
-    pt->straight = r->motion_type == ls_MotionType_STRAIGHT_MOTION;
+    pt->motion = r->motion_type;
     pt->relative = r->offset_type == ls_OffsetType_RELATIVE_DATA;
     if (r->frame == ls_ReferenceFrame_JOINT_FRAME) {
         /* The seed's tag_struct carries up to 24 jointvals; this arm has
@@ -160,13 +160,18 @@ int32_t ls_h_path_load(struct ls_core *core, struct ls_call *call)
         return ls_reply(call, ls_RetCode_CMD_PARAM_ERR,
                         "pathLoad: frame must be JOINT_FRAME, BASE_CARTESIAN_FRAME or WORLD_CARTESIAN_FRAME");
     }
-    if (r->motion_type != ls_MotionType_JOINT_MOTION && r->motion_type != ls_MotionType_STRAIGHT_MOTION) {
+    if (r->motion_type != ls_MotionType_JOINT_MOTION && r->motion_type != ls_MotionType_STRAIGHT_MOTION &&
+        r->motion_type != ls_MotionType_SLEW_MOTION && r->motion_type != ls_MotionType_CIRCULAR_MOTION) {
         return ls_reply(call, ls_RetCode_CMD_PARAM_ERR,
-                        "pathLoad: motion_type must be JOINT_MOTION or STRAIGHT_MOTION");
+                        "pathLoad: motion_type %d is not a MotionType: JOINT_MOTION (0), STRAIGHT_MOTION (1), "
+                        "SLEW_MOTION (2) or CIRCULAR_MOTION (3)",
+                        (int)r->motion_type);
     }
-    if (r->motion_type == ls_MotionType_STRAIGHT_MOTION && r->frame == ls_ReferenceFrame_JOINT_FRAME) {
+    if ((r->motion_type == ls_MotionType_STRAIGHT_MOTION || r->motion_type == ls_MotionType_CIRCULAR_MOTION) &&
+        r->frame == ls_ReferenceFrame_JOINT_FRAME) {
         return ls_reply(call, ls_RetCode_CMD_PARAM_ERR,
-                        "pathLoad: STRAIGHT_MOTION needs Cartesian points (BASE_ or WORLD_CARTESIAN_FRAME)");
+                        "pathLoad: %s needs Cartesian points (BASE_ or WORLD_CARTESIAN_FRAME)",
+                        r->motion_type == ls_MotionType_STRAIGHT_MOTION ? "STRAIGHT_MOTION" : "CIRCULAR_MOTION");
     }
     int i = ls_path_find(core, r->path_name);
     if (i >= 0 && path_running(core, i)) {

@@ -1,6 +1,7 @@
 /* Seed 3.5.2 pathMove: the program builder. Every point of a path queue is
  * resolved against the one before it (relative points, frames, the tool)
- * and planned as a segment, with the cycle's closing segment and the blends
+ * and planned as a segment of its motion type (seed section 6: joint,
+ * straight, slew, circular), with the cycle's closing segment and the blends
  * between segments, into core->motion.prog; the whole program is planned
  * and checked before anything moves. */
 #include <math.h>
@@ -12,25 +13,10 @@
 #include "ls_kin.h"
 #include "ls_units.h"
 
-/* Resolve point k against the previous position (q_prev, tip pose P_prev)
- * and plan its segment into s. *straight_out and the target are kept for
- * the segment that closes a cycle. */
-static int plan_point(ls_core_t *core, const ls_path_point_t *pt, const double q_prev[LS_N_JOINTS],
-                      const double P_prev[16], ls_motion_seg_t *s, double q_target[LS_N_JOINTS], double P_target[16],
-                      char *why, unsigned whylen)
+/* The tip pose (base frame) a Cartesian point names, resolved against the
+ * previous tip pose P_prev when it is relative. */
+static void cart_target(const ls_core_t *core, const ls_path_point_t *pt, const double P_prev[16], double P[16])
 {
-    const ls_settings_t *set = &core->settings;
-    const double sf = (pt->speed_pct > 0.0 ? pt->speed_pct : set->speed_pct) / 100.0;
-    const double af = (pt->accel_pct > 0.0 ? pt->accel_pct : set->accel_pct) / 100.0;
-    double tool[16];
-    ls_mcmd_tool_pose(core, tool);
-    if (pt->frame == ls_ReferenceFrame_JOINT_FRAME) {
-        for (int j = 0; j < LS_N_JOINTS; j++) {
-            q_target[j] = pt->v[j] + (pt->relative ? q_prev[j] : 0.0);
-        }
-        ls_mcmd_tip_of(core, q_target, P_target);
-        return ls_motion_seg_joint(s, core->model, q_prev, q_target, sf, af, why, whylen);
-    }
     double F[16], T[16];
     const double zero[6] = { 0 };
     if (pt->frame == ls_ReferenceFrame_WORLD_CARTESIAN_FRAME) {
@@ -39,12 +25,47 @@ static int plan_point(ls_core_t *core, const ls_path_point_t *pt, const double q
         ls_pose_from_xyzrpy(zero, F);
     }
     if (pt->relative) {
-        ls_mcmd_offset_in_frame(F, P_prev, pt->v, P_target);
+        ls_mcmd_offset_in_frame(F, P_prev, pt->v, P);
     } else {
         ls_pose_from_xyzrpy(pt->v, T);
-        ls_pose_mul(F, T, P_target);
+        ls_pose_mul(F, T, P);
     }
-    if (pt->straight) {
+}
+
+/* Speed and acceleration fractions of a joint-space segment to pt. */
+static void joint_fracs(const ls_core_t *core, const ls_path_point_t *pt, double *sf, double *af)
+{
+    *sf = (pt->speed_pct > 0.0 ? pt->speed_pct : core->settings.speed_pct) / 100.0;
+    *af = (pt->accel_pct > 0.0 ? pt->accel_pct : core->settings.accel_pct) / 100.0;
+}
+
+static int seg_joint_kind(ls_motion_seg_t *s, const ls_core_t *core, const ls_path_point_t *pt,
+                          const double q0[LS_N_JOINTS], const double q1[LS_N_JOINTS], char *why, unsigned whylen)
+{
+    double sf, af;
+    joint_fracs(core, pt, &sf, &af);
+    return pt->motion == ls_MotionType_SLEW_MOTION ? ls_motion_seg_slew(s, core->model, q0, q1, sf, af, why, whylen)
+                                                   : ls_motion_seg_joint(s, core->model, q0, q1, sf, af, why, whylen);
+}
+
+/* Resolve point k (JOINT_, STRAIGHT_ or SLEW_MOTION) against the previous
+ * position (q_prev, tip pose P_prev) and plan its segment into s. The target
+ * is kept for the segment that closes a cycle. */
+static int plan_point(ls_core_t *core, const ls_path_point_t *pt, const double q_prev[LS_N_JOINTS],
+                      const double P_prev[16], ls_motion_seg_t *s, double q_target[LS_N_JOINTS], double P_target[16],
+                      char *why, unsigned whylen)
+{
+    double tool[16];
+    ls_mcmd_tool_pose(core, tool);
+    if (pt->frame == ls_ReferenceFrame_JOINT_FRAME) {
+        for (int j = 0; j < LS_N_JOINTS; j++) {
+            q_target[j] = pt->v[j] + (pt->relative ? q_prev[j] : 0.0);
+        }
+        ls_mcmd_tip_of(core, q_target, P_target);
+        return seg_joint_kind(s, core, pt, q_prev, q_target, why, whylen);
+    }
+    cart_target(core, pt, P_prev, P_target);
+    if (pt->motion == ls_MotionType_STRAIGHT_MOTION) {
         ls_motion_cart_limits_t lim;
         ls_mcmd_cart_limits(core, pt->speed_pct, pt->accel_pct, &lim);
         int st = ls_motion_seg_line(s, core->model, q_prev, tool, P_target, &lim, why, whylen);
@@ -62,7 +83,61 @@ static int plan_point(ls_core_t *core, const ls_path_point_t *pt, const double q
                                       : (ks == LS_KIN_ESINGULAR ? "shoulder singularity" : "out of reach"));
         return LS_MOTION_ERANGE;
     }
-    return ls_motion_seg_joint(s, core->model, q_prev, q_target, sf, af, why, whylen);
+    return seg_joint_kind(s, core, pt, q_prev, q_target, why, whylen);
+}
+
+/* CIRCULAR_MOTION: points `via` and `goal` (the next one) make one arc from
+ * the previous tip pose P_prev through via's position to goal's; it runs as
+ * two arcs of the same circle, split at the via point (ls_motion_arc_split),
+ * into s_via and s_goal, so that each point keeps its tag, auxiliary
+ * commands and dwell. Orientation is slerped from each point to the next. */
+static int plan_arc_pair(ls_core_t *core, const ls_path_point_t *via, const ls_path_point_t *goal,
+                         const double q_prev[LS_N_JOINTS], const double P_prev[16], ls_motion_seg_t *s_via,
+                         ls_motion_seg_t *s_goal, double P_via[16], double P_goal[16], char *why, unsigned whylen,
+                         int *bad_point)
+{
+    double tool[16], Ma[16], Mb[16], ma[3], mb[3];
+    const double zero[6] = { 0 };
+    ls_mcmd_tool_pose(core, tool);
+    cart_target(core, via, P_prev, P_via);
+    cart_target(core, goal, P_via, P_goal);
+    *bad_point = 0;
+    int st = ls_motion_arc_split(&P_prev[12], &P_via[12], &P_goal[12], ma, mb);
+    if (st < 0) {
+        snprintf(why, whylen, "no circle: the previous point, this via and its goal are collinear or coincide");
+        return st;
+    }
+    ls_pose_from_xyzrpy(zero, Ma);
+    ls_pose_from_xyzrpy(zero, Mb);
+    memcpy(&Ma[12], ma, sizeof ma);
+    memcpy(&Mb[12], mb, sizeof mb);
+    ls_motion_cart_limits_t lim;
+    ls_mcmd_cart_limits(core, via->speed_pct, via->accel_pct, &lim);
+    st = ls_motion_seg_arc(s_via, core->model, q_prev, tool, Ma, P_via, &lim, why, whylen);
+    if (st < 0) {
+        return st;
+    }
+    *bad_point = 1;
+    ls_mcmd_cart_limits(core, goal->speed_pct, goal->accel_pct, &lim);
+    return ls_motion_seg_arc(s_goal, core->model, s_via->q1, tool, Mb, P_goal, &lim, why, whylen);
+}
+
+/* CIRCULAR_MOTION points pair up as (via, goal) in load order within each
+ * run of consecutive circular points: -1 when every run has an even count,
+ * else the index of the via point left without a goal. */
+static int unpaired_circular(const ls_path_t *p)
+{
+    int run = 0;
+    for (int k = 0; k < p->n; k++) {
+        if (p->pt[k].motion == ls_MotionType_CIRCULAR_MOTION) {
+            run++;
+        } else if (run % 2 != 0) {
+            return k - 1;
+        } else {
+            run = 0;
+        }
+    }
+    return run % 2 != 0 ? p->n - 1 : -1;
 }
 
 static void copy_point_attrs(ls_motion_seg_t *s, const ls_path_point_t *pt, int k)
@@ -89,7 +164,28 @@ static int build_program(ls_core_t *core, const ls_path_t *p, const double q_sta
         ls_motion_seg_t *s = &core->motion.prog.seg[k];
         copy_point_attrs(s, &p->pt[k], k);
         double q_t[LS_N_JOINTS], P_t[16];
-        int st = plan_point(core, &p->pt[k], q_prev, P_prev, s, q_t, P_t, w, sizeof w);
+        int st;
+        if (p->pt[k].motion == ls_MotionType_CIRCULAR_MOTION) {
+            /* a via point and its goal (unpaired_circular checked the pairs) */
+            ls_motion_seg_t *s2 = &core->motion.prog.seg[k + 1];
+            copy_point_attrs(s2, &p->pt[k + 1], k + 1);
+            double P_via[16];
+            int bad = 0;
+            st = plan_arc_pair(core, &p->pt[k], &p->pt[k + 1], q_prev, P_prev, s, s2, P_via, P_t, w, sizeof w, &bad);
+            if (st < 0) {
+                snprintf(why, whylen, "point %d (CIRCULAR_MOTION %s): %s", k + bad, bad ? "goal" : "via", w);
+                return st;
+            }
+            if (k == 0) {
+                memcpy(q_first, s->q1, sizeof q_first);
+                memcpy(P_first, P_via, sizeof P_first);
+            }
+            memcpy(q_prev, s2->q1, sizeof q_prev);
+            memcpy(P_prev, P_t, sizeof P_prev);
+            k++;
+            continue;
+        }
+        st = plan_point(core, &p->pt[k], q_prev, P_prev, s, q_t, P_t, w, sizeof w);
         if (st < 0) {
             snprintf(why, whylen, "point %d: %s", k, w);
             return st;
@@ -109,7 +205,10 @@ static int build_program(ls_core_t *core, const ls_path_t *p, const double q_sta
         const ls_path_point_t *pt0 = &p->pt[0];
         copy_point_attrs(s, pt0, 0);
         int st;
-        if (pt0->frame != ls_ReferenceFrame_JOINT_FRAME && pt0->straight) {
+        /* A circular first point (a via point): a straight line back to it;
+         * its arc to the goal (seg[1]) is the same in every cycle. */
+        if (pt0->frame != ls_ReferenceFrame_JOINT_FRAME &&
+            (pt0->motion == ls_MotionType_STRAIGHT_MOTION || pt0->motion == ls_MotionType_CIRCULAR_MOTION)) {
             ls_motion_cart_limits_t lim;
             ls_mcmd_cart_limits(core, pt0->speed_pct, pt0->accel_pct, &lim);
             double tool[16];
@@ -126,9 +225,7 @@ static int build_program(ls_core_t *core, const ls_path_t *p, const double q_sta
                 }
             }
         } else {
-            const double sf = (pt0->speed_pct > 0.0 ? pt0->speed_pct : core->settings.speed_pct) / 100.0;
-            const double af = (pt0->accel_pct > 0.0 ? pt0->accel_pct : core->settings.accel_pct) / 100.0;
-            st = ls_motion_seg_joint(s, core->model, q_prev, q_first, sf, af, w, sizeof w);
+            st = seg_joint_kind(s, core, pt0, q_prev, q_first, w, sizeof w);
         }
         if (st < 0) {
             snprintf(why, whylen, "point 0 (start of cycle 2): %s", w);
@@ -166,6 +263,14 @@ int32_t ls_h_path_move(struct ls_core *core, struct ls_call *call)
         return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR,
                         "pathMove: number_of_cycles %d is out of range [0, %d] (0: dry run)", (int)r->number_of_cycles,
                         LS_PATH_MAX_CYCLES);
+    }
+    const int odd = unpaired_circular(&core->motion.paths[i]);
+    if (odd >= 0) {
+        return ls_reply(call, ls_RetCode_CMD_PARAM_ERR,
+                        "pathMove: path '%s': CIRCULAR_MOTION points pair up in load order as (via, goal) of one arc "
+                        "each; point %d is a via point with no circular goal after it (an odd count): load one more "
+                        "CIRCULAR_MOTION point after it or pathClearPath and load an even number",
+                        r->path_name, odd);
     }
     ls_ctl_snapshot_t snap;
     ls_control_snapshot(core->ctl, &snap);

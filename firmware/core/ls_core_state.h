@@ -28,7 +28,7 @@
 typedef struct {
     bool used;
     ls_ReferenceFrame frame;
-    bool straight; /* STRAIGHT_MOTION (Cartesian points only) */
+    ls_MotionType motion; /* STRAIGHT_ and CIRCULAR_MOTION: Cartesian points only */
     bool relative;
     double v[LS_N_JOINTS]; /* SI: joints (rad), or x y z (m) roll pitch yaw (rad) */
     char tag[LS_MOTION_NAME_LEN];

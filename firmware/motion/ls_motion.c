@@ -147,6 +147,47 @@ int ls_motion_seg_joint(ls_motion_seg_t *s, const ls_robot_model_t *model, const
     return LS_MOTION_OK;
 }
 
+/* Joint-space segment limits at speed_frac / accel_frac of the model's. */
+static void joint_limits(const ls_robot_model_t *model, double speed_frac, double accel_frac, ls_traj_limits_t *lim)
+{
+    memset(lim, 0, sizeof *lim);
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        lim->v_max[j] = model->qd_max_rad_s[j] * speed_frac;
+        lim->a_max[j] = model->qdd_max_rad_s2[j] * accel_frac;
+        lim->j_max[j] = model->qddd_max_rad_s3[j] * accel_frac;
+    }
+}
+
+int ls_motion_seg_slew(ls_motion_seg_t *s, const ls_robot_model_t *model, const double q0[LS_N_JOINTS],
+                       const double q1[LS_N_JOINTS], double speed_frac, double accel_frac, char *why, unsigned whylen)
+{
+    /* The synchronised planner checks the arguments and the limits and sets
+     * the stop ramps; then each joint gets its own minimum-time profile. The
+     * ramps stay valid: they follow each joint's peak speed, which is at its
+     * limit here as in the slowest joint of a synchronised move. */
+    int r = ls_motion_seg_joint(s, model, q0, q1, speed_frac, accel_frac, why, whylen);
+    if (r < 0) {
+        return r;
+    }
+    ls_traj_limits_t lim;
+    joint_limits(model, speed_frac, accel_frac, &lim);
+    ls_traj_t tr = s->traj;
+    tr.duration_s = 0.0;
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        if (ls_traj_plan_axis(&tr.axis[j], q0[j], q1[j], lim.v_max[j], lim.a_max[j], lim.j_max[j]) != LS_TRAJ_OK) {
+            return refuse(why, whylen, LS_MOTION_EARG, "slew: joint %d could not be planned", j + 1);
+        }
+        tr.duration_s = fmax(tr.duration_s, tr.axis[j].T);
+    }
+    s->traj = tr;
+    double ramp = ls_traj_stop_ramp_s(&tr, &lim);
+    s->stop_ramp_s = fmax(MIN_STOP_RAMP_S, STOP_RAMP_MARGIN * (ramp > 0.0 ? ramp : 0.0));
+    joint_limits(model, 1.0, 1.0, &lim);
+    ramp = ls_traj_stop_ramp_s(&tr, &lim);
+    s->fast_stop_ramp_s = fmin(s->stop_ramp_s, fmax(MIN_STOP_RAMP_S, STOP_RAMP_MARGIN * (ramp > 0.0 ? ramp : 0.0)));
+    return LS_MOTION_OK;
+}
+
 static void plan_init(ls_motion_plan_t *p, ls_plan_kind_t kind)
 {
     p->kind = kind;
@@ -415,19 +456,13 @@ int ls_motion_seg_line(ls_motion_seg_t *s, const ls_robot_model_t *model, const 
     return cart_time_and_check(s, model, lim, why, whylen);
 }
 
-int ls_motion_seg_arc(ls_motion_seg_t *s, const ls_robot_model_t *model, const double q0[LS_N_JOINTS],
-                      const double tool[16], const double tip_via[16], const double tip1[16],
-                      const ls_motion_cart_limits_t *lim, char *why, unsigned whylen)
+/* Circumcircle of p0, pv, p1 (the circle through the three points): centre,
+ * in-plane unit vectors u (towards p0) and v (90 degrees ahead of u in the
+ * direction p0 -> pv -> p1), radius and the angle from p0 to p1 (0, 2 pi].
+ * LS_MOTION_EGEOM when the points are collinear or coincide. */
+static int circumcircle(const double p0[3], const double pv[3], const double p1[3], double centre[3], double u[3],
+                        double v[3], double *radius, double *angle)
 {
-    if (tip_via == NULL || !finite_n(tip_via, 16)) {
-        return refuse(why, whylen, LS_MOTION_EARG, "arc: missing or non-finite arc point");
-    }
-    int r = cart_start(s, LS_SEG_ARC, model, q0, tool, tip1, lim, why, whylen);
-    if (r < 0) {
-        return r;
-    }
-    /* Circumcircle of p0, pv, p1 (the circle through the three points). */
-    const double *p0 = &s->P0[12], *pv = &tip_via[12], *p1 = &s->P1[12];
     double a[3], b[3], n[3];
     v3_sub(pv, p0, a);
     v3_sub(p1, p0, b);
@@ -439,31 +474,74 @@ int ls_motion_seg_arc(ls_motion_seg_t *s, const ls_robot_model_t *model, const d
     /* Collinear when the arc point lies within 0.1 mm of the line through
      * start and goal: the circle would be huge and ill-defined by rounding. */
     if (la < 1e-6 || lb < 1e-6 || lc < 1e-6 || nn / lb < 1e-4) {
-        return refuse(why, whylen, LS_MOTION_EGEOM,
-                      "arc: start, arc point and goal are collinear or coincide (no unique circle); use a line");
+        return LS_MOTION_EGEOM;
     }
     /* centre = p0 + (|a|^2 (b x n) + |b|^2 (n x a)) / (2 |n|^2) */
     double bxn[3], nxa[3];
     v3_cross(b, n, bxn);
     v3_cross(n, a, nxa);
     for (int i = 0; i < 3; i++) {
-        s->centre_m[i] = p0[i] + (la * la * bxn[i] + lb * lb * nxa[i]) / (2.0 * nn * nn);
+        centre[i] = p0[i] + (la * la * bxn[i] + lb * lb * nxa[i]) / (2.0 * nn * nn);
     }
     double r0[3], r1[3], w[3];
-    v3_sub(p0, s->centre_m, r0);
-    v3_sub(p1, s->centre_m, r1);
-    s->radius_m = v3_norm(r0);
+    v3_sub(p0, centre, r0);
+    v3_sub(p1, centre, r1);
+    *radius = v3_norm(r0);
     for (int i = 0; i < 3; i++) {
-        s->u[i] = r0[i] / s->radius_m;
+        u[i] = r0[i] / *radius;
         w[i] = n[i] / nn;
     }
-    v3_cross(w, s->u, s->v); /* in-plane, 90 degrees ahead of u in the direction p0 -> pv -> p1 */
-    double ang = atan2(v3_dot(r1, s->v), v3_dot(r1, s->u));
+    v3_cross(w, u, v);
+    double ang = atan2(v3_dot(r1, v), v3_dot(r1, u));
     if (ang <= 0.0) {
         ang += 2.0 * PI;
     }
-    s->angle_rad = ang;
-    s->length_m = s->radius_m * ang;
+    *angle = ang;
+    return LS_MOTION_OK;
+}
+
+int ls_motion_arc_split(const double p0[3], const double pv[3], const double p1[3], double mid_a[3], double mid_b[3])
+{
+    double c[3], u[3], v[3], r, ang;
+    if (p0 == NULL || pv == NULL || p1 == NULL || mid_a == NULL || mid_b == NULL || !finite_n(p0, 3) ||
+        !finite_n(pv, 3) || !finite_n(p1, 3)) {
+        return LS_MOTION_EARG;
+    }
+    if (circumcircle(p0, pv, p1, c, u, v, &r, &ang) < 0) {
+        return LS_MOTION_EGEOM;
+    }
+    double d[3];
+    v3_sub(pv, c, d);
+    double av = atan2(v3_dot(d, v), v3_dot(d, u));
+    if (av <= 0.0) {
+        av += 2.0 * PI;
+    }
+    const double ta = 0.5 * av, tb = 0.5 * (av + ang);
+    for (int i = 0; i < 3; i++) {
+        mid_a[i] = c[i] + r * (cos(ta) * u[i] + sin(ta) * v[i]);
+        mid_b[i] = c[i] + r * (cos(tb) * u[i] + sin(tb) * v[i]);
+    }
+    return LS_MOTION_OK;
+}
+
+int ls_motion_seg_arc(ls_motion_seg_t *s, const ls_robot_model_t *model, const double q0[LS_N_JOINTS],
+                      const double tool[16], const double tip_via[16], const double tip1[16],
+                      const ls_motion_cart_limits_t *lim, char *why, unsigned whylen)
+{
+    if (tip_via == NULL || !finite_n(tip_via, 16)) {
+        return refuse(why, whylen, LS_MOTION_EARG, "arc: missing or non-finite arc point");
+    }
+    int r = cart_start(s, LS_SEG_ARC, model, q0, tool, tip1, lim, why, whylen);
+    if (r < 0) {
+        return r;
+    }
+    const int g =
+        circumcircle(&s->P0[12], &tip_via[12], &s->P1[12], s->centre_m, s->u, s->v, &s->radius_m, &s->angle_rad);
+    if (g < 0) {
+        return refuse(why, whylen, LS_MOTION_EGEOM,
+                      "arc: start, arc point and goal are collinear or coincide (no unique circle); use a line");
+    }
+    s->length_m = s->radius_m * s->angle_rad;
     return cart_time_and_check(s, model, lim, why, whylen);
 }
 

@@ -202,6 +202,21 @@ int ls_motion_seg_arc(ls_motion_seg_t *s, const ls_robot_model_t *model, const d
                       const double tool[16], const double tip_via[16], const double tip1[16],
                       const ls_motion_cart_limits_t *lim, char *why, unsigned whylen);
 
+/* A slew (seed section 6, SLEW_MOTION): the fastest joint-space motion from
+ * q0 to q1, each joint on its own minimum-time profile at speed_frac /
+ * accel_frac of its own limits, not synchronised (the joints arrive one
+ * after another; the tool's path is not the synchronised move's). Checks and
+ * refusals as ls_motion_seg_joint. */
+int ls_motion_seg_slew(ls_motion_seg_t *s, const ls_robot_model_t *model, const double q0[LS_N_JOINTS],
+                       const double q1[LS_N_JOINTS], double speed_frac, double accel_frac, char *why, unsigned whylen);
+
+/* The circle through p0, pv and p1 (positions, m) split at pv: mid_a is the
+ * middle of the arc p0 -> pv, mid_b of the arc pv -> p1, so that two
+ * ls_motion_seg_arc calls (p0 via mid_a to pv, pv via mid_b to p1) run the
+ * arc through the three points. LS_MOTION_EGEOM when they are collinear
+ * or coincide, LS_MOTION_EARG for NULL or non-finite input. Pure, O(1). */
+int ls_motion_arc_split(const double p0[3], const double pv[3], const double p1[3], double mid_a[3], double mid_b[3]);
+
 /* Blend `a` into the following segment `b` (both JOINT, a without auxiliary
  * commands or dwell): b starts `frac` (0..1] of min(a's braking time, b's
  * accelerating time) before a ends, and the two motions are added (b's

@@ -10,13 +10,14 @@ import time
 from collections.abc import Iterator
 
 import can
+import numpy as np
 import pytest
 from conftest import Controller
 from landscape import errors
 from landscape._generated import landscape_pb2 as pb
 from landscape.registry import lookup
-from landscape.supervisor import Supervisor
-from test_motion import HOME, WATCH, JointWatch, _rpy, fk
+from landscape.supervisor import Supervisor, notice_data
+from test_motion import HOME, WATCH, JointWatch, _rpy, fk, joints, tip
 
 LINE = [0.0, 0.15, 0.0, 0.0, 0.0, 0.0]  # 15 cm along base y, no turn
 
@@ -130,3 +131,65 @@ def test_comply_is_valid_at_rest_only(sup: Supervisor) -> None:
             sup.comply("force_sensor", [0.0, 0.0, 10.0], max_travel=[0.05, 0, 0, 0, 0, 0.05])
     finally:
         sup.wait_complete(rv, timeout_s=30)
+
+
+# ---------------------------------------------------------------- 4. every MotionType in a path
+
+
+def _tagged_run(sup: Supervisor, name: str) -> tuple[list[str], list[list[float]]]:
+    """Run path `name` once: its tags in order and the joints broadcast meanwhile."""
+    w = WATCH[id(sup)]
+    m = w.mark()
+    list(sup.notices(timeout_s=0.1))
+    rv = sup.path_move(name, number_of_cycles=1)
+    got = []
+    for n in sup.notices(timeout_s=60):
+        if n.ref_seq == rv.seq:
+            got.append(n)
+            if n.final:
+                break
+    assert [n.event_id for n in got if n.final] == ["pathMoveComplete"], [n.event_id for n in got]
+    time.sleep(0.1)
+    return [notice_data(n)["tag"] for n in got if n.event_id == "tag"], w.since(m)
+
+
+def test_slew_path_runs_each_joint_on_its_own(sup: Supervisor) -> None:
+    far = list(HOME)
+    far[0] += 1.2  # joint 1 travels far, joint 3 a little: a slew does not wait for joint 1
+    far[2] -= 0.1
+    back = list(HOME)
+    sup.path_load("slew", [{"joints": far, "tag_name": "far"}, {"joints": back, "tag_name": "back"}],
+                  motion_type=pb.SLEW_MOTION)
+    tags, qs = _tagged_run(sup, "slew")
+    assert tags == ["far", "back"]
+    assert joints(sup) == pytest.approx(back, abs=2e-3)
+    first = qs[: len(qs) // 2]
+    # joint 3 has arrived while joint 1 is not yet half-way (a synchronised move has them in step)
+    assert any(abs(q[2] - far[2]) < 2e-3 and (q[0] - HOME[0]) / 1.2 < 0.5 for q in first)
+    # the same points as JOINT_MOTION: synchronised, so never so
+    sup.path_load("sync", [{"joints": far}, {"joints": back}])
+    _, qs = _tagged_run(sup, "sync")
+    assert not any(abs(q[2] - far[2]) < 2e-3 and (q[0] - HOME[0]) / 1.2 < 0.5 for q in qs[: len(qs) // 2])
+
+
+def test_circular_path_runs_arcs_through_its_points(sup: Supervisor) -> None:
+    start = fk(HOME)
+    rpy = _rpy(start)
+    p0 = start[:3, 3]
+    c = p0 + [0.0, 0.1, 0.0]  # centre of the circle the points lie on (radius 0.1 m, horizontal)
+    pts = [p0 + [0.1, 0.1, 0.0], p0 + [0.0, 0.2, 0.0], p0 + [-0.1, 0.1, 0.0], p0]  # via, goal, via, goal
+    sup.path_load("circ", [{"pose": [*p, *rpy], "tag_name": f"C{k}"} for k, p in enumerate(pts)],
+                  frame=pb.BASE_CARTESIAN_FRAME, motion_type=pb.CIRCULAR_MOTION)
+    tags, qs = _tagged_run(sup, "circ")
+    assert tags == ["C0", "C1", "C2", "C3"]
+    assert len(qs) > 20
+    for q in qs:
+        p = fk(q)[:3, 3]
+        assert abs(np.linalg.norm((p - c)[:2]) - 0.1) < 1.5e-3
+        assert abs(p[2] - c[2]) < 1.5e-3
+    assert np.linalg.norm(tip(sup) - p0) < 1e-3  # ends at its last point
+    # an odd count leaves a via point without its goal: refused, naming it
+    sup.path_load("odd", [{"pose": [*pts[0], *rpy]}, {"pose": [*pts[1], *rpy]}, {"pose": [*pts[2], *rpy]}],
+                  frame=pb.BASE_CARTESIAN_FRAME, motion_type=pb.CIRCULAR_MOTION)
+    with pytest.raises(errors.ParamError, match=r"point 2 is a via point with no circular goal after it"):
+        sup.path_move("odd", number_of_cycles=1)

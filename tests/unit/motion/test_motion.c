@@ -590,6 +590,57 @@ static void test_path_dwell_and_blend(void **state)
     assert_int_equal(k_dwell - k_plain, 250);
 }
 
+/* SLEW_MOTION: each joint reaches its goal in its own minimum time (not
+ * synchronised), the segment lasts as long as the slowest joint, and the
+ * end is exact. */
+static void test_slew_joints_arrive_on_their_own(void **state)
+{
+    (void)state;
+    double q1[LS_N_JOINTS];
+    memcpy(q1, mt_q_home, sizeof q1);
+    q1[0] += 1.2;
+    q1[2] -= 0.1;
+    ls_motion_seg_t slew, sync;
+    char why[128];
+    assert_int_equal(ls_motion_seg_slew(&slew, M, mt_q_home, q1, 1.0, 1.0, why, sizeof why), LS_MOTION_OK);
+    assert_int_equal(ls_motion_seg_joint(&sync, M, mt_q_home, q1, 1.0, 1.0, why, sizeof why), LS_MOTION_OK);
+    assert_double_equal(slew.traj.duration_s, sync.traj.duration_s, 1e-9); /* the slowest joint sets both */
+    assert_true(slew.traj.axis[2].T < 0.5 * slew.traj.duration_s);         /* joint 3 arrives early */
+    assert_double_equal(sync.traj.axis[2].T, sync.traj.duration_s, 1e-9);
+    double q[LS_N_JOINTS];
+    ls_traj_sample(&slew.traj, slew.traj.axis[2].T, q, NULL, NULL);
+    assert_double_equal(q[2], q1[2], 1e-12);
+    assert_true(q[0] < q1[0] - 0.1);
+    ls_traj_sample(&slew.traj, slew.traj.duration_s, q, NULL, NULL);
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        assert_double_equal(q[j], q1[j], 0.0);
+    }
+    q1[2] = 9.0; /* beyond joint 3's limit: refused as a joint move is */
+    assert_int_equal(ls_motion_seg_slew(&slew, M, mt_q_home, q1, 1.0, 1.0, why, sizeof why), LS_MOTION_ERANGE);
+    assert_non_null(strstr(why, "joint 3"));
+}
+
+/* CIRCULAR_MOTION's split: both middles lie on the circle through the three
+ * points, on the right sides of the via point; collinear points refused. */
+static void test_arc_split_midpoints_on_the_circle(void **state)
+{
+    (void)state;
+    const double p0[3] = { 0.5, 0.0, 0.4 }, pv[3] = { 0.6, 0.1, 0.4 }, p1[3] = { 0.5, 0.2, 0.4 };
+    double ma[3], mb[3];
+    assert_int_equal(ls_motion_arc_split(p0, pv, p1, ma, mb), LS_MOTION_OK);
+    const double c[3] = { 0.5, 0.1, 0.4 }; /* radius 0.1 */
+    assert_double_equal(hypot(ma[0] - c[0], ma[1] - c[1]), 0.1, 1e-12);
+    assert_double_equal(hypot(mb[0] - c[0], mb[1] - c[1]), 0.1, 1e-12);
+    assert_double_equal(ma[2], 0.4, 1e-12);
+    /* 45 degrees from p0 towards pv, and 45 degrees past pv towards p1 */
+    assert_double_equal(ma[0], 0.5 + 0.1 * sqrt(0.5), 1e-12);
+    assert_double_equal(ma[1], 0.1 - 0.1 * sqrt(0.5), 1e-12);
+    assert_double_equal(mb[0], 0.5 + 0.1 * sqrt(0.5), 1e-12);
+    assert_double_equal(mb[1], 0.1 + 0.1 * sqrt(0.5), 1e-12);
+    const double line[3] = { 0.5, 0.1, 0.4 };
+    assert_int_equal(ls_motion_arc_split(p0, line, p1, ma, mb), LS_MOTION_EGEOM);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -607,6 +658,8 @@ int main(void)
         cmocka_unit_test(test_path_tags_in_order_for_two_cycles),
         cmocka_unit_test(test_path_aux_waits_for_done_and_dry_run_skips),
         cmocka_unit_test(test_path_dwell_and_blend),
+        cmocka_unit_test(test_slew_joints_arrive_on_their_own),
+        cmocka_unit_test(test_arc_split_midpoints_on_the_circle),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
