@@ -12,12 +12,13 @@ from collections.abc import Iterator
 import can
 import numpy as np
 import pytest
+from test_motion import HOME, WATCH, JointWatch, _rpy, fk, joints, tip
+
 from conftest import Controller
 from landscape import errors
 from landscape._generated import landscape_pb2 as pb
 from landscape.registry import lookup
 from landscape.supervisor import Supervisor, notice_data
-from test_motion import HOME, WATCH, JointWatch, _rpy, fk, joints, tip
 
 LINE = [0.0, 0.15, 0.0, 0.0, 0.0, 0.0]  # 15 cm along base y, no turn
 
