@@ -57,7 +57,9 @@ def test_percent_speed_scales_cartesian_moves(sup: Supervisor) -> None:
     slow = _timed_line(sup, LINE)
     sup.set_speed(90)
     fast = _timed_line(sup, LINE)
-    assert slow / fast > 3.0, f"15 cm line: {slow:.3f} s at 10 %, {fast:.3f} s at 90 %"
+    # Planned: 1.5 s cruise + ~0.1 s ramps at 10 %, 0.17 s + ~0.33 s ramps at 90 % (about 3.1);
+    # without the percent applied both took the same (issue 18: 0.96 s each).
+    assert slow / fast > 2.5, f"15 cm line: {slow:.3f} s at 10 %, {fast:.3f} s at 90 %"
     # LINEAR_SPEED after PERCENT_SPEED: the most recent call's kind wins
     sup.set_speed(0.05, attribute=pb.LINEAR_SPEED)
     linear = _timed_line(sup, LINE)
@@ -92,7 +94,7 @@ def test_point_percents_scale_straight_path_segments(sup: Supervisor) -> None:
         t0 = time.monotonic()
         sup.wait_complete(sup.path_move(f"s{pct:.0f}", number_of_cycles=1), timeout_s=30)
         took[pct] = time.monotonic() - t0
-    assert took[10.0] / took[90.0] > 3.0, took
+    assert took[10.0] / took[90.0] > 2.5, took  # planned about 3.1, as for the single line
 
 
 # ---------------------------------------------------------------- 2. tag_struct's jointvals
