@@ -796,7 +796,10 @@ static int32_t do_connect(ls_core_t *core, uint8_t addr, ls_call_t *call)
     s->nonce = rq->client_nonce;
     s->hb_token = heartbeat_token(s->nonce, s->epoch, call->now_us);
     rs->heartbeat_token = s->hb_token;
-    s->last_heard_us = call->now_us;
+    /* The supervisor cannot beat before this answer, which carries the token,
+     * has reached it: the session counts as heard until the network layer
+     * may have given up delivering it (docs/protocol.md "Liveness"). */
+    s->last_heard_us = call->now_us + LS_CONNECT_ANSWER_GRACE_US;
     s->heartbeat_period_ms = period_ms;
     s->heartbeat_timeout_ms = timeout_ms;
     s->units = LS_UNITS_SI; /* every session starts in SI (docs/conformance.md, setUnits) */
@@ -1021,8 +1024,19 @@ static void on_request(ls_core_t *core, uint8_t addr, ls_Request *rq, const uint
                            (unsigned)rq->seq, prev != NULL ? prev->name : "?", now != NULL ? now->name : "request");
         return;
     }
-    if (s != NULL && s->have_last && rq->seq == s->last_seq && rq->which_cmd != ls_Request_connect_tag) {
-        /* A retransmission: answer from the cache, never execute twice. */
+    const bool connect_again = rq->which_cmd == ls_Request_connect_tag && s != NULL && s->have_last &&
+                               s->last_tag == ls_Request_connect_tag && hash == s->last_req_hash;
+    if (s != NULL && s->have_last && rq->seq == s->last_seq &&
+        (rq->which_cmd != ls_Request_connect_tag || connect_again)) {
+        /* A retransmission: answer from the cache, never execute twice. A
+         * connect retransmitted byte for byte (its nonce included: the same
+         * client, whose answer was lost) gets the same epoch and heartbeat
+         * token, and counts as heard: the client cannot beat before it has
+         * the token. Running it again would hand out a new token while an
+         * earlier answer may still reach the client. */
+        if (connect_again && now_us > s->last_heard_us) {
+            s->last_heard_us = now_us;
+        }
         if (!s->last_pending && s->last_resp_len > 0) {
             send_bytes(core, addr, s->last_resp, s->last_resp_len);
         }

@@ -47,6 +47,10 @@ struct ls_control;
  * A supervisor states its period at connect, within these bounds (0: not
  * stated, the configured time-out alone applies). */
 #define LS_HB_MISSED_MAX 5u
+/* A new session counts as heard for this long after its connect: the answer
+ * carrying its heartbeat token may take the network layer's transfers of a
+ * downlink (ls_net.h, LS_NET_TX_TRIES x N_Bs of 1 s) to get through. */
+#define LS_CONNECT_ANSWER_GRACE_US 3000000u
 #define LS_HB_PERIOD_MIN_MS 10u
 #define LS_HB_PERIOD_MAX_MS 2000u
 /* Identity (docs/protocol.md "Identity"): a session's heartbeat token is

@@ -125,7 +125,7 @@ def command_mix(rng: random.Random) -> list[tuple[str, int, Callable[[Supervisor
         ("getDigitalIO(unit 99)", 1, lambda s: s.get_digital_io("sim", 99, check=False)),
         ("pathLoad(count mismatch)", 1, lambda s: s.path_load("soak", [{"joints": [0.0] * 6}], number_of_points=5,
                                                                check=False)),
-        ("pathMove(unknown path)", 1, lambda s: s.path_move("nope", 1, check=False)),
+        ("pathMove(unknown path)", 1, lambda s: s.path_move("nope", number_of_cycles=1, check=False)),
         ("getSensorReading(bogus)", 1, lambda s: s.get_sensor_reading("bogus", check=False)),
         ("sendCommand(junk)", 1, lambda s: s.send_command("no-such-vendor-command", check=False)),
     ]

@@ -1299,6 +1299,30 @@ static size_t resend_same_seq(uint8_t addr, size_t *first)
     return g_nrx - *first;
 }
 
+/* A connect whose answer was lost is retransmitted byte for byte: the same
+ * epoch and heartbeat token come back (a new token would leave the client
+ * beating with the one of an answer that arrived late), and the session
+ * counts as heard. */
+static void test_a_retransmitted_connect_gets_the_same_token(void **state)
+{
+    (void)state;
+    const int i = ls_core_session_of(&g_core, HOST_A);
+    assert_true(i >= 0);
+    const uint32_t epoch = g_core.sessions[i].epoch;
+    connect_host(HOST_A); /* a new connect (new seq) of the same client: a reconnect */
+    const uint32_t token2 = g_core.sessions[i].hb_token, epoch2 = g_core.sessions[i].epoch;
+    assert_int_not_equal(epoch2, epoch);
+    g_now += LS_CONNECT_ANSWER_GRACE_US + 900000; /* past the connect's grace, most of the 1 s time-out */
+    size_t first;
+    assert_int_equal(resend_same_seq(HOST_A, &first), 1);
+    const ls_Response *r = &g_rx[first].msg.response;
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_EXEC_OK);
+    assert_int_equal(r->result.connect.heartbeat_token, token2);
+    assert_int_equal(r->session_epoch, epoch2);
+    assert_int_equal(g_core.sessions[i].hb_token, token2);
+    assert_int_equal(g_core.sessions[i].last_heard_us, g_now);
+}
+
 static void test_seq_reuse_with_another_request_is_refused(void **state)
 {
     (void)state;
@@ -1792,9 +1816,10 @@ static void test_heartbeats_keep_a_session_only_with_its_token(void **state)
     assert_int_equal(g_core.hb_refused, 3);
     assert_int_equal(g_core.sessions[a].hb_refused, 3);
     assert_int_equal(g_core.sessions[b].hb_refused, 0);
-    assert_int_equal(g_core.sessions[a].last_heard_us, t0);
+    assert_int_equal(g_core.sessions[a].last_heard_us,
+                     t0 + LS_CONNECT_ANSWER_GRACE_US); /* heard until the connect answer can have arrived */
     assert_int_equal(g_core.sessions[b].last_heard_us, late);
-    ls_core_tick(&g_core, t0 + 600000001u);
+    ls_core_tick(&g_core, t0 + LS_CONNECT_ANSWER_GRACE_US + 600000001u);
     assert_int_equal(ls_core_session_of(&g_core, HOST_A), -1); /* the bare heartbeats did not keep it */
     assert_int_equal(ls_core_session_of(&g_core, HOST_B), b);
     assert_int_equal(g_core.owner, -1); /* the owner was lost: the disconnect action ran */
@@ -1881,19 +1906,19 @@ static void test_liveness_heartbeats_only_and_the_stated_period(void **state)
     assert_int_equal(ls_core_session_of(&g_core, 0x25), -1);
 
     /* B keeps sending requests but no heartbeat; A sends heartbeats only */
-    g_now = t0 + 900000;
+    g_now = t0 + LS_CONNECT_ANSWER_GRACE_US + 900000;
     req(ls_Request_get_units_tag);
     assert_int_equal(must(HOST_B)->ret_code, ls_RetCode_CMD_EXEC_OK);
-    beat(HOST_A, t0 + 900000);
-    beat(0x24, t0 + 900000);
-    ls_core_tick(&g_core, t0 + 1000001);
+    beat(HOST_A, t0 + LS_CONNECT_ANSWER_GRACE_US + 900000);
+    beat(0x24, t0 + LS_CONNECT_ANSWER_GRACE_US + 900000);
+    ls_core_tick(&g_core, t0 + LS_CONNECT_ANSWER_GRACE_US + 1000001);
     assert_int_equal(ls_core_session_of(&g_core, HOST_B), -1); /* requests do not keep a session */
     assert_true(ls_core_session_of(&g_core, HOST_A) >= 0);
     assert_true(ls_core_session_of(&g_core, 0x23) >= 0); /* its own, longer time-out */
-    ls_core_tick(&g_core, t0 + 1900001);
+    ls_core_tick(&g_core, t0 + LS_CONNECT_ANSWER_GRACE_US + 1900001);
     assert_int_equal(ls_core_session_of(&g_core, HOST_A), -1);
     assert_true(ls_core_session_of(&g_core, 0x23) >= 0);
-    ls_core_tick(&g_core, t0 + 2000001);
+    ls_core_tick(&g_core, t0 + LS_CONNECT_ANSWER_GRACE_US + 2000001);
     assert_int_equal(ls_core_session_of(&g_core, 0x23), -1);
     assert_int_equal(g_core.sessions_dropped, 4);
 }
@@ -1987,15 +2012,15 @@ static void test_disconnect_action_stop_during_a_motion(void **state)
     g_stop_calls = 0;
     size_t from = g_nrx, n;
     g_nposted = 0;
-    beat(HOST_B, g_now + 600000001u);
-    ls_core_tick(&g_core, g_now + 600000001u); /* the owner's heartbeat is lost */
+    beat(HOST_B, g_now + LS_CONNECT_ANSWER_GRACE_US + 600000001u);
+    ls_core_tick(&g_core, g_now + LS_CONNECT_ANSWER_GRACE_US + 600000001u); /* the owner's heartbeat is lost */
     assert_int_equal(g_stop_calls, 1);
     assert_int_equal(g_core.state, ls_State_MOVING);
     assert_string_equal(g_core.motion_state, "robot_stopping");
     assert_null(owner_lost_alarm(from));
     g_snap.cycle += 2;
     g_snap.phase = LS_MOTION_PAUSED; /* paused on the path, drives still on */
-    ls_run_tick(&g_core, g_now + 600100000u);
+    ls_run_tick(&g_core, g_now + LS_CONNECT_ANSWER_GRACE_US + 600100000u);
     const ls_Notice *f = the_final(from, move, &n);
     assert_non_null(f);
     assert_int_equal(n, 1);
@@ -2018,8 +2043,8 @@ static void test_disconnect_action_stop_deactivate(void **state)
     g_core.act.enable_drives = fake_drives;
     g_drive_calls = 0;
     size_t from = g_nrx;
-    beat(HOST_B, g_now + 600000001u);
-    ls_core_tick(&g_core, g_now + 600000001u);
+    beat(HOST_B, g_now + LS_CONNECT_ANSWER_GRACE_US + 600000001u);
+    ls_core_tick(&g_core, g_now + LS_CONNECT_ANSWER_GRACE_US + 600000001u);
     assert_int_equal(g_drive_calls, 1);
     assert_false(g_drives_on);
     assert_int_equal(g_core.state, ls_State_LOCKED);
@@ -2398,6 +2423,7 @@ int main(void)
         cmocka_unit_test_setup(test_signal_rsvp_decline_cancels_the_watch, setup_locked),
         cmocka_unit_test_setup(test_signal_rsvp_unanswered_takes_the_default, setup_locked),
         cmocka_unit_test_setup(test_seq_reuse_with_another_request_is_refused, setup_locked),
+        cmocka_unit_test_setup(test_a_retransmitted_connect_gets_the_same_token, setup_locked),
         cmocka_unit_test(test_utf8_check_and_repair),
         cmocka_unit_test_setup(test_strings_that_are_not_utf8_are_refused_naming_the_field, setup_locked),
         cmocka_unit_test_setup(test_what_the_device_shortens_stays_utf8, setup_locked),
