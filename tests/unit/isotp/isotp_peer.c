@@ -8,7 +8,10 @@
  *                T <us>                  time is now <us> (monotonic, decimal)
  *                S <hex payload>         send a message
  *                Q                       quit
- * Output lines:  F <hex id> <hex data>   a frame the link transmits
+ * Output lines:  F <hex id> <hex data> <us>
+ *                                        a frame the link transmits, and the
+ *                                        link's time when it did (so a test
+ *                                        can check STmin on the device's clock)
  *                M <hex payload>         a message the link received
  *                E <text>                a rejected input line or API error
  * Frames with another id are ignored (the bus is shared). The link is polled
@@ -39,10 +42,10 @@ static void put_hex(const uint8_t *d, size_t n)
 
 static int peer_send(void *ctx, uint32_t can_id, const uint8_t *data, uint8_t len)
 {
-    (void)ctx;
+    const uint64_t *now_us = ctx;
     printf("F %08X ", (unsigned)can_id);
     put_hex(data, len);
-    putchar('\n');
+    printf(" %llu\n", (unsigned long long)*now_us);
     return 0;
 }
 
@@ -109,11 +112,11 @@ int main(int argc, char **argv)
         fprintf(stderr, "usage: %s [-b BS] [-s STMIN] [-p 0|1]\n", argv[0]);
         return 2;
     }
-    if (ls_isotp_init(&link_, &cfg, PEER_TX_ID, PEER_RX_ID, peer_send, NULL) != LS_ISOTP_OK) {
+    uint64_t now_us = 0;
+    if (ls_isotp_init(&link_, &cfg, PEER_TX_ID, PEER_RX_ID, peer_send, &now_us) != LS_ISOTP_OK) {
         fprintf(stderr, "isotp_peer: invalid configuration (reserved STmin?)\n");
         return 2;
     }
-    uint64_t now_us = 0;
     while (fgets(line, sizeof(line), stdin) != NULL) {
         if (strchr(line, '\n') == NULL && !feof(stdin)) {
             printf("E line too long\n");
