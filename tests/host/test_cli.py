@@ -39,7 +39,7 @@ def test_text_output(channel: str, device: FakeDevice) -> None:
 
 
 def test_json_output_parses(channel: str, device: FakeDevice) -> None:
-    from landscape.cli import LOCK_NOTE
+    from landscape.cli_core import LOCK_NOTE
 
     r = run(channel, "--json", "lock")
     assert r.exit_code == 0
@@ -351,7 +351,7 @@ def test_one_shot_lock_says_it_ends_with_the_invocation(channel: str, device: Fa
 
 @pytest.mark.parametrize("command", ["move-react", "comply"])
 def test_help_of_move_react_and_comply_explains_every_option(command: str) -> None:
-    from landscape.cli import OPTION_HELP
+    from landscape.cli_core import OPTION_HELP
     from landscape.registry import lookup
 
     cmd = lookup(command)

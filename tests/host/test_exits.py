@@ -18,7 +18,8 @@ from click.testing import CliRunner, Result
 
 from fake_device import FakeDevice
 from landscape import LinkLostError, Supervisor
-from landscape.cli import EXIT_BUS, EXIT_USAGE, classify, cli
+from landscape.cli import cli
+from landscape.cli_core import EXIT_BUS, EXIT_USAGE, classify
 from landscape.paths import MAX_POINT_TEXT_BYTES, PathFileError, load_path_file, max_file_bytes
 
 

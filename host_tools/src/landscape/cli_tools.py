@@ -25,23 +25,23 @@ import click
 
 from ._generated import landscape_pb2 as pb
 from .bus import SLCAN_DEFAULT_BITRATE, resolve_config
-from .cli import (
+from .cli_core import (
     EXIT_COMMAND,
     EXIT_ERROR,
     CliState,
     CommandFailed,
     EnumType,
-    _description_of,
-    _fmt_notice,
-    _fmt_value,
-    _one_line,
-    _state,
     call,
     classify,
     cli,
+    description_of,
     execute,
+    fmt_notice,
+    fmt_value,
+    one_line,
     send,
     session_units,
+    state_of,
 )
 from .demo import StepResult, demo_steps, run_demo
 from .errors import LandscapeError, error_for_code
@@ -78,7 +78,7 @@ def path_points_limit(backend: Supervisor | SessionClient) -> int | None:
         desc = backend.description
     else:
         rv = send(backend, lookup("describe"), {}, wait_s=None)
-        desc = _description_of(rv) if rv.ok else None
+        desc = description_of(rv) if rv.ok else None
     if desc is None or not desc.from_device:
         return None
     return int(desc.res.max_points_per_path) or None
@@ -99,7 +99,7 @@ def path_load_cmd(ctx: click.Context, file: Path, path_name: str | None, frame: 
     """Append the points of FILE to a path: the whole file is checked first (against the
     device's points per path), then sent in as many pathLoad messages as the firmware needs
     (docs/host-tool.md lists the columns)."""
-    st = _state(ctx)
+    st = state_of(ctx)
     backend = st.backend()
     pf = load_path_file(file, max_points=path_points_limit(backend))  # a bad file never reaches the device
     s = resolve_settings(pf, path_name=path_name, frame=frame, motion_type=motion_type, offset_type=offset_type)
@@ -143,9 +143,9 @@ def path_load_cmd(ctx: click.Context, file: Path, path_name: str | None, frame: 
     elif rv.ret_code >= 0:
         click.echo(f"path load: {rv.ret_name}")
         for k, v in result.items():
-            click.echo(f"  {k}: {_fmt_value(v)}")
+            click.echo(f"  {k}: {fmt_value(v)}")
     if rv.ret_code < 0:
-        raise CommandFailed(_one_line(error_for_code("path load", rv.ret_code, rv.ret_msg)))
+        raise CommandFailed(one_line(error_for_code("path load", rv.ret_code, rv.ret_msg)))
 
 
 @path_group.command("clear")
@@ -256,7 +256,7 @@ def record_cmd(ctx: click.Context, file: Path, duration: float | None) -> None:
     """Record telemetry (JOINTS_12/34/56, TOOL_POS, TOOL_RPY, STATUS, DIO) and notices to FILE:
     MCAP for .mcap (joint states, link transforms for the URDF of `landscape urdf`, tool pose,
     status, DIO, notices as logs, raw CAN frames), CSV for .csv, JSON lines for .jsonl/.json/.ndjson."""
-    st = _state(ctx)
+    st = state_of(ctx)
     record_format(file)  # a name it cannot record to fails before the bus is opened
     st.backend()  # connect first (picking a free address takes a moment): --duration is recording time
     rec = open_recorder(file)
@@ -307,7 +307,7 @@ def events_cmd(ctx: click.Context, duration: float | None) -> None:
     With a background session running, every notice the session receives (the commands of
     every terminal); else the notices sent to this invocation's own session. Positions in
     notices are in the session's units (named in the first line). Ctrl-C ends it (exit 0)."""
-    st = _state(ctx)
+    st = state_of(ctx)
     client = st.background()
     units = session_units(client if client is not None else st.session())
     where = f"device {st.device:#04x} on {st.spec.describe()}" + (" (via the session)" if client else "")
@@ -420,7 +420,7 @@ def demo_cmd(ctx: click.Context, record_file: Path | None, plot_file: Path | Non
              wait_timeout: float) -> None:
     """Lock, activate, joint moves, a tagged Cartesian path, deactivate, release. Commands this
     firmware does not implement are skipped; exit 0 when every implemented step succeeded."""
-    st = _state(ctx)
+    st = state_of(ctx)
     backend = st.backend()
     steps = demo_steps(load_path_file(path_file, max_points=path_points_limit(backend))
                        if path_file is not None else None)
@@ -453,7 +453,7 @@ def demo_cmd(ctx: click.Context, record_file: Path | None, plot_file: Path | Non
         def on_notice(nt: pb.Notice) -> None:
             got.append(nt)
             if not st.json_out:
-                click.echo(_fmt_notice(nt))
+                click.echo(fmt_notice(nt))
         rv, _, final = call(backend, lookup(command), fields, wait=wait, wait_timeout_s=wait_timeout,
                             on_notice=on_notice)
         return rv, final
@@ -472,7 +472,7 @@ def demo_cmd(ctx: click.Context, record_file: Path | None, plot_file: Path | Non
         if res.retval is None:
             click.echo(head(step))
         if res.status == "ok" and res.retval is not None:
-            extra = "; ".join(f"{k}: {_fmt_value(v)}" for k, v in res.retval.result.items())
+            extra = "; ".join(f"{k}: {fmt_value(v)}" for k, v in res.retval.result.items())
             click.echo("    ok" + (f" ({extra})" if extra else ""))
         elif res.status == "tolerated":
             click.echo(f"    nothing to do ({res.detail})")
@@ -542,7 +542,7 @@ def session_group() -> None:
 @click.pass_context
 def session_start_cmd(ctx: click.Context, lock: bool, start_timeout: float) -> None:
     """Start the background session of this bus and device."""
-    st = _state(ctx)
+    st = state_of(ctx)
     path = st.socket_path()
     running = SessionClient.attach(path, on_stale=lambda msg: click.echo(f"landscape: {msg}", err=True))
     if running is not None:
@@ -587,7 +587,7 @@ def session_start_cmd(ctx: click.Context, lock: bool, start_timeout: float) -> N
 @click.pass_context
 def session_serve_cmd(ctx: click.Context, lock: bool) -> None:
     """The background process (started by `session start`): reports readiness as one JSON line."""
-    st = _state(ctx)
+    st = state_of(ctx)
     st.no_session = True
     broker: LinkBroker | None = None
     try:
@@ -636,7 +636,7 @@ def session_serve_cmd(ctx: click.Context, lock: bool) -> None:
 @click.pass_context
 def session_status_cmd(ctx: click.Context) -> None:
     """Show the background session of this bus and device (exit 1 when none runs)."""
-    st = _state(ctx)
+    st = state_of(ctx)
     client = st.background() if not st.no_session else SessionClient.attach(st.socket_path())
     if client is None:
         raise _no_session(st)
@@ -658,7 +658,7 @@ def session_status_cmd(ctx: click.Context) -> None:
 @click.pass_context
 def session_stop_cmd(ctx: click.Context, stop_timeout: float) -> None:
     """Stop the background session: it disconnects (the device releases an owner's lock)."""
-    st = _state(ctx)
+    st = state_of(ctx)
     client = st.background() if not st.no_session else SessionClient.attach(st.socket_path())
     if client is None:
         raise _no_session(st)
