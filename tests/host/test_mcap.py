@@ -16,7 +16,7 @@ from landscape._generated import landscape_pb2 as pb
 from landscape.errors import ArgumentError
 from landscape.mcap_log import CHANNELS, McapError, McapRecorder, read_mcap
 from landscape.plotting import plot
-from landscape.recording import read_recording
+from landscape.record_files import read_recording
 from landscape.urdf import ArmChain, UrdfError, quaternion_xyzw, rpy_matrix
 
 DEV = 0x10

@@ -50,7 +50,8 @@ from .mcap_log import McapRecorder
 from .notices import format_notice
 from .paths import build_path_load_requests, load_path_file, request_fields, resolve_settings
 from .plotting import KINDS, plot
-from .recording import Recorder, open_recorder, read_recording, record_format
+from .record_files import open_recorder, read_recording
+from .recording import Recorder, record_format
 from .registry import lookup, message_to_dict
 from .session import SessionClient, SessionError, SessionServer
 from .supervisor import RetVal, Supervisor

@@ -14,8 +14,8 @@ one column per signal of RECORDED_MESSAGES, named with its DBC unit (`j1_rad`,
 JSON lines (`.jsonl`, `.json`, `.ndjson`): one object per row with `signals` (keyed
 by the same unit-named columns) or `notice` (the Notice as a dict).
 MCAP (`.mcap`): channels with schemas for viewers such as Foxglove, written by
-mcap_log.McapRecorder (`open_recorder` picks the writer from the suffix);
-`read_recording` reads all three.
+mcap_log.McapRecorder, which builds on this module. record_files picks the writer
+or reader of all three from a file's suffix.
 """
 from __future__ import annotations
 
@@ -25,15 +25,12 @@ import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import IO, TYPE_CHECKING, Any
+from typing import IO, Any
 
 from . import telemetry as tm
 from ._generated import landscape_pb2 as pb
 from .errors import ArgumentError, LandscapeError
 from .registry import message_to_dict
-
-if TYPE_CHECKING:
-    from .mcap_log import McapRecorder
 
 RECORDED_MESSAGES: tuple[str, ...] = ("JOINTS_12", "JOINTS_34", "JOINTS_56", "TOOL_POS", "TOOL_RPY", "STATUS", "DIO")
 TIME_COLUMNS: tuple[str, ...] = ("host_monotonic_s", "t_s", "device_time_ms")
@@ -76,15 +73,6 @@ def record_format(path: str | Path) -> str:
     return fmt
 
 
-def open_recorder(path: str | Path, *, start_s: float | None = None) -> Recorder | McapRecorder:
-    """The writer for `path`'s suffix: McapRecorder for .mcap, else Recorder (CSV, JSON lines)."""
-    if record_format(path) == "mcap":
-        from .mcap_log import McapRecorder
-
-        return McapRecorder(path, start_s=start_s)
-    return Recorder(path, start_s=start_s)
-
-
 class Recorder:
     """Writes broadcasts and notices as they come (thread-safe: telemetry and notices
     arrive in different threads). Use as a context manager."""
@@ -93,7 +81,7 @@ class Recorder:
         self.path = Path(path)
         self.format = record_format(path)
         if self.format == "mcap":
-            raise ArgumentError(f"{path}: Recorder writes CSV or JSON lines; use open_recorder() for .mcap")
+            raise ArgumentError(f"{path}: Recorder writes CSV or JSON lines; record_files.open_recorder() opens .mcap")
         self.start_s = time.monotonic() if start_s is None else start_s
         self.broadcasts = 0
         self.notices = 0
@@ -198,14 +186,12 @@ def _data_dict(items: list[str]) -> dict[str, str]:
     return out
 
 
-def read_recording(path: str | Path) -> Recording:
-    """Read a recording written by Recorder (CSV or JSON lines) or McapRecorder (MCAP)."""
+def read_text_recording(path: str | Path) -> Recording:
+    """Read a recording written by Recorder (CSV or JSON lines)."""
     p = Path(path)
     fmt = record_format(p)
     if fmt == "mcap":
-        from .mcap_log import recording_from_mcap
-
-        return recording_from_mcap(p)
+        raise ArgumentError(f"{path}: an MCAP file; use record_files.read_recording()")
     rec = Recording(p)
     signal_of = _signal_of_column()  # unit-named columns back to DBC signal names
     try:
