@@ -266,7 +266,7 @@ typedef struct ls_core {
      * until it connects again and is the owner once more. */
     bool held;
     uint8_t held_addr;
-    char held_name[32];
+    char held_name[sizeof(((ls_ConnectReq *)0)->client_name)]; /* the session name, whole */
     ls_DisconnectAction held_action;
     ls_State state;
     int owner; /* index in sessions[], -1 when unlocked */
