@@ -5,10 +5,11 @@ import inspect
 
 import click
 import pytest
+from google.protobuf.descriptor import FieldDescriptor
 
 from landscape import ArgumentError, Supervisor, build_request, ls
 from landscape.cli import cli
-from landscape.registry import COMMANDS, enum_aliases, is_repeated, kebab, lookup, parse_enum
+from landscape.registry import COMMANDS, absent_means, enum_aliases, is_repeated, is_required, kebab, lookup, parse_enum
 
 REQUEST_FIELDS = [f.name for f in ls.Request.DESCRIPTOR.oneofs_by_name["cmd"].fields]
 
@@ -82,6 +83,67 @@ def test_every_typed_method_matches_its_request_fields() -> None:
         for p in params:
             if p.default is not p.empty:
                 assert p.kind == p.KEYWORD_ONLY, f"{c.field}({p.name}) optional arguments are keyword-only"
+
+
+#: The annotation a typed method gives a field of each schema type (as written, with
+#: `from __future__ import annotations`): a schema type change fails here first.
+ANNOTATION_OF_TYPE = {
+    FieldDescriptor.TYPE_STRING: "str",
+    FieldDescriptor.TYPE_BOOL: "bool",
+    FieldDescriptor.TYPE_ENUM: "Enum",
+    FieldDescriptor.TYPE_DOUBLE: "float",
+    FieldDescriptor.TYPE_FLOAT: "float",
+    FieldDescriptor.TYPE_INT32: "int",
+    FieldDescriptor.TYPE_INT64: "int",
+    FieldDescriptor.TYPE_UINT32: "int",
+    FieldDescriptor.TYPE_UINT64: "int",
+    FieldDescriptor.TYPE_SINT32: "int",
+}
+
+
+def expected_annotation(fd: FieldDescriptor) -> str:
+    if fd.type == FieldDescriptor.TYPE_MESSAGE:
+        one = f"pb.{fd.message_type.name} | Mapping[str, Any]"
+    else:
+        one = ANNOTATION_OF_TYPE[fd.type]
+    return f"Sequence[{one}]" if is_repeated(fd) else one
+
+
+def test_every_typed_method_has_its_fields_types_and_defaults() -> None:
+    """Types follow the schema's field types; a default says what the schema says absence
+    means: a plain field's zero value, an optional field's (ls.absent_means) or None (left
+    out). A field the device requires ((ls.required)) is always sent: a default there is the
+    method's own choice, a value of the field's enum, or None when the method derives it
+    from its other arguments (its docstring says how)."""
+    checked = 0
+    for c in COMMANDS.values():
+        if c.field in ("connect", "disconnect"):
+            continue
+        sig = inspect.signature(getattr(Supervisor, c.field))
+        for fd in c.fields():
+            p = sig.parameters[fd.name]
+            optional = fd.containing_oneof is not None and fd.containing_oneof.name == "_" + fd.name
+            want = expected_annotation(fd)
+            if optional and p.default is None:
+                want += " | None"
+            assert p.annotation == want, f"{c.field}({fd.name}): {p.annotation}, the schema says {want}"
+            checked += 1
+            if p.default is p.empty:
+                continue
+            if optional and is_required(fd) and p.default is None:
+                doc = getattr(Supervisor, c.field).__doc__ or ""
+                assert fd.name in doc, f"{c.field}({fd.name}) defaults to None: its docstring must say how it is set"
+            elif optional and is_required(fd):
+                assert fd.type == FieldDescriptor.TYPE_ENUM, f"{c.field}({fd.name}) required, defaulted"
+                assert p.default in {v.number for v in fd.enum_type.values}, f"{c.field}({fd.name})"
+            elif optional:
+                assert p.default in (None, absent_means(fd)), f"{c.field}({fd.name}) default {p.default!r}"
+            elif is_repeated(fd):
+                assert tuple(p.default) == (), f"{c.field}({fd.name}) default {p.default!r}"
+            else:
+                zero = "" if fd.type == FieldDescriptor.TYPE_STRING else 0
+                assert p.default == zero, f"{c.field}({fd.name}) default {p.default!r}, absence means {zero!r}"
+    assert checked >= 70
 
 
 @pytest.mark.parametrize("spelling", ["JOINT_FRAME", "joint_frame", "joint", "Joint", 0])
