@@ -43,6 +43,16 @@ def run_cli(*args: str, timeout: float = 60.0, check: bool = False) -> subproces
     return subprocess.run([str(CLI), *args], capture_output=True, text=True, timeout=timeout, check=check)
 
 
+def wait_for_path(path: Path, proc: subprocess.Popen[bytes], timeout_s: float = 10.0) -> None:
+    """Wait until landscaped (`proc`) has made `path` (a pty link or a socket); fail when it
+    exits first or the time runs out."""
+    deadline = time.monotonic() + timeout_s
+    while not path.exists():
+        assert proc.poll() is None, f"landscaped exited with {proc.returncode} before {path} appeared"
+        assert time.monotonic() < deadline, f"{path} did not appear within {timeout_s:g} s"
+        time.sleep(0.02)
+
+
 def start_controller(path: Path, *extra: str) -> Controller:
     if not LANDSCAPED.exists():
         raise AssertionError(f"{LANDSCAPED} is missing: build first (bash .ci/build)")

@@ -18,7 +18,7 @@ from pathlib import Path
 import can
 import pytest
 
-from conftest import ROOT, Controller, start_controller
+from conftest import ROOT, Controller, start_controller, wait_for_path
 from landscape import errors
 from landscape._generated import landscape_pb2 as pb
 from landscape.registry import lookup
@@ -47,13 +47,6 @@ class Sim:
             s.sendto(f"in {on:x} {off:x}".encode(), str(self.dio_socket))
 
 
-def _wait_path(path: Path, proc: subprocess.Popen[bytes]) -> None:
-    deadline = time.monotonic() + 10
-    while not path.exists():
-        assert proc.poll() is None, "landscaped exited"
-        assert time.monotonic() < deadline, f"{path} did not appear within 10 s"
-        time.sleep(0.02)
-
 
 @pytest.fixture
 def sim(tmp_path: Path) -> Iterator[Sim]:
@@ -61,8 +54,8 @@ def sim(tmp_path: Path) -> Iterator[Sim]:
     second = tmp_path / "ls1"
     c = start_controller(tmp_path / "ls0", "--link", f"slcan:pty:{second}", "--dio-socket", str(sock))
     try:
-        _wait_path(sock, c.proc)
-        _wait_path(second, c.proc)
+        wait_for_path(sock, c.proc)
+        wait_for_path(second, c.proc)
         yield Sim(c, sock, str(second))
     finally:
         c.stop()

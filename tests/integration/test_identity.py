@@ -22,7 +22,7 @@ from pathlib import Path
 import can
 import pytest
 
-from conftest import CLI, ROOT, Controller, open_slcan, start_controller
+from conftest import CLI, ROOT, Controller, open_slcan, start_controller, wait_for_path
 from landscape import AddressInUseError, Supervisor
 from landscape import telemetry as tm
 from landscape._generated import landscape_pb2 as pb
@@ -39,13 +39,6 @@ class Rig:
     ptys: list[str]  # three links of one landscaped
 
 
-def _wait_path(path: Path, proc: subprocess.Popen[bytes]) -> None:
-    deadline = time.monotonic() + 10
-    while not path.exists():
-        assert proc.poll() is None, "landscaped exited"
-        assert time.monotonic() < deadline, f"{path} did not appear within 10 s"
-        time.sleep(0.02)
-
 
 @pytest.fixture
 def rig(tmp_path: Path) -> Iterator[Rig]:
@@ -53,7 +46,7 @@ def rig(tmp_path: Path) -> Iterator[Rig]:
     c = start_controller(tmp_path / "ls0", *[a for p in extra for a in ("--link", f"slcan:pty:{p}")])
     try:
         for p in extra:
-            _wait_path(p, c.proc)
+            wait_for_path(p, c.proc)
         yield Rig(c, [c.pty, *map(str, extra)])
     finally:
         code = c.stop()
