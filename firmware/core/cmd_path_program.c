@@ -146,6 +146,7 @@ static void copy_point_attrs(ls_motion_seg_t *s, const ls_path_point_t *pt, int 
     s->tag_index = pt->tag_index;
     s->point = k;
     s->delay_s = pt->delay_s;
+    s->blend_frac = pt->blend_pct / 100.0;
     s->n_aux = pt->n_aux;
     memcpy(s->aux, pt->aux, sizeof s->aux);
     s->overlap_s = 0.0;
@@ -232,17 +233,9 @@ static int build_program(ls_core_t *core, const ls_path_t *p, const double q_sta
             return st;
         }
     }
-    /* Blends: each point with the segment that follows it. */
-    for (int k = 0; k < p->n; k++) {
-        const ls_motion_seg_t *nx =
-            k + 1 < p->n ? &core->motion.prog.seg[k + 1] : (cycles > 1 ? &core->motion.prog.seg[p->n] : NULL);
-        ls_motion_seg_blend(&core->motion.prog.seg[k], nx, p->pt[k].blend_pct / 100.0);
-    }
-    if (cycles > 1) {
-        const ls_motion_seg_t *nx = p->n > 1 ? &core->motion.prog.seg[1] : &core->motion.prog.seg[p->n];
-        ls_motion_seg_blend(&core->motion.prog.seg[p->n], nx, p->pt[0].blend_pct / 100.0);
-    }
-    return 0;
+    /* Blends: each point with the segment that follows it (ls_motion_prog_blend
+     * names the point when a blend cannot be run). */
+    return ls_motion_prog_blend(&core->motion.prog, core->model, cycles, why, whylen);
 }
 
 int32_t ls_h_path_move(struct ls_core *core, struct ls_call *call)

@@ -103,6 +103,61 @@ static void seg_clear_motion(ls_motion_seg_t *s, ls_seg_kind_t kind)
     s->fast_stop_ramp_s = MIN_STOP_RAMP_S;
     s->radius_m = s->angle_rad = s->length_m = s->turn_rad = 0.0;
     s->overlap_s = 0.0;
+    memset(s->lim_, 0, sizeof s->lim_);
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        s->jerk_scale_[j] = 1.0;
+    }
+    s->slew_ = false;
+}
+
+/* Joint-space segment limits at speed_frac / accel_frac of the model's,
+ * jerk also times the segment's jerk scale (blends). */
+static void joint_limits(const ls_robot_model_t *model, double speed_frac, double accel_frac,
+                         const double jerk_scale[LS_N_JOINTS], ls_traj_limits_t *lim)
+{
+    memset(lim, 0, sizeof *lim);
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        lim->v_max[j] = model->qd_max_rad_s[j] * speed_frac;
+        lim->a_max[j] = model->qdd_max_rad_s2[j] * accel_frac;
+        lim->j_max[j] = model->qddd_max_rad_s3[j] * accel_frac * (jerk_scale != NULL ? jerk_scale[j] : 1.0);
+    }
+}
+
+/* Stop ramps of a joint segment planned within `lim`: its own, and the fast
+ * one within the model's maxima. */
+static void joint_ramps(ls_motion_seg_t *s, const ls_robot_model_t *model, const ls_traj_limits_t *lim)
+{
+    double ramp = ls_traj_stop_ramp_s(&s->traj, lim);
+    s->stop_ramp_s = fmax(MIN_STOP_RAMP_S, STOP_RAMP_MARGIN * (ramp > 0.0 ? ramp : 0.0));
+    ls_traj_limits_t full;
+    joint_limits(model, 1.0, 1.0, NULL, &full);
+    ramp = ls_traj_stop_ramp_s(&s->traj, &full);
+    s->fast_stop_ramp_s = fmin(s->stop_ramp_s, fmax(MIN_STOP_RAMP_S, STOP_RAMP_MARGIN * (ramp > 0.0 ? ramp : 0.0)));
+}
+
+/* Plan the profile of joint segment s (q0, q1 set) at its stored fractions
+ * and jerk scale: synchronised, or each joint on its own (slew). */
+static int joint_profile(ls_motion_seg_t *s, const ls_robot_model_t *model)
+{
+    ls_traj_limits_t lim;
+    joint_limits(model, s->lim_[0], s->lim_[1], s->jerk_scale_, &lim);
+    ls_traj_t tr;
+    if (ls_traj_plan(&tr, LS_N_JOINTS, s->q0, s->q1, &lim) != LS_TRAJ_OK) {
+        return -1;
+    }
+    if (s->slew_) {
+        tr.duration_s = 0.0;
+        for (int j = 0; j < LS_N_JOINTS; j++) {
+            if (ls_traj_plan_axis(&tr.axis[j], s->q0[j], s->q1[j], lim.v_max[j], lim.a_max[j], lim.j_max[j]) !=
+                LS_TRAJ_OK) {
+                return -(j + 2);
+            }
+            tr.duration_s = fmax(tr.duration_s, tr.axis[j].T);
+        }
+    }
+    s->traj = tr;
+    joint_ramps(s, model, &lim);
+    return 0;
 }
 
 int ls_motion_seg_joint(ls_motion_seg_t *s, const ls_robot_model_t *model, const double q0[LS_N_JOINTS],
@@ -120,71 +175,33 @@ int ls_motion_seg_joint(ls_motion_seg_t *s, const ls_robot_model_t *model, const
     if (r < 0) {
         return r;
     }
-    ls_traj_limits_t lim;
-    memset(&lim, 0, sizeof lim);
-    for (int j = 0; j < LS_N_JOINTS; j++) {
-        lim.v_max[j] = model->qd_max_rad_s[j] * speed_frac;
-        lim.a_max[j] = model->qdd_max_rad_s2[j] * accel_frac;
-        lim.j_max[j] = model->qddd_max_rad_s3[j] * accel_frac;
-    }
-    ls_traj_t tr;
-    if (ls_traj_plan(&tr, LS_N_JOINTS, q0, q1, &lim) != LS_TRAJ_OK) {
-        return refuse(why, whylen, LS_MOTION_EARG, "joint move: the trajectory could not be planned");
-    }
     seg_clear_motion(s, LS_SEG_JOINT);
-    s->traj = tr;
     memcpy(s->q0, q0, sizeof s->q0);
     memcpy(s->q1, q1, sizeof s->q1);
-    double ramp = ls_traj_stop_ramp_s(&tr, &lim);
-    s->stop_ramp_s = fmax(MIN_STOP_RAMP_S, STOP_RAMP_MARGIN * (ramp > 0.0 ? ramp : 0.0));
-    for (int j = 0; j < LS_N_JOINTS; j++) {
-        lim.v_max[j] = model->qd_max_rad_s[j];
-        lim.a_max[j] = model->qdd_max_rad_s2[j];
-        lim.j_max[j] = model->qddd_max_rad_s3[j];
+    s->lim_[0] = speed_frac;
+    s->lim_[1] = accel_frac;
+    if (joint_profile(s, model) != 0) {
+        return refuse(why, whylen, LS_MOTION_EARG, "joint move: the trajectory could not be planned");
     }
-    ramp = ls_traj_stop_ramp_s(&tr, &lim);
-    s->fast_stop_ramp_s = fmin(s->stop_ramp_s, fmax(MIN_STOP_RAMP_S, STOP_RAMP_MARGIN * (ramp > 0.0 ? ramp : 0.0)));
     return LS_MOTION_OK;
-}
-
-/* Joint-space segment limits at speed_frac / accel_frac of the model's. */
-static void joint_limits(const ls_robot_model_t *model, double speed_frac, double accel_frac, ls_traj_limits_t *lim)
-{
-    memset(lim, 0, sizeof *lim);
-    for (int j = 0; j < LS_N_JOINTS; j++) {
-        lim->v_max[j] = model->qd_max_rad_s[j] * speed_frac;
-        lim->a_max[j] = model->qdd_max_rad_s2[j] * accel_frac;
-        lim->j_max[j] = model->qddd_max_rad_s3[j] * accel_frac;
-    }
 }
 
 int ls_motion_seg_slew(ls_motion_seg_t *s, const ls_robot_model_t *model, const double q0[LS_N_JOINTS],
                        const double q1[LS_N_JOINTS], double speed_frac, double accel_frac, char *why, unsigned whylen)
 {
-    /* The synchronised planner checks the arguments and the limits and sets
-     * the stop ramps; then each joint gets its own minimum-time profile. The
-     * ramps stay valid: they follow each joint's peak speed, which is at its
-     * limit here as in the slowest joint of a synchronised move. */
+    /* The synchronised planner checks the arguments and the limits; then
+     * each joint gets its own minimum-time profile. The stop ramps follow
+     * each joint's peak speed, which is at its limit here as in the slowest
+     * joint of a synchronised move. */
     int r = ls_motion_seg_joint(s, model, q0, q1, speed_frac, accel_frac, why, whylen);
     if (r < 0) {
         return r;
     }
-    ls_traj_limits_t lim;
-    joint_limits(model, speed_frac, accel_frac, &lim);
-    ls_traj_t tr = s->traj;
-    tr.duration_s = 0.0;
-    for (int j = 0; j < LS_N_JOINTS; j++) {
-        if (ls_traj_plan_axis(&tr.axis[j], q0[j], q1[j], lim.v_max[j], lim.a_max[j], lim.j_max[j]) != LS_TRAJ_OK) {
-            return refuse(why, whylen, LS_MOTION_EARG, "slew: joint %d could not be planned", j + 1);
-        }
-        tr.duration_s = fmax(tr.duration_s, tr.axis[j].T);
+    s->slew_ = true;
+    r = joint_profile(s, model);
+    if (r < 0) {
+        return refuse(why, whylen, LS_MOTION_EARG, "slew: joint %d could not be planned", -r - 1);
     }
-    s->traj = tr;
-    double ramp = ls_traj_stop_ramp_s(&tr, &lim);
-    s->stop_ramp_s = fmax(MIN_STOP_RAMP_S, STOP_RAMP_MARGIN * (ramp > 0.0 ? ramp : 0.0));
-    joint_limits(model, 1.0, 1.0, &lim);
-    ramp = ls_traj_stop_ramp_s(&tr, &lim);
-    s->fast_stop_ramp_s = fmin(s->stop_ramp_s, fmax(MIN_STOP_RAMP_S, STOP_RAMP_MARGIN * (ramp > 0.0 ? ramp : 0.0)));
     return LS_MOTION_OK;
 }
 
@@ -198,6 +215,7 @@ static void plan_init(ls_motion_plan_t *p, ls_plan_kind_t kind)
     p->one.tag_index = 0;
     p->one.point = 0;
     p->one.delay_s = 0.0;
+    p->one.blend_frac = 0.0;
     p->one.n_aux = 0;
 }
 
@@ -312,6 +330,42 @@ static int check_box(const ls_robot_model_t *model, const double T[16], char *wh
     return LS_MOTION_OK;
 }
 
+/* Plan the profile of a Cartesian segment over s in [0, 1] at its stored
+ * limits of s (lim_[0..2]) and jerk scale, and its stop ramps (the fast one
+ * with the model's Cartesian maxima on the path parameter). */
+static int cart_profile(ls_motion_seg_t *s, const ls_robot_model_t *model)
+{
+    const double L = s->length_m, A = s->turn_rad;
+    const bool still = !(L > 1e-9 || A > 1e-9);
+    ls_traj_limits_t tl;
+    memset(&tl, 0, sizeof tl);
+    tl.v_max[0] = still ? 1.0 : s->lim_[0];
+    tl.a_max[0] = still ? 1.0 : s->lim_[1];
+    tl.j_max[0] = still ? 1.0 : s->lim_[2] * s->jerk_scale_[0];
+    const double p0 = 0.0, p1 = still ? 0.0 : 1.0;
+    if (ls_traj_plan(&s->traj, 1, &p0, &p1, &tl) != LS_TRAJ_OK) {
+        return -1;
+    }
+    double ramp = ls_traj_stop_ramp_s(&s->traj, &tl);
+    s->stop_ramp_s = fmax(MIN_STOP_RAMP_S, STOP_RAMP_MARGIN * (ramp > 0.0 ? ramp : 0.0));
+    if (!still) {
+        double af = INFINITY, jf = INFINITY;
+        if (L > 1e-9) {
+            af = fmin(af, model->max_linear_accel_m_s2 / L);
+            jf = fmin(jf, model->max_linear_jerk_m_s3 / L);
+        }
+        if (A > 1e-9) {
+            af = fmin(af, model->max_angular_accel_rad_s2 / A);
+            jf = fmin(jf, model->max_angular_jerk_rad_s3 / A);
+        }
+        tl.a_max[0] = fmax(af, tl.a_max[0]);
+        tl.j_max[0] = fmax(jf, tl.j_max[0]);
+        ramp = ls_traj_stop_ramp_s(&s->traj, &tl);
+    }
+    s->fast_stop_ramp_s = fmin(s->stop_ramp_s, fmax(MIN_STOP_RAMP_S, STOP_RAMP_MARGIN * (ramp > 0.0 ? ramp : 0.0)));
+    return 0;
+}
+
 /* Time the segment over s in [0, 1] with the slower of the linear and the
  * angular limits, then sample it: workspace box, IK, joint limits and joint
  * velocities. Fills traj, stop ramp and q1. */
@@ -331,33 +385,13 @@ static int cart_time_and_check(ls_motion_seg_t *s, const ls_robot_model_t *model
         j = fmin(j, lim->j_ang_rad_s3 / A);
     }
     const bool still = !(L > 1e-9 || A > 1e-9);
-    ls_traj_limits_t tl;
-    memset(&tl, 0, sizeof tl);
-    tl.v_max[0] = still ? 1.0 : v;
-    tl.a_max[0] = still ? 1.0 : a;
-    tl.j_max[0] = still ? 1.0 : j;
-    const double p0 = 0.0, p1 = still ? 0.0 : 1.0;
-    if (ls_traj_plan(&s->traj, 1, &p0, &p1, &tl) != LS_TRAJ_OK) {
+    s->lim_[0] = v;
+    s->lim_[1] = a;
+    s->lim_[2] = j;
+    s->lim_[3] = lim->joint_speed_frac;
+    if (cart_profile(s, model) != 0) {
         return refuse(why, whylen, LS_MOTION_EARG, "Cartesian move: the profile could not be planned");
     }
-    double ramp = ls_traj_stop_ramp_s(&s->traj, &tl);
-    s->stop_ramp_s = fmax(MIN_STOP_RAMP_S, STOP_RAMP_MARGIN * (ramp > 0.0 ? ramp : 0.0));
-    if (!still) {
-        /* the fast stop: the model's Cartesian maxima on the path parameter */
-        double af = INFINITY, jf = INFINITY;
-        if (L > 1e-9) {
-            af = fmin(af, model->max_linear_accel_m_s2 / L);
-            jf = fmin(jf, model->max_linear_jerk_m_s3 / L);
-        }
-        if (A > 1e-9) {
-            af = fmin(af, model->max_angular_accel_rad_s2 / A);
-            jf = fmin(jf, model->max_angular_jerk_rad_s3 / A);
-        }
-        tl.a_max[0] = fmax(af, tl.a_max[0]);
-        tl.j_max[0] = fmax(jf, tl.j_max[0]);
-        ramp = ls_traj_stop_ramp_s(&s->traj, &tl);
-    }
-    s->fast_stop_ramp_s = fmin(s->stop_ramp_s, fmax(MIN_STOP_RAMP_S, STOP_RAMP_MARGIN * (ramp > 0.0 ? ramp : 0.0)));
 
     /* The target first, so an unreachable goal is reported as such rather
      * than as the velocity blow-up on the way to the edge of the reach. */
@@ -589,21 +623,48 @@ int ls_motion_plan_path(ls_motion_plan_t *p, const ls_motion_program_t *prog, in
     return LS_MOTION_OK;
 }
 
-/* The braking time of a synchronised joint profile (its last three phases)
- * and its accelerating time (the first three), the shortest over the moving
- * joints. */
-static double traj_phase_time(const ls_traj_t *tr, bool braking)
+/* ---- blending (ls_motion.h, docs/architecture.md "Blended paths") ---- */
+
+#define BLEND_SAMPLE_S 1e-3
+
+static bool seg_moves(const ls_motion_seg_t *s)
 {
-    double best = INFINITY;
-    for (int j = 0; j < tr->n; j++) {
-        const ls_traj_axis_t *ax = &tr->axis[j];
-        if (ax->dist == 0.0) {
-            continue;
+    for (int j = 0; j < s->traj.n; j++) {
+        if (s->traj.axis[j].dist != 0.0) {
+            return true;
         }
-        const double t = braking ? ax->t[4] + ax->t[5] + ax->t[6] : ax->t[0] + ax->t[1] + ax->t[2];
-        best = fmin(best, t);
     }
-    return isfinite(best) ? best : 0.0;
+    return false;
+}
+
+/* a may blend into b: a point without auxiliary commands or dwell, joint
+ * into joint or line into line, both moving. */
+static bool blend_applies(const ls_motion_seg_t *a, const ls_motion_seg_t *b, double frac)
+{
+    if (b == NULL || !(frac > 0.0) || a->n_aux > 0 || a->delay_s > 0.0) {
+        return false;
+    }
+    const bool same = (a->kind == LS_SEG_JOINT && b->kind == LS_SEG_JOINT) ||
+                      (a->kind == LS_SEG_LINE && b->kind == LS_SEG_LINE);
+    return same && seg_moves(a) && seg_moves(b);
+}
+
+/* The shortest of a's last jerk phase and b's first one over the moving
+ * axes: inside it each motion has one constant jerk. */
+static double blend_window_s(const ls_motion_seg_t *a, const ls_motion_seg_t *b)
+{
+    double w = INFINITY;
+    for (int j = 0; j < a->traj.n; j++) {
+        if (a->traj.axis[j].dist != 0.0) {
+            w = fmin(w, a->traj.axis[j].t[6]);
+        }
+    }
+    for (int j = 0; j < b->traj.n; j++) {
+        if (b->traj.axis[j].dist != 0.0) {
+            w = fmin(w, b->traj.axis[j].t[0]);
+        }
+    }
+    return isfinite(w) ? w : 0.0;
 }
 
 void ls_motion_seg_blend(ls_motion_seg_t *a, const ls_motion_seg_t *b, double frac)
@@ -612,12 +673,177 @@ void ls_motion_seg_blend(ls_motion_seg_t *a, const ls_motion_seg_t *b, double fr
         return;
     }
     a->overlap_s = 0.0;
-    if (b == NULL || !(frac > 0.0) || a->kind != LS_SEG_JOINT || b->kind != LS_SEG_JOINT || a->n_aux > 0 ||
-        a->delay_s > 0.0) {
+    if (!blend_applies(a, b, frac)) {
         return;
     }
-    const double f = frac > 1.0 ? 1.0 : frac;
-    a->overlap_s = f * fmin(traj_phase_time(&a->traj, true), traj_phase_time(&b->traj, false));
+    a->overlap_s = (frac > 1.0 ? 1.0 : frac) * blend_window_s(a, b);
+}
+
+/* Linear jerk of a line segment's profile (m/s^3). */
+static double line_jerk(const ls_motion_seg_t *s)
+{
+    return fabs(s->traj.axis[0].j) * s->length_m;
+}
+
+double ls_motion_seg_blend_dev_m(const ls_motion_seg_t *a, const ls_motion_seg_t *b)
+{
+    if (a == NULL || b == NULL || !(a->overlap_s > 0.0)) {
+        return 0.0;
+    }
+    if (a->kind != LS_SEG_LINE) {
+        return NAN;
+    }
+    const double t = a->overlap_s;
+    return fmax(line_jerk(a), line_jerk(b)) * t * t * t / 6.0;
+}
+
+/* The jerk scale per axis that keeps the sum of the two motions' jerks
+ * within the larger of their limits (ls_motion_prog_blend). */
+static void blend_jerk_scale(const ls_motion_seg_t *a, const ls_motion_seg_t *b, double k[LS_N_JOINTS])
+{
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        k[j] = 1.0;
+    }
+    if (a->kind == LS_SEG_JOINT) {
+        for (int j = 0; j < LS_N_JOINTS; j++) {
+            if (a->traj.axis[j].dist * b->traj.axis[j].dist > 0.0) {
+                k[j] = 0.5; /* both jerks push the joint the same way */
+            }
+        }
+        return;
+    }
+    if (a->length_m > 1e-9 && b->length_m > 1e-9) {
+        double da[3], db[3];
+        v3_sub(&a->P1[12], &a->P0[12], da);
+        v3_sub(&b->P1[12], &b->P0[12], db);
+        const double c = v3_dot(da, db) / (v3_norm(da) * v3_norm(db));
+        /* |Ja da + Jb db| <= J max(1, 2 cos(theta / 2)), 2 cos(theta / 2) = sqrt(2 (1 + cos theta)) */
+        k[0] = 1.0 / fmax(1.0, sqrt(fmax(0.0, 2.0 * (1.0 + c))));
+    }
+    if (a->turn_rad > 1e-9 && b->turn_rad > 1e-9) {
+        k[0] = fmin(k[0], 0.5);
+    }
+}
+
+/* Re-plan a segment's profile at its jerk scale (same path, same q1). */
+static int seg_replan(ls_motion_seg_t *s, const ls_robot_model_t *model)
+{
+    if (s->kind == LS_SEG_JOINT) {
+        return joint_profile(s, model);
+    }
+    return s->kind == LS_SEG_LINE ? cart_profile(s, model) : 0;
+}
+
+/* The segment b that a = seg[i] blends into (ls_motion_prog_blend), or -1. */
+static int blend_next(const ls_motion_program_t *prog, int32_t cycles, int i)
+{
+    const int n = prog->n;
+    if (i < n - 1) {
+        return i + 1;
+    }
+    if (cycles > 1 && i == n - 1) {
+        return n;
+    }
+    if (cycles > 1 && i == n) {
+        return n > 1 ? 1 : n;
+    }
+    return -1;
+}
+
+/* The tool-tip pose of a at xa blended with b at xb: positions added (b's
+ * displacement on top of a), b's rotation since its start composed onto a's. */
+static void blend_pose(const ls_motion_seg_t *a, double xa, const ls_motion_seg_t *b, double xb, double T[16])
+{
+    double Ta[16], Tb[16], B0inv[16], D[16];
+    seg_tip_pose(a, xa, Ta);
+    seg_tip_pose(b, xb, Tb);
+    ls_pose_inv(b->P0, B0inv);
+    ls_pose_mul(B0inv, Tb, D);
+    ls_pose_mul(Ta, D, T);
+    for (int i = 0; i < 3; i++) {
+        T[12 + i] = Ta[12 + i] + Tb[12 + i] - b->P0[12 + i];
+    }
+}
+
+/* Sample a line blend every BLEND_SAMPLE_S: workspace box, a joint solution
+ * and joint speeds within the larger joint speed fraction of the two. */
+static int blend_check(const ls_robot_model_t *model, const ls_motion_seg_t *a, const ls_motion_seg_t *b, char *why,
+                       unsigned whylen)
+{
+    const double t0 = a->traj.duration_s - a->overlap_s;
+    const int n = (int)fmax(1.0, ceil(a->overlap_s / BLEND_SAMPLE_S));
+    const double dt = a->overlap_s / n, jsf = fmax(a->lim_[3], b->lim_[3]);
+    double q_prev[LS_N_JOINTS];
+    memcpy(q_prev, a->q1, sizeof q_prev);
+    for (int k = 0; k <= n; k++) {
+        double xa, xb, T[16], F[16], q[LS_N_JOINTS];
+        ls_traj_sample_axis(&a->traj.axis[0], t0 + dt * k, &xa, NULL, NULL);
+        ls_traj_sample_axis(&b->traj.axis[0], dt * k, &xb, NULL, NULL);
+        blend_pose(a, xa, b, xb, T);
+        char tmp[112];
+        if (check_box(model, T, tmp, sizeof tmp) < 0) {
+            return refuse(why, whylen, LS_MOTION_ERANGE, "point %d: its blend leaves the workspace (%s)", a->point,
+                          tmp);
+        }
+        ls_pose_mul(T, a->tool_inv, F);
+        if (ls_kin_ik_nearest(model, F, k == 0 ? a->q1 : q_prev, q) != LS_KIN_OK) {
+            return refuse(why, whylen, LS_MOTION_ERANGE, "point %d: no joint solution on its blend at tip (%.4g, %.4g, "
+                          "%.4g) m", a->point, T[12], T[13], T[14]);
+        }
+        for (int j = 0; k > 0 && j < LS_N_JOINTS; j++) {
+            const double qd = fabs(q[j] - q_prev[j]) / dt, lim = model->qd_max_rad_s[j] * jsf;
+            if (qd > lim) {
+                return refuse(why, whylen, LS_MOTION_ERANGE, "point %d: joint %d at %.4g rad/s on its blend, beyond "
+                              "its limit %.4g rad/s", a->point, j + 1, qd, lim);
+            }
+        }
+        memcpy(q_prev, q, sizeof q_prev);
+    }
+    return LS_MOTION_OK;
+}
+
+int ls_motion_prog_blend(ls_motion_program_t *prog, const ls_robot_model_t *model, int32_t cycles, char *why,
+                         unsigned whylen)
+{
+    if (prog == NULL || model == NULL || prog->n < 1 || prog->n >= LS_MOTION_MAX_SEGS || cycles < 1) {
+        return refuse(why, whylen, LS_MOTION_EARG, "blend: no program");
+    }
+    const int last = cycles > 1 ? prog->n : prog->n - 1;
+    for (int i = 0; i <= last; i++) {
+        for (int j = 0; j < LS_N_JOINTS; j++) {
+            prog->seg[i].jerk_scale_[j] = 1.0;
+        }
+    }
+    for (int i = 0; i <= last; i++) {
+        const int nb = blend_next(prog, cycles, i);
+        ls_motion_seg_t *a = &prog->seg[i];
+        if (nb >= 0 && blend_applies(a, &prog->seg[nb], a->blend_frac)) {
+            double k[LS_N_JOINTS];
+            blend_jerk_scale(a, &prog->seg[nb], k);
+            for (int j = 0; j < LS_N_JOINTS; j++) {
+                a->jerk_scale_[j] = fmin(a->jerk_scale_[j], k[j]);
+                prog->seg[nb].jerk_scale_[j] = fmin(prog->seg[nb].jerk_scale_[j], k[j]);
+            }
+        }
+    }
+    for (int i = 0; i <= last; i++) {
+        if (seg_replan(&prog->seg[i], model) != 0) {
+            return refuse(why, whylen, LS_MOTION_EARG, "point %d: its profile could not be re-planned for a blend",
+                          prog->seg[i].point);
+        }
+    }
+    for (int i = 0; i <= last; i++) {
+        const int nb = blend_next(prog, cycles, i);
+        ls_motion_seg_t *a = &prog->seg[i];
+        ls_motion_seg_blend(a, nb >= 0 ? &prog->seg[nb] : NULL, a->blend_frac);
+        if (a->overlap_s > 0.0 && a->kind == LS_SEG_LINE) {
+            int r = blend_check(model, a, &prog->seg[nb], why, whylen);
+            if (r < 0) {
+                return r;
+            }
+        }
+    }
+    return LS_MOTION_OK;
 }
 
 /* -------------------------------------------------------------- executor */
@@ -817,6 +1043,35 @@ static int seg_position(const ls_motion_t *m, const ls_motion_seg_t *s, double t
     return seg_ik(m->model, s, x, m->q_cmd, q);
 }
 
+/* The set-point of the current segment s, blended with nx when it is not
+ * NULL: joint into joint in joint space (qd: the sum), line into line by
+ * one IK of the blended tip pose (qd: filled by the caller). */
+static int step_position(const ls_motion_t *m, const ls_motion_seg_t *s, const ls_motion_seg_t *nx,
+                         double q[LS_N_JOINTS], double qd[LS_N_JOINTS])
+{
+    if (nx == NULL || s->kind == LS_SEG_JOINT) {
+        int ks = seg_position(m, s, m->t_s, q, qd);
+        if (nx != NULL && ks == LS_KIN_OK) {
+            double q2[LS_N_JOINTS], qd2[LS_N_JOINTS];
+            ks = seg_position(m, nx, m->t_next_s_, q2, qd2);
+            for (int j = 0; j < LS_N_JOINTS; j++) {
+                q[j] += q2[j] - nx->q0[j];
+                qd[j] += qd2[j];
+            }
+        }
+        return ks;
+    }
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        qd[j] = 0.0;
+    }
+    double xa, xb, T[16], F[16];
+    ls_traj_sample_axis(&s->traj.axis[0], m->t_s, &xa, NULL, NULL);
+    ls_traj_sample_axis(&nx->traj.axis[0], m->t_next_s_, &xb, NULL, NULL);
+    blend_pose(s, xa, nx, xb, T);
+    ls_pose_mul(T, s->tool_inv, F);
+    return ls_kin_ik_nearest(m->model, F, m->q_cmd, q);
+}
+
 /* Move on to the next point of the plan. at_rest: no blend in progress, so
  * a pending stop pauses here. */
 static void advance(ls_motion_t *m, ls_motion_events_t *ev, bool at_rest)
@@ -907,15 +1162,7 @@ static void move_step(ls_motion_t *m, const ls_motion_seg_t *s, double dt_s, dou
         }
     }
     double q[LS_N_JOINTS];
-    int ks = seg_position(m, s, m->t_s, q, qd);
-    if (ks == LS_KIN_OK && m->blending_ && nx != NULL) {
-        double q2[LS_N_JOINTS], qd2[LS_N_JOINTS];
-        ks = seg_position(m, nx, m->t_next_s_, q2, qd2);
-        for (int j = 0; j < LS_N_JOINTS; j++) {
-            q[j] += q2[j] - nx->q0[j];
-            qd[j] += qd2[j];
-        }
-    }
+    const int ks = step_position(m, s, m->blending_ ? nx : NULL, q, qd);
     if (ks != LS_KIN_OK) {
         fault(m, ev, "no joint solution on the planned path (IK status %d): stopped", ks);
     } else {

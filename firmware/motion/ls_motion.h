@@ -13,7 +13,7 @@
  * (single moves: one segment, one cycle). Each segment ends at a point where
  * the executor reports the tag, runs the auxiliary commands and dwells; it
  * blends into the next segment instead of stopping when the planner gave it
- * an overlap (joint segments only, see ls_motion_seg_blend).
+ * an overlap (joint into joint, line into line: ls_motion_prog_blend).
  *
  * Units: SI everywhere (m, rad, s); conversion from the user's units happens
  * in the command handlers. Poses are 4x4 column-major (ls_kin.h). */
@@ -99,10 +99,16 @@ typedef struct {
     char tag[LS_MOTION_NAME_LEN]; /* empty: no tag event */
     int32_t tag_index;
     int32_t point;    /* index of the point in its path */
-    double delay_s;   /* dwell after arriving (after the auxiliary commands) */
-    double overlap_s; /* > 0: the next segment starts this long before this one ends */
+    double delay_s;    /* dwell after arriving (after the auxiliary commands) */
+    double blend_frac; /* (0, 1]: blend into the next segment (transitionSpeed / 100); 0: stop here */
+    double overlap_s;  /* > 0: the next segment starts this long before this one ends */
     uint8_t n_aux;
     char aux[LS_MOTION_AUX_PER_POINT][LS_MOTION_AUX_LEN];
+    /* private to ls_motion.c: what the profile was planned with, so that a
+     * blend can re-plan it with a lower jerk (ls_motion_prog_blend) */
+    double lim_[4]; /* JOINT: speed_frac, accel_frac; LINE/ARC: v, a, j of s, joint_speed_frac */
+    double jerk_scale_[LS_N_JOINTS];
+    bool slew_;
 } ls_motion_seg_t;
 
 /* The segments of a path: seg[0..n-1] for the first cycle; seg[n] leads
@@ -217,13 +223,46 @@ int ls_motion_seg_slew(ls_motion_seg_t *s, const ls_robot_model_t *model, const 
  * or coincide, LS_MOTION_EARG for NULL or non-finite input. Pure, O(1). */
 int ls_motion_arc_split(const double p0[3], const double pv[3], const double p1[3], double mid_a[3], double mid_b[3]);
 
-/* Blend `a` into the following segment `b` (both JOINT, a without auxiliary
- * commands or dwell): b starts `frac` (0..1] of min(a's braking time, b's
- * accelerating time) before a ends, and the two motions are added (b's
- * displacement from its start on top of a), so the velocity is continuous
- * and the arm passes near the point without stopping. Sets a->overlap_s
- * (0 when the blend does not apply). */
+/* Blending (docs/architecture.md, "Blended paths"). A blend of segment `a`
+ * into the following `b` starts b `a->overlap_s` = T_o before a ends and
+ * adds the two motions (b's displacement from its start on top of a): joint
+ * into joint in joint space, line into line in Cartesian space (positions
+ * added, b's rotation composed onto a's). T_o is blend_frac times the
+ * window: the shorter of a's last jerk phase and b's first one, over every
+ * moving axis (joints; the path parameter of a line). Inside the window
+ * each motion is in a single constant-jerk phase, which bounds the sum:
+ *   speed  <= J T_o^2 / 2 per motion, at most half of its peak speed;
+ *   accel  <= J T_o, at most its peak acceleration;
+ *   jerk   = Ja da + Jb db: ls_motion_prog_blend lowers the jerk of both
+ *            segments so this stays within the larger of their limits.
+ * The tool stays within max(Ja, Jb) T_o^3 / 6 of the point (a line's
+ * linear jerk J = |j of s| * length). */
+
+/* The window and overlap of one blend, without changing the profiles:
+ * a->overlap_s = frac (clamped to (0, 1]) x the window, or 0 when the blend
+ * does not apply (frac <= 0, kinds other than JOINT->JOINT or LINE->LINE,
+ * a with auxiliary commands or a dwell, a or b not moving). Pure, O(axes). */
 void ls_motion_seg_blend(ls_motion_seg_t *a, const ls_motion_seg_t *b, double frac);
+
+/* The bound on the tool's distance from the point at the end of `a` while
+ * it blends into `b` (LINE->LINE: max(Ja, Jb) T_o^3 / 6, m), 0 when a does
+ * not blend, NAN for a joint blend (no Cartesian bound: joint space). */
+double ls_motion_seg_blend_dev_m(const ls_motion_seg_t *a, const ls_motion_seg_t *b);
+
+/* Blend a whole program at its points' blend_frac (seg[k] into seg[k+1];
+ * with cycles > 1 also seg[n-1] into seg[n] and seg[n] into seg[1]):
+ * 1. each blended pair's jerk scale: joint j moving the same way in both
+ *    segments 1/2 (else 1); a line pair turning by theta
+ *    1 / max(1, 2 cos(theta / 2)) for the position, 1/2 when both rotate;
+ *    every segment re-planned at the smallest scale of its pairs (slower
+ *    start and end ramps, same path, same peak speed);
+ * 2. the overlaps (ls_motion_seg_blend);
+ * 3. line blends sampled every 1 ms of their window: workspace box, joint
+ *    solution and joint speeds, as the line planner checks its samples.
+ * Returns 0, or the planner status with `why` naming the point and what to
+ * do. Comms thread (planning); cost O(n) plus one IK per sampled ms. */
+int ls_motion_prog_blend(ls_motion_program_t *prog, const ls_robot_model_t *model, int32_t cycles, char *why,
+                         unsigned whylen);
 
 /* ---- executor (control loop) ---- */
 
