@@ -644,8 +644,8 @@ static bool blend_applies(const ls_motion_seg_t *a, const ls_motion_seg_t *b, do
     if (b == NULL || !(frac > 0.0) || a->n_aux > 0 || a->delay_s > 0.0) {
         return false;
     }
-    const bool same = (a->kind == LS_SEG_JOINT && b->kind == LS_SEG_JOINT) ||
-                      (a->kind == LS_SEG_LINE && b->kind == LS_SEG_LINE);
+    const bool same =
+        (a->kind == LS_SEG_JOINT && b->kind == LS_SEG_JOINT) || (a->kind == LS_SEG_LINE && b->kind == LS_SEG_LINE);
     return same && seg_moves(a) && seg_moves(b);
 }
 
@@ -787,14 +787,18 @@ static int blend_check(const ls_robot_model_t *model, const ls_motion_seg_t *a, 
         }
         ls_pose_mul(T, a->tool_inv, F);
         if (ls_kin_ik_nearest(model, F, k == 0 ? a->q1 : q_prev, q) != LS_KIN_OK) {
-            return refuse(why, whylen, LS_MOTION_ERANGE, "point %d: no joint solution on its blend at tip (%.4g, %.4g, "
-                          "%.4g) m", a->point, T[12], T[13], T[14]);
+            return refuse(why, whylen, LS_MOTION_ERANGE,
+                          "point %d: no joint solution on its blend at tip (%.4g, %.4g, "
+                          "%.4g) m",
+                          a->point, T[12], T[13], T[14]);
         }
         for (int j = 0; k > 0 && j < LS_N_JOINTS; j++) {
             const double qd = fabs(q[j] - q_prev[j]) / dt, lim = model->qd_max_rad_s[j] * jsf;
             if (qd > lim) {
-                return refuse(why, whylen, LS_MOTION_ERANGE, "point %d: joint %d at %.4g rad/s on its blend, beyond "
-                              "its limit %.4g rad/s", a->point, j + 1, qd, lim);
+                return refuse(why, whylen, LS_MOTION_ERANGE,
+                              "point %d: joint %d at %.4g rad/s on its blend, beyond "
+                              "its limit %.4g rad/s",
+                              a->point, j + 1, qd, lim);
             }
         }
         memcpy(q_prev, q, sizeof q_prev);

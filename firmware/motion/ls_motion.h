@@ -98,7 +98,7 @@ typedef struct {
     /* the point at the end of the segment (paths) */
     char tag[LS_MOTION_NAME_LEN]; /* empty: no tag event */
     int32_t tag_index;
-    int32_t point;    /* index of the point in its path */
+    int32_t point;     /* index of the point in its path */
     double delay_s;    /* dwell after arriving (after the auxiliary commands) */
     double blend_frac; /* (0, 1]: blend into the next segment (transitionSpeed / 100); 0: stop here */
     double overlap_s;  /* > 0: the next segment starts this long before this one ends */

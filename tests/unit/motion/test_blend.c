@@ -1,0 +1,359 @@
+/* Blended paths (ls_motion_prog_blend): the blend maths, and the executor
+ * running blended programs with an ideal arm at 1 ms, measured from the
+ * set-points: speed, acceleration and jerk by finite differences (each a
+ * weighted mean of the true value over a few cycles, so never above its
+ * peak), the distance from the path and from the points. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include <cmocka.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "ls_kin.h"
+#include "ls_motion.h"
+#include "motion_test_util.h"
+
+#define N_ZIG 6
+#define MAX_STEPS 100000
+
+static const ls_robot_model_t *M = &ls_robot_model_default;
+
+static ls_motion_t g_m;
+static ls_motion_plan_t g_plan;
+static ls_motion_program_t g_prog;
+static double g_corner[N_ZIG + 1][3]; /* the start, then point k at [k + 1] */
+
+static void tip_of(const double q[LS_N_JOINTS], double P[16])
+{
+    double F[16], T[16];
+    ls_kin_fk(M, q, F);
+    mt_tool(T);
+    ls_pose_mul(F, T, P);
+}
+
+static double dist3(const double a[3], const double b[3])
+{
+    return sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+}
+
+/* Distance from p to the segment a-b. */
+static double dist_to_segment(const double p[3], const double a[3], const double b[3])
+{
+    double ab[3], ap[3];
+    for (int i = 0; i < 3; i++) {
+        ab[i] = b[i] - a[i];
+        ap[i] = p[i] - a[i];
+    }
+    double t = (ap[0] * ab[0] + ap[1] * ab[1] + ap[2] * ab[2]) / (ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2]);
+    t = fmin(1.0, fmax(0.0, t));
+    double c[3];
+    for (int i = 0; i < 3; i++) {
+        c[i] = a[i] + t * ab[i];
+    }
+    return dist3(p, c);
+}
+
+/* A zig-zag of n straight lines from the home pose: point k at
+ * (+4 cm (k + 1), +-3 cm, 0) from the start, same orientation, tagged
+ * "Pk", blended at `frac` (the last point stops); `accel_k` scales the
+ * acceleration (not the jerk) of segment `accel_seg`. */
+static void make_zigzag(int n, double frac, int accel_seg, double accel_k)
+{
+    char why[160];
+    double tool[16], P[16], q_prev[LS_N_JOINTS];
+    mt_tool(tool);
+    memset(&g_prog, 0, sizeof g_prog);
+    memcpy(q_prev, mt_q_home, sizeof q_prev);
+    tip_of(mt_q_home, P);
+    memcpy(g_corner[0], P + 12, sizeof g_corner[0]);
+    for (int k = 0; k < n; k++) {
+        ls_motion_cart_limits_t lim;
+        mt_limits(&lim);
+        if (k == accel_seg) {
+            lim.a_lin_m_s2 *= accel_k;
+        }
+        double T[16];
+        memcpy(T, P, sizeof T);
+        T[12] += 0.04 * (k + 1);
+        T[13] += k % 2 == 0 ? 0.03 : -0.03;
+        ls_motion_seg_t *s = &g_prog.seg[k];
+        snprintf(s->tag, sizeof s->tag, "P%d", k);
+        s->tag_index = k;
+        s->point = k;
+        s->blend_frac = k + 1 < n ? frac : 0.0;
+        assert_int_equal(ls_motion_seg_line(s, M, q_prev, tool, T, &lim, why, sizeof why), 0);
+        memcpy(q_prev, s->q1, sizeof q_prev);
+        memcpy(g_corner[k + 1], T + 12, sizeof g_corner[k + 1]);
+    }
+    g_prog.n = (uint16_t)n;
+    assert_int_equal(ls_motion_prog_blend(&g_prog, M, 1, why, sizeof why), 0);
+    assert_int_equal(ls_motion_plan_path(&g_plan, &g_prog, 1, false, "zig"), 0);
+}
+
+typedef struct {
+    long steps;
+    double v, a, j;         /* peaks of the tool tip's motion */
+    double min_speed;       /* from passing the first point to braking for the last one */
+    double off_path;        /* the largest distance from the polyline */
+    double outside_bound;   /* > 0: a sample off the polyline not within its corner's bound */
+    int tags, tag_in_order; /* tag events; 1 while they came as P0, P1, ... */
+} run_t;
+
+static run_t run_zigzag(int n)
+{
+    run_t r = { .min_speed = INFINITY, .tag_in_order = 1 };
+    ls_motion_init(&g_m, M);
+    ls_motion_hold(&g_m, mt_q_home);
+    assert_int_equal(ls_motion_start(&g_m, &g_plan), 0);
+    double p[4][3]; /* p[0] newest */
+    for (int h = 0; h < 4; h++) {
+        memcpy(p[h], g_corner[0], sizeof p[h]);
+    }
+    ev_log_t log = { .n = 0 };
+    bool between = false, done = false;
+    while (!done && r.steps < MAX_STEPS) {
+        double q[LS_N_JOINTS], qd[LS_N_JOINTS], P[16];
+        const int before = log.n;
+        mt_step(&g_m, q, qd, &log);
+        r.steps++;
+        tip_of(q, P);
+        memmove(p[1], p[0], 3 * sizeof p[0]);
+        memcpy(p[0], P + 12, sizeof p[0]);
+        double v[3], a[3], j[3];
+        for (int i = 0; i < 3; i++) {
+            v[i] = (p[0][i] - p[1][i]) / DT_S;
+            a[i] = (p[0][i] - 2.0 * p[1][i] + p[2][i]) / (DT_S * DT_S);
+            j[i] = (p[0][i] - 3.0 * p[1][i] + 3.0 * p[2][i] - p[3][i]) / (DT_S * DT_S * DT_S);
+        }
+        const double zero[3] = { 0, 0, 0 };
+        r.v = fmax(r.v, dist3(v, zero));
+        r.a = fmax(r.a, dist3(a, zero));
+        r.j = fmax(r.j, dist3(j, zero));
+        /* the last segment's second half brakes to the last point */
+        const bool braking_to_last = g_m.seg_i_ == n - 1 && g_m.t_s > g_prog.seg[n - 1].traj.duration_s / 2;
+        for (int e = before; e < log.n; e++) {
+            if (log.ev[e].kind == LS_MEV_TAG) {
+                char want[16];
+                snprintf(want, sizeof want, "P%d", r.tags);
+                r.tag_in_order &= strcmp(log.ev[e].name, want) == 0;
+                r.tags++;
+                between = true;
+            }
+            done |= log.ev[e].kind == LS_MEV_DONE;
+        }
+        if (between && !braking_to_last && !done) {
+            r.min_speed = fmin(r.min_speed, dist3(v, zero));
+        }
+        double off = INFINITY;
+        for (int k = 0; k < n; k++) {
+            off = fmin(off, dist_to_segment(p[0], g_corner[k], g_corner[k + 1]));
+        }
+        r.off_path = fmax(r.off_path, off);
+        if (off > 1e-7) {
+            double slack = INFINITY; /* within the bound of some blended corner? */
+            for (int k = 0; k + 1 < n; k++) {
+                const double bound = ls_motion_seg_blend_dev_m(&g_prog.seg[k], &g_prog.seg[k + 1]);
+                slack = fmin(slack, dist3(p[0], g_corner[k + 1]) - bound);
+            }
+            r.outside_bound = fmax(r.outside_bound, slack - 1e-9);
+        }
+    }
+    assert_true(done);
+    return r;
+}
+
+/* The maths of one corner: the jerk scale, the window, the overlap and the
+ * deviation bound, from the planned profiles. */
+static void test_blend_maths_of_a_corner(void **state)
+{
+    (void)state;
+    ls_motion_cart_limits_t lim;
+    mt_limits(&lim);
+    make_zigzag(3, 0.6, -1, 1.0);
+    for (int k = 0; k < 3; k++) {
+        const ls_motion_seg_t *s = &g_prog.seg[k];
+        const double J = fabs(s->traj.axis[0].j) * s->length_m;
+        double want = lim.j_lin_m_s3;
+        for (int c = (k == 0 ? 0 : k - 1); c <= (k < 2 ? k : 1); c++) {
+            /* corner c joins segment c and c + 1 */
+            double da[3], db[3];
+            for (int i = 0; i < 3; i++) {
+                da[i] = g_corner[c + 1][i] - g_corner[c][i];
+                db[i] = g_corner[c + 2][i] - g_corner[c + 1][i];
+            }
+            const double zero[3] = { 0, 0, 0 };
+            const double cth = (da[0] * db[0] + da[1] * db[1] + da[2] * db[2]) / (dist3(da, zero) * dist3(db, zero));
+            want = fmin(want, lim.j_lin_m_s3 / fmax(1.0, 2.0 * cos(acos(cth) / 2.0)));
+        }
+        assert_true(fabs(J - want) <= 1e-9 * want);
+        assert_true(fabs(s->traj.axis[0].t[0] - s->traj.axis[0].t[6]) < 1e-12); /* symmetric */
+    }
+    for (int k = 0; k < 2; k++) {
+        const ls_motion_seg_t *a = &g_prog.seg[k], *b = &g_prog.seg[k + 1];
+        const double win = fmin(a->traj.axis[0].t[6], b->traj.axis[0].t[0]);
+        assert_true(win > 0.05);
+        assert_true(fabs(a->overlap_s - 0.6 * win) < 1e-12);
+        const double Jmax = fmax(fabs(a->traj.axis[0].j) * a->length_m, fabs(b->traj.axis[0].j) * b->length_m);
+        const double t = a->overlap_s;
+        assert_true(fabs(ls_motion_seg_blend_dev_m(a, b) - Jmax * t * t * t / 6.0) < 1e-15);
+    }
+    assert_true(g_prog.seg[2].overlap_s == 0.0); /* the last point stops */
+    assert_true(ls_motion_seg_blend_dev_m(&g_prog.seg[2], NULL) == 0.0);
+
+    /* Straight on (theta = 0): both jerks add fully, half each. A reversal
+     * (theta = 180 degrees) cancels them: the full jerk stays. */
+    char why[160];
+    double tool[16], P0[16], P1[16], P2[16];
+    mt_tool(tool);
+    tip_of(mt_q_home, P0);
+    memcpy(P1, P0, sizeof P1);
+    memcpy(P2, P0, sizeof P2);
+    P1[12] += 0.05;
+    P2[12] += 0.10;
+    for (int rev = 0; rev < 2; rev++) {
+        memset(&g_prog, 0, sizeof g_prog);
+        g_prog.seg[0].blend_frac = 1.0;
+        assert_int_equal(ls_motion_seg_line(&g_prog.seg[0], M, mt_q_home, tool, P1, &lim, why, sizeof why), 0);
+        assert_int_equal(
+            ls_motion_seg_line(&g_prog.seg[1], M, g_prog.seg[0].q1, tool, rev ? P0 : P2, &lim, why, sizeof why), 0);
+        g_prog.n = 2;
+        assert_int_equal(ls_motion_prog_blend(&g_prog, M, 1, why, sizeof why), 0);
+        const double J = fabs(g_prog.seg[0].traj.axis[0].j) * g_prog.seg[0].length_m;
+        assert_true(fabs(J - lim.j_lin_m_s3 * (rev ? 1.0 : 0.5)) < 1e-9);
+        assert_true(g_prog.seg[0].overlap_s > 0.0);
+    }
+}
+
+/* A blended zig-zag never stops between its first and last points, stays
+ * on the path or within each corner's bound, keeps the tip's speed,
+ * acceleration and jerk within the limits, fires each tag once, in order,
+ * and is faster than the same path stopping at every point. */
+static void test_blended_zigzag_within_bound_and_limits(void **state)
+{
+    (void)state;
+    ls_motion_cart_limits_t lim;
+    mt_limits(&lim);
+    make_zigzag(N_ZIG, 0.0, -1, 1.0);
+    const run_t stop = run_zigzag(N_ZIG);
+    make_zigzag(N_ZIG, 1.0, -1, 1.0);
+    const run_t blend = run_zigzag(N_ZIG);
+
+    assert_int_equal(blend.tags, N_ZIG);
+    assert_true(blend.tag_in_order);
+    assert_true(blend.min_speed > 1e-3);
+    assert_true(blend.off_path > 1e-4); /* it does leave the corners */
+    assert_true(blend.outside_bound <= 0.0);
+    assert_true(blend.v <= lim.v_lin_m_s * (1.0 + 1e-6));
+    assert_true(blend.a <= lim.a_lin_m_s2 * (1.0 + 1e-6));
+    assert_true(blend.j <= lim.j_lin_m_s3 * (1.0 + 1e-6));
+    assert_true(blend.steps < stop.steps - 100 * (N_ZIG - 1) / 2);
+
+    /* transitionSpeed 0: stops at every point, stays on the polyline, tags
+     * as before. */
+    assert_int_equal(stop.tags, N_ZIG);
+    assert_true(stop.tag_in_order);
+    assert_true(stop.min_speed < 1e-5); /* the last millisecond of a jerk-limited stop: J dt^3 / 6 */
+    assert_true(stop.off_path < 1e-7);
+    assert_true(stop.j <= lim.j_lin_m_s3 * (1.0 + 1e-6));
+}
+
+/* The per-segment acceleration of a straight line sets its duration; a
+ * blend between segments of different accelerations stays within the
+ * larger of the two. */
+static void test_line_accel_changes_its_duration(void **state)
+{
+    (void)state;
+    make_zigzag(2, 0.0, 1, 0.25);
+    const double slow = g_prog.seg[1].traj.duration_s;
+    make_zigzag(2, 0.0, 1, 1.0);
+    const double fast = g_prog.seg[1].traj.duration_s;
+    assert_true(slow > fast + 0.05);
+    make_zigzag(2, 1.0, 1, 0.25);
+    const run_t r = run_zigzag(2);
+    ls_motion_cart_limits_t lim;
+    mt_limits(&lim);
+    assert_true(r.a <= lim.a_lin_m_s2 * (1.0 + 1e-6));
+    assert_true(r.min_speed > 1e-4);
+}
+
+/* Joint into joint: each joint within its velocity, acceleration and jerk
+ * limits, joint 1 continuing and joint 3 reversing through the points. */
+static void test_joint_blend_within_joint_limits(void **state)
+{
+    (void)state;
+    char why[128];
+    memset(&g_prog, 0, sizeof g_prog);
+    double q_prev[LS_N_JOINTS];
+    memcpy(q_prev, mt_q_home, sizeof q_prev);
+    const double d1[3] = { 0.5, 0.4, 0.6 }, d3[3] = { 0.4, -0.5, 0.3 };
+    for (int k = 0; k < 3; k++) {
+        double q[LS_N_JOINTS];
+        memcpy(q, q_prev, sizeof q);
+        q[0] += d1[k];
+        q[2] += d3[k];
+        ls_motion_seg_t *s = &g_prog.seg[k];
+        snprintf(s->tag, sizeof s->tag, "J%d", k);
+        s->point = k;
+        s->blend_frac = k < 2 ? 1.0 : 0.0;
+        assert_int_equal(ls_motion_seg_joint(s, M, q_prev, q, 1.0, 1.0, why, sizeof why), 0);
+        memcpy(q_prev, q, sizeof q_prev);
+    }
+    g_prog.n = 3;
+    assert_int_equal(ls_motion_prog_blend(&g_prog, M, 1, why, sizeof why), 0);
+    assert_true(isnan(ls_motion_seg_blend_dev_m(&g_prog.seg[0], &g_prog.seg[1])));
+    assert_true(g_prog.seg[0].jerk_scale_[0] == 0.5 && g_prog.seg[0].jerk_scale_[2] == 1.0);
+    assert_int_equal(ls_motion_plan_path(&g_plan, &g_prog, 1, false, "j"), 0);
+    ls_motion_init(&g_m, M);
+    ls_motion_hold(&g_m, mt_q_home);
+    assert_int_equal(ls_motion_start(&g_m, &g_plan), 0);
+    double h[4][LS_N_JOINTS];
+    for (int i = 0; i < 4; i++) {
+        memcpy(h[i], mt_q_home, sizeof h[i]);
+    }
+    ev_log_t log = { .n = 0 };
+    double min_speed = INFINITY;
+    int tags = 0;
+    long k = 0;
+    for (; k < MAX_STEPS && log.n < 4; k++) {
+        double q[LS_N_JOINTS], qd[LS_N_JOINTS];
+        const int before = log.n;
+        mt_step(&g_m, q, qd, &log);
+        memmove(h[1], h[0], 3 * sizeof h[0]);
+        memcpy(h[0], q, sizeof h[0]);
+        for (int j = 0; j < LS_N_JOINTS; j++) {
+            const double v = (h[0][j] - h[1][j]) / DT_S;
+            const double a = (h[0][j] - 2.0 * h[1][j] + h[2][j]) / (DT_S * DT_S);
+            const double jk = (h[0][j] - 3.0 * h[1][j] + 3.0 * h[2][j] - h[3][j]) / (DT_S * DT_S * DT_S);
+            assert_true(fabs(v) <= M->qd_max_rad_s[j] * (1.0 + 1e-6));
+            assert_true(fabs(a) <= M->qdd_max_rad_s2[j] * (1.0 + 1e-6));
+            if (fabs(jk) > M->qddd_max_rad_s3[j] * (1.0 + 1e-6)) {
+                fail_msg("joint %d: jerk %.6g above %.6g at cycle %ld", j + 1, jk, M->qddd_max_rad_s3[j], k);
+            }
+        }
+        for (int e = before; e < log.n; e++) {
+            tags += log.ev[e].kind == LS_MEV_TAG;
+        }
+        if (tags >= 1 && !(g_m.seg_i_ == 2 && g_m.t_s > g_prog.seg[2].traj.duration_s / 2) && log.n < 4) {
+            min_speed = fmin(min_speed, fabs(qd[0]));
+        }
+    }
+    assert_int_equal(tags, 3);
+    assert_int_equal(log.ev[3].kind, LS_MEV_DONE);
+    assert_true(min_speed > 0.01); /* joint 1 never stops on the way */
+    assert_memory_equal(g_m.q_cmd, g_prog.seg[2].q1, sizeof g_m.q_cmd);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_blend_maths_of_a_corner),
+        cmocka_unit_test(test_blended_zigzag_within_bound_and_limits),
+        cmocka_unit_test(test_line_accel_changes_its_duration),
+        cmocka_unit_test(test_joint_blend_within_joint_limits),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
