@@ -1,4 +1,4 @@
-"""Run every benchmark of issue 10 and regenerate docs/performance.md.
+"""Run every benchmark and regenerate docs/performance.md.
 
     .venv/bin/python bench/run.py            # build (build-bench/, Release), run all, write the doc
     .venv/bin/python bench/run.py --quick    # every benchmark, fewer samples; the page goes to build-bench/
@@ -26,6 +26,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+import b_blend
 import b_cmd
 import b_cycle
 import b_footprint
@@ -60,6 +61,7 @@ BENCHES = [
     Bench(7, "Footprint (Cortex-M4F)", b_footprint.bench_footprint,
           ("landscaped", "ls_cmd_table_gen", "ls_proto", "ls_dbc")),
     Bench(8, "Real-time jitter", b_jitter.bench_jitter, ("bench_rt_jitter",)),
+    Bench(9, "Blended paths", b_blend.bench_blend, ("bench_blend",)),
 ]
 
 
