@@ -86,7 +86,9 @@ def bench_blend(quick: bool) -> Section:
         f"turning by 136 degrees, at {SPEED_PCT:g} % speed and {ACCEL_PCT:g} % acceleration of the model's "
         "Cartesian maxima, as the program builder does (`ls_motion_seg_line`, then `ls_motion_prog_blend`), and "
         "runs it with the executor at 1 ms and an ideal arm. Speed, acceleration and jerk are finite differences "
-        "of the set-points' tool tip (each a weighted mean of the true value, never above its peak); the miss is "
+        "of the set-points' tool tip (each a weighted mean of the true value, never above its peak; their rounding "
+        "is about 1e-7 of a limit: the jerk of the time-optimal segments, at its limit, reads 1.00000004); "
+        "the miss is "
         "the tip's closest approach to each point passed; the bound is docs/architecture.md \"Blended paths\". "
         "The figures are computed, not timed: they do not depend on the machine's load.")
     sec.commands.append(f"build-bench/bench/bench_blend {N_POINTS} {STEP_M} {ZIG_M} {SPEED_PCT:g} {ACCEL_PCT:g} 100"
