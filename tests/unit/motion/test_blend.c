@@ -94,6 +94,15 @@ static void make_zigzag(int n, double frac, int accel_seg, double accel_k)
     assert_int_equal(ls_motion_plan_path(&g_plan, &g_prog, 1, false, "zig"), 0);
 }
 
+static int count_done(const ev_log_t *log)
+{
+    int n = 0;
+    for (int i = 0; i < log->n; i++) {
+        n += log->ev[i].kind == LS_MEV_DONE || log->ev[i].kind == LS_MEV_FAULT;
+    }
+    return n;
+}
+
 typedef struct {
     long steps;
     double v, a, j;         /* peaks of the tool tip's motion */
@@ -280,6 +289,65 @@ static void test_line_accel_changes_its_duration(void **state)
     assert_true(r.min_speed > 1e-4);
 }
 
+/* Two cycles of a blended line path: the last point blends into the line
+ * back to the first (seg[n]), that one into seg[1]; every tag fires once
+ * per cycle, nothing faults, the tip stays within the limits, and the last
+ * point of the last cycle stops. */
+static void test_blended_lines_over_two_cycles(void **state)
+{
+    (void)state;
+    char why[160];
+    double tool[16], P0[16];
+    ls_motion_cart_limits_t lim;
+    mt_limits(&lim);
+    mt_tool(tool);
+    make_zigzag(3, 1.0, -1, 1.0);
+    g_prog.seg[2].blend_frac = 1.0;
+    ls_motion_seg_t *back = &g_prog.seg[3];
+    memset(back, 0, sizeof *back);
+    snprintf(back->tag, sizeof back->tag, "P0");
+    back->blend_frac = 1.0;
+    tip_of(g_prog.seg[0].q1, P0);
+    assert_int_equal(ls_motion_seg_line(back, M, g_prog.seg[2].q1, tool, P0, &lim, why, sizeof why), 0);
+    assert_int_equal(ls_motion_prog_blend(&g_prog, M, 2, why, sizeof why), 0);
+    assert_true(g_prog.seg[2].overlap_s > 0.0 && g_prog.seg[3].overlap_s > 0.0);
+    assert_int_equal(ls_motion_plan_path(&g_plan, &g_prog, 2, false, "zig2"), 0);
+    ls_motion_init(&g_m, M);
+    ls_motion_hold(&g_m, mt_q_home);
+    assert_int_equal(ls_motion_start(&g_m, &g_plan), 0);
+    double p[4][3];
+    tip_of(mt_q_home, P0);
+    for (int h = 0; h < 4; h++) {
+        memcpy(p[h], P0 + 12, sizeof p[h]);
+    }
+    ev_log_t log = { .n = 0 };
+    const double zero[3] = { 0, 0, 0 };
+    long k = 0;
+    for (; k < MAX_STEPS && count_done(&log) == 0; k++) {
+        double q[LS_N_JOINTS], qd[LS_N_JOINTS], P[16];
+        mt_step(&g_m, q, qd, &log);
+        tip_of(q, P);
+        memmove(p[1], p[0], 3 * sizeof p[0]);
+        memcpy(p[0], P + 12, sizeof p[0]);
+        double v[3], a[3], j[3];
+        for (int i = 0; i < 3; i++) {
+            v[i] = (p[0][i] - p[1][i]) / DT_S;
+            a[i] = (p[0][i] - 2.0 * p[1][i] + p[2][i]) / (DT_S * DT_S);
+            j[i] = (p[0][i] - 3.0 * p[1][i] + 3.0 * p[2][i] - p[3][i]) / (DT_S * DT_S * DT_S);
+        }
+        assert_true(dist3(v, zero) <= lim.v_lin_m_s * (1.0 + 1e-6));
+        assert_true(dist3(a, zero) <= lim.a_lin_m_s2 * (1.0 + 1e-6));
+        assert_true(dist3(j, zero) <= lim.j_lin_m_s3 * (1.0 + 1e-6));
+    }
+    const char *want[7] = { "P0", "P1", "P2", "P0", "P1", "P2", "zig2" };
+    assert_int_equal(log.n, 7);
+    for (int e = 0; e < 7; e++) {
+        assert_int_equal(log.ev[e].kind, e < 6 ? LS_MEV_TAG : LS_MEV_DONE);
+        assert_string_equal(log.ev[e].name, want[e]);
+    }
+    assert_memory_equal(g_m.q_cmd, g_prog.seg[2].q1, sizeof g_m.q_cmd);
+}
+
 /* Joint into joint: each joint within its velocity, acceleration and jerk
  * limits, joint 1 continuing and joint 3 reversing through the points. */
 static void test_joint_blend_within_joint_limits(void **state)
@@ -353,6 +421,7 @@ int main(void)
         cmocka_unit_test(test_blend_maths_of_a_corner),
         cmocka_unit_test(test_blended_zigzag_within_bound_and_limits),
         cmocka_unit_test(test_line_accel_changes_its_duration),
+        cmocka_unit_test(test_blended_lines_over_two_cycles),
         cmocka_unit_test(test_joint_blend_within_joint_limits),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
