@@ -721,8 +721,38 @@ static void blend_jerk_scale(const ls_motion_seg_t *a, const ls_motion_seg_t *b,
         k[0] = 1.0 / fmax(1.0, sqrt(fmax(0.0, 2.0 * (1.0 + c))));
     }
     if (a->turn_rad > 1e-9 && b->turn_rad > 1e-9) {
-        k[0] = fmin(k[0], 0.5);
+        /* half of the angular jerk for the two rotations' own jerks, half
+         * for the products of the composition (blend_cap_rotation) */
+        k[0] = fmin(k[0], 0.25);
     }
+}
+
+/* Two turning lines: the composed rotation R = Ra(t) Rb0^T Rb(t) has, with
+ * w, al, je the two rotations' angular speeds, accelerations and jerks,
+ *   |accel| <= al_a + al_b + w_a w_b
+ *   |jerk|  <= je_a + je_b + al_a w_b + 2 w_a al_b + w_a^2 w_b
+ * (docs/architecture.md "Blended paths"). In the window w <= J T^2 / 2 and
+ * al <= J T; shorten the overlap T until both fit the larger of the two
+ * segments' angular limits, at most 40 steps of 0.8 (else no blend). */
+static void blend_cap_rotation(ls_motion_seg_t *a, const ls_motion_seg_t *b)
+{
+    if (!(a->turn_rad > 1e-9 && b->turn_rad > 1e-9)) {
+        return;
+    }
+    const double ja = fabs(a->traj.axis[0].j) * a->turn_rad, jb = fabs(b->traj.axis[0].j) * b->turn_rad;
+    const double a_lim = fmax(a->lim_[1] * a->turn_rad, b->lim_[1] * b->turn_rad);
+    const double j_lim = fmax(a->lim_[2] * a->turn_rad, b->lim_[2] * b->turn_rad);
+    double t = a->overlap_s;
+    for (int i = 0; i < 40; i++, t *= 0.8) {
+        const double wa = ja * t * t / 2.0, wb = jb * t * t / 2.0;
+        const double acc = fmax(ja, jb) * t + wa * wb;
+        const double jerk = ja + jb + ja * t * wb + 2.0 * wa * jb * t + wa * wa * wb;
+        if (acc <= a_lim && jerk <= j_lim) {
+            a->overlap_s = t;
+            return;
+        }
+    }
+    a->overlap_s = 0.0;
 }
 
 /* Re-plan a segment's profile at its jerk scale (same path, same q1). */
@@ -840,6 +870,9 @@ int ls_motion_prog_blend(ls_motion_program_t *prog, const ls_robot_model_t *mode
         const int nb = blend_next(prog, cycles, i);
         ls_motion_seg_t *a = &prog->seg[i];
         ls_motion_seg_blend(a, nb >= 0 ? &prog->seg[nb] : NULL, a->blend_frac);
+        if (a->overlap_s > 0.0 && a->kind == LS_SEG_LINE) {
+            blend_cap_rotation(a, &prog->seg[nb]);
+        }
         if (a->overlap_s > 0.0 && a->kind == LS_SEG_LINE) {
             int r = blend_check(model, a, &prog->seg[nb], why, whylen);
             if (r < 0) {

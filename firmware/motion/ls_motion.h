@@ -253,10 +253,11 @@ double ls_motion_seg_blend_dev_m(const ls_motion_seg_t *a, const ls_motion_seg_t
  * with cycles > 1 also seg[n-1] into seg[n] and seg[n] into seg[1]):
  * 1. each blended pair's jerk scale: joint j moving the same way in both
  *    segments 1/2 (else 1); a line pair turning by theta
- *    1 / max(1, 2 cos(theta / 2)) for the position, 1/2 when both rotate;
+ *    1 / max(1, 2 cos(theta / 2)) for the position, 1/4 when both rotate;
  *    every segment re-planned at the smallest scale of its pairs (slower
  *    start and end ramps, same path, same peak speed);
- * 2. the overlaps (ls_motion_seg_blend);
+ * 2. the overlaps (ls_motion_seg_blend), for two rotating lines shortened
+ *    until the composed rotation fits the angular limits;
  * 3. line blends sampled every 1 ms of their window: workspace box, joint
  *    solution and joint speeds, as the line planner checks its samples.
  * Returns 0, or the planner status with `why` naming the point and what to

@@ -103,6 +103,15 @@ static int count_done(const ev_log_t *log)
     return n;
 }
 
+static int count_kind_tags(const ev_log_t *log)
+{
+    int n = 0;
+    for (int i = 0; i < log->n; i++) {
+        n += log->ev[i].kind == LS_MEV_TAG;
+    }
+    return n;
+}
+
 typedef struct {
     long steps;
     double v, a, j;         /* peaks of the tool tip's motion */
@@ -348,6 +357,96 @@ static void test_blended_lines_over_two_cycles(void **state)
     assert_memory_equal(g_m.q_cmd, g_prog.seg[2].q1, sizeof g_m.q_cmd);
 }
 
+/* Space-frame rotation vector of B A^T (4x4 column-major poses): the turn
+ * from A to B. */
+static void rot_between(const double A[16], const double B[16], double w[3])
+{
+    double R[3][3];
+    for (int r = 0; r < 3; r++) {
+        for (int c = 0; c < 3; c++) {
+            R[r][c] = 0.0;
+            for (int k = 0; k < 3; k++) {
+                R[r][c] += B[k * 4 + r] * A[k * 4 + c]; /* B(r,k) A^T(k,c) = B(r,k) A(c,k) */
+            }
+        }
+    }
+    const double ang = acos(fmin(1.0, fmax(-1.0, (R[0][0] + R[1][1] + R[2][2] - 1.0) / 2.0)));
+    const double f = ang < 1e-9 ? 0.5 : ang / (2.0 * sin(ang));
+    w[0] = f * (R[2][1] - R[1][2]);
+    w[1] = f * (R[0][2] - R[2][0]);
+    w[2] = f * (R[1][0] - R[0][1]);
+}
+
+/* Two lines that both turn the tool: the composed rotation stays within the
+ * angular speed, acceleration and jerk limits (the products of the two
+ * rotations included), and the blend still happens. */
+static void test_turning_lines_blend_within_angular_limits(void **state)
+{
+    (void)state;
+    char why[160];
+    double tool[16], P[3][16];
+    ls_motion_cart_limits_t lim;
+    mt_limits(&lim);
+    mt_tool(tool);
+    tip_of(mt_q_home, P[0]);
+    for (int k = 1; k < 3; k++) {
+        const double rz[6] = { 0, 0, 0, 0.0, 0.0, 0.35 * k }, ry[6] = { 0, 0, 0, 0.0, 0.25 * k, 0.0 };
+        double Rz[16], Ry[16], T[16];
+        ls_pose_from_xyzrpy(rz, Rz);
+        ls_pose_from_xyzrpy(ry, Ry);
+        ls_pose_mul(Rz, Ry, T);
+        ls_pose_mul(T, P[0], P[k]);
+        memcpy(P[k] + 12, P[0] + 12, 3 * sizeof(double));
+        P[k][12] += k == 1 ? 0.04 : 0.0;
+        P[k][13] += 0.03 * k;
+    }
+    memset(&g_prog, 0, sizeof g_prog);
+    double q_prev[LS_N_JOINTS];
+    memcpy(q_prev, mt_q_home, sizeof q_prev);
+    for (int k = 0; k < 2; k++) {
+        ls_motion_seg_t *s = &g_prog.seg[k];
+        snprintf(s->tag, sizeof s->tag, "T%d", k);
+        s->point = k;
+        s->blend_frac = k == 0 ? 1.0 : 0.0;
+        assert_int_equal(ls_motion_seg_line(s, M, q_prev, tool, P[k + 1], &lim, why, sizeof why), 0);
+        assert_true(s->turn_rad > 0.2);
+        memcpy(q_prev, s->q1, sizeof q_prev);
+    }
+    g_prog.n = 2;
+    assert_int_equal(ls_motion_prog_blend(&g_prog, M, 1, why, sizeof why), 0);
+    assert_true(g_prog.seg[0].overlap_s > 0.02);
+    assert_int_equal(ls_motion_plan_path(&g_plan, &g_prog, 1, false, "turn"), 0);
+    ls_motion_init(&g_m, M);
+    ls_motion_hold(&g_m, mt_q_home);
+    assert_int_equal(ls_motion_start(&g_m, &g_plan), 0);
+    double prev[16], w[3][3] = { { 0 } }, peak[3] = { 0 };
+    memcpy(prev, P[0], sizeof prev);
+    ev_log_t log = { .n = 0 };
+    const double zero[3] = { 0, 0, 0 };
+    for (long k = 0; k < MAX_STEPS && count_done(&log) == 0; k++) {
+        double q[LS_N_JOINTS], qd[LS_N_JOINTS], T[16], d[3];
+        mt_step(&g_m, q, qd, &log);
+        tip_of(q, T);
+        rot_between(prev, T, d);
+        memcpy(prev, T, sizeof prev);
+        memmove(w[1], w[0], 2 * sizeof w[0]);
+        double al[3], je[3];
+        for (int i = 0; i < 3; i++) {
+            w[0][i] = d[i] / DT_S;
+            al[i] = (w[0][i] - w[1][i]) / DT_S;
+            je[i] = (w[0][i] - 2.0 * w[1][i] + w[2][i]) / (DT_S * DT_S);
+        }
+        peak[0] = fmax(peak[0], dist3(w[0], zero));
+        peak[1] = fmax(peak[1], dist3(al, zero));
+        peak[2] = fmax(peak[2], dist3(je, zero));
+    }
+    assert_int_equal(count_kind_tags(&log), 2);
+    if (peak[0] > lim.v_ang_rad_s * 1.001 || peak[1] > lim.a_ang_rad_s2 * 1.001 || peak[2] > lim.j_ang_rad_s3 * 1.001) {
+        fail_msg("angular peaks %.6g rad/s, %.6g rad/s^2, %.6g rad/s^3 above %.6g, %.6g, %.6g", peak[0], peak[1],
+                 peak[2], lim.v_ang_rad_s, lim.a_ang_rad_s2, lim.j_ang_rad_s3);
+    }
+}
+
 /* Joint into joint: each joint within its velocity, acceleration and jerk
  * limits, joint 1 continuing and joint 3 reversing through the points. */
 static void test_joint_blend_within_joint_limits(void **state)
@@ -422,6 +521,7 @@ int main(void)
         cmocka_unit_test(test_blended_zigzag_within_bound_and_limits),
         cmocka_unit_test(test_line_accel_changes_its_duration),
         cmocka_unit_test(test_blended_lines_over_two_cycles),
+        cmocka_unit_test(test_turning_lines_blend_within_angular_limits),
         cmocka_unit_test(test_joint_blend_within_joint_limits),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
