@@ -245,9 +245,12 @@ int32_t ls_h_move_react(struct ls_core *core, struct ls_call *call)
                         "%s: motion_offsets has %u values; give x y z (or x y z c_x c_y c_z) in the tool frame", what,
                         (unsigned)r->motion_offsets_count);
     }
+    /* every number, the ones moveReact does not use too (gains, envelope min, c_speed) */
     if (!ls_mcmd_all_finite(r->motion_offsets, r->motion_offsets_count) ||
-        !ls_mcmd_all_finite(r->thresholds, r->thresholds_count) ||
-        !ls_mcmd_all_finite(r->envelope_max, r->envelope_max_count)) {
+        !ls_mcmd_all_finite(r->thresholds, r->thresholds_count) || !ls_mcmd_all_finite(r->gains, r->gains_count) ||
+        !ls_mcmd_all_finite(r->envelope_min, r->envelope_min_count) ||
+        !ls_mcmd_all_finite(r->envelope_max, r->envelope_max_count) || !isfinite(r->motion_speed_pct) ||
+        !isfinite(r->compliance_speed_pct)) {
         return ls_reply(call, ls_RetCode_CMD_PARAM_ERR, "%s: values must be finite numbers", what);
     }
     for (size_t k = 3; k < r->motion_offsets_count; k++) {
@@ -379,7 +382,9 @@ int32_t ls_h_comply(struct ls_core *core, struct ls_call *call)
     if (!ls_mcmd_all_finite(r->max_travel, 6) || !ls_mcmd_all_finite(r->thresholds, r->thresholds_count) ||
         !ls_mcmd_all_finite(r->proportional_gains, r->proportional_gains_count) ||
         !ls_mcmd_all_finite(r->differential_gains, r->differential_gains_count) ||
-        !ls_mcmd_all_finite(r->envelope_max, r->envelope_max_count) || !isfinite(r->max_timeout_s)) {
+        !ls_mcmd_all_finite(r->envelope_min, r->envelope_min_count) ||
+        !ls_mcmd_all_finite(r->envelope_max, r->envelope_max_count) || !isfinite(r->max_timeout_s) ||
+        !isfinite(r->speed_pct) || !isfinite(r->compliance_speed_pct)) {
         return ls_reply(call, ls_RetCode_CMD_PARAM_ERR, "%s: values must be finite numbers", what);
     }
     for (size_t k = 3; k < r->thresholds_count; k++) {

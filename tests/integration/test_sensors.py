@@ -4,6 +4,7 @@ stops at its maximum distance; comply holds the contact force within 20 % of
 the target while it slides along the table."""
 from __future__ import annotations
 
+import math
 import threading
 import time
 
@@ -169,3 +170,20 @@ def test_comply_refusals(rig: Rig) -> None:
         sup.comply("force_sensor", [0.0, 0.0, 10.0], max_travel=[0.05, 0, 0, 0, 0, 0.05])
     assert "comply is valid in RESTING, the device is MOVING" in str(ei.value)
     sup.wait_complete(rv, timeout_s=20)
+
+
+@pytest.mark.parametrize("field", ["gains", "envelope_min", "motion_speed_pct", "compliance_speed_pct"])
+def test_move_react_refuses_a_number_that_is_not_finite_in_any_field(rig: Rig, field: str) -> None:
+    """Found by tests/probe/probe.py: NaN in a field moveReact does not use started the move."""
+    value: float | list[float] = math.nan if field.endswith("_pct") else [math.nan]
+    with pytest.raises(errors.ParamError, match="values must be finite numbers"):
+        rig.sup.move_react("force_sensor", [0.0, 0.0, -0.01], thresholds=[0.0, 0.0, 10.0], **{field: value})
+    assert rig.sup.get_motion_control_state().result["state"] == "RESTING"
+
+
+@pytest.mark.parametrize("field", ["envelope_min", "speed_pct", "compliance_speed_pct"])
+def test_comply_refuses_a_number_that_is_not_finite_in_any_field(rig: Rig, field: str) -> None:
+    value: float | list[float] = math.nan if field.endswith("_pct") else [math.nan]
+    with pytest.raises(errors.ParamError, match="values must be finite numbers"):
+        rig.sup.comply("force_sensor", [0.0, 0.0, 10.0], max_travel=[0.05, 0, 0, 0, 0, 0.05], **{field: value})
+    assert rig.sup.get_motion_control_state().result["state"] == "RESTING"
