@@ -56,16 +56,19 @@ static int summary(report_t *r)
 
 /* ---- configuration ---------------------------------------------------- */
 
-static void check_config(report_t *r, const ls_config_t *cfg)
+/* false when the configuration as a whole is refused (docs/deploy.md: exit 2,
+ * as when landscaped would start with it). */
+static bool check_config(report_t *r, const ls_config_t *cfg)
 {
     char msg[512];
     const char *src = cfg->config_path[0] != '\0' ? cfg->config_path : "(command line only)";
     if (ls_config_validate(cfg, msg, sizeof msg) != 0) {
         report(r, LS_CHECK_FAIL, "configuration", "%s: %s", src, msg);
-        return;
+        return false;
     }
     report(r, LS_CHECK_PASS, "configuration", "%s: node 0x%02X, %zu link(s), arm %s, dio %s, clock %s, %u Hz", src,
            (unsigned)cfg->node, cfg->n_links, cfg->arm, cfg->dio, cfg->clock, (unsigned)cfg->rate_hz);
+    return true;
 }
 
 /* ---- CAN ----------------------------------------------------------------- */
@@ -339,13 +342,14 @@ static void check_memlock(report_t *r, const ls_config_t *cfg)
 int ls_check_run(const ls_config_t *cfg, FILE *out)
 {
     report_t r = { .out = out, .n = { 0, 0, 0 } };
-    check_config(&r, cfg);
+    bool config_ok = check_config(&r, cfg);
     check_afcan(&r, cfg);
     check_links(&r, cfg);
     check_dio(&r, cfg);
     check_realtime(&r, cfg);
     check_memlock(&r, cfg);
-    return summary(&r);
+    int code = summary(&r);
+    return config_ok ? code : LS_EXIT_BAD_CONFIG;
 }
 
 int ls_check_config_error(const char *msg, FILE *out)

@@ -754,6 +754,12 @@ int ls_config_validate(const ls_config_t *cfg, char *msg, size_t msglen)
             return opt_error(msg, msglen, "[dio] estop_input = %d needs a DIO backend but [hal] dio = none",
                              cfg->estop_input);
         }
+        if (gpiod && cfg->n_inputs == 0) {
+            return opt_error(msg, msglen,
+                             "[dio] estop_input = %d but [dio] inputs is empty: list the e-stop's line "
+                             "under inputs, or set estop_input = -1",
+                             cfg->estop_input);
+        }
         if (gpiod && cfg->estop_input >= (int)cfg->n_inputs) {
             return opt_error(msg, msglen,
                              "[dio] estop_input = %d but only %u inputs are configured: use an input "

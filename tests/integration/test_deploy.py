@@ -328,3 +328,20 @@ def test_deploy_doc_lists_every_key() -> None:
     for needle in ("ip link set can0 type can bitrate 500000", "vcan", "journalctl -u landscaped -p warning",
                    "--check", "systemctl enable --now landscaped", "60-landscape-gpio.rules", "dpkg -i"):
         assert needle in doc, needle
+
+
+@pytest.mark.parametrize("which", ["driver", "landscaped"])
+def test_a_configuration_refused_as_a_whole_exits_2_with_check_too(which: str, tmp_path: Path) -> None:
+    """Keys that are each valid but not together (ls_config_validate): --check refused them with
+    exit 1, as if the machine were at fault, where starting with them exits 2 (docs/deploy.md
+    section 5). Found by tests/probe/probe.py."""
+    exe = executable(which)
+    conf = tmp_path / "estop.conf"
+    conf.write_text("[hal]\nlink = slcan:pty:/tmp/never\ndio = gpiod:gpiochip0\n[dio]\ninputs =\nestop_input = 0\n")
+    r = run(exe, "--config", conf, "--check", timeout=30)
+    assert r.returncode == 2, r.stdout
+    assert r.stdout.splitlines()[0] == (f"FAIL  configuration: {conf}: [dio] estop_input = 0 but [dio] inputs is "
+                                        "empty: list the e-stop's line under inputs, or set estop_input = -1")
+    r = run(exe, "--config", conf, timeout=30)
+    assert r.returncode == 2
+    assert not Path("/tmp/never").exists()
