@@ -30,6 +30,10 @@
 #define COMPLY_DEFAULT_KP_M_S_N 5e-4
 #define COMPLY_DEFAULT_CSPEED_FRAC 0.01
 #define COMPLY_DEFAULT_TIMEOUT_S 30.0
+/* comply max_timeout_s: 0 (the default above) or within these; a longer one
+ * held a comply in free air at its range for as long as it said (1e308 s) */
+#define COMPLY_MIN_TIMEOUT_S 0.1
+#define COMPLY_MAX_TIMEOUT_S 3600.0
 #define COMPLY_DEFAULT_PANIC_FACTOR 3.0
 /* comply: travel and compliance directions may differ from orthogonal by this much */
 #define COMPLY_MAX_COS 0.0872 /* 5 degrees */
@@ -457,9 +461,11 @@ int32_t ls_h_comply(struct ls_core *core, struct ls_call *call)
     }
     double cfrac = r->compliance_speed_pct > 0.0 ? r->compliance_speed_pct / 100.0 : COMPLY_DEFAULT_CSPEED_FRAC;
     plan.vc_max_m_s = cfrac * core->model->max_linear_speed_m_s;
-    if (r->max_timeout_s < 0.0) {
-        return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR, "%s: max_timeout %.4g s must be >= 0 (0: %g s)",
-                        what, r->max_timeout_s, COMPLY_DEFAULT_TIMEOUT_S);
+    if (r->max_timeout_s != 0.0 &&
+        (r->max_timeout_s < COMPLY_MIN_TIMEOUT_S || r->max_timeout_s > COMPLY_MAX_TIMEOUT_S)) {
+        return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR,
+                        "%s: max_timeout %.4g s: allowed 0 (%g s) or [%g, %g] s", what, r->max_timeout_s,
+                        COMPLY_DEFAULT_TIMEOUT_S, COMPLY_MIN_TIMEOUT_S, COMPLY_MAX_TIMEOUT_S);
     }
     plan.timeout_s = r->max_timeout_s > 0.0 ? r->max_timeout_s : COMPLY_DEFAULT_TIMEOUT_S;
     double env = r->envelope_max_count > 0 ? r->envelope_max[0] : 0.0;

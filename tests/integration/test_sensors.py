@@ -187,3 +187,13 @@ def test_comply_refuses_a_number_that_is_not_finite_in_any_field(rig: Rig, field
     with pytest.raises(errors.ParamError, match="values must be finite numbers"):
         rig.sup.comply("force_sensor", [0.0, 0.0, 10.0], max_travel=[0.05, 0, 0, 0, 0, 0.05], **{field: value})
     assert rig.sup.get_motion_control_state().result["state"] == "RESTING"
+
+
+@pytest.mark.parametrize("timeout_s", [1e308, 3600.5, 5e-324, 0.05, -1.0])
+def test_comply_timeout_outside_its_range_is_refused(rig: Rig, timeout_s: float) -> None:
+    """Found by tests/probe/probe.py: max_timeout_s 1e308 held a comply in free air at its range,
+    MOVING, for as long as it said."""
+    with pytest.raises(errors.ParamOutOfRangeError, match=r"allowed 0 \(30 s\) or \[0.1, 3600\] s"):
+        rig.sup.comply("force_sensor", [0.0, 0.0, 10.0], max_timeout_s=timeout_s,
+                       max_travel=[0.05, 0, 0, 0, 0, 0.05])
+    assert rig.sup.get_motion_control_state().result["state"] == "RESTING"
