@@ -262,17 +262,27 @@ def main() -> int:
         "",
     ]
     # Field names for the string, bytes, message and repeated fields of every
-    # message (nanopb's descriptors carry numbers only).
+    # message (nanopb's descriptors carry numbers only), and for the enum and
+    # uint32 fields of what the device decodes (reachable from Uplink): a value
+    # their C type cannot hold (a -1 for an enum) is refused naming them.
     names = []
     # option types (CommandSpec) are metadata that nanopb skips (landscape.options)
     meta = {e.message_type.name for e in pb2.DESCRIPTOR.extensions_by_name.values() if e.message_type}
+    uplink: set[str] = set()
+    todo = [pb2.DESCRIPTOR.message_types_by_name["Uplink"]]
+    while todo:
+        m = todo.pop()
+        if m.name not in uplink:
+            uplink.add(m.name)
+            todo += [f.message_type for f in m.fields if f.message_type is not None]
     for mname, mdesc in sorted(pb2.DESCRIPTOR.message_types_by_name.items()):
         if mname in meta:
             continue
         if mdesc.nested_types:
             raise SystemExit(f"gen_registry: {mname} has nested message types; name them in ls_field_name")
         for f in mdesc.fields:
-            if f.type in (f.TYPE_STRING, f.TYPE_BYTES, f.TYPE_MESSAGE) or f.label == f.LABEL_REPEATED:
+            if f.type in (f.TYPE_STRING, f.TYPE_BYTES, f.TYPE_MESSAGE) or f.label == f.LABEL_REPEATED or (
+                    mname in uplink and f.type in (f.TYPE_ENUM, f.TYPE_UINT32)):
                 names.append((mname, f.number, f.name))
     src += [
         "typedef struct {",

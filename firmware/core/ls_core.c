@@ -1188,12 +1188,14 @@ void ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t
         bool scanned = scan_request(buf, len, &seq, &cmd);
         const ls_cmd_desc_t *d = scanned ? ls_cmd_find((pb_size_t)cmd) : NULL;
         char where[120];
-        if (ls_wire_find_overflow(ls_Uplink_fields, &core->up, buf, len, where, sizeof where)) {
+        ls_wire_fault_t fault = ls_wire_find_overflow(ls_Uplink_fields, &core->up, buf, len, where, sizeof where);
+        if (fault != LS_WIRE_FITS) {
             /* "request." is the envelope: name the field as the command has it */
             const char *field = strncmp(where, "request.", 8) == 0 ? where + 8 : where;
-            answer_bad_request(core, addr, ls_RetCode_CMD_PARAM_ERR, seq,
-                               "%s did not decode (%s): %s (protocol/landscape.options): send fewer",
-                               d != NULL ? d->name : "the message", PB_GET_ERROR(&is), field);
+            answer_bad_request(core, addr, ls_RetCode_CMD_PARAM_ERR, seq, "%s did not decode (%s): %s %s",
+                               d != NULL ? d->name : "the message", PB_GET_ERROR(&is), field,
+                               fault == LS_WIRE_SIZE ? "(protocol/landscape.options): send fewer"
+                                                     : "(the schema's type): send a value it holds");
             return;
         }
         answer_bad_request(core, addr, ls_RetCode_CMD_PARAM_ERR, seq,

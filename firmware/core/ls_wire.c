@@ -1,6 +1,7 @@
 /* Naming the field that made nanopb refuse an uplink (ls_wire.h). */
 #include "ls_wire.h"
 
+#include <inttypes.h>
 #include <pb_common.h>
 #include <pb_decode.h>
 #include <stdio.h>
@@ -46,11 +47,46 @@ static size_t name_at(char *where, size_t cap, size_t used, const pb_msgdesc_t *
     return w > 0 && used + (size_t)w < cap ? used + (size_t)w : cap - 1u;
 }
 
-static bool walk(const pb_msgdesc_t *desc, const void *msg, const uint8_t *buf, size_t len, char *where, size_t cap,
-                 size_t used, int depth)
+/* A varint of an integer field that its C type holds, as nanopb decodes it
+ * (pb_dec_varint: the value must survive the store). Else false, with the
+ * value and the range in `why`. */
+static bool varint_fits(pb_type_t lt, pb_size_t size, uint64_t v, char *why, size_t cap)
+{
+    if (lt == PB_LTYPE_UVARINT) {
+        const uint64_t max = size >= 8 ? UINT64_MAX : (UINT64_C(1) << (8u * size)) - 1u;
+        if (v <= max) {
+            return true;
+        }
+        /* a negative number sent for it reads as its 64-bit two's complement */
+        if (v > (uint64_t)INT64_MAX) {
+            snprintf(why, cap, " is %" PRId64 ", outside 0..%" PRIu64, (int64_t)v, max);
+        } else {
+            snprintf(why, cap, " is %" PRIu64 ", outside 0..%" PRIu64, v, max);
+        }
+        return false;
+    }
+    int64_t sv;
+    if (lt == PB_LTYPE_SVARINT) {
+        sv = (int64_t)(v >> 1) ^ -(int64_t)(v & 1u);
+    } else if (size >= 8) {
+        sv = (int64_t)v;
+    } else {
+        sv = (int32_t)(uint32_t)v; /* as nanopb: a field of 32 bits or less takes the low 32 */
+    }
+    const int64_t hi = size >= 8 ? INT64_MAX : (INT64_C(1) << (8u * size - 1u)) - 1;
+    const int64_t lo = -hi - 1;
+    if (sv >= lo && sv <= hi) {
+        return true;
+    }
+    snprintf(why, cap, " is %" PRId64 ", outside %" PRId64 "..%" PRId64, sv, lo, hi);
+    return false;
+}
+
+static ls_wire_fault_t walk(const pb_msgdesc_t *desc, const void *msg, const uint8_t *buf, size_t len, char *where,
+                            size_t cap, size_t used, int depth)
 {
     if (depth > 8) {
-        return false;
+        return LS_WIRE_FITS;
     }
     seen_t seen[SEEN_MAX];
     size_t n_seen = 0;
@@ -60,14 +96,14 @@ static bool walk(const pb_msgdesc_t *desc, const void *msg, const uint8_t *buf, 
         uint32_t tag;
         bool eof;
         if (!pb_decode_tag(&s, &wt, &tag, &eof) || eof) {
-            return false;
+            return LS_WIRE_FITS;
         }
         pb_field_iter_t it;
         /* only the layout of msg is used: iterators compute addresses, nothing is accessed */
         if (!pb_field_iter_begin_const(&it, desc, msg) || !pb_field_iter_find(&it, tag) ||
             PB_ATYPE(it.type) != PB_ATYPE_STATIC) {
             if (!pb_skip_field(&s, wt)) {
-                return false;
+                return LS_WIRE_FITS;
             }
             continue;
         }
@@ -78,18 +114,32 @@ static bool walk(const pb_msgdesc_t *desc, const void *msg, const uint8_t *buf, 
         if (wt == PB_WT_STRING) {
             uint32_t l32;
             if (!pb_decode_varint32(&s, &l32) || l32 > s.bytes_left) {
-                return false;
+                return LS_WIRE_FITS;
             }
             L = l32;
             p = buf + (len - s.bytes_left);
             if (!pb_read(&s, NULL, L)) {
-                return false;
+                return LS_WIRE_FITS;
             }
             if (rep && lt != PB_LTYPE_STRING && lt != PB_LTYPE_BYTES && !PB_LTYPE_IS_SUBMSG(lt)) {
                 items = packed_items(lt, p, L);
             }
+        } else if (wt == PB_WT_VARINT && !rep &&
+                   (lt == PB_LTYPE_VARINT || lt == PB_LTYPE_UVARINT || lt == PB_LTYPE_SVARINT)) {
+            uint64_t v;
+            if (!pb_decode_varint(&s, &v)) {
+                return LS_WIRE_FITS;
+            }
+            char why[64];
+            if (!varint_fits(lt, it.data_size, v, why, sizeof why)) {
+                size_t at = name_at(where, cap, used, desc, tag, false, 0);
+                if (where != NULL && at + 1u < cap) {
+                    snprintf(where + at, cap - at, "%s", why);
+                }
+                return LS_WIRE_RANGE;
+            }
         } else if (!pb_skip_field(&s, wt)) {
-            return false;
+            return LS_WIRE_FITS;
         }
         size_t k = 0;
         if (rep) {
@@ -111,7 +161,7 @@ static bool walk(const pb_msgdesc_t *desc, const void *msg, const uint8_t *buf, 
                                  PB_LTYPE_IS_SUBMSG(lt) || lt == PB_LTYPE_STRING ? "items" : "values",
                                  (unsigned)it.array_size);
                     }
-                    return true;
+                    return LS_WIRE_SIZE;
                 }
             }
         }
@@ -126,29 +176,30 @@ static bool walk(const pb_msgdesc_t *desc, const void *msg, const uint8_t *buf, 
                 if (where != NULL && at + 1u < cap) {
                     snprintf(where + at, cap - at, " has %zu bytes, at most %zu", L, max);
                 }
-                return true;
+                return LS_WIRE_SIZE;
             }
         } else if (PB_LTYPE_IS_SUBMSG(lt) && it.submsg_desc != NULL) {
             size_t at = name_at(where, cap, used, desc, tag, rep, k);
-            if (walk(it.submsg_desc, it.pData, p, L, where, cap, at, depth + 1)) {
-                return true;
+            ls_wire_fault_t f = walk(it.submsg_desc, it.pData, p, L, where, cap, at, depth + 1);
+            if (f != LS_WIRE_FITS) {
+                return f;
             }
             if (where != NULL && used < cap) {
                 where[used] = '\0';
             }
         }
     }
-    return false;
+    return LS_WIRE_FITS;
 }
 
-bool ls_wire_find_overflow(const pb_msgdesc_t *desc, const void *scratch, const uint8_t *buf, size_t len, char *where,
-                           size_t cap)
+ls_wire_fault_t ls_wire_find_overflow(const pb_msgdesc_t *desc, const void *scratch, const uint8_t *buf, size_t len,
+                                      char *where, size_t cap)
 {
     if (where != NULL && cap > 0) {
         where[0] = '\0';
     }
     if (desc == NULL || scratch == NULL || buf == NULL) {
-        return false;
+        return LS_WIRE_FITS;
     }
     return walk(desc, scratch, buf, len, where, cap, 0, 0);
 }

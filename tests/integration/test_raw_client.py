@@ -378,6 +378,13 @@ def test_what_the_contract_refuses(raw: RawClient) -> None:
     # a move without its frame: refused naming the field
     res = raw.call(move_absolute=pb.MoveAbsoluteReq(point_name="p", values=joints_now(raw)))
     assert res.ret_code == pb.CMD_PARAM_ERR and "frame is missing" in res.ret_msg
+    # -1 for an enum without negative values (a 10-byte varint): refused naming the field and
+    # the range its type holds (the probe found "integer too large" naming nothing)
+    res = raw.call(signal_digital_io=pb.SignalDigitalIOReq(type="digital", unit_id=0, bit_string=1,
+                                                           callback_type=-1))
+    assert res.ret_code == pb.CMD_PARAM_ERR
+    assert res.ret_msg == ("signalDigitalIO did not decode (integer too large): signal_digital_io.callback_type "
+                           "is -1, outside 0..4294967295 (the schema's type): send a value it holds"), res.ret_msg
     # pathMove without number_of_cycles runs once (seed 3.5.2), with its auxiliary command
     q = joints_now(raw)
     point = pb.TagPoint(joints=within(d, [q[0] + 0.1, *q[1:]]), tag_name="only", aux_commands=["event aux"])
