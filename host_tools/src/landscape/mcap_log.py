@@ -104,14 +104,19 @@ def _quat_from_rpy(roll: float, pitch: float, yaw: float) -> dict[str, float]:
     return {"x": x, "y": y, "z": z, "w": w}
 
 
-class McapRecorder:
-    """Writes the channels above as broadcasts, notices and frames arrive (thread-safe).
-    The same calls as recording.Recorder (broadcast, notice, close) plus frame(). A context manager."""
+def channel_schemas() -> list[tuple[str, str, bytes]]:
+    """(topic, schema name, JSON schema as bytes) of every channel, in CHANNELS order: what the MCAP file
+    registers and what the live view (view.py) advertises, byte for byte."""
+    return [(topic, schema, json.dumps(SCHEMAS[schema]).encode()) for topic, schema in CHANNELS.items()]
 
-    def __init__(self, path: str | Path, *, start_s: float | None = None, chain: ArmChain | None = None) -> None:
-        from mcap.writer import CompressionType, Writer
 
-        self.path = Path(path)
+class ChannelWriter:
+    """Turns broadcasts, notices and CAN frames into the messages of the channels above (thread-safe) and
+    hands each to `_write` as (topic, log time in ns since the epoch, JSON bytes). The one encoder of
+    McapRecorder (a file) and view.LiveView (a Foxglove WebSocket server). The same calls as
+    recording.Recorder (broadcast, notice, close) plus frame(). A context manager."""
+
+    def __init__(self, *, start_s: float | None = None, chain: ArmChain | None = None) -> None:
         self.start_s = time.monotonic() if start_s is None else start_s
         self._epoch_offset_s = time.time() - time.monotonic()
         self.chain = chain or ArmChain()
@@ -126,19 +131,8 @@ class McapRecorder:
         self._dev_wraps = 0
         self._tool_pos: dict[str, float] | None = None
         self._closed = False
-        try:
-            self._f: IO[bytes] = self.path.open("wb")
-        except OSError as exc:
-            raise McapError(f"cannot write {path}: {exc.strerror or exc}") from None
-        self._w = Writer(self._f, compression=CompressionType.ZSTD)
-        self._w.start(profile="", library="landscape")
-        self._chan: dict[str, int] = {}
-        for topic, schema in CHANNELS.items():
-            sid = self._w.register_schema(name=schema, encoding="jsonschema",
-                                          data=json.dumps(SCHEMAS[schema]).encode())
-            self._chan[topic] = self._w.register_channel(topic=topic, message_encoding="json", schema_id=sid)
 
-    def __enter__(self) -> McapRecorder:
+    def __enter__(self) -> ChannelWriter:
         return self
 
     def __exit__(self, *exc: object) -> None:
@@ -148,22 +142,25 @@ class McapRecorder:
     def messages(self) -> int:
         return sum(self.counts.values())
 
+    def _write(self, topic: str, ns: int, data: bytes, sequence: int) -> None:
+        """Deliver one message (called with the lock held)."""
+        raise NotImplementedError
+
+    def _finish(self) -> None:
+        """Close the sink (called once, with the lock held)."""
+
     def close(self) -> None:
         with self._lock:
             if self._closed:
                 return
             self._closed = True
-            try:
-                self._w.finish()  # type: ignore[no-untyped-call]  # mcap 1.6 leaves it unannotated
-            finally:
-                self._f.close()
+            self._finish()
 
     def _ns(self, monotonic_s: float) -> int:
         return int((monotonic_s + self._epoch_offset_s) * 1e9)
 
     def _put(self, topic: str, ns: int, obj: dict[str, Any]) -> None:
-        self._w.add_message(channel_id=self._chan[topic], log_time=ns, publish_time=ns,
-                            data=json.dumps(obj, allow_nan=False).encode(), sequence=self.counts[topic])
+        self._write(topic, ns, json.dumps(obj, allow_nan=False).encode(), self.counts[topic])
         self.counts[topic] += 1
 
     def _device_ms(self, raw: Any) -> int:
@@ -247,6 +244,39 @@ class McapRecorder:
                                    "error": bool(msg.is_error_frame), "dlc": int(msg.dlc),
                                    "data": bytes(msg.data).hex()})
             self.frames += 1
+
+
+
+class McapRecorder(ChannelWriter):
+    """Writes the channels above to an MCAP file (zstd chunks) as broadcasts, notices and frames arrive."""
+
+    def __init__(self, path: str | Path, *, start_s: float | None = None, chain: ArmChain | None = None) -> None:
+        from mcap.writer import CompressionType, Writer
+
+        super().__init__(start_s=start_s, chain=chain)
+        self.path = Path(path)
+        try:
+            self._f: IO[bytes] = self.path.open("wb")
+        except OSError as exc:
+            raise McapError(f"cannot write {path}: {exc.strerror or exc}") from None
+        self._w = Writer(self._f, compression=CompressionType.ZSTD)
+        self._w.start(profile="", library="landscape")
+        self._chan: dict[str, int] = {}
+        for topic, schema, data in channel_schemas():
+            sid = self._w.register_schema(name=schema, encoding="jsonschema", data=data)
+            self._chan[topic] = self._w.register_channel(topic=topic, message_encoding="json", schema_id=sid)
+
+    def __enter__(self) -> McapRecorder:
+        return self
+
+    def _write(self, topic: str, ns: int, data: bytes, sequence: int) -> None:
+        self._w.add_message(channel_id=self._chan[topic], log_time=ns, publish_time=ns, data=data, sequence=sequence)
+
+    def _finish(self) -> None:
+        try:
+            self._w.finish()  # type: ignore[no-untyped-call]  # mcap 1.6 leaves it unannotated
+        finally:
+            self._f.close()
 
 
 def read_mcap(path: str | Path) -> dict[str, list[tuple[int, dict[str, Any]]]]:
