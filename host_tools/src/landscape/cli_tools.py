@@ -46,7 +46,7 @@ from .cli_core import (
 from .demo import StepResult, demo_steps, run_demo
 from .errors import LandscapeError, error_for_code
 from .link import LinkBroker, is_local_line, pid_alive
-from .mcap_log import McapRecorder
+from .mcap_log import ChannelWriter, McapRecorder
 from .notices import format_notice
 from .paths import build_path_load_requests, load_path_file, request_fields, resolve_settings
 from .plotting import KINDS, plot
@@ -207,7 +207,7 @@ class Follow:
                     f"the session at {watcher.path} went away ({exc}): check `landscape session status`")
 
 
-def start_recording(st: CliState, rec: Recorder | McapRecorder) -> Follow:
+def start_recording(st: CliState, rec: Recorder | ChannelWriter) -> Follow:
     """Feed `rec` from the background session (a watch connection of its own) or from the
     invocation's own session; returns the Follow that stops it. Raw CAN frames (MCAP) come
     from the own session only: the background session forwards broadcasts and notices."""
@@ -216,7 +216,7 @@ def start_recording(st: CliState, rec: Recorder | McapRecorder) -> Follow:
         sup = st.session()
         sup.on_telemetry(rec.broadcast)
         sup.on_notice(rec.notice)
-        frames = rec.frame if isinstance(rec, McapRecorder) else None
+        frames = rec.frame if isinstance(rec, ChannelWriter) else None
         if frames is not None:
             sup.add_frame_listener(frames)
 
