@@ -326,6 +326,23 @@ static void send_telemetry(void)
     if (landscape_joints_56_pack(d, &j56, sizeof d) == 8) {
         send_frame(LS_ID_OF_DBC(LANDSCAPE_JOINTS_56_FRAME_ID), d);
     }
+    /* The set-point of the same snapshot, before TOOL_POS closes the cycle:
+     * a host pairs it with the measured joints for the following error. */
+    struct landscape_joints_cmd_12_t c12 = { landscape_joints_cmd_12_j1_cmd_encode(s.q_cmd_rad[0]),
+                                             landscape_joints_cmd_12_j2_cmd_encode(s.q_cmd_rad[1]) };
+    struct landscape_joints_cmd_34_t c34 = { landscape_joints_cmd_34_j3_cmd_encode(s.q_cmd_rad[2]),
+                                             landscape_joints_cmd_34_j4_cmd_encode(s.q_cmd_rad[3]) };
+    struct landscape_joints_cmd_56_t c56 = { landscape_joints_cmd_56_j5_cmd_encode(s.q_cmd_rad[4]),
+                                             landscape_joints_cmd_56_j6_cmd_encode(s.q_cmd_rad[5]) };
+    if (landscape_joints_cmd_12_pack(d, &c12, sizeof d) == 8) {
+        send_frame(LS_ID_OF_DBC(LANDSCAPE_JOINTS_CMD_12_FRAME_ID), d);
+    }
+    if (landscape_joints_cmd_34_pack(d, &c34, sizeof d) == 8) {
+        send_frame(LS_ID_OF_DBC(LANDSCAPE_JOINTS_CMD_34_FRAME_ID), d);
+    }
+    if (landscape_joints_cmd_56_pack(d, &c56, sizeof d) == 8) {
+        send_frame(LS_ID_OF_DBC(LANDSCAPE_JOINTS_CMD_56_FRAME_ID), d);
+    }
     double tool[16], tip[16], xyzrpy[6];
     ls_pose_from_xyzrpy(g_core.settings.tool_offset, tool);
     ls_pose_mul(s.flange_pose, tool, tip);
