@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
+from typing import Any
 
 import can
 import numpy as np
@@ -22,11 +23,20 @@ from landscape.urdf import ArmChain, UrdfError, quaternion_xyzw, rpy_matrix
 DEV = 0x10
 
 
+#: Commanded minus measured joint positions of every cycle of _cycle [rad].
+LAG = [0.002, -0.001, 0.0, 0.0005, 0.0, -0.003]
+
+
 def _cycle(rec: McapRecorder, t_s: float, dev_ms: int, q: list[float]) -> None:
-    """One telemetry cycle in the device's order, as frames through telemetry.decode."""
+    """One telemetry cycle in the device's order, as frames through telemetry.decode; the commanded positions
+    lead the measured ones by LAG."""
+    c = [a + b for a, b in zip(q, LAG, strict=True)]
     frames = [tm.encode("STATUS", DEV, st_state=3),
               tm.encode("JOINTS_12", DEV, j1=q[0], j2=q[1]), tm.encode("JOINTS_34", DEV, j3=q[2], j4=q[3]),
               tm.encode("JOINTS_56", DEV, j5=q[4], j6=q[5]),
+              tm.encode("JOINTS_CMD_12", DEV, j1_cmd=c[0], j2_cmd=c[1]),
+              tm.encode("JOINTS_CMD_34", DEV, j3_cmd=c[2], j4_cmd=c[3]),
+              tm.encode("JOINTS_CMD_56", DEV, j5_cmd=c[4], j6_cmd=c[5]),
               tm.encode("TOOL_POS", DEV, tool_x=0.5, tool_y=-0.1, tool_z=0.7, tool_time_ms=dev_ms & 0xFFFF),
               tm.encode("TOOL_RPY", DEV, tool_roll=0.1, tool_pitch=0.2, tool_yaw=0.3),
               tm.encode("DIO", DEV, dio_inputs=5, dio_outputs=2)]
@@ -64,8 +74,8 @@ def test_every_channel_has_a_schema_and_plausible_messages(tmp_path: Path) -> No
             json.loads(schema.data)
     msgs = read_mcap(tmp_path / "r.mcap")
     assert {t: len(v) for t, v in msgs.items()} == {"/joint_states": 20, "/tf": 20, "/tool_pose": 20,
-                                                    "/status": 20, "/dio": 20, "/notices": 2, "/can": 140}
-    assert rec.counts["/can"] == rec.frames == 140
+                                                    "/status": 20, "/dio": 20, "/notices": 2, "/can": 200}
+    assert rec.counts["/can"] == rec.frames == 200
     js = [m for _, m in msgs["/joint_states"]]
     assert js[0]["velocity_rad_s"] == [None] * 6
     assert [m["device_time_ms"] for m in js] == [65500 + 20 * k for k in range(20)]  # unwrapped past 65535
@@ -73,6 +83,9 @@ def test_every_channel_has_a_schema_and_plausible_messages(tmp_path: Path) -> No
         assert m["velocity_rad_s"][0] == pytest.approx(0.5, abs=1e-3)
         assert m["velocity_rad_s"][1] == pytest.approx(0.0, abs=1e-3)
     assert js[-1]["position_rad"][0] == pytest.approx(0.19, abs=1e-6)
+    assert js[-1]["command_rad"][0] == pytest.approx(0.192, abs=1e-6)
+    for m in js:
+        assert m["following_error_rad"] == pytest.approx(LAG, abs=2e-6)  # the DBC's scale: 1e-6 rad
     tf = msgs["/tf"][-1][1]["transforms"]
     assert len(tf) == 12 and tf[0]["parent_frame_id"] == "base_link" and tf[-1]["child_frame_id"] == "flange"
     rot = tf[0]["rotation"]  # joint 1 about z by q1
@@ -93,7 +106,7 @@ def test_plots_of_an_mcap(tmp_path: Path) -> None:
     rec = read_recording(tmp_path / "r.mcap")
     assert rec.notices[0][1:] == ("tag", {"tag": "p2", "path": "demo"})
     assert len(rec.series["TOOL_POS"]) == 20 and len(rec.joint_states) == 20
-    for kind in ("joints", "velocity", "path"):
+    for kind in ("joints", "velocity", "following", "path"):
         out = plot(rec, tmp_path / f"{kind}.png", kind)
         assert out.stat().st_size > 10_000, kind
 
@@ -147,3 +160,81 @@ def test_frames_without_a_timestamp_get_the_host_clock(tmp_path: Path) -> None:
         rec.frame(can.Message(arbitration_id=0x123, is_extended_id=False, data=b"\x01\x02"))
     (_, m), = read_mcap(tmp_path / "f.mcap")["/can"]
     assert m == {**m, "id": 0x123, "extended": False, "data": "0102", "dlc": 2}
+
+
+def _joint_rows(rec: Any, k: int, t: float, commands: bool) -> None:
+    q = [0.1 * k, 0.0, 0.2, 0.0, 0.5, 0.0]
+    for name, sig in (("JOINTS_12", {"j1": q[0], "j2": q[1]}), ("JOINTS_34", {"j3": q[2], "j4": q[3]}),
+                      ("JOINTS_56", {"j5": q[4], "j6": q[5]})):
+        rec.broadcast(tm.Broadcast(name, DEV, sig, timestamp=t))
+    if commands:
+        c = [a + b for a, b in zip(q, LAG, strict=True)]
+        for name, sig in (("JOINTS_CMD_12", {"j1_cmd": c[0], "j2_cmd": c[1]}),
+                          ("JOINTS_CMD_34", {"j3_cmd": c[2], "j4_cmd": c[3]}),
+                          ("JOINTS_CMD_56", {"j5_cmd": c[4], "j6_cmd": c[5]})):
+            rec.broadcast(tm.Broadcast(name, DEV, sig, timestamp=t))
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".jsonl", ".mcap"])
+def test_following_error_is_commanded_minus_measured_of_each_cycle(tmp_path: Path, suffix: str) -> None:
+    """plot --kind following from every recording type: commanded minus measured of the same cycle (the
+    commanded frames come after the measured ones, at the same host time or later), one trace per joint."""
+    from landscape.plotting import following_samples, plot_following
+    from landscape.record_files import open_recorder
+
+    path = tmp_path / f"r{suffix}"
+    if suffix == ".mcap":
+        _record(path, n=8)
+    else:
+        with open_recorder(path, start_s=0.0) as rec:
+            for k in range(8):
+                _joint_rows(rec, k, 0.02 * k, commands=True)
+    recording = read_recording(path)
+    samples = following_samples(recording)
+    assert len(samples) == 8
+    for _, err in samples:
+        assert err == pytest.approx(LAG, abs=2e-6)
+    out = plot_following(recording, tmp_path / "f.png")
+    assert out.stat().st_size > 10_000
+    import matplotlib.figure
+
+    captured: list[Any] = []
+    orig = matplotlib.figure.Figure.savefig
+
+    def grab(self: Any, *a: Any, **kw: Any) -> Any:
+        captured.append(self)
+        return orig(self, *a, **kw)
+    matplotlib.figure.Figure.savefig = grab  # type: ignore[method-assign]
+    try:
+        plot(recording, tmp_path / "g.png", "following")
+    finally:
+        matplotlib.figure.Figure.savefig = orig  # type: ignore[method-assign]
+    fig = captured[0]
+    ax = fig.axes[0]
+    traces = [ln for ln in ax.get_lines() if not ln.get_label().startswith("_")]  # tags are unlabelled lines
+    assert [ln.get_label() for ln in traces] == [f"joint {j}" for j in range(1, 7)]
+    assert list(traces[5].get_ydata()) == pytest.approx([LAG[5]] * 8, abs=2e-6)
+    assert ax.get_ylabel() == "following error [rad]"
+    assert [a.get_ylabel() for a in ax.child_axes] == ["following error [deg]"]  # the right axis, in degrees
+    assert "following error" in ax.get_title()
+    # the legend hides no tag label (the MCAP recording has one)
+    renderer = fig._get_renderer()  # the renderer of its last savefig (the figure has no pyplot canvas)
+    legend = ax.get_legend().get_window_extent(renderer)
+    tags = [t for t in ax.texts if t.get_text() == "p2"]
+    assert len(tags) == (1 if suffix == ".mcap" else 0)
+    assert all(not legend.overlaps(t.get_window_extent(renderer)) for t in tags)
+
+
+def test_following_error_without_commanded_positions_is_refused_with_the_reason(tmp_path: Path) -> None:
+    from landscape.record_files import open_recorder
+    from landscape.recording import RecordingError
+
+    with open_recorder(tmp_path / "old.csv", start_s=0.0) as rec:
+        for k in range(3):
+            _joint_rows(rec, k, 0.02 * k, commands=False)
+    with pytest.raises(RecordingError, match=r"old.csv: no commanded positions \(JOINTS_CMD_12/34/56\)"):
+        plot(read_recording(tmp_path / "old.csv"), tmp_path / "f.png", "following")
+    with open_recorder(tmp_path / "empty.csv", start_s=0.0):
+        pass
+    with pytest.raises(RecordingError, match="no joint telemetry"):
+        plot(read_recording(tmp_path / "empty.csv"), tmp_path / "f.png", "following")

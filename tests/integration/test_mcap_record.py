@@ -70,6 +70,18 @@ def test_demo_recorded_to_mcap(controller: Controller, tmp_path: Path) -> None:
     assert any(m["name"] == "tag" for _, m in msgs["/notices"])
     # the end of the recording is where getRobotPosition says the arm is
     assert js[-1][1]["position_rad"] == pytest.approx(final_q, abs=1e-5)
+    # commanded positions (JOINTS_CMD_12/34/56) in every joint state; the following error is their difference
+    # from the measured ones: small on the simulated arm (about -velocity x 1 ms), nonzero while it moves
+    for _, m in js:
+        assert m["following_error_rad"] == pytest.approx(
+            [c - q for c, q in zip(m["command_rad"], m["position_rad"], strict=True)], abs=1e-9)
+    fe = [abs(e) for _, m in js for e in m["following_error_rad"]]
+    assert 1e-5 < max(fe) < 0.01, max(fe)
+    assert js[-1][1]["command_rad"] == pytest.approx(final_q, abs=1e-4)
+    fol = tmp_path / "following.png"
+    r = controller.cli("plot", str(rec), "-o", str(fol), "--kind", "following")
+    assert r.returncode == 0 and r.stdout.strip() == f"plot: wrote {fol} (following)", r.stderr
+    assert fol.stat().st_size > 10_000
 
     # /tf composes to the URDF FK of the same joints, and the tool pose agrees with it (TOOL_POS: 0.1 mm steps)
     t_last, tf = msgs["/tf"][-1]
@@ -92,7 +104,7 @@ def test_demo_recorded_to_mcap(controller: Controller, tmp_path: Path) -> None:
     assert {"st_state", "st_motion", "st_fault"} <= st.keys() and st["st_fault"] == 0
     assert all(isinstance(m["inputs"], int) and isinstance(m["outputs"], int) for _, m in msgs["/dio"])
     ids = {m["id"] for _, m in msgs["/can"]}
-    assert len(msgs["/can"]) >= 6 * len(js)  # 7 telemetry frames per cycle, plus ISO-TP
+    assert len(msgs["/can"]) >= 9 * len(js)  # 10 telemetry frames per cycle, plus ISO-TP
     assert any(i & 0x1FFFFF00 == 0x1CFF1100 for i in ids)
 
 
@@ -105,7 +117,7 @@ def test_record_command_writes_mcap_with_a_summary(controller: Controller, tmp_p
     msgs = read_mcap(out)
     n = len(msgs["/joint_states"])
     assert 30 <= n <= 100, n  # 50 Hz telemetry for 1.5 s
-    assert len(msgs["/tf"]) == n and len(msgs["/can"]) >= 7 * n - 7
+    assert len(msgs["/tf"]) == n and len(msgs["/can"]) >= 10 * n - 10
     q = msgs["/joint_states"][-1][1]["position_rad"]
     assert all(math.isfinite(v) for v in q)
     j = controller.cli("--json", "record", str(tmp_path / "j.mcap"), "--duration", "0.5")

@@ -77,6 +77,7 @@ def test_a_websocket_client_follows_a_move_on_the_live_view(session: Controller)
     assert j1[0] == pytest.approx(q0[0], abs=0.05)
     assert js[-1]["position_rad"] == pytest.approx(TARGET, abs=2e-3)
     assert max(abs(v) for m in js for v in m["velocity_rad_s"] if v is not None) > 0.05
+    assert max(abs(e) for m in js for e in m["following_error_rad"]) > 1e-5  # commanded minus measured, live
     assert len([r for r in got if r.topic == "/tf"]) == len(js)
     assert any(r.json()["name"] == "moveAbsoluteComplete" for r in got if r.topic == "/notices")
     assert any(r.json()["signals"]["st_motion"] == 1 for r in got if r.topic == "/status")

@@ -396,8 +396,8 @@ def urdf_cmd(out: Path | None) -> None:
 @click.option("-o", "--output", "out", type=click.Path(dir_okay=False, path_type=Path), required=True,
               help="image to write (PNG; the suffix chooses the format)")
 @click.option("--kind", type=click.Choice(KINDS), default="joints", show_default=True,
-              help="joints: positions over time; velocity: joint velocities over time; path: the tool position "
-                   "in 3-D")
+              help="joints: positions over time; velocity: joint velocities over time; following: commanded minus "
+                   "measured positions over time; path: the tool position in 3-D")
 def plot_cmd(file: Path, out: Path, kind: str) -> None:
     """Plot a recording of `landscape record` (.mcap, .csv or .jsonl; no bus needed)."""
     plot(read_recording(file), out, kind)

@@ -7,7 +7,10 @@ topic               schema                    what
 ==================  ========================  ===============================================================
 /joint_states       landscape.JointState      one per telemetry cycle: joint positions [rad] (JOINTS_12/34/56),
                                               velocities [rad/s] derived from consecutive positions over the
-                                              device clock (TOOL_POS.tool_time_ms), the device time [ms]
+                                              device clock (TOOL_POS.tool_time_ms), the device time [ms], the
+                                              commanded positions [rad] (JOINTS_CMD_12/34/56) and the following
+                                              error (commanded minus measured) [rad], null from a device that
+                                              does not send JOINTS_CMD
 /tf                 foxglove.FrameTransforms  one transform per URDF joint at those positions (a 3D panel with
                                               the URDF of `landscape urdf` draws the arm)
 /tool_pose          foxglove.PoseInFrame      the tool tip (TOOL_POS + TOOL_RPY) in frame base_link
@@ -17,8 +20,7 @@ topic               schema                    what
 /can                landscape.CanFrame        every CAN frame received (id, flags, data as hex)
 ==================  ========================  ===============================================================
 
-Commanded joint positions are not in the telemetry (the DBC broadcasts measured positions only), so
-no channel carries them. Log times are the host's wall clock (ns since the epoch) of arrival.
+Log times are the host's wall clock (ns since the epoch) of arrival.
 """
 from __future__ import annotations
 
@@ -40,6 +42,9 @@ from .urdf import BASE_FRAME, ArmChain, rpy_matrix
 JOINT_NAMES: tuple[str, ...] = tuple(f"joint{i}" for i in range(1, 7))
 JOINT_SIGNALS: dict[str, tuple[str, ...]] = {"JOINTS_12": ("j1", "j2"), "JOINTS_34": ("j3", "j4"),
                                              "JOINTS_56": ("j5", "j6")}
+COMMAND_SIGNALS: dict[str, tuple[str, ...]] = {"JOINTS_CMD_12": ("j1_cmd", "j2_cmd"),
+                                               "JOINTS_CMD_34": ("j3_cmd", "j4_cmd"),
+                                               "JOINTS_CMD_56": ("j5_cmd", "j6_cmd")}
 LOG_LEVEL = {pb.EVENT: 2, pb.EVENT_RSVP: 2, pb.ALARM: 3, pb.ALARM_RSVP: 3}  # foxglove.Log: INFO, WARNING
 
 _TIME = {"type": "object", "title": "time", "properties": {"sec": {"type": "integer", "minimum": 0},
@@ -48,14 +53,17 @@ _VEC3 = {"type": "object", "properties": {k: {"type": "number"} for k in "xyz"}}
 _QUAT = {"type": "object", "properties": {k: {"type": "number"} for k in "xyzw"}}
 _POSE = {"type": "object", "properties": {"position": _VEC3, "orientation": _QUAT}}
 _NUMS = {"type": "array", "items": {"type": ["number", "null"]}}
+_NUMS_OR_NULL = {"type": ["array", "null"], "items": {"type": "number"}}
 
 SCHEMAS: dict[str, dict[str, Any]] = {
     "landscape.JointState": {
         "type": "object", "title": "landscape.JointState",
-        "description": "Joint positions of one telemetry cycle; velocities derived on the host",
+        "description": "Joint positions of one telemetry cycle; velocities derived on the host; commanded "
+                       "positions and the following error (commanded minus measured) where the device sends them",
         "properties": {"timestamp": _TIME, "device_time_ms": {"type": "integer"},
                        "name": {"type": "array", "items": {"type": "string"}},
-                       "position_rad": _NUMS, "velocity_rad_s": _NUMS}},
+                       "position_rad": _NUMS, "velocity_rad_s": _NUMS, "command_rad": _NUMS_OR_NULL,
+                       "following_error_rad": _NUMS_OR_NULL}},
     "foxglove.FrameTransforms": {
         "type": "object", "title": "foxglove.FrameTransforms",
         "properties": {"transforms": {"type": "array", "items": {
@@ -126,6 +134,7 @@ class ChannelWriter:
         self.frames = 0
         self._lock = threading.Lock()
         self._q: dict[str, float] = {}
+        self._q_cmd: dict[str, float] = {}
         self._last: tuple[int, list[float]] | None = None  # (device ms, q) of the previous joint state
         self._dev_last: int | None = None
         self._dev_wraps = 0
@@ -172,7 +181,7 @@ class ChannelWriter:
 
     def broadcast(self, b: tm.Broadcast) -> None:
         """A decoded broadcast: joints are gathered until TOOL_POS closes the cycle (the device sends
-        STATUS, JOINTS_12/34/56, TOOL_POS, TOOL_RPY, DIO from one snapshot)."""
+        STATUS, JOINTS_12/34/56, JOINTS_CMD_12/34/56, TOOL_POS, TOOL_RPY, DIO from one snapshot)."""
         with self._lock:
             if self._closed:
                 return
@@ -180,12 +189,17 @@ class ChannelWriter:
             if b.name in JOINT_SIGNALS:
                 for sig in JOINT_SIGNALS[b.name]:
                     self._q[sig] = float(s[sig])
+            elif b.name in COMMAND_SIGNALS:
+                for sig in COMMAND_SIGNALS[b.name]:
+                    self._q_cmd[sig] = float(s[sig])
             elif b.name == "TOOL_POS":
                 self._tool_pos = {k: float(s[k]) for k in ("tool_x", "tool_y", "tool_z")}
                 dev = self._device_ms(s["tool_time_ms"])
                 if len(self._q) == 6:
-                    self._joint_state(ns, dev, [self._q[f"j{i}"] for i in range(1, 7)])
+                    cmd = [self._q_cmd[f"j{i}_cmd"] for i in range(1, 7)] if len(self._q_cmd) == 6 else None
+                    self._joint_state(ns, dev, [self._q[f"j{i}"] for i in range(1, 7)], cmd)
                 self._q = {}
+                self._q_cmd = {}
             elif b.name == "TOOL_RPY" and self._tool_pos is not None:
                 p = self._tool_pos
                 self._put("/tool_pose", ns, {
@@ -203,14 +217,16 @@ class ChannelWriter:
                 return
             self.broadcasts += 1
 
-    def _joint_state(self, ns: int, dev_ms: int, q: list[float]) -> None:
+    def _joint_state(self, ns: int, dev_ms: int, q: list[float], cmd: list[float] | None) -> None:
         vel: list[float | None] = [None] * 6
         if self._last is not None and dev_ms > self._last[0]:
             dt_s = (dev_ms - self._last[0]) / 1000.0
             vel = [(a - b) / dt_s for a, b in zip(q, self._last[1], strict=True)]
         self._last = (dev_ms, q)
         self._put("/joint_states", ns, {"timestamp": _stamp(ns), "device_time_ms": dev_ms, "name": list(JOINT_NAMES),
-                                        "position_rad": q, "velocity_rad_s": vel})
+                                        "position_rad": q, "velocity_rad_s": vel, "command_rad": cmd,
+                                        "following_error_rad": None if cmd is None else
+                                        [c - m for c, m in zip(cmd, q, strict=True)]})
         self._put("/tf", ns, {"transforms": [
             {"timestamp": _stamp(ns), "parent_frame_id": t.parent, "child_frame_id": t.child,
              "translation": dict(zip("xyz", t.translation_m, strict=True)),
@@ -323,6 +339,10 @@ def recording_from_mcap(path: str | Path) -> Recording:
             rec.joint_states.append((t, q, [finite(v) for v in m["velocity_rad_s"]]))
             for name, sigs in JOINT_SIGNALS.items():
                 rec.series.setdefault(name, []).append((t, {sig: q[int(sig[1]) - 1] for sig in sigs}))
+            cmd = m.get("command_rad")
+            if cmd is not None:
+                for name, sigs in COMMAND_SIGNALS.items():
+                    rec.series.setdefault(name, []).append((t, {sig: float(cmd[int(sig[1]) - 1]) for sig in sigs}))
         for ns, m in msgs.get("/tool_pose", []):
             pos = m["pose"]["position"]
             rec.series.setdefault("TOOL_POS", []).append(

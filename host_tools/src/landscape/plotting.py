@@ -4,11 +4,10 @@
 per joint, tag events as dotted vertical lines labelled above the axes (the legend sits below the
 plot so it hides no tag). `plot_velocity`: joint velocities [rad/s]: as recorded in an MCAP
 (positions differenced over the device clock), else differenced over the recording's time stamps.
+`plot_following`: the following error, commanded (JOINTS_CMD_12/34/56, the control loop's set-point)
+minus measured (JOINTS_12/34/56) positions of the same telemetry cycle [rad, degrees on the right axis].
 `plot_path`: the tool position (TOOL_POS) in 3-D with equal scales on x, y and z, start, end and
 tags marked.
-
-Following error (commanded minus measured) is not plotted: the telemetry carries measured
-positions only (protocol/landscape.dbc).
 """
 from __future__ import annotations
 
@@ -18,8 +17,9 @@ from typing import Any
 
 from .recording import Recording, RecordingError
 
-KINDS = ("joints", "velocity", "path")
+KINDS = ("joints", "velocity", "following", "path")
 JOINT_MESSAGES = ("JOINTS_12", "JOINTS_34", "JOINTS_56")
+COMMAND_MESSAGES = ("JOINTS_CMD_12", "JOINTS_CMD_34", "JOINTS_CMD_56")
 
 
 def _figure(width_in: float, height_in: float) -> Any:
@@ -48,6 +48,33 @@ def joint_samples(rec: Recording) -> list[tuple[float, list[float], list[float |
                 vel = [(a - b) / dt for a, b in zip(q, out[-1][1], strict=True)]
             out.append((t, q, vel))
             cur = {}
+    return out
+
+
+def command_samples(rec: Recording) -> list[tuple[float, list[float]]]:
+    """(t_s, commanded positions [rad]) per complete set of JOINTS_CMD_12/34/56 (a set closes at JOINTS_CMD_56)."""
+    events = sorted((t, name, sig) for name in COMMAND_MESSAGES for t, sig in rec.series.get(name, []))
+    out: list[tuple[float, list[float]]] = []
+    cur: dict[str, float] = {}
+    for t, name, sig in events:
+        cur.update({k: v for k, v in sig.items() if k in {f"j{i}_cmd" for i in range(1, 7)}})
+        if name == "JOINTS_CMD_56" and len(cur) == 6:
+            out.append((t, [cur[f"j{i}_cmd"] for i in range(1, 7)]))
+            cur = {}
+    return out
+
+
+def following_samples(rec: Recording) -> list[tuple[float, list[float]]]:
+    """(t_s, commanded minus measured [rad]) per telemetry cycle: each commanded set with the measured set of
+    its cycle, the latest one at or before it (the device sends JOINTS_12/34/56, then JOINTS_CMD_12/34/56)."""
+    measured = joint_samples(rec)
+    out: list[tuple[float, list[float]]] = []
+    i = 0
+    for t, cmd in command_samples(rec):
+        while i + 1 < len(measured) and measured[i + 1][0] <= t:
+            i += 1
+        if measured and measured[i][0] <= t:
+            out.append((t, [c - m for c, m in zip(cmd, measured[i][1], strict=True)]))
     return out
 
 
@@ -107,6 +134,20 @@ def plot_velocity(rec: Recording, out: str | Path) -> Path:
     return _time_plot(rec, out, "joint velocities", "joint velocity [rad/s]", lines, degrees=True)
 
 
+def plot_following(rec: Recording, out: str | Path) -> Path:
+    """Following error (commanded minus measured joint positions) [rad] against time [s]."""
+    samples = following_samples(rec)
+    if not samples:
+        why = ("no commanded positions (JOINTS_CMD_12/34/56): the recording comes from a controller that does not "
+               "broadcast them; record again with this version's landscaped") if joint_samples(rec) else \
+            "no joint telemetry (JOINTS_12/34/56) to plot: record while the controller broadcasts"
+        raise RecordingError(f"{rec.path}: {why}")
+    ts = [s[0] for s in samples]
+    lines = [(f"joint {j + 1}", ts, [s[1][j] for s in samples]) for j in range(6)]
+    return _time_plot(rec, out, "following error (commanded - measured)", "following error [rad]", lines,
+                      degrees=True)
+
+
 def plot_path(rec: Recording, out: str | Path) -> Path:
     """The tool position [m] in 3-D (equal scales), coloured from start to end, with tags marked."""
     samples = rec.series.get("TOOL_POS", [])
@@ -156,6 +197,8 @@ def plot(rec: Recording, out: str | Path, kind: str = "joints") -> Path:
         return plot_joints(rec, out)
     if kind == "velocity":
         return plot_velocity(rec, out)
+    if kind == "following":
+        return plot_following(rec, out)
     if kind == "path":
         return plot_path(rec, out)
     raise RecordingError(f"unknown plot kind '{kind}': use {', '.join(KINDS)}")

@@ -32,7 +32,8 @@ from ._generated import landscape_pb2 as pb
 from .errors import ArgumentError, LandscapeError
 from .registry import message_to_dict
 
-RECORDED_MESSAGES: tuple[str, ...] = ("JOINTS_12", "JOINTS_34", "JOINTS_56", "TOOL_POS", "TOOL_RPY", "STATUS", "DIO")
+RECORDED_MESSAGES: tuple[str, ...] = ("JOINTS_12", "JOINTS_34", "JOINTS_56", "JOINTS_CMD_12", "JOINTS_CMD_34",
+                                      "JOINTS_CMD_56", "TOOL_POS", "TOOL_RPY", "STATUS", "DIO")
 TIME_COLUMNS: tuple[str, ...] = ("host_monotonic_s", "t_s", "device_time_ms")
 NOTICE_COLUMNS: tuple[str, ...] = ("notice_kind", "data", "ref_seq", "final")
 FORMATS: dict[str, str] = {".csv": "csv", ".jsonl": "jsonl", ".json": "jsonl", ".ndjson": "jsonl", ".mcap": "mcap"}
