@@ -6,8 +6,9 @@ file=square.csv). Per document, the `file=` blocks are written first (into a wor
 directory of the test's own, `~/` into its home), then each `sh` block runs line by line
 against a fresh landscaped, and each `python` block is executed. `/tmp/ls0` in an example
 stands for the test's pty. A line must exit 0 without a traceback; `monitor` and `events`
-without `--duration`/`--once` get SIGINT two seconds after they run (their first line, or
-at most STARTUP_S), as a user ends them, and must then exit 0. A block holding `landscape`
+without `--duration`/`--once`, and `view` without `--duration`/`--write-layout`, get SIGINT two
+seconds after they run (their first line, or at most STARTUP_S), as a user ends them, and must
+then exit 0. A block holding `landscape`
 commands that is not marked `example` (or `synopsis`, for a usage line) fails
 `test_every_command_block_is_marked`.
 """
@@ -31,7 +32,7 @@ from conftest import CLI, ROOT, start_controller
 DOCS = ("README.md", "docs/host-tool.md")
 DOC_PTY = "/tmp/ls0"
 #: Commands that run until Ctrl-C unless bounded by one of these options.
-OPEN_ENDED = {"monitor": ("--duration", "--once"), "events": ("--duration",)}
+OPEN_ENDED = {"monitor": ("--duration", "--once"), "events": ("--duration",), "view": ("--duration", "--write-layout")}
 INTERRUPT_AFTER_S = 2.0
 STARTUP_S = 6.0
 FENCE = re.compile(r"^(?P<indent> *)(?P<fence>```+)(?P<info>.*)$")
