@@ -225,3 +225,9 @@ def test_the_layout_check_catches_a_wrong_setting() -> None:
         _check({"paths": [{"value": "/joint_states.position_rad[0]", "labl": "x"}]}, fl.PlotConfig, "Plot!x")
     assert not _field_exists("/joint_states", "position[0]")
     assert _field_exists("/joint_states", "position_rad[0]")
+
+
+def test_without_foxglove_sdk_the_view_says_what_to_install(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setitem(sys.modules, "foxglove", None)  # import foxglove raises ImportError
+    with pytest.raises(ViewError, match=r"needs the Python package foxglove-sdk: pip install 'landscape\[view\]'"):
+        LiveView(port=0)
