@@ -203,6 +203,134 @@ def label(path: str) -> str:
     return name
 
 
+# Where the static RAM goes: the parts bench/footprint/fw_sizes.c measures (fp_<name>), what each one is and
+# the limits that size it (fp_limit_<LIMIT> carries each limit's value). Indented parts belong to the object
+# above them; "rest" is what the listed parts leave of it.
+RAM_PARTS = [
+    ("core", "`ls_core_t` (g_core)", ""),
+    ("core__paths", "path queues `motion.paths`",
+     "LS_PATH_MAX x LS_PATH_MAX_POINTS x ls_path_point_t ({path_point} B)"),
+    ("core__prog", "the path program `motion.prog`", "LS_MOTION_MAX_SEGS (a path and the segment closing a cycle) x "
+     "ls_motion_seg_t ({motion_seg} B)"),
+    ("core__sessions", "sessions (each with its last answer)", "LS_MAX_SUPERVISORS x ls_session_t ({session} B: "
+     "LS_DOWNLINK_MAX)"),
+    ("core__up", "decoded uplink `up`", "ls_Uplink: the schema's max_count/max_size (protocol/landscape.options)"),
+    ("core__down_note", "answer and notice being built", "2 x ls_Downlink (protocol/landscape.options)"),
+    ("core__enc", "their encodings", "2 x LS_DOWNLINK_MAX"),
+    ("core__logs", "event and fault logs", "LS_EVENT_LOG_LEN, LS_FAULT_LOG_LEN"),
+    ("core__sensor", "manual control and its reachability check", "one ls_motion_seg_t"),
+    ("core__rest", "rest of the core", "RSVPs, DIO watches, settings, tool"),
+    ("net", "`ls_net_t` (g_net)", ""),
+    ("net__isotp", "ISO-TP links, one per peer", "LS_NET_MAX_PEERS x ls_isotp_link_t ({isotp_link} B: 2 x "
+     "LS_ISOTP_MAX_PAYLOAD)"),
+    ("net__outq", "downlink queues", "LS_NET_MAX_PEERS x LS_NET_OUTQ x ls_net_msg_t ({net_msg} B: LS_DOWNLINK_MAX)"),
+    ("net__rxbuf", "reception buffer", "LS_ISOTP_MAX_PAYLOAD"),
+    ("net__rest", "rest of the network layer", "links, buckets, counters"),
+    ("ctl", "`ls_control_t` (g_ctl)", ""),
+    ("ctl__rings", "command and event rings", "2 x LS_CTL_QUEUE_LEN"),
+    ("ctl__motion", "plan slot and path executor", "2 x ls_motion_seg_t and the executor's state"),
+    ("ctl__react", "plan slot and sensor-guided executor", "ls_react_plan_t, ls_react_t"),
+    ("ctl__rest", "rest of the control loop", "snapshot, sensors, set-points"),
+]
+LIMIT_RE = re.compile(r"\b(LS_[A-Z_]+)\b")
+
+
+def ram_parts(sizes_nm: str) -> tuple[dict[str, int], dict[str, int]]:
+    """Sizes (fp_<name>) and limit values (fp_limit_<LIMIT>) from `arm-none-eabi-nm -S` of fw_sizes.o."""
+    sizes: dict[str, int] = {}
+    limits: dict[str, int] = {}
+    for line in sizes_nm.splitlines():
+        parts = line.split()
+        if len(parts) != 4 or not parts[3].startswith("fp_"):
+            continue
+        value, name = int(parts[1], 16), parts[3][3:]
+        if name.startswith("limit_"):
+            limits[name[6:]] = value
+        else:
+            sizes[name] = value
+    missing = [p for p, _, _ in RAM_PARTS if p not in sizes]
+    if missing:
+        raise BenchError(f"bench/footprint/fw_sizes.c does not measure {', '.join(missing)}: keep it and RAM_PARTS in "
+                         "bench/b_footprint.py together")
+    return sizes, limits
+
+
+def ram_table(profiles: list[tuple[str, dict[str, int], dict[str, int]]]) -> str:
+    """The static RAM table, one column per profile; each limit in the 'set by' column with its values."""
+    head = "| part | " + " | ".join(f"{name} B" for name, _, _ in profiles) + " | set by |"
+    rule = "|---|" + "---:|" * len(profiles) + "---|"
+    lines = [head, rule]
+    for key, what, setter in RAM_PARTS:
+        text = setter.format(**{k: "/".join(str(s[k]) for _, s, _ in profiles)
+                                for k in ("path_point", "motion_seg", "session", "isotp_link", "net_msg")})
+
+        def with_values(m: re.Match[str]) -> str:
+            vals = [lim.get(m.group(1)) for _, _, lim in profiles]
+            return m.group(1) if None in vals else f"{m.group(1)} ({'/'.join(str(v) for v in vals)})"
+
+        text = LIMIT_RE.sub(with_values, text)
+        indent = "" if "__" not in key else "&nbsp;&nbsp;"
+        name = what if "__" in key else f"**{what}**"
+        lines.append(f"| {indent}{name} | " + " | ".join(str(s[key]) for _, s, _ in profiles) + f" | {text} |")
+    return "\n".join(lines)
+
+
+@dataclass
+class Image:
+    """One Cortex-M4F image of a profile: its size, symbols, linker map and static RAM parts."""
+
+    text: int
+    data: int
+    bss: int
+    syms: list[str]
+    map_text: str
+    firmware_allocs: set[str]
+    sizes: dict[str, int]
+    limits: dict[str, int]
+
+
+def build_image(targets: list[FwTarget], npb: Path | None, defines: list[str], tmp: Path) -> Image:
+    """Cross-compile and link the firmware's portable libraries + fw_main.c with `defines` added to every
+    unit (a profile's), and measure the static RAM parts with fw_sizes.c under the same flags."""
+    all_includes = list(dict.fromkeys(p for t in targets for p in t.includes))
+    main_t = FwTarget("fw_main", [ROOT / "bench" / "footprint" / "fw_main.c"], all_includes)
+    runtime_t = FwTarget("nanopb runtime", [npb / f for f in NANOPB_RUNTIME]) if npb is not None else None
+    units = [(t, src) for t in [*targets, *([runtime_t] if runtime_t else []), main_t] for src in t.sources]
+    if any(src.suffix in CXX_SUFFIXES for _, src in units) and shutil.which(CXX) is None:
+        raise BenchError(f"{CXX} is missing for the C++ sources: apt-get install gcc-arm-none-eabi")
+    jobs = [(t, src, tmp / f"{i:02d}_{obj_stem(src)}.o") for i, (t, src) in enumerate(units)
+            if src.suffix in CXX_SUFFIXES or src.suffix == ".c"]  # headers listed as sources are skipped
+    sizes_job = (FwTarget("fw_sizes", [], all_includes), ROOT / "bench" / "footprint" / "fw_sizes.c",
+                 tmp / "fw_sizes.o")
+
+    def compile_one(job: tuple[FwTarget, Path, Path]) -> str:
+        t, src, obj = job
+        cmd = [CXX, *CXXFLAGS] if src.suffix in CXX_SUFFIXES else [CC, *CFLAGS]
+        includes = [*([npb] if npb is not None else []), *t.includes]
+        cc = run([*cmd, *t.options, *(f"-D{d}" for d in [*t.defines, *defines]), *(f"-I{p}" for p in includes),
+                  "-c", str(src), "-o", str(obj)])
+        return "" if cc.returncode == 0 else f"cross-compiling {src.name} ({t.name}) failed: " + \
+            cc.stderr.strip()[-300:]
+
+    with ThreadPoolExecutor(max_workers=os.cpu_count() or 2) as pool:
+        errors = [e for e in pool.map(compile_one, [*jobs, sizes_job]) if e]
+    if errors:
+        raise BenchError("; ".join(errors))
+    objs, firmware_allocs = [obj for _, _, obj in jobs], set()
+    for _, src, obj in jobs:
+        undefined = set(run(["arm-none-eabi-nm", "-u", str(obj)]).stdout.split()) - {"U"}
+        if "fw_main" not in obj.name:
+            firmware_allocs |= {f"{src.name}: {s}" for s in undefined & ALLOCATORS}
+    elf, mapf = tmp / "fw.elf", tmp / "fw.map"
+    ld = run([CC, *CFLAGS, *LDFLAGS, *map(str, objs), f"-Wl,-Map={mapf}", "-o", str(elf), "-lm"])
+    if ld.returncode != 0:
+        raise BenchError(f"linking the Cortex-M4F image failed: {ld.stderr.strip()[-400:]}")
+    text, data, bss = (int(x) for x in run(["arm-none-eabi-size", str(elf)]).stdout.splitlines()[1].split()[:3])
+    syms = run(["arm-none-eabi-nm", "-S", "--size-sort", str(elf)]).stdout.splitlines()
+    sizes, limits = ram_parts(run(["arm-none-eabi-nm", "-S", str(sizes_job[2])]).stdout)
+    return Image(text, data, bss, syms, mapf.read_text(), firmware_allocs, sizes, limits)
+
+
 def bench_footprint(quick: bool) -> Section:
     del quick
     sec = Section(7, "Footprint on a Cortex-M4F (arm-none-eabi-gcc -Os, newlib-nano)")
@@ -214,50 +342,17 @@ def bench_footprint(quick: bool) -> Section:
         raise BenchError(f"sources missing (generated ones are made by the bench build): {', '.join(missing)}; "
                          "build with bench/run.py first")
     npb = nanopb_runtime() if "nanopb::protobuf-nanopb-static" in libraries else None
-    all_includes = list(dict.fromkeys(p for t in targets for p in t.includes))
-    main_t = FwTarget("fw_main", [ROOT / "bench" / "footprint" / "fw_main.c"], all_includes)
-    runtime_t = FwTarget("nanopb runtime", [npb / f for f in NANOPB_RUNTIME]) if npb is not None else None
-    units = [(t, src) for t in [*targets, *([runtime_t] if runtime_t else []), main_t] for src in t.sources]
     with tempfile.TemporaryDirectory(prefix="lsbench-fp-") as tmpdir:
-        tmp = Path(tmpdir)
-        if any(src.suffix in CXX_SUFFIXES for _, src in units) and shutil.which(CXX) is None:
-            raise BenchError(f"{CXX} is missing for the C++ sources: apt-get install gcc-arm-none-eabi")
-        jobs = [(t, src, tmp / f"{i:02d}_{obj_stem(src)}.o") for i, (t, src) in enumerate(units)
-                if src.suffix in CXX_SUFFIXES or src.suffix == ".c"]  # headers listed as sources are skipped
-
-        def compile_one(job: tuple[FwTarget, Path, Path]) -> str:
-            t, src, obj = job
-            cmd = [CXX, *CXXFLAGS] if src.suffix in CXX_SUFFIXES else [CC, *CFLAGS]
-            includes = [*([npb] if npb is not None else []), *t.includes]
-            cc = run([*cmd, *t.options, *(f"-D{d}" for d in t.defines), *(f"-I{p}" for p in includes), "-c",
-                      str(src), "-o", str(obj)])
-            return "" if cc.returncode == 0 else f"cross-compiling {src.name} ({t.name}) failed: " + \
-                cc.stderr.strip()[-300:]
-
-        with ThreadPoolExecutor(max_workers=os.cpu_count() or 2) as pool:
-            errors = [e for e in pool.map(compile_one, jobs) if e]
-        if errors:
-            raise BenchError("; ".join(errors))
-        objs, firmware_allocs = [obj for _, _, obj in jobs], set()
-        for _, src, obj in jobs:
-            undefined = set(run(["arm-none-eabi-nm", "-u", str(obj)]).stdout.split()) - {"U"}
-            if "fw_main" not in obj.name:
-                firmware_allocs |= {f"{src.name}: {s}" for s in undefined & ALLOCATORS}
-        elf, mapf = tmp / "fw.elf", tmp / "fw.map"
-        ld = run([CC, *CFLAGS, *LDFLAGS, *map(str, objs), f"-Wl,-Map={mapf}", "-o", str(elf), "-lm"])
-        if ld.returncode != 0:
-            raise BenchError(f"linking the Cortex-M4F image failed: {ld.stderr.strip()[-400:]}")
-        text, data, bss = (int(x) for x in run(["arm-none-eabi-size", str(elf)]).stdout.splitlines()[1].split()[:3])
-        syms = run(["arm-none-eabi-nm", "-S", "--size-sort", str(elf)]).stdout.splitlines()
-        linked_allocs = sorted({line.split()[-1] for line in syms} & ALLOCATORS)
-        map_text = mapf.read_text()
-        why = re.findall(r"\((lib_a-[\w-]+\.o)\)\s*\n?\s+\S*\((lib_a-[\w-]+\.o)\) "
-                         r"\((_(?:malloc|realloc|free|calloc)_r|malloc|free|calloc)\)", map_text)
-        breakdown: dict[str, dict[str, int]] = defaultdict(lambda: {"flash": 0, "ram": 0})
-        for path, sizes in map_breakdown(map_text).items():
-            for k, v in sizes.items():
-                breakdown[label(path)][k] += v
-        big_ram = [line.split() for line in syms if line.split()[2] in "bBdD"][-4:]
+        img = build_image(targets, npb, [], Path(tmpdir))
+    text, data, bss, syms, firmware_allocs = img.text, img.data, img.bss, img.syms, img.firmware_allocs
+    linked_allocs = sorted({line.split()[-1] for line in syms} & ALLOCATORS)
+    why = re.findall(r"\((lib_a-[\w-]+\.o)\)\s*\n?\s+\S*\((lib_a-[\w-]+\.o)\) "
+                     r"\((_(?:malloc|realloc|free|calloc)_r|malloc|free|calloc)\)", img.map_text)
+    breakdown: dict[str, dict[str, int]] = defaultdict(lambda: {"flash": 0, "ram": 0})
+    for path, sizes in map_breakdown(img.map_text).items():
+        for k, v in sizes.items():
+            breakdown[label(path)][k] += v
+    big_ram = [line.split() for line in syms if line.split()[2] in "bBdD"][-4:]
     sec.rows.append(Row("7a. flash (text + data)", f"{(text + data) / 1024:.1f} KiB ({text + data} B)",
                         "machine-independent count", "", "", "portable firmware + nanopb + newlib-nano"))
     sec.rows.append(Row("7b. RAM (data + bss), static", f"{(data + bss) / 1024:.1f} KiB ({data + bss} B)",
@@ -288,6 +383,9 @@ def bench_footprint(quick: bool) -> Section:
     sec.details.append("Per part (from the linker map; flash includes initialised data):\n\n"
                        "| part | flash B | RAM B |\n|---|---:|---:|\n" +
                        "\n".join(f"| {k} | {v['flash']} | {v['ram']} |" for k, v in rows))
+    sec.details.append("Where the static RAM goes (`bench/footprint/fw_sizes.c`: each part's size as the target "
+                       "compiler lays it out, and the limits that set it):\n\n" +
+                       ram_table([("image", img.sizes, img.limits)]))
     if linked_allocs:
         sec.details.append(
             "Heap: the firmware's own objects reference no allocator (checked with `arm-none-eabi-nm -u` on each "
