@@ -40,6 +40,9 @@ LIBRARIES = {
 # The host's system headers: the cross compiler has its own (newlib); nanopb's headers come with its runtime.
 HOST_INCLUDE = Path("/usr/include")
 MANIFEST = BUILD / "footprint" / "portable.txt"
+# Issue 22's goals for the mcu profile's image.
+FLASH_GOAL_KIB = 128
+RAM_GOAL_KIB = 192
 CACHE = Path(os.environ.get("LS_BENCH_CACHE", Path.home() / ".cache" / "landscape-bench"))
 
 
@@ -62,14 +65,15 @@ def obj_stem(src: Path) -> str:
     return src.stem.replace("landscape", "dbc_landscape" if "dbc" in str(src) else "landscape")
 
 
-def read_manifest(path: Path) -> tuple[list[FwTarget], list[str]]:
-    """The portable libraries of landscaped and the other libraries it links, as bench/CMakeLists.txt
-    computed them from the main build's targets."""
+def read_manifest(path: Path) -> tuple[list[FwTarget], list[str], dict[str, list[str]]]:
+    """The portable libraries of landscaped, the other libraries it links, as bench/CMakeLists.txt
+    computed them from the main build's targets, and each profile's definitions (CMakeLists.txt LS_PROFILE)."""
     if not path.is_file():
         raise BenchError(f"{path} is missing: configure the bench project (bench/run.py, or "
                          "cmake -S bench -B build-bench) to generate it")
     targets: list[FwTarget] = []
     libraries: list[str] = []
+    profiles: dict[str, list[str]] = {}
     for number, line in enumerate(path.read_text().splitlines(), 1):
         key, _, value = line.partition(" ")
         items = [x for x in value.split(";") if x]
@@ -77,6 +81,9 @@ def read_manifest(path: Path) -> tuple[list[FwTarget], list[str]]:
             targets.append(FwTarget(value))
         elif key == "library":
             libraries.append(value)
+        elif key == "profile":
+            name, _, defs = value.partition(" ")
+            profiles[name] = [d for d in defs.split(";") if d.strip()]
         elif key in ("sources", "includes", "defines", "options") and targets:
             t = targets[-1]
             if key == "sources":
@@ -96,7 +103,9 @@ def read_manifest(path: Path) -> tuple[list[FwTarget], list[str]]:
         raise BenchError(f"landscaped links {', '.join(unknown)}, which the Cortex-M4F image does not know: "
                          "add it to LIBRARIES in bench/b_footprint.py (what it is on a bare board), or move it "
                          "to an OS part (LS_FOOTPRINT_OS_DIRS in bench/CMakeLists.txt)")
-    return targets, libraries
+    if not {"linux", "mcu"} <= profiles.keys():
+        raise BenchError(f"{path} names no linux and mcu profiles: reconfigure build-bench")
+    return targets, libraries, profiles
 
 
 def run(cmd: list[str], **kw: object) -> subprocess.CompletedProcess[str]:
@@ -336,14 +345,17 @@ def bench_footprint(quick: bool) -> Section:
     sec = Section(7, "Footprint on a Cortex-M4F (arm-none-eabi-gcc -Os, newlib-nano)")
     if shutil.which(CC) is None:
         raise BenchError("arm-none-eabi-gcc is missing: apt-get install gcc-arm-none-eabi libnewlib-arm-none-eabi")
-    targets, libraries = read_manifest(MANIFEST)
+    targets, libraries, profiles = read_manifest(MANIFEST)
     missing = [str(src) for t in targets for src in t.sources if not src.is_file()]
     if missing:
         raise BenchError(f"sources missing (generated ones are made by the bench build): {', '.join(missing)}; "
                          "build with bench/run.py first")
     npb = nanopb_runtime() if "nanopb::protobuf-nanopb-static" in libraries else None
     with tempfile.TemporaryDirectory(prefix="lsbench-fp-") as tmpdir:
-        img = build_image(targets, npb, [], Path(tmpdir))
+        (Path(tmpdir) / "mcu").mkdir()
+        (Path(tmpdir) / "linux").mkdir()
+        img = build_image(targets, npb, profiles["mcu"], Path(tmpdir) / "mcu")
+        ref = build_image(targets, npb, profiles["linux"], Path(tmpdir) / "linux")
     text, data, bss, syms, firmware_allocs = img.text, img.data, img.bss, img.syms, img.firmware_allocs
     linked_allocs = sorted({line.split()[-1] for line in syms} & ALLOCATORS)
     why = re.findall(r"\((lib_a-[\w-]+\.o)\)\s*\n?\s+\S*\((lib_a-[\w-]+\.o)\) "
@@ -353,17 +365,30 @@ def bench_footprint(quick: bool) -> Section:
         for k, v in sizes.items():
             breakdown[label(path)][k] += v
     big_ram = [line.split() for line in syms if line.split()[2] in "bBdD"][-4:]
-    sec.rows.append(Row("7a. flash (text + data)", f"{(text + data) / 1024:.1f} KiB ({text + data} B)",
-                        "machine-independent count", "", "", "portable firmware + nanopb + newlib-nano"))
-    sec.rows.append(Row("7b. RAM (data + bss), static", f"{(data + bss) / 1024:.1f} KiB ({data + bss} B)",
-                        "machine-independent count", "", "",
-                        "largest: " + ", ".join(f"{s[3]} {int(s[1], 16)} B" for s in reversed(big_ram))))
+    flash, ram = text + data, data + bss
+    ref_flash, ref_ram = ref.text + ref.data, ref.data + ref.bss
+
+    def goal(value: int, limit_kib: int) -> str:
+        diff = value - limit_kib * 1024
+        return (f"goal <= {limit_kib} KiB: met, {-diff / 1024:.1f} KiB to spare" if diff <= 0
+                else f"goal <= {limit_kib} KiB: missed by {diff / 1024:.1f} KiB")
+
+    reference = "linux profile (landscaped's limits), same sources"
+    sec.rows.append(Row("7a. flash (text + data), mcu profile", f"{flash / 1024:.1f} KiB ({flash} B)", reference,
+                        f"{ref_flash / 1024:.1f} KiB", f"{flash / ref_flash:.2f}",
+                        f"{goal(flash, FLASH_GOAL_KIB)}; portable firmware + nanopb + newlib-nano"))
+    sec.rows.append(Row("7b. RAM (data + bss), static, mcu profile", f"{ram / 1024:.1f} KiB ({ram} B)", reference,
+                        f"{ref_ram / 1024:.1f} KiB", f"{ram / ref_ram:.3f}",
+                        f"{goal(ram, RAM_GOAL_KIB)}; largest: " +
+                        ", ".join(f"{s[3]} {int(s[1], 16)} B" for s in reversed(big_ram))))
     heap = ("no firmware object references an allocator" if not firmware_allocs
             else "firmware objects reference: " + ", ".join(sorted(firmware_allocs)))
     pulled = sorted({f"{b} -> {sym}" for _, b, sym in why}) or []
-    sec.rows.append(Row("7c. heap", heap, "linked from the C library", ", ".join(linked_allocs) or "none", "",
-                        ("pulled in by " + "; ".join(pulled) + "; _sbrk stubbed to fail: no heap region")
-                        if linked_allocs else "no allocator in the image"))
+    sec.rows.append(Row("7c. heap, mcu profile", heap, "allocator symbols in the image (arm-none-eabi-nm)",
+                        ", ".join(linked_allocs) or "none", "",
+                        ("goal none: missed; pulled in by " + "; ".join(pulled) +
+                         "; _sbrk stubbed to fail: no heap region")
+                        if linked_allocs else "goal none: met, no allocator in the image"))
     sec.details.append(
         f"`{CC} {' '.join(CFLAGS)}` (C++: `{CXX} {' '.join(CXXFLAGS)}`), linked with "
         f"`{' '.join(LDFLAGS)} -lm`. Sources: every library `landscaped` links, followed through their link "
@@ -378,14 +403,18 @@ def bench_footprint(quick: bool) -> Section:
         "trajectory plan and sample per turn), CAN and arm HALs as volatile registers, an entry point that zeroes "
         ".bss, and an `_sbrk` that always fails. Not included: the sim and Linux HAL backends, telemetry "
         "broadcasts, landscaped's "
-"process glue, a board's vector table and linker script. -DNDEBUG as in a release build.")
+"process glue, a board's vector table and linker script. -DNDEBUG as in a release build. "
+        "The image is built twice from the same sources: with the mcu profile's definitions "
+        f"({' '.join('-D' + d for d in profiles['mcu'])}: the limits for a 256 KiB-RAM Cortex-M4F, CMakeLists.txt "
+        "LS_PROFILE) and, for reference, with the linux profile's (what landscaped and the tests run); the rows, the "
+        "per-part table and the heap check are the mcu image's.")
     rows = sorted(breakdown.items(), key=lambda kv: -(kv[1]["flash"] + kv[1]["ram"]))
     sec.details.append("Per part (from the linker map; flash includes initialised data):\n\n"
                        "| part | flash B | RAM B |\n|---|---:|---:|\n" +
                        "\n".join(f"| {k} | {v['flash']} | {v['ram']} |" for k, v in rows))
     sec.details.append("Where the static RAM goes (`bench/footprint/fw_sizes.c`: each part's size as the target "
                        "compiler lays it out, and the limits that set it):\n\n" +
-                       ram_table([("image", img.sizes, img.limits)]))
+                       ram_table([("mcu", img.sizes, img.limits), ("linux", ref.sizes, ref.limits)]))
     if linked_allocs:
         sec.details.append(
             "Heap: the firmware's own objects reference no allocator (checked with `arm-none-eabi-nm -u` on each "

@@ -37,7 +37,14 @@
 #include "ls_react.h"
 #include "ls_robot_model.h"
 
-#define LS_CTL_QUEUE_LEN 32u /* power of two */
+/* Commands to and events from the loop (power of two). Per profile
+ * (CMakeLists.txt LS_PROFILE): the mcu one halves them (one arm, one or two
+ * sessions: the comms loop drains events every turn). */
+#if LS_PROFILE_MCU
+#define LS_CTL_QUEUE_LEN 16u
+#else
+#define LS_CTL_QUEUE_LEN 32u
+#endif
 #define LS_CTL_MAX_DIO_UNITS 4
 
 typedef enum {

@@ -46,6 +46,24 @@ static int32_t check_pct(ls_call_t *call, int k, const char *field, double v)
 }
 
 /* Validate point k of the message and convert it to SI. */
+/* x as a path point stores it (ls_path_real_t), kept within [lo, hi] when
+ * x is: rounding to float (the mcu profile) may cross a joint limit by one
+ * unit in the last place, and the planner would then refuse the point. */
+#define LS_PATH_REAL_TOWARD(s, t) _Generic((s), float: nextafterf, default: nextafter)((s), (t))
+static ls_path_real_t store_within(double x, double lo, double hi)
+{
+    ls_path_real_t s = (ls_path_real_t)x;
+    if (x >= lo && x <= hi) {
+        while ((double)s > hi) {
+            s = LS_PATH_REAL_TOWARD(s, (ls_path_real_t)-INFINITY);
+        }
+        while ((double)s < lo) {
+            s = LS_PATH_REAL_TOWARD(s, (ls_path_real_t)INFINITY);
+        }
+    }
+    return s;
+}
+
 static int32_t load_point(ls_core_t *core, ls_call_t *call, const ls_PathLoadReq *r, int k, ls_path_point_t *pt)
 {
     const ls_TagPoint *tp = &r->tags[k];
@@ -68,10 +86,11 @@ static int32_t load_point(ls_core_t *core, ls_call_t *call, const ls_PathLoadReq
             return ls_reply(call, ls_RetCode_CMD_PARAM_ERR, "pathLoad point %d: `joints` must be finite numbers", k);
         }
         for (int j = 0; j < LS_N_JOINTS; j++) {
-            pt->v[j] = tp->joints[j] * ls_units_to_si_angular(un.angular, 1.0);
-            if (!pt->relative && (pt->v[j] < core->model->q_min_rad[j] || pt->v[j] > core->model->q_max_rad[j])) {
-                const double lim =
-                    pt->v[j] < core->model->q_min_rad[j] ? core->model->q_min_rad[j] : core->model->q_max_rad[j];
+            const double q = tp->joints[j] * ls_units_to_si_angular(un.angular, 1.0);
+            const double lo = core->model->q_min_rad[j], hi = core->model->q_max_rad[j];
+            pt->v[j] = pt->relative ? (ls_path_real_t)q : store_within(q, lo, hi);
+            if (!pt->relative && (q < lo || q > hi)) {
+                const double lim = q < lo ? lo : hi;
                 return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR,
                                 "pathLoad point %d: joint %d: %.4g %s beyond its limit %.4g %s", k, j + 1,
                                 tp->joints[j], ls_units_angular_symbol(un.angular),
@@ -85,10 +104,15 @@ static int32_t load_point(ls_core_t *core, ls_call_t *call, const ls_PathLoadReq
                             "yaw), got %u",
                             k, (unsigned)tp->pose_count);
         }
-        ls_units_pose_to_si(un.linear, un.angular, tp->pose, pt->v);
+        double v[6];
+        ls_units_pose_to_si(un.linear, un.angular, tp->pose, v);
+        for (int i = 0; i < 6; i++) {
+            pt->v[i] = (ls_path_real_t)v[i];
+            v[i] = pt->v[i]; /* check what is stored: what runs */
+        }
         if (!pt->relative) {
             double T[16], W[16], P[16];
-            ls_pose_from_xyzrpy(pt->v, T);
+            ls_pose_from_xyzrpy(v, T);
             if (r->frame == ls_ReferenceFrame_WORLD_CARTESIAN_FRAME) {
                 ls_mcmd_world_pose(core, W);
                 ls_pose_mul(W, T, P);
@@ -122,10 +146,10 @@ static int32_t load_point(ls_core_t *core, ls_call_t *call, const ls_PathLoadReq
     }
     snprintf(pt->tag, sizeof pt->tag, "%s", tp->tag_name);
     pt->tag_index = tp->tag_index;
-    pt->delay_s = tp->time_delay_s;
-    pt->blend_pct = tp->transition_speed_pct;
-    pt->speed_pct = tp->speed_pct;
-    pt->accel_pct = tp->accel_pct;
+    pt->delay_s = (ls_path_real_t)tp->time_delay_s;
+    pt->blend_pct = (ls_path_real_t)tp->transition_speed_pct;
+    pt->speed_pct = (ls_path_real_t)tp->speed_pct;
+    pt->accel_pct = (ls_path_real_t)tp->accel_pct;
     pt->n_aux = (uint8_t)tp->aux_commands_count;
     for (int a = 0; a < pt->n_aux; a++) {
         ls_aux_t ax;

@@ -17,17 +17,20 @@
  * previous tip pose P_prev when it is relative. */
 static void cart_target(const ls_core_t *core, const ls_path_point_t *pt, const double P_prev[16], double P[16])
 {
-    double F[16], T[16];
+    double F[16], T[16], v[6];
     const double zero[6] = { 0 };
+    for (int i = 0; i < 6; i++) {
+        v[i] = pt->v[i];
+    }
     if (pt->frame == ls_ReferenceFrame_WORLD_CARTESIAN_FRAME) {
         ls_mcmd_world_pose(core, F);
     } else {
         ls_pose_from_xyzrpy(zero, F);
     }
     if (pt->relative) {
-        ls_mcmd_offset_in_frame(F, P_prev, pt->v, P);
+        ls_mcmd_offset_in_frame(F, P_prev, v, P);
     } else {
-        ls_pose_from_xyzrpy(pt->v, T);
+        ls_pose_from_xyzrpy(v, T);
         ls_pose_mul(F, T, P);
     }
 }

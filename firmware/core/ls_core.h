@@ -21,7 +21,14 @@
 
 struct ls_control;
 
+/* Sessions at once (describe: max_sessions). Each keeps its last answer
+ * (LS_DOWNLINK_MAX) and needs an ISO-TP peer (ls_net.h). Per profile
+ * (CMakeLists.txt LS_PROFILE): linux 4, mcu 2 (an owner and an observer). */
+#if LS_PROFILE_MCU
+#define LS_MAX_SUPERVISORS 2
+#else
 #define LS_MAX_SUPERVISORS 4
+#endif
 #define LS_DOWNLINK_MAX ls_Downlink_size
 #define LS_UPLINK_MAX 4095u
 #define LS_CALL_DEFERRED INT32_MIN /* a handler will answer later */

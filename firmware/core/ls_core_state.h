@@ -17,11 +17,30 @@
 #include "ls_motion.h"
 
 /* Path queues: LS_PATH_MAX names of LS_PATH_MAX_POINTS points (ls_motion.h).
- * Path storage is the firmware's largest static table (about 8 x 256 x 420 B
- * here). A board with little SRAM builds with smaller values, e.g.
- * -DLS_PATH_MAX=2 -DLS_PATH_MAX_POINTS=64 for the whole build (docs/performance.md). */
+ * With the program they are the firmware's largest static tables (the
+ * table in docs/performance.md section 7). The build's profile picks the
+ * value (CMakeLists.txt, LS_PROFILE: linux, or mcu for a 256 KiB-RAM
+ * Cortex-M4F); -DLS_PATH_MAX=N for the whole build overrides it. The device
+ * publishes it (describe: max_paths). */
 #ifndef LS_PATH_MAX
+#if LS_PROFILE_MCU
+#define LS_PATH_MAX 2
+#else
 #define LS_PATH_MAX 8
+#endif
+#endif
+
+/* What a path point stores its numbers in (pose or joints, dwell and
+ * percentages). linux: double, as received. mcu: float, half the bytes: its
+ * 24-bit significand keeps a relative 6e-8, i.e. 0.4 urad on an angle up to
+ * 2 pi and 0.12 um on a coordinate up to 2 m, far below what an arm
+ * repeats (tens of um, tens of urad) and below the set-points a drive
+ * resolves; the dwell (<= 3600 s) keeps 0.2 ms, the percentages 6e-6 %. The
+ * handlers plan from the stored value, so what is checked is what runs. */
+#if LS_PROFILE_MCU
+typedef float ls_path_real_t;
+#else
+typedef double ls_path_real_t;
 #endif
 
 /* One point of a path queue as pathLoad checked it, in SI. */
@@ -30,10 +49,10 @@ typedef struct {
     ls_ReferenceFrame frame;
     ls_MotionType motion; /* STRAIGHT_ and CIRCULAR_MOTION: Cartesian points only */
     bool relative;
-    double v[LS_N_JOINTS]; /* SI: joints (rad), or x y z (m) roll pitch yaw (rad) */
+    ls_path_real_t v[LS_N_JOINTS]; /* SI: joints (rad), or x y z (m) roll pitch yaw (rad) */
     char tag[LS_MOTION_NAME_LEN];
     int32_t tag_index;
-    double delay_s, blend_pct, speed_pct, accel_pct;
+    ls_path_real_t delay_s, blend_pct, speed_pct, accel_pct;
     uint8_t n_aux;
     char aux[LS_MOTION_AUX_PER_POINT][LS_MOTION_AUX_LEN];
 } ls_path_point_t;

@@ -31,9 +31,17 @@
 #define LS_MOTION_AUX_PER_POINT 4
 #define LS_MOTION_AUX_LEN 48
 /* Points of one path. It sizes static tables in several translation units:
- * change it for the whole build only (cmake -DCMAKE_C_FLAGS=-DLS_PATH_MAX_POINTS=64). */
+ * the build's profile picks it (CMakeLists.txt LS_PROFILE: linux, or mcu for
+ * a 256 KiB-RAM Cortex-M4F, where the program of LS_MOTION_MAX_SEGS
+ * segments of about 1.7 KB each bounds it); an override goes to the whole
+ * build only (cmake -DCMAKE_C_FLAGS=-DLS_PATH_MAX_POINTS=64). The device
+ * publishes it (describe: max_points_per_path). */
 #ifndef LS_PATH_MAX_POINTS
+#if LS_PROFILE_MCU
+#define LS_PATH_MAX_POINTS 16
+#else
 #define LS_PATH_MAX_POINTS 256
+#endif
 #endif
 #define LS_MOTION_MAX_SEGS (LS_PATH_MAX_POINTS + 1) /* a path plus the segment that closes a cycle */
 #define LS_MOTION_FOLLOWING_ERROR_RAD 0.05

@@ -21,7 +21,15 @@
 #include "ls_isotp.h"
 #include "landscape.h" /* cantools: the DBC's frame ids */
 
+/* The limits below are per profile (CMakeLists.txt LS_PROFILE): linux, or
+ * mcu for a 256 KiB-RAM Cortex-M4F, where each peer costs 2 x
+ * LS_ISOTP_MAX_PAYLOAD plus LS_NET_OUTQ x LS_DOWNLINK_MAX (about 18.5 KB
+ * with 3 queued downlinks). */
+#if LS_PROFILE_MCU
+#define LS_NET_MAX_LINKS 2
+#else
 #define LS_NET_MAX_LINKS 4
+#endif
 /* ISO-TP links, one per source address, so a source holds at most one
  * reception (of at most LS_ISOTP_MAX_PAYLOAD bytes, its time capped by
  * LS_ISOTP_RX_CAP_BLOCK). The link of an address with a live session is
@@ -31,8 +39,13 @@
  * least recently (answers to session-less sources before receptions), so a
  * flood from changing addresses churns among itself and a new supervisor
  * can still connect (docs/protocol.md "Budgets under floods"). */
+#if LS_PROFILE_MCU
+#define LS_NET_MAX_PEERS 4 /* LS_MAX_SUPERVISORS + 2 */
+#define LS_NET_OUTQ 3      /* an answer and two notices waiting per peer; more are dropped and counted */
+#else
 #define LS_NET_MAX_PEERS 6
 #define LS_NET_OUTQ 8
+#endif
 /* Bridged frames (a frame received on one link, copied to the others): a
  * token bucket per output link, LS_NET_FWD_RATE_FPS frames/s with bursts of
  * LS_NET_FWD_BURST; EMERGENCY frames have a bucket of their own so a flood
