@@ -1,0 +1,50 @@
+/* Text formatting and number parsing into and from fixed buffers, without
+ * the C library's stdio: the firmware's replacement for snprintf/vsnprintf
+ * and strtod. newlib's vsnprintf references its allocator (for asprintf's
+ * growing string) and its strtod allocates big numbers for long inputs, so
+ * an image that uses them links malloc; these never allocate, read no
+ * locale and keep no state: callable from any thread, reentrant. The
+ * control loop may call them too (no allocation, no blocking), though what
+ * it formats is bounded by its own buffers.
+ *
+ * Output is the same as glibc's for every conversion supported (the unit
+ * tests and tests/fuzz/fuzz_fmt.c compare them), floating point included:
+ * the decimal expansion is exact (base-1e9 limbs of the binary value) and
+ * rounds half to even, as glibc does in the default rounding mode. */
+#ifndef LS_FMT_H
+#define LS_FMT_H
+
+#include <stdarg.h>
+#include <stddef.h>
+
+/* snprintf's contract: writes at most cap - 1 characters and a NUL into
+ * buf (nothing when cap is 0; buf may then be NULL), returns the length the
+ * whole output has (so a result >= cap means it was cut), or a negative
+ * value when `fmt` holds a conversion this formatter does not support (the
+ * output then stops there, NUL-terminated).
+ *
+ * Conversions: d i u o x X c s % e E f F g G; flags - + space # 0; width
+ * and precision as numbers or *; length modifiers hh h l ll z j t (L, a/A,
+ * n and p are not supported). NULL for %s prints "(null)" as glibc does.
+ * Cost: O(output) for integers and strings; a floating-point conversion
+ * costs O(decimal digits of the value) limb operations and uses about
+ * 560 bytes of stack. No allocation. */
+int ls_fmt_print(char *buf, size_t cap, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+int ls_fmt_vprint(char *buf, size_t cap, const char *fmt, va_list ap) __attribute__((format(printf, 3, 0)));
+
+/* strtod's contract for decimal text: skips leading white space (isspace
+ * in the C locale), takes an optional sign, then "inf", "infinity", "nan"
+ * or "nan(chars)" (any case), or decimal digits with an optional '.' and
+ * an optional exponent (e/E, sign, digits). Returns the double nearest the
+ * exact decimal value (ties to even; correctly rounded however many digits
+ * are given), +-HUGE_VAL when it overflows, 0 or a subnormal when it
+ * underflows. *end (when end is not NULL) points after the last character
+ * used, or at s when no number was found (the result is then 0).
+ * Not accepted: hexadecimal ("0x1p3" reads as 0 and stops at 'x'), locale
+ * radix characters. errno is not set.
+ * Cost: O(length of s) plus, for inputs that are not exact in a double's
+ * first guess, a few comparisons of big numbers (about 1.2 KiB of stack).
+ * No allocation. */
+double ls_fmt_parse_double(const char *s, char **end);
+
+#endif
