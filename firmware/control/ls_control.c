@@ -1,9 +1,9 @@
 /* Control loop glue: lock-free rings, plan hand-over, seqlock snapshot. */
 #include "ls_control.h"
 
-#include <stdio.h>
 #include <string.h>
 
+#include "ls_fmt.h"
 #include "ls_kin.h"
 
 /* --- SPSC rings: the producer writes the slot then publishes head (release);
@@ -233,9 +233,9 @@ static void tool_event(ls_control_t *c, const ls_ctl_cmd_t *cmd, int status, uin
     ev.motion.kind = LS_MEV_TOOL;
     ev.motion.ref_seq = cmd->ref_seq;
     ev.motion.index = status;
-    snprintf(ev.motion.name, sizeof ev.motion.name, "%s", cmd->tool.id);
-    snprintf(ev.motion.text, sizeof ev.motion.text, "%s",
-             cmd->kind == LS_CTL_TOOL_COUPLE ? (cmd->tool.attach ? "couple" : "uncouple") : "bits");
+    ls_fmt_print(ev.motion.name, sizeof ev.motion.name, "%s", cmd->tool.id);
+    ls_fmt_print(ev.motion.text, sizeof ev.motion.text, "%s",
+                 cmd->kind == LS_CTL_TOOL_COUPLE ? (cmd->tool.attach ? "couple" : "uncouple") : "bits");
     memcpy(ev.motion.q_rad, c->q, sizeof ev.motion.q_rad);
     ev.dio.on = bits;
     ev_push(c, &ev);
@@ -332,7 +332,7 @@ static void jog_ready(ls_control_t *c, uint32_t ref_seq)
     mev.ev[0].kind = LS_MEV_JOG;
     mev.ev[0].ref_seq = ref_seq;
     mev.ev[0].index = 0;
-    snprintf(mev.ev[0].text, sizeof mev.ev[0].text, "ready");
+    ls_fmt_print(mev.ev[0].text, sizeof mev.ev[0].text, "ready");
     memcpy(mev.ev[0].q_rad, c->q_cmd, sizeof mev.ev[0].q_rad);
     motion_events(c, &mev);
 }
@@ -495,7 +495,7 @@ static void read_dio(ls_control_t *c)
             ls_ctl_event_t ev;
             memset(&ev, 0, sizeof ev);
             ev.kind = LS_CEV_FAULT;
-            snprintf(ev.text, sizeof ev.text, "e-stop input active");
+            ls_fmt_print(ev.text, sizeof ev.text, "e-stop input active");
             ev_push(c, &ev);
         }
     }

@@ -4,13 +4,13 @@
  * wait for inputs, an event, an RSVP. The path waits at the point until the
  * command is done; a failed one ends the path there. Comms thread only. */
 #include <math.h>
-#include <stdio.h>
 #include <string.h>
 #include <stdlib.h>
 
 #include "cmd_motion.h"
 #include "ls_core_events.h"
 #include "ls_control.h"
+#include "ls_fmt.h"
 #include "ls_kin.h"
 #include "ls_units.h"
 
@@ -34,7 +34,7 @@ static bool parse_timeout(const char *tok, double *out)
         return false;
     }
     char *end = NULL;
-    double v = strtod(tok, &end);
+    double v = ls_fmt_parse_double(tok, &end);
     if (*end != '\0' || !isfinite(v) || v <= 0.0 || v > 3600.0) {
         return false;
     }
@@ -50,7 +50,7 @@ static bool parse_timeout(const char *tok, double *out)
 int ls_aux_parse(const char *text, ls_aux_t *a, char *why, size_t whylen)
 {
     char buf[LS_MOTION_AUX_LEN];
-    snprintf(buf, sizeof buf, "%s", text);
+    ls_fmt_print(buf, sizeof buf, "%s", text);
     char *tok[5] = { 0 };
     int n = 0;
     for (char *c = buf; *c != '\0';) {
@@ -78,7 +78,7 @@ int ls_aux_parse(const char *text, ls_aux_t *a, char *why, size_t whylen)
             a->unit = (uint16_t)unit;
             return 0;
         }
-        snprintf(why, whylen, "expected 'dio UNIT ON OFF' with UNIT 0..%d and hex masks", LS_CTL_MAX_DIO_UNITS - 1);
+        ls_fmt_print(why, whylen, "expected 'dio UNIT ON OFF' with UNIT 0..%d and hex masks", LS_CTL_MAX_DIO_UNITS - 1);
         return -1;
     }
     if (n == 4 && strcmp(tok[0], "wait") == 0) {
@@ -88,24 +88,24 @@ int ls_aux_parse(const char *text, ls_aux_t *a, char *why, size_t whylen)
             a->unit = (uint16_t)unit;
             return 0;
         }
-        snprintf(why, whylen, "expected 'wait UNIT MASK TIMEOUT_S', MASK hex != 0, TIMEOUT_S in (0, 3600]");
+        ls_fmt_print(why, whylen, "expected 'wait UNIT MASK TIMEOUT_S', MASK hex != 0, TIMEOUT_S in (0, 3600]");
         return -1;
     }
     if (n == 2 && strcmp(tok[0], "event") == 0) {
         a->kind = LS_AUX_EVENT;
-        snprintf(a->name, sizeof a->name, "%s", tok[1]);
+        ls_fmt_print(a->name, sizeof a->name, "%s", tok[1]);
         return 0;
     }
     if (n == 3 && strcmp(tok[0], "rsvp") == 0) {
         a->kind = LS_AUX_RSVP;
-        snprintf(a->name, sizeof a->name, "%s", tok[1]);
+        ls_fmt_print(a->name, sizeof a->name, "%s", tok[1]);
         if (parse_timeout(tok[2], &a->timeout_s)) {
             return 0;
         }
-        snprintf(why, whylen, "expected 'rsvp NAME TIMEOUT_S', TIMEOUT_S in (0, 3600]");
+        ls_fmt_print(why, whylen, "expected 'rsvp NAME TIMEOUT_S', TIMEOUT_S in (0, 3600]");
         return -1;
     }
-    snprintf(why, whylen, "unknown auxiliary command: use dio, wait, event or rsvp");
+    ls_fmt_print(why, whylen, "unknown auxiliary command: use dio, wait, event or rsvp");
     return -1;
 }
 
@@ -118,10 +118,10 @@ int ls_aux_check_io(const ls_core_t *core, const ls_aux_t *a, char *why, size_t 
     }
     if (a->unit >= core->dio_units) {
         if (core->dio_units == 0) {
-            snprintf(why, whylen, "this controller has no DIO units (start landscaped with a DIO backend)");
+            ls_fmt_print(why, whylen, "this controller has no DIO units (start landscaped with a DIO backend)");
         } else {
-            snprintf(why, whylen, "DIO unit %u does not exist: units 0..%u", (unsigned)a->unit,
-                     (unsigned)core->dio_units - 1u);
+            ls_fmt_print(why, whylen, "DIO unit %u does not exist: units 0..%u", (unsigned)a->unit,
+                         (unsigned)core->dio_units - 1u);
         }
         return -1;
     }
@@ -129,20 +129,20 @@ int ls_aux_check_io(const ls_core_t *core, const ls_aux_t *a, char *why, size_t 
     if (a->kind == LS_AUX_DIO) {
         const uint32_t bad = (a->on | a->off) & ~u->output_mask;
         if (bad != 0u) {
-            snprintf(why, whylen, "bits 0x%X of unit %u are not outputs (outputs: 0x%X)", (unsigned)bad,
-                     (unsigned)a->unit, (unsigned)u->output_mask);
+            ls_fmt_print(why, whylen, "bits 0x%X of unit %u are not outputs (outputs: 0x%X)", (unsigned)bad,
+                         (unsigned)a->unit, (unsigned)u->output_mask);
             return -1;
         }
         if ((a->on & a->off) != 0u) {
-            snprintf(why, whylen, "bits 0x%X are both set and cleared", (unsigned)(a->on & a->off));
+            ls_fmt_print(why, whylen, "bits 0x%X are both set and cleared", (unsigned)(a->on & a->off));
             return -1;
         }
         return 0;
     }
     const uint32_t bad = a->on & ~u->input_mask;
     if (bad != 0u) {
-        snprintf(why, whylen, "bits 0x%X of unit %u are not inputs (inputs: 0x%X)", (unsigned)bad, (unsigned)a->unit,
-                 (unsigned)u->input_mask);
+        ls_fmt_print(why, whylen, "bits 0x%X of unit %u are not inputs (inputs: 0x%X)", (unsigned)bad,
+                     (unsigned)a->unit, (unsigned)u->input_mask);
         return -1;
     }
     return 0;
@@ -166,12 +166,12 @@ static void aux_failed(ls_core_t *core, int point, const char *text)
     }
     (void)ls_mcmd_post(core, LS_CTL_ABORT, core->run.ref_seq);
     char d1[24], d2[72];
-    snprintf(d1, sizeof d1, "at_point=%d", point);
-    snprintf(d2, sizeof d2, "fault=%.*s", (int)sizeof d2 - 7, text); /* cut: the notice holds 64 */
+    ls_fmt_print(d1, sizeof d1, "at_point=%d", point);
+    ls_fmt_print(d2, sizeof d2, "fault=%.*s", (int)sizeof d2 - 7, text); /* cut: the notice holds 64 */
     const char *extra[] = { d1, d2 };
     if (core->state == ls_State_MOVING || core->state == ls_State_PAUSED) {
         core->state = ls_State_RESTING;
-        snprintf(core->motion_state, sizeof core->motion_state, "robot_stopped_on_error");
+        ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_stopped_on_error");
     }
     ls_run_finish(core, LS_RUN_END_AUX_FAILED, extra, 2);
 }
@@ -193,11 +193,11 @@ static const char *rsvp_done(struct ls_core *core, void *ctx, int32_t ret_code, 
          * the arm is at rest at the point. */
         (void)ls_mcmd_post(core, LS_CTL_ABORT, core->run.ref_seq);
         char d1[32];
-        snprintf(d1, sizeof d1, "answer=%d", (int)ret_code);
+        ls_fmt_print(d1, sizeof d1, "answer=%d", (int)ret_code);
         const char *extra[] = { d1 };
         if (core->state == ls_State_MOVING || core->state == ls_State_PAUSED) {
             core->state = ls_State_RESTING;
-            snprintf(core->motion_state, sizeof core->motion_state, "robot_stopped_on_command");
+            ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_stopped_on_command");
         }
         ls_run_finish(core, LS_RUN_END_RSVP_DECLINED, extra, 1);
         return LS_PATH_RSVP_DECLINE;
@@ -213,13 +213,13 @@ void ls_aux_run(ls_core_t *core, const ls_motion_event_t *ev)
     if (ls_aux_parse(ev->text, &a, why, sizeof why) != 0) {
         /* pathLoad checked it: only a corrupted program gets here. */
         char t[96];
-        snprintf(t, sizeof t, "bad auxiliary command '%.40s'", ev->text);
+        ls_fmt_print(t, sizeof t, "bad auxiliary command '%.40s'", ev->text);
         aux_failed(core, (int)ev->index, t);
         return;
     }
     char d1[8 + LS_MOTION_NAME_LEN], d2[24];
-    snprintf(d1, sizeof d1, "path=%s", core->run.point);
-    snprintf(d2, sizeof d2, "point=%d", (int)ev->index);
+    ls_fmt_print(d1, sizeof d1, "path=%s", core->run.point);
+    ls_fmt_print(d2, sizeof d2, "point=%d", (int)ev->index);
     const char *data[] = { d1, d2 };
     switch (a.kind) {
     case LS_AUX_DIO: {
@@ -248,8 +248,8 @@ void ls_aux_run(ls_core_t *core, const ls_motion_event_t *ev)
         core->run.wait_mask = a.on;
         core->run.wait_deadline_us = core->motion.now_us + (uint64_t)(a.timeout_s * 1e6);
         core->run.wait_point = (int)ev->index;
-        snprintf(core->run.wait_text, sizeof core->run.wait_text, "%.*s", (int)sizeof core->run.wait_text - 1,
-                 ev->text);
+        ls_fmt_print(core->run.wait_text, sizeof core->run.wait_text, "%.*s", (int)sizeof core->run.wait_text - 1,
+                     ev->text);
         ls_core_motion_tick(core, core->motion.now_us);
         return;
     case LS_AUX_EVENT:
@@ -296,8 +296,8 @@ void ls_core_motion_tick(ls_core_t *core, uint64_t now_us)
     } else if (now_us >= core->run.wait_deadline_us) {
         core->run.wait_active = false;
         char t[64];
-        snprintf(t, sizeof t, "wait: inputs 0x%X of unit %u not all set in time", (unsigned)core->run.wait_mask,
-                 (unsigned)core->run.wait_unit);
+        ls_fmt_print(t, sizeof t, "wait: inputs 0x%X of unit %u not all set in time", (unsigned)core->run.wait_mask,
+                     (unsigned)core->run.wait_unit);
         aux_failed(core, core->run.wait_point, t);
     }
 }
@@ -318,11 +318,11 @@ void ls_core_motion_failed(ls_core_t *core, uint32_t ref_seq, const char *text)
     /* The loop could not start it (drives off, manual control, a motion
      * still held): nothing moved. */
     char d[80];
-    snprintf(d, sizeof d, "fault=%s", text);
+    ls_fmt_print(d, sizeof d, "fault=%s", text);
     const char *extra[] = { d };
     if (core->state == ls_State_MOVING || core->state == ls_State_PAUSED) {
         core->state = ls_State_RESTING;
-        snprintf(core->motion_state, sizeof core->motion_state, "robot_stopped_on_error");
+        ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_stopped_on_error");
     }
     ls_run_finish(core, LS_RUN_END_FAULT, extra, 1);
 }

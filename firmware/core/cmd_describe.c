@@ -5,11 +5,11 @@
  * table sizes from the core's headers, the DIO map, sensors and tool rack
  * from the composed HAL, joint and Cartesian limits from the robot model.
  * Everything is SI, whatever setUnits chose. */
-#include <stdio.h>
 #include <string.h>
 
 #include "cmd_sensor.h"
 #include "ls_core.h"
+#include "ls_fmt.h"
 
 _Static_assert(LS_FIELD_LIMIT_COUNT <= pb_arraysize(ls_DescribeRes, field_limits),
                "landscape.options: raise ls.DescribeRes.field_limits max_count to hold every bounded uplink field");
@@ -53,7 +53,7 @@ static bool describe_devices(const ls_core_t *core, ls_DescribeRes *r)
             break;
         }
         ls_SensorInfo *o = &r->sensors[r->sensors_count++];
-        snprintf(o->name, sizeof o->name, "%s", s->name);
+        ls_fmt_print(o->name, sizeof o->name, "%s", s->name);
         const char *unit = "";
         const char *comp;
         for (size_t k = 0; (comp = ls_core_sensor_component(s, k, &unit)) != NULL; k++) {
@@ -62,8 +62,8 @@ static bool describe_devices(const ls_core_t *core, ls_DescribeRes *r)
                 break;
             }
             ls_SensorComponent *c = &o->components[o->components_count++];
-            snprintf(c->name, sizeof c->name, "%s", comp);
-            snprintf(c->unit, sizeof c->unit, "%s", unit);
+            ls_fmt_print(c->name, sizeof c->name, "%s", comp);
+            ls_fmt_print(c->unit, sizeof c->unit, "%s", unit);
         }
     }
     if (core->tool != NULL && core->tool->ops != NULL && core->tool->ops->name != NULL) {
@@ -73,7 +73,7 @@ static bool describe_devices(const ls_core_t *core, ls_DescribeRes *r)
                 whole = false;
                 break;
             }
-            snprintf(r->tools[r->tools_count++], sizeof r->tools[0], "%s", name);
+            ls_fmt_print(r->tools[r->tools_count++], sizeof r->tools[0], "%s", name);
         }
     }
     return whole;
@@ -81,7 +81,7 @@ static bool describe_devices(const ls_core_t *core, ls_DescribeRes *r)
 
 static void describe_model(const ls_robot_model_t *m, ls_DescribeRes *r)
 {
-    snprintf(r->robot_model, sizeof r->robot_model, "%s", m->name != NULL ? m->name : "");
+    ls_fmt_print(r->robot_model, sizeof r->robot_model, "%s", m->name != NULL ? m->name : "");
     for (int j = 0; j < LS_N_JOINTS; j++) {
         ls_JointLimit *l = &r->joints[r->joints_count++];
         l->min_rad = m->q_min_rad[j];

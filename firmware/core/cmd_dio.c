@@ -15,12 +15,12 @@
  * (it fires again once the bits have been not all set and are all set
  * again), decline cancels it, no answer within LS_DIO_RSVP_TIMEOUT_MS takes
  * the default, cancel. Comms thread only. */
-#include <stdio.h>
 #include <string.h>
 
 #include "ls_control.h"
 #include "ls_core.h"
 #include "ls_core_events.h"
+#include "ls_fmt.h"
 
 _Static_assert(LS_CORE_MAX_DIO_UNITS == LS_CTL_MAX_DIO_UNITS, "the core and the loop must agree on DIO units");
 
@@ -217,10 +217,10 @@ typedef struct {
 
 static void watch_data(watch_data_t *d, const ls_dio_watch_t *w, uint32_t levels)
 {
-    snprintf(d->unit, sizeof d->unit, "unit=%u", (unsigned)w->unit);
-    snprintf(d->bits, sizeof d->bits, "bits=0x%X", (unsigned)w->bits);
-    snprintf(d->levels, sizeof d->levels, "levels=0x%X", (unsigned)levels);
-    snprintf(d->watch, sizeof d->watch, "watch=%u", (unsigned)w->id);
+    ls_fmt_print(d->unit, sizeof d->unit, "unit=%u", (unsigned)w->unit);
+    ls_fmt_print(d->bits, sizeof d->bits, "bits=0x%X", (unsigned)w->bits);
+    ls_fmt_print(d->levels, sizeof d->levels, "levels=0x%X", (unsigned)levels);
+    ls_fmt_print(d->watch, sizeof d->watch, "watch=%u", (unsigned)w->id);
     d->v[0] = d->unit;
     d->v[1] = d->bits;
     d->v[2] = d->levels;
@@ -246,7 +246,7 @@ static const char *rsvp_done(ls_core_t *core, void *ctx, int32_t ret_code, bool 
         core->dio.rsvp_timed_out++;
         if (session_alive(core, w)) {
             char watch[24];
-            snprintf(watch, sizeof watch, "watch=%u", (unsigned)w->id);
+            ls_fmt_print(watch, sizeof watch, "watch=%u", (unsigned)w->id);
             const char *data[] = { watch, "action=" LS_DIO_RSVP_DEFAULT };
             ls_core_notify(core, w->sup, cb_is_alarm(w->cb) ? ls_NoticeKind_ALARM : ls_NoticeKind_EVENT,
                            "dioSignalRsvpTimeout", w->ref_seq, false, data, 2);
@@ -345,19 +345,20 @@ static void finish_writes(ls_core_t *core, lazy_snap_t *ls, uint64_t now_us)
             uint32_t lv = s->dio[ww->unit];
             ww->pending = false;
             if ((lv & ww->on) == ww->on && (lv & ww->off) == 0u) {
-                snprintf(msg, sizeof msg, "unit %u: levels now 0x%08X", (unsigned)ww->unit, (unsigned)lv);
+                ls_fmt_print(msg, sizeof msg, "unit %u: levels now 0x%08X", (unsigned)ww->unit, (unsigned)lv);
                 ls_core_finish_deferred(core, i, ls_RetCode_CMD_EXEC_OK, msg);
             } else {
-                snprintf(msg, sizeof msg,
-                         "unit %u: after switching on 0x%X, off 0x%X the levels read 0x%08X: the DIO "
-                         "backend refused the write (see the log)",
-                         (unsigned)ww->unit, (unsigned)ww->on, (unsigned)ww->off, (unsigned)lv);
+                ls_fmt_print(msg, sizeof msg,
+                             "unit %u: after switching on 0x%X, off 0x%X the levels read 0x%08X: the DIO "
+                             "backend refused the write (see the log)",
+                             (unsigned)ww->unit, (unsigned)ww->on, (unsigned)ww->off, (unsigned)lv);
                 ls_core_finish_deferred(core, i, ls_RetCode_CMD_ERR, msg);
             }
         } else if (now_us >= ww->deadline_us) {
             ww->pending = false;
-            snprintf(msg, sizeof msg, "unit %u: the control loop did not apply the write within %u ms: is it running?",
-                     (unsigned)ww->unit, (unsigned)(LS_DIO_WRITE_TIMEOUT_US / 1000u));
+            ls_fmt_print(msg, sizeof msg,
+                         "unit %u: the control loop did not apply the write within %u ms: is it running?",
+                         (unsigned)ww->unit, (unsigned)(LS_DIO_WRITE_TIMEOUT_US / 1000u));
             ls_core_finish_deferred(core, i, ls_RetCode_CMD_TIMEOUT_ERR, msg);
         }
     }

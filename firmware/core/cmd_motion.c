@@ -4,11 +4,11 @@
  * Cartesian limits of the settings, parameter checks, and handing a plan to
  * the control loop. Comms thread only. */
 #include <math.h>
-#include <stdio.h>
 #include <string.h>
 
 #include "cmd_motion.h"
 #include "ls_control.h"
+#include "ls_fmt.h"
 #include "ls_kin.h"
 #include "ls_units.h"
 
@@ -153,7 +153,7 @@ int32_t ls_mcmd_start_plan(ls_core_t *core, ls_call_t *call, ls_motion_plan_t *s
                            const char *point, int path)
 {
     slot->ref_seq = call->req->seq;
-    snprintf(slot->name, sizeof slot->name, "%s", point);
+    ls_fmt_print(slot->name, sizeof slot->name, "%s", point);
     if (!ls_control_start_plan(core->ctl, call->req->seq)) {
         return ls_reply(call, ls_RetCode_CMD_BUSY_ERR, "%s: the control loop's command queue is full; try again",
                         seed_name);

@@ -3,12 +3,12 @@
  * state change and the notice of docs/state-machine.md, to the session that
  * started the motion. */
 #include <math.h>
-#include <stdio.h>
 #include <string.h>
 
 #include "cmd_motion.h"
 #include "ls_core_events.h"
 #include "ls_control.h"
+#include "ls_fmt.h"
 #include "ls_kin.h"
 #include "ls_units.h"
 
@@ -16,10 +16,10 @@ static void joints_text(const ls_core_t *core, const double q[LS_N_JOINTS], char
 {
     /* Fit the notice's 64 characters: fewer digits when needed. */
     for (int prec = 6; prec >= 3; prec--) {
-        size_t len = (size_t)snprintf(out, cap, "joints=");
+        size_t len = (size_t)ls_fmt_print(out, cap, "joints=");
         for (int j = 0; j < LS_N_JOINTS && len < cap; j++) {
-            len += (size_t)snprintf(out + len, cap - len, "%s%.*g", j ? "," : "", prec,
-                                    q[j] / ls_units_to_si_angular(ls_core_run_units(core).angular, 1.0));
+            len += (size_t)ls_fmt_print(out + len, cap - len, "%s%.*g", j ? "," : "", prec,
+                                        q[j] / ls_units_to_si_angular(ls_core_run_units(core).angular, 1.0));
         }
         if (len < cap) {
             return;
@@ -42,7 +42,7 @@ void ls_core_on_motion_event(ls_core_t *core, const ls_motion_event_t *ev)
         const char *extra[] = { d2 };
         if (!core->halt.active && (core->state == ls_State_MOVING || core->state == ls_State_PAUSED)) {
             core->state = ls_State_RESTING;
-            snprintf(core->motion_state, sizeof core->motion_state, "robot_at_rest");
+            ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_at_rest");
         }
         /* It completed, even when a halt was already stopping it. */
         ls_run_finish(core, LS_RUN_END_COMPLETE, extra, 1);
@@ -54,7 +54,7 @@ void ls_core_on_motion_event(ls_core_t *core, const ls_motion_event_t *ev)
         }
         if (core->state == ls_State_MOVING) {
             core->state = ls_State_PAUSED;
-            snprintf(core->motion_state, sizeof core->motion_state, "robot_paused");
+            ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_paused");
         }
         if (core->run.stop_pending) {
             core->run.stop_pending = false;
@@ -64,7 +64,7 @@ void ls_core_on_motion_event(ls_core_t *core, const ls_motion_event_t *ev)
         return;
     case LS_MEV_FAULT: {
         char t[80];
-        snprintf(t, sizeof t, "%s", ev->text);
+        ls_fmt_print(t, sizeof t, "%s", ev->text);
         if (core->ctl != NULL) {
             ls_ctl_snapshot_t snap;
             ls_control_snapshot(core->ctl, &snap);
@@ -76,17 +76,17 @@ void ls_core_on_motion_event(ls_core_t *core, const ls_motion_event_t *ev)
         return;
     }
     case LS_MEV_TAG: {
-        snprintf(core->motion.tag_path, sizeof core->motion.tag_path, "%.*s", (int)sizeof core->motion.tag_path - 1,
-                 ev->text);
-        snprintf(core->motion.tag_last, sizeof core->motion.tag_last, "%s", ev->name);
+        ls_fmt_print(core->motion.tag_path, sizeof core->motion.tag_path, "%.*s", (int)sizeof core->motion.tag_path - 1,
+                     ev->text);
+        ls_fmt_print(core->motion.tag_last, sizeof core->motion.tag_last, "%s", ev->name);
         if (!core->run.active || core->run.react) {
             return;
         }
         char d1[8 + LS_MOTION_NAME_LEN], d2[24], d3[24], d4[8 + sizeof ev->text];
-        snprintf(d1, sizeof d1, "tag=%s", ev->name);
-        snprintf(d2, sizeof d2, "index=%d", (int)ev->index);
-        snprintf(d3, sizeof d3, "cycle=%d", (int)ev->cycle);
-        snprintf(d4, sizeof d4, "path=%s", ev->text);
+        ls_fmt_print(d1, sizeof d1, "tag=%s", ev->name);
+        ls_fmt_print(d2, sizeof d2, "index=%d", (int)ev->index);
+        ls_fmt_print(d3, sizeof d3, "cycle=%d", (int)ev->cycle);
+        ls_fmt_print(d4, sizeof d4, "path=%s", ev->text);
         const char *data[] = { d1, d2, d3, d4, "dry_run=true" };
         ls_core_notify_to(core, core->run.addr, core->run.epoch, ls_NoticeKind_EVENT, "tag", core->run.ref_seq, false,
                           data, core->run.dry_run ? 5u : 4u);

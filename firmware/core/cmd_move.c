@@ -8,11 +8,11 @@
  * motion being run is core->run (ls_run.h), shared with moveReact and
  * comply: its one final notice goes through ls_run_finish. */
 #include <math.h>
-#include <stdio.h>
 #include <string.h>
 
 #include "cmd_motion.h"
 #include "ls_control.h"
+#include "ls_fmt.h"
 #include "ls_kin.h"
 #include "ls_units.h"
 
@@ -213,7 +213,7 @@ int32_t ls_h_resume_motion(struct ls_core *core, struct ls_call *call)
                         "resumeMotion: the control loop's command queue is full; try again");
     }
     core->state = ls_State_MOVING;
-    snprintf(core->motion_state, sizeof core->motion_state, "running_trajectory");
+    ls_fmt_print(core->motion_state, sizeof core->motion_state, "running_trajectory");
     return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "resumed along the planned path");
 }
 
@@ -231,7 +231,7 @@ int32_t ls_h_abort_motion(struct ls_core *core, struct ls_call *call)
     }
     if (core->state == ls_State_PAUSED) {
         core->state = ls_State_RESTING;
-        snprintf(core->motion_state, sizeof core->motion_state, "robot_stopped_on_command");
+        ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_stopped_on_command");
     }
     return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "%s",
                     had ? "motion dropped and its path queue cleared" : "nothing to abort: no motion was held");
@@ -240,8 +240,8 @@ int32_t ls_h_abort_motion(struct ls_core *core, struct ls_call *call)
 int32_t ls_h_get_tag_id(struct ls_core *core, struct ls_call *call)
 {
     ls_GetTagIdRes *r = &call->res->result.get_tag_id;
-    snprintf(r->path_name, sizeof r->path_name, "%s", core->motion.tag_path);
-    snprintf(r->tag_id, sizeof r->tag_id, "%s", core->motion.tag_last);
+    ls_fmt_print(r->path_name, sizeof r->path_name, "%s", core->motion.tag_path);
+    ls_fmt_print(r->tag_id, sizeof r->tag_id, "%s", core->motion.tag_last);
     return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "%s",
                     core->motion.tag_last[0] != '\0' ? "last tag reached" : "no tag reached yet");
 }

@@ -3,11 +3,11 @@
  * auxiliary commands) before it changes: a refused pathLoad leaves the path
  * as it was. The queues are core->motion.paths (ls_core_state.h). */
 #include <math.h>
-#include <stdio.h>
 #include <string.h>
 
 #include "cmd_motion.h"
 #include "ls_control.h"
+#include "ls_fmt.h"
 #include "ls_kin.h"
 #include "ls_units.h"
 
@@ -49,7 +49,7 @@ static int32_t check_pct(ls_call_t *call, int k, const char *field, double v)
 /* x as a path point stores it (ls_path_real_t), kept within [lo, hi] when
  * x is: rounding to float (the mcu profile) may cross a joint limit by one
  * unit in the last place, and the planner would then refuse the point. */
-#define LS_PATH_REAL_TOWARD(s, t) _Generic((s), float: nextafterf, default: nextafter)((s), (t))
+#define LS_PATH_REAL_TOWARD(s, t) _Generic((s), float : nextafterf, default : nextafter)((s), (t))
 static ls_path_real_t store_within(double x, double lo, double hi)
 {
     ls_path_real_t s = (ls_path_real_t)x;
@@ -144,7 +144,7 @@ static int32_t load_point(ls_core_t *core, ls_call_t *call, const ls_PathLoadReq
         return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR,
                         "pathLoad point %d: time_delay_s %.4g is out of range [0, 3600] s", k, tp->time_delay_s);
     }
-    snprintf(pt->tag, sizeof pt->tag, "%s", tp->tag_name);
+    ls_fmt_print(pt->tag, sizeof pt->tag, "%s", tp->tag_name);
     pt->tag_index = tp->tag_index;
     pt->delay_s = (ls_path_real_t)tp->time_delay_s;
     pt->blend_pct = (ls_path_real_t)tp->transition_speed_pct;
@@ -159,7 +159,7 @@ static int32_t load_point(ls_core_t *core, ls_call_t *call, const ls_PathLoadReq
             return ls_reply(call, ls_RetCode_CMD_PARAM_ERR, "pathLoad point %d: aux command '%s': %s", k,
                             tp->aux_commands[a], why);
         }
-        snprintf(pt->aux[a], sizeof pt->aux[a], "%s", tp->aux_commands[a]);
+        ls_fmt_print(pt->aux[a], sizeof pt->aux[a], "%s", tp->aux_commands[a]);
     }
     return 0;
 }
@@ -231,7 +231,7 @@ int32_t ls_h_path_load(struct ls_core *core, struct ls_call *call)
     }
     if (!p->used) {
         p->used = true;
-        snprintf(p->name, sizeof p->name, "%s", r->path_name);
+        ls_fmt_print(p->name, sizeof p->name, "%s", r->path_name);
     }
     p->n = (uint16_t)(have + r->tags_count);
     call->res->result.path_load.points_in_path = p->n;

@@ -5,11 +5,11 @@
  * between segments, into core->motion.prog; the whole program is planned
  * and checked before anything moves. */
 #include <math.h>
-#include <stdio.h>
 #include <string.h>
 
 #include "cmd_motion.h"
 #include "ls_control.h"
+#include "ls_fmt.h"
 #include "ls_kin.h"
 #include "ls_units.h"
 
@@ -80,10 +80,10 @@ static int plan_point(ls_core_t *core, const ls_path_point_t *pt, const double q
     ls_pose_mul(P_target, tinv, Fl);
     int ks = ls_kin_ik_nearest(core->model, Fl, q_prev, q_target);
     if (ks != LS_KIN_OK) {
-        snprintf(why, whylen, "no joint solution for tip (%.4g, %.4g, %.4g) m (%s)", P_target[12], P_target[13],
-                 P_target[14],
-                 ks == LS_KIN_ELIMITS ? "beyond the joint limits"
-                                      : (ks == LS_KIN_ESINGULAR ? "shoulder singularity" : "out of reach"));
+        ls_fmt_print(why, whylen, "no joint solution for tip (%.4g, %.4g, %.4g) m (%s)", P_target[12], P_target[13],
+                     P_target[14],
+                     ks == LS_KIN_ELIMITS ? "beyond the joint limits"
+                                          : (ks == LS_KIN_ESINGULAR ? "shoulder singularity" : "out of reach"));
         return LS_MOTION_ERANGE;
     }
     return seg_joint_kind(s, core, pt, q_prev, q_target, why, whylen);
@@ -107,7 +107,7 @@ static int plan_arc_pair(ls_core_t *core, const ls_path_point_t *via, const ls_p
     *bad_point = 0;
     int st = ls_motion_arc_split(&P_prev[12], &P_via[12], &P_goal[12], ma, mb);
     if (st < 0) {
-        snprintf(why, whylen, "no circle: the previous point, this via and its goal are collinear or coincide");
+        ls_fmt_print(why, whylen, "no circle: the previous point, this via and its goal are collinear or coincide");
         return st;
     }
     ls_pose_from_xyzrpy(zero, Ma);
@@ -177,7 +177,7 @@ static int build_program(ls_core_t *core, const ls_path_t *p, const double q_sta
             int bad = 0;
             st = plan_arc_pair(core, &p->pt[k], &p->pt[k + 1], q_prev, P_prev, s, s2, P_via, P_t, w, sizeof w, &bad);
             if (st < 0) {
-                snprintf(why, whylen, "point %d (CIRCULAR_MOTION %s): %s", k + bad, bad ? "goal" : "via", w);
+                ls_fmt_print(why, whylen, "point %d (CIRCULAR_MOTION %s): %s", k + bad, bad ? "goal" : "via", w);
                 return st;
             }
             if (k == 0) {
@@ -191,7 +191,7 @@ static int build_program(ls_core_t *core, const ls_path_t *p, const double q_sta
         }
         st = plan_point(core, &p->pt[k], q_prev, P_prev, s, q_t, P_t, w, sizeof w);
         if (st < 0) {
-            snprintf(why, whylen, "point %d: %s", k, w);
+            ls_fmt_print(why, whylen, "point %d: %s", k, w);
             return st;
         }
         if (k == 0) {
@@ -221,8 +221,8 @@ static int build_program(ls_core_t *core, const ls_path_t *p, const double q_sta
             if (st == 0) {
                 for (int j = 0; j < LS_N_JOINTS; j++) {
                     if (fabs(s->q1[j] - q_first[j]) > 1e-6) {
-                        snprintf(w, sizeof w, "the line back to it ends in another arm configuration (joint %d)",
-                                 j + 1);
+                        ls_fmt_print(w, sizeof w, "the line back to it ends in another arm configuration (joint %d)",
+                                     j + 1);
                         st = LS_MOTION_ERANGE;
                         break;
                     }
@@ -232,7 +232,7 @@ static int build_program(ls_core_t *core, const ls_path_t *p, const double q_sta
             st = seg_joint_kind(s, core, pt0, q_prev, q_first, w, sizeof w);
         }
         if (st < 0) {
-            snprintf(why, whylen, "point 0 (start of cycle 2): %s", w);
+            ls_fmt_print(why, whylen, "point 0 (start of cycle 2): %s", w);
             return st;
         }
     }
@@ -286,7 +286,7 @@ int32_t ls_h_path_move(struct ls_core *core, struct ls_call *call)
         return ls_mcmd_refused(call, st, "pathMove", why);
     }
     (void)ls_motion_plan_path(slot, &core->motion.prog, cycles, dry, r->path_name);
-    snprintf(core->motion.tag_path, sizeof core->motion.tag_path, "%s", r->path_name);
+    ls_fmt_print(core->motion.tag_path, sizeof core->motion.tag_path, "%s", r->path_name);
     core->motion.tag_last[0] = '\0';
     int32_t started = ls_mcmd_start_plan(core, call, slot, "pathMove", r->path_name, i);
     if (started == ls_RetCode_CMD_STARTED_OK && dry) {

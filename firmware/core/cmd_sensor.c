@@ -10,13 +10,13 @@
  * The guarded/compliant move in progress is core->run (ls_run.h, shared with
  * the planned motions); the manual mode is static here. */
 #include <math.h>
-#include <stdio.h>
 #include <string.h>
 
 #include "cmd_motion.h"
 #include "cmd_sensor.h"
 #include "ls_control.h"
 #include "ls_core.h"
+#include "ls_fmt.h"
 #include "ls_kin.h"
 #include "ls_motion.h"
 #include "ls_react.h"
@@ -93,8 +93,8 @@ static int32_t find_sensor(ls_core_t *core, ls_call_t *call, const char *what, c
     char list[96] = "";
     size_t n = 0;
     for (size_t i = 0; i < core->n_sensors && n < sizeof list; i++) {
-        n += (size_t)snprintf(list + n, sizeof list - n, "%s%s", i ? ", " : "",
-                              core->sensors[i].name != NULL ? core->sensors[i].name : "?");
+        n += (size_t)ls_fmt_print(list + n, sizeof list - n, "%s%s", i ? ", " : "",
+                                  core->sensors[i].name != NULL ? core->sensors[i].name : "?");
     }
     return ls_reply(call, ls_RetCode_CMD_UNSUPPORTED_ERR, "%s: no sensor '%s': this controller has %s", what, name,
                     core->n_sensors > 0 ? list : "no sensors");
@@ -153,9 +153,9 @@ static int32_t move_speed(ls_core_t *core, ls_call_t *call, const char *what, co
 static void values_text(const char *key, const double *v, size_t n, char *out, size_t cap)
 {
     for (int prec = 6; prec >= 2; prec--) {
-        size_t len = (size_t)snprintf(out, cap, "%s=", key);
+        size_t len = (size_t)ls_fmt_print(out, cap, "%s=", key);
         for (size_t k = 0; k < n && len < cap; k++) {
-            len += (size_t)snprintf(out + len, cap - len, "%s%.*g", k ? "," : "", prec, v[k]);
+            len += (size_t)ls_fmt_print(out + len, cap - len, "%s%.*g", k ? "," : "", prec, v[k]);
         }
         if (len < cap) {
             return;
@@ -202,7 +202,7 @@ static int32_t plan_and_start(ls_core_t *core, ls_call_t *call, const char *what
     int32_t code;
     plan->a_m_s2 = fmin(set->linear_accel_m_s2, core->model->max_linear_accel_m_s2);
     plan->a_stop_m_s2 = core->model->max_linear_accel_m_s2;
-    snprintf(plan->sensor, sizeof plan->sensor, "%s", sensor->name);
+    ls_fmt_print(plan->sensor, sizeof plan->sensor, "%s", sensor->name);
     ls_mcmd_tool_pose(core, plan->tool);
 
     ls_ctl_snapshot_t snap;
@@ -220,7 +220,7 @@ static int32_t plan_and_start(ls_core_t *core, ls_call_t *call, const char *what
     if (slot == NULL) {
         return code;
     }
-    snprintf(run->seed_name, sizeof run->seed_name, "%s", what);
+    ls_fmt_print(run->seed_name, sizeof run->seed_name, "%s", what);
     return start_react(core, call, slot, plan, run);
 }
 
@@ -521,10 +521,10 @@ int32_t ls_h_manual_control(struct ls_core *core, struct ls_call *call)
         return ls_reply(call, ls_RetCode_CMD_BUSY_ERR,
                         "manualControl: the control loop's command queue is full; try again");
     }
-    snprintf(core->sensor.mode, sizeof core->sensor.mode, "%s", type);
+    ls_fmt_print(core->sensor.mode, sizeof core->sensor.mode, "%s", type);
     core->sensor.sup = frac > 0.0 ? call->sup : -1;
     if (frac > 0.0) {
-        snprintf(core->motion_state, sizeof core->motion_state, "manual_%s", type);
+        ls_fmt_print(core->motion_state, sizeof core->motion_state, "manual_%s", type);
         return ls_reply(call, ls_RetCode_CMD_EXEC_OK,
                         "%s jogging on: %.3g %s/s and %.3g %s/s at full deflection%s; motion commands are refused "
                         "until manualControl off",
@@ -533,7 +533,7 @@ int32_t ls_h_manual_control(struct ls_core *core, struct ls_call *call)
                         core->state == ls_State_RESTING ? "" : " (moves once activated)");
     }
     if (strncmp(core->motion_state, "manual_", 7) == 0) {
-        snprintf(core->motion_state, sizeof core->motion_state, "robot_at_rest");
+        ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_at_rest");
     }
     return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "manual control off");
 }
@@ -546,10 +546,10 @@ void ls_core_manual_off(ls_core_t *core)
     if (core->ctl != NULL) {
         (void)ls_control_set_manual(core->ctl, NULL, NULL, 0);
     }
-    snprintf(core->sensor.mode, sizeof core->sensor.mode, "off");
+    ls_fmt_print(core->sensor.mode, sizeof core->sensor.mode, "off");
     core->sensor.sup = -1;
     if (strncmp(core->motion_state, "manual_", 7) == 0) {
-        snprintf(core->motion_state, sizeof core->motion_state, "robot_at_rest");
+        ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_at_rest");
     }
 }
 
@@ -559,7 +559,7 @@ static void rest(ls_core_t *core)
 {
     if (core->state == ls_State_MOVING || core->state == ls_State_PAUSED) {
         core->state = ls_State_RESTING;
-        snprintf(core->motion_state, sizeof core->motion_state, "robot_at_rest");
+        ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_at_rest");
     }
 }
 
@@ -583,7 +583,7 @@ static void react_end(ls_core_t *core, const ls_ctl_event_t *ev)
     size_t n = 0;
     const char *reason =
         rep->end == LS_REACT_END_MAX_DISTANCE && core->run.comply ? "max_travel" : ls_react_end_name(rep->end);
-    snprintf(d_reason, sizeof d_reason, "reason=%s", reason);
+    ls_fmt_print(d_reason, sizeof d_reason, "reason=%s", reason);
     data[n++] = d_reason;
     values_text("pose", pose, 6, d_pose, sizeof d_pose);
     data[n++] = d_pose;
@@ -601,7 +601,7 @@ static void react_end(ls_core_t *core, const ls_ctl_event_t *ev)
                            : core->run.length                ? "distance"
                            : core->run.component < 6         ? k_ft[core->run.component]
                                                              : "value";
-        snprintf(d_trig, sizeof d_trig, "trigger=%s:%.6g", comp, tv);
+        ls_fmt_print(d_trig, sizeof d_trig, "trigger=%s:%.6g", comp, tv);
         data[n++] = d_trig;
     }
     double trav = ls_units_from_si_linear(un.linear, rep->travelled_m);
@@ -615,7 +615,7 @@ static void react_end(ls_core_t *core, const ls_ctl_event_t *ev)
         data[n++] = d_extra[1];
         data[n++] = d_extra[2];
         if (rep->end == LS_REACT_END_PANIC) {
-            snprintf(d_extra[3], sizeof d_extra[3], "panic_stop_code=%d", (int)core->run.panic_code);
+            ls_fmt_print(d_extra[3], sizeof d_extra[3], "panic_stop_code=%d", (int)core->run.panic_code);
             data[n++] = d_extra[3];
         }
     }
@@ -627,7 +627,7 @@ static void react_end(ls_core_t *core, const ls_ctl_event_t *ev)
                          : rep->end == LS_REACT_END_ABORTED  ? "Aborted"
                                                              : "Failed";
     char id[40];
-    snprintf(id, sizeof id, "%s%s", core->run.seed_name, suffix);
+    ls_fmt_print(id, sizeof id, "%s%s", core->run.seed_name, suffix);
     core->run.active = false;
     rest(core);
     ls_core_notify_to(core, core->run.addr, core->run.epoch, ok ? ls_NoticeKind_EVENT : ls_NoticeKind_ALARM, id,
@@ -641,17 +641,17 @@ static void jog_event(ls_core_t *core, const ls_ctl_event_t *ev)
          * switched it on may jog; a new owner gets it switched off. */
         if (core->sensor.sup < 0 || core->owner != core->sensor.sup) {
             (void)ls_control_set_manual(core->ctl, NULL, NULL, 0);
-            snprintf(core->sensor.mode, sizeof core->sensor.mode, "off");
+            ls_fmt_print(core->sensor.mode, sizeof core->sensor.mode, "off");
             core->sensor.sup = -1;
             return;
         }
         if (core->state == ls_State_RESTING) {
-            snprintf(core->motion_state, sizeof core->motion_state, "manual_%s", core->sensor.mode);
+            ls_fmt_print(core->motion_state, sizeof core->motion_state, "manual_%s", core->sensor.mode);
         }
         return;
     }
     char d1[72];
-    snprintf(d1, sizeof d1, "reason=%s", ev->motion.text);
+    ls_fmt_print(d1, sizeof d1, "reason=%s", ev->motion.text);
     const char *data[] = { d1 };
     ls_core_notify(core, core->sensor.sup, ls_NoticeKind_EVENT, "manualLimit", 0, false, data, 1);
 }
@@ -682,10 +682,10 @@ bool ls_core_sensor_on_event(ls_core_t *core, const ls_ctl_event_t *ev)
     case LS_CEV_CMD_FAILED:
         if (mine && !core->halt.active) {
             char d[80];
-            snprintf(d, sizeof d, "fault=%s", ev->text);
+            ls_fmt_print(d, sizeof d, "fault=%s", ev->text);
             const char *extra[] = { d };
             rest(core);
-            snprintf(core->motion_state, sizeof core->motion_state, "robot_stopped_on_error");
+            ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_stopped_on_error");
             ls_run_finish(core, LS_RUN_END_FAULT, extra, 1);
             return true;
         }

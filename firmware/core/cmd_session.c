@@ -2,8 +2,8 @@
  * checked the state and the owner. */
 #include "cmd_sensor.h"
 #include "ls_core.h"
+#include "ls_fmt.h"
 
-#include <stdio.h>
 
 int32_t ls_h_lock(struct ls_core *core, struct ls_call *call)
 {
@@ -36,7 +36,7 @@ int32_t ls_h_activate(struct ls_core *core, struct ls_call *call)
         }
     }
     core->state = ls_State_RESTING;
-    snprintf(core->motion_state, sizeof core->motion_state, "robot_at_rest");
+    ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_at_rest");
     return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "%s",
                     have_drives ? "active: drives enabled" : "active: no arm backend is composed, nothing can move");
 }

@@ -5,11 +5,11 @@
  * every check runs before the first store. The dispatcher has already checked
  * the state and the owner. */
 #include <math.h>
-#include <stdio.h>
 #include <string.h>
 
 #include "ls_control.h"
 #include "ls_core.h"
+#include "ls_fmt.h"
 #include "ls_kin.h"
 #include "ls_units.h"
 
@@ -56,7 +56,7 @@ int32_t ls_h_set_speed(struct ls_core *core, struct ls_call *call)
         if (core->model == NULL) {
             return no_model(call, "setSpeed LINEAR_SPEED");
         }
-        snprintf(unit, sizeof unit, "%s/s", ls_units_linear_name(un.linear));
+        ls_fmt_print(unit, sizeof unit, "%s/s", ls_units_linear_name(un.linear));
         rc = check_rate(call, "LINEAR_SPEED", v, ls_units_from_si_linear(un.linear, core->model->max_linear_speed_m_s),
                         unit);
         if (rc < 0) {
@@ -71,7 +71,7 @@ int32_t ls_h_set_speed(struct ls_core *core, struct ls_call *call)
         if (core->model == NULL) {
             return no_model(call, "setSpeed ANGULAR_SPEED");
         }
-        snprintf(unit, sizeof unit, "%s/s", ls_units_angular_name(un.angular));
+        ls_fmt_print(unit, sizeof unit, "%s/s", ls_units_angular_name(un.angular));
         rc = check_rate(call, "ANGULAR_SPEED", v,
                         ls_units_from_si_angular(un.angular, core->model->max_angular_speed_rad_s), unit);
         if (rc < 0) {
@@ -111,7 +111,7 @@ int32_t ls_h_set_acceleration(struct ls_core *core, struct ls_call *call)
         if (core->model == NULL) {
             return no_model(call, "setAcceleration LINEAR_ACCEL");
         }
-        snprintf(unit, sizeof unit, "%s/s^2", ls_units_linear_name(un.linear));
+        ls_fmt_print(unit, sizeof unit, "%s/s^2", ls_units_linear_name(un.linear));
         rc = check_rate(call, "LINEAR_ACCEL", v, ls_units_from_si_linear(un.linear, core->model->max_linear_accel_m_s2),
                         unit);
         if (rc < 0) {
@@ -124,7 +124,7 @@ int32_t ls_h_set_acceleration(struct ls_core *core, struct ls_call *call)
         if (core->model == NULL) {
             return no_model(call, "setAcceleration ANGULAR_ACCEL");
         }
-        snprintf(unit, sizeof unit, "%s/s^2", ls_units_angular_name(un.angular));
+        ls_fmt_print(unit, sizeof unit, "%s/s^2", ls_units_angular_name(un.angular));
         rc = check_rate(call, "ANGULAR_ACCEL", v,
                         ls_units_from_si_angular(un.angular, core->model->max_angular_accel_rad_s2), unit);
         if (rc < 0) {
@@ -234,8 +234,8 @@ int32_t ls_h_get_units(struct ls_core *core, struct ls_call *call)
 {
     const ls_units_t un = ls_core_units(core, call->sup);
     ls_GetUnitsRes *r = &call->res->result.get_units;
-    snprintf(r->linear_units, sizeof r->linear_units, "%s", ls_units_linear_name(un.linear));
-    snprintf(r->angular_units, sizeof r->angular_units, "%s", ls_units_angular_name(un.angular));
+    ls_fmt_print(r->linear_units, sizeof r->linear_units, "%s", ls_units_linear_name(un.linear));
+    ls_fmt_print(r->angular_units, sizeof r->angular_units, "%s", ls_units_angular_name(un.angular));
     return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "%s, %s", r->linear_units, r->angular_units);
 }
 
@@ -378,8 +378,8 @@ int32_t ls_h_get_sensor_reading(struct ls_core *core, struct ls_call *call)
         char list[128] = "";
         size_t n = 0;
         for (size_t i = 0; i < core->n_sensors && n < sizeof list; i++) {
-            int w = snprintf(list + n, sizeof list - n, "%s%s", i > 0 ? ", " : "",
-                             core->sensors[i].name != NULL ? core->sensors[i].name : "?");
+            int w = ls_fmt_print(list + n, sizeof list - n, "%s%s", i > 0 ? ", " : "",
+                                 core->sensors[i].name != NULL ? core->sensors[i].name : "?");
             if (w < 0) {
                 break;
             }

@@ -17,12 +17,12 @@
  * State (static, one controller per process): the held tool, its bits, and
  * the tool change or bit command in progress. */
 #include <math.h>
-#include <stdio.h>
 #include <string.h>
 
 #include "cmd_sensor.h"
 #include "ls_control.h"
 #include "ls_core.h"
+#include "ls_fmt.h"
 #include "ls_kin.h"
 #include "ls_motion.h"
 #include "ls_units.h"
@@ -59,7 +59,7 @@ static int32_t unknown_tool(ls_core_t *core, ls_call_t *call, const char *what, 
     for (int i = 0; core->tool->ops->name != NULL && n < sizeof list &&
                     (name = core->tool->ops->name(core->tool->self, i)) != NULL;
          i++) {
-        n += (size_t)snprintf(list + n, sizeof list - n, "%s%s", n ? ", " : "", name);
+        n += (size_t)ls_fmt_print(list + n, sizeof list - n, "%s%s", n ? ", " : "", name);
     }
     return ls_reply(call, ls_RetCode_CMD_PARAM_ERR, "%s: unknown tool '%s'; the rack holds %s", what, id,
                     n > 0 ? list : "tools whose names this firmware cannot list");
@@ -73,7 +73,7 @@ static bool post_tool(ls_core_t *core, ls_ctl_kind_t kind, uint32_t ref_seq, con
     c.kind = kind;
     c.ref_seq = ref_seq;
     c.tool.dev = core->tool;
-    snprintf(c.tool.id, sizeof c.tool.id, "%s", id);
+    ls_fmt_print(c.tool.id, sizeof c.tool.id, "%s", id);
     c.tool.attach = attach;
     c.tool.on = on;
     c.tool.off = off;
@@ -84,7 +84,7 @@ static void rest(ls_core_t *core)
 {
     if (core->state == ls_State_MOVING || core->state == ls_State_PAUSED) {
         core->state = ls_State_RESTING;
-        snprintf(core->motion_state, sizeof core->motion_state, "robot_at_rest");
+        ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_at_rest");
     }
 }
 
@@ -111,7 +111,7 @@ static int plan_step(ls_core_t *core, const double q0[LS_N_JOINTS], char *why, s
 {
     ls_motion_plan_t *slot = ls_control_plan_slot(core->ctl);
     if (slot == NULL) {
-        snprintf(why, whylen, "the control loop has not taken the previous motion");
+        ls_fmt_print(why, whylen, "the control loop has not taken the previous motion");
         return -1;
     }
     const ls_robot_model_t *m = core->model;
@@ -120,7 +120,7 @@ static int plan_step(ls_core_t *core, const double q0[LS_N_JOINTS], char *why, s
     if (core->tool_cmds.op.step == STEP_APPROACH) {
         double q1[LS_N_JOINTS];
         if (ls_kin_ik_nearest(m, core->tool_cmds.op.approach, q0, q1) != LS_KIN_OK) {
-            snprintf(why, whylen, "the approach point above the rack is out of reach");
+            ls_fmt_print(why, whylen, "the approach point above the rack is out of reach");
             return -1;
         }
         const ls_settings_t *set = &core->settings;
@@ -142,13 +142,13 @@ static int plan_step(ls_core_t *core, const double q0[LS_N_JOINTS], char *why, s
         st = ls_motion_plan_line(slot, m, q0, flange_tool, goal, &lim, w, sizeof w);
     }
     if (st < 0) {
-        snprintf(why, whylen, "%.100s", w);
+        ls_fmt_print(why, whylen, "%.100s", w);
         return -1;
     }
     slot->ref_seq = core->tool_cmds.op.ref_seq;
-    snprintf(slot->name, sizeof slot->name, "%s", core->tool_cmds.op.id);
+    ls_fmt_print(slot->name, sizeof slot->name, "%s", core->tool_cmds.op.id);
     if (!ls_control_start_plan(core->ctl, core->tool_cmds.op.ref_seq)) {
-        snprintf(why, whylen, "the control loop's command queue is full");
+        ls_fmt_print(why, whylen, "the control loop's command queue is full");
         return -1;
     }
     return 0;
@@ -159,8 +159,8 @@ static void step_failed(ls_core_t *core, const char *why)
     char msg[256];
     /* why: at most 100 characters, so the whole text fits msg with a 63-byte tool id
      * (-Wformat-truncation at -O3). */
-    snprintf(msg, sizeof msg, "%s %s stopped at step %d: %.100s; the arm holds where it is", op_name(core),
-             core->tool_cmds.op.id, core->tool_cmds.op.step, why);
+    ls_fmt_print(msg, sizeof msg, "%s %s stopped at step %d: %.100s; the arm holds where it is", op_name(core),
+                 core->tool_cmds.op.id, core->tool_cmds.op.step, why);
     op_end(core, ls_RetCode_CMD_ERR, msg, true);
 }
 
@@ -203,7 +203,7 @@ static int32_t change(ls_core_t *core, ls_call_t *call, const char *id, bool att
     op.sup = call->sup;
     op.ref_seq = call->req->seq;
     op.step = STEP_APPROACH;
-    snprintf(op.id, sizeof op.id, "%s", id);
+    ls_fmt_print(op.id, sizeof op.id, "%s", id);
     ls_pose_from_xyzrpy(rack6, op.rack);
     memcpy(op.approach, op.rack, sizeof op.approach);
     for (int i = 0; i < 3; i++) {
@@ -223,7 +223,7 @@ static int32_t change(ls_core_t *core, ls_call_t *call, const char *id, bool att
     }
     core->tool_cmds.op.active = true;
     core->state = ls_State_MOVING;
-    snprintf(core->motion_state, sizeof core->motion_state, "changing_tool");
+    ls_fmt_print(core->motion_state, sizeof core->motion_state, "changing_tool");
     return LS_CALL_DEFERRED;
 }
 
@@ -279,11 +279,11 @@ int32_t ls_h_deactivate_tool(struct ls_core *core, struct ls_call *call)
 int32_t ls_h_get_end_effector_state(struct ls_core *core, struct ls_call *call)
 {
     ls_GetEndEffectorStateRes *r = &call->res->result.get_end_effector_state;
-    snprintf(r->current_ee, sizeof r->current_ee, "%s", core->tool_cmds.held);
+    ls_fmt_print(r->current_ee, sizeof r->current_ee, "%s", core->tool_cmds.held);
     if (strcmp(core->tool_cmds.held, "none") == 0) {
-        snprintf(r->ee_state, sizeof r->ee_state, "flange (no tool)");
+        ls_fmt_print(r->ee_state, sizeof r->ee_state, "flange (no tool)");
     } else {
-        snprintf(r->ee_state, sizeof r->ee_state, "bits=0x%X", (unsigned)core->tool_cmds.bits);
+        ls_fmt_print(r->ee_state, sizeof r->ee_state, "bits=0x%X", (unsigned)core->tool_cmds.bits);
     }
     return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "%s%s", have_changer(core) ? "" : "no tool changer: ",
                     strcmp(core->tool_cmds.held, "none") == 0 ? "no tool held" : "tool held");
@@ -298,14 +298,14 @@ static void bits_event(ls_core_t *core, const ls_ctl_event_t *ev)
     char msg[160];
     int st = ev->motion.index;
     if (st < 0) {
-        snprintf(msg, sizeof msg, "%s: bits 0x%X refused by %.31s (HAL status %d): the tool has no such bits",
-                 core->tool_cmds.bits_op.on ? "activateTool" : "deactivateTool", (unsigned)core->tool_cmds.bits_op.bits,
-                 core->tool_cmds.held, st);
+        ls_fmt_print(msg, sizeof msg, "%s: bits 0x%X refused by %.31s (HAL status %d): the tool has no such bits",
+                     core->tool_cmds.bits_op.on ? "activateTool" : "deactivateTool",
+                     (unsigned)core->tool_cmds.bits_op.bits, core->tool_cmds.held, st);
         ls_core_finish_deferred(core, core->tool_cmds.bits_op.sup,
                                 st == HAL_EINVAL ? ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR : ls_RetCode_CMD_ERR, msg);
         return;
     }
-    snprintf(msg, sizeof msg, "%s bits now 0x%X", core->tool_cmds.held, (unsigned)core->tool_cmds.bits);
+    ls_fmt_print(msg, sizeof msg, "%s bits now 0x%X", core->tool_cmds.held, (unsigned)core->tool_cmds.bits);
     ls_core_finish_deferred(core, core->tool_cmds.bits_op.sup, ls_RetCode_CMD_EXEC_OK, msg);
 }
 
@@ -314,15 +314,15 @@ static void coupled(ls_core_t *core, const ls_ctl_event_t *ev)
     int st = ev->motion.index;
     if (st < 0) {
         char why[100];
-        snprintf(why, sizeof why, "the tool changer refused to %.20s (HAL status %d)", ev->motion.text, st);
+        ls_fmt_print(why, sizeof why, "the tool changer refused to %.20s (HAL status %d)", ev->motion.text, st);
         step_failed(core, why);
         return;
     }
     if (core->tool_cmds.op.attach) {
-        snprintf(core->tool_cmds.held, sizeof core->tool_cmds.held, "%s", core->tool_cmds.op.id);
+        ls_fmt_print(core->tool_cmds.held, sizeof core->tool_cmds.held, "%s", core->tool_cmds.op.id);
         memcpy(core->settings.tool_offset, core->tool_cmds.op.offset, sizeof core->settings.tool_offset);
     } else {
-        snprintf(core->tool_cmds.held, sizeof core->tool_cmds.held, "none");
+        ls_fmt_print(core->tool_cmds.held, sizeof core->tool_cmds.held, "none");
         memset(core->settings.tool_offset, 0, sizeof core->settings.tool_offset);
     }
     core->tool_cmds.bits = ev->dio.on;
@@ -345,7 +345,8 @@ bool ls_core_tool_on_event(ls_core_t *core, const ls_ctl_event_t *ev)
     }
     if (ev->kind == LS_CEV_FAULT) {
         char msg[192];
-        snprintf(msg, sizeof msg, "%s %s stopped by a fault: %.60s", op_name(core), core->tool_cmds.op.id, ev->text);
+        ls_fmt_print(msg, sizeof msg, "%s %s stopped by a fault: %.60s", op_name(core), core->tool_cmds.op.id,
+                     ev->text);
         op_end(core, ls_RetCode_CMD_FAULT_ERR, msg, false);
         return false;
     }
@@ -380,10 +381,10 @@ bool ls_core_tool_on_event(ls_core_t *core, const ls_ctl_event_t *ev)
             double o[6];
             const ls_units_t un = ls_core_units(core, core->tool_cmds.op.sup); /* the answer's session */
             ls_units_pose_from_si(un.linear, un.angular, core->settings.tool_offset, o);
-            snprintf(off, sizeof off, "%.4g %.4g %.4g", o[0], o[1], o[2]);
-            snprintf(msg, sizeof msg, "%s: %s; tool offset now %s %s", op_name(core),
-                     core->tool_cmds.op.attach ? core->tool_cmds.op.id : "flange (no tool)", off,
-                     ls_units_linear_name(un.linear));
+            ls_fmt_print(off, sizeof off, "%.4g %.4g %.4g", o[0], o[1], o[2]);
+            ls_fmt_print(msg, sizeof msg, "%s: %s; tool offset now %s %s", op_name(core),
+                         core->tool_cmds.op.attach ? core->tool_cmds.op.id : "flange (no tool)", off,
+                         ls_units_linear_name(un.linear));
             op_end(core, ls_RetCode_CMD_EXEC_OK, msg, true);
         }
         return true;
@@ -394,8 +395,8 @@ bool ls_core_tool_on_event(ls_core_t *core, const ls_ctl_event_t *ev)
         return false;
     case LS_MEV_FAULT: {
         char msg[160];
-        snprintf(msg, sizeof msg, "%s %.31s stopped by a fault: %.60s", op_name(core), core->tool_cmds.op.id,
-                 ev->motion.text);
+        ls_fmt_print(msg, sizeof msg, "%s %.31s stopped by a fault: %.60s", op_name(core), core->tool_cmds.op.id,
+                     ev->motion.text);
         op_end(core, ls_RetCode_CMD_FAULT_ERR, msg, false);
         return false;
     }

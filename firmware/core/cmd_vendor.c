@@ -9,10 +9,10 @@
  *   stopping the category-1 stop's bound per joint, from the robot model
  * Output is plain text, one item per line, at most 1 KiB. */
 #include <stdarg.h>
-#include <stdio.h>
 #include <string.h>
 
 #include "ls_core.h"
+#include "ls_fmt.h"
 #include "ls_motion.h"
 
 typedef struct {
@@ -28,7 +28,7 @@ static void put(out_t *o, const char *fmt, ...)
     }
     va_list ap;
     va_start(ap, fmt);
-    int w = vsnprintf(o->buf + o->len, o->cap - o->len, fmt, ap);
+    int w = ls_fmt_vprint(o->buf + o->len, o->cap - o->len, fmt, ap);
     va_end(ap);
     if (w > 0) {
         o->len += (size_t)w < o->cap - o->len ? (size_t)w : o->cap - o->len - 1u;

@@ -6,11 +6,11 @@
 #include "cmd_sensor.h"
 #include "ls_control.h"
 #include "ls_core_events.h"
+#include "ls_fmt.h"
 #include "ls_utf8.h"
 #include "ls_wire.h"
 
 #include <stdarg.h>
-#include <stdio.h>
 #include <string.h>
 
 #include <pb_decode.h>
@@ -80,7 +80,7 @@ void ls_core_log_event(ls_core_t *core, uint64_t now_us, const char *fmt, ...)
     e->at_us = now_us;
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(e->text, sizeof e->text, fmt, ap);
+    ls_fmt_vprint(e->text, sizeof e->text, fmt, ap);
     va_end(ap);
     core->event_log_count++;
 }
@@ -114,7 +114,7 @@ void ls_core_init(ls_core_t *core, const ls_core_config_t *cfg, const ls_core_io
     }
     core->state = ls_State_IDLE;
     core->owner = -1;
-    snprintf(core->motion_state, sizeof core->motion_state, "robot_at_rest");
+    ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_at_rest");
     core->settings.speed_pct = 25.0;
     core->settings.accel_pct = 50.0;
     core->settings.linear_speed_m_s = 0.25;
@@ -125,9 +125,9 @@ void ls_core_init(ls_core_t *core, const ls_core_config_t *cfg, const ls_core_io
     core->epoch_next = 1;
     core->run.path = -1;
     core->halt.answer_sup = -1;
-    snprintf(core->sensor.mode, sizeof core->sensor.mode, "off");
+    ls_fmt_print(core->sensor.mode, sizeof core->sensor.mode, "off");
     core->sensor.sup = -1;
-    snprintf(core->tool_cmds.held, sizeof core->tool_cmds.held, "none");
+    ls_fmt_print(core->tool_cmds.held, sizeof core->tool_cmds.held, "none");
 }
 
 int ls_core_session_of(const ls_core_t *core, uint8_t addr)
@@ -139,7 +139,7 @@ int32_t ls_reply(ls_call_t *call, int32_t code, const char *fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(call->res->ret_msg, sizeof call->res->ret_msg, fmt, ap);
+    ls_fmt_vprint(call->res->ret_msg, sizeof call->res->ret_msg, fmt, ap);
     va_end(ap);
     return code;
 }
@@ -199,14 +199,14 @@ void ls_core_notify(ls_core_t *core, int sup, ls_NoticeKind kind, const char *ev
         core->note.which_msg = ls_Downlink_notice_tag;
         ls_Notice *n = &core->note.msg.notice;
         n->kind = kind;
-        snprintf(n->event_id, sizeof n->event_id, "%s", event_id);
+        ls_fmt_print(n->event_id, sizeof n->event_id, "%s", event_id);
         n->ref_seq = ref_seq;
         n->final = final;
         n->notice_seq = ++s->notice_seq;
         n->session_epoch = ref_seq != 0u ? s->epoch : 0u;
         size_t cap = sizeof n->data / sizeof n->data[0];
         for (size_t k = 0; k < n_data && k < cap; k++) {
-            snprintf(n->data[k], sizeof n->data[k], "%s", data[k]);
+            ls_fmt_print(n->data[k], sizeof n->data[k], "%s", data[k]);
             n->data_count++;
         }
         size_t len = encode_msg(&core->note, core->note_enc, sizeof core->note_enc);
@@ -224,7 +224,7 @@ void ls_core_notify_to(ls_core_t *core, uint8_t addr, uint32_t epoch, ls_NoticeK
     core->note.which_msg = ls_Downlink_notice_tag;
     ls_Notice *n = &core->note.msg.notice;
     n->kind = kind;
-    snprintf(n->event_id, sizeof n->event_id, "%s", event_id);
+    ls_fmt_print(n->event_id, sizeof n->event_id, "%s", event_id);
     n->ref_seq = ref_seq;
     n->final = final;
     n->session_epoch = epoch;
@@ -233,7 +233,7 @@ void ls_core_notify_to(ls_core_t *core, uint8_t addr, uint32_t epoch, ls_NoticeK
     n->notice_seq = i >= 0 ? ++core->sessions[i].notice_seq : 0u;
     size_t cap = sizeof n->data / sizeof n->data[0];
     for (size_t k = 0; k < n_data && k < cap; k++) {
-        snprintf(n->data[k], sizeof n->data[k], "%s", data[k]);
+        ls_fmt_print(n->data[k], sizeof n->data[k], "%s", data[k]);
         n->data_count++;
     }
     size_t len = encode_msg(&core->note, core->note_enc, sizeof core->note_enc);
@@ -251,7 +251,7 @@ void ls_core_log_fault(ls_core_t *core, uint64_t now_us, const char *fmt, ...)
     e->at_us = now_us;
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(e->text, sizeof e->text, fmt, ap);
+    ls_fmt_vprint(e->text, sizeof e->text, fmt, ap);
     va_end(ap);
     core->fault_log_count++;
 }
@@ -284,9 +284,9 @@ static void alarm_window_report(ls_core_t *core, uint64_t now_us)
 {
     ls_alarm_window_t *w = &core->alarm_window;
     char d1[32], d2[32], d3[96];
-    snprintf(d1, sizeof d1, "suppressed=%u", (unsigned)w->suppressed);
-    snprintf(d2, sizeof d2, "window_ms=%u", (unsigned)((now_us - w->since_us) / 1000u));
-    snprintf(d3, sizeof d3, "fault=%s", w->text);
+    ls_fmt_print(d1, sizeof d1, "suppressed=%u", (unsigned)w->suppressed);
+    ls_fmt_print(d2, sizeof d2, "window_ms=%u", (unsigned)((now_us - w->since_us) / 1000u));
+    ls_fmt_print(d3, sizeof d3, "fault=%s", w->text);
     const char *data[] = { d1, d2, d3 };
     ls_core_log_fault(core, now_us, "%u repeats suppressed: %.60s", (unsigned)w->suppressed, w->text);
     ls_core_notify(core, -1, ls_NoticeKind_ALARM, LS_ALARM_SUPPRESSED_EVENT, 0, false, data, 3);
@@ -326,13 +326,13 @@ static bool alarm_repeat(ls_core_t *core, const char *text, uint64_t now_us)
     w->open = true;
     w->since_us = now_us;
     w->suppressed = 0;
-    snprintf(w->text, sizeof w->text, "%s", text);
+    ls_fmt_print(w->text, sizeof w->text, "%s", text);
     return false;
 }
 
 static void fault_as(ls_core_t *core, ls_run_end_t why, const char *text, uint64_t now_us)
 {
-    snprintf(core->fault, sizeof core->fault, "%s", text);
+    ls_fmt_print(core->fault, sizeof core->fault, "%s", text);
     if (core->state == ls_State_MOVING || core->state == ls_State_PAUSED || core->halt.active) {
         /* Stop along the path at the model's maximum deceleration, then drives
          * off; ls_run_tick changes the state and sends the motion's notice. */
@@ -344,14 +344,14 @@ static void fault_as(ls_core_t *core, ls_run_end_t why, const char *text, uint64
             }
             core->state = ls_State_LOCKED;
         }
-        snprintf(core->motion_state, sizeof core->motion_state, "robot_stopped_on_error");
+        ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_stopped_on_error");
     }
     if (alarm_repeat(core, text, now_us)) {
         return; /* latched and stopping; counted, reported at the window's end */
     }
     ls_core_log_fault(core, now_us, "%s", text);
     char d[80];
-    snprintf(d, sizeof d, "fault=%s", text);
+    ls_fmt_print(d, sizeof d, "fault=%s", text);
     const char *data[] = { d };
     ls_core_notify(core, -1, ls_NoticeKind_ALARM, "fault", 0, false, data, 1);
 }
@@ -372,9 +372,9 @@ void ls_core_owner_lost_alarm(ls_core_t *core, uint8_t addr, const char *why, ls
 {
     const char *name = ls_core_disconnect_action_name(action);
     char d1[40], d2[64], d3[48];
-    snprintf(d1, sizeof d1, "supervisor=0x%02X", addr);
-    snprintf(d2, sizeof d2, "reason=%s", why);
-    snprintf(d3, sizeof d3, "action=%s", name != NULL ? name : "?");
+    ls_fmt_print(d1, sizeof d1, "supervisor=0x%02X", addr);
+    ls_fmt_print(d2, sizeof d2, "reason=%s", why);
+    ls_fmt_print(d3, sizeof d3, "action=%s", name != NULL ? name : "?");
     const char *data[] = { d1, d2, d3 };
     ls_core_notify(core, -1, ls_NoticeKind_ALARM, "ownerLost", 0, false, data, 3);
     ls_core_log_fault(core, now_us, "owner 0x%02X lost (%s): action %s", addr, why, name != NULL ? name : "?");
@@ -402,7 +402,7 @@ static void drop_session(ls_core_t *core, int i, const char *why, uint64_t now_u
             core->held = true;
             core->held_addr = addr;
             core->held_action = action;
-            snprintf(core->held_name, sizeof core->held_name, "%s", s->name);
+            ls_fmt_print(core->held_name, sizeof core->held_name, "%s", s->name);
         }
         if (core->state == ls_State_MOVING || core->state == ls_State_PAUSED || core->halt.active) {
             /* Stop along the path (drives off unless the action is `stop`),
@@ -415,7 +415,7 @@ static void drop_session(ls_core_t *core, int i, const char *why, uint64_t now_u
             core->halt.release = release;
             core->halt.lost_action = action;
             core->halt.lost_addr = addr;
-            snprintf(core->halt.lost_why, sizeof core->halt.lost_why, "%s", why);
+            ls_fmt_print(core->halt.lost_why, sizeof core->halt.lost_why, "%s", why);
             return;
         }
         if (core->state == ls_State_RESTING && action != ls_DisconnectAction_DISCONNECT_STOP) {
@@ -474,7 +474,7 @@ static void rsvp_remember(ls_core_t *core, const ls_rsvp_t *r, bool timed_out, c
     *e = (ls_rsvp_ended_t){
         .id = r->id, .addr = r->addr, .timed_out = timed_out, .ref_seq = r->ref_seq, .epoch = r->epoch
     };
-    snprintf(e->action, sizeof e->action, "%s", action != NULL ? action : "");
+    ls_fmt_print(e->action, sizeof e->action, "%s", action != NULL ? action : "");
 }
 
 static void rsvp_tick(ls_core_t *core, uint64_t now_us)
@@ -499,7 +499,7 @@ static void join_data(const ls_RsvpReply *reply, char *out, size_t cap)
     size_t n = 0;
     out[0] = '\0';
     for (pb_size_t k = 0; k < reply->data_count && n < cap; k++) {
-        int w = snprintf(out + n, cap - n, "%s%s", k > 0 ? "," : "", reply->data[k]);
+        int w = ls_fmt_print(out + n, cap - n, "%s%s", k > 0 ? "," : "", reply->data[k]);
         if (w < 0) {
             return;
         }
@@ -519,10 +519,10 @@ static void send_rsvp_ack(ls_core_t *core, uint8_t addr, uint32_t id, int32_t co
     a->ret_code = code;
     a->ref_seq = ref_seq;
     a->session_epoch = epoch;
-    snprintf(a->action, sizeof a->action, "%s", action);
+    ls_fmt_print(a->action, sizeof a->action, "%s", action);
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(a->ret_msg, sizeof a->ret_msg, fmt, ap);
+    ls_fmt_vprint(a->ret_msg, sizeof a->ret_msg, fmt, ap);
     va_end(ap);
     size_t len = encode_msg(&core->note, core->note_enc, sizeof core->note_enc);
     if (len > 0) {
@@ -607,16 +607,16 @@ int32_t ls_core_rsvp(ls_core_t *core, int sup, uint32_t ref_seq, ls_NoticeKind k
     core->note.which_msg = ls_Downlink_notice_tag;
     ls_Notice *n = &core->note.msg.notice;
     n->kind = kind;
-    snprintf(n->event_id, sizeof n->event_id, "%s", event_id);
+    ls_fmt_print(n->event_id, sizeof n->event_id, "%s", event_id);
     n->rsvp_id = id;
     n->ref_seq = ref_seq;
     n->session_epoch = ref_seq != 0u ? s->epoch : 0u;
     n->rsvp_timeout_ms = timeout_ms;
-    snprintf(n->rsvp_default, sizeof n->rsvp_default, "%s", default_action);
+    ls_fmt_print(n->rsvp_default, sizeof n->rsvp_default, "%s", default_action);
     n->notice_seq = ++s->notice_seq;
     size_t cap = sizeof n->data / sizeof n->data[0];
     for (size_t k = 0; k < n_data && k < cap; k++) {
-        snprintf(n->data[k], sizeof n->data[k], "%s", data[k]);
+        ls_fmt_print(n->data[k], sizeof n->data[k], "%s", data[k]);
         n->data_count++;
     }
     size_t len = encode_msg(&core->note, core->note_enc, sizeof core->note_enc);
@@ -631,8 +631,8 @@ int32_t ls_core_rsvp(ls_core_t *core, int sup, uint32_t ref_seq, ls_NoticeKind k
                          .deadline_us = now_us + (uint64_t)timeout_ms * 1000u,
                          .done = done,
                          .ctx = ctx };
-    snprintf(slot->event_id, sizeof slot->event_id, "%s", event_id);
-    snprintf(slot->default_action, sizeof slot->default_action, "%s", default_action);
+    ls_fmt_print(slot->event_id, sizeof slot->event_id, "%s", event_id);
+    ls_fmt_print(slot->default_action, sizeof slot->default_action, "%s", default_action);
     send_bytes(core, s->addr, core->note_enc, len);
     return (int32_t)id;
 }
@@ -652,13 +652,13 @@ static void on_loop_event(ls_core_t *core, const ls_ctl_event_t *ev, uint64_t no
     case LS_CEV_DIO_CHANGED: ls_core_on_dio_event(core, ev->dio.unit, ev->dio.on, ev->dio.off, now_us); break;
     case LS_CEV_CMD_FAILED: {
         char d[80];
-        snprintf(d, sizeof d, "reason=%s", ev->text);
+        ls_fmt_print(d, sizeof d, "reason=%s", ev->text);
         const char *data[] = { d };
         ls_core_notify(core, core->owner, ls_NoticeKind_ALARM, "commandFailed", ev->ref_seq, false, data, 1);
         ls_core_motion_failed(core, ev->ref_seq, ev->text);
         if (core->act.log_warn != NULL) {
             char line[112];
-            snprintf(line, sizeof line, "control loop: %s", ev->text);
+            ls_fmt_print(line, sizeof line, "control loop: %s", ev->text);
             core->act.log_warn(core->act.ctx, line);
         }
         break;
@@ -698,8 +698,8 @@ static int32_t do_connect(ls_core_t *core, uint8_t addr, ls_call_t *call)
     call->res->which_result = ls_Response_connect_tag;
     rs->protocol_version = ls_Protocol_PROTOCOL_VERSION;
     rs->schema_hash = LS_SCHEMA_HASH;
-    snprintf(rs->device_name, sizeof rs->device_name, "%s", core->cfg.device_name);
-    snprintf(rs->firmware_version, sizeof rs->firmware_version, "%s", core->cfg.firmware_version);
+    ls_fmt_print(rs->device_name, sizeof rs->device_name, "%s", core->cfg.device_name);
+    ls_fmt_print(rs->firmware_version, sizeof rs->firmware_version, "%s", core->cfg.firmware_version);
     rs->joint_count = core->cfg.joint_count;
     rs->heartbeat_timeout_ms = core->cfg.heartbeat_timeout_ms;
     rs->client_nonce = rq->client_nonce; /* an error carries no result: only an accepted connect's */
@@ -804,7 +804,7 @@ static int32_t do_connect(ls_core_t *core, uint8_t addr, ls_call_t *call)
     s->heartbeat_timeout_ms = timeout_ms;
     s->units = LS_UNITS_SI; /* every session starts in SI (docs/conformance.md, setUnits) */
     s->disconnect_action = action;
-    snprintf(s->name, sizeof s->name, "%s", rq->client_name);
+    ls_fmt_print(s->name, sizeof s->name, "%s", rq->client_name);
     call->sup = i;
     if (core->held && core->held_addr == addr) {
         /* The lost owner is back: the kept lock is its own again. */
@@ -847,7 +847,7 @@ static void describe_states(uint8_t mask, char *out, size_t cap)
     out[0] = '\0';
     for (size_t i = 0; i < sizeof all / sizeof all[0]; i++) {
         if ((mask & (uint8_t)all[i]) != 0u) {
-            int w = snprintf(out + n, cap - n, "%s%s", n > 0 ? "/" : "", ls_core_state_name(all[i]));
+            int w = ls_fmt_print(out + n, cap - n, "%s%s", n > 0 ? "/" : "", ls_core_state_name(all[i]));
             if (w < 0 || (size_t)w >= cap - n) {
                 return;
             }
@@ -970,7 +970,7 @@ static void send_response(ls_core_t *core, ls_session_t *s, uint8_t addr)
         ls_Response *r = &core->down.msg.response;
         r->which_result = 0;
         r->ret_code = ls_RetCode_CMD_ERR;
-        snprintf(r->ret_msg, sizeof r->ret_msg, "internal: response did not encode");
+        ls_fmt_print(r->ret_msg, sizeof r->ret_msg, "internal: response did not encode");
         len = encode_downlink(core);
     }
     if (s != NULL) {
@@ -1053,8 +1053,8 @@ static void on_request(ls_core_t *core, uint8_t addr, ls_Request *rq, const uint
         busy->seq = rq->seq;
         busy->session_epoch = s->epoch;
         busy->ret_code = ls_RetCode_CMD_BUSY_ERR;
-        snprintf(busy->ret_msg, sizeof busy->ret_msg, "%s (seq %u) is still running: wait for its answer",
-                 pd != NULL ? pd->name : "a blocking command", (unsigned)s->last_seq);
+        ls_fmt_print(busy->ret_msg, sizeof busy->ret_msg, "%s (seq %u) is still running: wait for its answer",
+                     pd != NULL ? pd->name : "a blocking command", (unsigned)s->last_seq);
         size_t len = encode_downlink(core);
         if (len > 0) {
             send_bytes(core, addr, core->enc, len);
@@ -1109,7 +1109,7 @@ void ls_core_finish_deferred(ls_core_t *core, int sup, int32_t code, const char 
     res->session_epoch = s->epoch;
     res->ret_code = code;
     res->which_result = code >= 0 ? s->pending_tag : 0;
-    snprintf(res->ret_msg, sizeof res->ret_msg, "%s", msg);
+    ls_fmt_print(res->ret_msg, sizeof res->ret_msg, "%s", msg);
     send_response(core, s, s->addr);
 }
 
@@ -1172,7 +1172,7 @@ static void answer_bad_request(ls_core_t *core, uint8_t addr, int32_t code, uint
     res->session_epoch = sup >= 0 ? core->sessions[sup].epoch : 0u;
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(res->ret_msg, sizeof res->ret_msg, fmt, ap);
+    ls_fmt_vprint(res->ret_msg, sizeof res->ret_msg, fmt, ap);
     va_end(ap);
     send_response(core, NULL, addr);
 }

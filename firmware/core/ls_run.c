@@ -2,12 +2,12 @@
 #include "ls_run.h"
 
 #include <math.h>
-#include <stdio.h>
 #include <string.h>
 
 #include "cmd_sensor.h"
 #include "ls_control.h"
 #include "ls_core.h"
+#include "ls_fmt.h"
 
 /* A halt that has not reached rest with the drives off after this long ends
  * anyway (the notices must not wait for ever on a broken loop). */
@@ -44,7 +44,7 @@ static const char *end_suffix(ls_run_end_t why)
 
 static void set_motion_state(ls_core_t *core, const char *s)
 {
-    snprintf(core->motion_state, sizeof core->motion_state, "%s", s);
+    ls_fmt_print(core->motion_state, sizeof core->motion_state, "%s", s);
 }
 
 void ls_run_begin(ls_core_t *core, const ls_call_t *call, bool react, const char *seed_name, const char *point,
@@ -61,8 +61,8 @@ void ls_run_begin(ls_core_t *core, const ls_call_t *call, bool react, const char
     r->ref_seq = call->req->seq;
     r->path = path;
     r->stop_sup = -1;
-    snprintf(r->seed_name, sizeof r->seed_name, "%s", seed_name);
-    snprintf(r->point, sizeof r->point, "%s", point);
+    ls_fmt_print(r->seed_name, sizeof r->seed_name, "%s", seed_name);
+    ls_fmt_print(r->point, sizeof r->point, "%s", point);
     core->state = ls_State_MOVING;
     set_motion_state(core, "running_trajectory");
 }
@@ -74,8 +74,8 @@ void ls_run_finish(ls_core_t *core, ls_run_end_t why, const char *const *extra, 
         return;
     }
     char d_point[8 + LS_MOTION_NAME_LEN], d_reason[32];
-    snprintf(d_point, sizeof d_point, "point=%s", r->point);
-    snprintf(d_reason, sizeof d_reason, "reason=%s", ls_run_end_name(why));
+    ls_fmt_print(d_point, sizeof d_point, "point=%s", r->point);
+    ls_fmt_print(d_reason, sizeof d_reason, "reason=%s", ls_run_end_name(why));
     const char *data[9] = { d_point, d_reason };
     size_t n = 2;
     for (size_t k = 0; k < n_extra && n < sizeof data / sizeof data[0] - 1u; k++) {
@@ -85,7 +85,7 @@ void ls_run_finish(ls_core_t *core, ls_run_end_t why, const char *const *extra, 
         data[n++] = "dry_run=true";
     }
     char id[40];
-    snprintf(id, sizeof id, "%s%s", r->seed_name, end_suffix(why));
+    ls_fmt_print(id, sizeof id, "%s%s", r->seed_name, end_suffix(why));
     r->active = false;
     r->wait_active = false;
     ls_core_notify_to(core, r->addr, r->epoch, why == LS_RUN_END_COMPLETE ? ls_NoticeKind_EVENT : ls_NoticeKind_ALARM,
@@ -93,7 +93,7 @@ void ls_run_finish(ls_core_t *core, ls_run_end_t why, const char *const *extra, 
     if (r->stop_pending) {
         r->stop_pending = false;
         char msg[120];
-        snprintf(msg, sizeof msg, "the motion ended (%s) before it paused", ls_run_end_name(why));
+        ls_fmt_print(msg, sizeof msg, "the motion ended (%s) before it paused", ls_run_end_name(why));
         ls_core_finish_deferred(core, r->stop_sup,
                                 why == LS_RUN_END_COMPLETE ? ls_RetCode_CMD_EXEC_OK : ls_RetCode_CMD_ERR,
                                 why == LS_RUN_END_COMPLETE ? "the motion completed before it could stop" : msg);
@@ -138,7 +138,7 @@ void ls_run_halt(ls_core_t *core, ls_run_end_t why, const char *text, bool fast,
         /* Already stopping: a fault takes over the reason and the speed of the stop. */
         if (is_fault(why) && !is_fault(h->why)) {
             h->why = why;
-            snprintf(h->text, sizeof h->text, "%s", text != NULL ? text : "");
+            ls_fmt_print(h->text, sizeof h->text, "%s", text != NULL ? text : "");
         }
         if (answer_sup >= 0) {
             h->answer_sup = answer_sup;
@@ -156,7 +156,7 @@ void ls_run_halt(ls_core_t *core, ls_run_end_t why, const char *text, bool fast,
     h->answer_sup = answer_sup;
     h->since_us = now_us;
     h->fast = fast;
-    snprintf(h->text, sizeof h->text, "%s", text != NULL ? text : "");
+    ls_fmt_print(h->text, sizeof h->text, "%s", text != NULL ? text : "");
     halt_enter(core);
     post_stop(core, fast);
 }
@@ -221,7 +221,7 @@ void ls_run_tick(ls_core_t *core, uint64_t now_us)
     const char *extra[1] = { d_fault };
     size_t n_extra = 0;
     if (h->text[0] != '\0') {
-        snprintf(d_fault, sizeof d_fault, "fault=%s", h->text);
+        ls_fmt_print(d_fault, sizeof d_fault, "fault=%s", h->text);
         n_extra = 1;
     }
     if (h->keep_drives && core->ctl != NULL) {

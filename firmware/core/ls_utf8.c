@@ -3,10 +3,10 @@
 
 #include <pb_common.h>
 #include <stdint.h>
-#include <stdio.h>
 #include <string.h>
 
 #include "ls_cmd_table.h"
+#include "ls_fmt.h"
 
 /* Length of the valid sequence at s[0..len), 0 when it is not one. */
 static size_t seq_len(const unsigned char *s, size_t len)
@@ -110,9 +110,9 @@ static bool walk(const pb_msgdesc_t *desc, void *msg, bool repair, char *where, 
             size_t here = used;
             if (!repair && where != NULL && cap > used) {
                 const char *name = ls_field_name(desc, it.tag);
-                int w = snprintf(where + used, cap - used, "%s%s", used > 0 ? "." : "", name != NULL ? name : "?");
+                int w = ls_fmt_print(where + used, cap - used, "%s%s", used > 0 ? "." : "", name != NULL ? name : "?");
                 if (w > 0 && rep) {
-                    w += snprintf(where + used + (size_t)w, cap - used - (size_t)w, "[%zu]", k);
+                    w += ls_fmt_print(where + used + (size_t)w, cap - used - (size_t)w, "[%zu]", k);
                 }
                 here = w > 0 && used + (size_t)w < cap ? used + (size_t)w : cap - 1u;
             }
@@ -127,7 +127,7 @@ static bool walk(const pb_msgdesc_t *desc, void *msg, bool repair, char *where, 
                 const size_t bad = ls_utf8_check(elem, len);
                 if (bad < len) {
                     if (where != NULL && cap > here) {
-                        snprintf(where + here, cap - here, " at byte %zu", bad);
+                        ls_fmt_print(where + here, cap - here, " at byte %zu", bad);
                     }
                     return false;
                 }

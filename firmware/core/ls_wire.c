@@ -4,10 +4,10 @@
 #include <inttypes.h>
 #include <pb_common.h>
 #include <pb_decode.h>
-#include <stdio.h>
 #include <string.h>
 
 #include "ls_cmd_table.h"
+#include "ls_fmt.h"
 
 #define SEEN_MAX 16 /* repeated fields counted per message level */
 
@@ -39,10 +39,10 @@ static size_t name_at(char *where, size_t cap, size_t used, const pb_msgdesc_t *
         return used;
     }
     const char *name = ls_field_name(desc, tag);
-    int w = name != NULL ? snprintf(where + used, cap - used, "%s%s", used > 0 ? "." : "", name)
-                         : snprintf(where + used, cap - used, "%sfield %u", used > 0 ? "." : "", (unsigned)tag);
+    int w = name != NULL ? ls_fmt_print(where + used, cap - used, "%s%s", used > 0 ? "." : "", name)
+                         : ls_fmt_print(where + used, cap - used, "%sfield %u", used > 0 ? "." : "", (unsigned)tag);
     if (w > 0 && rep && used + (size_t)w < cap) {
-        w += snprintf(where + used + (size_t)w, cap - used - (size_t)w, "[%zu]", k);
+        w += ls_fmt_print(where + used + (size_t)w, cap - used - (size_t)w, "[%zu]", k);
     }
     return w > 0 && used + (size_t)w < cap ? used + (size_t)w : cap - 1u;
 }
@@ -157,9 +157,9 @@ static ls_wire_fault_t walk(const pb_msgdesc_t *desc, const void *msg, const uin
                 if (seen[i].count > it.array_size) {
                     size_t at = name_at(where, cap, used, desc, tag, false, 0);
                     if (where != NULL && at + 1u < cap) {
-                        snprintf(where + at, cap - at, " has %zu %s, at most %u", seen[i].count,
-                                 PB_LTYPE_IS_SUBMSG(lt) || lt == PB_LTYPE_STRING ? "items" : "values",
-                                 (unsigned)it.array_size);
+                        ls_fmt_print(where + at, cap - at, " has %zu %s, at most %u", seen[i].count,
+                                     PB_LTYPE_IS_SUBMSG(lt) || lt == PB_LTYPE_STRING ? "items" : "values",
+                                     (unsigned)it.array_size);
                     }
                     return LS_WIRE_SIZE;
                 }
@@ -174,7 +174,7 @@ static ls_wire_fault_t walk(const pb_msgdesc_t *desc, const void *msg, const uin
             if (L > max) {
                 size_t at = name_at(where, cap, used, desc, tag, rep, k);
                 if (where != NULL && at + 1u < cap) {
-                    snprintf(where + at, cap - at, " has %zu bytes, at most %zu", L, max);
+                    ls_fmt_print(where + at, cap - at, " has %zu bytes, at most %zu", L, max);
                 }
                 return LS_WIRE_SIZE;
             }

@@ -3,9 +3,9 @@
 
 #include <math.h>
 #include <stdarg.h>
-#include <stdio.h>
 #include <string.h>
 
+#include "ls_fmt.h"
 #include "ls_kin.h"
 
 #define PI 3.14159265358979323846
@@ -30,7 +30,7 @@ static int refuse(char *why, unsigned whylen, int code, const char *fmt, ...)
     if (why != NULL && whylen > 0) {
         va_list ap;
         va_start(ap, fmt);
-        vsnprintf(why, whylen, fmt, ap);
+        ls_fmt_vprint(why, whylen, fmt, ap);
         va_end(ap);
     }
     return code;
@@ -619,7 +619,7 @@ int ls_motion_plan_path(ls_motion_plan_t *p, const ls_motion_program_t *prog, in
     p->prog = prog;
     p->cycles = cycles;
     p->dry_run = dry_run;
-    snprintf(p->name, sizeof p->name, "%s", name != NULL ? name : "");
+    ls_fmt_print(p->name, sizeof p->name, "%s", name != NULL ? name : "");
     return LS_MOTION_OK;
 }
 
@@ -938,7 +938,7 @@ static void fault(ls_motion_t *m, ls_motion_events_t *ev, const char *fmt, ...)
     if (e != NULL) {
         va_list ap;
         va_start(ap, fmt);
-        vsnprintf(e->text, sizeof e->text, fmt, ap);
+        ls_fmt_vprint(e->text, sizeof e->text, fmt, ap);
         va_end(ap);
     }
     m->phase = LS_MOTION_IDLE;
@@ -1146,7 +1146,7 @@ static void announce_aux(ls_motion_t *m, const ls_motion_seg_t *s, ls_motion_eve
 {
     ls_motion_event_t *e = push_event(m, ev, LS_MEV_AUX);
     if (e != NULL) {
-        snprintf(e->text, sizeof e->text, "%s", s->aux[m->aux_k_]);
+        ls_fmt_print(e->text, sizeof e->text, "%s", s->aux[m->aux_k_]);
         e->index = s->point;
     }
     m->aux_wait_ = true;
@@ -1158,7 +1158,7 @@ static void arrive(ls_motion_t *m, const ls_motion_seg_t *s, ls_motion_events_t 
         ls_motion_event_t *e = push_event(m, ev, LS_MEV_TAG);
         if (e != NULL) {
             memcpy(e->name, s->tag, sizeof e->name);
-            snprintf(e->text, sizeof e->text, "%s", m->plan.name);
+            ls_fmt_print(e->text, sizeof e->text, "%s", m->plan.name);
             e->index = s->tag_index;
         }
     }

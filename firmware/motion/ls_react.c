@@ -2,9 +2,9 @@
 #include "ls_react.h"
 
 #include <math.h>
-#include <stdio.h>
 #include <string.h>
 
+#include "ls_fmt.h"
 #include "ls_kin.h"
 
 enum { PH_RUN = 1, PH_BRAKE, PH_RETURN, PH_SETTLE, PH_SEEK, PH_CONTACT };
@@ -56,7 +56,7 @@ static void emit(ls_motion_events_t *ev, ls_motion_event_kind_t kind, uint32_t r
         /* The precision bounds the copy by the field, whatever buffer the
          * caller formatted into: a longer text is cut, and the compiler can
          * prove that nothing else is (-Wformat-truncation at -O3). */
-        snprintf(e->text, sizeof e->text, "%.*s", (int)(sizeof e->text - 1), text);
+        ls_fmt_print(e->text, sizeof e->text, "%.*s", (int)(sizeof e->text - 1), text);
     }
     if (q != NULL) {
         memcpy(e->q_rad, q, sizeof e->q_rad);
@@ -103,8 +103,8 @@ static int solve(const ls_robot_model_t *m, const double P[16], const double too
 {
     for (int i = 0; i < 3; i++) {
         if (P[12 + i] < m->workspace_min_m[i] || P[12 + i] > m->workspace_max_m[i]) {
-            snprintf(why, len, "workspace: tip %c %.4g m outside [%.4g, %.4g]", "xyz"[i], P[12 + i],
-                     m -> workspace_min_m[i], m -> workspace_max_m[i]);
+            ls_fmt_print(why, len, "workspace: tip %c %.4g m outside [%.4g, %.4g]", "xyz"[i], P[12 + i],
+                         m -> workspace_min_m[i], m -> workspace_max_m[i]);
             return -1;
         }
     }
@@ -112,15 +112,15 @@ static int solve(const ls_robot_model_t *m, const double P[16], const double too
     ls_pose_mul(P, tool_inv, F);
     int st = ls_kin_ik_nearest(m, F, q_prev, q_out);
     if (st != LS_KIN_OK) {
-        snprintf(why, len, "%s",
-                 st == LS_KIN_ELIMITS     ? "a joint limit"
-                 : st == LS_KIN_ESINGULAR ? "the shoulder singularity"
-                                          : "the edge of the reachable space");
+        ls_fmt_print(why, len, "%s",
+                     st == LS_KIN_ELIMITS     ? "a joint limit"
+                     : st == LS_KIN_ESINGULAR ? "the shoulder singularity"
+                                              : "the edge of the reachable space");
         return -1;
     }
     for (int j = 0; j < LS_N_JOINTS; j++) {
         if (fabs(q_out[j] - q_prev[j]) > m->qd_max_rad_s[j] * dt_s) {
-            snprintf(why, len, "joint %d would jump: a joint limit or singularity ahead", j + 1);
+            ls_fmt_print(why, len, "joint %d would jump: a joint limit or singularity ahead", j + 1);
             return -1;
         }
     }
@@ -139,7 +139,7 @@ void ls_react_init(ls_react_t *r, const ls_robot_model_t *model)
 static int refuse(char *why, size_t len, const char *text)
 {
     if (why != NULL && len > 0) {
-        snprintf(why, len, "%s", text);
+        ls_fmt_print(why, len, "%s", text);
     }
     return -1;
 }
@@ -497,7 +497,7 @@ void ls_react_step(ls_react_t *r, double dt_s, const double q_meas[LS_N_JOINTS],
     for (int j = 0; j < LS_N_JOINTS; j++) {
         if (fabs(q_meas[j] - r->q_cmd_[j]) > r->following_error_max_rad) {
             char t[64];
-            snprintf(t, sizeof t, "following error joint %d: %.3g rad", j + 1, q_meas[j] - r->q_cmd_[j]);
+            ls_fmt_print(t, sizeof t, "following error joint %d: %.3g rad", j + 1, q_meas[j] - r->q_cmd_[j]);
             r->active = false;
             emit(ev, LS_MEV_FAULT, p->ref_seq, 0, t, q_meas);
             return;
@@ -616,7 +616,7 @@ bool ls_react_jog_step(ls_react_t *r, double dt_s, const double *twist, double q
         if (!r->jog_limited_) {
             r->jog_limited_ = true;
             char t[80];
-            snprintf(t, sizeof t, "stopped at %.60s", why);
+            ls_fmt_print(t, sizeof t, "stopped at %.60s", why);
             emit(ev, LS_MEV_JOG, 0, 1, t, q_cmd);
         }
         return false;

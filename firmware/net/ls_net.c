@@ -1,7 +1,8 @@
 #include "ls_net.h" /* with cantools' landscape.h: protocol/landscape.dbc */
 
-#include <stdio.h>
 #include <string.h>
+
+#include "ls_fmt.h"
 
 /* Every downlink is one ISO-TP message: the largest the schema allows must fit
  * (protocol/landscape.options bounds it; describe is the largest answer). */
@@ -399,15 +400,15 @@ void ls_net_describe(void *ctx, char *buf, size_t cap)
         }
     }
     size_t n = 0;
-    int w = snprintf(buf, cap,
-                     "frames_in=%u\nframes_out=%u\ntx_full=%u\nlink_rx_dropped=%u\nlink_tx_dropped=%u\n"
-                     "peers_evicted=%u\npeers_preempted=%u\ntx_retried=%u\ntx_given_up=%u\ntx_deduplicated=%u\n"
-                     "frames_bridged=%u\nfwd_dropped=%u\nfwd_emergency_dropped=%u\nlink_close_held=%u\n",
-                     (unsigned)net->frames_in, (unsigned)net->frames_out, (unsigned)net->tx_full,
-                     (unsigned)link_rx_dropped, (unsigned)link_tx_dropped, (unsigned)net->peers_evicted,
-                     (unsigned)net->peers_preempted, (unsigned)net->tx_retried, (unsigned)net->tx_given_up,
-                     (unsigned)net->tx_deduplicated, (unsigned)net->frames_bridged, (unsigned)net->fwd_dropped,
-                     (unsigned)net->fwd_emergency_dropped, (unsigned)link_close_held);
+    int w = ls_fmt_print(buf, cap,
+                         "frames_in=%u\nframes_out=%u\ntx_full=%u\nlink_rx_dropped=%u\nlink_tx_dropped=%u\n"
+                         "peers_evicted=%u\npeers_preempted=%u\ntx_retried=%u\ntx_given_up=%u\ntx_deduplicated=%u\n"
+                         "frames_bridged=%u\nfwd_dropped=%u\nfwd_emergency_dropped=%u\nlink_close_held=%u\n",
+                         (unsigned)net->frames_in, (unsigned)net->frames_out, (unsigned)net->tx_full,
+                         (unsigned)link_rx_dropped, (unsigned)link_tx_dropped, (unsigned)net->peers_evicted,
+                         (unsigned)net->peers_preempted, (unsigned)net->tx_retried, (unsigned)net->tx_given_up,
+                         (unsigned)net->tx_deduplicated, (unsigned)net->frames_bridged, (unsigned)net->fwd_dropped,
+                         (unsigned)net->fwd_emergency_dropped, (unsigned)link_close_held);
     n = w > 0 ? (size_t)w : 0u;
     for (int r = 0; r < LS_ISOTP_N_RESULT_COUNT && n < cap; r++) {
         /* e.g. isotp_unexp_pdu=1: receive and send outcomes together, by ISO name */
@@ -420,7 +421,7 @@ void ls_net_describe(void *ctx, char *buf, size_t cap)
         }
         lower[k] = '\0';
         const char *suffix = strncmp(lower, "n_", 2) == 0 ? lower + 2 : lower;
-        w = snprintf(buf + n, cap - n, "isotp_%s=%u\n", suffix, (unsigned)(rx[r] + tx[r]));
+        w = ls_fmt_print(buf + n, cap - n, "isotp_%s=%u\n", suffix, (unsigned)(rx[r] + tx[r]));
         n += w > 0 ? (size_t)w : 0u;
     }
 }
