@@ -23,9 +23,9 @@ CFLAGS = ["-std=c11", *TARGET]
 # C++ (the kinematics) needs libstdc++-arm-none-eabi-newlib for <cmath>; its definitions and -f options
 # (-fno-exceptions, -fno-rtti, EIGEN_NO_MALLOC) come from its target in the manifest.
 CXXFLAGS = ["-std=c++17", *TARGET]
-# nosys.specs: newlib's system-call stubs (fail with ENOSYS). newlib's strtod (used by the core) can reach
-# __assert_func -> fiprintf -> stdio -> _write/_close/...; fw_main.c's own _sbrk wins over nosys's.
-LDFLAGS = ["--specs=nano.specs", "--specs=nosys.specs", "-nostartfiles", "-Wl,--gc-sections"]
+# No nosys.specs: the firmware formats and parses with firmware/common/ls_fmt.c, so nothing reaches newlib's
+# stdio or system calls; a libc function that needed one would fail the link here.
+LDFLAGS = ["--specs=nano.specs", "-nostartfiles", "-Wl,--gc-sections"]
 ALLOCATORS = {"malloc", "free", "calloc", "realloc", "_malloc_r", "_free_r", "_calloc_r", "_realloc_r", "_sbrk",
               "_sbrk_r", "aligned_alloc", "posix_memalign", "memalign", "_Znwj", "_Znaj", "_ZdlPv", "_ZdaPv"}
 NANOPB_RUNTIME = ("pb_encode.c", "pb_decode.c", "pb_common.c")
@@ -198,7 +198,9 @@ def label(path: str) -> str:
         return "newlib-nano / libm / libgcc"
     name = Path(path).name
     for key, lab in (("ls_cmd_table", "generated dispatch table"), ("ls_core", "firmware/core"),
-                     ("cmd_", "firmware/core"), ("ls_units", "firmware/core"), ("ls_kin", "firmware/kinematics"),
+                     ("cmd_", "firmware/core"), ("ls_units", "firmware/core"),
+                     ("ls_run", "firmware/core"), ("ls_wire", "firmware/core"), ("ls_utf8", "firmware/core"),
+                     ("ls_fmt", "firmware/common/ls_fmt.c"), ("ls_kin", "firmware/kinematics"),
                      ("ls_motion", "firmware/motion/ls_motion.c"),
                      ("ls_react", "firmware/motion/ls_react.c"), ("ls_control", "firmware/control"),
                      ("ls_net", "firmware/net"),
@@ -401,7 +403,8 @@ def bench_footprint(quick: bool) -> Section:
         "archive). `bench/footprint/fw_main.c` is landscaped's composition without the OS (core + net on one CAN "
         "link, the control loop on a 1 ms tick with its events drained into the core, the heartbeat, one "
         "trajectory plan and sample per turn), CAN and arm HALs as volatile registers, an entry point that zeroes "
-        ".bss, and an `_sbrk` that always fails. Not included: the sim and Linux HAL backends, telemetry "
+        ".bss, and an `_sbrk` that always fails (should an allocator be linked again). Not included: the sim and "
+        "Linux HAL backends, telemetry "
         "broadcasts, landscaped's "
 "process glue, a board's vector table and linker script. -DNDEBUG as in a release build. "
         "The image is built twice from the same sources: with the mcu profile's definitions "
@@ -424,6 +427,12 @@ def bench_footprint(quick: bool) -> Section:
             "`_calloc_r`/`_malloc_r` for long inputs and can reach `__assert_func` -> `fiprintf` -> stdio (hence the "
             "nosys stubs). With `_sbrk` failing, that code can never obtain memory (strtod then fails on such input). "
             "To have no allocator in the image at all, the core would need its own formatter and number parser.")
+    else:
+        sec.details.append(
+            "Heap: none. The firmware formats and parses with `firmware/common/ls_fmt.c` (fixed buffers, no stdio), "
+            "not newlib's `vsnprintf` and `strtod`, which linked newlib's allocator; `arm-none-eabi-nm` of the image "
+            f"shows none of {', '.join(sorted(ALLOCATORS))}, and the firmware's objects reference none "
+            "(`arm-none-eabi-nm -u` on each). The image links without newlib's system-call stubs (no nosys.specs).")
     sec.commands.append(f"{CC} {' '.join(CFLAGS)} -I... <sources> {' '.join(LDFLAGS)} -Wl,-Map=fw.map -o fw.elf -lm")
     sec.commands.append("arm-none-eabi-size fw.elf; arm-none-eabi-nm fw.elf | grep -E ' (malloc|free|_sbrk)'")
     return sec

@@ -215,11 +215,11 @@ void _start(void)
     }
 }
 
-/* No heap: newlib-nano's vsnprintf (used by the core's ls_reply) references
- * _realloc_r for its growing-string mode (asprintf), which fixed-buffer
- * snprintf never uses; that drags newlib's malloc in, and malloc needs
- * _sbrk. This _sbrk refuses every request, so even that code could never
- * obtain memory: there is no heap region. */
+/* No heap: the firmware formats and parses with ls_fmt (firmware/common),
+ * so nothing references newlib's allocator and the linker drops this
+ * function. Should something link malloc again (newlib's vsnprintf and
+ * strtod did), this _sbrk refuses every request: there is no heap region,
+ * and bench 7's heap row names what pulled the allocator in. */
 void *_sbrk(ptrdiff_t incr);
 void *_sbrk(ptrdiff_t incr)
 {
