@@ -59,9 +59,9 @@ static bool varint_fits(pb_type_t lt, pb_size_t size, uint64_t v, char *why, siz
         }
         /* a negative number sent for it reads as its 64-bit two's complement */
         if (v > (uint64_t)INT64_MAX) {
-            snprintf(why, cap, " is %" PRId64 ", outside 0..%" PRIu64, (int64_t)v, max);
+            ls_fmt_print(why, cap, " is %" PRId64 ", outside 0..%" PRIu64, (int64_t)v, max);
         } else {
-            snprintf(why, cap, " is %" PRIu64 ", outside 0..%" PRIu64, v, max);
+            ls_fmt_print(why, cap, " is %" PRIu64 ", outside 0..%" PRIu64, v, max);
         }
         return false;
     }
@@ -78,7 +78,7 @@ static bool varint_fits(pb_type_t lt, pb_size_t size, uint64_t v, char *why, siz
     if (sv >= lo && sv <= hi) {
         return true;
     }
-    snprintf(why, cap, " is %" PRId64 ", outside %" PRId64 "..%" PRId64, sv, lo, hi);
+    ls_fmt_print(why, cap, " is %" PRId64 ", outside %" PRId64 "..%" PRId64, sv, lo, hi);
     return false;
 }
 
@@ -134,7 +134,7 @@ static ls_wire_fault_t walk(const pb_msgdesc_t *desc, const void *msg, const uin
             if (!varint_fits(lt, it.data_size, v, why, sizeof why)) {
                 size_t at = name_at(where, cap, used, desc, tag, false, 0);
                 if (where != NULL && at + 1u < cap) {
-                    snprintf(where + at, cap - at, "%s", why);
+                    ls_fmt_print(where + at, cap - at, "%s", why);
                 }
                 return LS_WIRE_RANGE;
             }

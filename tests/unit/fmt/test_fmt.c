@@ -8,6 +8,7 @@
 #include <stdint.h>
 
 #include <cmocka.h>
+#include <inttypes.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -131,6 +132,7 @@ static void test_integers_strings_chars(void **state)
     const char *const volatile null_text = NULL;
     SAME("%s|%10s|%.3s|%.6s", null_text, null_text, null_text, null_text);
     SAME("%lx %lX %llx %zx", 0xdeadbeefUL, 0xfeedUL, 0x0123456789abcdefULL, (size_t)0xffff);
+    SAME("%" PRId64 " %" PRIu64 " %" PRId64 " %" PRIx64, INT64_MIN, UINT64_MAX, (int64_t)-7, (uint64_t)0xABCDEF);
     SAME("%s", "");
     SAME("no conversion at all");
 }
