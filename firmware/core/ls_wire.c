@@ -1,9 +1,9 @@
 /* Naming the field that made nanopb refuse an uplink (ls_wire.h). */
 #include "ls_wire.h"
 
-#include <inttypes.h>
 #include <pb_common.h>
 #include <pb_decode.h>
+#include <stdint.h>
 #include <string.h>
 
 #include "ls_cmd_table.h"
@@ -59,9 +59,9 @@ static bool varint_fits(pb_type_t lt, pb_size_t size, uint64_t v, char *why, siz
         }
         /* a negative number sent for it reads as its 64-bit two's complement */
         if (v > (uint64_t)INT64_MAX) {
-            ls_fmt_print(why, cap, " is %" PRId64 ", outside 0..%" PRIu64, (int64_t)v, max);
+            ls_fmt_print(why, cap, " is %lld, outside 0..%llu", (long long)(int64_t)v, (unsigned long long)max);
         } else {
-            ls_fmt_print(why, cap, " is %" PRIu64 ", outside 0..%" PRIu64, v, max);
+            ls_fmt_print(why, cap, " is %llu, outside 0..%llu", (unsigned long long)v, (unsigned long long)max);
         }
         return false;
     }
@@ -78,7 +78,7 @@ static bool varint_fits(pb_type_t lt, pb_size_t size, uint64_t v, char *why, siz
     if (sv >= lo && sv <= hi) {
         return true;
     }
-    ls_fmt_print(why, cap, " is %" PRId64 ", outside %" PRId64 "..%" PRId64, sv, lo, hi);
+    ls_fmt_print(why, cap, " is %lld, outside %lld..%lld", (long long)sv, (long long)lo, (long long)hi);
     return false;
 }
 
