@@ -444,6 +444,8 @@ def bench_footprint(quick: bool) -> Section:
             "not newlib's `vsnprintf` and `strtod`, which linked newlib's allocator; `arm-none-eabi-nm` of the image "
             f"shows none of {', '.join(sorted(ALLOCATORS))}, and the firmware's objects reference none "
             "(`arm-none-eabi-nm -u` on each). The image links without newlib's system-call stubs (no nosys.specs).")
-    sec.commands.append(f"{CC} {' '.join(CFLAGS)} -I... <sources> {' '.join(LDFLAGS)} -Wl,-Map=fw.map -o fw.elf -lm")
+    mcu_defs = " ".join(f"-D{d}" for d in profiles["mcu"])
+    sec.commands.append(f"{CC} {' '.join(CFLAGS)} {mcu_defs} -I... <sources> {' '.join(LDFLAGS)} "
+                        "-Wl,-Map=fw.map -o fw.elf -lm")
     sec.commands.append("arm-none-eabi-size fw.elf; arm-none-eabi-nm fw.elf | grep -E ' (malloc|free|_sbrk)'")
     return sec
