@@ -33,12 +33,13 @@ import pytest
 from lifecycle_rig import HOME
 
 from conftest import Controller, open_slcan, start_controller
+from landscape import telemetry as tm
 from landscape._generated import landscape_pb2 as pb
 from landscape.registry import build_request, lookup
 from landscape.supervisor import Supervisor, notice_data
 
 TELEMETRY_HZ = 50  # more and the host (python-can reads the pty byte by byte) loses ISO-TP frames
-DEVICE = 0x10
+DEVICE = pb.DEFAULT_DEVICE_ADDRESS
 OWNER, NEWCOMER, OBSERVER = 0xF1, 0x22, 0x23
 #: a request answered within this during a flood (unloaded, a few ms; the issue: never)
 ANSWER_BOUND_S = 1.0
@@ -47,8 +48,6 @@ STOP_BOUND_S = 1.5
 #: connect and read the description (about 40 frames each way) during a flood
 CONNECT_BOUND_S = 3.0
 FLOOD_S = 3.0
-ISOTP_PHYS = 0x18DA0000
-EMERGENCY_ID = 0x00FF0000  # docs/protocol.md "Identifiers and priorities"
 # ls_net.h: the forward budget of bridged frames per output link
 FWD_RATE_FPS = 1000
 FWD_BURST = 128
@@ -136,7 +135,7 @@ class Flood(threading.Thread):
 
 def ff_flood(k: int) -> list[can.Message]:
     """The issue's first flood: first frames announcing 4,095 B from 6 source addresses."""
-    return [can.Message(arbitration_id=ISOTP_PHYS | DEVICE << 8 | (0x60 + i), is_extended_id=True,
+    return [can.Message(arbitration_id=pb.ISOTP_PHYSICAL_BASE | DEVICE << 8 | (0x60 + i), is_extended_id=True,
                         data=bytes([0x1F, 0xFF, 0, 0, 0, 0, 0, 0])) for i in range(6)]
 
 
@@ -147,12 +146,12 @@ def sf_flood(k: int) -> list[can.Message]:
     """The issue's second flood: single frames (a real request) from a new address each time."""
     assert len(SF_REQUEST) <= 7
     payload = bytes([len(SF_REQUEST)]) + SF_REQUEST
-    return [can.Message(arbitration_id=ISOTP_PHYS | DEVICE << 8 | (0x80 + k % 100), is_extended_id=True,
+    return [can.Message(arbitration_id=pb.ISOTP_PHYSICAL_BASE | DEVICE << 8 | (0x80 + k % 100), is_extended_id=True,
                         data=payload.ljust(8, b"\xcc"))]
 
 
 def emergency(k: int) -> list[can.Message]:
-    return [can.Message(arbitration_id=EMERGENCY_ID | 0xF3, is_extended_id=True,
+    return [can.Message(arbitration_id=tm.frame_id("EMERGENCY", 0xF3), is_extended_id=True,
                         data=bytes([1, 1, 0xF3, 0, 0, 0, 0, 0]))]
 
 
@@ -329,7 +328,7 @@ def test_the_forward_budget_caps_a_flood_from_another_link(tmp_path: Path) -> No
         seen = {"n": 0, "last": 0.0}
 
         def count(msg: can.Message) -> None:
-            if msg.arbitration_id == 0x1CFF1042:
+            if msg.arbitration_id == tm.frame_id("STATUS", 0x42):
                 seen["last"] = time.monotonic()
                 seen["n"] += 1
 

@@ -19,15 +19,19 @@ import pytest
 from landscape._generated import landscape_pb2 as pb
 from landscape.supervisor import Supervisor
 
-DEVICE = 0x10
-OWNER = 0xF1
+DEVICE = pb.DEFAULT_DEVICE_ADDRESS
+OWNER = pb.DEFAULT_HOST_ADDRESS
 OTHER = 0xF2
 WAIT_S = 1.0
 NO_ANSWER_S = 0.5
 
 
 def functional_id(target: int, source: int) -> int:
-    return 0x18DB0000 | target << 8 | source
+    return pb.ISOTP_FUNCTIONAL_BASE | target << 8 | source
+
+
+def physical_id(target: int, source: int) -> int:
+    return pb.ISOTP_PHYSICAL_BASE | target << 8 | source
 
 
 def single_frame(uplink: pb.Uplink) -> bytes:
@@ -186,7 +190,8 @@ def test_multi_frame_functional_request_is_ignored(bus: can.BusABC, notifier: ca
 
     class FcWatch(can.Listener):
         def on_message_received(self, msg: can.Message) -> None:
-            if msg.arbitration_id == 0x18DBF110 or (msg.arbitration_id == 0x18DAF110 and msg.data[0] >> 4 == 3):
+            if msg.arbitration_id == functional_id(OWNER, DEVICE) or (
+                    msg.arbitration_id == physical_id(OWNER, DEVICE) and msg.data[0] >> 4 == 3):
                 fcs.append(msg)
 
     watch = FcWatch()

@@ -19,19 +19,20 @@ import isotp
 import pytest
 
 from conftest import Controller
+from landscape import telemetry as tm
 from landscape._generated import landscape_pb2 as pb
 from landscape.errors import ArgumentError
 from landscape.registry import COMMANDS
 from landscape.supervisor import Supervisor
 
-DEVICE = 0x10
-HOST = 0xF1
+DEVICE = pb.DEFAULT_DEVICE_ADDRESS
+HOST = pb.DEFAULT_HOST_ADDRESS
 N_CR_S = 1.0  # the firmware's N_Cr (docs/protocol.md)
 WAIT_S = 1.0
 
 
 def phys_id(target: int, source: int) -> int:
-    return 0x18DA0000 | target << 8 | source
+    return pb.ISOTP_PHYSICAL_BASE | target << 8 | source
 
 
 def frame(can_id: int, data: bytes) -> can.Message:
@@ -368,8 +369,10 @@ def registry_name(request_: pb.Request) -> str:
 
 def test_random_frames_and_slcan_lines_do_not_hurt(bus: can.BusABC, sup: Supervisor, controller: Controller) -> None:
     rng = random.Random(20261122)
-    ids = [phys_id(DEVICE, HOST), phys_id(DEVICE, 0xF7), 0x18DBFFF7, 0x18DB10F7, 0x14FF01F7, 0x1CFF10F7,
-           0x18DA10F1 & 0x7FF]
+    functional = pb.ISOTP_FUNCTIONAL_BASE
+    ids = [phys_id(DEVICE, HOST), phys_id(DEVICE, 0xF7), functional | pb.FUNCTIONAL_ALL_DEVICES << 8 | 0xF7,
+           functional | DEVICE << 8 | 0xF7, tm.frame_id("HEARTBEAT", 0xF7), tm.frame_id("STATUS", 0xF7),
+           phys_id(DEVICE, HOST) & 0x7FF]
     for i in range(600):
         can_id = rng.choice(ids) if i % 3 else rng.getrandbits(29)
         data = bytes(rng.getrandbits(8) for _ in range(rng.randint(0, 8)))
@@ -378,7 +381,8 @@ def test_random_frames_and_slcan_lines_do_not_hurt(bus: can.BusABC, sup: Supervi
                              is_remote_frame=rng.random() < 0.05))
         if i % 50 == 0:
             time.sleep(0.01)
-    junk = [b"T\r", b"t12\r", b"T18DA10F19" + b"00" * 9 + b"\r", b"TXYZ\r", b"\x00\xff\xfe\r",
+    too_long = f"T{phys_id(DEVICE, HOST):08X}9".encode() + b"00" * 9 + b"\r"  # DLC 9
+    junk = [b"T\r", b"t12\r", too_long, b"TXYZ\r", b"\x00\xff\xfe\r",
             b"Z9\r", b"S9\r", b"x" * 600 + b"\r", b"t1238GG\r", b"r7FF\r", b"R1FFFFFFF0\r"]
     for j in junk:
         bus.serialPortOrig.write(j)  # type: ignore[attr-defined]

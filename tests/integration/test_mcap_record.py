@@ -13,6 +13,7 @@ import pytest
 from mcap.reader import make_reader
 
 from conftest import Controller
+from landscape import telemetry as tm
 from landscape.mcap_log import CHANNELS, read_mcap
 from landscape.urdf import ArmChain
 
@@ -105,7 +106,7 @@ def test_demo_recorded_to_mcap(controller: Controller, tmp_path: Path) -> None:
     assert all(isinstance(m["inputs"], int) and isinstance(m["outputs"], int) for _, m in msgs["/dio"])
     ids = {m["id"] for _, m in msgs["/can"]}
     assert len(msgs["/can"]) >= 9 * len(js)  # 10 telemetry frames per cycle, plus ISO-TP
-    assert any(i & 0x1FFFFF00 == 0x1CFF1100 for i in ids)
+    assert any(i & tm.ID_MASK == tm.frame_id("JOINTS_12", 0) for i in ids)
 
 
 def test_record_command_writes_mcap_with_a_summary(controller: Controller, tmp_path: Path) -> None:

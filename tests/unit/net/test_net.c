@@ -26,6 +26,9 @@
 
 #include "ls_net.h"
 
+/* A STATUS broadcast of node 0x42 (the DBC's id with that sender). */
+#define STATUS_OF_42 (LS_ID_OF_DBC(LANDSCAPE_STATUS_FRAME_ID) | 0x42u)
+
 #define NODE 0x01u
 #define SUP_A 0x21u
 #define SUP_B 0x22u
@@ -302,7 +305,7 @@ static void test_frames_that_are_not_ours_are_ignored(void **state)
     link_put(&g_link[0], phys(NODE, SUP_A) & 0x7FFu, 0, d, 8);
     link_put(&g_link[0], phys(NODE, SUP_A), HAL_CAN_F_EXT | HAL_CAN_F_RTR, d, 0);
     /* An unrelated 29-bit id. */
-    link_put(&g_link[0], 0x1CFF1021u, HAL_CAN_F_EXT, d, 8);
+    link_put(&g_link[0], (LS_ID_OF_DBC(LANDSCAPE_STATUS_FRAME_ID) | 0x21u), HAL_CAN_F_EXT, d, 8);
     ls_net_poll(&g_net, 1000);
     assert_int_equal(g_ncalls, 0);
     assert_false(peer_used(SUP_A));
@@ -766,7 +769,7 @@ static void test_bridged_frames_are_capped_per_output_link(void **state)
     setup_net(2);
     const uint8_t d[8] = { 0 };
     for (int i = 0; i < 500; i++) {
-        link_put(&g_link[0], 0x1CFF1042u, HAL_CAN_F_EXT, d, 8);
+        link_put(&g_link[0], STATUS_OF_42, HAL_CAN_F_EXT, d, 8);
     }
     ls_net_poll(&g_net, 1000);
     ls_net_poll(&g_net, 1000); /* 256 frames a turn: all 500 read at one instant */
@@ -784,7 +787,7 @@ static void test_bridged_frames_are_capped_per_output_link(void **state)
     assert_int_equal(describe_value("fwd_emergency_dropped"), 1);
     /* the budget refills at its rate: 100 ms later, 200 frames */
     for (int i = 0; i < 300; i++) {
-        link_put(&g_link[0], 0x1CFF1042u, HAL_CAN_F_EXT, d, 8);
+        link_put(&g_link[0], STATUS_OF_42, HAL_CAN_F_EXT, d, 8);
     }
     ls_net_poll(&g_net, 1000 + 100000);
     ls_net_poll(&g_net, 1000 + 100000);
@@ -830,13 +833,13 @@ static void test_bridging_between_links(void **state)
     setup_net(3);
     const uint8_t d[8] = { 1, 2, 3, 4, 5, 6, 7, 8 };
     /* Someone else's traffic on link 1: copied to links 0 and 2, not back to 1. */
-    link_put(&g_link[1], 0x1CFF1042u, HAL_CAN_F_EXT, d, 8);
+    link_put(&g_link[1], STATUS_OF_42, HAL_CAN_F_EXT, d, 8);
     link_put(&g_link[1], 0x123u, 0, d, 3); /* 11-bit frames too */
     ls_net_poll(&g_net, 1000);
     assert_int_equal(g_link[0].n_tx, 2);
     assert_int_equal(g_link[2].n_tx, 2);
     assert_int_equal(g_link[1].n_tx, 0);
-    assert_int_equal(g_link[0].tx[0].id, 0x1CFF1042u);
+    assert_int_equal(g_link[0].tx[0].id, STATUS_OF_42);
     assert_int_equal(g_link[0].tx[1].id, 0x123u);
     assert_int_equal(g_link[0].tx[1].flags, 0);
     assert_int_equal(g_link[2].tx[1].len, 3);
@@ -863,7 +866,7 @@ static void test_single_link_does_not_echo(void **state)
     (void)state;
     setup_net(1);
     const uint8_t d[8] = { 0 };
-    link_put(&g_link[0], 0x1CFF1042u, HAL_CAN_F_EXT, d, 8);
+    link_put(&g_link[0], STATUS_OF_42, HAL_CAN_F_EXT, d, 8);
     ls_net_poll(&g_net, 1000);
     assert_int_equal(g_link[0].n_tx, 0);
 }
@@ -898,7 +901,7 @@ static void test_a_busy_link_does_not_starve_the_others(void **state)
     setup_net(2);
     const uint8_t d[8] = { 0 };
     for (int i = 0; i < 300; i++) {
-        link_put(&g_link[0], 0x1CFF1042u, HAL_CAN_F_EXT, d, 8);
+        link_put(&g_link[0], STATUS_OF_42, HAL_CAN_F_EXT, d, 8);
     }
     const uint8_t req[] = { 0x60 };
     put_sf(&g_link[1], phys(NODE, SUP_B), req, 1);
