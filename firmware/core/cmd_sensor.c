@@ -18,6 +18,7 @@
 #include "ls_core.h"
 #include "ls_fmt.h"
 #include "ls_kin.h"
+#include "ls_math.h"
 #include "ls_motion.h"
 #include "ls_react.h"
 #include "ls_units.h"
@@ -420,7 +421,7 @@ int32_t ls_h_comply(struct ls_core *core, struct ls_call *call)
     if (fabs(cosang) > COMPLY_MAX_COS) {
         return ls_reply(call, ls_RetCode_CMD_PARAM_ERR,
                         "%s: the travel and the compliance direction must be orthogonal (they are %.1f deg apart)",
-                        what, acos(fmax(-1.0, fmin(1.0, cosang))) * 180.0 / 3.14159265358979323846);
+                        what, acos(fmax(-1.0, fmin(1.0, cosang))) * 180.0 / LS_PI);
     }
     const double *ft = r->thresholds;
     plan.f_target_N = ft[0] * plan.n_tool[0] + ft[1] * plan.n_tool[1] + ft[2] * plan.n_tool[2];

@@ -15,6 +15,7 @@
 #include "landscape.pb.h"
 #include "ls_cmd_table.h"
 #include "ls_core_state.h"
+#include "ls_math.h"
 #include "ls_robot_model.h"
 #include "ls_run.h"
 #include "ls_units.h"
@@ -112,7 +113,7 @@ typedef struct {
  * within +-LS_FRAME_ANGLE_MAX_RAD. Names of points and paths are not empty. */
 #define LS_RATE_MIN_FRACTION 0.001
 #define LS_RATE_MIN_PCT (100.0 * LS_RATE_MIN_FRACTION)
-#define LS_FRAME_ANGLE_MAX_RAD (2.0 * 3.14159265358979323846)
+#define LS_FRAME_ANGLE_MAX_RAD (2.0 * LS_PI)
 
 /* Settings of seed 3.2, always in SI (m, rad, s) inside the firmware; the
  * handlers convert from and to the units of the calling session

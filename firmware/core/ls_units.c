@@ -4,9 +4,7 @@
 
 #include <math.h>
 
-#ifndef M_PI
-#define M_PI 3.14159265358979323846
-#endif
+#include "ls_math.h"
 
 /* Metres per unit; NaN for a value outside the schema. */
 static double linear_factor(ls_LinearUnit u)
@@ -25,7 +23,7 @@ static double angular_factor(ls_AngularUnit u)
 {
     switch (u) {
     case ls_AngularUnit_RADIANS: return 1.0;
-    case ls_AngularUnit_DEGREES: return M_PI / 180.0;
+    case ls_AngularUnit_DEGREES: return LS_PI / 180.0;
     }
     return NAN;
 }

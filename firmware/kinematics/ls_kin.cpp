@@ -3,6 +3,7 @@
 // Only fixed-size Eigen types: nothing here allocates or throws, so every
 // entry point may run in the control loop (see ls_kin.h for costs).
 #include "ls_kin.h"
+#include "ls_math.h"
 
 #include <Eigen/Dense>
 #include <cmath>
@@ -18,7 +19,7 @@ using Eigen::Vector3d;
 using Mat6 = Eigen::Matrix<double, 6, 6>;
 using Vec6 = Eigen::Matrix<double, 6, 1>;
 
-constexpr double kPi = 3.14159265358979323846;
+constexpr double kPi = LS_PI;
 constexpr double kTwoPi = 2.0 * kPi;
 
 // Geometry tolerances (documented in ls_kin.h).

@@ -2,17 +2,18 @@
 
 #include <math.h>
 
-#define PI 3.14159265358979323846
-#define DEG (PI / 180.0)
+#include "ls_math.h"
+
+#define DEG (LS_PI / 180.0)
 
 const ls_robot_model_t ls_robot_model_default = {
     .name = "ls-sim6",
     .dh = {
-        { .a_m = 0.050, .alpha_rad = -PI / 2, .d_m = 0.400, .theta_offset_rad = 0.0 },
-        { .a_m = 0.400, .alpha_rad = 0.0, .d_m = 0.0, .theta_offset_rad = -PI / 2 },
-        { .a_m = 0.040, .alpha_rad = -PI / 2, .d_m = 0.0, .theta_offset_rad = 0.0 },
-        { .a_m = 0.0, .alpha_rad = PI / 2, .d_m = 0.380, .theta_offset_rad = 0.0 },
-        { .a_m = 0.0, .alpha_rad = -PI / 2, .d_m = 0.0, .theta_offset_rad = 0.0 },
+        { .a_m = 0.050, .alpha_rad = -LS_PI / 2, .d_m = 0.400, .theta_offset_rad = 0.0 },
+        { .a_m = 0.400, .alpha_rad = 0.0, .d_m = 0.0, .theta_offset_rad = -LS_PI / 2 },
+        { .a_m = 0.040, .alpha_rad = -LS_PI / 2, .d_m = 0.0, .theta_offset_rad = 0.0 },
+        { .a_m = 0.0, .alpha_rad = LS_PI / 2, .d_m = 0.380, .theta_offset_rad = 0.0 },
+        { .a_m = 0.0, .alpha_rad = -LS_PI / 2, .d_m = 0.0, .theta_offset_rad = 0.0 },
         { .a_m = 0.0, .alpha_rad = 0.0, .d_m = 0.080, .theta_offset_rad = 0.0 },
     },
     .q_min_rad = { -170 * DEG, -110 * DEG, -110 * DEG, -185 * DEG, -125 * DEG, -350 * DEG },

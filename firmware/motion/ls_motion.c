@@ -7,8 +7,8 @@
 
 #include "ls_fmt.h"
 #include "ls_kin.h"
+#include "ls_math.h"
 
-#define PI 3.14159265358979323846
 #define START_TOL_RAD 1e-3
 #define MIN_STOP_RAMP_S 0.05
 /* Stop ramps are this many times the shortest one that keeps the ramp's own
@@ -17,7 +17,7 @@
  * and within a_max during cruise. */
 #define STOP_RAMP_MARGIN 2.0
 #define SAMPLE_STEP_M 1e-3
-#define SAMPLE_STEP_RAD (0.5 * PI / 180.0)
+#define SAMPLE_STEP_RAD (0.5 * LS_PI / 180.0)
 #define SAMPLE_STEP_S 0.01
 #define MAX_SAMPLES 20000
 
@@ -293,8 +293,8 @@ static int explain_ik(const ls_robot_model_t *model, const ls_motion_seg_t *s, d
     if (kin_status == LS_KIN_ELIMITS) {
         ls_robot_model_t wide = *model;
         for (int j = 0; j < LS_N_JOINTS; j++) {
-            wide.q_min_rad[j] = -4.0 * PI;
-            wide.q_max_rad[j] = 4.0 * PI;
+            wide.q_min_rad[j] = -4.0 * LS_PI;
+            wide.q_max_rad[j] = 4.0 * LS_PI;
         }
         double q[LS_N_JOINTS];
         if (ls_kin_ik_nearest(&wide, F, seed, q) == LS_KIN_OK) {
@@ -528,7 +528,7 @@ static int circumcircle(const double p0[3], const double pv[3], const double p1[
     v3_cross(w, u, v);
     double ang = atan2(v3_dot(r1, v), v3_dot(r1, u));
     if (ang <= 0.0) {
-        ang += 2.0 * PI;
+        ang += 2.0 * LS_PI;
     }
     *angle = ang;
     return LS_MOTION_OK;
@@ -548,7 +548,7 @@ int ls_motion_arc_split(const double p0[3], const double pv[3], const double p1[
     v3_sub(pv, c, d);
     double av = atan2(v3_dot(d, v), v3_dot(d, u));
     if (av <= 0.0) {
-        av += 2.0 * PI;
+        av += 2.0 * LS_PI;
     }
     const double ta = 0.5 * av, tb = 0.5 * (av + ang);
     for (int i = 0; i < 3; i++) {

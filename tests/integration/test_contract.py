@@ -5,6 +5,7 @@ heartbeat period stated at connect (docs/protocol.md "RSVP", "Disconnect handler
 "Liveness"; docs/conformance.md)."""
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -93,7 +94,7 @@ def test_units_belong_to_the_session(bus: can.BusABC) -> None:
             assert b.get_units().result == {"linear_units": "meters", "angular_units": "radians"}
             qa = a.get_robot_position().result["joints"]
             qb = b.get_robot_position().result["joints"]
-            assert qa == pytest.approx([v * 180.0 / 3.141592653589793 for v in qb], abs=1e-3)
+            assert qa == pytest.approx([math.degrees(v) for v in qb], abs=1e-3)
             assert "units=millimeters,degrees" in _status_line(b, OWNER)
             assert "units=meters,radians" in _status_line(b, OTHER)
         # the next session of the same supervisor starts in SI (issue 19: `landscape demo`

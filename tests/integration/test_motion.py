@@ -30,7 +30,7 @@ HOME = [0.0, 0.3, 0.3, 0.0, 0.9, 0.0]  # rad, a pose well inside the reach
 def _dh_table() -> list[tuple[float, float, float, float]]:
     """(a, alpha, d, theta_offset) per joint, parsed from the model source."""
     text = (ROOT / "firmware" / "model" / "ls_robot_model.c").read_text()
-    env = {"PI": math.pi}
+    env = {"LS_PI": math.pi}  # common/ls_math.h
     rows = re.findall(r"\{ \.a_m = ([^,]+), \.alpha_rad = ([^,]+), \.d_m = ([^,]+), \.theta_offset_rad = ([^}]+?) \}",
                       text)
     assert len(rows) == 6, "the DH table of ls_robot_model.c changed shape: update this parser"

@@ -9,9 +9,9 @@
 #include <ode/ode.h>
 
 #include "sim_world_internal.h"
+#include "ls_math.h"
 
 #define NJ HAL_SIM_ARM_JOINTS
-#define PI 3.14159265358979323846
 
 #define GRAVITY_M_S2 9.81
 #define SERVO_KP_1_S 200.0
@@ -30,7 +30,7 @@
 #define TIP_RADIUS_M 0.01
 #define LASER_RANGE_M 0.5
 #define RACK_POS_TOL_M 0.002
-#define RACK_ANG_TOL_RAD (2.0 * PI / 180.0)
+#define RACK_ANG_TOL_RAD (2.0 * LS_PI / 180.0)
 #define MAX_DT_S 0.1
 
 typedef struct {
@@ -42,8 +42,8 @@ typedef struct {
 } sim_tool_desc_t;
 
 static const sim_tool_desc_t k_tools[] = {
-    { "gripper", { 0.0, 0.0, 0.12, 0.0, 0.0, 0.0 }, 0.4, { 0.30, 0.50, 0.35, PI, 0.0, 0.0 }, 0x1u },
-    { "probe", { 0.0, 0.0, 0.15, 0.0, 0.0, 0.0 }, 0.2, { 0.30, -0.50, 0.35, PI, 0.0, 0.0 }, 0x0u },
+    { "gripper", { 0.0, 0.0, 0.12, 0.0, 0.0, 0.0 }, 0.4, { 0.30, 0.50, 0.35, LS_PI, 0.0, 0.0 }, 0x1u },
+    { "probe", { 0.0, 0.0, 0.15, 0.0, 0.0, 0.0 }, 0.2, { 0.30, -0.50, 0.35, LS_PI, 0.0, 0.0 }, 0x0u },
 };
 #define N_TOOLS ((int)(sizeof k_tools / sizeof k_tools[0]))
 
@@ -361,7 +361,7 @@ static void build_arm(void)
         dJointAttach(h, body, i == 0 ? 0 : W.link[i - 1]);
         dJointSetHingeAnchor(h, a->p[0], a->p[1], a->p[2]);
         dJointSetHingeAxis(h, a->R[2], a->R[5], a->R[8]);
-        if (m->q_min_rad[i] > -PI && m->q_max_rad[i] < PI) {
+        if (m->q_min_rad[i] > -LS_PI && m->q_max_rad[i] < LS_PI) {
             dJointSetHingeParam(h, dParamLoStop, m->q_min_rad[i]);
             dJointSetHingeParam(h, dParamHiStop, m->q_max_rad[i]);
         }
@@ -432,8 +432,8 @@ static void read_joints(void)
 {
     for (int i = 0; i < NJ; i++) {
         double a = dJointGetHingeAngle(W.hinge[i]);
-        double k = nearbyint((W.q[i] - a) / (2.0 * PI));
-        W.q[i] = a + 2.0 * PI * k;
+        double k = nearbyint((W.q[i] - a) / (2.0 * LS_PI));
+        W.q[i] = a + 2.0 * LS_PI * k;
         W.qd[i] = dJointGetHingeAngleRate(W.hinge[i]);
     }
 }

@@ -20,12 +20,10 @@
 #include "ls_core.h"
 #include "ls_core_events.h"
 #include "ls_kin.h"
+#include "ls_math.h"
 #include "ls_units.h"
 #include "ls_utf8.h"
 
-#ifndef M_PI
-#define M_PI 3.14159265358979323846
-#endif
 
 /* cmocka's assert_float_equal works in float: too coarse for these values. */
 #define assert_near(a, b, eps) assert_near_((a), (b), (eps), #a, __FILE__, __LINE__)
@@ -328,8 +326,8 @@ static void test_units_conversions(void **state)
     assert_true(ls_units_to_si_linear(ls_LinearUnit_METERS, 0.125) == 0.125);
     assert_true(ls_units_from_si_linear(ls_LinearUnit_INCHES, 0.0254) == 1.0);
     assert_true(ls_units_from_si_linear(ls_LinearUnit_FEET, 0.9144) == 3.0);
-    assert_true(ls_units_to_si_angular(ls_AngularUnit_DEGREES, 180.0) == M_PI);
-    assert_true(ls_units_from_si_angular(ls_AngularUnit_DEGREES, M_PI / 2) == 90.0);
+    assert_true(ls_units_to_si_angular(ls_AngularUnit_DEGREES, 180.0) == LS_PI);
+    assert_true(ls_units_from_si_angular(ls_AngularUnit_DEGREES, LS_PI / 2) == 90.0);
     assert_true(ls_units_from_si_angular(ls_AngularUnit_RADIANS, 0.5) == 0.5);
     assert_string_equal(ls_units_linear_name(ls_LinearUnit_METERS), "meters");
     assert_string_equal(ls_units_linear_name(ls_LinearUnit_MILLIMETERS), "millimeters");
@@ -349,7 +347,7 @@ static void test_units_conversions(void **state)
     double p[6] = { 100.0, -200.0, 50.0, 90.0, -45.0, 180.0 }, si[6], back[6];
     ls_units_pose_to_si(ls_LinearUnit_MILLIMETERS, ls_AngularUnit_DEGREES, p, si);
     assert_true(si[0] == 0.1 && si[1] == -0.2 && si[2] == 0.05);
-    assert_true(si[3] == M_PI / 2 && si[4] == -M_PI / 4 && si[5] == M_PI);
+    assert_true(si[3] == LS_PI / 2 && si[4] == -LS_PI / 4 && si[5] == LS_PI);
     ls_units_pose_from_si(ls_LinearUnit_MILLIMETERS, ls_AngularUnit_DEGREES, si, back);
     for (int i = 0; i < 6; i++) {
         assert_near(back[i], p[i], 1e-12);
@@ -385,7 +383,7 @@ static void test_units_round_trip(void **state)
     memcpy(t->offset, off, sizeof off);
     assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
     assert_near(g_core.settings.tool_offset[2], 0.15, 1e-15);
-    assert_near(g_core.settings.tool_offset[3], M_PI / 2, 1e-15);
+    assert_near(g_core.settings.tool_offset[3], LS_PI / 2, 1e-15);
 
     req(ls_Request_get_tool_offsets_tag);
     r = must(HOST_A);
@@ -413,7 +411,7 @@ static void test_units_round_trip(void **state)
     sp->has_speed = true;
     assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
     assert_near(g_core.settings.linear_speed_m_s, 0.5, 1e-15);
-    assert_near(g_core.settings.angular_speed_rad_s, M_PI / 2, 1e-15);
+    assert_near(g_core.settings.angular_speed_rad_s, LS_PI / 2, 1e-15);
 
     req(ls_Request_get_velocities_tag);
     r = must(HOST_A);
@@ -423,8 +421,8 @@ static void test_units_round_trip(void **state)
     assert_near(v->world_angular_velocity, 90.0, 1e-9);
     assert_int_equal(v->joint_velocities_count, 6);
     /* joint 1: 40 % of 2.5 rad/s = 1 rad/s */
-    assert_near(v->joint_velocities[0], 180.0 / M_PI, 1e-9);
-    assert_near(v->joint_velocities[5], 0.4 * 6.0 * 180.0 / M_PI, 1e-9);
+    assert_near(v->joint_velocities[0], 180.0 / LS_PI, 1e-9);
+    assert_near(v->joint_velocities[5], 0.4 * 6.0 * 180.0 / LS_PI, 1e-9);
 
     ls_SetAccelerationReq *ac = &req(ls_Request_set_acceleration_tag)->cmd.set_acceleration;
     ac->attribute = ls_AccelType_LINEAR_ACCEL;
@@ -449,26 +447,26 @@ static void test_units_round_trip(void **state)
     assert_near(a->percent_accel, 100.0, 0);
     assert_near(a->world_linear_accel, 2000.0, 1e-9);
     assert_near(a->world_angular_accel, 360.0, 1e-9);
-    assert_near(a->joint_accels[0], 8.0 * 180.0 / M_PI, 1e-9);
+    assert_near(a->joint_accels[0], 8.0 * 180.0 / LS_PI, 1e-9);
 
     req(ls_Request_get_max_velocities_tag);
     const ls_GetMaxVelocitiesRes *mv = &must(HOST_A)->result.get_max_velocities;
     assert_near(mv->max_world_linear_velocity, 1000.0, 1e-9);
-    assert_near(mv->max_world_angular_velocity, 3.0 * 180.0 / M_PI, 1e-9);
+    assert_near(mv->max_world_angular_velocity, 3.0 * 180.0 / LS_PI, 1e-9);
     assert_int_equal(mv->max_joint_velocities_count, 6);
-    assert_near(mv->max_joint_velocities[2], 3.0 * 180.0 / M_PI, 1e-9);
+    assert_near(mv->max_joint_velocities[2], 3.0 * 180.0 / LS_PI, 1e-9);
     req(ls_Request_get_max_accelerations_tag);
     const ls_GetMaxAccelerationsRes *ma = &must(HOST_A)->result.get_max_accelerations;
     assert_near(ma->max_world_linear_accel, 4000.0, 1e-9);
-    assert_near(ma->max_world_angular_accel, 12.0 * 180.0 / M_PI, 1e-9);
-    assert_near(ma->max_joint_accels[5], 20.0 * 180.0 / M_PI, 1e-9);
+    assert_near(ma->max_world_angular_accel, 12.0 * 180.0 / LS_PI, 1e-9);
+    assert_near(ma->max_joint_accels[5], 20.0 * 180.0 / LS_PI, 1e-9);
 
     /* back to inches: the same SI settings read in the new unit */
     set_units(ls_LinearUnit_INCHES, ls_AngularUnit_RADIANS);
     req(ls_Request_get_tool_offsets_tag);
     r = must(HOST_A);
     assert_near(r->result.get_tool_offsets.offset[2], 0.15 / 0.0254, 1e-9);
-    assert_near(r->result.get_tool_offsets.offset[3], M_PI / 2, 1e-12);
+    assert_near(r->result.get_tool_offsets.offset[3], LS_PI / 2, 1e-12);
     req(ls_Request_get_velocities_tag);
     assert_near(must(HOST_A)->result.get_velocities.world_linear_velocity, 0.5 / 0.0254, 1e-9);
     /* the other session reads the same SI settings in its own units, SI */
@@ -662,7 +660,7 @@ static void test_robot_position_is_the_tool_tip_in_the_world(void **state)
     const ls_GetRobotPositionRes *p = &r->result.get_robot_position;
     assert_int_equal(p->joints_count, 6);
     for (int j = 0; j < 6; j++) {
-        assert_near(p->joints[j], q[j] * 180.0 / M_PI, 1e-9);
+        assert_near(p->joints[j], q[j] * 180.0 / LS_PI, 1e-9);
     }
     double F[16], flange[6];
     assert_int_equal(ls_kin_fk(&ls_robot_model_default, q, F), LS_KIN_OK);
@@ -672,12 +670,12 @@ static void test_robot_position_is_the_tool_tip_in_the_world(void **state)
     assert_int_equal(p->world_pose_count, 6);
     for (int i = 0; i < 3; i++) {
         assert_near(p->world_pose[i], tip[i] * 1000.0, 1e-9);
-        assert_near(p->world_pose[i + 3], flange[i + 3] * 180.0 / M_PI, 1e-9);
+        assert_near(p->world_pose[i + 3], flange[i + 3] * 180.0 / LS_PI, 1e-9);
     }
 
     /* a rotated world frame: yaw 90 deg maps base +y to world -x */
     g_core.settings.world_frame[0] = 0.0;
-    g_core.settings.world_frame[5] = M_PI / 2;
+    g_core.settings.world_frame[5] = LS_PI / 2;
     g_core.settings.tool_offset[2] = 0.0;
     req(ls_Request_get_robot_position_tag);
     p = &must(HOST_A)->result.get_robot_position;

@@ -25,7 +25,7 @@ void kt_random_q(kt_rng_t *r, const ls_robot_model_t *m, double margin_rad, doub
 
 double kt_angdiff(double a, double b)
 {
-    return remainder(a - b, 2.0 * KT_PI);
+    return remainder(a - b, 2.0 * LS_PI);
 }
 
 void kt_log_rot(const double R[16], double w[3])

@@ -5,9 +5,9 @@
 
 #include <stdint.h>
 
+#include "ls_math.h"
 #include "ls_robot_model.h"
 
-#define KT_PI 3.14159265358979323846
 
 typedef struct {
     uint64_t s;

@@ -16,7 +16,6 @@
 #include "ls_kin.h"
 #include "ls_robot_model.h"
 
-#define PI KT_PI
 #define M (&ls_robot_model_default)
 
 /* cmocka's assert_float_equal works in float; this one in double, NaN fails. */
@@ -83,11 +82,11 @@ static ls_robot_model_t variant_model(void)
 {
     ls_robot_model_t v = ls_robot_model_default;
     const ls_dh_t dh[6] = {
-        { .a_m = 0.10, .alpha_rad = PI / 2, .d_m = 0.35, .theta_offset_rad = 0.2 },
+        { .a_m = 0.10, .alpha_rad = LS_PI / 2, .d_m = 0.35, .theta_offset_rad = 0.2 },
         { .a_m = 0.45, .alpha_rad = 0.0, .d_m = 0.12, .theta_offset_rad = 0.3 },
-        { .a_m = -0.05, .alpha_rad = PI / 2, .d_m = 0.03, .theta_offset_rad = -0.4 },
-        { .a_m = 0.0, .alpha_rad = -PI / 2, .d_m = 0.42, .theta_offset_rad = 0.5 },
-        { .a_m = 0.0, .alpha_rad = PI / 2, .d_m = 0.0, .theta_offset_rad = -0.6 },
+        { .a_m = -0.05, .alpha_rad = LS_PI / 2, .d_m = 0.03, .theta_offset_rad = -0.4 },
+        { .a_m = 0.0, .alpha_rad = -LS_PI / 2, .d_m = 0.42, .theta_offset_rad = 0.5 },
+        { .a_m = 0.0, .alpha_rad = LS_PI / 2, .d_m = 0.0, .theta_offset_rad = -0.6 },
         { .a_m = 0.0, .alpha_rad = 0.3, .d_m = 0.10, .theta_offset_rad = 0.7 },
     };
     memcpy(v.dh, dh, sizeof dh);
@@ -109,19 +108,19 @@ static void test_fk_hand_configurations(void **state)
 {
     (void)state;
     /* q1 = 90 deg: the whole arm turned about z. */
-    fk_expect((double[]){ PI / 2, 0, 0, 0, 0, 0 }, (double[]){ 0, 0, 1 }, (double[]){ 1, 0, 0 }, (double[]){ 0, 1, 0 },
+    fk_expect((double[]){ LS_PI / 2, 0, 0, 0, 0, 0 }, (double[]){ 0, 0, 1 }, (double[]){ 1, 0, 0 }, (double[]){ 0, 1, 0 },
               (double[]){ 0, 0.51, 0.84 });
     /* q2 = 90 deg: upper arm horizontal, forearm pointing down. */
-    fk_expect((double[]){ 0, PI / 2, 0, 0, 0, 0 }, (double[]){ 1, 0, 0 }, (double[]){ 0, -1, 0 },
+    fk_expect((double[]){ 0, LS_PI / 2, 0, 0, 0, 0 }, (double[]){ 1, 0, 0 }, (double[]){ 0, -1, 0 },
               (double[]){ 0, 0, -1 }, (double[]){ 0.49, 0, -0.06 });
     /* q3 = 90 deg: upper arm vertical, forearm down from the elbow. */
-    fk_expect((double[]){ 0, 0, PI / 2, 0, 0, 0 }, (double[]){ 1, 0, 0 }, (double[]){ 0, -1, 0 },
+    fk_expect((double[]){ 0, 0, LS_PI / 2, 0, 0, 0 }, (double[]){ 1, 0, 0 }, (double[]){ 0, -1, 0 },
               (double[]){ 0, 0, -1 }, (double[]){ 0.09, 0, 0.34 });
     /* q5 = 90 deg: wrist bent down, flange 0.08 below the wrist centre. */
-    fk_expect((double[]){ 0, 0, 0, 0, PI / 2, 0 }, (double[]){ 1, 0, 0 }, (double[]){ 0, -1, 0 },
+    fk_expect((double[]){ 0, 0, 0, 0, LS_PI / 2, 0 }, (double[]){ 1, 0, 0 }, (double[]){ 0, -1, 0 },
               (double[]){ 0, 0, -1 }, (double[]){ 0.43, 0, 0.76 });
     /* q6 = 90 deg: flange turned about its own z. */
-    fk_expect((double[]){ 0, 0, 0, 0, 0, PI / 2 }, (double[]){ 0, -1, 0 }, (double[]){ 0, 0, -1 },
+    fk_expect((double[]){ 0, 0, 0, 0, 0, LS_PI / 2 }, (double[]){ 0, -1, 0 }, (double[]){ 0, 0, -1 },
               (double[]){ 1, 0, 0 }, (double[]){ 0.51, 0, 0.84 });
 }
 
@@ -217,8 +216,8 @@ static void test_ik_eight_branches(void **state)
     (void)state;
     ls_robot_model_t wide = ls_robot_model_default;
     for (int j = 0; j < 6; ++j) {
-        wide.q_min_rad[j] = -2 * PI;
-        wide.q_max_rad[j] = 2 * PI;
+        wide.q_min_rad[j] = -2 * LS_PI;
+        wide.q_max_rad[j] = 2 * LS_PI;
     }
     const double q[6] = { 0.3, 0.2, 0.5, 0.4, 0.6, 0.7 };
     double T[16], qs[LS_KIN_MAX_BRANCHES][LS_N_JOINTS];
@@ -238,7 +237,7 @@ static void test_ik_eight_branches(void **state)
     }
     /* Wrist flip of the generating branch: (q4 + pi, -q5, q6 + pi). */
     int flip = 0;
-    const double qf[6] = { q[0], q[1], q[2], q[3] + PI, -q[4], q[5] + PI };
+    const double qf[6] = { q[0], q[1], q[2], q[3] + LS_PI, -q[4], q[5] + LS_PI };
     for (int b = 0; b < n; ++b) {
         flip |= same_mod_2pi(qs[b], qf, 1e-9);
     }
@@ -286,10 +285,10 @@ static void test_ik_wraps(void **state)
     assert_int_equal(ls_kin_ik_all(M, T, qs, &n), LS_KIN_OK);
     int found = 0;
     for (int b = 0; b < n; ++b) {
-        assert_true(fabs(qs[b][5]) <= PI + 1e-12);
+        assert_true(fabs(qs[b][5]) <= LS_PI + 1e-12);
         if (same_mod_2pi(qs[b], q, 1e-9)) {
             found = 1;
-            assert_near(qs[b][5], 5.5 - 2 * PI, 1e-9);
+            assert_near(qs[b][5], 5.5 - 2 * LS_PI, 1e-9);
         }
     }
     assert_true(found);
@@ -328,9 +327,9 @@ static void test_ik_limits(void **state)
     /* Joint 1 confined to +-10 deg; a pose at q1 = 90 deg needs q1 = 90 deg
      * (front) or -90 deg (back): reachable, but not within the limits. */
     ls_robot_model_t narrow = ls_robot_model_default;
-    narrow.q_min_rad[0] = -10 * PI / 180;
-    narrow.q_max_rad[0] = 10 * PI / 180;
-    const double q[6] = { PI / 2, 0.3, 0.2, 0.1, 0.5, 0.2 };
+    narrow.q_min_rad[0] = -10 * LS_PI / 180;
+    narrow.q_max_rad[0] = 10 * LS_PI / 180;
+    const double q[6] = { LS_PI / 2, 0.3, 0.2, 0.1, 0.5, 0.2 };
     double T[16], qs[LS_KIN_MAX_BRANCHES][LS_N_JOINTS], out[6];
     int n = -1;
     assert_int_equal(ls_kin_fk(M, q, T), LS_KIN_OK);
@@ -564,11 +563,11 @@ static void test_rpy_axis_order(void **state)
     (void)state;
     double T[16], E[16];
     /* R = Rz(90) Ry(0) Rx(90): x -> y, y -> z, z -> x. */
-    ls_pose_from_xyzrpy((double[]){ 1, 2, 3, PI / 2, 0, PI / 2 }, T);
+    ls_pose_from_xyzrpy((double[]){ 1, 2, 3, LS_PI / 2, 0, LS_PI / 2 }, T);
     pose_from_axes((double[]){ 0, 1, 0 }, (double[]){ 0, 0, 1 }, (double[]){ 1, 0, 0 }, (double[]){ 1, 2, 3 }, E);
     assert_pose_near(T, E, 1e-15);
     /* Pitch alone: Ry(90) sends x to -z. */
-    ls_pose_from_xyzrpy((double[]){ 0, 0, 0, 0, PI / 2, 0 }, T);
+    ls_pose_from_xyzrpy((double[]){ 0, 0, 0, 0, LS_PI / 2, 0 }, T);
     pose_from_axes((double[]){ 0, 0, -1 }, (double[]){ 0, 1, 0 }, (double[]){ 1, 0, 0 }, (double[]){ 0, 0, 0 }, E);
     assert_pose_near(T, E, 1e-15);
 }
@@ -581,9 +580,9 @@ static void test_rpy_round_trip(void **state)
         const double in[6] = { kt_uniform(&rng, -1, 1),
                                kt_uniform(&rng, -1, 1),
                                kt_uniform(&rng, -1, 1),
-                               kt_uniform(&rng, -PI, PI),
-                               kt_uniform(&rng, -PI / 2 + 1e-6, PI / 2 - 1e-6),
-                               kt_uniform(&rng, -PI, PI) };
+                               kt_uniform(&rng, -LS_PI, LS_PI),
+                               kt_uniform(&rng, -LS_PI / 2 + 1e-6, LS_PI / 2 - 1e-6),
+                               kt_uniform(&rng, -LS_PI, LS_PI) };
         double T[16], out[6], T2[16];
         ls_pose_from_xyzrpy(in, T);
         ls_pose_to_xyzrpy(T, out);
@@ -604,23 +603,23 @@ static void test_rpy_gimbal_lock(void **state)
     (void)state;
     double T[16], out[6], T2[16];
     /* pitch = +pi/2: only yaw - roll is defined; roll = 0 by convention. */
-    ls_pose_from_xyzrpy((double[]){ 0, 0, 0, 0.3, PI / 2, 0.5 }, T);
+    ls_pose_from_xyzrpy((double[]){ 0, 0, 0, 0.3, LS_PI / 2, 0.5 }, T);
     ls_pose_to_xyzrpy(T, out);
     assert_near(out[3], 0.0, 0.0);
-    assert_near(out[4], PI / 2, 1e-12);
+    assert_near(out[4], LS_PI / 2, 1e-12);
     assert_near(out[5], 0.2, 1e-12);
     ls_pose_from_xyzrpy(out, T2);
     assert_pose_near(T, T2, 1e-12);
     /* pitch = -pi/2: only yaw + roll is defined. */
-    ls_pose_from_xyzrpy((double[]){ 0, 0, 0, 0.3, -PI / 2, 0.5 }, T);
+    ls_pose_from_xyzrpy((double[]){ 0, 0, 0, 0.3, -LS_PI / 2, 0.5 }, T);
     ls_pose_to_xyzrpy(T, out);
     assert_near(out[3], 0.0, 0.0);
-    assert_near(out[4], -PI / 2, 1e-12);
+    assert_near(out[4], -LS_PI / 2, 1e-12);
     assert_near(out[5], 0.8, 1e-12);
     ls_pose_from_xyzrpy(out, T2);
     assert_pose_near(T, T2, 1e-12);
     /* Near (not at) the lock the angles still reproduce the rotation. */
-    ls_pose_from_xyzrpy((double[]){ 0, 0, 0, 0.3, PI / 2 - 1e-9, 0.5 }, T);
+    ls_pose_from_xyzrpy((double[]){ 0, 0, 0, 0.3, LS_PI / 2 - 1e-9, 0.5 }, T);
     ls_pose_to_xyzrpy(T, out);
     ls_pose_from_xyzrpy(out, T2);
     assert_pose_near(T, T2, 1e-12);
@@ -646,7 +645,7 @@ static void test_pose_mul_inv(void **state)
     /* Exact composition: A = Rz(90) at (1, 0, 0), B = translation (1, 0, 0):
      * AB is at (1, 1, 0) with A's rotation. In-place output works. */
     double A[16], B[16], E[16];
-    ls_pose_from_xyzrpy((double[]){ 1, 0, 0, 0, 0, PI / 2 }, A);
+    ls_pose_from_xyzrpy((double[]){ 1, 0, 0, 0, 0, LS_PI / 2 }, A);
     ls_pose_from_xyzrpy((double[]){ 1, 0, 0, 0, 0, 0 }, B);
     ls_pose_mul(A, B, A);
     pose_from_axes((double[]){ 0, 1, 0 }, (double[]){ -1, 0, 0 }, (double[]){ 0, 0, 1 }, (double[]){ 1, 1, 0 }, E);
@@ -658,18 +657,18 @@ static void test_pose_interp(void **state)
     (void)state;
     double A[16], B[16], T[16], E[16];
     ls_pose_from_xyzrpy((double[]){ 0, 0, 0, 0, 0, 0 }, A);
-    ls_pose_from_xyzrpy((double[]){ 1, 2, 3, 0, 0, PI / 2 }, B);
+    ls_pose_from_xyzrpy((double[]){ 1, 2, 3, 0, 0, LS_PI / 2 }, B);
     ls_pose_interp(A, B, 0.0, T);
     assert_pose_near(T, A, 1e-15);
     ls_pose_interp(A, B, 1.0, T);
     assert_pose_near(T, B, 1e-15);
     ls_pose_interp(A, B, 0.5, T);
-    ls_pose_from_xyzrpy((double[]){ 0.5, 1, 1.5, 0, 0, PI / 4 }, E);
+    ls_pose_from_xyzrpy((double[]){ 0.5, 1, 1.5, 0, 0, LS_PI / 4 }, E);
     assert_pose_near(T, E, 1e-15);
     /* Shortest arc: yaw 0 -> yaw 270 deg goes through -45 deg, not 135. */
-    ls_pose_from_xyzrpy((double[]){ 0, 0, 0, 0, 0, 3 * PI / 2 }, B);
+    ls_pose_from_xyzrpy((double[]){ 0, 0, 0, 0, 0, 3 * LS_PI / 2 }, B);
     ls_pose_interp(A, B, 0.5, T);
-    ls_pose_from_xyzrpy((double[]){ 0, 0, 0, 0, 0, -PI / 4 }, E);
+    ls_pose_from_xyzrpy((double[]){ 0, 0, 0, 0, 0, -LS_PI / 4 }, E);
     assert_pose_near(T, E, 1e-15);
     /* Angle from A along the way is proportional to s. */
     ls_pose_from_xyzrpy((double[]){ 0, 0, 0, 0.4, -0.7, 2.0 }, B);
@@ -690,8 +689,8 @@ static void test_pose_angle_dist(void **state)
     assert_near(ls_pose_dist(A, B), 5.0, 1e-15);
     assert_near(ls_pose_angle(A, B), 0.3, 1e-15);
     assert_near(ls_pose_angle(B, A), 0.3, 1e-15);
-    ls_pose_from_xyzrpy((double[]){ 0, 0, 0, PI, 0, 0 }, B);
-    assert_near(ls_pose_angle(A, B), PI, 1e-15);
+    ls_pose_from_xyzrpy((double[]){ 0, 0, 0, LS_PI, 0, 0 }, B);
+    assert_near(ls_pose_angle(A, B), LS_PI, 1e-15);
     ls_pose_from_xyzrpy((double[]){ 0, 0, 0, 1e-9, 0, 0 }, B);
     assert_near(ls_pose_angle(A, B), 1e-9, 1e-20);
     assert_near(ls_pose_angle(A, A), 0.0, 0.0);

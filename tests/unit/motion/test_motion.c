@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "ls_kin.h"
+#include "ls_math.h"
 #include "ls_motion.h"
 #include "motion_test_util.h"
 
@@ -371,7 +372,7 @@ static void test_arc_stays_on_its_circle(void **state)
     assert_int_equal(ls_motion_plan_arc(&g_plan, M, mt_q_home, tool, Pv, P1, &lim, why, sizeof why), 0);
     /* The circle through (0,0), (0.1,0.1), (0,0.2) (relative): centre (0, 0.1), radius 0.1, a half turn. */
     assert_double_equal(g_plan.one.radius_m, 0.1, 1e-12);
-    assert_double_equal(g_plan.one.angle_rad, 3.14159265358979323846, 1e-9);
+    assert_double_equal(g_plan.one.angle_rad, LS_PI, 1e-9);
     const double c[3] = { P0[12], P0[13] + 0.1, P0[14] };
     start(&g_plan);
     ev_log_t log = { .n = 0 };

@@ -21,11 +21,11 @@
 
 #include "hal_sim_world.h"
 #include "ls_robot_model_sim.h"
+#include "ls_math.h"
 
 #define NJ LS_N_JOINTS
 #define DT 0.001
-#define PI 3.14159265358979323846
-#define DEG (PI / 180.0)
+#define DEG (LS_PI / 180.0)
 
 static const ls_robot_model_t *M = &ls_robot_model_default;
 static hal_arm_t arm;
@@ -227,7 +227,7 @@ static bool ik(const double xyzrpy[6], double q[NJ])
     double yaw = atan2(xyzrpy[1], xyzrpy[0]);
     const double seeds[][NJ] = {
         { yaw, 0.3, 0.3, 0.0, 1.2, 0.0 }, { yaw, 0.3, 0.3, 0.0, -1.2, 0.0 }, { yaw, 0.6, 0.6, 0.0, 1.0, 0.0 },
-        { yaw, 0.0, 0.8, 0.0, 0.8, 0.0 }, { yaw, 0.5, 0.0, PI, 1.0, 0.0 },   { yaw, 0.2, 0.2, 0.0, -0.4, 0.0 },
+        { yaw, 0.0, 0.8, 0.0, 0.8, 0.0 }, { yaw, 0.5, 0.0, LS_PI, 1.0, 0.0 },   { yaw, 0.2, 0.2, 0.0, -0.4, 0.0 },
         { yaw, 0.2, 0.2, 0.0, 0.4, 0.0 }, { 0.0, 0.0, 0.0, 0.0, 0.0, 0.0 },
     };
     for (size_t s = 0; s < sizeof seeds / sizeof seeds[0]; s++) {
@@ -276,7 +276,7 @@ static void move_to(const double q[NJ], double speed)
 {
     double T = 0.05;
     for (int j = 0; j < NJ; j++) {
-        T = fmax(T, fabs(q[j] - cmd_q[j]) * PI / 2.0 / (speed * M->qd_max_rad_s[j]));
+        T = fmax(T, fabs(q[j] - cmd_q[j]) * LS_PI / 2.0 / (speed * M->qd_max_rad_s[j]));
     }
     int n = (int)ceil(T / DT);
     double from[NJ];
@@ -286,8 +286,8 @@ static void move_to(const double q[NJ], double speed)
         double c[NJ], cd[NJ];
         for (int j = 0; j < NJ; j++) {
             double d = q[j] - from[j];
-            c[j] = from[j] + d * (1.0 - cos(PI * s)) / 2.0;
-            cd[j] = d * PI * sin(PI * s) / (2.0 * n * DT);
+            c[j] = from[j] + d * (1.0 - cos(LS_PI * s)) / 2.0;
+            cd[j] = d * LS_PI * sin(LS_PI * s) / (2.0 * n * DT);
         }
         cycle(c, cd);
     }
@@ -454,8 +454,8 @@ static void run_sequence(int idle_cycles, double out[][NJ], int n_out)
                     cd[j] = 0.0;
                 } else {
                     double from = phase == 0 ? 0.0 : a[j], to = phase == 0 ? a[j] : b[j];
-                    c[j] = from + (to - from) * (1.0 - cos(PI * s)) / 2.0;
-                    cd[j] = (to - from) * PI * sin(PI * s) / (2.0 * n * DT);
+                    c[j] = from + (to - from) * (1.0 - cos(LS_PI * s)) / 2.0;
+                    cd[j] = (to - from) * LS_PI * sin(LS_PI * s) / (2.0 * n * DT);
                 }
             }
             cycle(c, cd);
@@ -496,7 +496,7 @@ static void test_tracking(void **state)
     open_world(false, false, NULL);
     assert_int_equal(hal_arm_enable(&arm, true), HAL_OK);
     const double amp[NJ] = { 0.5, 0.4, -0.5, 0.6, 0.5, 0.8 };
-    const double w = PI; /* 0.5 Hz */
+    const double w = LS_PI; /* 0.5 Hz */
     double worst = 0.0;
     for (int k = 0; k < 4000; k++) {
         double t = k * DT, c[NJ], cd[NJ], q[NJ];
@@ -518,7 +518,7 @@ static void test_contact_force_and_laser(void **state)
     open_world(false, false, NULL);
     assert_int_equal(hal_arm_enable(&arm, true), HAL_OK);
     double q[NJ], w[6], T[16];
-    double pose[6] = { 0.55, 0.0, 0.30, PI, 0.0, 0.0 };
+    double pose[6] = { 0.55, 0.0, 0.30, LS_PI, 0.0, 0.0 };
     assert_true(ik(pose, q));
     move_to(q, 0.5);
     hold(300);
@@ -600,7 +600,7 @@ static void test_tool_rack(void **state)
     assert_int_equal(tool.ops->rack_pose(tool.self, "probe", rack_p), HAL_OK);
     assert_int_equal(tool.ops->rack_pose(tool.self, "hammer", rack_p), HAL_EINVAL);
     assert_int_equal(tool.ops->rack_pose(tool.self, "none", rack_p), HAL_EINVAL);
-    const double want_g[6] = { 0.30, 0.50, 0.35, PI, 0.0, 0.0 };
+    const double want_g[6] = { 0.30, 0.50, 0.35, LS_PI, 0.0, 0.0 };
     assert_memory_equal(rack_g, want_g, sizeof want_g);
     assert_int_equal(tool.ops->tool_offset(tool.self, "gripper", off), HAL_OK);
     const double want_off[6] = { 0, 0, 0.12, 0, 0, 0 };
@@ -630,7 +630,7 @@ static void test_tool_rack(void **state)
         assert_true(fabs(w[k]) < 0.1); /* the tool's weight is tared */
     }
     /* the tare holds in any orientation: tool horizontal, along +x */
-    const double level[6] = { 0.55, 0.0, 0.50, 0.0, PI / 2, 0.0 };
+    const double level[6] = { 0.55, 0.0, 0.50, 0.0, LS_PI / 2, 0.0 };
     go_to_pose(level);
     hold(300);
     force(w);
@@ -871,7 +871,7 @@ static void test_control_loop_on_another_thread(void **state)
     assert_int_equal(hal_sim_world_attach_thread(), HAL_ENODEV);
     open_world(false, false, NULL);
     assert_int_equal(hal_arm_enable(&arm, true), HAL_OK);
-    double pose[6] = { 0.50, -0.10, 0.25, PI, 0.0, 0.0 }, q[NJ];
+    double pose[6] = { 0.50, -0.10, 0.25, LS_PI, 0.0, 0.0 }, q[NJ];
     assert_true(ik(pose, q));
     move_to(q, 0.5);
     pose[2] = 0.099; /* 1 mm into the table: about 50 N */
@@ -922,7 +922,7 @@ static void test_cycles_do_not_allocate(void **state)
     hal_sim_world_get_tool(&tool);
     assert_int_equal(hal_arm_enable(&arm, true), HAL_OK);
     /* press onto the obstacle (top z 0.20): moves, contacts, sensors, I/O */
-    double pose[6] = { 0.60, 0.20, 0.30, PI, 0.0, 0.0 };
+    double pose[6] = { 0.60, 0.20, 0.30, LS_PI, 0.0, 0.0 };
     double q[NJ], w[6], twist[6];
     uint32_t bits, buttons;
     assert_true(ik(pose, q));
