@@ -15,5 +15,5 @@ int32_t ls_h_get_motion_control_state(struct ls_core *core, struct ls_call *call
     r->state = core->state;
     ls_fmt_print(r->fault, sizeof r->fault, "%s", core->fault);
     r->owner = core->owner == call->sup;
-    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "%s", ls_core_state_name(core->state));
+    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "%s", ls_State_name(core->state));
 }

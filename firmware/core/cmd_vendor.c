@@ -46,7 +46,7 @@ int32_t ls_h_send_command(struct ls_core *core, struct ls_call *call)
         put(&o, "firmware=%s\nprotocol=%u\nschema=%08X\n", core->cfg.firmware_version,
             (unsigned)ls_Protocol_PROTOCOL_VERSION, (unsigned)LS_SCHEMA_HASH);
     } else if (strcmp(in, "status") == 0) {
-        put(&o, "state=%s\nowner=", ls_core_state_name(core->state));
+        put(&o, "state=%s\nowner=", ls_State_name(core->state));
         if (core->owner >= 0) {
             put(&o, "0x%02X\n", core->sessions[core->owner].addr);
         } else if (core->held) {

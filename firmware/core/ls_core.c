@@ -16,43 +16,6 @@
 #include <pb_decode.h>
 #include <pb_encode.h>
 
-const char *ls_core_state_name(ls_State s)
-{
-    switch (s) {
-    case ls_State_IDLE: return "IDLE";
-    case ls_State_UNLOCKED: return "UNLOCKED";
-    case ls_State_LOCKED: return "LOCKED";
-    case ls_State_RESTING: return "RESTING";
-    case ls_State_MOVING: return "MOVING";
-    case ls_State_PAUSED: return "PAUSED";
-    case ls_State_STATE_NONE: break;
-    }
-    return "NONE";
-}
-
-const char *ls_core_ret_name(int32_t code)
-{
-    switch (code) {
-    case ls_RetCode_CMD_EXEC_OK: return "CMD_EXEC_OK";
-    case ls_RetCode_CMD_STARTED_OK: return "CMD_STARTED_OK";
-    case ls_RetCode_CMD_ERR: return "CMD_ERR";
-    case ls_RetCode_CMD_PARAM_ERR: return "CMD_PARAM_ERR";
-    case ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR: return "CMD_PARAM_OUT_OF_RANGE_ERR";
-    case ls_RetCode_CMD_WRONG_STATE_ERR: return "CMD_WRONG_STATE_ERR";
-    case ls_RetCode_CMD_NOT_OWNER_ERR: return "CMD_NOT_OWNER_ERR";
-    case ls_RetCode_CMD_BUSY_ERR: return "CMD_BUSY_ERR";
-    case ls_RetCode_CMD_TIMEOUT_ERR: return "CMD_TIMEOUT_ERR";
-    case ls_RetCode_CMD_NOT_CONNECTED_ERR: return "CMD_NOT_CONNECTED_ERR";
-    case ls_RetCode_CMD_NOT_IMPLEMENTED_ERR: return "CMD_NOT_IMPLEMENTED_ERR";
-    case ls_RetCode_CMD_UNSUPPORTED_ERR: return "CMD_UNSUPPORTED_ERR";
-    case ls_RetCode_CMD_VERSION_MISMATCH_ERR: return "CMD_VERSION_MISMATCH_ERR";
-    case ls_RetCode_CMD_FAULT_ERR: return "CMD_FAULT_ERR";
-    case ls_RetCode_CMD_UNKNOWN_CMD_ERR: return "CMD_UNKNOWN_CMD_ERR";
-    case ls_RetCode_CMD_NO_RESOURCES_ERR: return "CMD_NO_RESOURCES_ERR";
-    default: return "UNKNOWN_RET_CODE";
-    }
-}
-
 static int find_session(const ls_core_t *core, uint8_t addr);
 
 const char *ls_core_disconnect_action_name(ls_DisconnectAction a)
@@ -847,7 +810,7 @@ static void describe_states(uint8_t mask, char *out, size_t cap)
     out[0] = '\0';
     for (size_t i = 0; i < sizeof all / sizeof all[0]; i++) {
         if ((mask & (uint8_t)all[i]) != 0u) {
-            int w = ls_fmt_print(out + n, cap - n, "%s%s", n > 0 ? "/" : "", ls_core_state_name(all[i]));
+            int w = ls_fmt_print(out + n, cap - n, "%s%s", n > 0 ? "/" : "", ls_State_name(all[i]));
             if (w < 0 || (size_t)w >= cap - n) {
                 return;
             }
@@ -932,7 +895,7 @@ static int32_t dispatch(ls_core_t *core, uint8_t addr, ls_call_t *call, ls_Reque
         char valid[64];
         describe_states(d->states, valid, sizeof valid);
         return ls_reply(call, ls_RetCode_CMD_WRONG_STATE_ERR, "%s is valid in %s, the device is %s: %s", d->name, valid,
-                        ls_core_state_name(core->state), how_to_reach(d->states, core->state));
+                        ls_State_name(core->state), how_to_reach(d->states, core->state));
     }
     if (core->halt.active && (d->flags & LS_CMD_F_OWNER_ONLY) != 0u) {
         return ls_reply(call, ls_RetCode_CMD_BUSY_ERR,

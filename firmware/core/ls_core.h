@@ -394,9 +394,6 @@ int32_t ls_core_rsvp(ls_core_t *core, int sup, uint32_t ref_seq, ls_NoticeKind k
 /* Index of the connected session of `addr`, or -1. */
 int ls_core_session_of(const ls_core_t *core, uint8_t addr);
 
-const char *ls_core_state_name(ls_State s);
-const char *ls_core_ret_name(int32_t code);
-
 /* Fill call->res->ret_msg (printf-style) and return `code`: handlers end with
  * `return ls_reply(call, CODE, "...", ...)`. */
 int32_t ls_reply(ls_call_t *call, int32_t code, const char *fmt, ...) __attribute__((format(printf, 3, 4)));

@@ -261,12 +261,12 @@ static void test_every_command_in_every_state(void **state)
             }
             if (valid) {
                 if (r->ret_code == ls_RetCode_CMD_WRONG_STATE_ERR) {
-                    fail_msg("%s in %s: %s", d->name, ls_core_state_name(k_states[s]), r->ret_msg);
+                    fail_msg("%s in %s: %s", d->name, ls_State_name(k_states[s]), r->ret_msg);
                 }
             } else {
                 if (r->ret_code != ls_RetCode_CMD_WRONG_STATE_ERR) {
                     fail_msg("%s in %s answered %d (%s), expected CMD_WRONG_STATE_ERR", d->name,
-                             ls_core_state_name(k_states[s]), (int)r->ret_code, r->ret_msg);
+                             ls_State_name(k_states[s]), (int)r->ret_code, r->ret_msg);
                 }
                 assert_non_null(strstr(r->ret_msg, d->name));
             }
@@ -299,12 +299,12 @@ static void test_owner_only_commands_refuse_non_owners(void **state)
                 int32_t code = r != NULL ? r->ret_code : LS_CALL_DEFERRED;
                 bool refuse = !owner_is_a && (d->flags & LS_CMD_F_OWNER_ONLY) != 0u;
                 if (refuse && code != ls_RetCode_CMD_NOT_OWNER_ERR) {
-                    fail_msg("%s from a non-owner in %s answered %d", d->name, ls_core_state_name(k_states[s]),
+                    fail_msg("%s from a non-owner in %s answered %d", d->name, ls_State_name(k_states[s]),
                              (int)code);
                 }
                 if (!refuse && code == ls_RetCode_CMD_NOT_OWNER_ERR) {
                     fail_msg("%s (owner %s) in %s answered CMD_NOT_OWNER_ERR: %s", d->name,
-                             owner_is_a ? "caller" : "other", ls_core_state_name(k_states[s]), r->ret_msg);
+                             owner_is_a ? "caller" : "other", ls_State_name(k_states[s]), r->ret_msg);
                 }
                 if (refuse) {
                     assert_non_null(strstr(r->ret_msg, "0x22")); /* names the owner */
