@@ -184,7 +184,9 @@ int main(void)
         ls_net_poll(&g_net, t);
         ls_core_tick(&g_core, t);
         if (t >= next_hb) {
-            struct landscape_heartbeat_t hb = { .hb_counter = hb_counter++, .hb_state = (uint8_t)g_core.state };
+            struct landscape_heartbeat_t hb = { .hb_counter = hb_counter++,
+                                                .hb_state = (uint8_t)g_core.state,
+                                                .hb_role = LANDSCAPE_HEARTBEAT_HB_ROLE_DEVICE_CHOICE };
             hal_can_frame_t f = { .id = LS_ID_HEARTBEAT | 0x10u, .flags = HAL_CAN_F_EXT, .len = 8 };
             if (landscape_heartbeat_pack(f.data, &hb, sizeof f.data) == 8) {
                 (void)ls_net_send_frame(&g_net, &f);

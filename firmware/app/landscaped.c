@@ -173,9 +173,10 @@ static void send_heartbeat(ls_net_t *net, const ls_core_t *core, uint8_t counter
     struct landscape_heartbeat_t hb = {
         .hb_counter = counter,
         .hb_state = (uint8_t)core->state,
-        .hb_role = 0,
+        .hb_role = LANDSCAPE_HEARTBEAT_HB_ROLE_DEVICE_CHOICE,
         .hb_owner = core->owner >= 0 ? core->sessions[core->owner].addr : 0,
-        .hb_fault = core->fault[0] != '\0' ? 1u : 0u,
+        .hb_fault = core->fault[0] != '\0' ? LANDSCAPE_HEARTBEAT_HB_FAULT_LATCHED_CHOICE
+                                           : LANDSCAPE_HEARTBEAT_HB_FAULT_NONE_CHOICE,
         .hb_supervisors = 0,
     };
     for (int i = 0; i < LS_MAX_SUPERVISORS; i++) {
@@ -282,6 +283,27 @@ static void send_frame(uint32_t base, const uint8_t *data)
     (void)ls_net_send_frame(&g_net, &f);
 }
 
+/* STATUS st_motion (the DBC's value table). MOVING with the loop not yet on
+ * the plan (the cycle between the core accepting a move and the loop taking
+ * it) is running, so a STATUS frame never says MOVING and none at once. */
+static uint8_t status_motion(const ls_ctl_snapshot_t *s)
+{
+    if (g_core.halt.active) {
+        return LANDSCAPE_STATUS_ST_MOTION_ROBOT_STOPPING_CHOICE;
+    }
+    if (s->phase == LS_MOTION_RUNNING || s->phase == LS_MOTION_STOPPING) {
+        return LANDSCAPE_STATUS_ST_MOTION_RUNNING_TRAJECTORY_CHOICE;
+    }
+    if (s->phase == LS_MOTION_PAUSED) {
+        return LANDSCAPE_STATUS_ST_MOTION_ROBOT_PAUSED_CHOICE;
+    }
+    if (g_core.fault[0] != '\0') {
+        return LANDSCAPE_STATUS_ST_MOTION_ROBOT_STOPPED_ON_ERROR_CHOICE;
+    }
+    return g_core.state == ls_State_MOVING ? LANDSCAPE_STATUS_ST_MOTION_RUNNING_TRAJECTORY_CHOICE
+                                           : LANDSCAPE_STATUS_ST_MOTION_NONE_CHOICE;
+}
+
 /* Telemetry broadcasts of protocol/landscape.dbc (SI units). */
 static void send_telemetry(void)
 {
@@ -290,17 +312,12 @@ static void send_telemetry(void)
     uint8_t d[8];
     struct landscape_status_t st = {
         .st_state = (uint8_t)g_core.state,
-        /* MOVING with the loop not yet on the plan (the cycle between the
-         * core accepting a move and the loop taking it) is running, so a
-         * STATUS frame never says MOVING and none at once. */
-        .st_motion = (uint8_t)(g_core.halt.active                                              ? 5
-                               : s.phase == LS_MOTION_RUNNING || s.phase == LS_MOTION_STOPPING ? 1
-                               : s.phase == LS_MOTION_PAUSED                                   ? 2
-                               : g_core.fault[0] != '\0'                                       ? 3
-                               : g_core.state == ls_State_MOVING                               ? 1
-                                                                                               : 0),
-        .st_control_mode = (uint8_t)(g_core.fault[0] != '\0' ? 2 : (s.enabled ? 1 : 0)),
-        .st_fault = g_core.fault[0] != '\0' ? 1u : 0u,
+        .st_motion = status_motion(&s),
+        .st_control_mode = (uint8_t)(g_core.fault[0] != '\0' ? LANDSCAPE_STATUS_ST_CONTROL_MODE_CONTROLLER_ERROR_CHOICE
+                                     : s.enabled             ? LANDSCAPE_STATUS_ST_CONTROL_MODE_POWER_ON_CHOICE
+                                                             : LANDSCAPE_STATUS_ST_CONTROL_MODE_POWER_OFF_CHOICE),
+        .st_fault =
+            g_core.fault[0] != '\0' ? LANDSCAPE_STATUS_ST_FAULT_LATCHED_CHOICE : LANDSCAPE_STATUS_ST_FAULT_NONE_CHOICE,
         .st_overruns = 0,
         .st_cycle_us = 0,
     };

@@ -8,6 +8,7 @@
 #include <stdlib.h>
 
 #include "cmd_motion.h"
+#include "landscape.h"
 #include "ls_core_events.h"
 #include "ls_control.h"
 #include "ls_fmt.h"
@@ -171,7 +172,7 @@ static void aux_failed(ls_core_t *core, int point, const char *text)
     const char *extra[] = { d1, d2 };
     if (core->state == ls_State_MOVING || core->state == ls_State_PAUSED) {
         core->state = ls_State_RESTING;
-        ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_stopped_on_error");
+        ls_core_set_motion_state(core, LANDSCAPE_STATUS_ST_MOTION_ROBOT_STOPPED_ON_ERROR_CHOICE);
     }
     ls_run_finish(core, LS_RUN_END_AUX_FAILED, extra, 2);
 }
@@ -197,7 +198,7 @@ static const char *rsvp_done(struct ls_core *core, void *ctx, int32_t ret_code, 
         const char *extra[] = { d1 };
         if (core->state == ls_State_MOVING || core->state == ls_State_PAUSED) {
             core->state = ls_State_RESTING;
-            ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_stopped_on_command");
+            ls_core_set_motion_state(core, LANDSCAPE_STATUS_ST_MOTION_ROBOT_STOPPED_ON_COMMAND_CHOICE);
         }
         ls_run_finish(core, LS_RUN_END_RSVP_DECLINED, extra, 1);
         return LS_PATH_RSVP_DECLINE;
@@ -322,7 +323,7 @@ void ls_core_motion_failed(ls_core_t *core, uint32_t ref_seq, const char *text)
     const char *extra[] = { d };
     if (core->state == ls_State_MOVING || core->state == ls_State_PAUSED) {
         core->state = ls_State_RESTING;
-        ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_stopped_on_error");
+        ls_core_set_motion_state(core, LANDSCAPE_STATUS_ST_MOTION_ROBOT_STOPPED_ON_ERROR_CHOICE);
     }
     ls_run_finish(core, LS_RUN_END_FAULT, extra, 1);
 }

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "cmd_motion.h"
+#include "landscape.h"
 #include "ls_core_events.h"
 #include "ls_control.h"
 #include "ls_fmt.h"
@@ -54,7 +55,7 @@ void ls_core_on_motion_event(ls_core_t *core, const ls_motion_event_t *ev)
         }
         if (core->state == ls_State_MOVING) {
             core->state = ls_State_PAUSED;
-            ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_paused");
+            ls_core_set_motion_state(core, LANDSCAPE_STATUS_ST_MOTION_ROBOT_PAUSED_CHOICE);
         }
         if (core->run.stop_pending) {
             core->run.stop_pending = false;

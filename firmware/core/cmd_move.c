@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "cmd_motion.h"
+#include "landscape.h"
 #include "ls_control.h"
 #include "ls_fmt.h"
 #include "ls_kin.h"
@@ -213,7 +214,7 @@ int32_t ls_h_resume_motion(struct ls_core *core, struct ls_call *call)
                         "resumeMotion: the control loop's command queue is full; try again");
     }
     core->state = ls_State_MOVING;
-    ls_fmt_print(core->motion_state, sizeof core->motion_state, "running_trajectory");
+    ls_core_set_motion_state(core, LANDSCAPE_STATUS_ST_MOTION_RUNNING_TRAJECTORY_CHOICE);
     return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "resumed along the planned path");
 }
 
@@ -231,7 +232,7 @@ int32_t ls_h_abort_motion(struct ls_core *core, struct ls_call *call)
     }
     if (core->state == ls_State_PAUSED) {
         core->state = ls_State_RESTING;
-        ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_stopped_on_command");
+        ls_core_set_motion_state(core, LANDSCAPE_STATUS_ST_MOTION_ROBOT_STOPPED_ON_COMMAND_CHOICE);
     }
     return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "%s",
                     had ? "motion dropped and its path queue cleared" : "nothing to abort: no motion was held");

@@ -15,6 +15,7 @@
 #include "cmd_motion.h"
 #include "cmd_sensor.h"
 #include "ls_control.h"
+#include "landscape.h"
 #include "ls_core.h"
 #include "ls_fmt.h"
 #include "ls_kin.h"
@@ -686,7 +687,7 @@ bool ls_core_sensor_on_event(ls_core_t *core, const ls_ctl_event_t *ev)
             ls_fmt_print(d, sizeof d, "fault=%s", ev->text);
             const char *extra[] = { d };
             rest(core);
-            ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_stopped_on_error");
+            ls_core_set_motion_state(core, LANDSCAPE_STATUS_ST_MOTION_ROBOT_STOPPED_ON_ERROR_CHOICE);
             ls_run_finish(core, LS_RUN_END_FAULT, extra, 1);
             return true;
         }

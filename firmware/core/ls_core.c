@@ -10,6 +10,9 @@
 #include "ls_utf8.h"
 #include "ls_wire.h"
 
+#include "landscape.h"
+#include "landscape_choices.h"
+
 #include <stdarg.h>
 #include <string.h>
 
@@ -17,6 +20,12 @@
 #include <pb_encode.h>
 
 static int find_session(const ls_core_t *core, uint8_t addr);
+
+void ls_core_set_motion_state(ls_core_t *core, uint32_t choice)
+{
+    const char *name = landscape_status_st_motion_choice_name(choice);
+    ls_fmt_print(core->motion_state, sizeof core->motion_state, "%s", name != NULL ? name : "unknown");
+}
 
 const char *ls_core_disconnect_action_name(ls_DisconnectAction a)
 {
@@ -307,7 +316,7 @@ static void fault_as(ls_core_t *core, ls_run_end_t why, const char *text, uint64
             }
             core->state = ls_State_LOCKED;
         }
-        ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_stopped_on_error");
+        ls_core_set_motion_state(core, LANDSCAPE_STATUS_ST_MOTION_ROBOT_STOPPED_ON_ERROR_CHOICE);
     }
     if (alarm_repeat(core, text, now_us)) {
         return; /* latched and stopping; counted, reported at the window's end */

@@ -370,6 +370,11 @@ const char *ls_core_disconnect_action_name(ls_DisconnectAction a);
  * their data. */
 void ls_core_log_event(ls_core_t *core, uint64_t now_us, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 
+/* Set motion_state (getMotionControlState's motion_control_state) to the DBC's
+ * name of STATUS st_motion `choice` (LANDSCAPE_STATUS_ST_MOTION_*_CHOICE), so the
+ * text and the telemetry code have one home. Dispatcher only. */
+void ls_core_set_motion_state(ls_core_t *core, uint32_t choice);
+
 /* The units of session `sup` (SI when sup < 0 or not connected). */
 ls_units_t ls_core_units(const ls_core_t *core, int sup);
 /* The units of the session that started the run (SI when it has ended):

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "cmd_sensor.h"
+#include "landscape.h"
 #include "ls_control.h"
 #include "ls_core.h"
 #include "ls_fmt.h"
@@ -42,11 +43,6 @@ static const char *end_suffix(ls_run_end_t why)
     }
 }
 
-static void set_motion_state(ls_core_t *core, const char *s)
-{
-    ls_fmt_print(core->motion_state, sizeof core->motion_state, "%s", s);
-}
-
 void ls_run_begin(ls_core_t *core, const ls_call_t *call, bool react, const char *seed_name, const char *point,
                   int path)
 {
@@ -64,7 +60,7 @@ void ls_run_begin(ls_core_t *core, const ls_call_t *call, bool react, const char
     ls_fmt_print(r->seed_name, sizeof r->seed_name, "%s", seed_name);
     ls_fmt_print(r->point, sizeof r->point, "%s", point);
     core->state = ls_State_MOVING;
-    set_motion_state(core, "running_trajectory");
+    ls_core_set_motion_state(core, LANDSCAPE_STATUS_ST_MOTION_RUNNING_TRAJECTORY_CHOICE);
 }
 
 void ls_run_finish(ls_core_t *core, ls_run_end_t why, const char *const *extra, size_t n_extra)
@@ -128,7 +124,7 @@ static void halt_enter(ls_core_t *core)
     }
     core->run.wait_active = false;
     ls_core_manual_off(core);
-    set_motion_state(core, "robot_stopping");
+    ls_core_set_motion_state(core, LANDSCAPE_STATUS_ST_MOTION_ROBOT_STOPPING_CHOICE);
 }
 
 void ls_run_halt(ls_core_t *core, ls_run_end_t why, const char *text, bool fast, int answer_sup, uint64_t now_us)
@@ -250,8 +246,9 @@ void ls_run_tick(ls_core_t *core, uint64_t now_us)
     } else if (core->state == ls_State_MOVING || core->state == ls_State_PAUSED || core->state == ls_State_RESTING) {
         core->state = ls_State_LOCKED;
     }
-    set_motion_state(core,
-                     fault || h->why == LS_RUN_END_OWNER_LOST ? "robot_stopped_on_error" : "robot_stopped_on_command");
+    ls_core_set_motion_state(core, fault || h->why == LS_RUN_END_OWNER_LOST
+                                       ? LANDSCAPE_STATUS_ST_MOTION_ROBOT_STOPPED_ON_ERROR_CHOICE
+                                       : LANDSCAPE_STATUS_ST_MOTION_ROBOT_STOPPED_ON_COMMAND_CHOICE);
     ls_run_finish(core, h->why, extra, n_extra);
     if (h->owner_lost) {
         ls_core_owner_lost_alarm(core, h->lost_addr, h->lost_why, h->lost_action, now_us);

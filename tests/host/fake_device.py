@@ -34,6 +34,10 @@ from landscape.bus import ISOTP_PARAMS
 from landscape.limits import max_count, max_string_bytes
 from landscape.registry import PROTOCOL_VERSION, SCHEMA_HASH
 
+#: HEARTBEAT hb_role of a device and of a supervisor (the DBC's value table)
+DEVICE_ROLE = tm.choice_value("HEARTBEAT", "hb_role", "device")
+SUPERVISOR_ROLE = tm.choice_value("HEARTBEAT", "hb_role", "supervisor")
+
 
 @dataclass
 class Session:
@@ -126,7 +130,7 @@ class FakeDevice:
 
     def _on_frame(self, frame: can.Message) -> None:
         b = tm.decode(frame)
-        if b is None or b.name != "HEARTBEAT" or b.signals.get("hb_role") != 1:
+        if b is None or b.name != "HEARTBEAT" or b.signals.get("hb_role") != SUPERVISOR_ROLE:
             return
         with self._lock:
             if b.sender in self.heartbeats:
@@ -148,7 +152,7 @@ class FakeDevice:
                 state = self.state
                 owner = self.owner or 0
             try:
-                self.bus.send(tm.encode("HEARTBEAT", self.address, hb_role=0, hb_counter=counter & 0xFF,
+                self.bus.send(tm.encode("HEARTBEAT", self.address, hb_role=DEVICE_ROLE, hb_counter=counter & 0xFF,
                                         hb_state=state, hb_owner=owner, hb_supervisors=len(self.sessions)))
                 self.bus.send(tm.encode("STATUS", self.address, st_state=state, st_cycle_us=1000))
                 self.bus.send(tm.encode("JOINTS_12", self.address, j1=0.5, j2=-0.25))

@@ -19,7 +19,8 @@ FAR = [1.2, -0.2, 0.6, 0.4, 0.5, 0.3]   # a joint move of about 1.5 s at 50 % sp
 #: a joint's broadcast position changes by at most this between two sets when at rest
 #: (the JOINTS_* resolution is 1e-6 rad; the simulated arm settles to well below this)
 REST_STEP_RAD = 2e-4
-DRIVES_OFF, DRIVES_ON, DRIVES_FAULT = 0, 1, 2
+DRIVES_OFF, DRIVES_ON, DRIVES_FAULT = (tm.choice_value("STATUS", "st_control_mode", n)
+                                       for n in ("power_off", "power_on", "controller_error"))
 
 
 @dataclass

@@ -16,6 +16,7 @@ import can
 import pytest
 from lifecycle_rig import (
     DRIVES_OFF,
+    DRIVES_ON,
     FAR,
     HOME,
     REST_STEP_RAD,
@@ -145,7 +146,7 @@ def test_emergency_frame_fails_the_move_after_stopping_it(rig: Rig) -> None:
     assert "emergency" in data["fault"]
     # the notice comes once the arm is at rest with the drives off
     assert rig.watch.moving_after(t_final) <= REST_STEP_RAD
-    assert rig.watch.status_after(t_final) != 1
+    assert rig.watch.status_after(t_final) != DRIVES_ON
     st = state(rig.sup)
     assert (st["state"], st["control_mode"], st["motion_control_state"]) == \
         ("LOCKED", "controller_error", "robot_stopped_on_error")

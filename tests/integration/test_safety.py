@@ -43,7 +43,7 @@ TELEMETRY_HZ = 50  # more and the host (python-can reads the pty byte by byte) l
 #: bound, at joint 1's top speed
 #: for the distance (docs/reliability.md "Stopping distance and time")
 REACT_S = 0.05
-ST_MOTION_STOPPING = 5  # protocol/landscape.dbc STATUS st_motion
+ST_MOTION_STOPPING = tm.choice_value("STATUS", "st_motion", "robot_stopping")
 START_Q1, END_Q1 = -2.0, 2.0
 
 

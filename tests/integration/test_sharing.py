@@ -21,6 +21,7 @@ import pytest
 
 from conftest import CLI, Controller
 from landscape import BusSpec, Supervisor
+from landscape import telemetry as tm
 from landscape.link import lock_holder_pid
 
 #: Joint targets far apart, run at 10 % speed: each move lasts seconds.
@@ -33,7 +34,7 @@ STOP_TIME_S = 2.0
 #: invocation disconnects right after its stop, and the owner's disconnect ends the paused motion.
 # STATUS st_motion values of a motion that still moves (DBC VAL_ table):
 # running_trajectory, robot_stopping.
-RUNNING = (1, 5)
+RUNNING = tuple(tm.choice_value("STATUS", "st_motion", n) for n in ("running_trajectory", "robot_stopping"))
 
 
 @pytest.fixture

@@ -16,6 +16,8 @@ import cantools.database
 from cantools.database.can import Database as DbcDatabase
 from cantools.database.can import Message as DbcMessage
 
+from .errors import ArgumentError
+
 ID_MASK = 0x1FFFFF00
 
 
@@ -66,6 +68,19 @@ def choice_name(message: str, signal: str, value: int) -> str:
     choices: dict[int, object] = dict(database().get_message_by_name(message).get_signal_by_name(signal).choices or {})
     name = choices.get(value)
     return str(name) if name is not None else str(value)
+
+
+def choice_value(message: str, signal: str, name: str) -> int:
+    """The number the DBC's value table (VAL_) of `signal` of broadcast `message` gives
+    `name`, e.g. choice_value("STATUS", "st_motion", "robot_stopping"): code that compares
+    or sends a status code names it, the DBC holds the number. ArgumentError naming the
+    known names when the table has no such name."""
+    choices: dict[int, object] = dict(database().get_message_by_name(message).get_signal_by_name(signal).choices or {})
+    for value, text in choices.items():
+        if str(text) == name:
+            return int(value)
+    known = ", ".join(str(t) for t in choices.values()) or "none: the signal has no value table"
+    raise ArgumentError(f"{message}.{signal} has no value named {name!r} in landscape.dbc (known: {known})")
 
 
 def decode(frame: can.Message) -> Broadcast | None:

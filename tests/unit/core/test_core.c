@@ -299,8 +299,7 @@ static void test_owner_only_commands_refuse_non_owners(void **state)
                 int32_t code = r != NULL ? r->ret_code : LS_CALL_DEFERRED;
                 bool refuse = !owner_is_a && (d->flags & LS_CMD_F_OWNER_ONLY) != 0u;
                 if (refuse && code != ls_RetCode_CMD_NOT_OWNER_ERR) {
-                    fail_msg("%s from a non-owner in %s answered %d", d->name, ls_State_name(k_states[s]),
-                             (int)code);
+                    fail_msg("%s from a non-owner in %s answered %d", d->name, ls_State_name(k_states[s]), (int)code);
                 }
                 if (!refuse && code == ls_RetCode_CMD_NOT_OWNER_ERR) {
                     fail_msg("%s (owner %s) in %s answered CMD_NOT_OWNER_ERR: %s", d->name,

@@ -27,10 +27,12 @@
 #include "ls_isotp.h"
 
 /* The schema's ISO-TP ids of the default device and host addresses. */
-#define PEER_RX_ID ((uint32_t)ls_IsotpId_ISOTP_PHYSICAL_BASE | (uint32_t)ls_NodeAddress_DEFAULT_DEVICE_ADDRESS << 8 | \
-                    (uint32_t)ls_NodeAddress_DEFAULT_HOST_ADDRESS)
-#define PEER_TX_ID ((uint32_t)ls_IsotpId_ISOTP_PHYSICAL_BASE | (uint32_t)ls_NodeAddress_DEFAULT_HOST_ADDRESS << 8 | \
-                    (uint32_t)ls_NodeAddress_DEFAULT_DEVICE_ADDRESS)
+#define PEER_RX_ID                                                                                                     \
+    ((uint32_t)ls_IsotpId_ISOTP_PHYSICAL_BASE | (uint32_t)ls_NodeAddress_DEFAULT_DEVICE_ADDRESS << 8 |                 \
+     (uint32_t)ls_NodeAddress_DEFAULT_HOST_ADDRESS)
+#define PEER_TX_ID                                                                                                     \
+    ((uint32_t)ls_IsotpId_ISOTP_PHYSICAL_BASE | (uint32_t)ls_NodeAddress_DEFAULT_HOST_ADDRESS << 8 |                   \
+     (uint32_t)ls_NodeAddress_DEFAULT_DEVICE_ADDRESS)
 #define LINE_MAX_CHARS (2u * LS_ISOTP_MAX_PAYLOAD + 64u)
 
 static ls_isotp_link_t link_;

@@ -35,10 +35,12 @@
 #include "slcan_pty.h"
 
 /* The schema's ISO-TP ids of the default device and host addresses. */
-#define PEER_RX_ID ((uint32_t)ls_IsotpId_ISOTP_PHYSICAL_BASE | (uint32_t)ls_NodeAddress_DEFAULT_DEVICE_ADDRESS << 8 | \
-                    (uint32_t)ls_NodeAddress_DEFAULT_HOST_ADDRESS)
-#define PEER_TX_ID ((uint32_t)ls_IsotpId_ISOTP_PHYSICAL_BASE | (uint32_t)ls_NodeAddress_DEFAULT_HOST_ADDRESS << 8 | \
-                    (uint32_t)ls_NodeAddress_DEFAULT_DEVICE_ADDRESS)
+#define PEER_RX_ID                                                                                                     \
+    ((uint32_t)ls_IsotpId_ISOTP_PHYSICAL_BASE | (uint32_t)ls_NodeAddress_DEFAULT_DEVICE_ADDRESS << 8 |                 \
+     (uint32_t)ls_NodeAddress_DEFAULT_HOST_ADDRESS)
+#define PEER_TX_ID                                                                                                     \
+    ((uint32_t)ls_IsotpId_ISOTP_PHYSICAL_BASE | (uint32_t)ls_NodeAddress_DEFAULT_HOST_ADDRESS << 8 |                   \
+     (uint32_t)ls_NodeAddress_DEFAULT_DEVICE_ADDRESS)
 #define LINK_PREFIX "slcan:pty:"
 /* Upper bound of one wait: keeps the pty's pending output flowing while the
  * host reads slowly (flushing happens on recv/send calls). */

@@ -108,8 +108,8 @@ static void test_fk_hand_configurations(void **state)
 {
     (void)state;
     /* q1 = 90 deg: the whole arm turned about z. */
-    fk_expect((double[]){ LS_PI / 2, 0, 0, 0, 0, 0 }, (double[]){ 0, 0, 1 }, (double[]){ 1, 0, 0 }, (double[]){ 0, 1, 0 },
-              (double[]){ 0, 0.51, 0.84 });
+    fk_expect((double[]){ LS_PI / 2, 0, 0, 0, 0, 0 }, (double[]){ 0, 0, 1 }, (double[]){ 1, 0, 0 },
+              (double[]){ 0, 1, 0 }, (double[]){ 0, 0.51, 0.84 });
     /* q2 = 90 deg: upper arm horizontal, forearm pointing down. */
     fk_expect((double[]){ 0, LS_PI / 2, 0, 0, 0, 0 }, (double[]){ 1, 0, 0 }, (double[]){ 0, -1, 0 },
               (double[]){ 0, 0, -1 }, (double[]){ 0.49, 0, -0.06 });

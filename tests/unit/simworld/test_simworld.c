@@ -226,8 +226,8 @@ static bool ik(const double xyzrpy[6], double q[NJ])
     pose_to_T(xyzrpy, Tt);
     double yaw = atan2(xyzrpy[1], xyzrpy[0]);
     const double seeds[][NJ] = {
-        { yaw, 0.3, 0.3, 0.0, 1.2, 0.0 }, { yaw, 0.3, 0.3, 0.0, -1.2, 0.0 }, { yaw, 0.6, 0.6, 0.0, 1.0, 0.0 },
-        { yaw, 0.0, 0.8, 0.0, 0.8, 0.0 }, { yaw, 0.5, 0.0, LS_PI, 1.0, 0.0 },   { yaw, 0.2, 0.2, 0.0, -0.4, 0.0 },
+        { yaw, 0.3, 0.3, 0.0, 1.2, 0.0 }, { yaw, 0.3, 0.3, 0.0, -1.2, 0.0 },  { yaw, 0.6, 0.6, 0.0, 1.0, 0.0 },
+        { yaw, 0.0, 0.8, 0.0, 0.8, 0.0 }, { yaw, 0.5, 0.0, LS_PI, 1.0, 0.0 }, { yaw, 0.2, 0.2, 0.0, -0.4, 0.0 },
         { yaw, 0.2, 0.2, 0.0, 0.4, 0.0 }, { 0.0, 0.0, 0.0, 0.0, 0.0, 0.0 },
     };
     for (size_t s = 0; s < sizeof seeds / sizeof seeds[0]; s++) {

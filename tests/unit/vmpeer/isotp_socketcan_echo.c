@@ -30,10 +30,12 @@
 #include "ls_isotp.h"
 
 /* The schema's ISO-TP ids of the default device and host addresses. */
-#define ECHO_RX_ID ((uint32_t)ls_IsotpId_ISOTP_PHYSICAL_BASE | (uint32_t)ls_NodeAddress_DEFAULT_DEVICE_ADDRESS << 8 | \
-                    (uint32_t)ls_NodeAddress_DEFAULT_HOST_ADDRESS)
-#define ECHO_TX_ID ((uint32_t)ls_IsotpId_ISOTP_PHYSICAL_BASE | (uint32_t)ls_NodeAddress_DEFAULT_HOST_ADDRESS << 8 | \
-                    (uint32_t)ls_NodeAddress_DEFAULT_DEVICE_ADDRESS)
+#define ECHO_RX_ID                                                                                                     \
+    ((uint32_t)ls_IsotpId_ISOTP_PHYSICAL_BASE | (uint32_t)ls_NodeAddress_DEFAULT_DEVICE_ADDRESS << 8 |                 \
+     (uint32_t)ls_NodeAddress_DEFAULT_HOST_ADDRESS)
+#define ECHO_TX_ID                                                                                                     \
+    ((uint32_t)ls_IsotpId_ISOTP_PHYSICAL_BASE | (uint32_t)ls_NodeAddress_DEFAULT_HOST_ADDRESS << 8 |                   \
+     (uint32_t)ls_NodeAddress_DEFAULT_DEVICE_ADDRESS)
 
 static volatile sig_atomic_t stop_requested;
 static hal_can_link_t can_link;
