@@ -254,8 +254,8 @@ void ls_aux_run(ls_core_t *core, const ls_motion_event_t *ev)
         ls_core_motion_tick(core, core->motion.now_us);
         return;
     case LS_AUX_EVENT:
-        ls_core_notify_to(core, core->run.addr, core->run.epoch, ls_NoticeKind_EVENT, a.name, core->run.ref_seq, false,
-                          data, 2);
+        ls_core_notify_named_to(core, core->run.addr, core->run.epoch, ls_NoticeKind_EVENT, a.name, core->run.ref_seq,
+                                false, data, 2);
         aux_done(core);
         return;
     case LS_AUX_RSVP:

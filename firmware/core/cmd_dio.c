@@ -249,7 +249,7 @@ static const char *rsvp_done(ls_core_t *core, void *ctx, int32_t ret_code, bool 
             ls_fmt_print(watch, sizeof watch, "watch=%u", (unsigned)w->id);
             const char *data[] = { watch, "action=" LS_DIO_RSVP_DEFAULT };
             ls_core_notify(core, w->sup, cb_is_alarm(w->cb) ? ls_NoticeKind_ALARM : ls_NoticeKind_EVENT,
-                           "dioSignalRsvpTimeout", w->ref_seq, false, data, 2);
+                           ls_EventId_dioSignalRsvpTimeout, w->ref_seq, false, data, 2);
         }
         w->phase = LS_WATCH_FREE;
         return LS_DIO_RSVP_DEFAULT;
@@ -275,14 +275,14 @@ static void fire(ls_core_t *core, ls_dio_watch_t *w, uint32_t levels, uint64_t n
     if (w->cb == ls_CallbackType_CB_EVENT_RSVP || w->cb == ls_CallbackType_CB_ALARM_RSVP) {
         ls_NoticeKind kind =
             w->cb == ls_CallbackType_CB_ALARM_RSVP ? ls_NoticeKind_ALARM_RSVP : ls_NoticeKind_EVENT_RSVP;
-        if (ls_core_rsvp(core, w->sup, w->ref_seq, kind, "dioSignal", d.v, 4, LS_DIO_RSVP_TIMEOUT_MS,
-                         LS_DIO_RSVP_DEFAULT, rsvp_done, w, now_us) > 0) {
+        if (ls_core_rsvp(core, w->sup, w->ref_seq, kind, ls_EventId_name(ls_EventId_dioSignal), d.v, 4,
+                         LS_DIO_RSVP_TIMEOUT_MS, LS_DIO_RSVP_DEFAULT, rsvp_done, w, now_us) > 0) {
             w->phase = LS_WATCH_AWAIT_RSVP;
             return;
         }
         /* RSVP table full: the supervisor still learns that the bits are set. */
     }
-    ls_core_notify(core, w->sup, cb_is_alarm(w->cb) ? ls_NoticeKind_ALARM : ls_NoticeKind_EVENT, "dioSignal",
+    ls_core_notify(core, w->sup, cb_is_alarm(w->cb) ? ls_NoticeKind_ALARM : ls_NoticeKind_EVENT, ls_EventId_dioSignal,
                    w->ref_seq, false, d.v, 4);
     w->phase = LS_WATCH_FREE;
 }
@@ -398,7 +398,7 @@ void ls_dio_tick(ls_core_t *core, uint64_t now_us)
             watch_data_t d;
             watch_data(&d, w, snap_get(core, &ls)->dio[w->unit]);
             ls_core_notify(core, w->sup, cb_is_alarm(w->cb) ? ls_NoticeKind_ALARM : ls_NoticeKind_EVENT,
-                           "dioSignalTimeout", w->ref_seq, false, d.v, 4);
+                           ls_EventId_dioSignalTimeout, w->ref_seq, false, d.v, 4);
             w->phase = LS_WATCH_FREE;
         }
     }

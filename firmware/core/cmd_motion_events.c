@@ -89,8 +89,8 @@ void ls_core_on_motion_event(ls_core_t *core, const ls_motion_event_t *ev)
         ls_fmt_print(d3, sizeof d3, "cycle=%d", (int)ev->cycle);
         ls_fmt_print(d4, sizeof d4, "path=%s", ev->text);
         const char *data[] = { d1, d2, d3, d4, "dry_run=true" };
-        ls_core_notify_to(core, core->run.addr, core->run.epoch, ls_NoticeKind_EVENT, "tag", core->run.ref_seq, false,
-                          data, core->run.dry_run ? 5u : 4u);
+        ls_core_notify_to(core, core->run.addr, core->run.epoch, ls_NoticeKind_EVENT, ls_EventId_tag, core->run.ref_seq,
+                          false, data, core->run.dry_run ? 5u : 4u);
         return;
     }
     case LS_MEV_AUX:

@@ -565,6 +565,21 @@ static void rest(ls_core_t *core)
     }
 }
 
+const char *ls_core_sensor_end_suffix(ls_react_end_t end)
+{
+    switch (end) {
+    case LS_REACT_END_THRESHOLD:
+    case LS_REACT_END_MAX_DISTANCE: return "Complete";
+    case LS_REACT_END_ENVELOPE: return "Envelope";
+    case LS_REACT_END_TIMEOUT: return "Timeout";
+    case LS_REACT_END_PANIC: return "PanicStop";
+    case LS_REACT_END_ABORTED: return "Aborted";
+    case LS_REACT_END_UNREACHABLE:
+    case LS_REACT_END_NO_SENSOR: break;
+    }
+    return "Failed";
+}
+
 static void react_end(ls_core_t *core, const ls_ctl_event_t *ev)
 {
     const ls_units_t un = ls_core_run_units(core); /* the final notice speaks the run's session's units */
@@ -622,14 +637,7 @@ static void react_end(ls_core_t *core, const ls_ctl_event_t *ev)
         }
     }
     bool ok = rep->end == LS_REACT_END_THRESHOLD || rep->end == LS_REACT_END_MAX_DISTANCE;
-    const char *suffix = ok                                  ? "Complete"
-                         : rep->end == LS_REACT_END_ENVELOPE ? "Envelope"
-                         : rep->end == LS_REACT_END_TIMEOUT  ? "Timeout"
-                         : rep->end == LS_REACT_END_PANIC    ? "PanicStop"
-                         : rep->end == LS_REACT_END_ABORTED  ? "Aborted"
-                                                             : "Failed";
-    char id[40];
-    ls_fmt_print(id, sizeof id, "%s%s", core->run.seed_name, suffix);
+    const ls_EventId id = ls_run_end_event(core->run.seed_name, ls_core_sensor_end_suffix(rep->end));
     core->run.active = false;
     rest(core);
     ls_core_notify_to(core, core->run.addr, core->run.epoch, ok ? ls_NoticeKind_EVENT : ls_NoticeKind_ALARM, id,
@@ -655,7 +663,7 @@ static void jog_event(ls_core_t *core, const ls_ctl_event_t *ev)
     char d1[72];
     ls_fmt_print(d1, sizeof d1, "reason=%s", ev->motion.text);
     const char *data[] = { d1 };
-    ls_core_notify(core, core->sensor.sup, ls_NoticeKind_EVENT, "manualLimit", 0, false, data, 1);
+    ls_core_notify(core, core->sensor.sup, ls_NoticeKind_EVENT, ls_EventId_manualLimit, 0, false, data, 1);
 }
 
 bool ls_core_sensor_on_event(ls_core_t *core, const ls_ctl_event_t *ev)

@@ -18,6 +18,11 @@
  * change these handlers started (consumed), false to pass it on. */
 bool ls_core_sensor_on_event(ls_core_t *core, const ls_ctl_event_t *ev);
 
+/* The suffix of a sensor-guided move's final event id for its ending:
+ * "Complete", "Envelope", "Timeout", "PanicStop", "Aborted" or "Failed"
+ * (docs/protocol.md "Motion lifecycle"; ls_run_end_event makes the id). */
+const char *ls_core_sensor_end_suffix(ls_react_end_t end);
+
 /* cmd_tool.c: an event of the loop; true when it was the tool code's own
  * (consumed), false to pass it on (it may still have acted on it: a fault
  * ends a tool change in progress). */

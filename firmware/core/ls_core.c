@@ -159,9 +159,10 @@ static void send_bytes(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t
     }
 }
 
-void ls_core_notify(ls_core_t *core, int sup, ls_NoticeKind kind, const char *event_id, uint32_t ref_seq, bool final,
+void ls_core_notify(ls_core_t *core, int sup, ls_NoticeKind kind, ls_EventId id, uint32_t ref_seq, bool final,
                     const char *const *data, size_t n_data)
 {
+    const char *event_id = ls_EventId_name(id);
     for (int i = 0; i < LS_MAX_SUPERVISORS; i++) {
         ls_session_t *s = &core->sessions[i];
         if (!s->connected || (sup >= 0 && i != sup)) {
@@ -188,8 +189,14 @@ void ls_core_notify(ls_core_t *core, int sup, ls_NoticeKind kind, const char *ev
     }
 }
 
-void ls_core_notify_to(ls_core_t *core, uint8_t addr, uint32_t epoch, ls_NoticeKind kind, const char *event_id,
+void ls_core_notify_to(ls_core_t *core, uint8_t addr, uint32_t epoch, ls_NoticeKind kind, ls_EventId id,
                        uint32_t ref_seq, bool final, const char *const *data, size_t n_data)
+{
+    ls_core_notify_named_to(core, addr, epoch, kind, ls_EventId_name(id), ref_seq, final, data, n_data);
+}
+
+void ls_core_notify_named_to(ls_core_t *core, uint8_t addr, uint32_t epoch, ls_NoticeKind kind, const char *event_id,
+                             uint32_t ref_seq, bool final, const char *const *data, size_t n_data)
 {
     int i = find_session(core, addr);
     memset(&core->note, 0, sizeof core->note);
@@ -261,7 +268,7 @@ static void alarm_window_report(ls_core_t *core, uint64_t now_us)
     ls_fmt_print(d3, sizeof d3, "fault=%s", w->text);
     const char *data[] = { d1, d2, d3 };
     ls_core_log_fault(core, now_us, "%u repeats suppressed: %.60s", (unsigned)w->suppressed, w->text);
-    ls_core_notify(core, -1, ls_NoticeKind_ALARM, LS_ALARM_SUPPRESSED_EVENT, 0, false, data, 3);
+    ls_core_notify(core, -1, ls_NoticeKind_ALARM, ls_EventId_alarmsSuppressed, 0, false, data, 3);
     w->suppressed = 0;
     w->since_us = now_us;
 }
@@ -325,7 +332,7 @@ static void fault_as(ls_core_t *core, ls_run_end_t why, const char *text, uint64
     char d[80];
     ls_fmt_print(d, sizeof d, "fault=%s", text);
     const char *data[] = { d };
-    ls_core_notify(core, -1, ls_NoticeKind_ALARM, "fault", 0, false, data, 1);
+    ls_core_notify(core, -1, ls_NoticeKind_ALARM, ls_EventId_fault, 0, false, data, 1);
 }
 
 void ls_core_fault(ls_core_t *core, const char *text, uint64_t now_us)
@@ -348,7 +355,7 @@ void ls_core_owner_lost_alarm(ls_core_t *core, uint8_t addr, const char *why, ls
     ls_fmt_print(d2, sizeof d2, "reason=%s", why);
     ls_fmt_print(d3, sizeof d3, "action=%s", name != NULL ? name : "?");
     const char *data[] = { d1, d2, d3 };
-    ls_core_notify(core, -1, ls_NoticeKind_ALARM, "ownerLost", 0, false, data, 3);
+    ls_core_notify(core, -1, ls_NoticeKind_ALARM, ls_EventId_ownerLost, 0, false, data, 3);
     ls_core_log_fault(core, now_us, "owner 0x%02X lost (%s): action %s", addr, why, name != NULL ? name : "?");
 }
 
@@ -626,7 +633,7 @@ static void on_loop_event(ls_core_t *core, const ls_ctl_event_t *ev, uint64_t no
         char d[80];
         ls_fmt_print(d, sizeof d, "reason=%s", ev->text);
         const char *data[] = { d };
-        ls_core_notify(core, core->owner, ls_NoticeKind_ALARM, "commandFailed", ev->ref_seq, false, data, 1);
+        ls_core_notify(core, core->owner, ls_NoticeKind_ALARM, ls_EventId_commandFailed, ev->ref_seq, false, data, 1);
         ls_core_motion_failed(core, ev->ref_seq, ev->text);
         if (core->act.log_warn != NULL) {
             char line[112];

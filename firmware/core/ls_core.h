@@ -43,10 +43,9 @@ struct ls_control;
  * EMERGENCY frame included) always latches and stops at once; its alarm and
  * fault-log entry go out at once too, but repeats of the same text within
  * LS_ALARM_WINDOW_MS are counted instead, and at the end of each window with
- * repeats one alarm LS_ALARM_SUPPRESSED_EVENT says how many (and is logged).
+ * repeats one alarm alarmsSuppressed says how many (and is logged).
  * The window runs on while the repeats go on. */
 #define LS_ALARM_WINDOW_MS 1000u
-#define LS_ALARM_SUPPRESSED_EVENT "alarmsSuppressed"
 #define LS_MAX_RSVP 8
 #define LS_RSVP_ENDED_LEN 8 /* ended RSVPs remembered, so a late reply is told apart from an unknown one */
 #define LS_EVENT_LOG_LEN 16
@@ -333,14 +332,21 @@ void ls_core_on_heartbeat(ls_core_t *core, uint8_t addr, uint32_t token, uint64_
  * auxiliary commands (ls_core_motion_tick). */
 void ls_core_tick(ls_core_t *core, uint64_t now_us);
 
-/* Send a notice (event, alarm) to one session (sup >= 0) or to all (sup < 0). */
-void ls_core_notify(ls_core_t *core, int sup, ls_NoticeKind kind, const char *event_id, uint32_t ref_seq, bool final,
+/* Send a notice (event, alarm) to one session (sup >= 0) or to all (sup < 0).
+ * Its event id is one the schema declares (enum ls.EventId, sent by name), its
+ * data "key=value" strings with the keys the schema lists for it. */
+void ls_core_notify(ls_core_t *core, int sup, ls_NoticeKind kind, ls_EventId id, uint32_t ref_seq, bool final,
                     const char *const *data, size_t n_data);
 
 /* Send a notice to the session at `addr` (if any) carrying session epoch
  * `epoch`: the notices of a run go to the session that started it. */
-void ls_core_notify_to(ls_core_t *core, uint8_t addr, uint32_t epoch, ls_NoticeKind kind, const char *event_id,
+void ls_core_notify_to(ls_core_t *core, uint8_t addr, uint32_t epoch, ls_NoticeKind kind, ls_EventId id,
                        uint32_t ref_seq, bool final, const char *const *data, size_t n_data);
+
+/* ls_core_notify_to for a path's auxiliary `event NAME`: the name the path
+ * chose, which no schema can declare (ls.EventId AUX_NAMED_EVENT has its keys). */
+void ls_core_notify_named_to(ls_core_t *core, uint8_t addr, uint32_t epoch, ls_NoticeKind kind, const char *name,
+                             uint32_t ref_seq, bool final, const char *const *data, size_t n_data);
 
 /* Latch a fault: record it, raise the alarm `fault` to everyone, stop a
  * motion along its path at the model's maximum deceleration, then drives off

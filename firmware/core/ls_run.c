@@ -31,8 +31,14 @@ const char *ls_run_end_name(ls_run_end_t why)
     return (unsigned)why < LS_RUN_END_COUNT ? k_end_names[why] : "unknown";
 }
 
-/* The event id suffix and notice kind of each reason (docs/protocol.md). */
-static const char *end_suffix(ls_run_end_t why)
+ls_EventId ls_run_end_event(const char *seed_name, const char *suffix)
+{
+    char name[48];
+    int n = ls_fmt_print(name, sizeof name, "%s%s", seed_name, suffix);
+    return n > 0 && (size_t)n < sizeof name ? ls_event_find(name) : ls_EventId_EVENT_ID_NONE;
+}
+
+const char *ls_run_end_suffix(ls_run_end_t why)
 {
     switch (why) {
     case LS_RUN_END_COMPLETE: return "Complete";
@@ -80,8 +86,7 @@ void ls_run_finish(ls_core_t *core, ls_run_end_t why, const char *const *extra, 
     if (r->dry_run) {
         data[n++] = "dry_run=true";
     }
-    char id[40];
-    ls_fmt_print(id, sizeof id, "%s%s", r->seed_name, end_suffix(why));
+    const ls_EventId id = ls_run_end_event(r->seed_name, ls_run_end_suffix(why));
     r->active = false;
     r->wait_active = false;
     ls_core_notify_to(core, r->addr, r->epoch, why == LS_RUN_END_COMPLETE ? ls_NoticeKind_EVENT : ls_NoticeKind_ALARM,

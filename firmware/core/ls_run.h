@@ -94,6 +94,15 @@ typedef struct {
 
 const char *ls_run_end_name(ls_run_end_t why);
 
+/* The suffix of the final notice's event id of an ending: "Complete",
+ * "Failed" or "Aborted" (docs/protocol.md "Motion lifecycle"). */
+const char *ls_run_end_suffix(ls_run_end_t why);
+
+/* The schema's event id <seed_name><suffix> (enum ls.EventId), or
+ * ls_EventId_EVENT_ID_NONE when the schema does not declare it (a bug that
+ * protocol/gen_registry.py and tests/unit/core catch). Dispatcher; O(ids). */
+ls_EventId ls_run_end_event(const char *seed_name, const char *suffix);
+
 /* Take the run for the request being answered (call); ls_core_t.state becomes
  * MOVING and motion_state running_trajectory. */
 void ls_run_begin(struct ls_core *core, const struct ls_call *call, bool react, const char *seed_name,

@@ -54,3 +54,4 @@ def device(channel: str) -> Iterator[FakeDevice]:
     dev.stop()
     n.stop()
     b.shutdown()
+    assert dev.undeclared == [], "the fake device was asked to send what the schema does not declare"

@@ -10,9 +10,13 @@ release, activate, deactivate, get-motion-control-state, seq caching (a
 retransmitted seq is answered from the cache, never executed twice), pathLoad
 and pathClearPath (named paths, at most 32 points per message as the firmware),
 describe (the limits of the committed landscape.options, no devices) and two
-non-blocking commands: moveAbsolute, which sends a tag event, an RSVP
-and then its final event or alarm, and pathMove, which sends one tag event per
-tagged point and cycle, then pathComplete. It broadcasts HEARTBEAT, STATUS,
+non-blocking commands: moveAbsolute, which sends a tag event, an RSVP named
+as a path's own `rsvp confirmMove` would be, and then its final event or alarm
+(moveAbsoluteComplete, moveAbsoluteFailed, moveAbsoluteAborted), and pathMove,
+which sends one tag event per tagged point and cycle, then pathMoveComplete.
+Every notice carries an event id and data keys the schema declares (enum
+ls.EventId, landscape.notices.undeclared); one that does not is refused, not
+sent, and recorded in `undeclared` (the `device` fixture fails the test). It broadcasts HEARTBEAT, STATUS,
 JOINTS_12/34/56, TOOL_POS (with a device time stamp), TOOL_RPY and DIO every
 50 ms. Every other command answers CMD_NOT_IMPLEMENTED_ERR. Test knobs:
 `drop_responses`, `silent`, `force_codes`, `version`, `schema_hash`,
@@ -32,6 +36,7 @@ from landscape import telemetry as tm
 from landscape._generated import landscape_pb2 as pb
 from landscape.bus import ISOTP_PARAMS
 from landscape.limits import max_count, max_string_bytes
+from landscape.notices import undeclared
 from landscape.registry import PROTOCOL_VERSION, SCHEMA_HASH
 
 #: HEARTBEAT hb_role of a device and of a supervisor (the DBC's value table)
@@ -76,6 +81,8 @@ class FakeDevice:
         self.sessions: dict[int, Session] = {}
         self.heartbeats: dict[int, list[dict[str, Any]]] = {h: [] for h in hosts}
         self.rsvp_replies: list[pb.RsvpReply] = []
+        self.rsvp_outcomes: list[str] = []  # per RSVP: "answered" in time, or "default"
+        self.undeclared: list[str] = []     # notices refused: what the schema does not declare
         self.requests: list[pb.Request] = []
         self.uplink_sizes: list[int] = []   # bytes of every request message received
         self.hb_refused = 0                 # heartbeats without their session's token
@@ -366,7 +373,12 @@ class FakeDevice:
 
     # ---------------------------------------------------------------- the non-blocking command
 
-    def notify(self, host: int, **kw: Any) -> None:
+    def notify(self, host: int, *, path_event: bool = False, **kw: Any) -> None:
+        """Send a notice; `path_event`: its name is a path's own (`event NAME`, `rsvp NAME`)."""
+        problem = undeclared(str(kw.get("event_id", "")), list(kw.get("data", [])), path_event=path_event)
+        if problem is not None:
+            self.undeclared.append(problem)
+            return
         with self._lock:
             s = self.sessions.get(host)
             if s is None:
@@ -384,7 +396,7 @@ class FakeDevice:
                                 data=[f"tag={p.tag_name}", f"index={p.tag_index}", f"cycle={cycle}", f"path={path}"])
         with self._lock:
             self.state = pb.RESTING
-        self.notify(host, kind=pb.EVENT, event_id="pathComplete", data=[f"path={path}", f"cycles={cycles}"],
+        self.notify(host, kind=pb.EVENT, event_id="pathMoveComplete", data=[f"point={path}", "reason=complete"],
                     ref_seq=seq, final=True)
 
     def _run_move(self, host: int, seq: int, point: str, values: list[float]) -> None:
@@ -395,18 +407,22 @@ class FakeDevice:
             self._rsvp_next += 1
             ev = threading.Event()
             self._rsvp_waiters[rsvp_id] = ev
-        self.notify(host, kind=pb.EVENT_RSVP, event_id="confirmMove", data=[f"point={point}"], ref_seq=seq,
-                    rsvp_id=rsvp_id, rsvp_timeout_ms=self.rsvp_timeout_ms, rsvp_default="continue")
+        self.notify(host, path_event=True, kind=pb.EVENT_RSVP, event_id="confirmMove", data=[f"point={point}"],
+                    ref_seq=seq, rsvp_id=rsvp_id, rsvp_timeout_ms=self.rsvp_timeout_ms, rsvp_default="continue")
         answered = ev.wait(self.rsvp_timeout_ms / 1000.0)
         with self._lock:
             reply = next((r for r in self.rsvp_replies if r.rsvp_id == rsvp_id), None)
+            self.rsvp_outcomes.append("answered" if answered else "default")
             self.state = pb.RESTING
         if values[0] > 3.0:
-            self.notify(host, kind=pb.ALARM, event_id="jointLimit", data=["joint=1", f"value={values[0]}"],
+            self.notify(host, kind=pb.ALARM, event_id="moveAbsoluteFailed",
+                        data=[f"point={point}", "reason=fault", f"fault=joint 1 beyond its limit ({values[0]} rad)"],
                         ref_seq=seq, final=True)
         elif answered and reply is not None and reply.ret_code < 0:
-            self.notify(host, kind=pb.ALARM, event_id="moveRefused", data=list(reply.data), ref_seq=seq, final=True)
+            self.notify(host, kind=pb.ALARM, event_id="moveAbsoluteAborted",
+                        data=[f"point={point}", "reason=rsvpDeclined", f"answer={reply.ret_code}"],
+                        ref_seq=seq, final=True)
         else:
-            how = "answered" if answered else "default"
-            self.notify(host, kind=pb.EVENT, event_id="moveComplete", data=[f"point={point}", f"rsvp={how}"],
+            self.notify(host, kind=pb.EVENT, event_id="moveAbsoluteComplete",
+                        data=[f"point={point}", "reason=complete", "joints=" + ",".join(f"{v:g}" for v in values)],
                         ref_seq=seq, final=True)

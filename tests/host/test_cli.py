@@ -71,7 +71,7 @@ def test_non_blocking_waits_and_prints_notices(channel: str, device: FakeDevice,
     assert lines[5] == "move-absolute: CMD_STARTED_OK"
     assert lines[6].startswith("  EVENT tag tag=p1 path= (ref 5)")
     assert lines[7].startswith("  EVENT_RSVP confirmMove point=p1 (ref 5) [rsvp 1: default 'continue'")
-    assert lines[8] == "  EVENT moveComplete point=p1 rsvp=default (ref 5) final"
+    assert lines[8] == "  EVENT moveAbsoluteComplete point=p1 reason=complete joints=0,-0.5,0,0,0,0 (ref 5) final"
     move = [q for q in device.requests if q.WhichOneof("cmd") == "move_absolute"][0]
     assert move.move_absolute == ls.MoveAbsoluteReq(point_name="p1", frame=ls.JOINT_FRAME,
                                                     values=[0, -0.5, 0, 0, 0, 0], speed_pct=20)
@@ -85,9 +85,9 @@ def test_json_non_blocking_with_notices_and_alarm(channel: str, device: FakeDevi
     assert r.exit_code == 3
     objs = [json.loads(line) for line in r.stdout.splitlines()]
     assert [o["command"] for o in objs] == ["lock", "activate", "move-absolute"]
-    assert [n["event_id"] for n in objs[2]["notices"]] == ["tag", "confirmMove", "jointLimit"]
+    assert [n["event_id"] for n in objs[2]["notices"]] == ["tag", "confirmMove", "moveAbsoluteFailed"]
     assert objs[2]["notices"][2]["kind"] == "ALARM" and objs[2]["notices"][2]["final"] is True
-    assert "alarm.ls:3: move-absolute ended with alarm jointLimit" in r.stderr
+    assert "alarm.ls:3: move-absolute ended with alarm moveAbsoluteFailed" in r.stderr
 
 
 def test_no_wait(channel: str, device: FakeDevice, tmp_path: Path) -> None:
@@ -308,7 +308,7 @@ def test_shell_takes_lines_while_a_motion_runs(channel: str, device: FakeDevice,
     # the query ran while the move was under way, before its end was printed
     state = out.index("get-motion-control-state: CMD_EXEC_OK")
     assert "  state: MOVING" in out[state:]
-    assert state < out.index("EVENT moveComplete") < out.index("move-absolute: done (moveComplete)")
+    assert state < out.index("EVENT moveAbsoluteComplete") < out.index("move-absolute: done (moveAbsoluteComplete)")
 
 
 def test_shell_completion_of_names_options_enums_files_and_values(tmp_path: Path) -> None:

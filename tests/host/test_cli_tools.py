@@ -112,7 +112,8 @@ def test_path_run_prints_tags_and_waits(channel: str, device: FakeDevice, tmp_pa
     tags = [line for line in out[start:] if "EVENT tag" in line]
     assert [t.split()[2] for t in tags] == ["tag=c1", "tag=c2", "tag=c4"] * 2
     assert tags[3].startswith("  EVENT tag tag=c1 index=1 cycle=2 path=sq (ref ")
-    assert out[start + 7].startswith("  EVENT pathComplete path=sq cycles=2 (ref ") and out[start + 7].endswith("final")
+    assert out[start + 7].startswith("  EVENT pathMoveComplete point=sq reason=complete (ref ")
+    assert out[start + 7].endswith("final")
     assert "path-clear-path: CMD_EXEC_OK" in out and device.paths == {}
     pl = next(q.path_load for q in device.requests if q.WhichOneof("cmd") == "path_load")
     assert (pl.frame, pl.motion_type, pl.offset_type) == (ls.BASE_CARTESIAN_FRAME, ls.STRAIGHT_MOTION,
@@ -249,7 +250,7 @@ def test_demo_failure_cleans_up_and_exits_3(channel: str, device: FakeDevice) ->
         ("lock", "ok"), ("activate", "ok"), ("speed", "skipped"), ("ready", "ok"), ("side", "ok"),
         ("back", "skipped"), ("where", "skipped"), ("clear_old", "tolerated"), ("load", "ok"), ("run", "failed"),
         ("deactivate", "ok"), ("release", "ok")]
-    assert steps[3]["notices"][-1]["event_id"] == "moveComplete"
+    assert steps[3]["notices"][-1]["event_id"] == "moveAbsoluteComplete"
     assert single_error(r) == ("landscape: demo: step 'run path 'demo_square' once' failed: CMD_FAULT_ERR: "
                                "e-stop input active")
     assert device.owner is None

@@ -47,6 +47,7 @@ def pty_device(runtime_dir: Path) -> Iterator[tuple[FakeDevice, str]]:
     dev.stop()
     n.stop()
     link.shutdown()
+    assert dev.undeclared == [], "the fake device was asked to send what the schema does not declare"
 
 
 def slcan(pty: str, *args: str) -> Result:
@@ -125,9 +126,9 @@ def test_session_streams_notices_and_locks_at_start(pty_device: tuple[FakeDevice
         lines = r.stdout.splitlines()
         assert lines[0] == "path-move: CMD_STARTED_OK"
         assert [line.split()[2] for line in lines[1:5]] == ["tag=a", "tag=b", "tag=a", "tag=b"]
-        assert lines[5].startswith("  EVENT pathComplete path=sq cycles=2") and lines[5].endswith("final")
+        assert lines[5].startswith("  EVENT pathMoveComplete point=sq reason=complete") and lines[5].endswith("final")
         r = slcan(pty, "move-absolute", "far", "joint", "4", "0", "0", "0", "0", "0")
-        assert r.exit_code == 3 and "move-absolute ended with alarm jointLimit" in r.stderr
+        assert r.exit_code == 3 and "move-absolute ended with alarm moveAbsoluteFailed" in r.stderr
         rec = tmp_path / "rec.jsonl"
         r = slcan(pty, "record", str(rec), "--duration", "0.4")  # through the session's watch stream
         assert r.exit_code == 0, r.stderr

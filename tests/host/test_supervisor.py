@@ -135,16 +135,18 @@ def test_notices_callbacks_iterator_and_wait_complete(bus, notifier, device: Fak
         rv = sup.move_absolute("p1", [0.1, 0, 0, 0, 0, 0])
         assert rv.started and rv.ret_name == "CMD_STARTED_OK"
         final = sup.wait_complete(rv, timeout_s=3)
-        assert (final.kind, final.event_id, final.ref_seq, final.final) == (ls.EVENT, "moveComplete", rv.seq, True)
-        assert notice_data(final) == {"point": "p1", "rsvp": "default"}
+        assert (final.kind, final.event_id, final.ref_seq, final.final) == \
+            (ls.EVENT, "moveAbsoluteComplete", rv.seq, True)
+        assert notice_data(final) == {"point": "p1", "reason": "complete", "joints": "0.1,0,0,0,0,0"}
+        assert device.rsvp_outcomes == ["default"]
         got = list(sup.notices(timeout_s=0.2))
         assert [(n.event_id, n.kind, n.final) for n in got] == [
-            ("tag", ls.EVENT, False), ("confirmMove", ls.EVENT_RSVP, False), ("moveComplete", ls.EVENT, True)]
+            ("tag", ls.EVENT, False), ("confirmMove", ls.EVENT_RSVP, False), ("moveAbsoluteComplete", ls.EVENT, True)]
         assert [n.notice_seq for n in got] == [1, 2, 3]
         deadline = time.monotonic() + 1
         while len(seen) < 3 and time.monotonic() < deadline:
             time.sleep(0.01)
-        assert [n.event_id for n in seen] == ["tag", "confirmMove", "moveComplete"]
+        assert [n.event_id for n in seen] == ["tag", "confirmMove", "moveAbsoluteComplete"]
         assert list(sup.notices(timeout_s=0.05)) == []  # the iterator consumed them
         assert sup.wait_for_tag("p1", timeout_s=0.5).event_id == "tag"
         with pytest.raises(ControllerTimeoutError, match="tag 'p9' not reached within 0.1 s"):
@@ -160,8 +162,9 @@ def test_wait_complete_raises_alarm(bus, notifier, device: FakeDevice) -> None:
         rv = sup.move_absolute("far", [4.0, 0, 0, 0, 0, 0])
         with pytest.raises(AlarmError) as ei:
             sup.wait_complete(rv, timeout_s=3)
-        assert ei.value.notice.event_id == "jointLimit" and ei.value.notice.ref_seq == rv.seq
-        assert str(ei.value).startswith("moveAbsolute ended with alarm jointLimit (joint=1 value=4.0)")
+        assert ei.value.notice.event_id == "moveAbsoluteFailed" and ei.value.notice.ref_seq == rv.seq
+        assert str(ei.value).startswith("moveAbsolute ended with alarm moveAbsoluteFailed (point=far reason=fault "
+                                        "fault=joint 1 beyond its limit (4.0 rad))")
 
 
 def test_rsvp_handler_answers(bus, notifier, device: FakeDevice) -> None:
@@ -176,7 +179,7 @@ def test_rsvp_handler_answers(bus, notifier, device: FakeDevice) -> None:
         sup.lock()
         sup.activate()
         rv = sup.move_absolute("p2", [0] * 6)
-        with pytest.raises(AlarmError, match="moveRefused"):
+        with pytest.raises(AlarmError, match="moveAbsoluteAborted"):
             sup.wait_complete(rv, timeout_s=3)
         assert asked == ["confirmMove"]
         assert [(r.rsvp_id, r.ret_code, list(r.data)) for r in device.rsvp_replies] == \
@@ -184,7 +187,8 @@ def test_rsvp_handler_answers(bus, notifier, device: FakeDevice) -> None:
         sup.remove_rsvp_handler("confirmMove")
         sup.on_rsvp(None, lambda n: None)  # catch-all: go on
         rv = sup.move_absolute("p3", [0] * 6)
-        assert notice_data(sup.wait_complete(rv, timeout_s=3))["rsvp"] == "answered"
+        assert notice_data(sup.wait_complete(rv, timeout_s=3))["reason"] == "complete"
+        assert device.rsvp_outcomes[-1] == "answered"
         assert device.rsvp_replies[-1].ret_code == ls.CMD_EXEC_OK
 
 
@@ -199,7 +203,7 @@ def test_answer_rsvp_returns_the_devices_acknowledgement(bus, notifier, device: 
         ack = sup.decline_rsvp(ask, ["why=not now"])
         assert (ack.rsvp_id, ack.ret_code, ack.action) == (ask.rsvp_id, ls.CMD_EXEC_OK, "refuse")
         assert [(r.ret_code, list(r.data)) for r in device.rsvp_replies] == [(ls.CMD_ERR, ["why=not now"])]
-        with pytest.raises(AlarmError, match="moveRefused"):
+        with pytest.raises(AlarmError, match="moveAbsoluteAborted"):
             sup.wait_complete(rv, timeout_s=3)
         # a second answer is refused, naming why; check=False returns the refusal
         with pytest.raises(ParamError, match="already answered"):

@@ -16,6 +16,7 @@ import pytest
 from conftest import Controller, open_slcan, start_controller
 from landscape import errors
 from landscape._generated import landscape_pb2 as pb
+from landscape.notices import undeclared
 from landscape.supervisor import Supervisor, notice_data
 
 HOME = [0.0, 0.3, 0.3, 0.0, 0.9, 0.0]
@@ -31,13 +32,23 @@ def _status_line(sup: Supervisor, addr: int) -> str:
     return next(line for line in text.splitlines() if line.startswith(f"session 0x{addr:02X} "))
 
 
+#: The names these tests' paths give their own `rsvp NAME` (no schema declares them).
+PATH_EVENTS = {"goOn"}
+
+
 @pytest.fixture
 def owner(bus: can.BusABC) -> Iterator[Supervisor]:
+    seen: list[pb.Notice] = []
     with Supervisor(bus, source_address=OWNER, client_name="contract") as s:
+        s.on_notice(seen.append)
         s.lock()
         s.activate()
         s.wait_complete(s.move_absolute("home", HOME, speed_pct=50), timeout_s=20)
         yield s
+    # every notice the firmware sent carries an event id and data keys of enum ls.EventId
+    assert seen and any(n.final for n in seen)
+    problems = [undeclared(n.event_id, n.data, path_event=n.event_id in PATH_EVENTS) for n in seen]
+    assert [p for p in problems if p is not None] == []
 
 
 def test_a_declined_path_rsvp_drops_the_path_and_is_acknowledged(owner: Supervisor) -> None:

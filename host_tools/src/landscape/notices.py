@@ -10,10 +10,18 @@ are the exact definitions the firmware uses too (firmware/core/ls_units.c: inch 
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 from ._generated import landscape_pb2 as pb
+
+if TYPE_CHECKING:
+    from google.protobuf.descriptor_pb2 import EnumValueOptions
+    from google.protobuf.internal.extension_dict import _ExtensionFieldDescriptor
+
+# protoc's .pyi declares the extension as a plain FieldDescriptor (see registry.py).
+_NOTICE_KEYS_OPTION = cast("_ExtensionFieldDescriptor[EnumValueOptions, str]", pb.notice_keys)
 
 #: Metres per linear unit and radians per angular unit, by the names getUnits answers.
 METERS_PER: dict[str, float] = {"meters": 1.0, "millimeters": 0.001, "centimeters": 0.01, "inches": 0.0254,
@@ -65,3 +73,37 @@ def format_notice(n: pb.Notice) -> str:
     if n.kind in (pb.EVENT_RSVP, pb.ALARM_RSVP):
         extra += f" [rsvp {n.rsvp_id}: default '{n.rsvp_default}' after {n.rsvp_timeout_ms} ms]"
     return f"{kind} {n.event_id}" + "".join(f" {d}" for d in n.data) + extra + (" final" if n.final else "")
+
+
+def _declared_events() -> dict[str, tuple[str, ...]]:
+    out: dict[str, tuple[str, ...]] = {}
+    for v in pb.EventId.DESCRIPTOR.values:
+        if v.number != pb.EVENT_ID_NONE:
+            out[v.name] = tuple(v.GetOptions().Extensions[_NOTICE_KEYS_OPTION].split())
+    return out
+
+
+_DECLARED = _declared_events()
+#: The data keys a path's own `event NAME` / `rsvp NAME` carries (ls.EventId AUX_NAMED_EVENT).
+AUX_NAMED_KEYS: tuple[str, ...] = _DECLARED.pop(pb.EventId.Name(pb.AUX_NAMED_EVENT))
+#: Every event id the device sends (enum ls.EventId of protocol/landscape.proto, by the name
+#: Notice.event_id carries) and the data keys its notices may carry (ls.notice_keys).
+EVENT_KEYS: dict[str, tuple[str, ...]] = _DECLARED
+#: The non-final event of a tagged path point.
+TAG_EVENT: str = pb.EventId.Name(pb.tag)
+
+
+def undeclared(event_id: str, data: Iterable[str], *, path_event: bool = False) -> str | None:
+    """What in a notice the schema does not declare, as a sentence, or None when all is declared.
+    `path_event`: the name is a path's own (`event NAME`, `rsvp NAME`), judged by AUX_NAMED_KEYS."""
+    if path_event:
+        keys = AUX_NAMED_KEYS
+    elif event_id in EVENT_KEYS:
+        keys = EVENT_KEYS[event_id]
+    else:
+        return f"event id {event_id!r} is not declared in protocol/landscape.proto enum EventId"
+    for item in data:
+        key, eq, _ = item.partition("=")
+        if not eq or key not in keys:
+            return f"notice {event_id!r}: data {item!r} has no key the schema declares for it ({', '.join(keys)})"
+    return None

@@ -15,6 +15,7 @@ import math
 from pathlib import Path
 from typing import Any
 
+from .notices import TAG_EVENT
 from .recording import Recording, RecordingError
 
 KINDS = ("joints", "velocity", "following", "path")
@@ -80,7 +81,7 @@ def following_samples(rec: Recording) -> list[tuple[float, list[float]]]:
 
 def _tags(rec: Recording, ax: Any) -> None:
     for t, event, data in rec.notices:
-        if event == "tag":
+        if event == TAG_EVENT:
             ax.axvline(t, color="grey", linestyle=":", linewidth=0.8)
             ax.annotate(data.get("tag") or data.get("tag_name", ""), (t, 1.01), xycoords=("data", "axes fraction"),
                         rotation=60, va="bottom", ha="left", fontsize=7, color="dimgrey", annotation_clip=False)
@@ -164,7 +165,7 @@ def plot_path(rec: Recording, out: str | Path) -> Path:
     ax.scatter([xs[-1]], [ys[-1]], [zs[-1]], color="tab:red", s=40, label="end")
     times = [p[0] for p in pts]
     for t, event, data in rec.notices:
-        if event != "tag":
+        if event != TAG_EVENT:
             continue
         i = min(range(len(times)), key=lambda k: abs(times[k] - t))
         ax.scatter([xs[i]], [ys[i]], [zs[i]], color="black", s=18, marker="^")

@@ -18,6 +18,7 @@
 
 #include "ls_control.h"
 #include "ls_core.h"
+#include "cmd_sensor.h"
 #include "ls_core_events.h"
 #include "ls_kin.h"
 #include "ls_math.h"
@@ -78,6 +79,35 @@ static ls_Request g_rq;
 static ls_Uplink g_up;
 static uint8_t g_buf[LS_UPLINK_MAX + 64];
 
+/* The event names the paths of these tests choose (`event NAME`): the only
+ * names a notice may carry that the schema does not declare. */
+static const char *const k_path_event_names[] = { "reached", "ask" };
+
+/* Every notice the core sends: its event id is declared in the schema's enum
+ * ls.EventId (or is a path's own, with AUX_NAMED_EVENT's keys) and every data
+ * item is "key=value" with a key the schema lists for that id. */
+static void assert_notice_declared(const ls_Notice *n)
+{
+    ls_EventId id = ls_event_find(n->event_id);
+    if (id == ls_EventId_EVENT_ID_NONE) {
+        bool path_event = false;
+        for (size_t k = 0; k < sizeof k_path_event_names / sizeof k_path_event_names[0]; k++) {
+            path_event = path_event || strcmp(n->event_id, k_path_event_names[k]) == 0;
+        }
+        if (!path_event) {
+            fail_msg("notice '%s' is not declared in protocol/landscape.proto enum EventId", n->event_id);
+        }
+        id = ls_EventId_AUX_NAMED_EVENT;
+    }
+    for (pb_size_t k = 0; k < n->data_count; k++) {
+        const char *eq = strchr(n->data[k], '=');
+        if (eq == NULL || !ls_event_key_declared(id, n->data[k], (size_t)(eq - n->data[k]))) {
+            fail_msg("notice '%s': data '%s' has no key the schema declares for it (ls.notice_keys)", n->event_id,
+                     n->data[k]);
+        }
+    }
+}
+
 static int fake_send(void *ctx, uint8_t addr, const uint8_t *buf, size_t len)
 {
     (void)ctx;
@@ -85,6 +115,9 @@ static int fake_send(void *ctx, uint8_t addr, const uint8_t *buf, size_t len)
     pb_istream_t is = pb_istream_from_buffer(buf, len);
     memset(&g_rx[g_nrx], 0, sizeof g_rx[g_nrx]);
     assert_true(pb_decode(&is, ls_Downlink_fields, &g_rx[g_nrx]));
+    if (g_rx[g_nrx].which_msg == ls_Downlink_notice_tag) {
+        assert_notice_declared(&g_rx[g_nrx].msg.notice);
+    }
     g_rx_addr[g_nrx] = addr;
     g_nrx++;
     return 0;
@@ -1082,7 +1115,8 @@ static void test_rsvp_reply_and_timeout(void **state)
 {
     (void)state;
     g_done_calls = 0;
-    const char *data[] = { "k=v" };
+    /* as a path's `rsvp ask T` sends it (ls.EventId AUX_NAMED_EVENT) */
+    const char *data[] = { "path=p" };
     size_t before = g_nrx;
     const uint32_t epoch_b = g_core.sessions[1].epoch;
     int32_t id = ls_core_rsvp(&g_core, 1, 77, ls_NoticeKind_EVENT_RSVP, "ask", data, 1, 300, "continue", done_cb,
@@ -1621,21 +1655,21 @@ static void test_an_emergency_flood_stops_once_and_counts_the_repeats(void **sta
     }
     assert_int_equal(g_halt_posts, 1);
     assert_int_equal(alarms_to(from, HOST_A, "fault", NULL), 1);
-    assert_int_equal(alarms_to(from, HOST_A, LS_ALARM_SUPPRESSED_EVENT, NULL), 0);
+    assert_int_equal(alarms_to(from, HOST_A, ls_EventId_name(ls_EventId_alarmsSuppressed), NULL), 0);
     assert_int_equal(g_core.emergency_frames, 500);
     assert_int_equal(g_core.alarms_suppressed, 499);
     assert_string_equal(g_core.fault, "emergency stop frame on the bus");
     /* the window ends: one alarm with the count, to everyone */
     ls_core_tick(&g_core, t0 + LS_ALARM_WINDOW_MS * 1000u);
     const ls_Notice *sum = NULL;
-    assert_int_equal(alarms_to(from, HOST_A, LS_ALARM_SUPPRESSED_EVENT, &sum), 1);
-    assert_int_equal(alarms_to(from, HOST_B, LS_ALARM_SUPPRESSED_EVENT, NULL), 1);
+    assert_int_equal(alarms_to(from, HOST_A, ls_EventId_name(ls_EventId_alarmsSuppressed), &sum), 1);
+    assert_int_equal(alarms_to(from, HOST_B, ls_EventId_name(ls_EventId_alarmsSuppressed), NULL), 1);
     assert_true(has_data(sum, "suppressed=499"));
     assert_true(has_data(sum, "fault=emergency stop frame on the bus"));
     /* a window without repeats: nothing more */
     ls_core_tick(&g_core, t0 + 2u * LS_ALARM_WINDOW_MS * 1000u + 1u);
     ls_core_tick(&g_core, t0 + 3u * LS_ALARM_WINDOW_MS * 1000u + 2u);
-    assert_int_equal(alarms_to(from, HOST_A, LS_ALARM_SUPPRESSED_EVENT, NULL), 1);
+    assert_int_equal(alarms_to(from, HOST_A, ls_EventId_name(ls_EventId_alarmsSuppressed), NULL), 1);
     /* the fault log: the frame, then the count */
     uint32_t n = 0, dropped = 0;
     assert_string_equal(ls_core_fault_entry(&g_core, 0, &n, &dropped)->text, "emergency stop frame on the bus");
@@ -1665,7 +1699,7 @@ static void test_a_different_alarm_is_not_suppressed(void **state)
     ls_core_fault(&g_core, "e-stop input", g_now + 2000u);
     assert_int_equal(alarms_to(from, HOST_A, "fault", NULL), 2);
     const ls_Notice *sum = NULL;
-    assert_int_equal(alarms_to(from, HOST_A, LS_ALARM_SUPPRESSED_EVENT, &sum), 1);
+    assert_int_equal(alarms_to(from, HOST_A, ls_EventId_name(ls_EventId_alarmsSuppressed), &sum), 1);
     assert_true(has_data(sum, "suppressed=1"));
     assert_string_equal(g_core.fault, "e-stop input");
 }
@@ -2397,9 +2431,49 @@ static void test_describe_publishes_the_limits_from_their_homes(void **state)
     assert_true(d->reach_m == ls_robot_model_reach_m(mdl));
 }
 
+/* Every final notice the core composes (<command><suffix>) is declared in the
+ * schema: each ending of every non-blocking command, and each ending of the
+ * sensor-guided moves. */
+static void test_every_final_notice_id_is_declared_in_the_schema(void **state)
+{
+    (void)state;
+    size_t checked = 0;
+    for (size_t i = 0; i < LS_CMD_COUNT; i++) {
+        const ls_cmd_desc_t *d = &ls_cmd_table[i];
+        if ((d->flags & LS_CMD_F_BLOCKING) != 0u) {
+            continue;
+        }
+        for (int why = 0; why < (int)LS_RUN_END_COUNT; why++) {
+            const char *suffix = ls_run_end_suffix((ls_run_end_t)why);
+            if (ls_run_end_event(d->name, suffix) == ls_EventId_EVENT_ID_NONE) {
+                fail_msg("%s%s (ending %s) is not declared in enum EventId", d->name, suffix,
+                         ls_run_end_name((ls_run_end_t)why));
+            }
+            checked++;
+        }
+    }
+    const char *const react[] = { "moveReact", "comply" };
+    for (size_t i = 0; i < 2; i++) {
+        for (int end = LS_REACT_END_THRESHOLD; end <= LS_REACT_END_NO_SENSOR; end++) {
+            const char *suffix = ls_core_sensor_end_suffix((ls_react_end_t)end);
+            if (ls_run_end_event(react[i], suffix) == ls_EventId_EVENT_ID_NONE) {
+                fail_msg("%s%s is not declared in enum EventId", react[i], suffix);
+            }
+            checked++;
+        }
+    }
+    assert_true(checked >= 6u * LS_RUN_END_COUNT);
+    /* and the lookup refuses what the schema does not declare */
+    assert_int_equal(ls_run_end_event("moveAbsolute", "Exploded"), ls_EventId_EVENT_ID_NONE);
+    assert_int_equal(ls_event_find("moveComplete"), ls_EventId_EVENT_ID_NONE);
+    assert_int_equal(ls_event_find("AUX_NAMED_EVENT"), ls_EventId_EVENT_ID_NONE);
+    assert_string_equal(ls_EventId_name(ls_event_find("moveAbsoluteComplete")), "moveAbsoluteComplete");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_every_final_notice_id_is_declared_in_the_schema),
         cmocka_unit_test(test_every_command_in_every_state),
         cmocka_unit_test(test_owner_only_commands_refuse_non_owners),
         cmocka_unit_test(test_units_conversions),

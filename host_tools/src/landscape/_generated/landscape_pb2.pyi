@@ -11,6 +11,7 @@ ALARM: NoticeKind
 ALARM_RSVP: NoticeKind
 ANGULAR_ACCEL: AccelType
 ANGULAR_SPEED: SpeedType
+AUX_NAMED_EVENT: EventId
 BASE_CARTESIAN_FRAME: ReferenceFrame
 CB_ALARM: CallbackType
 CB_ALARM_RSVP: CallbackType
@@ -44,6 +45,7 @@ DISCONNECT_STOP: DisconnectAction
 DISCONNECT_STOP_DEACTIVATE: DisconnectAction
 DISCONNECT_STOP_DEACTIVATE_RELEASE: DisconnectAction
 EVENT: NoticeKind
+EVENT_ID_NONE: EventId
 EVENT_RSVP: NoticeKind
 FEET: LinearUnit
 FUNCTIONAL_ALL_DEVICES: NodeAddress
@@ -62,6 +64,7 @@ METERS: LinearUnit
 MILLIMETERS: LinearUnit
 MOVING: State
 NODE_NONE: NodeAddress
+NOTICE_KEYS_FIELD_NUMBER: _ClassVar[int]
 PAUSED: State
 PERCENT_ACCEL: AccelType
 PERCENT_SPEED: SpeedType
@@ -78,8 +81,42 @@ TOOL_FRAME: ReferenceFrame
 UNLOCKED: State
 WORLD_CARTESIAN_FRAME: ReferenceFrame
 absent_means: _descriptor.FieldDescriptor
+alarmsSuppressed: EventId
 cmd: _descriptor.FieldDescriptor
+commandFailed: EventId
+complyAborted: EventId
+complyComplete: EventId
+complyEnvelope: EventId
+complyFailed: EventId
+complyPanicStop: EventId
+complyTimeout: EventId
+dioSignal: EventId
+dioSignalRsvpTimeout: EventId
+dioSignalTimeout: EventId
+fault: EventId
+manualLimit: EventId
+moveAbsoluteAborted: EventId
+moveAbsoluteComplete: EventId
+moveAbsoluteFailed: EventId
+moveArcAborted: EventId
+moveArcComplete: EventId
+moveArcFailed: EventId
+moveReactAborted: EventId
+moveReactComplete: EventId
+moveReactEnvelope: EventId
+moveReactFailed: EventId
+moveReactPanicStop: EventId
+moveReactTimeout: EventId
+moveRelativeAborted: EventId
+moveRelativeComplete: EventId
+moveRelativeFailed: EventId
+notice_keys: _descriptor.FieldDescriptor
+ownerLost: EventId
+pathMoveAborted: EventId
+pathMoveComplete: EventId
+pathMoveFailed: EventId
 required: _descriptor.FieldDescriptor
+tag: EventId
 
 class AbortMotionReq(_message.Message):
     __slots__ = []
@@ -1104,4 +1141,7 @@ class DisconnectAction(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
     __slots__ = []
 
 class NoticeKind(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
+    __slots__ = []
+
+class EventId(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
     __slots__ = []
