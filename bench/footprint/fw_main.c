@@ -133,18 +133,6 @@ static ls_net_t g_net;
 static ls_traj_t g_traj;
 static ls_control_t g_ctl;
 
-static int act_enable(void *ctx, bool on)
-{
-    ls_ctl_cmd_t cmd = { .kind = on ? LS_CTL_ENABLE : LS_CTL_DISABLE };
-    return ls_control_post((ls_control_t *)ctx, &cmd) ? 0 : HAL_EAGAIN;
-}
-
-static void act_stop(void *ctx)
-{
-    ls_ctl_cmd_t cmd = { .kind = LS_CTL_STOP };
-    (void)ls_control_post((ls_control_t *)ctx, &cmd);
-}
-
 int main(void)
 {
     ls_core_config_t cfg = {
@@ -155,7 +143,8 @@ int main(void)
         .heartbeat_timeout_ms = 1000,
     };
     ls_core_io_t io = { .send_downlink = ls_net_send_downlink, .ctx = &g_net };
-    ls_core_actions_t act = { .enable_drives = act_enable, .stop_motion = act_stop, .ctx = &g_ctl };
+    ls_core_actions_t act = { 0 };
+    ls_core_actions_for_loop(&act, &g_ctl);
     ls_core_init(&g_core, &cfg, &io, &act);
     ls_net_init(&g_net, 0x10, &g_core);
     hal_can_link_t link = { .ops = &can_ops, .self = NULL, .name = "can0" };

@@ -210,25 +210,6 @@ static void control_cycle(void *arg, uint64_t now_us, uint64_t cycle)
     ls_control_cycle((ls_control_t *)arg, now_us);
 }
 
-/* Core actions run through the loop's command ring. */
-static int act_enable(void *ctx, bool on)
-{
-    ls_ctl_cmd_t cmd = { .kind = on ? LS_CTL_ENABLE : LS_CTL_DISABLE };
-    return ls_control_post((ls_control_t *)ctx, &cmd) ? 0 : HAL_EAGAIN;
-}
-
-static void act_halt(void *ctx)
-{
-    ls_ctl_cmd_t cmd = { .kind = LS_CTL_HALT };
-    (void)ls_control_post((ls_control_t *)ctx, &cmd);
-}
-
-static void act_stop(void *ctx)
-{
-    ls_ctl_cmd_t cmd = { .kind = LS_CTL_STOP };
-    (void)ls_control_post((ls_control_t *)ctx, &cmd);
-}
-
 static const ls_config_t *g_cfg_running;
 
 /* How far the control loop's time has fallen behind the clock (hal_linux_rt.h). */
@@ -501,13 +482,10 @@ int main(int argc, char **argv)
     };
     ls_core_io_t io = { .send_downlink = ls_net_send_downlink, .describe = ls_net_describe, .ctx = &g_net };
     g_cfg_running = &opt;
-    ls_core_actions_t act = { .enable_drives = act_enable,
-                              .stop_motion = act_stop,
-                              .halt = act_halt,
-                              .describe_rt = describe_rt,
+    ls_core_actions_t act = { .describe_rt = describe_rt,
                               .log_warn = core_log_warn,
-                              .describe_config = describe_config,
-                              .ctx = &g_ctl };
+                              .describe_config = describe_config };
+    ls_core_actions_for_loop(&act, &g_ctl);
     ls_core_init(&g_core, &cfg, &io, &act);
     ls_net_init(&g_net, opt.node, &g_core);
 

@@ -155,6 +155,21 @@ static void copy_point_attrs(ls_motion_seg_t *s, const ls_path_point_t *pt, int 
     s->overlap_s = 0.0;
 }
 
+/* Point k is planned: where it is first reached (q_at, P_at) is kept for point 0,
+ * the place a cycle closes on; where it ends (q_end, P_end) is where the next
+ * point starts. */
+static void chain_point(int k, const double q_at[LS_N_JOINTS], const double P_at[16], const double q_end[LS_N_JOINTS],
+                        const double P_end[16], double q_first[LS_N_JOINTS], double P_first[16],
+                        double q_prev[LS_N_JOINTS], double P_prev[16])
+{
+    if (k == 0) {
+        memcpy(q_first, q_at, LS_N_JOINTS * sizeof q_at[0]);
+        memcpy(P_first, P_at, 16u * sizeof P_at[0]);
+    }
+    memcpy(q_prev, q_end, LS_N_JOINTS * sizeof q_end[0]);
+    memcpy(P_prev, P_end, 16u * sizeof P_end[0]);
+}
+
 /* Plan every segment of path `p` from q_start into core->motion.prog. Returns 0 or the
  * planner status with `why` naming the point. */
 static int build_program(ls_core_t *core, const ls_path_t *p, const double q_start[LS_N_JOINTS], int32_t cycles,
@@ -180,12 +195,7 @@ static int build_program(ls_core_t *core, const ls_path_t *p, const double q_sta
                 ls_fmt_print(why, whylen, "point %d (CIRCULAR_MOTION %s): %s", k + bad, bad ? "goal" : "via", w);
                 return st;
             }
-            if (k == 0) {
-                memcpy(q_first, s->q1, sizeof q_first);
-                memcpy(P_first, P_via, sizeof P_first);
-            }
-            memcpy(q_prev, s2->q1, sizeof q_prev);
-            memcpy(P_prev, P_t, sizeof P_prev);
+            chain_point(k, s->q1, P_via, s2->q1, P_t, q_first, P_first, q_prev, P_prev);
             k++;
             continue;
         }
@@ -194,12 +204,7 @@ static int build_program(ls_core_t *core, const ls_path_t *p, const double q_sta
             ls_fmt_print(why, whylen, "point %d: %s", k, w);
             return st;
         }
-        if (k == 0) {
-            memcpy(q_first, s->q1, sizeof q_first);
-            memcpy(P_first, P_t, sizeof P_first);
-        }
-        memcpy(q_prev, s->q1, sizeof q_prev);
-        memcpy(P_prev, P_t, sizeof P_prev);
+        chain_point(k, s->q1, P_t, s->q1, P_t, q_first, P_first, q_prev, P_prev);
     }
     core->motion.prog.n = p->n;
     if (cycles > 1) {

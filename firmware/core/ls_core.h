@@ -315,6 +315,14 @@ typedef struct ls_call {
 
 void ls_core_init(ls_core_t *core, const ls_core_config_t *cfg, const ls_core_io_t *io, const ls_core_actions_t *act);
 
+/* Set the drive, stop and halt actions of `act` (and its ctx) to commands
+ * posted on the control loop `ctl`'s command ring (ls_control_post; a full
+ * ring refuses the drives with HAL_EAGAIN). Every build that composes the core
+ * with the control loop (the app, the footprint build, the session fuzzer)
+ * takes them from here; the optional describe and log actions stay the
+ * caller's. Init only. */
+void ls_core_actions_for_loop(ls_core_actions_t *act, struct ls_control *ctl);
+
 /* One ISO-TP message from the supervisor at `addr` (an encoded ls.Uplink). */
 void ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t len, uint64_t now_us);
 

@@ -193,24 +193,6 @@ static hal_dio_t g_dio;
 static hal_sensor_t g_sensor;
 static uint64_t g_now;
 
-static int act_enable(void *ctx, bool on)
-{
-    ls_ctl_cmd_t cmd = { .kind = on ? LS_CTL_ENABLE : LS_CTL_DISABLE };
-    return ls_control_post((ls_control_t *)ctx, &cmd) ? 0 : HAL_EAGAIN;
-}
-
-static void act_halt(void *ctx)
-{
-    ls_ctl_cmd_t cmd = { .kind = LS_CTL_HALT };
-    (void)ls_control_post((ls_control_t *)ctx, &cmd);
-}
-
-static void act_stop(void *ctx)
-{
-    ls_ctl_cmd_t cmd = { .kind = LS_CTL_STOP };
-    (void)ls_control_post((ls_control_t *)ctx, &cmd);
-}
-
 /* ---------------------------------------------------------------- the ledger: what the supervisors saw */
 
 typedef struct {
@@ -743,7 +725,8 @@ static void setup(void)
                              .joint_count = LS_N_JOINTS,
                              .heartbeat_timeout_ms = 1000 };
     ls_core_io_t io = { .send_downlink = send_downlink, .ctx = NULL };
-    ls_core_actions_t act = { .enable_drives = act_enable, .stop_motion = act_stop, .halt = act_halt, .ctx = &g_ctl };
+    ls_core_actions_t act = { 0 };
+    ls_core_actions_for_loop(&act, &g_ctl);
     ls_core_init(&g_core, &cfg, &io, &act);
     g_core.model = model;
     g_core.sensors = &g_sensor;

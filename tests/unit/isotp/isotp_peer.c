@@ -23,16 +23,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "landscape.pb.h"
+#include "peer_ids.h"
 #include "ls_isotp.h"
 
-/* The schema's ISO-TP ids of the default device and host addresses. */
-#define PEER_RX_ID                                                                                                     \
-    ((uint32_t)ls_IsotpId_ISOTP_PHYSICAL_BASE | (uint32_t)ls_NodeAddress_DEFAULT_DEVICE_ADDRESS << 8 |                 \
-     (uint32_t)ls_NodeAddress_DEFAULT_HOST_ADDRESS)
-#define PEER_TX_ID                                                                                                     \
-    ((uint32_t)ls_IsotpId_ISOTP_PHYSICAL_BASE | (uint32_t)ls_NodeAddress_DEFAULT_HOST_ADDRESS << 8 |                   \
-     (uint32_t)ls_NodeAddress_DEFAULT_DEVICE_ADDRESS)
 #define LINE_MAX_CHARS (2u * LS_ISOTP_MAX_PAYLOAD + 64u)
 
 static ls_isotp_link_t link_;
@@ -119,7 +112,7 @@ int main(int argc, char **argv)
         return 2;
     }
     uint64_t now_us = 0;
-    if (ls_isotp_init(&link_, &cfg, PEER_TX_ID, PEER_RX_ID, peer_send, &now_us) != LS_ISOTP_OK) {
+    if (ls_isotp_init(&link_, &cfg, LS_PEER_TX_ID, LS_PEER_RX_ID, peer_send, &now_us) != LS_ISOTP_OK) {
         fprintf(stderr, "isotp_peer: invalid configuration (reserved STmin?)\n");
         return 2;
     }
@@ -148,7 +141,7 @@ int main(int argc, char **argv)
             long n = (end != line + 2 && *end == ' ') ? parse_hex(end + 1, buf, 8) : -1;
             if (n < 1) {
                 printf("E bad frame: %s", line);
-            } else if (id == PEER_RX_ID) {
+            } else if (id == LS_PEER_RX_ID) {
                 ls_isotp_on_frame(&link_, buf, (uint8_t)n, now_us);
             }
         } else if (kind == 'S' && line[1] == ' ') {

@@ -30,17 +30,10 @@
 #include <time.h>
 
 #include "hal/hal_can.h"
-#include "landscape.pb.h"
+#include "peer_ids.h"
 #include "ls_isotp.h"
 #include "slcan_pty.h"
 
-/* The schema's ISO-TP ids of the default device and host addresses. */
-#define PEER_RX_ID                                                                                                     \
-    ((uint32_t)ls_IsotpId_ISOTP_PHYSICAL_BASE | (uint32_t)ls_NodeAddress_DEFAULT_DEVICE_ADDRESS << 8 |                 \
-     (uint32_t)ls_NodeAddress_DEFAULT_HOST_ADDRESS)
-#define PEER_TX_ID                                                                                                     \
-    ((uint32_t)ls_IsotpId_ISOTP_PHYSICAL_BASE | (uint32_t)ls_NodeAddress_DEFAULT_HOST_ADDRESS << 8 |                   \
-     (uint32_t)ls_NodeAddress_DEFAULT_DEVICE_ADDRESS)
 #define LINK_PREFIX "slcan:pty:"
 /* Upper bound of one wait: keeps the pty's pending output flowing while the
  * host reads slowly (flushing happens on recv/send calls). */
@@ -180,7 +173,7 @@ static int serve(void)
         hal_can_frame_t f;
         int rc;
         while ((rc = hal_can_recv(&g_can, &f)) == 1) {
-            if ((f.flags & HAL_CAN_F_EXT) != 0u && f.id == PEER_RX_ID) {
+            if ((f.flags & HAL_CAN_F_EXT) != 0u && f.id == LS_PEER_RX_ID) {
                 put_frame('R', t, f.id, f.data, f.len);
                 ls_isotp_on_frame(&g_link, f.data, f.len, t);
                 take_message();
@@ -219,7 +212,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "usage: %s [-b BS] [-s STMIN] [-p 0|1] slcan:pty:PATH\n", argv[0]);
         return 2;
     }
-    if (ls_isotp_init(&g_link, &cfg, PEER_TX_ID, PEER_RX_ID, link_send, NULL) != LS_ISOTP_OK) {
+    if (ls_isotp_init(&g_link, &cfg, LS_PEER_TX_ID, LS_PEER_RX_ID, link_send, NULL) != LS_ISOTP_OK) {
         fprintf(stderr, "isotp_pty_peer: invalid ISO-TP configuration (reserved STmin?)\n");
         return 2;
     }

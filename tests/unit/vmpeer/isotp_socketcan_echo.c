@@ -26,16 +26,9 @@
 
 #include "hal/hal_can.h"
 #include "hal_linux_socketcan.h"
-#include "landscape.pb.h"
+#include "peer_ids.h"
 #include "ls_isotp.h"
 
-/* The schema's ISO-TP ids of the default device and host addresses. */
-#define ECHO_RX_ID                                                                                                     \
-    ((uint32_t)ls_IsotpId_ISOTP_PHYSICAL_BASE | (uint32_t)ls_NodeAddress_DEFAULT_DEVICE_ADDRESS << 8 |                 \
-     (uint32_t)ls_NodeAddress_DEFAULT_HOST_ADDRESS)
-#define ECHO_TX_ID                                                                                                     \
-    ((uint32_t)ls_IsotpId_ISOTP_PHYSICAL_BASE | (uint32_t)ls_NodeAddress_DEFAULT_HOST_ADDRESS << 8 |                   \
-     (uint32_t)ls_NodeAddress_DEFAULT_DEVICE_ADDRESS)
 
 static volatile sig_atomic_t stop_requested;
 static hal_can_link_t can_link;
@@ -108,7 +101,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "isotp_socketcan_echo: cannot open %s: %s (%s)\n", ifname, why, hal_strerror(rc));
         return 2;
     }
-    if (ls_isotp_init(&tp_link, NULL, ECHO_TX_ID, ECHO_RX_ID, can_send, NULL) != LS_ISOTP_OK) {
+    if (ls_isotp_init(&tp_link, NULL, LS_PEER_TX_ID, LS_PEER_RX_ID, can_send, NULL) != LS_ISOTP_OK) {
         fprintf(stderr, "isotp_socketcan_echo: ls_isotp_init failed\n");
         hal_can_close(&can_link);
         return 2;
@@ -140,7 +133,7 @@ int main(int argc, char **argv)
         t = now_us();
         hal_can_frame_t f;
         while ((rc = hal_can_recv(&can_link, &f)) == 1) {
-            if (f.id == ECHO_RX_ID && (f.flags & HAL_CAN_F_EXT) != 0 && (f.flags & HAL_CAN_F_RTR) == 0) {
+            if (f.id == LS_PEER_RX_ID && (f.flags & HAL_CAN_F_EXT) != 0 && (f.flags & HAL_CAN_F_RTR) == 0) {
                 ls_isotp_on_frame(&tp_link, f.data, f.len, t);
             }
         }
