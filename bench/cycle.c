@@ -66,7 +66,7 @@ static int run_traj(long n)
     const ls_robot_model_t *m = &ls_robot_model_default;
     ls_traj_limits_t lim = slow_limits(m);
     ls_traj_t tr;
-    if (ls_traj_plan(&tr, LS_N_JOINTS, q_home, q_goal, &lim) != LS_TRAJ_OK) {
+    if (ls_traj_plan(&tr, LS_N_JOINTS, q_home, q_goal, &lim) != LS_OK) {
         return -1;
     }
     double q[LS_N_JOINTS], qd[LS_N_JOINTS], qdd[LS_N_JOINTS];
@@ -84,7 +84,7 @@ static int run_fk(long n)
     memcpy(q, q_home, sizeof q);
     for (long k = 0; k < n; k++) {
         q[0] = q_home[0] + 1e-6 * (double)k;
-        if (ls_kin_fk(m, q, T) != LS_KIN_OK) {
+        if (ls_kin_fk(m, q, T) != LS_OK) {
             return -1;
         }
         checksum += T[12];
@@ -96,7 +96,7 @@ static int run_cart_ik(long n)
 {
     const ls_robot_model_t *m = &ls_robot_model_default;
     double A[16], B[16], T[16], q[LS_N_JOINTS];
-    if (ls_kin_fk(m, q_home, A) != LS_KIN_OK) {
+    if (ls_kin_fk(m, q_home, A) != LS_OK) {
         return -1;
     }
     memcpy(B, A, sizeof B);
@@ -104,7 +104,7 @@ static int run_cart_ik(long n)
     B[14] -= 0.05;
     /* The path parameter 0 -> 1 lasts longer than the N cycles, so that every cycle lies on the line. */
     ls_traj_axis_t s;
-    if (ls_traj_plan_axis_duration(&s, 0.0, 1.0, 2.0, 4.0, 40.0, (double)n * DT_S + 2.0) != LS_TRAJ_OK) {
+    if (ls_traj_plan_axis_duration(&s, 0.0, 1.0, 2.0, 4.0, 40.0, (double)n * DT_S + 2.0) != LS_OK) {
         return -1;
     }
     memcpy(q, q_home, sizeof q);
@@ -112,7 +112,7 @@ static int run_cart_ik(long n)
         double u;
         ls_traj_sample_axis(&s, (double)k * DT_S, &u, NULL, NULL);
         ls_pose_interp(A, B, u, T);
-        if (ls_kin_ik_nearest(m, T, q, q) != LS_KIN_OK) {
+        if (ls_kin_ik_nearest(m, T, q, q) != LS_OK) {
             return -1;
         }
         absorb(q);

@@ -32,7 +32,7 @@ int main(int argc, char **argv)
     }
     hal_can_link_t can;
     char msg[256];
-    if (hal_sim_slcan_pty_open(&can, argv[1], msg, sizeof msg) != HAL_OK) {
+    if (hal_sim_slcan_pty_open(&can, argv[1], msg, sizeof msg) != LS_OK) {
         fprintf(stderr, "bench_frame_echo: %s\n", msg);
         return 1;
     }
@@ -50,12 +50,12 @@ int main(int argc, char **argv)
             if ((f.flags & HAL_CAN_F_EXT) != 0 && (f.id & PF_MASK) == PHYS) {
                 f.id = PHYS | ((f.id & 0xFFu) << 8) | ((f.id >> 8) & 0xFFu);
             }
-            if (hal_can_send(&can, &f) == HAL_OK) {
+            if (hal_can_send(&can, &f) == LS_OK) {
                 echoed++;
             }
         }
-        if (r != HAL_EAGAIN) {
-            fprintf(stderr, "bench_frame_echo: link failed: %s\n", hal_strerror(r));
+        if (r != LS_EAGAIN) {
+            fprintf(stderr, "bench_frame_echo: link failed: %s\n", ls_err_text(r));
             break;
         }
     }

@@ -58,7 +58,7 @@ static long transfer(size_t len)
     frames_on_bus = 0;
     q_head = q_tail = 0;
     uint64_t now_us = 1;
-    if (ls_isotp_send(&link_a, payload, len, now_us) != LS_ISOTP_OK) {
+    if (ls_isotp_send(&link_a, payload, len, now_us) != LS_OK) {
         return -1;
     }
     for (unsigned turn = 0; turn < 100000u; turn++) {
@@ -89,8 +89,8 @@ int main(int argc, char **argv)
     ls_isotp_config_t cfg;
     ls_isotp_default_config(&cfg);
     cfg.block_size = (uint8_t)bs;
-    if (ls_isotp_init(&link_a, &cfg, ID_A_TO_B, ID_B_TO_A, bus_send, NULL) != LS_ISOTP_OK ||
-        ls_isotp_init(&link_b, &cfg, ID_B_TO_A, ID_A_TO_B, bus_send, NULL) != LS_ISOTP_OK) {
+    if (ls_isotp_init(&link_a, &cfg, ID_A_TO_B, ID_B_TO_A, bus_send, NULL) != LS_OK ||
+        ls_isotp_init(&link_b, &cfg, ID_B_TO_A, ID_A_TO_B, bus_send, NULL) != LS_OK) {
         fprintf(stderr, "bench_isotp_frames: link init failed\n");
         return 1;
     }

@@ -47,7 +47,7 @@ static int can_send(void *ctx, uint32_t can_id, const uint8_t *data, uint8_t len
     (void)ctx;
     hal_can_frame_t f = { .id = can_id, .flags = HAL_CAN_F_EXT, .len = len };
     memcpy(f.data, data, len);
-    return hal_can_send(&can_, &f) == HAL_OK ? 0 : -1;
+    return hal_can_send(&can_, &f) == LS_OK ? 0 : -1;
 }
 
 int main(int argc, char **argv)
@@ -57,13 +57,13 @@ int main(int argc, char **argv)
         return 2;
     }
     char msg[256];
-    if (hal_sim_slcan_pty_open(&can_, argv[1], msg, sizeof msg) != HAL_OK) {
+    if (hal_sim_slcan_pty_open(&can_, argv[1], msg, sizeof msg) != LS_OK) {
         fprintf(stderr, "bench_isotp_pty_echo: %s\n", msg);
         return 1;
     }
     signal(SIGTERM, on_signal);
     signal(SIGINT, on_signal);
-    if (ls_isotp_init(&link_, NULL, TX_ID, RX_ID, can_send, NULL) != LS_ISOTP_OK) {
+    if (ls_isotp_init(&link_, NULL, TX_ID, RX_ID, can_send, NULL) != LS_OK) {
         fprintf(stderr, "bench_isotp_pty_echo: ISO-TP init failed\n");
         hal_can_close(&can_);
         return 1;
@@ -90,13 +90,13 @@ int main(int argc, char **argv)
                 ls_isotp_on_frame(&link_, f.data, f.len, now_us());
             }
         }
-        if (r != HAL_EAGAIN) {
-            fprintf(stderr, "bench_isotp_pty_echo: link failed: %s\n", hal_strerror(r));
+        if (r != LS_EAGAIN) {
+            fprintf(stderr, "bench_isotp_pty_echo: link failed: %s\n", ls_err_text(r));
             break;
         }
         ls_isotp_poll(&link_, now_us());
         size_t n = ls_isotp_take_rx(&link_, msg_, sizeof msg_);
-        if (n > 0 && ls_isotp_send(&link_, msg_, n, now_us()) != LS_ISOTP_OK) {
+        if (n > 0 && ls_isotp_send(&link_, msg_, n, now_us()) != LS_OK) {
             fprintf(stderr, "bench_isotp_pty_echo: echo of %zu bytes refused (still sending)\n", n);
         }
     }

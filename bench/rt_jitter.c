@@ -137,7 +137,7 @@ int main(int argc, char **argv)
     static hal_linux_rt_t rt;
     hal_rt_config_t cfg = { .rate_hz = (uint32_t)rate, .priority = (int)prio, .cpu = -1, .lock_memory = true };
     char msg[256];
-    if (hal_linux_rt_start(&rt, &cfg, hal_cycle, &g_hal_meter, msg, sizeof msg) != HAL_OK) {
+    if (hal_linux_rt_start(&rt, &cfg, hal_cycle, &g_hal_meter, msg, sizeof msg) != LS_OK) {
         fprintf(stderr, "bench_rt_jitter: %s\n", msg);
         return 1;
     }

@@ -63,14 +63,14 @@ int main(void)
     for (size_t k = 0; k < count; k++) {
         const problem_t *p = &problems[k];
         ls_traj_t tr;
-        int rc = LS_TRAJ_OK;
+        int rc = LS_OK;
         const uint64_t t0 = mono_ns();
         for (int r = 0; r < REPEAT; r++) {
             rc |= ls_traj_plan(&tr, p->n, p->p0, p->p1, &p->lim);
             __asm__ volatile("" : : "g"(&tr) : "memory"); /* keep every repeat */
         }
         const uint64_t dt = mono_ns() - t0;
-        if (rc != LS_TRAJ_OK) {
+        if (rc != LS_OK) {
             printf("ERR %d\n", rc);
         } else {
             printf("OK %.17g %.1f\n", tr.duration_s, (double)dt / REPEAT);

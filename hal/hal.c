@@ -1,5 +1,5 @@
 /* Thin wrappers of the HAL contracts: an operation a backend leaves NULL
- * answers HAL_EUNSUPPORTED, so callers never test for NULL themselves. */
+ * answers LS_EUNSUPPORTED, so callers never test for NULL themselves. */
 #include <stddef.h>
 
 #include "hal/hal_arm.h"
@@ -7,27 +7,11 @@
 #include "hal/hal_clock.h"
 #include "hal/hal_dio.h"
 
-const char *hal_strerror(int status)
-{
-    switch (status) {
-    case HAL_OK: return "ok";
-    case HAL_EUNSUPPORTED: return "not supported by this backend";
-    case HAL_EAGAIN: return "try again";
-    case HAL_EIO: return "device I/O error";
-    case HAL_EINVAL: return "invalid argument for this device";
-    case HAL_ENODEV: return "no such device";
-    case HAL_EPERM: return "permission denied";
-    case HAL_EBUSOFF: return "CAN bus-off";
-    case HAL_ENOAFCAN: return "kernel has no AF_CAN support";
-    default: return status >= 0 ? "ok" : "unknown error";
-    }
-}
-
 #define HAL_CALL(obj, op, ...)                                                                                         \
     (((obj) != NULL && (obj)->ops != NULL && (obj)->ops->op != NULL) ? (obj)->ops->op((obj)->self, __VA_ARGS__)        \
-                                                                     : HAL_EUNSUPPORTED)
+                                                                     : LS_EUNSUPPORTED)
 #define HAL_CALL0(obj, op)                                                                                             \
-    (((obj) != NULL && (obj)->ops != NULL && (obj)->ops->op != NULL) ? (obj)->ops->op((obj)->self) : HAL_EUNSUPPORTED)
+    (((obj) != NULL && (obj)->ops != NULL && (obj)->ops->op != NULL) ? (obj)->ops->op((obj)->self) : LS_EUNSUPPORTED)
 
 int hal_can_send(hal_can_link_t *link, const hal_can_frame_t *frame)
 {
@@ -40,7 +24,7 @@ int hal_can_recv(hal_can_link_t *link, hal_can_frame_t *frame)
 int hal_can_poll_fd(hal_can_link_t *link)
 {
     int fd = HAL_CALL0(link, poll_fd);
-    return fd == HAL_EUNSUPPORTED ? -1 : fd;
+    return fd == LS_EUNSUPPORTED ? -1 : fd;
 }
 int hal_can_status(hal_can_link_t *link, hal_can_status_t *out)
 {
@@ -77,7 +61,7 @@ int hal_dio_write(hal_dio_t *dio, uint16_t unit, uint32_t on, uint32_t off)
 int hal_dio_poll_fd(hal_dio_t *dio)
 {
     int fd = HAL_CALL0(dio, poll_fd);
-    return fd == HAL_EUNSUPPORTED ? -1 : fd;
+    return fd == LS_EUNSUPPORTED ? -1 : fd;
 }
 int hal_dio_drain_events(hal_dio_t *dio)
 {

@@ -37,7 +37,7 @@ static int can_send(void *self, const hal_can_frame_t *f)
 {
     (void)self;
     if ((CAN0->status & 2u) != 0) {
-        return HAL_EAGAIN;
+        return LS_EAGAIN;
     }
     uint32_t d[2];
     memcpy(d, f->data, sizeof d);
@@ -46,14 +46,14 @@ static int can_send(void *self, const hal_can_frame_t *f)
     CAN0->tx_data[0] = d[0];
     CAN0->tx_data[1] = d[1];
     CAN0->tx_go = 1;
-    return HAL_OK;
+    return LS_OK;
 }
 
 static int can_recv(void *self, hal_can_frame_t *f)
 {
     (void)self;
     if ((CAN0->status & 1u) == 0) {
-        return HAL_EAGAIN;
+        return LS_EAGAIN;
     }
     uint32_t id = CAN0->rx_id;
     uint32_t d[2] = { CAN0->rx_data[0], CAN0->rx_data[1] };
@@ -79,7 +79,7 @@ static int can_status(void *self, hal_can_status_t *out)
     (void)self;
     memset(out, 0, sizeof *out);
     out->bitrate = 1000000;
-    return HAL_OK;
+    return LS_OK;
 }
 
 static void can_close(void *self)
@@ -95,7 +95,7 @@ static int arm_enable(void *self, bool on)
 {
     (void)self;
     CAN0->drive_enable = on ? 1 : 0;
-    return HAL_OK;
+    return LS_OK;
 }
 
 static int arm_command(void *self, const double *q_rad, const double *qd_rad_s)
@@ -105,7 +105,7 @@ static int arm_command(void *self, const double *q_rad, const double *qd_rad_s)
     for (int i = 0; i < LS_N_JOINTS; i++) {
         CAN0->joint_cmd_urad[i] = (int32_t)(q_rad[i] * 1e6);
     }
-    return HAL_OK;
+    return LS_OK;
 }
 
 static int arm_read(void *self, double *q_rad, double *qd_rad_s)
@@ -117,7 +117,7 @@ static int arm_read(void *self, double *q_rad, double *qd_rad_s)
             qd_rad_s[i] = 0.0;
         }
     }
-    return HAL_OK;
+    return LS_OK;
 }
 
 static const hal_arm_ops_t arm_ops = { NULL, arm_enable, arm_command, arm_read, NULL };
@@ -184,7 +184,7 @@ int main(void)
         }
         /* A new goal from the mailbox, planned and sampled as the control loop would. */
         q1[(t >> 4) % LS_N_JOINTS] = (double)(int32_t)CAN0->rx_data[0] * 1e-6;
-        if (ls_traj_plan(&g_traj, LS_N_JOINTS, q0, q1, &lim) == LS_TRAJ_OK) {
+        if (ls_traj_plan(&g_traj, LS_N_JOINTS, q0, q1, &lim) == LS_OK) {
             ls_traj_sample(&g_traj, (double)(t % 1000000u) * 1e-6, q, NULL, NULL);
             CAN0->tx_data[0] = (uint32_t)(int32_t)(q[0] * 1e6);
         }

@@ -153,13 +153,13 @@ static int wrap_faults(const char *spec, hal_can_link_t *link)
 {
     hal_sim_fault_config_t fc;
     char msg[256];
-    if (hal_sim_fault_parse(spec, &fc, msg, sizeof msg) != HAL_OK) {
+    if (hal_sim_fault_parse(spec, &fc, msg, sizeof msg) != LS_OK) {
         LOG_ERR("--link-faults %s: %s", spec, msg);
         return -1;
     }
     fc.clock = (hal_clock_t){ .now_us = fault_now_us, .self = NULL };
     hal_can_link_t faulty;
-    if (hal_sim_faulty_wrap(&faulty, link, &fc) != HAL_OK) {
+    if (hal_sim_faulty_wrap(&faulty, link, &fc) != LS_OK) {
         LOG_ERR("--link-faults: at most %d links can carry faults", HAL_SIM_FAULTY_MAX_LINKS);
         return -1;
     }

@@ -168,7 +168,7 @@ static void check_links(report_t *r, const ls_config_t *cfg)
             char what[160];
             snprintf(what, sizeof what, "link %s", spec);
             int rc = hal_linux_socketcan_probe(spec + 10, msg, sizeof msg);
-            if (rc == HAL_OK) {
+            if (rc == LS_OK) {
                 report(r, LS_CHECK_PASS, what, "%s", msg);
             } else {
                 report(r, LS_CHECK_FAIL, what, "%s", msg);
@@ -200,7 +200,7 @@ static void check_gpiod(report_t *r, const ls_config_t *cfg, const char *chip)
     char what[384];
     snprintf(what, sizeof what, "gpio chip %s", chip);
     int rc = hal_linux_gpiod_probe(chip, msg, sizeof msg);
-    if (rc != HAL_OK) {
+    if (rc != LS_OK) {
         report(r, LS_CHECK_FAIL, what, "%s", msg);
         return;
     }
@@ -220,7 +220,7 @@ static void check_gpiod(report_t *r, const ls_config_t *cfg, const char *chip)
     snprintf(what, sizeof what, "gpio lines %s (inputs %s, outputs %s)", chip, ins, outs);
     hal_dio_t dio;
     rc = hal_linux_gpiod_open(&dio, &gc, msg, sizeof msg);
-    if (rc != HAL_OK) {
+    if (rc != LS_OK) {
         report(r, LS_CHECK_FAIL, what, "%s", msg);
         return;
     }

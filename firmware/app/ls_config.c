@@ -262,7 +262,7 @@ static int set_link_faults(ls_config_t *cfg, const char *v, char *why, size_t wh
         return EXPECT("a fault spec of at most %zu characters", sizeof cfg->link_faults - 1);
     }
     char m[200];
-    if (hal_sim_fault_parse(v, &fc, m, sizeof m) != HAL_OK) {
+    if (hal_sim_fault_parse(v, &fc, m, sizeof m) != LS_OK) {
         cfg->link_faults[0] = '\0';
         return EXPECT("a fault spec as in docs/reliability.md (%s)", m);
     }

@@ -244,10 +244,10 @@ static void tool_event(ls_control_t *c, const ls_ctl_cmd_t *cmd, int status, uin
 static void run_tool(ls_control_t *c, const ls_ctl_cmd_t *cmd)
 {
     const hal_tool_t *t = cmd->tool.dev;
-    int st = HAL_EUNSUPPORTED;
+    int st = LS_EUNSUPPORTED;
     uint32_t bits = 0;
     if (t == NULL || t->ops == NULL) {
-        tool_event(c, cmd, HAL_ENODEV, 0);
+        tool_event(c, cmd, LS_ENODEV, 0);
         return;
     }
     if (cmd->kind == LS_CTL_TOOL_COUPLE) {
@@ -445,7 +445,7 @@ static void handle_command(ls_control_t *c, const ls_ctl_cmd_t *cmd)
     case LS_CTL_TOOL_COUPLE:
     case LS_CTL_TOOL_BITS:
         if (cmd->kind == LS_CTL_TOOL_COUPLE && busy(c)) {
-            tool_event(c, cmd, HAL_EAGAIN, 0);
+            tool_event(c, cmd, LS_EAGAIN, 0);
             return;
         }
         run_tool(c, cmd);

@@ -29,7 +29,7 @@ _Static_assert(sizeof(((ls_GetTagIdRes *)0)->tag_id) >= LS_MOTION_NAME_LEN, "get
 
 int32_t ls_mcmd_refused(ls_call_t *call, int status, const char *what, const char *why)
 {
-    int32_t code = status == LS_MOTION_ERANGE ? ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR : ls_RetCode_CMD_PARAM_ERR;
+    int32_t code = status == LS_ERANGE ? ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR : ls_RetCode_CMD_PARAM_ERR;
     return ls_reply(call, code, "%s refused, nothing moved: %s", what, why);
 }
 

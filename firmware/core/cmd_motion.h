@@ -20,7 +20,7 @@
 
 /* ------------------------------------------------------------- cmd_motion.c */
 
-/* Answer a planner's refusal: CMD_PARAM_OUT_OF_RANGE_ERR for LS_MOTION_ERANGE,
+/* Answer a planner's refusal: CMD_PARAM_OUT_OF_RANGE_ERR for LS_ERANGE,
  * CMD_PARAM_ERR otherwise; "nothing moved". */
 int32_t ls_mcmd_refused(ls_call_t *call, int status, const char *what, const char *why);
 /* The control loop's snapshot; false (and *snap untouched) without a loop. */

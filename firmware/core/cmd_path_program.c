@@ -79,12 +79,12 @@ static int plan_point(ls_core_t *core, const ls_path_point_t *pt, const double q
     ls_pose_inv(tool, tinv);
     ls_pose_mul(P_target, tinv, Fl);
     int ks = ls_kin_ik_nearest(core->model, Fl, q_prev, q_target);
-    if (ks != LS_KIN_OK) {
+    if (ks != LS_OK) {
         ls_fmt_print(why, whylen, "no joint solution for tip (%.4g, %.4g, %.4g) m (%s)", P_target[12], P_target[13],
                      P_target[14],
-                     ks == LS_KIN_ELIMITS ? "beyond the joint limits"
-                                          : (ks == LS_KIN_ESINGULAR ? "shoulder singularity" : "out of reach"));
-        return LS_MOTION_ERANGE;
+                     ks == LS_ELIMITS ? "beyond the joint limits"
+                                      : (ks == LS_ESINGULAR ? "shoulder singularity" : "out of reach"));
+        return LS_ERANGE;
     }
     return seg_joint_kind(s, core, pt, q_prev, q_target, why, whylen);
 }
@@ -228,7 +228,7 @@ static int build_program(ls_core_t *core, const ls_path_t *p, const double q_sta
                     if (fabs(s->q1[j] - q_first[j]) > 1e-6) {
                         ls_fmt_print(w, sizeof w, "the line back to it ends in another arm configuration (joint %d)",
                                      j + 1);
-                        st = LS_MOTION_ERANGE;
+                        st = LS_ERANGE;
                         break;
                     }
                 }

@@ -131,7 +131,7 @@ static int32_t check_line(ls_core_t *core, ls_call_t *call, const char *what, co
     char why[128];
     int st = ls_motion_seg_line(&core->sensor.check, m, q0, tool, tip1, &lim, why, sizeof why);
     if (st < 0) {
-        return ls_reply(call, st == LS_MOTION_ERANGE ? ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR : ls_RetCode_CMD_PARAM_ERR,
+        return ls_reply(call, st == LS_ERANGE ? ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR : ls_RetCode_CMD_PARAM_ERR,
                         "%s refused, nothing moved: %s", what, why);
     }
     return 0;

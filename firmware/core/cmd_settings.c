@@ -331,7 +331,7 @@ int32_t ls_h_get_robot_position(struct ls_core *core, struct ls_call *call)
     ls_ctl_snapshot_t snap;
     ls_control_snapshot(core->ctl, &snap);
     double T_base_flange[16], T_base_world[16], T_world_base[16], T_flange_tip[16], T[16], T_world_tip[16];
-    if (ls_kin_fk(core->model, snap.q_rad, T_base_flange) != LS_KIN_OK) {
+    if (ls_kin_fk(core->model, snap.q_rad, T_base_flange) != LS_OK) {
         return ls_reply(call, ls_RetCode_CMD_ERR,
                         "getRobotPosition: the measured joint angles are not finite: check the arm backend");
     }

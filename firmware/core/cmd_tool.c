@@ -119,7 +119,7 @@ static int plan_step(ls_core_t *core, const double q0[LS_N_JOINTS], char *why, s
     int st;
     if (core->tool_cmds.op.step == STEP_APPROACH) {
         double q1[LS_N_JOINTS];
-        if (ls_kin_ik_nearest(m, core->tool_cmds.op.approach, q0, q1) != LS_KIN_OK) {
+        if (ls_kin_ik_nearest(m, core->tool_cmds.op.approach, q0, q1) != LS_OK) {
             ls_fmt_print(why, whylen, "the approach point above the rack is out of reach");
             return -1;
         }
@@ -179,7 +179,7 @@ static int32_t change(ls_core_t *core, ls_call_t *call, const char *id, bool att
         return ls_reply(call, ls_RetCode_CMD_BUSY_ERR, "%s: manualControl is on: send manualControl off first", what);
     }
     double rack6[6];
-    if (strcmp(id, "none") == 0 || core->tool->ops->rack_pose(core->tool->self, id, rack6) != HAL_OK) {
+    if (strcmp(id, "none") == 0 || core->tool->ops->rack_pose(core->tool->self, id, rack6) != LS_OK) {
         return unknown_tool(core, call, what, id);
     }
     bool holding = strcmp(core->tool_cmds.held, "none") != 0;
@@ -210,7 +210,7 @@ static int32_t change(ls_core_t *core, ls_call_t *call, const char *id, bool att
         op.approach[12 + i] -= APPROACH_M * op.rack[8 + i]; /* back along the flange z axis */
     }
     if (attach && (core->tool->ops->tool_offset == NULL ||
-                   core->tool->ops->tool_offset(core->tool->self, id, op.offset) != HAL_OK)) {
+                   core->tool->ops->tool_offset(core->tool->self, id, op.offset) != LS_OK)) {
         return ls_reply(call, ls_RetCode_CMD_ERR, "getTool %s: the tool changer does not know its offset", id);
     }
     ls_ctl_snapshot_t snap;
@@ -302,7 +302,7 @@ static void bits_event(ls_core_t *core, const ls_ctl_event_t *ev)
                      core->tool_cmds.bits_op.on ? "activateTool" : "deactivateTool",
                      (unsigned)core->tool_cmds.bits_op.bits, core->tool_cmds.held, st);
         ls_core_finish_deferred(core, core->tool_cmds.bits_op.sup,
-                                st == HAL_EINVAL ? ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR : ls_RetCode_CMD_ERR, msg);
+                                st == LS_EINVAL ? ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR : ls_RetCode_CMD_ERR, msg);
         return;
     }
     ls_fmt_print(msg, sizeof msg, "%s bits now 0x%X", core->tool_cmds.held, (unsigned)core->tool_cmds.bits);

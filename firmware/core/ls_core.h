@@ -317,7 +317,7 @@ void ls_core_init(ls_core_t *core, const ls_core_config_t *cfg, const ls_core_io
 
 /* Set the drive, stop and halt actions of `act` (and its ctx) to commands
  * posted on the control loop `ctl`'s command ring (ls_control_post; a full
- * ring refuses the drives with HAL_EAGAIN). Every build that composes the core
+ * ring refuses the drives with LS_EAGAIN). Every build that composes the core
  * with the control loop (the app, the footprint build, the session fuzzer)
  * takes them from here; the optional describe and log actions stay the
  * caller's. Init only. */

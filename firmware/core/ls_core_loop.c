@@ -6,7 +6,7 @@
 static int act_enable(void *ctx, bool on)
 {
     ls_ctl_cmd_t cmd = { .kind = on ? LS_CTL_ENABLE : LS_CTL_DISABLE };
-    return ls_control_post((ls_control_t *)ctx, &cmd) ? 0 : HAL_EAGAIN;
+    return ls_control_post((ls_control_t *)ctx, &cmd) ? 0 : LS_EAGAIN;
 }
 
 static void act_halt(void *ctx)

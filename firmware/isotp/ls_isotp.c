@@ -120,7 +120,7 @@ int ls_isotp_init(ls_isotp_link_t *l, const ls_isotp_config_t *cfg, uint32_t tx_
                   ls_isotp_send_fn send, void *send_ctx)
 {
     if (l == NULL || send == NULL) {
-        return LS_ISOTP_EARG;
+        return LS_EINVAL;
     }
     ls_isotp_config_t c;
     if (cfg != NULL) {
@@ -129,7 +129,7 @@ int ls_isotp_init(ls_isotp_link_t *l, const ls_isotp_config_t *cfg, uint32_t tx_
         ls_isotp_default_config(&c);
     }
     if (!stmin_valid(c.st_min) || c.n_bs_timeout_us == 0 || c.n_cr_timeout_us == 0) {
-        return LS_ISOTP_EARG;
+        return LS_EINVAL;
     }
     memset(l, 0, sizeof(*l));
     l->cfg = c;
@@ -140,7 +140,7 @@ int ls_isotp_init(ls_isotp_link_t *l, const ls_isotp_config_t *cfg, uint32_t tx_
     l->rx_state = LS_ISOTP_RX_IDLE;
     l->tx_state = LS_ISOTP_TX_IDLE;
     l->last_error = LS_ISOTP_N_OK;
-    return LS_ISOTP_OK;
+    return LS_OK;
 }
 
 /* ---- transmitter ------------------------------------------------------- */
@@ -241,30 +241,30 @@ static void tx_start(ls_isotp_link_t *l, uint64_t now_us);
 int ls_isotp_send(ls_isotp_link_t *l, const uint8_t *payload, size_t len, uint64_t now_us)
 {
     if (l == NULL || payload == NULL) {
-        return LS_ISOTP_EARG;
+        return LS_EINVAL;
     }
     if (len == 0 || len > LS_ISOTP_MAX_PAYLOAD) {
-        return LS_ISOTP_ELEN;
+        return LS_ELEN;
     }
     if (l->tx_state != LS_ISOTP_TX_IDLE) {
-        return LS_ISOTP_EBUSY;
+        return LS_EBUSY;
     }
     memcpy(l->tx_buf, payload, len);
     l->tx_len = (uint16_t)len;
     tx_start(l, now_us);
-    return LS_ISOTP_OK;
+    return LS_OK;
 }
 
 int ls_isotp_resend(ls_isotp_link_t *l, uint64_t now_us)
 {
     if (l == NULL || l->tx_len == 0) {
-        return LS_ISOTP_EARG;
+        return LS_EINVAL;
     }
     if (l->tx_state != LS_ISOTP_TX_IDLE) {
-        return LS_ISOTP_EBUSY;
+        return LS_EBUSY;
     }
     tx_start(l, now_us);
-    return LS_ISOTP_OK;
+    return LS_OK;
 }
 
 /* Begin the transfer of the tx_len bytes in tx_buf from the first frame. */

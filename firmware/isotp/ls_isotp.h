@@ -20,6 +20,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "ls_err.h"
+
 #define LS_ISOTP_MAX_PAYLOAD 4095u /* classic ISO-TP without the 32-bit escape */
 /* A reception's whole time is bounded by its announced length: at most
  * N_Cr x (1 + its blocks of consecutive frames), a block being the BS we ask
@@ -44,11 +46,9 @@ typedef enum {
     LS_ISOTP_N_RESULT_COUNT
 } ls_isotp_result_t;
 
-/* Return codes of the API functions. */
-#define LS_ISOTP_OK 0
-#define LS_ISOTP_EBUSY (-1) /* a transmission is already in progress */
-#define LS_ISOTP_ELEN (-2)  /* length 0 or > LS_ISOTP_MAX_PAYLOAD */
-#define LS_ISOTP_EARG (-3)  /* NULL pointer or bad configuration */
+/* Return codes of the API functions (ls_err.h): LS_OK; LS_EBUSY (a
+ * transmission is already in progress), LS_ELEN (length 0 or >
+ * LS_ISOTP_MAX_PAYLOAD), LS_EINVAL (NULL pointer or bad configuration). */
 
 /* Transmit one CAN frame. Returns 0 when queued, negative when the link's
  * queue is full (the ISO-TP layer then retries the same frame on the next
@@ -102,7 +102,7 @@ typedef struct {
 } ls_isotp_link_t;
 
 /* Prepare a link (init time; clears counters). `cfg` NULL means the defaults.
- * Returns LS_ISOTP_EARG on a NULL link or send function, a reserved st_min or
+ * Returns LS_EINVAL on a NULL link or send function, a reserved st_min or
  * a zero timeout. */
 int ls_isotp_init(ls_isotp_link_t *l, const ls_isotp_config_t *cfg, uint32_t tx_id, uint32_t rx_id,
                   ls_isotp_send_fn send, void *send_ctx);
@@ -134,15 +134,15 @@ void ls_isotp_on_frame(ls_isotp_link_t *l, const uint8_t *data, uint8_t len, uin
 
 /* Start sending `len` bytes (copied). Sends the SF or FF at once when the CAN
  * queue has room, else on the next poll (a refused frame is retried by every
- * poll until the queue takes it). Returns LS_ISOTP_OK, LS_ISOTP_EARG (NULL),
- * LS_ISOTP_ELEN or LS_ISOTP_EBUSY. */
+ * poll until the queue takes it). Returns LS_OK, LS_EINVAL (NULL),
+ * LS_ELEN or LS_EBUSY. */
 int ls_isotp_send(ls_isotp_link_t *l, const uint8_t *payload, size_t len, uint64_t now_us);
 
 /* Send the last message again from its first frame (its bytes are still in
  * the link), after its transfer failed: no flow control within N_Bs, too many
  * FC.WAIT, an invalid flow status. The caller tells failure from success by
- * tx_results[LS_ISOTP_N_OK]. Returns LS_ISOTP_OK, LS_ISOTP_EARG (NULL, or
- * nothing was ever sent) or LS_ISOTP_EBUSY (a transfer is under way). */
+ * tx_results[LS_ISOTP_N_OK]. Returns LS_OK, LS_EINVAL (NULL, or
+ * nothing was ever sent) or LS_EBUSY (a transfer is under way). */
 int ls_isotp_resend(ls_isotp_link_t *l, uint64_t now_us);
 
 /* Send due consecutive frames (honouring STmin and BS), pending flow controls,

@@ -297,12 +297,12 @@ IkStatus ik_branches(const ls_robot_model_t &m, const Matrix4d &T, const double 
 int ik_status_code(IkStatus s) noexcept
 {
     switch (s) {
-    case kIkOk: return LS_KIN_OK;
-    case kIkUnreachable: return LS_KIN_EUNREACHABLE;
-    case kIkSingular: return LS_KIN_ESINGULAR;
-    case kIkLimits: return LS_KIN_ELIMITS;
+    case kIkOk: return LS_OK;
+    case kIkUnreachable: return LS_EUNREACHABLE;
+    case kIkSingular: return LS_ESINGULAR;
+    case kIkLimits: return LS_ELIMITS;
     }
-    return LS_KIN_EARG;
+    return LS_EINVAL;
 }
 
 void store(const Matrix4d &T, double out[16]) noexcept
@@ -318,17 +318,17 @@ extern "C" {
 int ls_kin_fk(const ls_robot_model_t *m, const double q[LS_N_JOINTS], double T_base_flange[16]) noexcept
 {
     if (m == nullptr || q == nullptr || T_base_flange == nullptr || !finite_n(q, LS_N_JOINTS)) {
-        return LS_KIN_EARG;
+        return LS_EINVAL;
     }
     Matrix4d T = Matrix4d::Identity();
     for (int i = 0; i < LS_N_JOINTS; ++i) {
         T = T * dh_transform(m->dh[i], q[i] + m->dh[i].theta_offset_rad);
     }
     if (!finite_n(T.data(), 16)) {
-        return LS_KIN_EARG; // non-finite DH parameters in the model
+        return LS_EINVAL; // non-finite DH parameters in the model
     }
     store(T, T_base_flange);
-    return LS_KIN_OK;
+    return LS_OK;
 }
 
 int ls_kin_ik_all(const ls_robot_model_t *m, const double T_base_flange[16],
@@ -338,11 +338,11 @@ int ls_kin_ik_all(const ls_robot_model_t *m, const double T_base_flange[16],
         *n_out = 0;
     }
     if (m == nullptr || T_base_flange == nullptr || q_out == nullptr || n_out == nullptr || !ik_structure_ok(*m)) {
-        return LS_KIN_EARG;
+        return LS_EINVAL;
     }
     const Matrix4d T = Map<const Matrix4d>(T_base_flange);
     if (!pose_ok(T)) {
-        return LS_KIN_EARG;
+        return LS_EINVAL;
     }
     const double zero[LS_N_JOINTS] = { 0.0, 0.0, 0.0, 0.0, 0.0, 0.0 };
     return ik_status_code(ik_branches(*m, T, zero, q_out, n_out));
@@ -353,11 +353,11 @@ int ls_kin_ik_nearest(const ls_robot_model_t *m, const double T_base_flange[16],
 {
     if (m == nullptr || T_base_flange == nullptr || q_near == nullptr || q_out == nullptr ||
         !finite_n(q_near, LS_N_JOINTS) || !ik_structure_ok(*m)) {
-        return LS_KIN_EARG;
+        return LS_EINVAL;
     }
     const Matrix4d T = Map<const Matrix4d>(T_base_flange);
     if (!pose_ok(T)) {
-        return LS_KIN_EARG;
+        return LS_EINVAL;
     }
     double q[LS_KIN_MAX_BRANCHES][LS_N_JOINTS];
     int n = 0;
@@ -380,13 +380,13 @@ int ls_kin_ik_nearest(const ls_robot_model_t *m, const double T_base_flange[16],
     for (int j = 0; j < LS_N_JOINTS; ++j) {
         q_out[j] = q[best][j];
     }
-    return LS_KIN_OK;
+    return LS_OK;
 }
 
 int ls_kin_jacobian(const ls_robot_model_t *m, const double q[LS_N_JOINTS], double J[36]) noexcept
 {
     if (m == nullptr || q == nullptr || J == nullptr || !finite_n(q, LS_N_JOINTS)) {
-        return LS_KIN_EARG;
+        return LS_EINVAL;
     }
     Matrix4d F[LS_N_JOINTS + 1];
     all_frames(*m, q, F);
@@ -400,11 +400,11 @@ int ls_kin_jacobian(const ls_robot_model_t *m, const double q[LS_N_JOINTS], doub
         Jm.block<3, 1>(3, i) = z;
     }
     if (!finite_n(Jm.data(), 36)) {
-        return LS_KIN_EARG;
+        return LS_EINVAL;
     }
     Map<Mat6> dst(J);
     dst = Jm;
-    return LS_KIN_OK;
+    return LS_OK;
 }
 
 void ls_pose_from_xyzrpy(const double xyzrpy[6], double T[16]) noexcept

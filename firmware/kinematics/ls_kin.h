@@ -15,6 +15,7 @@
 
 #include <stdint.h>
 
+#include "ls_err.h"
 #include "ls_robot_model.h"
 
 #ifdef __cplusplus
@@ -24,28 +25,27 @@ extern "C" {
 #define LS_KIN_NOEXCEPT
 #endif
 
-#define LS_KIN_OK 0
-#define LS_KIN_EUNREACHABLE (-1) /* the pose is outside the reachable space */
-#define LS_KIN_ESINGULAR (-2)    /* shoulder singularity: q1 undetermined (see IK below) */
-#define LS_KIN_ELIMITS (-3)      /* reachable, but no branch within the joint limits */
-#define LS_KIN_EARG (-4)         /* NULL, non-finite or non-rigid input, unsupported model */
+/* Statuses (ls_err.h): LS_OK; LS_EUNREACHABLE (the pose is outside the
+ * reachable space), LS_ESINGULAR (shoulder singularity: q1 undetermined, see IK
+ * below), LS_ELIMITS (reachable, but no branch within the joint limits),
+ * LS_EINVAL (NULL, non-finite or non-rigid input, unsupported model). */
 
 #define LS_KIN_MAX_BRANCHES 8
 
 /* Flange pose in the base frame for joint angles q[6]: the product of the DH
  * transforms A_i = Rz(q_i + offset_i) Tz(d_i) Tx(a_i) Rx(alpha_i). Joint
- * limits are not checked (FK is defined everywhere). LS_KIN_EARG on NULL or
+ * limits are not checked (FK is defined everywhere). LS_EINVAL on NULL or
  * non-finite q. Cost: six 4x4 products, about 0.3 us (x86-64, -O2). */
 int ls_kin_fk(const ls_robot_model_t *m, const double q[LS_N_JOINTS], double T_base_flange[16]) LS_KIN_NOEXCEPT;
 
 /* Every IK solution (shoulder front/back x elbow up/down x wrist flip) for a
  * flange pose, wrapped into the joint limits where possible. Solutions outside
  * the limits are not returned. n_out receives the count (0..8). Returns
- * LS_KIN_OK when n_out > 0, else the reason.
+ * LS_OK when n_out > 0, else the reason.
  *
  * Closed form for the structure of ls_robot_model_t: a4 = a5 = a6 = d5 = 0
  * (spherical wrist), alpha4 = +-pi/2, alpha5 = +-pi/2, alpha2 = 0,
- * sin(alpha1) != 0; any other model gives LS_KIN_EARG. d2, d3 (lateral
+ * sin(alpha1) != 0; any other model gives LS_EINVAL. d2, d3 (lateral
  * shoulder offset), a3 and alpha6 may be anything.
  *
  * Order: shoulder front (q1 facing the wrist centre) before back, then elbow
@@ -61,14 +61,14 @@ int ls_kin_fk(const ls_robot_model_t *m, const double q[LS_N_JOINTS], double T_b
  * Singularities (decided conventions):
  * - wrist (|sin q5| < 1e-6): only q4 +- q6 is defined; q4 = 0 here (q_near[3]
  *   in ls_kin_ik_nearest, clamped into the limits) and q6 is solved. Returns
- *   LS_KIN_OK: the pose is reached exactly at q5 = 0.
- * - elbow (arm stretched): the coincident branch is returned once, LS_KIN_OK.
+ *   LS_OK: the pose is reached exactly at q5 = 0.
+ * - elbow (arm stretched): the coincident branch is returned once, LS_OK.
  * - shoulder (wrist centre within 1e-9 m of the joint 1 axis): q1 is
- *   undetermined, so LS_KIN_ESINGULAR with n_out = 0 (if the pose is
- *   reachable at all; LS_KIN_EUNREACHABLE otherwise). Callers moving through
+ *   undetermined, so LS_ESINGULAR with n_out = 0 (if the pose is
+ *   reachable at all; LS_EUNREACHABLE otherwise). Callers moving through
  *   the axis should keep their current q1 and plan in joint space.
  *
- * LS_KIN_EARG also when T is not a rigid transform (last row not 0 0 0 1,
+ * LS_EINVAL also when T is not a rigid transform (last row not 0 0 0 1,
  * rotation not orthonormal within 1e-6, or a reflection).
  * Cost: about 3 us (x86-64, -O2, all branches); bounded, no iteration. */
 int ls_kin_ik_all(const ls_robot_model_t *m, const double T_base_flange[16],
@@ -78,13 +78,13 @@ int ls_kin_ik_all(const ls_robot_model_t *m, const double T_base_flange[16],
  * to the 2 pi equivalent inside its limits that is nearest q_near, the one
  * with the smallest max_j |q_j - q_near_j|. At a wrist singularity q4 =
  * q_near[3]. Same status codes as ls_kin_ik_all; q_out is written only on
- * LS_KIN_OK. LS_KIN_EARG on a non-finite q_near. Cost: as ls_kin_ik_all. */
+ * LS_OK. LS_EINVAL on a non-finite q_near. Cost: as ls_kin_ik_all. */
 int ls_kin_ik_nearest(const ls_robot_model_t *m, const double T_base_flange[16], const double q_near[LS_N_JOINTS],
                       double q_out[LS_N_JOINTS]) LS_KIN_NOEXCEPT;
 
 /* Geometric Jacobian (6x6, column-major; rows vx vy vz wx wy wz) of the
  * flange origin in the base frame: column i = (z_{i-1} x (p - o_{i-1}),
- * z_{i-1}). LS_KIN_EARG on NULL or non-finite q. Cost: about 0.35 us. */
+ * z_{i-1}). LS_EINVAL on NULL or non-finite q. Cost: about 0.35 us. */
 int ls_kin_jacobian(const ls_robot_model_t *m, const double q[LS_N_JOINTS], double J[36]) LS_KIN_NOEXCEPT;
 
 /* Pose helpers. They cannot fail: NULL arguments make them a no-op (NaN for

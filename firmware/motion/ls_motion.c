@@ -83,15 +83,15 @@ static int check_joint_limits(const ls_robot_model_t *model, const double q[LS_N
 {
     for (int j = 0; j < LS_N_JOINTS; j++) {
         if (q[j] > model->q_max_rad[j]) {
-            return refuse(why, whylen, LS_MOTION_ERANGE, "joint %d: %.4g rad beyond its limit %.4g rad", j + 1, q[j],
+            return refuse(why, whylen, LS_ERANGE, "joint %d: %.4g rad beyond its limit %.4g rad", j + 1, q[j],
                           model->q_max_rad[j]);
         }
         if (q[j] < model->q_min_rad[j]) {
-            return refuse(why, whylen, LS_MOTION_ERANGE, "joint %d: %.4g rad beyond its limit %.4g rad", j + 1, q[j],
+            return refuse(why, whylen, LS_ERANGE, "joint %d: %.4g rad beyond its limit %.4g rad", j + 1, q[j],
                           model->q_min_rad[j]);
         }
     }
-    return LS_MOTION_OK;
+    return LS_OK;
 }
 
 static void seg_clear_motion(ls_motion_seg_t *s, ls_seg_kind_t kind)
@@ -142,14 +142,13 @@ static int joint_profile(ls_motion_seg_t *s, const ls_robot_model_t *model)
     ls_traj_limits_t lim;
     joint_limits(model, s->lim_[0], s->lim_[1], s->jerk_scale_, &lim);
     ls_traj_t tr;
-    if (ls_traj_plan(&tr, LS_N_JOINTS, s->q0, s->q1, &lim) != LS_TRAJ_OK) {
+    if (ls_traj_plan(&tr, LS_N_JOINTS, s->q0, s->q1, &lim) != LS_OK) {
         return -1;
     }
     if (s->slew_) {
         tr.duration_s = 0.0;
         for (int j = 0; j < LS_N_JOINTS; j++) {
-            if (ls_traj_plan_axis(&tr.axis[j], s->q0[j], s->q1[j], lim.v_max[j], lim.a_max[j], lim.j_max[j]) !=
-                LS_TRAJ_OK) {
+            if (ls_traj_plan_axis(&tr.axis[j], s->q0[j], s->q1[j], lim.v_max[j], lim.a_max[j], lim.j_max[j]) != LS_OK) {
                 return -(j + 2);
             }
             tr.duration_s = fmax(tr.duration_s, tr.axis[j].T);
@@ -165,10 +164,10 @@ int ls_motion_seg_joint(ls_motion_seg_t *s, const ls_robot_model_t *model, const
 {
     if (s == NULL || model == NULL || q0 == NULL || q1 == NULL || !finite_n(q0, LS_N_JOINTS) ||
         !finite_n(q1, LS_N_JOINTS)) {
-        return refuse(why, whylen, LS_MOTION_EARG, "joint move: missing or non-finite joint values");
+        return refuse(why, whylen, LS_EINVAL, "joint move: missing or non-finite joint values");
     }
     if (!frac_ok(speed_frac) || !frac_ok(accel_frac)) {
-        return refuse(why, whylen, LS_MOTION_EARG, "speed %.4g and acceleration %.4g must be in (0, 1] of the maxima",
+        return refuse(why, whylen, LS_EINVAL, "speed %.4g and acceleration %.4g must be in (0, 1] of the maxima",
                       speed_frac, accel_frac);
     }
     int r = check_joint_limits(model, q1, why, whylen);
@@ -181,9 +180,9 @@ int ls_motion_seg_joint(ls_motion_seg_t *s, const ls_robot_model_t *model, const
     s->lim_[0] = speed_frac;
     s->lim_[1] = accel_frac;
     if (joint_profile(s, model) != 0) {
-        return refuse(why, whylen, LS_MOTION_EARG, "joint move: the trajectory could not be planned");
+        return refuse(why, whylen, LS_EINVAL, "joint move: the trajectory could not be planned");
     }
-    return LS_MOTION_OK;
+    return LS_OK;
 }
 
 int ls_motion_seg_slew(ls_motion_seg_t *s, const ls_robot_model_t *model, const double q0[LS_N_JOINTS],
@@ -200,9 +199,9 @@ int ls_motion_seg_slew(ls_motion_seg_t *s, const ls_robot_model_t *model, const 
     s->slew_ = true;
     r = joint_profile(s, model);
     if (r < 0) {
-        return refuse(why, whylen, LS_MOTION_EARG, "slew: joint %d could not be planned", -r - 1);
+        return refuse(why, whylen, LS_EINVAL, "slew: joint %d could not be planned", -r - 1);
     }
-    return LS_MOTION_OK;
+    return LS_OK;
 }
 
 static void plan_init(ls_motion_plan_t *p, ls_plan_kind_t kind)
@@ -223,7 +222,7 @@ int ls_motion_plan_joint(ls_motion_plan_t *p, const ls_robot_model_t *model, con
                          const double q1[LS_N_JOINTS], double speed_frac, double accel_frac, char *why, unsigned whylen)
 {
     if (p == NULL) {
-        return refuse(why, whylen, LS_MOTION_EARG, "no plan");
+        return refuse(why, whylen, LS_EINVAL, "no plan");
     }
     plan_init(p, LS_PLAN_JOINT);
     int r = ls_motion_seg_joint(&p->one, model, q0, q1, speed_frac, accel_frac, why, whylen);
@@ -290,31 +289,30 @@ static int explain_ik(const ls_robot_model_t *model, const ls_motion_seg_t *s, d
     double T[16], F[16];
     seg_tip_pose(s, x, T);
     ls_pose_mul(T, s->tool_inv, F);
-    if (kin_status == LS_KIN_ELIMITS) {
+    if (kin_status == LS_ELIMITS) {
         ls_robot_model_t wide = *model;
         for (int j = 0; j < LS_N_JOINTS; j++) {
             wide.q_min_rad[j] = -4.0 * LS_PI;
             wide.q_max_rad[j] = 4.0 * LS_PI;
         }
         double q[LS_N_JOINTS];
-        if (ls_kin_ik_nearest(&wide, F, seed, q) == LS_KIN_OK) {
+        if (ls_kin_ik_nearest(&wide, F, seed, q) == LS_OK) {
             char tmp[96];
             if (check_joint_limits(model, q, tmp, sizeof tmp) < 0) {
-                return refuse(why, whylen, LS_MOTION_ERANGE, "%s at tip (%.4g, %.4g, %.4g) m", tmp, T[12], T[13],
-                              T[14]);
+                return refuse(why, whylen, LS_ERANGE, "%s at tip (%.4g, %.4g, %.4g) m", tmp, T[12], T[13], T[14]);
             }
         }
-        return refuse(why, whylen, LS_MOTION_ERANGE,
-                      "no joint solution within the joint limits at tip (%.4g, %.4g, %.4g) m", T[12], T[13], T[14]);
+        return refuse(why, whylen, LS_ERANGE, "no joint solution within the joint limits at tip (%.4g, %.4g, %.4g) m",
+                      T[12], T[13], T[14]);
     }
-    if (kin_status == LS_KIN_ESINGULAR) {
-        return refuse(why, whylen, LS_MOTION_ERANGE,
+    if (kin_status == LS_ESINGULAR) {
+        return refuse(why, whylen, LS_ERANGE,
                       "shoulder singularity (wrist centre on the joint 1 axis) at tip (%.4g, %.4g, %.4g) m: "
                       "use a joint move",
                       T[12], T[13], T[14]);
     }
-    return refuse(why, whylen, LS_MOTION_ERANGE, "unreachable: tip (%.4g, %.4g, %.4g) m is out of the arm's reach",
-                  T[12], T[13], T[14]);
+    return refuse(why, whylen, LS_ERANGE, "unreachable: tip (%.4g, %.4g, %.4g) m is out of the arm's reach", T[12],
+                  T[13], T[14]);
 }
 
 static int check_box(const ls_robot_model_t *model, const double T[16], char *why, unsigned whylen)
@@ -322,12 +320,12 @@ static int check_box(const ls_robot_model_t *model, const double T[16], char *wh
     for (int i = 0; i < 3; i++) {
         const double pi = T[12 + i];
         if (pi < model->workspace_min_m[i] || pi > model->workspace_max_m[i]) {
-            return refuse(why, whylen, LS_MOTION_ERANGE,
+            return refuse(why, whylen, LS_ERANGE,
                           "axis %s: %.4g m beyond the workspace limit %.4g m (base frame, tool tip)", axis_name[i], pi,
                           pi < model->workspace_min_m[i] ? model->workspace_min_m[i] : model->workspace_max_m[i]);
         }
     }
-    return LS_MOTION_OK;
+    return LS_OK;
 }
 
 /* Plan the profile of a Cartesian segment over s in [0, 1] at its stored
@@ -343,7 +341,7 @@ static int cart_profile(ls_motion_seg_t *s, const ls_robot_model_t *model)
     tl.a_max[0] = still ? 1.0 : s->lim_[1];
     tl.j_max[0] = still ? 1.0 : s->lim_[2] * s->jerk_scale_[0];
     const double p0 = 0.0, p1 = still ? 0.0 : 1.0;
-    if (ls_traj_plan(&s->traj, 1, &p0, &p1, &tl) != LS_TRAJ_OK) {
+    if (ls_traj_plan(&s->traj, 1, &p0, &p1, &tl) != LS_OK) {
         return -1;
     }
     double ramp = ls_traj_stop_ramp_s(&s->traj, &tl);
@@ -390,7 +388,7 @@ static int cart_time_and_check(ls_motion_seg_t *s, const ls_robot_model_t *model
     s->lim_[2] = j;
     s->lim_[3] = lim->joint_speed_frac;
     if (cart_profile(s, model) != 0) {
-        return refuse(why, whylen, LS_MOTION_EARG, "Cartesian move: the profile could not be planned");
+        return refuse(why, whylen, LS_EINVAL, "Cartesian move: the profile could not be planned");
     }
 
     /* The target first, so an unreachable goal is reported as such rather
@@ -399,11 +397,11 @@ static int cart_time_and_check(ls_motion_seg_t *s, const ls_robot_model_t *model
         double F[16], sols[LS_KIN_MAX_BRANCHES][LS_N_JOINTS];
         int n_sol = 0;
         if (check_box(model, s->P1, why, whylen) < 0) {
-            return LS_MOTION_ERANGE;
+            return LS_ERANGE;
         }
         ls_pose_mul(s->P1, s->tool_inv, F);
         const int ks = ls_kin_ik_all(model, F, sols, &n_sol);
-        if (ks != LS_KIN_OK && ks != LS_KIN_ESINGULAR && ks != LS_KIN_ELIMITS) {
+        if (ks != LS_OK && ks != LS_ESINGULAR && ks != LS_ELIMITS) {
             return explain_ik(model, s, 1.0, s->q0, ks, why, whylen);
         }
     }
@@ -426,7 +424,7 @@ static int cart_time_and_check(ls_motion_seg_t *s, const ls_robot_model_t *model
         }
         double q[LS_N_JOINTS];
         int ks = seg_ik(model, s, x, q_prev, q);
-        if (ks != LS_KIN_OK) {
+        if (ks != LS_OK) {
             return explain_ik(model, s, x, q_prev, ks, why, whylen);
         }
         if (k > 0 && sd_peak > 0.0) {
@@ -435,7 +433,7 @@ static int cart_time_and_check(ls_motion_seg_t *s, const ls_robot_model_t *model
                 const double qd = fabs(q[jn] - q_prev[jn]) / ds * sd_peak;
                 const double qd_lim = model->qd_max_rad_s[jn] * lim->joint_speed_frac;
                 if (qd > qd_lim) {
-                    return refuse(why, whylen, LS_MOTION_ERANGE,
+                    return refuse(why, whylen, LS_ERANGE,
                                   "joint %d: velocity %.4g rad/s beyond its limit %.4g rad/s near tip (%.4g, %.4g, "
                                   "%.4g) m: lower the speed or use a joint move",
                                   jn + 1, qd, qd_lim, T[12], T[13], T[14]);
@@ -445,7 +443,7 @@ static int cart_time_and_check(ls_motion_seg_t *s, const ls_robot_model_t *model
         memcpy(q_prev, q, sizeof q_prev);
     }
     memcpy(s->q1, q_prev, sizeof s->q1);
-    return LS_MOTION_OK;
+    return LS_OK;
 }
 
 static bool cart_lim_ok(const ls_motion_cart_limits_t *l)
@@ -462,10 +460,10 @@ static int cart_start(ls_motion_seg_t *s, ls_seg_kind_t kind, const ls_robot_mod
 {
     if (s == NULL || model == NULL || q0 == NULL || tool == NULL || tip1 == NULL || !finite_n(q0, LS_N_JOINTS) ||
         !finite_n(tool, 16) || !finite_n(tip1, 16)) {
-        return refuse(why, whylen, LS_MOTION_EARG, "Cartesian move: missing or non-finite values");
+        return refuse(why, whylen, LS_EINVAL, "Cartesian move: missing or non-finite values");
     }
     if (!cart_lim_ok(lim)) {
-        return refuse(why, whylen, LS_MOTION_EARG, "Cartesian move: speed and acceleration limits must be > 0");
+        return refuse(why, whylen, LS_EINVAL, "Cartesian move: speed and acceleration limits must be > 0");
     }
     seg_clear_motion(s, kind);
     memcpy(s->q0, q0, sizeof s->q0);
@@ -475,7 +473,7 @@ static int cart_start(ls_motion_seg_t *s, ls_seg_kind_t kind, const ls_robot_mod
     memcpy(s->P1, tip1, sizeof s->P1);
     ls_pose_inv(tool, s->tool_inv);
     s->turn_rad = ls_pose_angle(s->P0, s->P1);
-    return LS_MOTION_OK;
+    return LS_OK;
 }
 
 int ls_motion_seg_line(ls_motion_seg_t *s, const ls_robot_model_t *model, const double q0[LS_N_JOINTS],
@@ -493,7 +491,7 @@ int ls_motion_seg_line(ls_motion_seg_t *s, const ls_robot_model_t *model, const 
 /* Circumcircle of p0, pv, p1 (the circle through the three points): centre,
  * in-plane unit vectors u (towards p0) and v (90 degrees ahead of u in the
  * direction p0 -> pv -> p1), radius and the angle from p0 to p1 (0, 2 pi].
- * LS_MOTION_EGEOM when the points are collinear or coincide. */
+ * LS_EGEOM when the points are collinear or coincide. */
 static int circumcircle(const double p0[3], const double pv[3], const double p1[3], double centre[3], double u[3],
                         double v[3], double *radius, double *angle)
 {
@@ -508,7 +506,7 @@ static int circumcircle(const double p0[3], const double pv[3], const double p1[
     /* Collinear when the arc point lies within 0.1 mm of the line through
      * start and goal: the circle would be huge and ill-defined by rounding. */
     if (la < 1e-6 || lb < 1e-6 || lc < 1e-6 || nn / lb < 1e-4) {
-        return LS_MOTION_EGEOM;
+        return LS_EGEOM;
     }
     /* centre = p0 + (|a|^2 (b x n) + |b|^2 (n x a)) / (2 |n|^2) */
     double bxn[3], nxa[3];
@@ -531,7 +529,7 @@ static int circumcircle(const double p0[3], const double pv[3], const double p1[
         ang += 2.0 * LS_PI;
     }
     *angle = ang;
-    return LS_MOTION_OK;
+    return LS_OK;
 }
 
 int ls_motion_arc_split(const double p0[3], const double pv[3], const double p1[3], double mid_a[3], double mid_b[3])
@@ -539,10 +537,10 @@ int ls_motion_arc_split(const double p0[3], const double pv[3], const double p1[
     double c[3], u[3], v[3], r, ang;
     if (p0 == NULL || pv == NULL || p1 == NULL || mid_a == NULL || mid_b == NULL || !finite_n(p0, 3) ||
         !finite_n(pv, 3) || !finite_n(p1, 3)) {
-        return LS_MOTION_EARG;
+        return LS_EINVAL;
     }
     if (circumcircle(p0, pv, p1, c, u, v, &r, &ang) < 0) {
-        return LS_MOTION_EGEOM;
+        return LS_EGEOM;
     }
     double d[3];
     v3_sub(pv, c, d);
@@ -555,7 +553,7 @@ int ls_motion_arc_split(const double p0[3], const double pv[3], const double p1[
         mid_a[i] = c[i] + r * (cos(ta) * u[i] + sin(ta) * v[i]);
         mid_b[i] = c[i] + r * (cos(tb) * u[i] + sin(tb) * v[i]);
     }
-    return LS_MOTION_OK;
+    return LS_OK;
 }
 
 int ls_motion_seg_arc(ls_motion_seg_t *s, const ls_robot_model_t *model, const double q0[LS_N_JOINTS],
@@ -563,7 +561,7 @@ int ls_motion_seg_arc(ls_motion_seg_t *s, const ls_robot_model_t *model, const d
                       const ls_motion_cart_limits_t *lim, char *why, unsigned whylen)
 {
     if (tip_via == NULL || !finite_n(tip_via, 16)) {
-        return refuse(why, whylen, LS_MOTION_EARG, "arc: missing or non-finite arc point");
+        return refuse(why, whylen, LS_EINVAL, "arc: missing or non-finite arc point");
     }
     int r = cart_start(s, LS_SEG_ARC, model, q0, tool, tip1, lim, why, whylen);
     if (r < 0) {
@@ -572,7 +570,7 @@ int ls_motion_seg_arc(ls_motion_seg_t *s, const ls_robot_model_t *model, const d
     const int g =
         circumcircle(&s->P0[12], &tip_via[12], &s->P1[12], s->centre_m, s->u, s->v, &s->radius_m, &s->angle_rad);
     if (g < 0) {
-        return refuse(why, whylen, LS_MOTION_EGEOM,
+        return refuse(why, whylen, LS_EGEOM,
                       "arc: start, arc point and goal are collinear or coincide (no unique circle); use a line");
     }
     s->length_m = s->radius_m * s->angle_rad;
@@ -584,7 +582,7 @@ int ls_motion_plan_line(ls_motion_plan_t *p, const ls_robot_model_t *model, cons
                         unsigned whylen)
 {
     if (p == NULL) {
-        return refuse(why, whylen, LS_MOTION_EARG, "no plan");
+        return refuse(why, whylen, LS_EINVAL, "no plan");
     }
     plan_init(p, LS_PLAN_LINE);
     int r = ls_motion_seg_line(&p->one, model, q0, tool, tip1, lim, why, whylen);
@@ -599,7 +597,7 @@ int ls_motion_plan_arc(ls_motion_plan_t *p, const ls_robot_model_t *model, const
                        const ls_motion_cart_limits_t *lim, char *why, unsigned whylen)
 {
     if (p == NULL) {
-        return refuse(why, whylen, LS_MOTION_EARG, "no plan");
+        return refuse(why, whylen, LS_EINVAL, "no plan");
     }
     plan_init(p, LS_PLAN_ARC);
     int r = ls_motion_seg_arc(&p->one, model, q0, tool, tip_via, tip1, lim, why, whylen);
@@ -613,14 +611,14 @@ int ls_motion_plan_path(ls_motion_plan_t *p, const ls_motion_program_t *prog, in
                         const char *name)
 {
     if (p == NULL || prog == NULL || prog->n < 1 || prog->n >= LS_MOTION_MAX_SEGS || cycles < 1) {
-        return LS_MOTION_EARG;
+        return LS_EINVAL;
     }
     plan_init(p, LS_PLAN_PATH);
     p->prog = prog;
     p->cycles = cycles;
     p->dry_run = dry_run;
     ls_fmt_print(p->name, sizeof p->name, "%s", name != NULL ? name : "");
-    return LS_MOTION_OK;
+    return LS_OK;
 }
 
 /* ---- blending (ls_motion.h, docs/architecture.md "Blended paths") ---- */
@@ -812,12 +810,11 @@ static int blend_check(const ls_robot_model_t *model, const ls_motion_seg_t *a, 
         blend_pose(a, xa, b, xb, T);
         char tmp[112];
         if (check_box(model, T, tmp, sizeof tmp) < 0) {
-            return refuse(why, whylen, LS_MOTION_ERANGE, "point %d: its blend leaves the workspace (%s)", a->point,
-                          tmp);
+            return refuse(why, whylen, LS_ERANGE, "point %d: its blend leaves the workspace (%s)", a->point, tmp);
         }
         ls_pose_mul(T, a->tool_inv, F);
-        if (ls_kin_ik_nearest(model, F, k == 0 ? a->q1 : q_prev, q) != LS_KIN_OK) {
-            return refuse(why, whylen, LS_MOTION_ERANGE,
+        if (ls_kin_ik_nearest(model, F, k == 0 ? a->q1 : q_prev, q) != LS_OK) {
+            return refuse(why, whylen, LS_ERANGE,
                           "point %d: no joint solution on its blend at tip (%.4g, %.4g, "
                           "%.4g) m",
                           a->point, T[12], T[13], T[14]);
@@ -825,7 +822,7 @@ static int blend_check(const ls_robot_model_t *model, const ls_motion_seg_t *a, 
         for (int j = 0; k > 0 && j < LS_N_JOINTS; j++) {
             const double qd = fabs(q[j] - q_prev[j]) / dt, lim = model->qd_max_rad_s[j] * jsf;
             if (qd > lim) {
-                return refuse(why, whylen, LS_MOTION_ERANGE,
+                return refuse(why, whylen, LS_ERANGE,
                               "point %d: joint %d at %.4g rad/s on its blend, beyond "
                               "its limit %.4g rad/s",
                               a->point, j + 1, qd, lim);
@@ -833,14 +830,14 @@ static int blend_check(const ls_robot_model_t *model, const ls_motion_seg_t *a, 
         }
         memcpy(q_prev, q, sizeof q_prev);
     }
-    return LS_MOTION_OK;
+    return LS_OK;
 }
 
 int ls_motion_prog_blend(ls_motion_program_t *prog, const ls_robot_model_t *model, int32_t cycles, char *why,
                          unsigned whylen)
 {
     if (prog == NULL || model == NULL || prog->n < 1 || prog->n >= LS_MOTION_MAX_SEGS || cycles < 1) {
-        return refuse(why, whylen, LS_MOTION_EARG, "blend: no program");
+        return refuse(why, whylen, LS_EINVAL, "blend: no program");
     }
     const int last = cycles > 1 ? prog->n : prog->n - 1;
     for (int i = 0; i <= last; i++) {
@@ -862,7 +859,7 @@ int ls_motion_prog_blend(ls_motion_program_t *prog, const ls_robot_model_t *mode
     }
     for (int i = 0; i <= last; i++) {
         if (seg_replan(&prog->seg[i], model) != 0) {
-            return refuse(why, whylen, LS_MOTION_EARG, "point %d: its profile could not be re-planned for a blend",
+            return refuse(why, whylen, LS_EINVAL, "point %d: its profile could not be re-planned for a blend",
                           prog->seg[i].point);
         }
     }
@@ -880,7 +877,7 @@ int ls_motion_prog_blend(ls_motion_program_t *prog, const ls_robot_model_t *mode
             }
         }
     }
-    return LS_MOTION_OK;
+    return LS_OK;
 }
 
 /* -------------------------------------------------------------- executor */
@@ -1066,14 +1063,14 @@ static int seg_position(const ls_motion_t *m, const ls_motion_seg_t *s, double t
 {
     if (s->kind == LS_SEG_JOINT) {
         ls_traj_sample(&s->traj, t, q, qd, NULL);
-        return LS_KIN_OK;
+        return LS_OK;
     }
     for (int j = 0; j < LS_N_JOINTS; j++) {
         qd[j] = 0.0; /* filled by the caller from the set-point difference */
     }
     if (t >= s->traj.duration_s) {
         memcpy(q, s->q1, LS_N_JOINTS * sizeof(double));
-        return LS_KIN_OK;
+        return LS_OK;
     }
     double x;
     ls_traj_sample_axis(&s->traj.axis[0], t, &x, NULL, NULL);
@@ -1088,7 +1085,7 @@ static int step_position(const ls_motion_t *m, const ls_motion_seg_t *s, const l
 {
     if (nx == NULL || s->kind == LS_SEG_JOINT) {
         int ks = seg_position(m, s, m->t_s, q, qd);
-        if (nx != NULL && ks == LS_KIN_OK) {
+        if (nx != NULL && ks == LS_OK) {
             double q2[LS_N_JOINTS], qd2[LS_N_JOINTS];
             ks = seg_position(m, nx, m->t_next_s_, q2, qd2);
             for (int j = 0; j < LS_N_JOINTS; j++) {
@@ -1200,7 +1197,7 @@ static void move_step(ls_motion_t *m, const ls_motion_seg_t *s, double dt_s, dou
     }
     double q[LS_N_JOINTS];
     const int ks = step_position(m, s, m->blending_ ? nx : NULL, q, qd);
-    if (ks != LS_KIN_OK) {
+    if (ks != LS_OK) {
         fault(m, ev, "no joint solution on the planned path (IK status %d): stopped", ks);
     } else {
         if (s->kind == LS_SEG_JOINT) {

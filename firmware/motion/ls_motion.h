@@ -23,6 +23,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "ls_err.h"
 #include "ls_robot_model.h"
 #include "ls_traj.h"
 
@@ -46,11 +47,10 @@
 #define LS_MOTION_MAX_SEGS (LS_PATH_MAX_POINTS + 1) /* a path plus the segment that closes a cycle */
 #define LS_MOTION_FOLLOWING_ERROR_RAD 0.05
 
-/* Planner statuses (negative = refused; `why` says which joint/axis and limit). */
-#define LS_MOTION_OK 0
-#define LS_MOTION_EARG (-1)   /* NULL, non-finite value, fraction outside (0, 1] */
-#define LS_MOTION_ERANGE (-2) /* a joint/velocity/workspace limit, or unreachable */
-#define LS_MOTION_EGEOM (-3)  /* degenerate geometry: collinear arc points */
+/* Planner statuses (ls_err.h; negative = refused, `why` says which joint/axis
+ * and limit): LS_OK; LS_EINVAL (NULL, non-finite value, fraction outside
+ * (0, 1]), LS_ERANGE (a joint/velocity/workspace limit, or unreachable),
+ * LS_EGEOM (degenerate geometry: collinear arc points). */
 
 typedef enum {
     LS_MOTION_IDLE = 0,
@@ -195,7 +195,7 @@ int ls_motion_plan_line(ls_motion_plan_t *p, const ls_robot_model_t *model, cons
 
 /* A circular arc of the tool tip from its pose at q0 through the position of
  * `tip_via` to `tip1`; orientation slerped from start to `tip1`. Collinear
- * (or coincident) points: LS_MOTION_EGEOM. Other refusals as for lines. */
+ * (or coincident) points: LS_EGEOM. Other refusals as for lines. */
 int ls_motion_plan_arc(ls_motion_plan_t *p, const ls_robot_model_t *model, const double q0[LS_N_JOINTS],
                        const double tool[16], const double tip_via[16], const double tip1[16],
                        const ls_motion_cart_limits_t *lim, char *why, unsigned whylen);
@@ -227,8 +227,8 @@ int ls_motion_seg_slew(ls_motion_seg_t *s, const ls_robot_model_t *model, const 
 /* The circle through p0, pv and p1 (positions, m) split at pv: mid_a is the
  * middle of the arc p0 -> pv, mid_b of the arc pv -> p1, so that two
  * ls_motion_seg_arc calls (p0 via mid_a to pv, pv via mid_b to p1) run the
- * arc through the three points. LS_MOTION_EGEOM when they are collinear
- * or coincide, LS_MOTION_EARG for NULL or non-finite input. Pure, O(1). */
+ * arc through the three points. LS_EGEOM when they are collinear
+ * or coincide, LS_EINVAL for NULL or non-finite input. Pure, O(1). */
 int ls_motion_arc_split(const double p0[3], const double pv[3], const double p1[3], double mid_a[3], double mid_b[3]);
 
 /* Blending (docs/architecture.md, "Blended paths"). A blend of segment `a`

@@ -111,11 +111,11 @@ static int solve(const ls_robot_model_t *m, const double P[16], const double too
     double F[16];
     ls_pose_mul(P, tool_inv, F);
     int st = ls_kin_ik_nearest(m, F, q_prev, q_out);
-    if (st != LS_KIN_OK) {
+    if (st != LS_OK) {
         ls_fmt_print(why, len, "%s",
-                     st == LS_KIN_ELIMITS     ? "a joint limit"
-                     : st == LS_KIN_ESINGULAR ? "the shoulder singularity"
-                                              : "the edge of the reachable space");
+                     st == LS_ELIMITS     ? "a joint limit"
+                     : st == LS_ESINGULAR ? "the shoulder singularity"
+                                          : "the edge of the reachable space");
         return -1;
     }
     for (int j = 0; j < LS_N_JOINTS; j++) {

@@ -74,23 +74,23 @@ static void set_axis(ls_traj_axis_t *ax, double p0, double p1, double d, double 
 static int check_axis_args(const ls_traj_axis_t *ax, double p0, double p1, double v_max, double a_max, double j_max)
 {
     if (ax == NULL || !isfinite(p0) || !isfinite(p1) || !isfinite(p1 - p0)) {
-        return LS_TRAJ_EARG;
+        return LS_EINVAL;
     }
     if (!is_limit(v_max) || !is_limit(a_max) || !is_limit(j_max)) {
-        return LS_TRAJ_EARG;
+        return LS_EINVAL;
     }
-    return LS_TRAJ_OK;
+    return LS_OK;
 }
 
 int ls_traj_plan_axis(ls_traj_axis_t *ax, double p0, double p1, double v_max, double a_max, double j_max)
 {
-    if (check_axis_args(ax, p0, p1, v_max, a_max, j_max) != LS_TRAJ_OK) {
-        return LS_TRAJ_EARG;
+    if (check_axis_args(ax, p0, p1, v_max, a_max, j_max) != LS_OK) {
+        return LS_EINVAL;
     }
     const double d = p1 - p0;
     if (d == 0.0) {
         set_axis(ax, p0, p1, d, 0.0, 0.0, 0.0, 0.0, 0.0);
-        return LS_TRAJ_OK;
+        return LS_OK;
     }
     const double D = fabs(d);
     const double v = min_time_peak(D, v_max, a_max, j_max);
@@ -103,10 +103,10 @@ int ls_traj_plan_axis(ls_traj_axis_t *ax, double p0, double p1, double v_max, do
     }
     const double T = 4.0 * tj + 2.0 * ta + tv;
     if (!isfinite(T) || !isfinite(v)) {
-        return LS_TRAJ_EARG; /* limits so extreme that the profile overflows */
+        return LS_EINVAL; /* limits so extreme that the profile overflows */
     }
     set_axis(ax, p0, p1, d, tj, ta, tv, d > 0.0 ? j_max : -j_max, T);
-    return LS_TRAJ_OK;
+    return LS_OK;
 }
 
 /* Peak velocity v <= v_hi with Tacc(v) + D / v = T, for T above the minimum
@@ -161,31 +161,31 @@ static double peak_for_duration(double D, double a_max, double j_max, double v_h
 int ls_traj_plan_axis_duration(ls_traj_axis_t *ax, double p0, double p1, double v_max, double a_max, double j_max,
                                double duration_s)
 {
-    if (check_axis_args(ax, p0, p1, v_max, a_max, j_max) != LS_TRAJ_OK || !isfinite(duration_s) || duration_s < 0.0) {
-        return LS_TRAJ_EARG;
+    if (check_axis_args(ax, p0, p1, v_max, a_max, j_max) != LS_OK || !isfinite(duration_s) || duration_s < 0.0) {
+        return LS_EINVAL;
     }
     ls_traj_axis_t fast;
-    if (ls_traj_plan_axis(&fast, p0, p1, v_max, a_max, j_max) != LS_TRAJ_OK) {
-        return LS_TRAJ_EARG;
+    if (ls_traj_plan_axis(&fast, p0, p1, v_max, a_max, j_max) != LS_OK) {
+        return LS_EINVAL;
     }
     if (duration_s < fast.T * (1.0 - DURATION_REL_TOL)) {
-        return LS_TRAJ_ETIME;
+        return LS_ETIME;
     }
     const double d = fast.dist;
     if (d == 0.0) {
         set_axis(ax, p0, p1, d, 0.0, 0.0, duration_s, 0.0, duration_s);
-        return LS_TRAJ_OK;
+        return LS_OK;
     }
     if (duration_s <= fast.T) {
         *ax = fast;
         ax->T = duration_s; /* equal up to rounding */
-        return LS_TRAJ_OK;
+        return LS_OK;
     }
     const double D = fabs(d);
     const double v_hi = min_time_peak(D, v_max, a_max, j_max);
     const double v = peak_for_duration(D, a_max, j_max, v_hi, duration_s);
     if (!(v > 0.0)) {
-        return LS_TRAJ_EARG; /* duration so long against the distance that the peak underflows */
+        return LS_EINVAL; /* duration so long against the distance that the peak underflows */
     }
     double tj, ta;
     half_of_peak(v, a_max, j_max, &tj, &ta);
@@ -194,20 +194,20 @@ int ls_traj_plan_axis_duration(ls_traj_axis_t *ax, double p0, double p1, double 
         tv = 0.0;
     }
     set_axis(ax, p0, p1, d, tj, ta, tv, d > 0.0 ? j_max : -j_max, duration_s);
-    return LS_TRAJ_OK;
+    return LS_OK;
 }
 
 int ls_traj_plan(ls_traj_t *tr, uint8_t n, const double *p0, const double *p1, const ls_traj_limits_t *lim)
 {
     if (tr == NULL || p0 == NULL || p1 == NULL || lim == NULL || n == 0 || n > LS_TRAJ_MAX_AXES) {
-        return LS_TRAJ_EARG;
+        return LS_EINVAL;
     }
     ls_traj_t out;
     out.n = n;
     out.duration_s = 0.0;
     for (uint8_t i = 0; i < n; ++i) {
-        if (ls_traj_plan_axis(&out.axis[i], p0[i], p1[i], lim->v_max[i], lim->a_max[i], lim->j_max[i]) != LS_TRAJ_OK) {
-            return LS_TRAJ_EARG;
+        if (ls_traj_plan_axis(&out.axis[i], p0[i], p1[i], lim->v_max[i], lim->a_max[i], lim->j_max[i]) != LS_OK) {
+            return LS_EINVAL;
         }
         if (out.axis[i].T > out.duration_s) {
             out.duration_s = out.axis[i].T;
@@ -219,15 +219,15 @@ int ls_traj_plan(ls_traj_t *tr, uint8_t n, const double *p0, const double *p1, c
         }
         /* duration_s >= this axis's minimum, so ETIME cannot happen. */
         if (ls_traj_plan_axis_duration(&out.axis[i], p0[i], p1[i], lim->v_max[i], lim->a_max[i], lim->j_max[i],
-                                       out.duration_s) != LS_TRAJ_OK) {
-            return LS_TRAJ_EARG;
+                                       out.duration_s) != LS_OK) {
+            return LS_EINVAL;
         }
     }
     for (uint8_t i = n; i < LS_TRAJ_MAX_AXES; ++i) {
         set_axis(&out.axis[i], 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
     }
     *tr = out;
-    return LS_TRAJ_OK;
+    return LS_OK;
 }
 
 /* First half of the motion in the direction of travel (jerk magnitude jm),
@@ -330,12 +330,12 @@ static double axis_peak_speed(const ls_traj_axis_t *ax)
 double ls_traj_stop_ramp_s(const ls_traj_t *tr, const ls_traj_limits_t *lim)
 {
     if (tr == NULL || lim == NULL || tr->n == 0 || tr->n > LS_TRAJ_MAX_AXES) {
-        return (double)LS_TRAJ_EARG;
+        return (double)LS_EINVAL;
     }
     double ramp = 0.0;
     for (uint8_t i = 0; i < tr->n; ++i) {
         if (!is_limit(lim->a_max[i]) || !is_limit(lim->j_max[i])) {
-            return (double)LS_TRAJ_EARG;
+            return (double)LS_EINVAL;
         }
         const double vp = axis_peak_speed(&tr->axis[i]);
         const double by_acc = LS_TIMESCALE_RD_GAIN * vp / lim->a_max[i];
@@ -407,12 +407,12 @@ static void ts_eval(const ls_timescale_t *ts, double t, double *r, double *rd, d
 int ls_timescale_set(ls_timescale_t *ts, double target, double ramp_s)
 {
     if (ts == NULL || !isfinite(target) || target < 0.0 || target > 1.0 || !is_limit(ramp_s)) {
-        return LS_TRAJ_EARG;
+        return LS_EINVAL;
     }
     const double V = LS_TIMESCALE_RD_GAIN / ramp_s;
     double A = LS_TIMESCALE_RDD_GAIN / (ramp_s * ramp_s);
     if (!is_limit(V) || !is_limit(A)) {
-        return LS_TRAJ_EARG; /* ramp_s so small that the limits overflow */
+        return LS_EINVAL; /* ramp_s so small that the limits overflow */
     }
     const double r0 = ts->r;
     double w = ts->rd;
@@ -443,7 +443,7 @@ int ls_timescale_set(ls_timescale_t *ts, double target, double ramp_s)
         ts->u_[1] = 0.0;
         ts->ph_s_[2] = fabs(v0) / A;
         ts->u_[2] = v0 > 0.0 ? -A : A;
-        return LS_TRAJ_OK;
+        return LS_OK;
     }
     /* Move towards the target in direction s: from speed w0 (along s) to the
      * peak wp, hold, brake to rest. Because rest has the sign of s, the
@@ -468,7 +468,7 @@ int ls_timescale_set(ls_timescale_t *ts, double target, double ramp_s)
     ts->u_[1] = 0.0;
     ts->ph_s_[2] = wp / A;
     ts->u_[2] = -s * A;
-    return LS_TRAJ_OK;
+    return LS_OK;
 }
 
 double ls_timescale_step(ls_timescale_t *ts, double dt_s)

@@ -17,11 +17,13 @@
 
 #include <stdint.h>
 
+#include "ls_err.h"
+
 #define LS_TRAJ_MAX_AXES 8
 
-#define LS_TRAJ_OK 0
-#define LS_TRAJ_EARG (-1)  /* NULL pointer, bad axis count, non-finite value, non-positive limit */
-#define LS_TRAJ_ETIME (-2) /* requested duration shorter than the axis's minimum time */
+/* Statuses (ls_err.h): LS_OK; LS_EINVAL (NULL pointer, bad axis count,
+ * non-finite value, non-positive limit), LS_ETIME (requested duration shorter
+ * than the axis's minimum time). */
 
 /* One axis: a rest-to-rest seven-segment profile from p0 to p1.
  * Plain data: copy freely. Filled by the planners only. */
@@ -48,7 +50,7 @@ typedef struct {
 /* Minimum-time rest-to-rest profile of one axis, in closed form (no
  * iteration; a few sqrt/cbrt). dist == 0 gives duration 0; negative dist is
  * the mirror of the positive one.
- * Returns LS_TRAJ_OK, or LS_TRAJ_EARG (ax NULL, a non-finite position, a
+ * Returns LS_OK, or LS_EINVAL (ax NULL, a non-finite position, a
  * limit that is not finite and > 0); *ax is untouched on error.
  * Call from anywhere (dispatcher, planner); O(1). */
 int ls_traj_plan_axis(ls_traj_axis_t *ax, double p0, double p1, double v_max, double a_max, double j_max);
@@ -59,8 +61,8 @@ int ls_traj_plan_axis(ls_traj_axis_t *ax, double p0, double p1, double v_max, do
  * a_max is reached, cubic by the trigonometric method when it is not) and
  * polished by two Newton steps: O(1), no loop whose count depends on data.
  * dist == 0 with duration_s > 0 holds p0 for duration_s.
- * Returns LS_TRAJ_OK, LS_TRAJ_EARG (as above, or duration_s not finite or
- * < 0), or LS_TRAJ_ETIME (duration_s below the minimum time by more than a
+ * Returns LS_OK, LS_EINVAL (as above, or duration_s not finite or
+ * < 0), or LS_ETIME (duration_s below the minimum time by more than a
  * relative 1e-12, which is absorbed as rounding). *ax is untouched on error. */
 int ls_traj_plan_axis_duration(ls_traj_axis_t *ax, double p0, double p1, double v_max, double a_max, double j_max,
                                double duration_s);
@@ -68,7 +70,7 @@ int ls_traj_plan_axis_duration(ls_traj_axis_t *ax, double p0, double p1, double 
 /* n (1..LS_TRAJ_MAX_AXES) axes from p0[n] to p1[n], synchronised: duration is
  * the largest per-axis minimum time and every other axis is re-planned to
  * exactly that duration, so all axes start and finish together.
- * Returns LS_TRAJ_OK or LS_TRAJ_EARG (as for ls_traj_plan_axis, per axis, or
+ * Returns LS_OK or LS_EINVAL (as for ls_traj_plan_axis, per axis, or
  * n out of range); *tr is untouched on error. O(n). */
 int ls_traj_plan(ls_traj_t *tr, uint8_t n, const double *p0, const double *p1, const ls_traj_limits_t *lim);
 
@@ -117,7 +119,7 @@ void ls_timescale_init(ls_timescale_t *ts);
  * (shorter changes less). May be called during a ramp (e.g. resume while
  * stopping): it continues from the current r and dr/dt without a jump; if
  * the new, gentler limits could not stop r before 0 or 1, rdd_max is raised
- * just enough for this ramp. Returns LS_TRAJ_OK, or LS_TRAJ_EARG (ts NULL,
+ * just enough for this ramp. Returns LS_OK, or LS_EINVAL (ts NULL,
  * target not in [0, 1], ramp_s not finite or <= 0) leaving ts unchanged.
  * Control-loop safe: O(1). */
 int ls_timescale_set(ls_timescale_t *ts, double target, double ramp_s);
@@ -136,7 +138,7 @@ int ls_timescale_settled(const ls_timescale_t *ts);
  * axis's peak planned speed (below v_max for the axes slowed by
  * synchronisation). That is max over axes of
  *   max(1.5 v_peak / a_max, sqrt(4.5 v_peak / j_max)).
- * Returns 0 for a trajectory that does not move, or LS_TRAJ_EARG (as a
+ * Returns 0 for a trajectory that does not move, or LS_EINVAL (as a
  * double) for NULL pointers, tr->n out of range or bad limits. O(n). */
 double ls_traj_stop_ramp_s(const ls_traj_t *tr, const ls_traj_limits_t *lim);
 

@@ -214,7 +214,7 @@ static void settle_tx(ls_net_t *net, ls_net_peer_t *p, uint64_t now_us)
         p->tx_tries = 0;
         return;
     }
-    if (p->tx_tries < LS_NET_TX_TRIES && ls_isotp_resend(&p->isotp, now_us) == LS_ISOTP_OK) {
+    if (p->tx_tries < LS_NET_TX_TRIES && ls_isotp_resend(&p->isotp, now_us) == LS_OK) {
         p->tx_tries++;
         net->tx_retried++;
         return;
@@ -342,7 +342,7 @@ void ls_net_poll(ls_net_t *net, uint64_t now_us)
         if (p->q_count > 0 && p->tx_tries == 0 && !ls_isotp_tx_busy(&p->isotp)) {
             ls_net_msg_t *m = &p->q[p->q_head];
             uint32_t ok_mark = p->isotp.tx_results[LS_ISOTP_N_OK];
-            if (ls_isotp_send(&p->isotp, m->buf, m->len, now_us) == LS_ISOTP_OK) {
+            if (ls_isotp_send(&p->isotp, m->buf, m->len, now_us) == LS_OK) {
                 p->q_head = (uint8_t)((p->q_head + 1u) % LS_NET_OUTQ);
                 p->q_count--;
                 p->tx_tries = 1;

@@ -52,28 +52,28 @@ static int gd_describe(void *self, uint16_t unit, hal_dio_unit_info_t *out)
 {
     const gd_unit_t *u = self;
     if (unit != 0u || out == NULL) {
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     out->input_mask = in_mask(u);
     out->output_mask = out_mask(u);
-    return HAL_OK;
+    return LS_OK;
 }
 
 static int gd_read(void *self, uint16_t unit, uint32_t *bits)
 {
     gd_unit_t *u = self;
     if (unit != 0u || bits == NULL) {
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     *bits = (uint32_t)(atomic_load(&u->in_bits) | atomic_load(&u->out_bits));
-    return HAL_OK;
+    return LS_OK;
 }
 
 static int gd_write(void *self, uint16_t unit, uint32_t on, uint32_t off)
 {
     gd_unit_t *u = self;
     if (unit != 0u || ((on | off) & ~out_mask(u)) != 0u || (on & off) != 0u) {
-        return HAL_EINVAL; /* not an output, or asked to be both on and off */
+        return LS_EINVAL; /* not an output, or asked to be both on and off */
     }
     uint32_t cur = (uint32_t)atomic_load(&u->out_bits);
     uint32_t next = (cur | on) & ~off;
@@ -84,12 +84,12 @@ static int gd_write(void *self, uint16_t unit, uint32_t on, uint32_t off)
             continue;
         }
         if (gpiod_line_set_value(u->out[j], (next & bit) != 0u ? 1 : 0) < 0) {
-            return HAL_EIO; /* lines before j were switched; the cache says which */
+            return LS_EIO; /* lines before j were switched; the cache says which */
         }
         cur ^= bit;
         atomic_store(&u->out_bits, cur);
     }
-    return HAL_OK;
+    return LS_OK;
 }
 
 static int gd_poll_fd(void *self)
@@ -104,7 +104,7 @@ static int gd_drain_events(void *self)
     struct epoll_event evs[HAL_LINUX_GPIOD_MAX_INPUTS];
     int n = epoll_wait(u->epfd, evs, HAL_LINUX_GPIOD_MAX_INPUTS, 0);
     if (n < 0) {
-        return errno == EINTR ? 0 : HAL_EIO;
+        return errno == EINTR ? 0 : LS_EIO;
     }
     int edges = 0;
     for (int k = 0; k < n; k++) {
@@ -116,7 +116,7 @@ static int gd_drain_events(void *self)
                 if (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR) {
                     break;
                 }
-                return HAL_EIO;
+                return LS_EIO;
             }
             if (ev.event_type == GPIOD_LINE_EVENT_RISING_EDGE) {
                 atomic_fetch_or(&u->in_bits, bit);
@@ -170,11 +170,11 @@ static int chip_open(const char *name, struct gpiod_chip **out, char *msg, size_
     struct gpiod_chip *c = gpiod_chip_open_lookup(name);
     if (c != NULL) {
         *out = c;
-        return HAL_OK;
+        return LS_OK;
     }
     int e = errno;
     if (e == EACCES || e == EPERM) {
-        return hal_linux_msg(HAL_EPERM, msg, msglen,
+        return hal_linux_msg(LS_EPERM, msg, msglen,
                              "no permission to open GPIO chip '%s': run as root, or add a udev rule "
                              "(SUBSYSTEM==\"gpio\", KERNEL==\"gpiochip*\", GROUP=\"gpio\", MODE=\"0660\") "
                              "and put the user in group 'gpio'",
@@ -182,23 +182,23 @@ static int chip_open(const char *name, struct gpiod_chip **out, char *msg, size_
     }
     if (e == ENOTTY || e == ENODEV || e == EINVAL) {
         if (strncmp(name, "/dev/", 5) == 0 && access(name, F_OK) == 0) {
-            return hal_linux_msg(HAL_ENODEV, msg, msglen,
+            return hal_linux_msg(LS_ENODEV, msg, msglen,
                                  "'%s' is not a GPIO character device (ls /dev/gpiochip*; this kernel may lack "
                                  "CONFIG_GPIOLIB)",
                                  name);
         }
     }
     if (e == ENOENT || e == ENODEV || e == ENOTTY || e == EINVAL || e == 0) {
-        return hal_linux_msg(HAL_ENODEV, msg, msglen,
+        return hal_linux_msg(LS_ENODEV, msg, msglen,
                              "no GPIO chip '%s' (ls /dev/gpiochip*; this kernel may lack CONFIG_GPIOLIB)", name);
     }
-    return hal_linux_msg(HAL_EIO, msg, msglen, "cannot open GPIO chip '%s': %s", name, strerror(e));
+    return hal_linux_msg(LS_EIO, msg, msglen, "cannot open GPIO chip '%s': %s", name, strerror(e));
 }
 
 static int check_config(const hal_linux_gpiod_config_t *cfg, char *msg, size_t msglen)
 {
     if (cfg->n_inputs > HAL_LINUX_GPIOD_MAX_INPUTS || cfg->n_outputs > HAL_LINUX_GPIOD_MAX_OUTPUTS) {
-        return hal_linux_msg(HAL_EINVAL, msg, msglen, "%u inputs and %u outputs asked; at most %d of each",
+        return hal_linux_msg(LS_EINVAL, msg, msglen, "%u inputs and %u outputs asked; at most %d of each",
                              (unsigned)cfg->n_inputs, (unsigned)cfg->n_outputs, HAL_LINUX_GPIOD_MAX_INPUTS);
     }
     unsigned all[HAL_LINUX_GPIOD_MAX_INPUTS + HAL_LINUX_GPIOD_MAX_OUTPUTS];
@@ -212,11 +212,11 @@ static int check_config(const hal_linux_gpiod_config_t *cfg, char *msg, size_t m
     for (size_t a = 0; a < n; a++) {
         for (size_t b = a + 1; b < n; b++) {
             if (all[a] == all[b]) {
-                return hal_linux_msg(HAL_EINVAL, msg, msglen, "GPIO line %u is configured twice", all[a]);
+                return hal_linux_msg(LS_EINVAL, msg, msglen, "GPIO line %u is configured twice", all[a]);
             }
         }
     }
-    return HAL_OK;
+    return LS_OK;
 }
 
 static int line_get(gd_unit_t *u, const char *chip, unsigned off, struct gpiod_line **line, char *msg, size_t msglen)
@@ -225,13 +225,13 @@ static int line_get(gd_unit_t *u, const char *chip, unsigned off, struct gpiod_l
     if (*line == NULL) {
         unsigned n = gpiod_chip_num_lines(u->chip);
         if (off >= n) {
-            return hal_linux_msg(HAL_EINVAL, msg, msglen, "GPIO chip '%s' has lines 0..%u; there is no line %u", chip,
+            return hal_linux_msg(LS_EINVAL, msg, msglen, "GPIO chip '%s' has lines 0..%u; there is no line %u", chip,
                                  n == 0u ? 0u : n - 1u, off);
         }
-        return hal_linux_msg(HAL_EIO, msg, msglen, "cannot get line %u of GPIO chip '%s': %s", off, chip,
+        return hal_linux_msg(LS_EIO, msg, msglen, "cannot get line %u of GPIO chip '%s': %s", off, chip,
                              strerror(errno));
     }
-    return HAL_OK;
+    return LS_OK;
 }
 
 static int request_failed(struct gpiod_line *line, const char *chip, unsigned off, const char *what, char *msg,
@@ -241,20 +241,20 @@ static int request_failed(struct gpiod_line *line, const char *chip, unsigned of
     if (e == EBUSY) {
         (void)gpiod_line_update(line);
         const char *who = gpiod_line_consumer(line);
-        return hal_linux_msg(HAL_EIO, msg, msglen,
+        return hal_linux_msg(LS_EIO, msg, msglen,
                              "GPIO line %u of '%s' is busy (used by '%s'): stop that user or pick another line "
                              "(gpioinfo %s)",
                              off, chip, who != NULL ? who : "another process", chip);
     }
     if (e == EACCES || e == EPERM) {
-        return hal_linux_msg(HAL_EPERM, msg, msglen, "no permission to request GPIO line %u of '%s' as %s", off, chip,
+        return hal_linux_msg(LS_EPERM, msg, msglen, "no permission to request GPIO line %u of '%s' as %s", off, chip,
                              what);
     }
     if (e == ENXIO || e == EINVAL || e == ENOTSUP || e == EOPNOTSUPP) {
-        return hal_linux_msg(HAL_EIO, msg, msglen, "GPIO line %u of '%s' cannot be used as %s: %s", off, chip, what,
+        return hal_linux_msg(LS_EIO, msg, msglen, "GPIO line %u of '%s' cannot be used as %s: %s", off, chip, what,
                              strerror(e));
     }
-    return hal_linux_msg(HAL_EIO, msg, msglen, "requesting GPIO line %u of '%s' as %s failed: %s", off, chip, what,
+    return hal_linux_msg(LS_EIO, msg, msglen, "requesting GPIO line %u of '%s' as %s failed: %s", off, chip, what,
                          strerror(e));
 }
 
@@ -264,7 +264,7 @@ static int setup_inputs(gd_unit_t *u, const char *chip, char *msg, size_t msglen
     for (uint8_t i = 0; i < u->n_in; i++) {
         unsigned off = u->in_off[i];
         int rc = line_get(u, chip, off, &u->in[i], msg, msglen);
-        if (rc != HAL_OK) {
+        if (rc != LS_OK) {
             return rc;
         }
         if (gpiod_line_request_both_edges_events(u->in[i], HAL_LINUX_GPIOD_CONSUMER) < 0) {
@@ -273,17 +273,17 @@ static int setup_inputs(gd_unit_t *u, const char *chip, char *msg, size_t msglen
         int fd = gpiod_line_event_get_fd(u->in[i]);
         int fl = fd < 0 ? -1 : fcntl(fd, F_GETFL);
         if (fl < 0 || fcntl(fd, F_SETFL, fl | O_NONBLOCK) < 0) {
-            return hal_linux_msg(HAL_EIO, msg, msglen, "cannot make the event fd of GPIO line %u non-blocking: %s", off,
+            return hal_linux_msg(LS_EIO, msg, msglen, "cannot make the event fd of GPIO line %u non-blocking: %s", off,
                                  strerror(errno));
         }
         struct epoll_event ev = { .events = EPOLLIN, .data.u32 = i };
         if (epoll_ctl(u->epfd, EPOLL_CTL_ADD, fd, &ev) < 0) {
-            return hal_linux_msg(HAL_EIO, msg, msglen, "epoll_ctl for GPIO line %u failed: %s", off, strerror(errno));
+            return hal_linux_msg(LS_EIO, msg, msglen, "epoll_ctl for GPIO line %u failed: %s", off, strerror(errno));
         }
         /* Read after the event request so no edge falls between the two. */
         int v = gpiod_line_get_value(u->in[i]);
         if (v < 0) {
-            return hal_linux_msg(HAL_EIO, msg, msglen, "cannot read GPIO line %u of '%s': %s", off, chip,
+            return hal_linux_msg(LS_EIO, msg, msglen, "cannot read GPIO line %u of '%s': %s", off, chip,
                                  strerror(errno));
         }
         if (v != 0) {
@@ -291,7 +291,7 @@ static int setup_inputs(gd_unit_t *u, const char *chip, char *msg, size_t msglen
         }
     }
     atomic_store(&u->in_bits, bits);
-    return HAL_OK;
+    return LS_OK;
 }
 
 static int setup_outputs(gd_unit_t *u, const char *chip, char *msg, size_t msglen)
@@ -299,7 +299,7 @@ static int setup_outputs(gd_unit_t *u, const char *chip, char *msg, size_t msgle
     for (uint8_t j = 0; j < u->n_out; j++) {
         unsigned off = u->out_off[j];
         int rc = line_get(u, chip, off, &u->out[j], msg, msglen);
-        if (rc != HAL_OK) {
+        if (rc != LS_OK) {
             return rc;
         }
         if (gpiod_line_request_output(u->out[j], HAL_LINUX_GPIOD_CONSUMER, 0) < 0) {
@@ -307,7 +307,7 @@ static int setup_outputs(gd_unit_t *u, const char *chip, char *msg, size_t msgle
         }
     }
     atomic_store(&u->out_bits, 0u);
-    return HAL_OK;
+    return LS_OK;
 }
 
 static gd_unit_t *pool_take(void)
@@ -330,19 +330,19 @@ static gd_unit_t *pool_take(void)
 int hal_linux_gpiod_open(hal_dio_t *out, const hal_linux_gpiod_config_t *cfg, char *msg, size_t msglen)
 {
     if (out == NULL || cfg == NULL) {
-        return hal_linux_msg(HAL_EINVAL, msg, msglen, "hal_linux_gpiod_open: out and cfg must not be NULL");
+        return hal_linux_msg(LS_EINVAL, msg, msglen, "hal_linux_gpiod_open: out and cfg must not be NULL");
     }
     out->ops = NULL;
     out->self = NULL;
     out->name[0] = '\0';
     const char *chip = cfg->chip != NULL ? cfg->chip : "gpiochip0";
     int rc = check_config(cfg, msg, msglen);
-    if (rc != HAL_OK) {
+    if (rc != LS_OK) {
         return rc;
     }
     gd_unit_t *u = pool_take();
     if (u == NULL) {
-        return hal_linux_msg(HAL_EINVAL, msg, msglen,
+        return hal_linux_msg(LS_EINVAL, msg, msglen,
                              "all %d GPIO DIO units are in use: close one or raise HAL_LINUX_GPIOD_MAX_UNITS",
                              HAL_LINUX_GPIOD_MAX_UNITS);
     }
@@ -352,26 +352,26 @@ int hal_linux_gpiod_open(hal_dio_t *out, const hal_linux_gpiod_config_t *cfg, ch
     memcpy(u->out_off, cfg->output_offsets, sizeof u->out_off);
 
     rc = chip_open(chip, &u->chip, msg, msglen);
-    if (rc == HAL_OK) {
+    if (rc == LS_OK) {
         u->epfd = epoll_create1(EPOLL_CLOEXEC);
         if (u->epfd < 0) {
-            rc = hal_linux_msg(HAL_EIO, msg, msglen, "epoll_create1 failed: %s", strerror(errno));
+            rc = hal_linux_msg(LS_EIO, msg, msglen, "epoll_create1 failed: %s", strerror(errno));
         }
     }
-    if (rc == HAL_OK) {
+    if (rc == LS_OK) {
         rc = setup_inputs(u, chip, msg, msglen);
     }
-    if (rc == HAL_OK) {
+    if (rc == LS_OK) {
         rc = setup_outputs(u, chip, msg, msglen);
     }
-    if (rc != HAL_OK) {
+    if (rc != LS_OK) {
         gd_close(u);
         return rc;
     }
     out->ops = &gd_ops;
     out->self = u;
     (void)snprintf(out->name, sizeof out->name, "gpiod:%s", gpiod_chip_name(u->chip));
-    return hal_linux_msg(HAL_OK, msg, msglen, "%s open: %u inputs, %u outputs", out->name, (unsigned)u->n_in,
+    return hal_linux_msg(LS_OK, msg, msglen, "%s open: %u inputs, %u outputs", out->name, (unsigned)u->n_in,
                          (unsigned)u->n_out);
 }
 
@@ -380,10 +380,10 @@ int hal_linux_gpiod_probe(const char *chip, char *msg, size_t msglen)
     const char *name = chip != NULL ? chip : "gpiochip0";
     struct gpiod_chip *c = NULL;
     int rc = chip_open(name, &c, msg, msglen);
-    if (rc != HAL_OK) {
+    if (rc != LS_OK) {
         return rc;
     }
-    rc = hal_linux_msg(HAL_OK, msg, msglen, "%s [%s] %u lines", gpiod_chip_name(c), gpiod_chip_label(c),
+    rc = hal_linux_msg(LS_OK, msg, msglen, "%s [%s] %u lines", gpiod_chip_name(c), gpiod_chip_label(c),
                        gpiod_chip_num_lines(c));
     gpiod_chip_close(c);
     return rc;

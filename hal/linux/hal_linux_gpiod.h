@@ -46,17 +46,17 @@ typedef struct {
 
 /* Open the chip and request the lines. On error `out` holds no ops and `msg`
  * names the cause and the fix:
- *   HAL_EINVAL  NULL argument, too many lines, an offset used twice, an offset
+ *   LS_EINVAL  NULL argument, too many lines, an offset used twice, an offset
  *               beyond the chip's lines, or the pool is full;
- *   HAL_ENODEV  no such chip (or the path is not a GPIO character device);
- *   HAL_EPERM   no access to /dev/gpiochipN (udev rule / group hint);
- *   HAL_EIO     a line is busy (message names its offset and consumer) or
+ *   LS_ENODEV  no such chip (or the path is not a GPIO character device);
+ *   LS_EPERM   no access to /dev/gpiochipN (udev rule / group hint);
+ *   LS_EIO     a line is busy (message names its offset and consumer) or
  *               cannot give edge events, or another libgpiod call failed.
  * Init-time only: libgpiod allocates. */
 int hal_linux_gpiod_open(hal_dio_t *out, const hal_linux_gpiod_config_t *cfg, char *msg, size_t msglen);
 
 /* Self-check for `landscaped --check`: open and close `chip` (NULL =
- * "gpiochip0"); HAL_OK with "gpiochip0 [label] 8 lines" in msg, or the
+ * "gpiochip0"); LS_OK with "gpiochip0 [label] 8 lines" in msg, or the
  * status and message open would give for the chip. Init-time only. */
 int hal_linux_gpiod_probe(const char *chip, char *msg, size_t msglen);
 

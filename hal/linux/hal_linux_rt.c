@@ -145,15 +145,15 @@ static void *rt_main(void *p)
 static int check_config(const hal_linux_rt_t *rt, const hal_rt_config_t *cfg, hal_cycle_fn fn, char *msg, size_t msglen)
 {
     if (rt == NULL || cfg == NULL || fn == NULL) {
-        return hal_linux_msg(HAL_EINVAL, msg, msglen, "hal_linux_rt_start: rt, cfg and fn must not be NULL");
+        return hal_linux_msg(LS_EINVAL, msg, msglen, "hal_linux_rt_start: rt, cfg and fn must not be NULL");
     }
     if (cfg->rate_hz == 0u || cfg->rate_hz > HAL_LINUX_RT_MAX_RATE_HZ) {
-        return hal_linux_msg(HAL_EINVAL, msg, msglen, "control rate %u Hz is outside 1..%u Hz", (unsigned)cfg->rate_hz,
+        return hal_linux_msg(LS_EINVAL, msg, msglen, "control rate %u Hz is outside 1..%u Hz", (unsigned)cfg->rate_hz,
                              HAL_LINUX_RT_MAX_RATE_HZ);
     }
     int pmax = sched_get_priority_max(SCHED_FIFO);
     if (cfg->priority < 0 || cfg->priority > pmax) {
-        return hal_linux_msg(HAL_EINVAL, msg, msglen, "real-time priority %d is outside 0..%d (0 = normal thread)",
+        return hal_linux_msg(LS_EINVAL, msg, msglen, "real-time priority %d is outside 0..%d (0 = normal thread)",
                              cfg->priority, pmax);
     }
     if (cfg->cpu >= 0) {
@@ -161,23 +161,23 @@ static int check_config(const hal_linux_rt_t *rt, const hal_rt_config_t *cfg, ha
         CPU_ZERO(&allowed);
         if (cfg->cpu >= CPU_SETSIZE || sched_getaffinity(0, sizeof allowed, &allowed) != 0 ||
             !CPU_ISSET((size_t)cfg->cpu, &allowed)) {
-            return hal_linux_msg(HAL_EINVAL, msg, msglen,
+            return hal_linux_msg(LS_EINVAL, msg, msglen,
                                  "CPU %d is not available to this process (see nproc / taskset -p %d); "
                                  "use -1 for no pinning",
                                  cfg->cpu, (int)getpid());
         }
     }
     if (atomic_load(&rt->running)) {
-        return hal_linux_msg(HAL_EINVAL, msg, msglen, "the control thread is already running: stop it first");
+        return hal_linux_msg(LS_EINVAL, msg, msglen, "the control thread is already running: stop it first");
     }
-    return HAL_OK;
+    return LS_OK;
 }
 
 int hal_linux_rt_start(hal_linux_rt_t *rt, const hal_rt_config_t *cfg, hal_cycle_fn fn, void *arg, char *msg,
                        size_t msglen)
 {
     int rc = check_config(rt, cfg, fn, msg, msglen);
-    if (rc != HAL_OK) {
+    if (rc != LS_OK) {
         return rc;
     }
     rt->cfg = *cfg;
@@ -206,7 +206,7 @@ int hal_linux_rt_start(hal_linux_rt_t *rt, const hal_rt_config_t *cfg, hal_cycle
     }
 
     if (sem_init(&rt->ready, 0, 0) != 0) {
-        return hal_linux_msg(HAL_EIO, msg, msglen, "sem_init failed: %s", strerror(errno));
+        return hal_linux_msg(LS_EIO, msg, msglen, "sem_init failed: %s", strerror(errno));
     }
     pthread_attr_t attr;
     int e = pthread_attr_init(&attr);
@@ -219,7 +219,7 @@ int hal_linux_rt_start(hal_linux_rt_t *rt, const hal_rt_config_t *cfg, hal_cycle
     }
     if (e != 0) {
         (void)sem_destroy(&rt->ready);
-        return hal_linux_msg(HAL_EIO, msg, msglen, "cannot create the control thread: %s%s", strerror(e),
+        return hal_linux_msg(LS_EIO, msg, msglen, "cannot create the control thread: %s%s", strerror(e),
                              e == EAGAIN && atomic_load(&rt->memory_locked)
                                  ? " (memory is locked: RLIMIT_MEMLOCK may be too small for the thread stack; "
                                    "raise LimitMEMLOCK= in the systemd unit or ulimit -l)"
@@ -229,7 +229,7 @@ int hal_linux_rt_start(hal_linux_rt_t *rt, const hal_rt_config_t *cfg, hal_cycle
     }
     (void)sem_destroy(&rt->ready);
     atomic_store(&rt->running, true);
-    return hal_linux_msg(HAL_OK, msg, msglen, "control thread at %u Hz, %s%s%s", (unsigned)cfg->rate_hz,
+    return hal_linux_msg(LS_OK, msg, msglen, "control thread at %u Hz, %s%s%s", (unsigned)cfg->rate_hz,
                          atomic_load(&rt->realtime) ? "SCHED_FIFO" : "normal scheduling",
                          atomic_load(&rt->memory_locked) ? ", memory locked" : "",
                          cfg->lockstep ? ", lockstep time" : "");

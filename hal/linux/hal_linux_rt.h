@@ -70,9 +70,9 @@ typedef struct hal_linux_rt {
 
 /* Start the thread and return once it runs with its final scheduling
  * (stats.realtime is valid then); the first cycle starts right away.
- * Errors (nothing started, msg says why): HAL_EINVAL for NULL rt/cfg/fn,
+ * Errors (nothing started, msg says why): LS_EINVAL for NULL rt/cfg/fn,
  * rate 0 or above the maximum, priority outside 0..99, a cpu this process
- * may not run on, or rt already running; HAL_EIO when pthread_create fails.
+ * may not run on, or rt already running; LS_EIO when pthread_create fails.
  * Missing privilege is not an error (see above). Init-time: may print. */
 int hal_linux_rt_start(hal_linux_rt_t *rt, const hal_rt_config_t *cfg, hal_cycle_fn fn, void *arg, char *msg,
                        size_t msglen);

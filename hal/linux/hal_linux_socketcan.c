@@ -44,11 +44,11 @@ static pthread_mutex_t g_pool_lock = PTHREAD_MUTEX_INITIALIZER;
 int hal_linux_socketcan_encode(const hal_can_frame_t *in, struct can_frame *out)
 {
     if (in == NULL || out == NULL || in->len > 8u || (in->flags & ~(HAL_CAN_F_EXT | HAL_CAN_F_RTR)) != 0u) {
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     bool ext = (in->flags & HAL_CAN_F_EXT) != 0u;
     if (in->id > (ext ? CAN_EFF_MASK : CAN_SFF_MASK)) {
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     memset(out, 0, sizeof *out);
     out->can_id = in->id | (ext ? CAN_EFF_FLAG : 0u) | ((in->flags & HAL_CAN_F_RTR) != 0u ? CAN_RTR_FLAG : 0u);
@@ -56,7 +56,7 @@ int hal_linux_socketcan_encode(const hal_can_frame_t *in, struct can_frame *out)
     if ((in->flags & HAL_CAN_F_RTR) == 0u) {
         memcpy(out->data, in->data, in->len);
     }
-    return HAL_OK;
+    return LS_OK;
 }
 
 /* The worst of the RX and TX states a controller-problem error frame reports. */
@@ -77,7 +77,7 @@ static hal_can_state_t crtl_state(uint8_t d1, hal_can_state_t current)
 int hal_linux_socketcan_decode(const struct can_frame *in, hal_can_frame_t *out, hal_can_status_t *st)
 {
     if (in == NULL || out == NULL || st == NULL) {
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     if ((in->can_id & CAN_ERR_FLAG) != 0u) {
         canid_t cls = in->can_id & CAN_ERR_MASK;
@@ -97,7 +97,7 @@ int hal_linux_socketcan_decode(const struct can_frame *in, hal_can_frame_t *out,
     }
     if (in->can_dlc > 8u) {
         st->rx_dropped++;
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     memset(out, 0, sizeof *out);
     bool ext = (in->can_id & CAN_EFF_FLAG) != 0u;
@@ -116,24 +116,24 @@ static int sc_send(void *self, const hal_can_frame_t *frame)
 {
     sc_link_t *l = self;
     struct can_frame cf;
-    if (hal_linux_socketcan_encode(frame, &cf) != HAL_OK) {
-        return HAL_EINVAL;
+    if (hal_linux_socketcan_encode(frame, &cf) != LS_OK) {
+        return LS_EINVAL;
     }
     for (;;) {
         ssize_t n = write(l->fd, &cf, sizeof cf);
         if (n == (ssize_t)sizeof cf) {
             l->st.tx_frames++;
-            return HAL_OK;
+            return LS_OK;
         }
         if (n < 0 && errno == EINTR) {
             continue;
         }
         if (n < 0 && (errno == ENOBUFS || errno == EAGAIN || errno == EWOULDBLOCK)) {
             /* A full TX queue during bus-off drains only after a restart. */
-            return l->st.state == HAL_CAN_STATE_BUS_OFF ? HAL_EBUSOFF : HAL_EAGAIN;
+            return l->st.state == HAL_CAN_STATE_BUS_OFF ? LS_EBUSOFF : LS_EAGAIN;
         }
         l->st.tx_dropped++;
-        return HAL_EIO; /* ENETDOWN (interface went down), EBADF, short write */
+        return LS_EIO; /* ENETDOWN (interface went down), EBADF, short write */
     }
 }
 
@@ -145,7 +145,7 @@ static int sc_recv(void *self, hal_can_frame_t *frame)
 {
     sc_link_t *l = self;
     if (frame == NULL) {
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     for (int i = 0; i < SC_MAX_RECORDS_PER_RECV; i++) {
         struct can_frame cf;
@@ -165,10 +165,10 @@ static int sc_recv(void *self, hal_can_frame_t *frame)
             if (errno == EAGAIN || errno == EWOULDBLOCK) {
                 break;
             }
-            return HAL_EIO; /* ENETDOWN: the interface went down */
+            return LS_EIO; /* ENETDOWN: the interface went down */
         }
         if (n == 0) {
-            return HAL_EIO; /* the peer of an adopted stream/seqpacket socket closed */
+            return LS_EIO; /* the peer of an adopted stream/seqpacket socket closed */
         }
         for (struct cmsghdr *c = CMSG_FIRSTHDR(&mh); c != NULL; c = CMSG_NXTHDR(&mh, c)) {
             if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SO_RXQ_OVFL &&
@@ -191,7 +191,7 @@ static int sc_recv(void *self, hal_can_frame_t *frame)
             return 1;
         }
     }
-    return l->st.state == HAL_CAN_STATE_BUS_OFF ? HAL_EBUSOFF : HAL_EAGAIN;
+    return l->st.state == HAL_CAN_STATE_BUS_OFF ? LS_EBUSOFF : LS_EAGAIN;
 }
 
 static int sc_poll_fd(void *self)
@@ -224,14 +224,14 @@ static int sc_status(void *self, hal_can_status_t *out)
 {
     const sc_link_t *l = self;
     if (out == NULL) {
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     *out = l->st;
     out->rx_dropped = l->parse_drops + l->kernel_drops;
     if (l->operstate_path[0] != '\0' && operstate_off_bus(l->operstate_path)) {
         out->state = HAL_CAN_STATE_BUS_OFF;
     }
-    return HAL_OK;
+    return LS_OK;
 }
 
 static void sc_close(void *self)
@@ -331,7 +331,7 @@ static bool parse_linkinfo(const char *li, size_t len, sc_netlink_info_t *info)
 int hal_linux_socketcan_parse_link(const void *buf, size_t len, hal_linux_socketcan_link_info_t *info)
 {
     if (buf == NULL || info == NULL) {
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     const char *base = buf;
     int found = 0;
@@ -414,13 +414,13 @@ static const char *const k_afcan_fix =
 static int check_ifname(const char *ifname, char *msg, size_t msglen)
 {
     if (ifname == NULL || ifname[0] == '\0') {
-        return hal_linux_msg(HAL_EINVAL, msg, msglen, "no CAN interface name given (e.g. can0 or vcan0)");
+        return hal_linux_msg(LS_EINVAL, msg, msglen, "no CAN interface name given (e.g. can0 or vcan0)");
     }
     if (strlen(ifname) >= IFNAMSIZ) {
-        return hal_linux_msg(HAL_EINVAL, msg, msglen, "CAN interface name '%s' is longer than %d characters", ifname,
+        return hal_linux_msg(LS_EINVAL, msg, msglen, "CAN interface name '%s' is longer than %d characters", ifname,
                              IFNAMSIZ - 1);
     }
-    return HAL_OK;
+    return LS_OK;
 }
 
 /* Socket, interface checks, error filter, bind. On success *fd_out is a
@@ -428,28 +428,28 @@ static int check_ifname(const char *ifname, char *msg, size_t msglen)
 static int sc_configure(const char *ifname, int *fd_out, sc_netlink_info_t *info, char *msg, size_t msglen)
 {
     int rc = check_ifname(ifname, msg, msglen);
-    if (rc != HAL_OK) {
+    if (rc != LS_OK) {
         return rc;
     }
     int fd = socket(PF_CAN, SOCK_RAW | SOCK_NONBLOCK | SOCK_CLOEXEC, CAN_RAW);
     if (fd < 0) {
         int e = errno;
         if (e == EAFNOSUPPORT) {
-            return hal_linux_msg(HAL_ENOAFCAN, msg, msglen, "this kernel has no AF_CAN (SocketCAN) support: %s",
+            return hal_linux_msg(LS_ENOAFCAN, msg, msglen, "this kernel has no AF_CAN (SocketCAN) support: %s",
                                  k_afcan_fix);
         }
         if (e == EPROTONOSUPPORT) {
-            return hal_linux_msg(HAL_ENOAFCAN, msg, msglen,
+            return hal_linux_msg(LS_ENOAFCAN, msg, msglen,
                                  "this kernel has AF_CAN but no CAN_RAW protocol: modprobe can-raw "
                                  "(CONFIG_CAN_RAW); on a machine without CAN use --link slcan:pty:PATH");
         }
         if (e == EPERM || e == EACCES) {
-            return hal_linux_msg(HAL_EPERM, msg, msglen,
+            return hal_linux_msg(LS_EPERM, msg, msglen,
                                  "no permission to open a CAN_RAW socket (%s): run as root or lift the "
                                  "seccomp/LSM policy that blocks AF_CAN",
                                  strerror(e));
         }
-        return hal_linux_msg(HAL_EIO, msg, msglen, "socket(PF_CAN, SOCK_RAW, CAN_RAW) failed: %s", strerror(e));
+        return hal_linux_msg(LS_EIO, msg, msglen, "socket(PF_CAN, SOCK_RAW, CAN_RAW) failed: %s", strerror(e));
     }
 
     struct ifreq ifr;
@@ -463,22 +463,22 @@ static int sc_configure(const char *ifname, int *fd_out, sc_netlink_info_t *info
         int e = errno;
         (void)close(fd);
         if (e == ENODEV) {
-            return hal_linux_msg(HAL_ENODEV, msg, msglen, "no CAN interface '%s': %s", ifname, hint);
+            return hal_linux_msg(LS_ENODEV, msg, msglen, "no CAN interface '%s': %s", ifname, hint);
         }
-        return hal_linux_msg(HAL_EIO, msg, msglen, "cannot look up interface '%s': %s", ifname, strerror(e));
+        return hal_linux_msg(LS_EIO, msg, msglen, "cannot look up interface '%s': %s", ifname, strerror(e));
     }
     int ifindex = ifr.ifr_ifindex;
 
     if (ioctl(fd, SIOCGIFHWADDR, &ifr) == 0 && ifr.ifr_hwaddr.sa_family != ARPHRD_CAN) {
         (void)close(fd);
-        return hal_linux_msg(HAL_ENODEV, msg, msglen,
+        return hal_linux_msg(LS_ENODEV, msg, msglen,
                              "interface '%s' is not a CAN interface (link type %u): name a CAN or vcan interface "
                              "(ip -details link show type can)",
                              ifname, (unsigned)ifr.ifr_hwaddr.sa_family);
     }
     if (ioctl(fd, SIOCGIFFLAGS, &ifr) == 0 && (ifr.ifr_flags & IFF_UP) == 0) {
         (void)close(fd);
-        return hal_linux_msg(HAL_EIO, msg, msglen,
+        return hal_linux_msg(LS_EIO, msg, msglen,
                              "CAN interface '%s' is down: ip link set %s up type can bitrate 500000 "
                              "(for vcan: ip link set %s up)",
                              ifname, ifname, ifname);
@@ -488,7 +488,7 @@ static int sc_configure(const char *ifname, int *fd_out, sc_netlink_info_t *info
     if (setsockopt(fd, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &err_mask, sizeof err_mask) < 0) {
         int e = errno;
         (void)close(fd);
-        return hal_linux_msg(HAL_EIO, msg, msglen, "setsockopt(CAN_RAW_ERR_FILTER) on '%s' failed: %s", ifname,
+        return hal_linux_msg(LS_EIO, msg, msglen, "setsockopt(CAN_RAW_ERR_FILTER) on '%s' failed: %s", ifname,
                              strerror(e));
     }
     int one = 1;
@@ -502,20 +502,19 @@ static int sc_configure(const char *ifname, int *fd_out, sc_netlink_info_t *info
         int e = errno;
         (void)close(fd);
         if (e == ENODEV) {
-            return hal_linux_msg(HAL_ENODEV, msg, msglen, "CAN interface '%s' vanished while opening: %s", ifname,
-                                 hint);
+            return hal_linux_msg(LS_ENODEV, msg, msglen, "CAN interface '%s' vanished while opening: %s", ifname, hint);
         }
         if (e == EPERM || e == EACCES) {
-            return hal_linux_msg(HAL_EPERM, msg, msglen, "no permission to bind to '%s' (%s): run as root", ifname,
+            return hal_linux_msg(LS_EPERM, msg, msglen, "no permission to bind to '%s' (%s): run as root", ifname,
                                  strerror(e));
         }
-        return hal_linux_msg(HAL_EIO, msg, msglen, "bind to CAN interface '%s' failed: %s", ifname, strerror(e));
+        return hal_linux_msg(LS_EIO, msg, msglen, "bind to CAN interface '%s' failed: %s", ifname, strerror(e));
     }
     if (info != NULL) {
         netlink_query(ifindex, info);
     }
     *fd_out = fd;
-    return HAL_OK;
+    return LS_OK;
 }
 
 static sc_link_t *pool_take(void)
@@ -537,7 +536,7 @@ static sc_link_t *pool_take(void)
 
 static int pool_full(char *msg, size_t msglen)
 {
-    return hal_linux_msg(HAL_EINVAL, msg, msglen,
+    return hal_linux_msg(LS_EINVAL, msg, msglen,
                          "all %d SocketCAN links are in use: close one or raise HAL_LINUX_SOCKETCAN_MAX_LINKS",
                          HAL_LINUX_SOCKETCAN_MAX_LINKS);
 }
@@ -564,13 +563,13 @@ static void link_clear(hal_can_link_t *out)
 int hal_linux_socketcan_open(hal_can_link_t *out, const char *ifname, char *msg, size_t msglen)
 {
     if (out == NULL) {
-        return hal_linux_msg(HAL_EINVAL, msg, msglen, "hal_linux_socketcan_open: no link to fill (out is NULL)");
+        return hal_linux_msg(LS_EINVAL, msg, msglen, "hal_linux_socketcan_open: no link to fill (out is NULL)");
     }
     link_clear(out);
     sc_netlink_info_t info = { 0 };
     int fd = -1;
     int rc = sc_configure(ifname, &fd, &info, msg, msglen);
-    if (rc != HAL_OK) {
+    if (rc != LS_OK) {
         return rc;
     }
     sc_link_t *l = pool_take();
@@ -581,21 +580,21 @@ int hal_linux_socketcan_open(hal_can_link_t *out, const char *ifname, char *msg,
     link_fill(out, l, ifname, fd);
     l->st.bitrate = info.bitrate;
     l->st.state = info.have_state ? info.state : HAL_CAN_STATE_ACTIVE;
-    return hal_linux_msg(HAL_OK, msg, msglen, "%s open: bitrate %u bit/s, state %s", out->name, (unsigned)l->st.bitrate,
+    return hal_linux_msg(LS_OK, msg, msglen, "%s open: bitrate %u bit/s, state %s", out->name, (unsigned)l->st.bitrate,
                          state_name(l->st.state));
 }
 
 int hal_linux_socketcan_adopt_fd(hal_can_link_t *out, int fd, const char *ifname, char *msg, size_t msglen)
 {
-    int rc = out == NULL ? HAL_EINVAL : check_ifname(ifname, msg, msglen);
+    int rc = out == NULL ? LS_EINVAL : check_ifname(ifname, msg, msglen);
     if (out == NULL) {
         (void)hal_linux_msg(rc, msg, msglen, "hal_linux_socketcan_adopt_fd: no link to fill (out is NULL)");
     }
     link_clear(out);
-    if (rc == HAL_OK && fd < 0) {
-        rc = hal_linux_msg(HAL_EINVAL, msg, msglen, "hal_linux_socketcan_adopt_fd: invalid fd %d", fd);
+    if (rc == LS_OK && fd < 0) {
+        rc = hal_linux_msg(LS_EINVAL, msg, msglen, "hal_linux_socketcan_adopt_fd: invalid fd %d", fd);
     }
-    if (rc != HAL_OK) {
+    if (rc != LS_OK) {
         if (fd >= 0) {
             (void)close(fd);
         }
@@ -605,7 +604,7 @@ int hal_linux_socketcan_adopt_fd(hal_can_link_t *out, int fd, const char *ifname
     if (fl < 0 || fcntl(fd, F_SETFL, fl | O_NONBLOCK) < 0) {
         int e = errno;
         (void)close(fd);
-        return hal_linux_msg(HAL_EIO, msg, msglen, "cannot make fd non-blocking: %s", strerror(e));
+        return hal_linux_msg(LS_EIO, msg, msglen, "cannot make fd non-blocking: %s", strerror(e));
     }
     int one = 1;
     (void)setsockopt(fd, SOL_SOCKET, SO_RXQ_OVFL, &one, sizeof one);
@@ -615,7 +614,7 @@ int hal_linux_socketcan_adopt_fd(hal_can_link_t *out, int fd, const char *ifname
         return pool_full(msg, msglen);
     }
     link_fill(out, l, ifname, fd);
-    return hal_linux_msg(HAL_OK, msg, msglen, "%s adopted fd %d", out->name, fd);
+    return hal_linux_msg(LS_OK, msg, msglen, "%s adopted fd %d", out->name, fd);
 }
 
 int hal_linux_socketcan_probe(const char *ifname, char *msg, size_t msglen)
@@ -623,10 +622,10 @@ int hal_linux_socketcan_probe(const char *ifname, char *msg, size_t msglen)
     sc_netlink_info_t info = { 0 };
     int fd = -1;
     int rc = sc_configure(ifname, &fd, &info, msg, msglen);
-    if (rc != HAL_OK) {
+    if (rc != LS_OK) {
         return rc;
     }
     (void)close(fd);
-    return hal_linux_msg(HAL_OK, msg, msglen, "socketcan:%s ok: bitrate %u bit/s, state %s", ifname,
+    return hal_linux_msg(LS_OK, msg, msglen, "socketcan:%s ok: bitrate %u bit/s, state %s", ifname,
                          (unsigned)info.bitrate, state_name(info.have_state ? info.state : HAL_CAN_STATE_ACTIVE));
 }

@@ -32,19 +32,19 @@
 
 /* Open a link on interface `ifname` (e.g. "can0"). On error `out` holds no
  * ops and `msg` (if not NULL) names the cause and the fix:
- *   HAL_EINVAL    out or ifname NULL, ifname empty or longer than IFNAMSIZ-1,
+ *   LS_EINVAL    out or ifname NULL, ifname empty or longer than IFNAMSIZ-1,
  *                 or all pool entries in use;
- *   HAL_ENOAFCAN  the kernel has no AF_CAN or no CAN_RAW (modprobe can can-raw);
- *   HAL_ENODEV    no interface of that name, or it is not a CAN interface;
- *   HAL_EIO       the interface exists but is administratively down, or
+ *   LS_ENOAFCAN  the kernel has no AF_CAN or no CAN_RAW (modprobe can can-raw);
+ *   LS_ENODEV    no interface of that name, or it is not a CAN interface;
+ *   LS_EIO       the interface exists but is administratively down, or
  *                 another socket call failed (message has strerror);
- *   HAL_EPERM     the kernel refused the socket.
+ *   LS_EPERM     the kernel refused the socket.
  * On success out->name is "socketcan:<ifname>", the bitrate and controller
  * state are read once over rtnetlink (best effort: bitrate 0 when unknown). */
 int hal_linux_socketcan_open(hal_can_link_t *out, const char *ifname, char *msg, size_t msglen);
 
 /* Self-check for `landscaped --check`: opens and closes a link on `ifname`
- * without keeping a pool entry. HAL_OK with a one-line summary in `msg`
+ * without keeping a pool entry. LS_OK with a one-line summary in `msg`
  * ("socketcan:can0 ok: bitrate 500000 bit/s, state active"), or the status
  * and message open would give. Init-time only. */
 int hal_linux_socketcan_probe(const char *ifname, char *msg, size_t msglen);
@@ -53,18 +53,18 @@ int hal_linux_socketcan_probe(const char *ifname, char *msg, size_t msglen);
  * supervisor). The link takes ownership of fd (closes it on close, and on
  * failure). fd is made non-blocking. Any datagram socket that carries
  * struct can_frame records works, which is how the unit tests exercise the
- * link logic on a kernel without AF_CAN. Errors: HAL_EINVAL (bad argument,
- * pool full), HAL_EIO (fcntl failed). */
+ * link logic on a kernel without AF_CAN. Errors: LS_EINVAL (bad argument,
+ * pool full), LS_EIO (fcntl failed). */
 int hal_linux_socketcan_adopt_fd(hal_can_link_t *out, int fd, const char *ifname, char *msg, size_t msglen);
 
 /* Frame conversion, exposed so tests can check it without a CAN kernel.
- * encode: HAL_EINVAL for an id wider than its format, len > 8 or unknown
- * flags; HAL_OK otherwise. */
+ * encode: LS_EINVAL for an id wider than its format, len > 8 or unknown
+ * flags; LS_OK otherwise. */
 int hal_linux_socketcan_encode(const hal_can_frame_t *in, struct can_frame *out);
 
 /* decode: a data or remote frame is written to `out` (returns 1); an error
  * frame (CAN_ERR_FLAG) updates `st` (state, error_frames) and returns 0;
- * a frame with can_dlc > 8 returns HAL_EINVAL and counts in st->rx_dropped. */
+ * a frame with can_dlc > 8 returns LS_EINVAL and counts in st->rx_dropped. */
 int hal_linux_socketcan_decode(const struct can_frame *in, hal_can_frame_t *out, hal_can_status_t *st);
 
 /* What rtnetlink says about a CAN interface. */
@@ -77,7 +77,7 @@ typedef struct {
 /* Parse an RTM_NEWLINK answer (one or more netlink messages, `len` bytes):
  * IFLA_LINKINFO of kind "can" -> IFLA_CAN_BITTIMING.bitrate and
  * IFLA_CAN_STATE (stopped and sleeping count as bus-off). Returns 1 when CAN
- * data was found, 0 when not (another link kind), HAL_EINVAL for NULL
+ * data was found, 0 when not (another link kind), LS_EINVAL for NULL
  * arguments. Malformed lengths end the walk; never reads outside buf.
  * Exposed for tests and fuzzing; open uses it. */
 int hal_linux_socketcan_parse_link(const void *buf, size_t len, hal_linux_socketcan_link_info_t *info);

@@ -205,13 +205,13 @@ static int f_send(void *self, const hal_can_frame_t *frame)
         hold_flush_lost(&f->tx);
         f->tx.cnt.frames++;
         f->tx.cnt.busoff_lost++;
-        return HAL_EBUSOFF;
+        return LS_EBUSOFF;
     }
     pump_tx(f, now);
     verdict_t v = judge(f, &f->tx, now);
     hal_can_frame_t fr = *frame;
     if (!apply(&f->tx, &v, &fr, now)) {
-        return HAL_OK; /* lost or held on the wire: the sender cannot tell */
+        return LS_OK; /* lost or held on the wire: the sender cannot tell */
     }
     int r = hal_can_send(&f->inner, &fr);
     if (r < 0) {
@@ -234,7 +234,7 @@ static int f_recv(void *self, hal_can_frame_t *out)
             f->rx.cnt.frames++;
             f->rx.cnt.busoff_lost++;
         }
-        return HAL_EAGAIN;
+        return LS_EAGAIN;
     }
     pump_tx(f, now); /* recv is called every loop turn: it times TX releases too */
     int i = hold_due(&f->rx, now);
@@ -258,7 +258,7 @@ static int f_recv(void *self, hal_can_frame_t *out)
         *out = fr;
         return 1;
     }
-    return HAL_EAGAIN;
+    return LS_EAGAIN;
 }
 
 static int f_poll_fd(void *self)
@@ -329,19 +329,19 @@ int hal_sim_faulty_wrap(hal_can_link_t *out, const hal_can_link_t *inner, const 
 {
     if (out == NULL || inner == NULL || inner->ops == NULL || cfg == NULL || !rates_ok(&cfg->tx) ||
         !rates_ok(&cfg->rx)) {
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     bool busoff = cfg->busoff_every_us > 0 || cfg->busoff_for_us > 0;
     if (busoff && (cfg->busoff_for_us == 0 || cfg->busoff_for_us >= cfg->busoff_every_us)) {
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     if (cfg->window_after_us > 0 && cfg->window_for_us == 0) {
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     bool timed = busoff || cfg->window_for_us > 0 || cfg->tx.delay > 0.0 || cfg->rx.delay > 0.0 ||
                  cfg->tx.reorder > 0.0 || cfg->rx.reorder > 0.0;
     if (timed && cfg->clock.now_us == NULL) {
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     faulty_t *f = NULL;
     for (size_t i = 0; i < HAL_SIM_FAULTY_MAX_LINKS; i++) {
@@ -351,7 +351,7 @@ int hal_sim_faulty_wrap(hal_can_link_t *out, const hal_can_link_t *inner, const 
         }
     }
     if (f == NULL) {
-        return HAL_EAGAIN;
+        return LS_EAGAIN;
     }
     memset(f, 0, sizeof *f);
     f->used = true;
@@ -369,7 +369,7 @@ int hal_sim_faulty_wrap(hal_can_link_t *out, const hal_can_link_t *inner, const 
     out->ops = &g_ops;
     out->self = f;
     snprintf(out->name, sizeof out->name, "faulty:%.56s", inner->name);
-    return HAL_OK;
+    return LS_OK;
 }
 
 static faulty_t *live(const hal_can_link_t *link)
@@ -385,19 +385,19 @@ int hal_sim_faulty_counters(const hal_can_link_t *link, hal_sim_fault_counters_t
 {
     faulty_t *f = live(link);
     if (f == NULL || out == NULL) {
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     out->tx = f->tx.cnt;
     out->rx = f->rx.cnt;
     out->busoff_windows = f->busoff_windows;
-    return HAL_OK;
+    return LS_OK;
 }
 
 int hal_sim_faulty_format(const hal_can_link_t *link, char *buf, size_t buflen)
 {
     hal_sim_fault_counters_t c;
-    if (hal_sim_faulty_counters(link, &c) != HAL_OK || buf == NULL || buflen == 0) {
-        return HAL_EINVAL;
+    if (hal_sim_faulty_counters(link, &c) != LS_OK || buf == NULL || buflen == 0) {
+        return LS_EINVAL;
     }
     const hal_sim_fault_dir_counters_t *d[2] = { &c.tx, &c.rx };
     static const char *names[2] = { "tx", "rx" };
@@ -409,7 +409,7 @@ int hal_sim_faulty_format(const hal_can_link_t *link, char *buf, size_t buflen)
                          i > 0 ? " " : "", names[i], d[i]->frames, d[i]->dropped, d[i]->duplicated, d[i]->corrupted,
                          d[i]->reordered, d[i]->delayed, d[i]->busoff_lost, d[i]->hold_overflow);
         if (w < 0) {
-            return HAL_EINVAL;
+            return LS_EINVAL;
         }
         n += (size_t)w;
         if (n >= buflen) {
@@ -418,7 +418,7 @@ int hal_sim_faulty_format(const hal_can_link_t *link, char *buf, size_t buflen)
     }
     int w = snprintf(buf + n, buflen - n, " busoff_windows=%u", c.busoff_windows);
     if (w < 0) {
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     n += (size_t)w;
     return (int)(n >= buflen ? buflen - 1 : n);
@@ -438,7 +438,7 @@ static int fail(char *msg, size_t msglen, const char *fmt, ...)
         vsnprintf(msg, msglen, fmt, ap);
         va_end(ap);
     }
-    return HAL_EINVAL;
+    return LS_EINVAL;
 }
 
 /* A plain decimal number at the start of s (no sign, no spaces, no inf/nan:
@@ -686,5 +686,5 @@ int hal_sim_fault_parse(const char *spec, hal_sim_fault_config_t *cfg, char *msg
         }
         p = comma + 1;
     }
-    return HAL_OK;
+    return LS_OK;
 }

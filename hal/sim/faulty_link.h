@@ -46,7 +46,7 @@ typedef struct {
     hal_sim_fault_rates_t rx; /* frames the wrapped side receives */
     /* Bus-off windows: [k*busoff_every_us, k*busoff_every_us + busoff_for_us)
      * after wrap, k = 1, 2, ...; both 0 = never. While off, send answers
-     * HAL_EBUSOFF, recv discards what arrives and answers HAL_EAGAIN, held
+     * LS_EBUSOFF, recv discards what arrives and answers LS_EAGAIN, held
      * frames that fall due are lost, status reports HAL_CAN_STATE_BUS_OFF. */
     uint64_t busoff_every_us;
     uint64_t busoff_for_us;
@@ -79,10 +79,10 @@ typedef struct {
 } hal_sim_fault_counters_t;
 
 /* Wrap `inner` (copied; the decorator owns it from now on and closes it with
- * itself). `cfg` is copied. Init-time only. Returns HAL_OK; HAL_EINVAL for a
+ * itself). `cfg` is copied. Init-time only. Returns LS_OK; LS_EINVAL for a
  * NULL argument, a rate outside 0..1, a delay rate without delay_us, busoff_for
  * >= busoff_every, a window with for = 0, or a time-dependent fault (delay,
- * reorder, bus-off, window) without a clock; HAL_EAGAIN when
+ * reorder, bus-off, window) without a clock; LS_EAGAIN when
  * all HAL_SIM_FAULTY_MAX_LINKS slots are in use. O(1), no allocation. */
 int hal_sim_faulty_wrap(hal_can_link_t *out, const hal_can_link_t *inner, const hal_sim_fault_config_t *cfg);
 
@@ -94,13 +94,13 @@ int hal_sim_faulty_wrap(hal_can_link_t *out, const hal_can_link_t *inner, const 
  * percentage ("5%"); TIME is a number with us, ms or s. A rate key applies to
  * both directions, or to one with a "tx." / "rx." prefix ("rx.drop=0.2"),
  * which may refine a bare key given earlier; the same key twice is an error.
- * `cfg` is reset first (clock zeroed: the caller sets it). Returns HAL_OK or
- * HAL_EINVAL with `msg` naming the item and what is allowed (the caller adds
+ * `cfg` is reset first (clock zeroed: the caller sets it). Returns LS_OK or
+ * LS_EINVAL with `msg` naming the item and what is allowed (the caller adds
  * where the spec came from, e.g. "--link-faults: "). Any thread; no
  * allocation; linear in the length of `spec`. */
 int hal_sim_fault_parse(const char *spec, hal_sim_fault_config_t *cfg, char *msg, size_t msglen);
 
-/* Counters of a link returned by hal_sim_faulty_wrap(). HAL_EINVAL when
+/* Counters of a link returned by hal_sim_faulty_wrap(). LS_EINVAL when
  * `link` is not a live decorator. Comms thread. */
 int hal_sim_faulty_counters(const hal_can_link_t *link, hal_sim_fault_counters_t *out);
 

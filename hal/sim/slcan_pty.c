@@ -55,14 +55,14 @@ static int flush_tx(slcan_pty_t *p)
         ssize_t w = write(p->master, p->tbuf, p->tlen);
         if (w < 0) {
             if (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR) {
-                return HAL_EAGAIN;
+                return LS_EAGAIN;
             }
-            return HAL_EIO;
+            return LS_EIO;
         }
         memmove(p->tbuf, p->tbuf + w, p->tlen - (size_t)w);
         p->tlen -= (size_t)w;
     }
-    return HAL_OK;
+    return LS_OK;
 }
 
 static int pty_send(void *self, const hal_can_frame_t *frame)
@@ -70,22 +70,22 @@ static int pty_send(void *self, const hal_can_frame_t *frame)
     slcan_pty_t *p = self;
     if (!p->open) {
         p->st.tx_dropped++;
-        return HAL_OK; /* no supervisor attached: the frame is lost on an unlistened bus */
+        return LS_OK; /* no supervisor attached: the frame is lost on an unlistened bus */
     }
     char line[LS_SLCAN_MAX_LINE];
     size_t n = ls_slcan_format(frame, line, sizeof line);
     if (n == 0) {
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     (void)flush_tx(p);
     if (p->tlen + n > sizeof p->tbuf) {
-        return HAL_EAGAIN; /* the host is not reading: the caller keeps the frame */
+        return LS_EAGAIN; /* the host is not reading: the caller keeps the frame */
     }
     memcpy(p->tbuf + p->tlen, line, n);
     p->tlen += n;
     p->st.tx_frames++;
     int r = flush_tx(p);
-    return r == HAL_EIO ? HAL_EIO : HAL_OK;
+    return r == LS_EIO ? LS_EIO : LS_OK;
 }
 
 static void handle_line(slcan_pty_t *p, const char *line, size_t len, hal_can_frame_t *frame, bool *got)
@@ -151,9 +151,9 @@ static int pty_recv(void *self, hal_can_frame_t *frame)
         ssize_t r = read(p->master, p->rbuf, sizeof p->rbuf);
         if (r <= 0) {
             if (r < 0 && (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR || errno == EIO)) {
-                return HAL_EAGAIN;
+                return LS_EAGAIN;
             }
-            return r == 0 ? HAL_EAGAIN : HAL_EIO;
+            return r == 0 ? LS_EAGAIN : LS_EIO;
         }
         p->rlen = (size_t)r;
         p->rpos = 0;
@@ -168,7 +168,7 @@ static int pty_hold_open(void *self, bool hold)
         p->close_due = false;
         p->open = false;
     }
-    return HAL_OK;
+    return LS_OK;
 }
 
 static int pty_poll_fd(void *self)
@@ -181,7 +181,7 @@ static int pty_status(void *self, hal_can_status_t *out)
     slcan_pty_t *p = self;
     *out = p->st;
     out->rx_dropped += p->lx.overlong;
-    return HAL_OK;
+    return LS_OK;
 }
 
 static void pty_close(void *self)
@@ -267,22 +267,22 @@ int hal_sim_slcan_pty_open(hal_can_link_t *out, const char *path, char *msg, siz
     }
     if (p == NULL) {
         snprintf(msg, msglen, "at most %d slcan pty links", HAL_SLCAN_PTY_MAX_LINKS);
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     if (path == NULL || path[0] == '\0' || strlen(path) >= sizeof p->path) {
         snprintf(msg, msglen, "slcan:pty needs a path for the symlink, e.g. --link slcan:pty:/tmp/landscape0");
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     char lock_path[sizeof p->lock_path];
     snprintf(lock_path, sizeof lock_path, "%s.lock", path);
     struct stat sb;
     if (lstat(path, &sb) == 0 && !S_ISLNK(sb.st_mode)) {
         snprintf(msg, msglen, "%s exists and is not a symlink: choose another path for the pty link", path);
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     int lock_fd = take_lock(lock_path, path, msg, msglen);
     if (lock_fd < 0) {
-        return HAL_EIO;
+        return LS_EIO;
     }
     if (lstat(path, &sb) == 0) {
         unlink(path); /* a stale link from a controller that did not exit cleanly (its lock is free) */
@@ -295,7 +295,7 @@ int hal_sim_slcan_pty_open(hal_can_link_t *out, const char *path, char *msg, siz
         }
         unlink(lock_path);
         close(lock_fd);
-        return HAL_EIO;
+        return LS_EIO;
     }
     const char *slave_name = ptsname(master);
     int slave = slave_name != NULL ? open(slave_name, O_RDWR | O_NOCTTY | O_NONBLOCK) : -1;
@@ -304,7 +304,7 @@ int hal_sim_slcan_pty_open(hal_can_link_t *out, const char *path, char *msg, siz
         close(master);
         unlink(lock_path);
         close(lock_fd);
-        return HAL_EIO;
+        return LS_EIO;
     }
     struct termios tio;
     if (tcgetattr(slave, &tio) == 0) {
@@ -317,7 +317,7 @@ int hal_sim_slcan_pty_open(hal_can_link_t *out, const char *path, char *msg, siz
         close(master);
         unlink(lock_path);
         close(lock_fd);
-        return HAL_EIO;
+        return LS_EIO;
     }
     memset(p, 0, sizeof *p);
     p->used = true;
@@ -330,5 +330,5 @@ int hal_sim_slcan_pty_open(hal_can_link_t *out, const char *path, char *msg, siz
     out->ops = &g_ops;
     out->self = p;
     snprintf(out->name, sizeof out->name, "slcan:pty:%s", path);
-    return HAL_OK;
+    return LS_OK;
 }

@@ -20,14 +20,14 @@ static int null_send(void *self, const hal_can_frame_t *f)
 {
     (void)self;
     (void)f;
-    return HAL_OK;
+    return LS_OK;
 }
 
 static int null_recv(void *self, hal_can_frame_t *f)
 {
     unsigned *n = self;
     if (*n == 0) {
-        return HAL_EAGAIN;
+        return LS_EAGAIN;
     }
     (*n)--;
     memset(f, 0, sizeof *f);
@@ -54,8 +54,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     hal_sim_fault_config_t cfg;
     char msg[200];
     int r = hal_sim_fault_parse(spec, &cfg, msg, sizeof msg);
-    if (r != HAL_OK) {
-        if (r != HAL_EINVAL || msg[0] == '\0' || strlen(msg) >= sizeof msg) {
+    if (r != LS_OK) {
+        if (r != LS_EINVAL || msg[0] == '\0' || strlen(msg) >= sizeof msg) {
             __builtin_trap();
         }
         return 0;
@@ -69,7 +69,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     hal_can_link_t inner = { .ops = &null_ops, .self = &pending, .name = "null" };
     hal_can_link_t link;
     g_now_us = 0;
-    if (hal_sim_faulty_wrap(&link, &inner, &cfg) != HAL_OK) {
+    if (hal_sim_faulty_wrap(&link, &inner, &cfg) != LS_OK) {
         __builtin_trap(); /* everything the parser accepts, the decorator must too */
     }
     hal_can_frame_t f = { .id = 1, .len = 8 };

@@ -128,8 +128,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     }
     memset(&rx_q, 0, sizeof(rx_q));
     memset(&tx_q, 0, sizeof(tx_q));
-    if (ls_isotp_init(&rx_link, &cfg, 0x18DAF110u, 0x18DA10F1u, fz_send, &rx_q) != LS_ISOTP_OK ||
-        ls_isotp_init(&tx_link, &cfg, 0x18DA10F1u, 0x18DAF110u, fz_send, &tx_q) != LS_ISOTP_OK) {
+    if (ls_isotp_init(&rx_link, &cfg, 0x18DAF110u, 0x18DA10F1u, fz_send, &rx_q) != LS_OK ||
+        ls_isotp_init(&tx_link, &cfg, 0x18DA10F1u, 0x18DAF110u, fz_send, &tx_q) != LS_OK) {
         abort();
     }
     for (size_t i = 0; i < sizeof(payload); i++) {
@@ -175,7 +175,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             p += 2;
             bool busy = ls_isotp_tx_busy(&tx_link);
             int rc = ls_isotp_send(&tx_link, payload, len, now_us);
-            int want = (len == 0 || len > LS_ISOTP_MAX_PAYLOAD) ? LS_ISOTP_ELEN : busy ? LS_ISOTP_EBUSY : LS_ISOTP_OK;
+            int want = (len == 0 || len > LS_ISOTP_MAX_PAYLOAD) ? LS_ELEN : busy ? LS_EBUSY : LS_OK;
             if (rc != want) {
                 abort();
             }

@@ -96,14 +96,14 @@ static int arm_info(void *self, hal_arm_info_t *out)
         out->q_max_rad[j] = 10.0;
         out->torque_max_Nm[j] = 100.0;
     }
-    return HAL_OK;
+    return LS_OK;
 }
 
 static int arm_enable(void *self, bool on)
 {
     (void)self;
     g_enabled = on;
-    return HAL_OK;
+    return LS_OK;
 }
 
 static int arm_command(void *self, const double *q, const double *qd)
@@ -115,7 +115,7 @@ static int arm_command(void *self, const double *q, const double *qd)
     } else {
         memset(g_qd, 0, sizeof g_qd);
     }
-    return HAL_OK;
+    return LS_OK;
 }
 
 static int arm_read(void *self, double *q, double *qd)
@@ -123,7 +123,7 @@ static int arm_read(void *self, double *q, double *qd)
     (void)self;
     memcpy(q, g_q, sizeof g_q);
     memcpy(qd, g_qd, sizeof g_qd);
-    return HAL_OK;
+    return LS_OK;
 }
 
 static const hal_arm_ops_t k_arm_ops = {
@@ -140,31 +140,31 @@ static int dio_describe(void *self, uint16_t unit, hal_dio_unit_info_t *out)
 {
     (void)self;
     if (unit != 0) {
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     out->input_mask = 0x00FFu;
     out->output_mask = 0xFF00u;
-    return HAL_OK;
+    return LS_OK;
 }
 
 static int dio_read(void *self, uint16_t unit, uint32_t *bits)
 {
     (void)self;
     if (unit != 0) {
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     *bits = g_dio_levels;
-    return HAL_OK;
+    return LS_OK;
 }
 
 static int dio_write(void *self, uint16_t unit, uint32_t on, uint32_t off)
 {
     (void)self;
     if (unit != 0 || ((on | off) & ~0xFF00u) != 0u) {
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     g_dio_levels = (g_dio_levels | on) & ~off;
-    return HAL_OK;
+    return LS_OK;
 }
 
 static int dio_poll_fd(void *self)
@@ -181,7 +181,7 @@ static int force_read(void *self, double *values)
 {
     (void)self;
     memcpy(values, g_force, sizeof g_force);
-    return HAL_OK;
+    return LS_OK;
 }
 
 /* ---------------------------------------------------------------- the composition */

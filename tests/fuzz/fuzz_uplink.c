@@ -28,7 +28,7 @@ static int feed_recv(void *self, hal_can_frame_t *f)
 {
     feed_t *fd = self;
     if (fd->n < 11) {
-        return HAL_EAGAIN;
+        return LS_EAGAIN;
     }
     memset(f, 0, sizeof *f);
     f->id = ids[fd->p[0] % (sizeof ids / sizeof ids[0])];
@@ -47,7 +47,7 @@ static int feed_send(void *self, const hal_can_frame_t *f)
     if (f->len > 8) {
         __builtin_trap();
     }
-    return HAL_OK;
+    return LS_OK;
 }
 
 static const hal_can_ops_t feed_ops = { .send = feed_send, .recv = feed_recv };

@@ -60,7 +60,7 @@ typedef struct {
     int (*rack_pose)(void *self, const char *tool_id, double xyzrpy[6]);
     /* Tool offset (flange -> tool tip) of a tool, x y z roll pitch yaw. */
     int (*tool_offset)(void *self, const char *tool_id, double xyzrpy[6]);
-    /* Couple the tool at the flange (1) or leave it in the rack (0). HAL_EINVAL
+    /* Couple the tool at the flange (1) or leave it in the rack (0). LS_EINVAL
      * when the flange is not at the rack pose of that tool. */
     int (*couple)(void *self, const char *tool_id, bool attach);
     /* Drive the coupled tool's bits. */

@@ -40,11 +40,11 @@ typedef struct {
 } hal_can_status_t;
 
 typedef struct {
-    /* Queue one frame for transmission. Never blocks. HAL_EAGAIN when the
+    /* Queue one frame for transmission. Never blocks. LS_EAGAIN when the
      * backend's queue is full (the caller keeps the frame and retries). */
     int (*send)(void *self, const hal_can_frame_t *frame);
     /* Take one received frame. Never blocks. 1: a frame was written;
-     * HAL_EAGAIN: none pending; other negatives: link failed. */
+     * LS_EAGAIN: none pending; other negatives: link failed. */
     int (*recv)(void *self, hal_can_frame_t *frame);
     /* A file descriptor that polls readable when recv may have a frame, or -1. */
     int (*poll_fd)(void *self);

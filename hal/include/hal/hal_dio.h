@@ -21,7 +21,7 @@ typedef struct {
     /* Current level of every line of the unit, inputs and outputs (1 = active). */
     int (*read)(void *self, uint16_t unit, uint32_t *bits);
     /* Switch outputs: bits in `on` become active, bits in `off` inactive.
-     * HAL_EINVAL when a bit is not an output (nothing is changed then). */
+     * LS_EINVAL when a bit is not an output (nothing is changed then). */
     int (*write)(void *self, uint16_t unit, uint32_t on, uint32_t off);
     /* A file descriptor that polls readable on an input edge, or -1 (then
      * the caller samples read() each cycle). */

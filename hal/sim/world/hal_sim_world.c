@@ -300,13 +300,13 @@ static int check_model(const hal_sim_arm_model_t *m, char *msg, size_t msglen)
 {
     if (m->n_joints != NJ) {
         set_msg(msg, msglen, "arm model: the simulation builds a 6-joint arm (n_joints = 6)");
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     for (int i = 0; i < NJ; i++) {
         if (!(m->q_min_rad[i] <= 0.0 && 0.0 <= m->q_max_rad[i]) || !(m->torque_max_Nm[i] > 0.0) ||
             !(m->link_mass_kg[i] > 0.0)) {
             set_msg(msg, msglen, "arm model: every joint needs q_min <= 0 <= q_max, torque_max > 0 and mass > 0");
-            return HAL_EINVAL;
+            return LS_EINVAL;
         }
     }
     const hal_sim_dh_t *d6 = &m->dh[NJ - 1];
@@ -314,9 +314,9 @@ static int check_model(const hal_sim_arm_model_t *m, char *msg, size_t msglen)
         !(m->link_radius_m > 0.0)) {
         set_msg(msg, msglen,
                 "arm model: the simulation needs link 6 along z6 (a6 = alpha6 = 0, d6 >= 10 mm) and link_radius > 0");
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
-    return HAL_OK;
+    return LS_OK;
 }
 
 static void build_arm(void)
@@ -517,11 +517,11 @@ int hal_sim_world_open(const hal_sim_world_config_t *cfg, char *msg, size_t msgl
 {
     if (W.open) {
         set_msg(msg, msglen, "the simulated world is already open (one per process); close it first");
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     if (cfg == NULL || cfg->arm == NULL) {
         set_msg(msg, msglen, "hal_sim_world_open needs a config with an arm model (hal_sim_arm_model_t)");
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     int rc = check_model(cfg->arm, msg, msglen);
     if (rc < 0) {
@@ -539,7 +539,7 @@ int hal_sim_world_open(const hal_sim_world_config_t *cfg, char *msg, size_t msgl
     if (!dInitODE2(0) || !dAllocateODEDataForThread((unsigned int)dAllocateMaskAll)) {
         sim_ctl_close(&W.ctl);
         set_msg(msg, msglen, "ODE failed to initialise (out of memory?)");
-        return HAL_EIO;
+        return LS_EIO;
     }
     W.ode_initialised = true;
     dRandSetSeed(0);
@@ -556,15 +556,15 @@ int hal_sim_world_open(const hal_sim_world_config_t *cfg, char *msg, size_t msgl
     build_environment();
     warm_up();
     W.open = true;
-    return HAL_OK;
+    return LS_OK;
 }
 
 int hal_sim_world_attach_thread(void)
 {
     if (!W.open) {
-        return HAL_ENODEV;
+        return LS_ENODEV;
     }
-    return dAllocateODEDataForThread((unsigned int)dAllocateMaskAll) ? HAL_OK : HAL_EIO;
+    return dAllocateODEDataForThread((unsigned int)dAllocateMaskAll) ? LS_OK : LS_EIO;
 }
 
 void hal_sim_world_close(void)
@@ -592,10 +592,10 @@ static int arm_info(void *self, hal_arm_info_t *out)
 {
     (void)self;
     if (!W.open) {
-        return HAL_ENODEV;
+        return LS_ENODEV;
     }
     if (out == NULL) {
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     memset(out, 0, sizeof *out);
     out->n_joints = NJ;
@@ -604,31 +604,31 @@ static int arm_info(void *self, hal_arm_info_t *out)
         out->q_max_rad[i] = W.m->q_max_rad[i];
         out->torque_max_Nm[i] = W.m->torque_max_Nm[i];
     }
-    return HAL_OK;
+    return LS_OK;
 }
 
 static int arm_enable(void *self, bool on)
 {
     (void)self;
     if (!W.open) {
-        return HAL_ENODEV;
+        return LS_ENODEV;
     }
     W.enabled = on;
-    return HAL_OK;
+    return LS_OK;
 }
 
 static int arm_command(void *self, const double *q_rad, const double *qd_rad_s)
 {
     (void)self;
     if (!W.open) {
-        return HAL_ENODEV;
+        return LS_ENODEV;
     }
     if (q_rad == NULL) {
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     for (int i = 0; i < NJ; i++) {
         if (!isfinite(q_rad[i]) || (qd_rad_s != NULL && !isfinite(qd_rad_s[i]))) {
-            return HAL_EINVAL;
+            return LS_EINVAL;
         }
     }
     memcpy(W.q_cmd, q_rad, sizeof W.q_cmd);
@@ -637,17 +637,17 @@ static int arm_command(void *self, const double *q_rad, const double *qd_rad_s)
     } else {
         memset(W.qd_cmd, 0, sizeof W.qd_cmd);
     }
-    return HAL_OK;
+    return LS_OK;
 }
 
 static int arm_read(void *self, double *q_rad, double *qd_rad_s)
 {
     (void)self;
     if (!W.open) {
-        return HAL_ENODEV;
+        return LS_ENODEV;
     }
     if (q_rad == NULL && qd_rad_s == NULL) {
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     if (q_rad != NULL) {
         memcpy(q_rad, W.q, sizeof W.q);
@@ -655,17 +655,17 @@ static int arm_read(void *self, double *q_rad, double *qd_rad_s)
     if (qd_rad_s != NULL) {
         memcpy(qd_rad_s, W.qd, sizeof W.qd);
     }
-    return HAL_OK;
+    return LS_OK;
 }
 
 int hal_sim_world_step(void *self, double dt_s)
 {
     (void)self;
     if (!W.open) {
-        return HAL_ENODEV;
+        return LS_ENODEV;
     }
     if (!(dt_s > 0.0 && dt_s <= MAX_DT_S)) {
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     bool same =
         memcmp(W.q_cmd, W.last_q_cmd, sizeof W.q_cmd) == 0 && memcmp(W.qd_cmd, W.last_qd_cmd, sizeof W.qd_cmd) == 0;
@@ -714,10 +714,10 @@ static int force_read(void *self, double *values)
 {
     (void)self;
     if (!W.open) {
-        return HAL_ENODEV;
+        return LS_ENODEV;
     }
     if (values == NULL) {
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     /* Joint force on the tool plus the tool's weight = minus the external
      * wrench on the (resting) tool = what the tool exerts on its surroundings. */
@@ -731,7 +731,7 @@ static int force_read(void *self, double *values)
     double T[3] = { W.fb.t1[0] + rxF[0], W.fb.t1[1] + rxF[1], W.fb.t1[2] + rxF[2] };
     mat_tvec(t.R, F, values);
     mat_tvec(t.R, T, values + 3);
-    return HAL_OK;
+    return LS_OK;
 }
 
 static bool point_inside_env(const double p[3])
@@ -751,16 +751,16 @@ static int laser_read(void *self, double *values)
 {
     (void)self;
     if (!W.open) {
-        return HAL_ENODEV;
+        return LS_ENODEV;
     }
     if (values == NULL) {
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     frame_t t;
     tool_frame(&t);
     if (point_inside_env(t.p)) {
         values[0] = 0.0;
-        return HAL_OK;
+        return LS_OK;
     }
     dGeomRaySet(W.ray, t.p[0], t.p[1], t.p[2], t.R[2], t.R[5], t.R[8]);
     dGeomRaySetLength(W.ray, LASER_RANGE_M);
@@ -772,7 +772,7 @@ static int laser_read(void *self, double *values)
         }
     }
     values[0] = best;
-    return HAL_OK;
+    return LS_OK;
 }
 
 static hal_sensor_t k_sensors[2] = {
@@ -813,28 +813,28 @@ static int tool_rack_pose(void *self, const char *tool_id, double xyzrpy[6])
 {
     (void)self;
     if (!W.open) {
-        return HAL_ENODEV;
+        return LS_ENODEV;
     }
     int t = find_tool(tool_id);
     if (t < 0 || xyzrpy == NULL) {
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     memcpy(xyzrpy, k_tools[t].rack, sizeof k_tools[t].rack);
-    return HAL_OK;
+    return LS_OK;
 }
 
 static int tool_offset(void *self, const char *tool_id, double xyzrpy[6])
 {
     (void)self;
     if (!W.open) {
-        return HAL_ENODEV;
+        return LS_ENODEV;
     }
     int t = find_tool(tool_id);
     if (t < -1 || xyzrpy == NULL) {
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     memcpy(xyzrpy, tool_offset_of(t), 6 * sizeof(double));
-    return HAL_OK;
+    return LS_OK;
 }
 
 static bool flange_at_rack(int t)
@@ -858,43 +858,43 @@ static int tool_couple(void *self, const char *tool_id, bool attach)
 {
     (void)self;
     if (!W.open) {
-        return HAL_ENODEV;
+        return LS_ENODEV;
     }
     int t = find_tool(tool_id);
     if (t < 0 || (attach ? W.tool != -1 : W.tool != t) || !flange_at_rack(t)) {
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     W.tool = attach ? t : -1;
     W.tool_bits = 0;
     tool_rebuild();
-    return HAL_OK;
+    return LS_OK;
 }
 
 static int tool_set_bits(void *self, uint32_t on, uint32_t off)
 {
     (void)self;
     if (!W.open) {
-        return HAL_ENODEV;
+        return LS_ENODEV;
     }
     uint32_t have = W.tool >= 0 ? k_tools[W.tool].bit_mask : 0u;
     if (((on | off) & ~have) != 0) {
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     W.tool_bits = (W.tool_bits | on) & ~off;
-    return HAL_OK;
+    return LS_OK;
 }
 
 static int tool_get_bits(void *self, uint32_t *bits)
 {
     (void)self;
     if (!W.open) {
-        return HAL_ENODEV;
+        return LS_ENODEV;
     }
     if (bits == NULL) {
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     *bits = W.tool_bits;
-    return HAL_OK;
+    return LS_OK;
 }
 
 static const hal_tool_ops_t k_tool_ops = {
@@ -933,10 +933,10 @@ void hal_sim_world_get_manual(hal_manual_t *out)
 int hal_sim_world_flange_pose(double T[16])
 {
     if (!W.open) {
-        return HAL_ENODEV;
+        return LS_ENODEV;
     }
     if (T == NULL) {
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     frame_t f;
     flange_frame(&f);
@@ -950,13 +950,13 @@ int hal_sim_world_flange_pose(double T[16])
     T[13] = f.p[1];
     T[14] = f.p[2];
     T[15] = 1.0;
-    return HAL_OK;
+    return LS_OK;
 }
 
 int hal_sim_world_contact(bool *in_contact, double point_m[3])
 {
     if (!W.open) {
-        return HAL_ENODEV;
+        return LS_ENODEV;
     }
     if (in_contact != NULL) {
         *in_contact = W.in_contact;

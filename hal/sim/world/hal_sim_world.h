@@ -53,7 +53,7 @@
  * pose). Joint trajectories are then a pure function of the command sequence,
  * whatever the number of idle cycles between host commands. Without lockstep
  * the physics always advances. hal_sim_world_step() returns 1 when it
- * advanced the physics, 0 when lockstep held it, HAL_EINVAL for dt outside
+ * advanced the physics, 0 when lockstep held it, LS_EINVAL for dt outside
  * (0, 0.1] s.
  *
  * ---------------------------------------------------------------------------
@@ -106,17 +106,17 @@
  *     "none"     the flange plate: offset 0 (tool_offset only)
  * couple(id, true) succeeds when no tool is coupled and the flange is within
  * 2 mm and 2 deg of the tool's rack pose; couple(id, false) when `id` is the
- * coupled tool and the flange is at its rack pose. Otherwise HAL_EINVAL and
+ * coupled tool and the flange is at its rack pose. Otherwise LS_EINVAL and
  * nothing changes. set_bits/get_bits hold the gripper's bit state (no
  * gripper fingers are simulated); bits of a tool without that bit, or with no
- * tool coupled, are HAL_EINVAL; uncoupling clears the bits.
+ * tool coupled, are LS_EINVAL; uncoupling clears the bits.
  *
  * ---------------------------------------------------------------------------
  * DIO, manual device and the control socket
  * ---------------------------------------------------------------------------
  * DIO: one unit (0); bits 0-15 are inputs, bits 16-31 outputs. read() gives
  * inputs | outputs; write() of a bit outside 16-31, or to a unit other than 0,
- * is HAL_EINVAL and changes nothing; a bit in both `on` and `off` ends
+ * is LS_EINVAL and changes nothing; a bit in both `on` and `off` ends
  * inactive. Inputs change only through the socket.
  *
  * Control socket protocol (cfg.dio_socket_path; a Unix SOCK_DGRAM socket the
@@ -194,14 +194,14 @@ typedef struct {
     bool with_obstacle;             /* a box on the table */
 } hal_sim_world_config_t;
 
-/* Build the world. Init only; allocates. Returns HAL_OK, or HAL_EINVAL (bad
+/* Build the world. Init only; allocates. Returns LS_OK, or LS_EINVAL (bad
  * config, world already open, socket path too long or taken by a non-socket)
- * or HAL_EIO (socket/ODE failure), with a reason in msg (msglen may be 0). */
+ * or LS_EIO (socket/ODE failure), with a reason in msg (msglen may be 0). */
 int hal_sim_world_open(const hal_sim_world_config_t *cfg, char *msg, size_t msglen);
 
 /* ODE keeps per-thread collision data: a control-loop thread other than
  * the one that opened the world calls this once at its start (it allocates).
- * HAL_OK, HAL_ENODEV when not open, HAL_EIO when ODE fails. */
+ * LS_OK, LS_ENODEV when not open, LS_EIO when ODE fails. */
 int hal_sim_world_attach_thread(void);
 
 /* Tear everything down (ODE, socket, socket file). Safe when not open. The
@@ -212,14 +212,14 @@ void hal_sim_world_close(void);
 /* Advance the world by dt_s (0 < dt_s <= 0.1): the joint servo, contacts and
  * one ODE step (see "Lockstep" above). Called by the control loop once per
  * cycle after commanding the arm, drives on or off (brakes). Returns 1 when
- * the physics advanced, 0 when lockstep held it, HAL_EINVAL for a bad dt,
- * HAL_ENODEV when not open. `self` is ignored (one world per process): the
+ * the physics advanced, 0 when lockstep held it, LS_EINVAL for a bad dt,
+ * LS_ENODEV when not open. `self` is ignored (one world per process): the
  * signature is that of a step callback with a context. */
 int hal_sim_world_step(void *self, double dt_s);
 
 /* Device handles of the open world (static ops, self = the world). Any
  * thread, any time after open; O(1), no allocation. When the world is not
- * open the handles' operations answer HAL_ENODEV. */
+ * open the handles' operations answer LS_ENODEV. */
 void hal_sim_world_get_arm(hal_arm_t *out);
 void hal_sim_world_get_dio(hal_dio_t *out);
 /* The two sensors above; *count = 2. The array is static. */
@@ -228,13 +228,13 @@ void hal_sim_world_get_tool(hal_tool_t *out);
 void hal_sim_world_get_manual(hal_manual_t *out);
 
 /* Ground truth for tests: the flange pose (DH frame 6) as ODE has it,
- * column-major 4x4, base frame. HAL_OK or HAL_ENODEV. */
+ * column-major 4x4, base frame. LS_OK or LS_ENODEV. */
 int hal_sim_world_flange_pose(double T[16]);
 
 /* Contact since open: *in_contact = link 6 or the tool touched the floor,
  * table or obstacle in the last step; point_m = the first contact point of
  * the first step that had any contact since open (zeros if none). Returns 1
- * when a contact has happened since open, 0 when not, HAL_ENODEV when closed. */
+ * when a contact has happened since open, 0 when not, LS_ENODEV when closed. */
 int hal_sim_world_contact(bool *in_contact, double point_m[3]);
 
 /* Name of the coupled tool ("gripper", "probe") or "none". Never NULL. */

@@ -35,7 +35,7 @@ int sim_ctl_open(sim_ctl_t *ctl, const char *path, char *msg, size_t msglen)
     ctl->fd = -1;
     if (path == NULL) {
         ctl->open = true;
-        return HAL_OK;
+        return LS_OK;
     }
     struct sockaddr_un addr;
     memset(&addr, 0, sizeof addr);
@@ -43,32 +43,32 @@ int sim_ctl_open(sim_ctl_t *ctl, const char *path, char *msg, size_t msglen)
     size_t len = strlen(path);
     if (len == 0 || len >= sizeof addr.sun_path || len >= sizeof ctl->path) {
         set_msg(msg, msglen, "DIO socket path is empty or longer than 107 bytes; use a shorter path", path);
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     memcpy(addr.sun_path, path, len);
     struct stat st;
     if (lstat(path, &st) == 0) {
         if (!S_ISSOCK(st.st_mode)) {
             set_msg(msg, msglen, "DIO socket path exists and is not a socket; remove it or pick another path", path);
-            return HAL_EINVAL;
+            return LS_EINVAL;
         }
         (void)unlink(path); /* stale socket of an earlier run */
     }
     int fd = socket(AF_UNIX, SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
     if (fd < 0) {
         set_msg(msg, msglen, "cannot create the DIO socket", strerror(errno));
-        return HAL_EIO;
+        return LS_EIO;
     }
     if (bind(fd, (const struct sockaddr *)&addr, sizeof addr) != 0) {
         set_msg(msg, msglen, "cannot bind the DIO socket (check the directory exists and is writable)",
                 strerror(errno));
         (void)close(fd);
-        return HAL_EIO;
+        return LS_EIO;
     }
     ctl->fd = fd;
     memcpy(ctl->path, path, len + 1);
     ctl->open = true;
-    return HAL_OK;
+    return LS_OK;
 }
 
 void sim_ctl_close(sim_ctl_t *ctl)
@@ -243,7 +243,7 @@ static int tokenize(const char *text, size_t len, tok_t *toks, int max_toks)
 static int malformed(sim_ctl_t *ctl)
 {
     ctl->malformed++;
-    return HAL_EINVAL;
+    return LS_EINVAL;
 }
 
 int sim_ctl_apply(sim_ctl_t *ctl, const char *text, size_t len)
@@ -317,7 +317,7 @@ int sim_ctl_drain(sim_ctl_t *ctl)
             if (errno == EAGAIN || errno == EWOULDBLOCK) {
                 break;
             }
-            return changed > 0 ? changed : HAL_EIO;
+            return changed > 0 ? changed : LS_EIO;
         }
         if (sim_ctl_apply(ctl, buf, (size_t)r) > 0) {
             changed++;
@@ -336,62 +336,62 @@ static sim_ctl_t *ctl_of(void *self)
 
 static int dio_unit_count(void *self)
 {
-    return ctl_of(self) != NULL ? 1 : HAL_ENODEV;
+    return ctl_of(self) != NULL ? 1 : LS_ENODEV;
 }
 
 static int dio_describe(void *self, uint16_t unit, hal_dio_unit_info_t *out)
 {
     if (ctl_of(self) == NULL) {
-        return HAL_ENODEV;
+        return LS_ENODEV;
     }
     if (unit != 0 || out == NULL) {
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     out->input_mask = SIM_DIO_INPUT_MASK;
     out->output_mask = SIM_DIO_OUTPUT_MASK;
-    return HAL_OK;
+    return LS_OK;
 }
 
 static int dio_read(void *self, uint16_t unit, uint32_t *bits)
 {
     sim_ctl_t *ctl = ctl_of(self);
     if (ctl == NULL) {
-        return HAL_ENODEV;
+        return LS_ENODEV;
     }
     if (unit != 0 || bits == NULL) {
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     *bits = ctl->dio_bits;
-    return HAL_OK;
+    return LS_OK;
 }
 
 static int dio_write(void *self, uint16_t unit, uint32_t on, uint32_t off)
 {
     sim_ctl_t *ctl = ctl_of(self);
     if (ctl == NULL) {
-        return HAL_ENODEV;
+        return LS_ENODEV;
     }
     if (unit != 0 || ((on | off) & ~SIM_DIO_OUTPUT_MASK) != 0) {
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     ctl->dio_bits = (ctl->dio_bits | on) & ~off;
-    return HAL_OK;
+    return LS_OK;
 }
 
 static int dio_poll_fd(void *self)
 {
     sim_ctl_t *ctl = ctl_of(self);
     if (ctl == NULL) {
-        return HAL_ENODEV;
+        return LS_ENODEV;
     }
-    return ctl->fd >= 0 ? ctl->fd : HAL_EUNSUPPORTED;
+    return ctl->fd >= 0 ? ctl->fd : LS_EUNSUPPORTED;
 }
 
 static int dio_drain_events(void *self)
 {
     sim_ctl_t *ctl = ctl_of(self);
     if (ctl == NULL) {
-        return HAL_ENODEV;
+        return LS_ENODEV;
     }
     return sim_ctl_drain(ctl);
 }
@@ -417,12 +417,12 @@ int sim_manual_read(void *self, double *twist, uint32_t *buttons)
 {
     sim_ctl_t *ctl = ctl_of(self);
     if (ctl == NULL) {
-        return HAL_ENODEV;
+        return LS_ENODEV;
     }
     if (twist == NULL || buttons == NULL) {
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     memcpy(twist, ctl->twist, sizeof ctl->twist);
     *buttons = ctl->buttons;
-    return HAL_OK;
+    return LS_OK;
 }

@@ -28,7 +28,7 @@ typedef struct {
 int sim_ctl_open(sim_ctl_t *ctl, const char *path, char *msg, size_t msglen);
 void sim_ctl_close(sim_ctl_t *ctl);
 /* Apply one message (no terminating NUL needed). Returns 1 when it changed
- * state, 0 when not, HAL_EINVAL when malformed (and counts it). */
+ * state, 0 when not, LS_EINVAL when malformed (and counts it). */
 int sim_ctl_apply(sim_ctl_t *ctl, const char *text, size_t len);
 /* Read and apply every pending datagram; the number that changed state. */
 int sim_ctl_drain(sim_ctl_t *ctl);

@@ -32,8 +32,8 @@ typedef struct {
     double q[LS_N_JOINTS];
     bool enabled;
     int n_enable_calls;
-    int fail_enable;  /* enable(true) returns HAL_EIO */
-    int fail_command; /* command returns HAL_EIO */
+    int fail_enable;  /* enable(true) returns LS_EIO */
+    int fail_command; /* command returns LS_EIO */
     long steps;
     bool counter; /* q[j] follows the step count (seqlock test), commands ignored */
 } fake_arm_t;
@@ -48,10 +48,10 @@ static int arm_enable(void *self, bool on)
     fake_arm_t *a = self;
     a->n_enable_calls++;
     if (on && a->fail_enable) {
-        return HAL_EIO;
+        return LS_EIO;
     }
     a->enabled = on;
-    return HAL_OK;
+    return LS_OK;
 }
 
 static int arm_command(void *self, const double *q_rad, const double *qd_rad_s)
@@ -59,12 +59,12 @@ static int arm_command(void *self, const double *q_rad, const double *qd_rad_s)
     fake_arm_t *a = self;
     (void)qd_rad_s;
     if (a->fail_command) {
-        return HAL_EIO;
+        return LS_EIO;
     }
     if (!a->counter) {
         memcpy(a->q, q_rad, sizeof a->q);
     }
-    return HAL_OK;
+    return LS_OK;
 }
 
 static int arm_read(void *self, double *q_rad, double *qd_rad_s)
@@ -74,7 +74,7 @@ static int arm_read(void *self, double *q_rad, double *qd_rad_s)
         q_rad[j] = a->counter ? counter_q(a->steps, j) : a->q[j];
         qd_rad_s[j] = 0.0;
     }
-    return HAL_OK;
+    return LS_OK;
 }
 
 /* The config's world_step: the fake arm is its own world (counts steps). */
@@ -82,7 +82,7 @@ static int world_step(void *world_ctx, double dt_s)
 {
     (void)dt_s;
     ((fake_arm_t *)world_ctx)->steps++;
-    return HAL_OK;
+    return LS_OK;
 }
 
 static const hal_arm_ops_t ARM_OPS = { .enable = arm_enable, .command = arm_command, .read = arm_read };
@@ -110,14 +110,14 @@ static int dio_unit_count(void *self)
 static int dio_read(void *self, uint16_t unit, uint32_t *bits)
 {
     *bits = ((fake_dio_t *)self)->levels[unit];
-    return HAL_OK;
+    return LS_OK;
 }
 
 static int dio_write(void *self, uint16_t unit, uint32_t on, uint32_t off)
 {
     fake_dio_t *d = self;
     if (d->fail_write) {
-        return HAL_EINVAL;
+        return LS_EINVAL;
     }
     if (d->n_writes < DIO_LOG) {
         d->log[d->n_writes].unit = unit;
@@ -126,7 +126,7 @@ static int dio_write(void *self, uint16_t unit, uint32_t on, uint32_t off)
     }
     d->n_writes++;
     d->levels[unit] = (d->levels[unit] | on) & ~off;
-    return HAL_OK;
+    return LS_OK;
 }
 
 static const hal_dio_ops_t DIO_OPS = { .unit_count = dio_unit_count, .read = dio_read, .write = dio_write };
@@ -144,7 +144,7 @@ static int sensor_read(void *self, double *values)
     for (int i = 0; i < 6; i++) {
         values[i] = s->arm != NULL ? (double)s->arm->steps + (double)i : s->force_N[i];
     }
-    return HAL_OK;
+    return LS_OK;
 }
 
 typedef struct {
@@ -158,7 +158,7 @@ static int tool_couple(void *self, const char *tool_id, bool attach)
 {
     fake_tool_t *t = self;
     t->n_couple++;
-    if (t->couple_status == HAL_OK) {
+    if (t->couple_status == LS_OK) {
         snprintf(t->coupled, sizeof t->coupled, "%s", attach ? tool_id : "");
     }
     return t->couple_status;
@@ -168,13 +168,13 @@ static int tool_set_bits(void *self, uint32_t on, uint32_t off)
 {
     fake_tool_t *t = self;
     t->bits = (t->bits | on) & ~off;
-    return HAL_OK;
+    return LS_OK;
 }
 
 static int tool_get_bits(void *self, uint32_t *bits)
 {
     *bits = ((fake_tool_t *)self)->bits;
-    return HAL_OK;
+    return LS_OK;
 }
 
 static const hal_tool_ops_t TOOL_OPS = { .couple = tool_couple, .set_bits = tool_set_bits, .get_bits = tool_get_bits };
@@ -187,7 +187,7 @@ static int manual_read(void *self, double *twist, uint32_t *buttons)
 {
     memcpy(twist, ((fake_manual_t *)self)->twist, 6 * sizeof twist[0]);
     *buttons = 0;
-    return HAL_OK;
+    return LS_OK;
 }
 
 /* ---------------------------------------------------------------- fixture */
@@ -833,18 +833,18 @@ static void test_tool_couple_and_bits(void **state)
     cycle(f);
     ls_ctl_event_t ev = next_motion(f, LS_MEV_TOOL);
     assert_int_equal(ev.ref_seq, 80);
-    assert_int_equal(ev.motion.index, HAL_OK);
+    assert_int_equal(ev.motion.index, LS_OK);
     assert_string_equal(ev.motion.name, "gripper");
     assert_string_equal(ev.motion.text, "couple");
     assert_string_equal(f->tool_state.coupled, "gripper");
     /* The HAL's refusal is reported as its status. */
-    f->tool_state.couple_status = HAL_EINVAL;
+    f->tool_state.couple_status = LS_EINVAL;
     c.ref_seq = 81;
     c.tool.attach = false;
     assert_true(ls_control_post(&f->ctl, &c));
     cycle(f);
     ev = next_motion(f, LS_MEV_TOOL);
-    assert_int_equal(ev.motion.index, HAL_EINVAL);
+    assert_int_equal(ev.motion.index, LS_EINVAL);
     assert_string_equal(ev.motion.text, "uncouple");
     /* Bits: the event carries the tool's bits after the change. */
     memset(&c, 0, sizeof c);
@@ -859,19 +859,19 @@ static void test_tool_couple_and_bits(void **state)
     assert_true(ls_control_post(&f->ctl, &c));
     cycle(f);
     ev = next_motion(f, LS_MEV_TOOL);
-    assert_int_equal(ev.motion.index, HAL_OK);
+    assert_int_equal(ev.motion.index, LS_OK);
     assert_string_equal(ev.motion.text, "bits");
     assert_int_equal(ev.dio.on, 0x5);
     ev = next_motion(f, LS_MEV_TOOL);
     assert_int_equal(ev.ref_seq, 83);
     assert_int_equal(ev.dio.on, 0xC);
-    /* No device: HAL_ENODEV. */
+    /* No device: LS_ENODEV. */
     c.tool.dev = NULL;
     c.ref_seq = 84;
     assert_true(ls_control_post(&f->ctl, &c));
     cycle(f);
-    assert_int_equal(next_motion(f, LS_MEV_TOOL).motion.index, HAL_ENODEV);
-    /* Coupling while a motion runs: HAL_EAGAIN, the tool is not touched. */
+    assert_int_equal(next_motion(f, LS_MEV_TOOL).motion.index, LS_ENODEV);
+    /* Coupling while a motion runs: LS_EAGAIN, the tool is not touched. */
     enable(f);
     fill_plan(f, 0.1, 85);
     assert_true(ls_control_start_plan(&f->ctl, 85));
@@ -886,7 +886,7 @@ static void test_tool_couple_and_bits(void **state)
     cycle(f);
     ev = next_motion(f, LS_MEV_TOOL);
     assert_int_equal(ev.ref_seq, 86);
-    assert_int_equal(ev.motion.index, HAL_EAGAIN);
+    assert_int_equal(ev.motion.index, LS_EAGAIN);
     assert_int_equal(f->tool_state.n_couple, calls);
 }
 

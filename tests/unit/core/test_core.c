@@ -695,7 +695,7 @@ static void test_robot_position_is_the_tool_tip_in_the_world(void **state)
         assert_near(p->joints[j], q[j] * 180.0 / LS_PI, 1e-9);
     }
     double F[16], flange[6];
-    assert_int_equal(ls_kin_fk(&ls_robot_model_default, q, F), LS_KIN_OK);
+    assert_int_equal(ls_kin_fk(&ls_robot_model_default, q, F), LS_OK);
     ls_pose_to_xyzrpy(F, flange);
     /* tip = flange origin + 0.1 * flange z axis (third column), minus the world origin */
     const double tip[3] = { F[12] + 0.1 * F[8] - 0.5, F[13] + 0.1 * F[9], F[14] + 0.1 * F[10] };

@@ -24,7 +24,7 @@ typedef struct {
     size_t rx_head, rx_tail;
     hal_can_frame_t sent[FAKE_CAP];
     size_t n_sent;
-    int send_ret; /* what send answers (HAL_OK, or an error to inject) */
+    int send_ret; /* what send answers (LS_OK, or an error to inject) */
     int closed;
 } fake_t;
 
@@ -38,14 +38,14 @@ static int fake_send(void *self, const hal_can_frame_t *f)
     }
     assert_true(k->n_sent < FAKE_CAP);
     k->sent[k->n_sent++] = *f;
-    return HAL_OK;
+    return LS_OK;
 }
 
 static int fake_recv(void *self, hal_can_frame_t *f)
 {
     fake_t *k = self;
     if (k->rx_head == k->rx_tail) {
-        return HAL_EAGAIN;
+        return LS_EAGAIN;
     }
     *f = k->rxq[k->rx_head++];
     return 1;
@@ -63,7 +63,7 @@ static int fake_status(void *self, hal_can_status_t *out)
     memset(out, 0, sizeof *out);
     out->state = HAL_CAN_STATE_ACTIVE;
     out->bitrate = 1000000;
-    return HAL_OK;
+    return LS_OK;
 }
 
 static void fake_close(void *self)
@@ -134,7 +134,7 @@ static hal_sim_fault_config_t cfg_with(const char *spec)
     hal_sim_fault_config_t cfg;
     char msg[256];
     int r = hal_sim_fault_parse(spec, &cfg, msg, sizeof msg);
-    if (r != HAL_OK) {
+    if (r != LS_OK) {
         fail_msg("parse '%s': %s", spec, msg);
     }
     cfg.clock = (hal_clock_t){ .now_us = fake_now, .self = NULL };
@@ -145,13 +145,13 @@ static void wrap(const char *spec)
 {
     hal_can_link_t inner = fake_link();
     hal_sim_fault_config_t cfg = cfg_with(spec);
-    assert_int_equal(hal_sim_faulty_wrap(&link_, &inner, &cfg), HAL_OK);
+    assert_int_equal(hal_sim_faulty_wrap(&link_, &inner, &cfg), LS_OK);
 }
 
 static hal_sim_fault_counters_t counters(void)
 {
     hal_sim_fault_counters_t c;
-    assert_int_equal(hal_sim_faulty_counters(&link_, &c), HAL_OK);
+    assert_int_equal(hal_sim_faulty_counters(&link_, &c), LS_OK);
     return c;
 }
 
@@ -180,42 +180,42 @@ static void test_wrap_rejects_bad_arguments(void **state)
     hal_can_link_t inner = fake_link();
     hal_sim_fault_config_t cfg;
     memset(&cfg, 0, sizeof cfg);
-    assert_int_equal(hal_sim_faulty_wrap(NULL, &inner, &cfg), HAL_EINVAL);
-    assert_int_equal(hal_sim_faulty_wrap(&link_, NULL, &cfg), HAL_EINVAL);
-    assert_int_equal(hal_sim_faulty_wrap(&link_, &inner, NULL), HAL_EINVAL);
+    assert_int_equal(hal_sim_faulty_wrap(NULL, &inner, &cfg), LS_EINVAL);
+    assert_int_equal(hal_sim_faulty_wrap(&link_, NULL, &cfg), LS_EINVAL);
+    assert_int_equal(hal_sim_faulty_wrap(&link_, &inner, NULL), LS_EINVAL);
     cfg.tx.drop = 1.5;
-    assert_int_equal(hal_sim_faulty_wrap(&link_, &inner, &cfg), HAL_EINVAL);
+    assert_int_equal(hal_sim_faulty_wrap(&link_, &inner, &cfg), LS_EINVAL);
     cfg.tx.drop = NAN;
-    assert_int_equal(hal_sim_faulty_wrap(&link_, &inner, &cfg), HAL_EINVAL);
+    assert_int_equal(hal_sim_faulty_wrap(&link_, &inner, &cfg), LS_EINVAL);
     cfg.tx.drop = -0.1;
-    assert_int_equal(hal_sim_faulty_wrap(&link_, &inner, &cfg), HAL_EINVAL);
+    assert_int_equal(hal_sim_faulty_wrap(&link_, &inner, &cfg), LS_EINVAL);
     memset(&cfg, 0, sizeof cfg);
     cfg.clock.now_us = fake_now;
     cfg.rx.delay = 0.1; /* without delay_us */
-    assert_int_equal(hal_sim_faulty_wrap(&link_, &inner, &cfg), HAL_EINVAL);
+    assert_int_equal(hal_sim_faulty_wrap(&link_, &inner, &cfg), LS_EINVAL);
     memset(&cfg, 0, sizeof cfg);
     cfg.clock.now_us = fake_now;
     cfg.busoff_every_us = 1000;
     cfg.busoff_for_us = 1000; /* never back on */
-    assert_int_equal(hal_sim_faulty_wrap(&link_, &inner, &cfg), HAL_EINVAL);
+    assert_int_equal(hal_sim_faulty_wrap(&link_, &inner, &cfg), LS_EINVAL);
     cfg.busoff_for_us = 0;
-    assert_int_equal(hal_sim_faulty_wrap(&link_, &inner, &cfg), HAL_EINVAL);
+    assert_int_equal(hal_sim_faulty_wrap(&link_, &inner, &cfg), LS_EINVAL);
     memset(&cfg, 0, sizeof cfg);
     cfg.clock.now_us = fake_now;
     cfg.window_after_us = 1000; /* a window that never closes must say so with for > 0 */
-    assert_int_equal(hal_sim_faulty_wrap(&link_, &inner, &cfg), HAL_EINVAL);
+    assert_int_equal(hal_sim_faulty_wrap(&link_, &inner, &cfg), LS_EINVAL);
     /* time-dependent faults need a clock */
     memset(&cfg, 0, sizeof cfg);
     cfg.tx.reorder = 0.1;
-    assert_int_equal(hal_sim_faulty_wrap(&link_, &inner, &cfg), HAL_EINVAL);
+    assert_int_equal(hal_sim_faulty_wrap(&link_, &inner, &cfg), LS_EINVAL);
     memset(&cfg, 0, sizeof cfg);
     cfg.busoff_every_us = 1000;
     cfg.busoff_for_us = 10;
-    assert_int_equal(hal_sim_faulty_wrap(&link_, &inner, &cfg), HAL_EINVAL);
+    assert_int_equal(hal_sim_faulty_wrap(&link_, &inner, &cfg), LS_EINVAL);
     /* drop-only needs none */
     memset(&cfg, 0, sizeof cfg);
     cfg.rx.drop = 0.5;
-    assert_int_equal(hal_sim_faulty_wrap(&link_, &inner, &cfg), HAL_OK);
+    assert_int_equal(hal_sim_faulty_wrap(&link_, &inner, &cfg), LS_OK);
     assert_string_equal(link_.name, "faulty:fake");
 }
 
@@ -227,22 +227,22 @@ static void test_pool_is_static_and_slots_come_back_on_close(void **state)
     memset(&cfg, 0, sizeof cfg);
     hal_can_link_t l[HAL_SIM_FAULTY_MAX_LINKS + 1];
     for (int i = 0; i < HAL_SIM_FAULTY_MAX_LINKS; i++) {
-        assert_int_equal(hal_sim_faulty_wrap(&l[i], &inner, &cfg), HAL_OK);
+        assert_int_equal(hal_sim_faulty_wrap(&l[i], &inner, &cfg), LS_OK);
     }
-    assert_int_equal(hal_sim_faulty_wrap(&l[HAL_SIM_FAULTY_MAX_LINKS], &inner, &cfg), HAL_EAGAIN);
+    assert_int_equal(hal_sim_faulty_wrap(&l[HAL_SIM_FAULTY_MAX_LINKS], &inner, &cfg), LS_EAGAIN);
     hal_can_close(&l[1]);
     assert_int_equal(fake.closed, 1);
     hal_can_close(&l[1]); /* idempotent: the inner link is closed once */
     assert_int_equal(fake.closed, 1);
     hal_sim_fault_counters_t c;
-    assert_int_equal(hal_sim_faulty_counters(&l[1], &c), HAL_EINVAL);
-    assert_int_equal(hal_sim_faulty_wrap(&l[HAL_SIM_FAULTY_MAX_LINKS], &inner, &cfg), HAL_OK);
+    assert_int_equal(hal_sim_faulty_counters(&l[1], &c), LS_EINVAL);
+    assert_int_equal(hal_sim_faulty_wrap(&l[HAL_SIM_FAULTY_MAX_LINKS], &inner, &cfg), LS_OK);
     for (int i = 0; i <= HAL_SIM_FAULTY_MAX_LINKS; i++) {
         hal_can_close(&l[i]);
     }
     assert_int_equal(fake.closed, HAL_SIM_FAULTY_MAX_LINKS + 1);
     /* a link that is not a decorator has no counters */
-    assert_int_equal(hal_sim_faulty_counters(&inner, &c), HAL_EINVAL);
+    assert_int_equal(hal_sim_faulty_counters(&inner, &c), LS_EINVAL);
     char buf[16];
     assert_true(hal_sim_faulty_format(&inner, buf, sizeof buf) < 0);
 }
@@ -253,7 +253,7 @@ static void test_no_faults_pass_everything_in_order(void **state)
     wrap("drop=0,seed=7");
     for (uint32_t i = 0; i < 1000; i++) {
         hal_can_frame_t f = frame_n(i);
-        assert_int_equal(hal_can_send(&link_, &f), HAL_OK);
+        assert_int_equal(hal_can_send(&link_, &f), LS_OK);
         fake_push_rx(&f);
     }
     assert_int_equal(fake.n_sent, 1000);
@@ -264,10 +264,10 @@ static void test_no_faults_pass_everything_in_order(void **state)
         assert_memory_equal(&got, &want, sizeof want);
     }
     hal_can_frame_t got;
-    assert_int_equal(hal_can_recv(&link_, &got), HAL_EAGAIN);
+    assert_int_equal(hal_can_recv(&link_, &got), LS_EAGAIN);
     assert_int_equal(hal_can_poll_fd(&link_), 42);
     hal_can_status_t st;
-    assert_int_equal(hal_can_status(&link_, &st), HAL_OK);
+    assert_int_equal(hal_can_status(&link_, &st), LS_OK);
     assert_int_equal(st.state, HAL_CAN_STATE_ACTIVE);
     assert_int_equal(st.bitrate, 1000000);
     hal_sim_fault_counters_t c = counters();
@@ -310,7 +310,7 @@ static void test_drop_rate_both_ways_is_exact_for_a_seed(void **state)
             (void)oracle_draw(&s_rx);
         }
         hal_can_frame_t f = frame_n(i);
-        assert_int_equal(hal_can_send(&link_, &f), HAL_OK); /* a dropped frame looks sent */
+        assert_int_equal(hal_can_send(&link_, &f), LS_OK); /* a dropped frame looks sent */
         fake_push_rx(&f);
     }
     size_t got_rx = 0;
@@ -358,7 +358,7 @@ static void test_each_fault_rate_within_binomial_bounds(void **state)
         size_t got_rx = 0;
         for (uint32_t i = 0; i < N_RATE; i++) {
             hal_can_frame_t f = frame_n(i);
-            assert_int_equal(hal_can_send(&link_, &f), HAL_OK);
+            assert_int_equal(hal_can_send(&link_, &f), LS_OK);
             fake_push_rx(&f);
             g_now_us += 100; /* 10 kframes/s */
             while (hal_can_recv(&link_, &f) == 1) {
@@ -404,7 +404,7 @@ static void test_same_seed_same_faults_other_seed_other_faults(void **state)
                      : "drop=0.1,dup=0.1,corrupt=0.1,reorder=0.1,delay=0.1:2ms,seed=100");
         for (uint32_t i = 0; i < 2000; i++) {
             hal_can_frame_t f = frame_n(i);
-            assert_int_equal(hal_can_send(&link_, &f), HAL_OK);
+            assert_int_equal(hal_can_send(&link_, &f), LS_OK);
             g_now_us += 500;
         }
         g_now_us += 1000000;
@@ -435,7 +435,7 @@ static void test_corrupt_flips_exactly_one_data_bit(void **state)
         hal_can_frame_t f = frame_n(i);
         f.id = i; /* the id is never touched: it identifies the frame */
         f.len = (uint8_t)(i % 9u);
-        assert_int_equal(hal_can_send(&link_, &f), HAL_OK);
+        assert_int_equal(hal_can_send(&link_, &f), LS_OK);
     }
     assert_int_equal(fake.n_sent, N_CORRUPT);
     uint32_t flipped = 0;
@@ -476,8 +476,8 @@ static void test_dup_delivers_the_copy_right_after_the_original(void **state)
     (void)state;
     wrap("dup=1,seed=2");
     hal_can_frame_t a = frame_n(1), b = frame_n(2), got;
-    assert_int_equal(hal_can_send(&link_, &a), HAL_OK);
-    assert_int_equal(hal_can_send(&link_, &b), HAL_OK);
+    assert_int_equal(hal_can_send(&link_, &a), LS_OK);
+    assert_int_equal(hal_can_send(&link_, &b), LS_OK);
     assert_int_equal(fake.n_sent, 4);
     assert_int_equal(frame_index(&fake.sent[0]), 1);
     assert_int_equal(frame_index(&fake.sent[1]), 1);
@@ -490,7 +490,7 @@ static void test_dup_delivers_the_copy_right_after_the_original(void **state)
         assert_int_equal(hal_can_recv(&link_, &got), 1);
         order[i] = frame_index(&got);
     }
-    assert_int_equal(hal_can_recv(&link_, &got), HAL_EAGAIN);
+    assert_int_equal(hal_can_recv(&link_, &got), LS_EAGAIN);
     assert_int_equal(order[0], 1);
     assert_int_equal(order[1], 1);
     assert_int_equal(order[2], 2);
@@ -506,7 +506,7 @@ static void test_reorder_releases_after_the_next_frame(void **state)
     wrap("tx.reorder=0.2,rx.reorder=0.2,seed=21");
     for (uint32_t i = 0; i < N_RATE; i++) {
         hal_can_frame_t f = frame_n(i);
-        assert_int_equal(hal_can_send(&link_, &f), HAL_OK);
+        assert_int_equal(hal_can_send(&link_, &f), LS_OK);
         fake_push_rx(&f);
     }
     /* the clock stands still: only following frames release held ones */
@@ -561,13 +561,13 @@ static void test_reorder_without_a_next_frame_is_released_after_the_cap(void **s
     (void)state;
     wrap("reorder=1,seed=1");
     hal_can_frame_t a = frame_n(5), got;
-    assert_int_equal(hal_can_send(&link_, &a), HAL_OK);
+    assert_int_equal(hal_can_send(&link_, &a), LS_OK);
     assert_int_equal(fake.n_sent, 0);
     g_now_us += HAL_SIM_FAULTY_REORDER_MAX_US - 1;
-    assert_int_equal(hal_can_recv(&link_, &got), HAL_EAGAIN);
+    assert_int_equal(hal_can_recv(&link_, &got), LS_EAGAIN);
     assert_int_equal(fake.n_sent, 0);
     g_now_us += 1;
-    assert_int_equal(hal_can_recv(&link_, &got), HAL_EAGAIN); /* recv calls time TX releases */
+    assert_int_equal(hal_can_recv(&link_, &got), LS_EAGAIN); /* recv calls time TX releases */
     assert_int_equal(fake.n_sent, 1);
     assert_int_equal(frame_index(&fake.sent[0]), 5);
 }
@@ -577,21 +577,21 @@ static void test_delay_holds_for_the_configured_time(void **state)
     (void)state;
     wrap("delay=1:5ms,seed=1");
     hal_can_frame_t a = frame_n(1), b = frame_n(2), got;
-    assert_int_equal(hal_can_send(&link_, &a), HAL_OK);
+    assert_int_equal(hal_can_send(&link_, &a), LS_OK);
     g_now_us += 1000;
-    assert_int_equal(hal_can_send(&link_, &b), HAL_OK); /* held until t0 + 6 ms */
+    assert_int_equal(hal_can_send(&link_, &b), LS_OK); /* held until t0 + 6 ms */
     fake_push_rx(&a);
-    assert_int_equal(hal_can_recv(&link_, &got), HAL_EAGAIN); /* rx a held until t0 + 6 ms */
+    assert_int_equal(hal_can_recv(&link_, &got), LS_EAGAIN); /* rx a held until t0 + 6 ms */
     assert_int_equal(fake.n_sent, 0);
     g_now_us += 3999; /* t0 + 4.999 ms */
-    assert_int_equal(hal_can_recv(&link_, &got), HAL_EAGAIN);
+    assert_int_equal(hal_can_recv(&link_, &got), LS_EAGAIN);
     assert_int_equal(fake.n_sent, 0);
     g_now_us += 1; /* t0 + 5 ms: a is due on TX */
-    assert_int_equal(hal_can_recv(&link_, &got), HAL_EAGAIN);
+    assert_int_equal(hal_can_recv(&link_, &got), LS_EAGAIN);
     assert_int_equal(fake.n_sent, 1);
     assert_int_equal(frame_index(&fake.sent[0]), 1);
     g_now_us += 999;
-    assert_int_equal(hal_can_recv(&link_, &got), HAL_EAGAIN);
+    assert_int_equal(hal_can_recv(&link_, &got), LS_EAGAIN);
     assert_int_equal(fake.n_sent, 1);
     g_now_us += 1; /* t0 + 6 ms: b on TX, a on RX */
     assert_int_equal(hal_can_recv(&link_, &got), 1);
@@ -609,7 +609,7 @@ static void test_delayed_frames_do_not_block_the_others(void **state)
     wrap("delay=0.5:10ms,seed=4");
     for (uint32_t i = 0; i < 100; i++) {
         hal_can_frame_t f = frame_n(i);
-        assert_int_equal(hal_can_send(&link_, &f), HAL_OK);
+        assert_int_equal(hal_can_send(&link_, &f), LS_OK);
         g_now_us += 1000; /* 1 ms apart: a delayed frame is overtaken by about 10 */
     }
     g_now_us += 10000;
@@ -641,7 +641,7 @@ static void test_hold_queue_overflow_passes_frames_unchanged(void **state)
     wrap("tx.delay=1:1s,seed=1");
     for (uint32_t i = 0; i < HAL_SIM_FAULTY_HOLD + 5; i++) {
         hal_can_frame_t f = frame_n(i);
-        assert_int_equal(hal_can_send(&link_, &f), HAL_OK);
+        assert_int_equal(hal_can_send(&link_, &f), LS_OK);
     }
     hal_sim_fault_counters_t c = counters();
     assert_int_equal(c.tx.delayed, HAL_SIM_FAULTY_HOLD);
@@ -655,11 +655,11 @@ static void test_inner_send_error_is_returned_and_nothing_is_sent_twice(void **s
     (void)state;
     wrap("dup=1,seed=1");
     hal_can_frame_t a = frame_n(1);
-    fake.send_ret = HAL_EAGAIN;
-    assert_int_equal(hal_can_send(&link_, &a), HAL_EAGAIN);
-    fake.send_ret = HAL_OK;
+    fake.send_ret = LS_EAGAIN;
+    assert_int_equal(hal_can_send(&link_, &a), LS_EAGAIN);
+    fake.send_ret = LS_OK;
     hal_can_frame_t got;
-    assert_int_equal(hal_can_recv(&link_, &got), HAL_EAGAIN);
+    assert_int_equal(hal_can_recv(&link_, &got), LS_EAGAIN);
     assert_int_equal(fake.n_sent, 0); /* the failed frame was not kept for a duplicate */
     assert_int_equal(counters().tx.duplicated, 0);
 }
@@ -671,38 +671,38 @@ static void test_busoff_windows(void **state)
     uint64_t t0 = g_now_us;
     hal_can_frame_t a = frame_n(1), got;
     hal_can_status_t st;
-    assert_int_equal(hal_can_send(&link_, &a), HAL_OK); /* delayed to t0 + 300 ms */
+    assert_int_equal(hal_can_send(&link_, &a), LS_OK); /* delayed to t0 + 300 ms */
     g_now_us = t0 + 999999;
     assert_int_equal(fake.n_sent, 0);
-    assert_int_equal(hal_can_recv(&link_, &got), HAL_EAGAIN);
+    assert_int_equal(hal_can_recv(&link_, &got), LS_EAGAIN);
     assert_int_equal(fake.n_sent, 1);
-    assert_int_equal(hal_can_send(&link_, &a), HAL_OK); /* delayed to t0 + 1.3 s: lost in the window */
-    assert_int_equal(hal_can_status(&link_, &st), HAL_OK);
+    assert_int_equal(hal_can_send(&link_, &a), LS_OK); /* delayed to t0 + 1.3 s: lost in the window */
+    assert_int_equal(hal_can_status(&link_, &st), LS_OK);
     assert_int_equal(st.state, HAL_CAN_STATE_ACTIVE);
     g_now_us = t0 + 1000000; /* the window opens */
-    assert_int_equal(hal_can_status(&link_, &st), HAL_OK);
+    assert_int_equal(hal_can_status(&link_, &st), LS_OK);
     assert_int_equal(st.state, HAL_CAN_STATE_BUS_OFF);
-    assert_int_equal(hal_can_send(&link_, &a), HAL_EBUSOFF);
+    assert_int_equal(hal_can_send(&link_, &a), LS_EBUSOFF);
     fake_push_rx(&a);
     fake_push_rx(&a);
-    assert_int_equal(hal_can_recv(&link_, &got), HAL_EAGAIN);
+    assert_int_equal(hal_can_recv(&link_, &got), LS_EAGAIN);
     assert_int_equal(fake.rx_head, fake.rx_tail); /* what arrived while off is gone */
     g_now_us = t0 + 1199999;
-    assert_int_equal(hal_can_send(&link_, &a), HAL_EBUSOFF);
+    assert_int_equal(hal_can_send(&link_, &a), LS_EBUSOFF);
     g_now_us = t0 + 1200000; /* back on */
-    assert_int_equal(hal_can_status(&link_, &st), HAL_OK);
+    assert_int_equal(hal_can_status(&link_, &st), LS_OK);
     assert_int_equal(st.state, HAL_CAN_STATE_ACTIVE);
     g_now_us = t0 + 1600000;
-    assert_int_equal(hal_can_recv(&link_, &got), HAL_EAGAIN);
+    assert_int_equal(hal_can_recv(&link_, &got), LS_EAGAIN);
     assert_int_equal(fake.n_sent, 1); /* the held frame was lost with the bus */
     hal_sim_fault_counters_t c = counters();
     assert_int_equal(c.busoff_windows, 1);
     assert_int_equal(c.tx.busoff_lost, 3); /* two refused sends and one held frame */
     assert_int_equal(c.rx.busoff_lost, 2);
     g_now_us = t0 + 2000000; /* the next window */
-    assert_int_equal(hal_can_send(&link_, &a), HAL_EBUSOFF);
+    assert_int_equal(hal_can_send(&link_, &a), LS_EBUSOFF);
     g_now_us = t0 + 5100000;
-    assert_int_equal(hal_can_send(&link_, &a), HAL_EBUSOFF);
+    assert_int_equal(hal_can_send(&link_, &a), LS_EBUSOFF);
     assert_int_equal(counters().busoff_windows, 3); /* windows 2 and 5 seen; 3 and 4 passed unseen */
 }
 
@@ -712,19 +712,19 @@ static void test_window_limits_frame_faults_in_time(void **state)
     wrap("drop=1,window=1s+500ms,seed=1");
     uint64_t t0 = g_now_us;
     hal_can_frame_t a = frame_n(1), got;
-    assert_int_equal(hal_can_send(&link_, &a), HAL_OK);
+    assert_int_equal(hal_can_send(&link_, &a), LS_OK);
     fake_push_rx(&a);
     assert_int_equal(hal_can_recv(&link_, &got), 1); /* before the window: clean */
     assert_int_equal(fake.n_sent, 1);
     g_now_us = t0 + 1000000;
-    assert_int_equal(hal_can_send(&link_, &a), HAL_OK);
+    assert_int_equal(hal_can_send(&link_, &a), LS_OK);
     fake_push_rx(&a);
-    assert_int_equal(hal_can_recv(&link_, &got), HAL_EAGAIN); /* in it: everything dropped */
+    assert_int_equal(hal_can_recv(&link_, &got), LS_EAGAIN); /* in it: everything dropped */
     g_now_us = t0 + 1499999;
-    assert_int_equal(hal_can_send(&link_, &a), HAL_OK);
+    assert_int_equal(hal_can_send(&link_, &a), LS_OK);
     assert_int_equal(fake.n_sent, 1);
     g_now_us = t0 + 1500000; /* after it: clean again */
-    assert_int_equal(hal_can_send(&link_, &a), HAL_OK);
+    assert_int_equal(hal_can_send(&link_, &a), LS_OK);
     fake_push_rx(&a);
     assert_int_equal(hal_can_recv(&link_, &got), 1);
     assert_int_equal(fake.n_sent, 2);
@@ -745,7 +745,7 @@ static void test_window_keeps_the_decision_stream(void **state)
     wrap("drop=0.3,seed=5");
     for (uint32_t i = 0; i < 2000; i++) {
         hal_can_frame_t f = frame_n(i);
-        assert_int_equal(hal_can_send(&link_, &f), HAL_OK);
+        assert_int_equal(hal_can_send(&link_, &f), LS_OK);
     }
     for (size_t j = 0; j < fake.n_sent; j++) {
         kept_always[n_always++] = frame_index(&fake.sent[j]);
@@ -755,7 +755,7 @@ static void test_window_keeps_the_decision_stream(void **state)
     wrap("drop=0.3,window=1ms+1000ms,seed=5");
     for (uint32_t i = 0; i < 2000; i++) {
         hal_can_frame_t f = frame_n(i);
-        assert_int_equal(hal_can_send(&link_, &f), HAL_OK);
+        assert_int_equal(hal_can_send(&link_, &f), LS_OK);
         g_now_us += 1000; /* frame i at i ms: 1..1000 inside the window */
     }
     size_t j = 0, k = 0;
@@ -779,7 +779,7 @@ static void test_format_names_every_counter(void **state)
     wrap("tx.drop=1,seed=1");
     hal_can_frame_t a = frame_n(1);
     for (int i = 0; i < 3; i++) {
-        assert_int_equal(hal_can_send(&link_, &a), HAL_OK);
+        assert_int_equal(hal_can_send(&link_, &a), LS_OK);
     }
     char buf[512];
     int n = hal_sim_faulty_format(&link_, buf, sizeof buf);
@@ -802,7 +802,7 @@ static void test_parse_full_spec(void **state)
     assert_int_equal(hal_sim_fault_parse("drop=0.05,dup=0.01,corrupt=0.01,reorder=0.01,delay=0.02:5ms,"
                                          "busoff=30s+2s,seed=1",
                                          &c, msg, sizeof msg),
-                     HAL_OK);
+                     LS_OK);
     assert_string_equal(msg, "");
     const hal_sim_fault_rates_t *r[2] = { &c.tx, &c.rx };
     for (int k = 0; k < 2; k++) {
@@ -827,7 +827,7 @@ static void test_parse_units_percentages_and_directions(void **state)
     assert_int_equal(
         hal_sim_fault_parse("drop=5%,rx.drop=20%,tx.delay=1:250us,rx.delay=0.5:1.5s,seed=0xFFFFFFFFFFFFFFFF", &c, msg,
                             sizeof msg),
-        HAL_OK);
+        LS_OK);
     assert_true(c.tx.drop == 0.05);
     assert_true(c.rx.drop == 0.2);
     assert_true(c.tx.delay == 1.0);
@@ -835,17 +835,17 @@ static void test_parse_units_percentages_and_directions(void **state)
     assert_true(c.rx.delay == 0.5);
     assert_int_equal(c.rx.delay_us, 1500000);
     assert_true(c.seed == UINT64_MAX);
-    assert_int_equal(hal_sim_fault_parse("busoff=500ms+1ms", &c, msg, sizeof msg), HAL_OK);
+    assert_int_equal(hal_sim_fault_parse("busoff=500ms+1ms", &c, msg, sizeof msg), LS_OK);
     assert_int_equal(c.busoff_every_us, 500000);
     assert_int_equal(c.busoff_for_us, 1000);
     assert_true(c.tx.drop == 0.0);
-    assert_int_equal(hal_sim_fault_parse("window=2s+30s", &c, msg, sizeof msg), HAL_OK);
+    assert_int_equal(hal_sim_fault_parse("window=2s+30s", &c, msg, sizeof msg), LS_OK);
     assert_int_equal(c.window_after_us, 2000000);
     assert_int_equal(c.window_for_us, 30000000);
-    assert_int_equal(hal_sim_fault_parse("window=0+1s", &c, msg, sizeof msg), HAL_OK);
+    assert_int_equal(hal_sim_fault_parse("window=0+1s", &c, msg, sizeof msg), LS_OK);
     assert_int_equal(c.window_after_us, 0);
     assert_int_equal(c.window_for_us, 1000000);
-    assert_int_equal(hal_sim_fault_parse("seed=18446744073709551615", &c, msg, sizeof msg), HAL_OK);
+    assert_int_equal(hal_sim_fault_parse("seed=18446744073709551615", &c, msg, sizeof msg), LS_OK);
     assert_true(c.seed == UINT64_MAX);
 }
 
@@ -902,15 +902,15 @@ static void test_parse_errors_say_what_is_wrong(void **state)
         hal_sim_fault_config_t c;
         char msg[256] = "x";
         int r = hal_sim_fault_parse(cases[i].spec, &c, msg, sizeof msg);
-        if (r != HAL_EINVAL || strstr(msg, cases[i].expect) == NULL || msg[0] == '\0') {
+        if (r != LS_EINVAL || strstr(msg, cases[i].expect) == NULL || msg[0] == '\0') {
             fail_msg("'%s': r=%d msg='%s', expected '%s'", cases[i].spec, r, msg, cases[i].expect);
         }
     }
     hal_sim_fault_config_t c;
-    assert_int_equal(hal_sim_fault_parse(NULL, &c, NULL, 0), HAL_EINVAL);
-    assert_int_equal(hal_sim_fault_parse("drop=0.1", NULL, NULL, 0), HAL_EINVAL);
+    assert_int_equal(hal_sim_fault_parse(NULL, &c, NULL, 0), LS_EINVAL);
+    assert_int_equal(hal_sim_fault_parse("drop=0.1", NULL, NULL, 0), LS_EINVAL);
     char tiny[8];
-    assert_int_equal(hal_sim_fault_parse("lose=1", &c, tiny, sizeof tiny), HAL_EINVAL);
+    assert_int_equal(hal_sim_fault_parse("lose=1", &c, tiny, sizeof tiny), LS_EINVAL);
     assert_string_equal(tiny, "unknown"); /* truncated, terminated */
 }
 

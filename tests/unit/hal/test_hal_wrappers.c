@@ -33,28 +33,28 @@ static void test_null_entries_are_unsupported(void **state)
     hal_can_link_t no_ops = { .ops = NULL, .self = &self };
     hal_can_link_t *links[] = { &link, &no_ops, NULL };
     for (size_t i = 0; i < 3; i++) {
-        assert_int_equal(hal_can_send(links[i], &f), HAL_EUNSUPPORTED);
-        assert_int_equal(hal_can_recv(links[i], &f), HAL_EUNSUPPORTED);
+        assert_int_equal(hal_can_send(links[i], &f), LS_EUNSUPPORTED);
+        assert_int_equal(hal_can_recv(links[i], &f), LS_EUNSUPPORTED);
         assert_int_equal(hal_can_poll_fd(links[i]), -1);
-        assert_int_equal(hal_can_status(links[i], &cs), HAL_EUNSUPPORTED);
-        assert_int_equal(hal_can_hold_open(links[i], true), HAL_EUNSUPPORTED);
+        assert_int_equal(hal_can_status(links[i], &cs), LS_EUNSUPPORTED);
+        assert_int_equal(hal_can_hold_open(links[i], true), LS_EUNSUPPORTED);
         hal_can_close(links[i]);
     }
     hal_dio_t dio_no_ops = { .ops = NULL, .self = &self };
     hal_dio_t *dios[] = { &dio, &dio_no_ops, NULL };
     for (size_t i = 0; i < 3; i++) {
-        assert_int_equal(hal_dio_unit_count(dios[i]), HAL_EUNSUPPORTED);
-        assert_int_equal(hal_dio_describe(dios[i], 0, &di), HAL_EUNSUPPORTED);
-        assert_int_equal(hal_dio_read(dios[i], 0, &bits), HAL_EUNSUPPORTED);
-        assert_int_equal(hal_dio_write(dios[i], 0, 1u, 0u), HAL_EUNSUPPORTED);
+        assert_int_equal(hal_dio_unit_count(dios[i]), LS_EUNSUPPORTED);
+        assert_int_equal(hal_dio_describe(dios[i], 0, &di), LS_EUNSUPPORTED);
+        assert_int_equal(hal_dio_read(dios[i], 0, &bits), LS_EUNSUPPORTED);
+        assert_int_equal(hal_dio_write(dios[i], 0, 1u, 0u), LS_EUNSUPPORTED);
         assert_int_equal(hal_dio_poll_fd(dios[i]), -1);
-        assert_int_equal(hal_dio_drain_events(dios[i]), HAL_EUNSUPPORTED);
+        assert_int_equal(hal_dio_drain_events(dios[i]), LS_EUNSUPPORTED);
         hal_dio_close(dios[i]);
     }
-    assert_int_equal(hal_arm_info(&arm, &ai), HAL_EUNSUPPORTED);
-    assert_int_equal(hal_arm_enable(&arm, true), HAL_EUNSUPPORTED);
-    assert_int_equal(hal_arm_command(&arm, q, q), HAL_EUNSUPPORTED);
-    assert_int_equal(hal_arm_read(&arm, q, q), HAL_EUNSUPPORTED);
+    assert_int_equal(hal_arm_info(&arm, &ai), LS_EUNSUPPORTED);
+    assert_int_equal(hal_arm_enable(&arm, true), LS_EUNSUPPORTED);
+    assert_int_equal(hal_arm_command(&arm, q, q), LS_EUNSUPPORTED);
+    assert_int_equal(hal_arm_read(&arm, q, q), LS_EUNSUPPORTED);
     hal_arm_close(&arm);
     hal_arm_close(NULL);
     assert_int_equal(self, 0);
@@ -74,7 +74,7 @@ static int fake_send(void *self, const hal_can_frame_t *frame)
     fake_t *f = self;
     f->self_seen = self;
     f->frame_seen = frame;
-    return HAL_EAGAIN;
+    return LS_EAGAIN;
 }
 static int fake_recv(void *self, hal_can_frame_t *frame)
 {
@@ -97,12 +97,12 @@ static int fake_write(void *self, uint16_t unit, uint32_t on, uint32_t off)
     f->unit_seen = unit;
     f->on_seen = on;
     f->off_seen = off;
-    return HAL_EINVAL;
+    return LS_EINVAL;
 }
 static int fake_dio_poll_fd(void *self)
 {
     (void)self;
-    return HAL_EIO; /* a failing poll_fd passes through, only "unsupported" becomes -1 */
+    return LS_EIO; /* a failing poll_fd passes through, only "unsupported" becomes -1 */
 }
 static uint64_t fake_now(void *self)
 {
@@ -121,22 +121,22 @@ static void test_present_entries_pass_through(void **state)
     hal_dio_t dio = { .ops = &dio_ops, .self = &fk };
     hal_can_frame_t f = { .id = 1 };
 
-    assert_int_equal(hal_can_send(&link, &f), HAL_EAGAIN);
+    assert_int_equal(hal_can_send(&link, &f), LS_EAGAIN);
     assert_ptr_equal(fk.self_seen, &fk);
     assert_ptr_equal(fk.frame_seen, &f);
     assert_int_equal(hal_can_recv(&link, &f), 1);
     assert_int_equal(f.id, 0x7E8);
     assert_int_equal(hal_can_poll_fd(&link), 42);
     hal_can_status_t cs;
-    assert_int_equal(hal_can_status(&link, &cs), HAL_EUNSUPPORTED);
+    assert_int_equal(hal_can_status(&link, &cs), LS_EUNSUPPORTED);
     hal_can_close(&link);
     assert_int_equal(fk.closes, 1);
 
-    assert_int_equal(hal_dio_write(&dio, 3, 0x10000u, 0x2u), HAL_EINVAL);
+    assert_int_equal(hal_dio_write(&dio, 3, 0x10000u, 0x2u), LS_EINVAL);
     assert_int_equal(fk.unit_seen, 3);
     assert_int_equal(fk.on_seen, 0x10000u);
     assert_int_equal(fk.off_seen, 0x2u);
-    assert_int_equal(hal_dio_poll_fd(&dio), HAL_EIO);
+    assert_int_equal(hal_dio_poll_fd(&dio), LS_EIO);
     hal_dio_close(&dio);
     assert_int_equal(fk.closes, 2);
 
@@ -148,17 +148,34 @@ static void test_present_entries_pass_through(void **state)
 static void test_strerror_names_every_status(void **state)
 {
     (void)state;
-    assert_string_equal(hal_strerror(HAL_OK), "ok");
-    assert_string_equal(hal_strerror(5), "ok");
-    assert_string_equal(hal_strerror(HAL_EUNSUPPORTED), "not supported by this backend");
-    assert_string_equal(hal_strerror(HAL_EAGAIN), "try again");
-    assert_string_equal(hal_strerror(HAL_EIO), "device I/O error");
-    assert_string_equal(hal_strerror(HAL_EINVAL), "invalid argument for this device");
-    assert_string_equal(hal_strerror(HAL_ENODEV), "no such device");
-    assert_string_equal(hal_strerror(HAL_EPERM), "permission denied");
-    assert_string_equal(hal_strerror(HAL_EBUSOFF), "CAN bus-off");
-    assert_string_equal(hal_strerror(HAL_ENOAFCAN), "kernel has no AF_CAN support");
-    assert_string_equal(hal_strerror(-99), "unknown error");
+    assert_string_equal(ls_err_text(LS_OK), "ok");
+    assert_string_equal(ls_err_text(5), "ok");
+    assert_string_equal(ls_err_text(LS_EUNSUPPORTED), "not supported by this backend");
+    assert_string_equal(ls_err_text(LS_EAGAIN), "try again");
+    assert_string_equal(ls_err_text(LS_EIO), "device I/O error");
+    assert_string_equal(ls_err_text(LS_EINVAL), "invalid argument for this device");
+    assert_string_equal(ls_err_text(LS_ENODEV), "no such device");
+    assert_string_equal(ls_err_text(LS_EPERM), "permission denied");
+    assert_string_equal(ls_err_text(LS_EBUSOFF), "CAN bus-off");
+    assert_string_equal(ls_err_text(LS_ENOAFCAN), "kernel has no AF_CAN support");
+    assert_string_equal(ls_err_text(-99), "unknown error");
+    /* one error space: every code has its own value and name (ls_err.h) */
+    const int codes[] = { LS_EUNSUPPORTED, LS_EAGAIN,   LS_EIO,    LS_EINVAL, LS_ENODEV, LS_EPERM,
+                          LS_EBUSOFF,      LS_ENOAFCAN, LS_EBUSY,  LS_ELEN,   LS_ETIME,  LS_EUNREACHABLE,
+                          LS_ESINGULAR,    LS_ELIMITS,  LS_ERANGE, LS_EGEOM };
+    const size_t n = sizeof codes / sizeof codes[0];
+    for (size_t i = 0; i < n; i++) {
+        assert_true(codes[i] < 0);
+        assert_string_not_equal(ls_err_name(codes[i]), "LS_E?");
+        assert_string_not_equal(ls_err_text(codes[i]), "unknown error");
+        for (size_t j = 0; j < i; j++) {
+            assert_int_not_equal(codes[i], codes[j]);
+            assert_string_not_equal(ls_err_name(codes[i]), ls_err_name(codes[j]));
+        }
+    }
+    assert_string_equal(ls_err_name(LS_EAGAIN), "LS_EAGAIN");
+    assert_string_equal(ls_err_name(LS_OK), "LS_OK");
+    assert_string_equal(ls_err_name(-99), "LS_E?");
 }
 
 int main(void)

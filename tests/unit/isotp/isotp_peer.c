@@ -112,7 +112,7 @@ int main(int argc, char **argv)
         return 2;
     }
     uint64_t now_us = 0;
-    if (ls_isotp_init(&link_, &cfg, LS_PEER_TX_ID, LS_PEER_RX_ID, peer_send, &now_us) != LS_ISOTP_OK) {
+    if (ls_isotp_init(&link_, &cfg, LS_PEER_TX_ID, LS_PEER_RX_ID, peer_send, &now_us) != LS_OK) {
         fprintf(stderr, "isotp_peer: invalid configuration (reserved STmin?)\n");
         return 2;
     }
@@ -146,8 +146,8 @@ int main(int argc, char **argv)
             }
         } else if (kind == 'S' && line[1] == ' ') {
             long n = parse_hex(line + 2, buf, sizeof(buf));
-            int rc = n < 1 ? LS_ISOTP_ELEN : ls_isotp_send(&link_, buf, (size_t)n, now_us);
-            if (rc != LS_ISOTP_OK) {
+            int rc = n < 1 ? LS_ELEN : ls_isotp_send(&link_, buf, (size_t)n, now_us);
+            if (rc != LS_OK) {
                 printf("E send failed: %d\n", rc);
             }
         } else if (line[0] != '\n') {

@@ -179,7 +179,7 @@ static int serve(void)
                 take_message();
             }
         }
-        if (rc != HAL_EAGAIN) {
+        if (rc != LS_EAGAIN) {
             fprintf(stderr, "isotp_pty_peer: the pty link failed (%d)\n", rc);
             return -1;
         }
@@ -187,7 +187,7 @@ static int serve(void)
         take_message();
         if (g_q_count > 0 && !ls_isotp_tx_busy(&g_link)) {
             int s = ls_isotp_send(&g_link, g_q[g_q_head], g_q_len[g_q_head], t);
-            if (s != LS_ISOTP_OK) {
+            if (s != LS_OK) {
                 printf("E echo of %zu bytes refused: %d\n", g_q_len[g_q_head], s);
             }
             g_q_head = (g_q_head + 1u) % ECHO_QUEUE;
@@ -212,7 +212,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "usage: %s [-b BS] [-s STMIN] [-p 0|1] slcan:pty:PATH\n", argv[0]);
         return 2;
     }
-    if (ls_isotp_init(&g_link, &cfg, LS_PEER_TX_ID, LS_PEER_RX_ID, link_send, NULL) != LS_ISOTP_OK) {
+    if (ls_isotp_init(&g_link, &cfg, LS_PEER_TX_ID, LS_PEER_RX_ID, link_send, NULL) != LS_OK) {
         fprintf(stderr, "isotp_pty_peer: invalid ISO-TP configuration (reserved STmin?)\n");
         return 2;
     }
@@ -223,7 +223,7 @@ int main(int argc, char **argv)
     sigaction(SIGTERM, &sa, NULL);
     sigaction(SIGINT, &sa, NULL);
     char msg[160];
-    if (hal_sim_slcan_pty_open(&g_can, path, msg, sizeof msg) != HAL_OK) {
+    if (hal_sim_slcan_pty_open(&g_can, path, msg, sizeof msg) != LS_OK) {
         fprintf(stderr, "isotp_pty_peer: %s\n", msg);
         return 2;
     }

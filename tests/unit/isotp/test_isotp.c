@@ -148,8 +148,8 @@ static ls_isotp_config_t cfg_of(uint8_t bs, uint8_t stmin, bool pad)
 static void setup_links(const ls_isotp_config_t *ca, const ls_isotp_config_t *cb)
 {
     memset(&fx, 0, sizeof(fx));
-    assert_int_equal(ls_isotp_init(&fx.a, ca, ID_A, ID_B, cap_send, &fx.ca), LS_ISOTP_OK);
-    assert_int_equal(ls_isotp_init(&fx.b, cb, ID_B, ID_A, cap_send, &fx.cb), LS_ISOTP_OK);
+    assert_int_equal(ls_isotp_init(&fx.a, ca, ID_A, ID_B, cap_send, &fx.ca), LS_OK);
+    assert_int_equal(ls_isotp_init(&fx.b, cb, ID_B, ID_A, cap_send, &fx.cb), LS_OK);
 }
 
 static void feed(ls_isotp_link_t *l, cap_t *own, const uint8_t *bytes, uint8_t len, uint64_t t)
@@ -207,7 +207,7 @@ static void test_sf_tx_padded_and_unpadded(void **state)
             ls_isotp_config_t c = cfg_of(8, 0, pad != 0);
             setup_links(&c, &c);
             fill_pattern(fx.payload, len, (uint32_t)len);
-            assert_int_equal(ls_isotp_send(&fx.a, fx.payload, len, 0), LS_ISOTP_OK);
+            assert_int_equal(ls_isotp_send(&fx.a, fx.payload, len, 0), LS_OK);
             assert_int_equal(fx.ca.n, 1);
             uint8_t b[8] = { (uint8_t)len };
             memcpy(b + 1, fx.payload, len);
@@ -251,7 +251,7 @@ static void check_transfer(size_t len, uint8_t bs, uint8_t stmin, bool pad_a, bo
     ls_isotp_config_t cb = cfg_of(bs, stmin, pad_b);
     setup_links(&ca, &cb);
     fill_pattern(fx.payload, len, (uint32_t)(len * 31u + bs + stmin));
-    assert_int_equal(ls_isotp_send(&fx.a, fx.payload, len, 0), LS_ISOTP_OK);
+    assert_int_equal(ls_isotp_send(&fx.a, fx.payload, len, 0), LS_OK);
     (void)run_wire(100, 60000000);
 
     /* Sender: exactly the ISO minimum of data frames, byte for byte. */
@@ -320,7 +320,7 @@ static void test_stmin0_bs0_burst(void **state)
     (void)state;
     setup_links(NULL, NULL);
     fill_pattern(fx.payload, 100, 7);
-    assert_int_equal(ls_isotp_send(&fx.a, fx.payload, 100, 0), LS_ISOTP_OK);
+    assert_int_equal(ls_isotp_send(&fx.a, fx.payload, 100, 0), LS_OK);
     assert_int_equal(fx.ca.n, 1);
     const uint8_t cts[3] = { 0x30, 0x00, 0x00 };
     feed(&fx.a, &fx.ca, cts, 3, 50);
@@ -352,7 +352,7 @@ static void check_sender_gap(uint8_t stmin, uint64_t gap_us)
 {
     setup_links(NULL, NULL);
     fill_pattern(fx.payload, 20, stmin);
-    assert_int_equal(ls_isotp_send(&fx.a, fx.payload, 20, 0), LS_ISOTP_OK);
+    assert_int_equal(ls_isotp_send(&fx.a, fx.payload, 20, 0), LS_OK);
     const uint8_t cts[3] = { 0x30, 0x00, stmin };
     feed(&fx.a, &fx.ca, cts, 3, 1000);
     assert_int_equal(fx.ca.n, 2); /* FF + first CF at once */
@@ -388,7 +388,7 @@ static void start_ff(size_t len)
 {
     setup_links(NULL, NULL);
     fill_pattern(fx.payload, len, 99);
-    assert_int_equal(ls_isotp_send(&fx.a, fx.payload, len, 0), LS_ISOTP_OK);
+    assert_int_equal(ls_isotp_send(&fx.a, fx.payload, len, 0), LS_OK);
     assert_int_equal(fx.ca.n, 1);
     assert_int_equal(fx.ca.f[0].d[0], 0x10 | (len >> 8));
     assert_int_equal(fx.a.tx_state, LS_ISOTP_TX_WAIT_FC);
@@ -420,14 +420,14 @@ static void test_resend_after_a_failed_transfer(void **state)
     (void)state;
     setup_links(NULL, NULL);
     /* nothing sent yet: nothing to send again */
-    assert_int_equal(ls_isotp_resend(&fx.a, 0), LS_ISOTP_EARG);
-    assert_int_equal(ls_isotp_resend(NULL, 0), LS_ISOTP_EARG);
+    assert_int_equal(ls_isotp_resend(&fx.a, 0), LS_EINVAL);
+    assert_int_equal(ls_isotp_resend(NULL, 0), LS_EINVAL);
     start_ff(20);
-    assert_int_equal(ls_isotp_resend(&fx.a, 10), LS_ISOTP_EBUSY); /* under way */
-    poll_at(&fx.a, &fx.ca, 1000000);                              /* N_Bs: failed */
+    assert_int_equal(ls_isotp_resend(&fx.a, 10), LS_EBUSY); /* under way */
+    poll_at(&fx.a, &fx.ca, 1000000);                        /* N_Bs: failed */
     assert_false(ls_isotp_tx_busy(&fx.a));
     /* the same bytes from the first frame again, with a fresh N_Bs */
-    assert_int_equal(ls_isotp_resend(&fx.a, 1000000), LS_ISOTP_OK);
+    assert_int_equal(ls_isotp_resend(&fx.a, 1000000), LS_OK);
     assert_int_equal(fx.ca.n, 2);
     assert_memory_equal(fx.ca.f[1].d, fx.ca.f[0].d, 8);
     assert_int_equal(fx.a.tx_state, LS_ISOTP_TX_WAIT_FC);
@@ -495,9 +495,9 @@ static void test_wft_max_overrun(void **state)
     ls_isotp_config_t c = cfg_of(8, 0, true);
     c.wft_max = 2;
     memset(&fx, 0, sizeof(fx));
-    assert_int_equal(ls_isotp_init(&fx.a, &c, ID_A, ID_B, cap_send, &fx.ca), LS_ISOTP_OK);
+    assert_int_equal(ls_isotp_init(&fx.a, &c, ID_A, ID_B, cap_send, &fx.ca), LS_OK);
     fill_pattern(fx.payload, 30, 1);
-    assert_int_equal(ls_isotp_send(&fx.a, fx.payload, 30, 0), LS_ISOTP_OK);
+    assert_int_equal(ls_isotp_send(&fx.a, fx.payload, 30, 0), LS_OK);
     const uint8_t wait[3] = { 0x31, 0, 0 };
     feed(&fx.a, &fx.ca, wait, 3, 10);
     feed(&fx.a, &fx.ca, wait, 3, 20);
@@ -516,9 +516,9 @@ static void test_wft_counter_resets_on_cts(void **state)
     ls_isotp_config_t c = cfg_of(8, 0, true);
     c.wft_max = 1;
     memset(&fx, 0, sizeof(fx));
-    assert_int_equal(ls_isotp_init(&fx.a, &c, ID_A, ID_B, cap_send, &fx.ca), LS_ISOTP_OK);
+    assert_int_equal(ls_isotp_init(&fx.a, &c, ID_A, ID_B, cap_send, &fx.ca), LS_OK);
     fill_pattern(fx.payload, 30, 1);
-    assert_int_equal(ls_isotp_send(&fx.a, fx.payload, 30, 0), LS_ISOTP_OK);
+    assert_int_equal(ls_isotp_send(&fx.a, fx.payload, 30, 0), LS_OK);
     const uint8_t wait[3] = { 0x31, 0, 0 };
     const uint8_t cts1[3] = { 0x30, 1, 0 };
     feed(&fx.a, &fx.ca, wait, 3, 10);
@@ -797,7 +797,7 @@ static void test_ovflw_end_to_end(void **state)
     const uint8_t sf[2] = { 0x01, 0x77 };
     feed(&fx.b, &fx.cb, sf, 2, 0); /* b now holds an untaken message */
     fill_pattern(fx.payload, 50, 5);
-    assert_int_equal(ls_isotp_send(&fx.a, fx.payload, 50, 0), LS_ISOTP_OK);
+    assert_int_equal(ls_isotp_send(&fx.a, fx.payload, 50, 0), LS_OK);
     feed(&fx.b, &fx.cb, fx.ca.f[0].d, fx.ca.f[0].len, 1);
     assert_int_equal(fx.cb.n, 1);
     frame_t want = fc_frame(ID_B, 2, 8, 0, true);
@@ -910,7 +910,7 @@ static void test_queue_full_retry(void **state)
     setup_links(NULL, NULL);
     fill_pattern(fx.payload, 20, 3);
     fx.ca.refuse = 1;
-    assert_int_equal(ls_isotp_send(&fx.a, fx.payload, 20, 0), LS_ISOTP_OK);
+    assert_int_equal(ls_isotp_send(&fx.a, fx.payload, 20, 0), LS_OK);
     assert_int_equal(fx.ca.n, 0);
     assert_true(ls_isotp_tx_busy(&fx.a));
     assert_int_equal(ls_isotp_next_deadline_us(&fx.a), 0);
@@ -942,10 +942,10 @@ static void test_queue_full_sf_retry(void **state)
     setup_links(NULL, NULL);
     const uint8_t p[3] = { 9, 8, 7 };
     fx.ca.refuse = 2;
-    assert_int_equal(ls_isotp_send(&fx.a, p, 3, 0), LS_ISOTP_OK);
+    assert_int_equal(ls_isotp_send(&fx.a, p, 3, 0), LS_OK);
     poll_at(&fx.a, &fx.ca, 1);
     assert_int_equal(fx.ca.n, 0);
-    assert_int_equal(ls_isotp_send(&fx.a, p, 3, 1), LS_ISOTP_EBUSY);
+    assert_int_equal(ls_isotp_send(&fx.a, p, 3, 1), LS_EBUSY);
     poll_at(&fx.a, &fx.ca, 2);
     assert_int_equal(fx.ca.n, 1);
     const uint8_t b[4] = { 0x03, 9, 8, 7 };
@@ -997,7 +997,7 @@ static void test_loopback_random_lengths(void **state)
         for (size_t i = 0; i < len; i++) {
             fx.payload[i] = (uint8_t)rng();
         }
-        assert_int_equal(ls_isotp_send(&fx.a, fx.payload, len, 0), LS_ISOTP_OK);
+        assert_int_equal(ls_isotp_send(&fx.a, fx.payload, len, 0), LS_OK);
         (void)run_wire(50, 60000000);
         assert_int_equal(fx.ca.n, iso_data_frames(len));
         assert_int_equal(ls_isotp_take_rx(&fx.b, fx.out, sizeof(fx.out)), len);
@@ -1016,8 +1016,8 @@ static void test_full_duplex(void **state)
     static uint8_t p2[500];
     fill_pattern(fx.payload, 700, 11);
     fill_pattern(p2, 500, 12);
-    assert_int_equal(ls_isotp_send(&fx.a, fx.payload, 700, 0), LS_ISOTP_OK);
-    assert_int_equal(ls_isotp_send(&fx.b, p2, 500, 0), LS_ISOTP_OK);
+    assert_int_equal(ls_isotp_send(&fx.a, fx.payload, 700, 0), LS_OK);
+    assert_int_equal(ls_isotp_send(&fx.b, p2, 500, 0), LS_OK);
     size_t da = 0, db = 0;
     bool got_a = false, got_b = false;
     for (uint64_t t = 0; t < 5000000 && !(got_a && got_b); t += 100) {
@@ -1062,22 +1062,22 @@ static void test_api_arguments(void **state)
     assert_int_equal(c.wft_max, 10);
     ls_isotp_default_config(NULL);
 
-    assert_int_equal(ls_isotp_init(NULL, NULL, 1, 2, cap_send, NULL), LS_ISOTP_EARG);
-    assert_int_equal(ls_isotp_init(&fx.a, NULL, 1, 2, NULL, NULL), LS_ISOTP_EARG);
+    assert_int_equal(ls_isotp_init(NULL, NULL, 1, 2, cap_send, NULL), LS_EINVAL);
+    assert_int_equal(ls_isotp_init(&fx.a, NULL, 1, 2, NULL, NULL), LS_EINVAL);
     c.st_min = 0x80;
-    assert_int_equal(ls_isotp_init(&fx.a, &c, 1, 2, cap_send, &fx.ca), LS_ISOTP_EARG);
+    assert_int_equal(ls_isotp_init(&fx.a, &c, 1, 2, cap_send, &fx.ca), LS_EINVAL);
     c.st_min = 0xF9;
-    assert_int_equal(ls_isotp_init(&fx.a, &c, 1, 2, cap_send, &fx.ca), LS_ISOTP_OK);
+    assert_int_equal(ls_isotp_init(&fx.a, &c, 1, 2, cap_send, &fx.ca), LS_OK);
     c.n_cr_timeout_us = 0;
-    assert_int_equal(ls_isotp_init(&fx.a, &c, 1, 2, cap_send, &fx.ca), LS_ISOTP_EARG);
+    assert_int_equal(ls_isotp_init(&fx.a, &c, 1, 2, cap_send, &fx.ca), LS_EINVAL);
 
-    assert_int_equal(ls_isotp_init(&fx.a, NULL, ID_A, ID_B, cap_send, &fx.ca), LS_ISOTP_OK);
-    assert_int_equal(ls_isotp_send(&fx.a, fx.payload, 0, 0), LS_ISOTP_ELEN);
-    assert_int_equal(ls_isotp_send(&fx.a, fx.payload, 4096, 0), LS_ISOTP_ELEN);
-    assert_int_equal(ls_isotp_send(&fx.a, NULL, 5, 0), LS_ISOTP_EARG);
-    assert_int_equal(ls_isotp_send(NULL, fx.payload, 5, 0), LS_ISOTP_EARG);
-    assert_int_equal(ls_isotp_send(&fx.a, fx.payload, 4095, 0), LS_ISOTP_OK);
-    assert_int_equal(ls_isotp_send(&fx.a, fx.payload, 5, 0), LS_ISOTP_EBUSY);
+    assert_int_equal(ls_isotp_init(&fx.a, NULL, ID_A, ID_B, cap_send, &fx.ca), LS_OK);
+    assert_int_equal(ls_isotp_send(&fx.a, fx.payload, 0, 0), LS_ELEN);
+    assert_int_equal(ls_isotp_send(&fx.a, fx.payload, 4096, 0), LS_ELEN);
+    assert_int_equal(ls_isotp_send(&fx.a, NULL, 5, 0), LS_EINVAL);
+    assert_int_equal(ls_isotp_send(NULL, fx.payload, 5, 0), LS_EINVAL);
+    assert_int_equal(ls_isotp_send(&fx.a, fx.payload, 4095, 0), LS_OK);
+    assert_int_equal(ls_isotp_send(&fx.a, fx.payload, 5, 0), LS_EBUSY);
     assert_int_equal(fx.ca.n, 1);
     assert_int_equal(fx.ca.f[0].d[0], 0x1F);
     assert_int_equal(fx.ca.f[0].d[1], 0xFF);

@@ -15,7 +15,7 @@ static void assert_missing_chip(const char *chip)
     hal_dio_t dio;
     memset(&dio, 0x5A, sizeof dio);
     char msg[512] = "";
-    assert_int_equal(hal_linux_gpiod_open(&dio, &cfg, msg, sizeof msg), HAL_ENODEV);
+    assert_int_equal(hal_linux_gpiod_open(&dio, &cfg, msg, sizeof msg), LS_ENODEV);
     char want[128];
     snprintf(want, sizeof want, "no GPIO chip '%s'", chip);
     assert_non_null(strstr(msg, want));
@@ -24,11 +24,11 @@ static void assert_missing_chip(const char *chip)
     assert_null(dio.ops);
     assert_null(dio.self);
     uint32_t bits;
-    assert_int_equal(hal_dio_read(&dio, 0, &bits), HAL_EUNSUPPORTED);
+    assert_int_equal(hal_dio_read(&dio, 0, &bits), LS_EUNSUPPORTED);
     hal_dio_close(&dio);
 
     char pmsg[512] = "";
-    assert_int_equal(hal_linux_gpiod_probe(chip, pmsg, sizeof pmsg), HAL_ENODEV);
+    assert_int_equal(hal_linux_gpiod_probe(chip, pmsg, sizeof pmsg), LS_ENODEV);
     assert_string_equal(pmsg, msg);
 }
 
@@ -50,7 +50,7 @@ static void test_path_that_is_not_a_gpio_chip(void **state)
     hal_linux_gpiod_config_t cfg = { .chip = "/dev/null", .n_inputs = 0, .n_outputs = 1, .output_offsets = { 0 } };
     hal_dio_t dio;
     char msg[512] = "";
-    assert_int_equal(hal_linux_gpiod_open(&dio, &cfg, msg, sizeof msg), HAL_ENODEV);
+    assert_int_equal(hal_linux_gpiod_open(&dio, &cfg, msg, sizeof msg), LS_ENODEV);
     assert_non_null(strstr(msg, "'/dev/null' is not a GPIO character device"));
     assert_non_null(strstr(msg, "CONFIG_GPIOLIB"));
     assert_null(dio.ops);
@@ -62,22 +62,22 @@ static void test_bad_configurations_are_refused_first(void **state)
     hal_dio_t dio;
     char msg[256];
     hal_linux_gpiod_config_t cfg = { .chip = "gpiochip99", .n_inputs = 17 };
-    assert_int_equal(hal_linux_gpiod_open(&dio, &cfg, msg, sizeof msg), HAL_EINVAL);
+    assert_int_equal(hal_linux_gpiod_open(&dio, &cfg, msg, sizeof msg), LS_EINVAL);
     assert_non_null(strstr(msg, "17 inputs"));
     assert_non_null(strstr(msg, "at most 16"));
 
     cfg = (hal_linux_gpiod_config_t){ .chip = "gpiochip99", .n_outputs = 17 };
-    assert_int_equal(hal_linux_gpiod_open(&dio, &cfg, msg, sizeof msg), HAL_EINVAL);
+    assert_int_equal(hal_linux_gpiod_open(&dio, &cfg, msg, sizeof msg), LS_EINVAL);
 
     cfg = (hal_linux_gpiod_config_t){
         .chip = "gpiochip99", .n_inputs = 2, .input_offsets = { 3, 4 }, .n_outputs = 2, .output_offsets = { 5, 4 }
     };
-    assert_int_equal(hal_linux_gpiod_open(&dio, &cfg, msg, sizeof msg), HAL_EINVAL);
+    assert_int_equal(hal_linux_gpiod_open(&dio, &cfg, msg, sizeof msg), LS_EINVAL);
     assert_string_equal(msg, "GPIO line 4 is configured twice");
     assert_null(dio.ops);
 
-    assert_int_equal(hal_linux_gpiod_open(NULL, &cfg, msg, sizeof msg), HAL_EINVAL);
-    assert_int_equal(hal_linux_gpiod_open(&dio, NULL, msg, sizeof msg), HAL_EINVAL);
+    assert_int_equal(hal_linux_gpiod_open(NULL, &cfg, msg, sizeof msg), LS_EINVAL);
+    assert_int_equal(hal_linux_gpiod_open(&dio, NULL, msg, sizeof msg), LS_EINVAL);
     assert_non_null(strstr(msg, "must not be NULL"));
 }
 

@@ -144,7 +144,7 @@ static void test_runs_paced_cycles(void **state)
     bool fifo = fifo_permitted();
     hal_rt_config_t cfg = { .rate_hz = 1000, .priority = 40, .cpu = -1, .lock_memory = false, .lockstep = false };
     char msg[256];
-    assert_int_equal(hal_linux_rt_start(&rt, &cfg, record, &g_rec, msg, sizeof msg), HAL_OK);
+    assert_int_equal(hal_linux_rt_start(&rt, &cfg, record, &g_rec, msg, sizeof msg), LS_OK);
     assert_non_null(strstr(msg, "1000 Hz"));
     wait_cycles(&rt, 200);
     uint64_t stop_us = stop_and_time_us(&rt);
@@ -191,7 +191,7 @@ static void test_runs_paced_cycles(void **state)
     /* Idempotent stop, and a restart on the same storage works. */
     hal_linux_rt_stop(&rt);
     rec_reset();
-    assert_int_equal(hal_linux_rt_start(&rt, &cfg, record, &g_rec, msg, sizeof msg), HAL_OK);
+    assert_int_equal(hal_linux_rt_start(&rt, &cfg, record, &g_rec, msg, sizeof msg), LS_OK);
     wait_cycles(&rt, 5);
     hal_linux_rt_stop(&rt);
     assert_true(g_rec.n >= 5);
@@ -206,7 +206,7 @@ static void test_lockstep_time_is_exact(void **state)
     hal_rt_config_t cfg = { .rate_hz = 1000, .priority = 0, .cpu = -1, .lock_memory = false, .lockstep = true };
     char msg[256];
     uint64_t before = hal_linux_monotonic_us();
-    assert_int_equal(hal_linux_rt_start(&rt, &cfg, record, &g_rec, msg, sizeof msg), HAL_OK);
+    assert_int_equal(hal_linux_rt_start(&rt, &cfg, record, &g_rec, msg, sizeof msg), LS_OK);
     uint64_t after = hal_linux_monotonic_us();
     assert_non_null(strstr(msg, "lockstep"));
     wait_cycles(&rt, 100);
@@ -231,7 +231,7 @@ static void test_one_slow_cycle_is_one_overrun_without_burst(void **state)
     g_rec.slow_us = 3000;
     hal_rt_config_t cfg = { .rate_hz = 1000, .priority = 40, .cpu = -1, .lock_memory = false, .lockstep = false };
     char msg[256];
-    assert_int_equal(hal_linux_rt_start(&rt, &cfg, record, &g_rec, msg, sizeof msg), HAL_OK);
+    assert_int_equal(hal_linux_rt_start(&rt, &cfg, record, &g_rec, msg, sizeof msg), LS_OK);
     wait_cycles(&rt, 150);
     hal_linux_rt_stop(&rt);
     hal_rt_stats_t st;
@@ -277,7 +277,7 @@ static void test_stats_report_cycle_time_and_memory_lock(void **state)
     }
     hal_rt_config_t cfg = { .rate_hz = 500, .priority = 30, .cpu = cpu, .lock_memory = true, .lockstep = false };
     char msg[256];
-    assert_int_equal(hal_linux_rt_start(&rt, &cfg, record, &g_rec, msg, sizeof msg), HAL_OK);
+    assert_int_equal(hal_linux_rt_start(&rt, &cfg, record, &g_rec, msg, sizeof msg), LS_OK);
     wait_cycles(&rt, 50);
     hal_linux_rt_stop(&rt);
     (void)munlockall();
@@ -297,28 +297,28 @@ static void test_bad_configurations(void **state)
     static hal_linux_rt_t rt;
     char msg[256];
     hal_rt_config_t cfg = { .rate_hz = 0, .priority = 0, .cpu = -1 };
-    assert_int_equal(hal_linux_rt_start(&rt, &cfg, record, &g_rec, msg, sizeof msg), HAL_EINVAL);
+    assert_int_equal(hal_linux_rt_start(&rt, &cfg, record, &g_rec, msg, sizeof msg), LS_EINVAL);
     assert_string_equal(msg, "control rate 0 Hz is outside 1..100000 Hz");
     cfg.rate_hz = 100001;
-    assert_int_equal(hal_linux_rt_start(&rt, &cfg, record, &g_rec, msg, sizeof msg), HAL_EINVAL);
+    assert_int_equal(hal_linux_rt_start(&rt, &cfg, record, &g_rec, msg, sizeof msg), LS_EINVAL);
     cfg.rate_hz = 1000;
     cfg.priority = 100;
-    assert_int_equal(hal_linux_rt_start(&rt, &cfg, record, &g_rec, msg, sizeof msg), HAL_EINVAL);
+    assert_int_equal(hal_linux_rt_start(&rt, &cfg, record, &g_rec, msg, sizeof msg), LS_EINVAL);
     assert_non_null(strstr(msg, "priority 100 is outside 0..99"));
     cfg.priority = -1;
-    assert_int_equal(hal_linux_rt_start(&rt, &cfg, record, &g_rec, msg, sizeof msg), HAL_EINVAL);
+    assert_int_equal(hal_linux_rt_start(&rt, &cfg, record, &g_rec, msg, sizeof msg), LS_EINVAL);
     cfg.priority = 0;
     cfg.cpu = 4000;
-    assert_int_equal(hal_linux_rt_start(&rt, &cfg, record, &g_rec, msg, sizeof msg), HAL_EINVAL);
+    assert_int_equal(hal_linux_rt_start(&rt, &cfg, record, &g_rec, msg, sizeof msg), LS_EINVAL);
     assert_non_null(strstr(msg, "CPU 4000 is not available"));
     cfg.cpu = -1;
-    assert_int_equal(hal_linux_rt_start(&rt, &cfg, NULL, &g_rec, msg, sizeof msg), HAL_EINVAL);
-    assert_int_equal(hal_linux_rt_start(NULL, &cfg, record, &g_rec, msg, sizeof msg), HAL_EINVAL);
+    assert_int_equal(hal_linux_rt_start(&rt, &cfg, NULL, &g_rec, msg, sizeof msg), LS_EINVAL);
+    assert_int_equal(hal_linux_rt_start(NULL, &cfg, record, &g_rec, msg, sizeof msg), LS_EINVAL);
 
     /* Starting twice is refused and leaves the running thread alone. */
     rec_reset();
-    assert_int_equal(hal_linux_rt_start(&rt, &cfg, record, &g_rec, msg, sizeof msg), HAL_OK);
-    assert_int_equal(hal_linux_rt_start(&rt, &cfg, record, &g_rec, msg, sizeof msg), HAL_EINVAL);
+    assert_int_equal(hal_linux_rt_start(&rt, &cfg, record, &g_rec, msg, sizeof msg), LS_OK);
+    assert_int_equal(hal_linux_rt_start(&rt, &cfg, record, &g_rec, msg, sizeof msg), LS_EINVAL);
     assert_non_null(strstr(msg, "already running"));
     wait_cycles(&rt, 3);
     hal_linux_rt_stop(&rt);
@@ -388,7 +388,7 @@ int rt_child_without_privilege(void)
     hal_rt_config_t cfg = { .rate_hz = 1000, .priority = 50, .cpu = -1, .lock_memory = true, .lockstep = false };
     for (int round = 0; round < 2; round++) {
         rec_reset();
-        if (hal_linux_rt_start(&rt, &cfg, record, &g_rec, NULL, 0) != HAL_OK) {
+        if (hal_linux_rt_start(&rt, &cfg, record, &g_rec, NULL, 0) != LS_OK) {
             return 12;
         }
         uint64_t until = hal_linux_monotonic_us() + 5000000u;

@@ -44,17 +44,17 @@ static void test_open_diagnoses_missing_afcan_or_interface(void **state)
     bool afcan = have_af_can(&err);
     int rc = hal_linux_socketcan_open(&link, "lsnoiface9", msg, sizeof msg);
     if (afcan) {
-        assert_int_equal(rc, HAL_ENODEV);
+        assert_int_equal(rc, LS_ENODEV);
         assert_non_null(strstr(msg, "no CAN interface 'lsnoiface9'"));
         assert_non_null(strstr(msg, "ip link set lsnoiface9 up type can bitrate 500000"));
         assert_non_null(strstr(msg, "ip link add dev vcan0 type vcan"));
         /* A non-CAN interface is refused by name, not bound. */
         rc = hal_linux_socketcan_open(&link, "lo", msg, sizeof msg);
-        assert_int_equal(rc, HAL_ENODEV);
+        assert_int_equal(rc, LS_ENODEV);
         assert_non_null(strstr(msg, "'lo' is not a CAN interface"));
     } else {
         assert_int_equal(err, EAFNOSUPPORT);
-        assert_int_equal(rc, HAL_ENOAFCAN);
+        assert_int_equal(rc, LS_ENOAFCAN);
         assert_non_null(strstr(msg, "no AF_CAN (SocketCAN) support"));
         assert_non_null(strstr(msg, "modprobe can can-raw"));
         assert_non_null(strstr(msg, "CONFIG_CAN"));
@@ -64,13 +64,13 @@ static void test_open_diagnoses_missing_afcan_or_interface(void **state)
     assert_null(link.ops);
     assert_null(link.self);
     hal_can_frame_t f;
-    assert_int_equal(hal_can_recv(&link, &f), HAL_EUNSUPPORTED);
+    assert_int_equal(hal_can_recv(&link, &f), LS_EUNSUPPORTED);
     assert_int_equal(hal_can_poll_fd(&link), -1);
     hal_can_close(&link);
 
     char pmsg[512] = "";
     int prc = hal_linux_socketcan_probe("lsnoiface9", pmsg, sizeof pmsg);
-    assert_int_equal(prc, afcan ? HAL_ENODEV : HAL_ENOAFCAN);
+    assert_int_equal(prc, afcan ? LS_ENODEV : LS_ENOAFCAN);
     (void)hal_linux_socketcan_open(&link, "lsnoiface9", msg, sizeof msg);
     assert_string_equal(pmsg, msg);
 }
@@ -80,18 +80,18 @@ static void test_open_rejects_bad_arguments(void **state)
     (void)state;
     hal_can_link_t link;
     char msg[256];
-    assert_int_equal(hal_linux_socketcan_open(NULL, "can0", msg, sizeof msg), HAL_EINVAL);
+    assert_int_equal(hal_linux_socketcan_open(NULL, "can0", msg, sizeof msg), LS_EINVAL);
     assert_non_null(strstr(msg, "out is NULL"));
-    assert_int_equal(hal_linux_socketcan_open(&link, NULL, msg, sizeof msg), HAL_EINVAL);
+    assert_int_equal(hal_linux_socketcan_open(&link, NULL, msg, sizeof msg), LS_EINVAL);
     assert_non_null(strstr(msg, "no CAN interface name"));
-    assert_int_equal(hal_linux_socketcan_open(&link, "", msg, sizeof msg), HAL_EINVAL);
-    assert_int_equal(hal_linux_socketcan_open(&link, "abcdefghijklmnop", msg, sizeof msg), HAL_EINVAL);
+    assert_int_equal(hal_linux_socketcan_open(&link, "", msg, sizeof msg), LS_EINVAL);
+    assert_int_equal(hal_linux_socketcan_open(&link, "abcdefghijklmnop", msg, sizeof msg), LS_EINVAL);
     assert_non_null(strstr(msg, "longer than 15 characters"));
     assert_null(link.ops);
     /* msg is optional and truncation is safe. */
-    assert_int_equal(hal_linux_socketcan_open(&link, "", NULL, 0), HAL_EINVAL);
+    assert_int_equal(hal_linux_socketcan_open(&link, "", NULL, 0), LS_EINVAL);
     char tiny[8];
-    assert_int_equal(hal_linux_socketcan_open(&link, "", tiny, sizeof tiny), HAL_EINVAL);
+    assert_int_equal(hal_linux_socketcan_open(&link, "", tiny, sizeof tiny), LS_EINVAL);
     assert_int_equal(strlen(tiny), 7);
 }
 
@@ -100,30 +100,30 @@ static void test_encode_frames(void **state)
     (void)state;
     struct can_frame cf;
     hal_can_frame_t f = { .id = 0x123, .flags = 0, .len = 3, .data = { 1, 2, 3, 4, 5, 6, 7, 8 } };
-    assert_int_equal(hal_linux_socketcan_encode(&f, &cf), HAL_OK);
+    assert_int_equal(hal_linux_socketcan_encode(&f, &cf), LS_OK);
     assert_int_equal(cf.can_id, 0x123);
     assert_int_equal(cf.can_dlc, 3);
     assert_memory_equal(cf.data, ((uint8_t[]){ 1, 2, 3, 0, 0, 0, 0, 0 }), 8);
 
     f = (hal_can_frame_t){ .id = 0x1ABCDEF0, .flags = HAL_CAN_F_EXT, .len = 8, .data = { 8, 7, 6, 5, 4, 3, 2, 1 } };
-    assert_int_equal(hal_linux_socketcan_encode(&f, &cf), HAL_OK);
+    assert_int_equal(hal_linux_socketcan_encode(&f, &cf), LS_OK);
     assert_int_equal(cf.can_id, 0x1ABCDEF0u | CAN_EFF_FLAG);
     assert_memory_equal(cf.data, f.data, 8);
 
     f = (hal_can_frame_t){ .id = 0x7FF, .flags = HAL_CAN_F_RTR, .len = 4, .data = { 9, 9, 9, 9 } };
-    assert_int_equal(hal_linux_socketcan_encode(&f, &cf), HAL_OK);
+    assert_int_equal(hal_linux_socketcan_encode(&f, &cf), LS_OK);
     assert_int_equal(cf.can_id, 0x7FFu | CAN_RTR_FLAG);
     assert_int_equal(cf.can_dlc, 4);
     assert_memory_equal(cf.data, ((uint8_t[8]){ 0 }), 8);
 
     f = (hal_can_frame_t){ .id = 0x800, .flags = 0, .len = 0 };
-    assert_int_equal(hal_linux_socketcan_encode(&f, &cf), HAL_EINVAL);
+    assert_int_equal(hal_linux_socketcan_encode(&f, &cf), LS_EINVAL);
     f = (hal_can_frame_t){ .id = 0x20000000, .flags = HAL_CAN_F_EXT, .len = 0 };
-    assert_int_equal(hal_linux_socketcan_encode(&f, &cf), HAL_EINVAL);
+    assert_int_equal(hal_linux_socketcan_encode(&f, &cf), LS_EINVAL);
     f = (hal_can_frame_t){ .id = 1, .flags = 0, .len = 9 };
-    assert_int_equal(hal_linux_socketcan_encode(&f, &cf), HAL_EINVAL);
+    assert_int_equal(hal_linux_socketcan_encode(&f, &cf), LS_EINVAL);
     f = (hal_can_frame_t){ .id = 1, .flags = 0x04, .len = 0 };
-    assert_int_equal(hal_linux_socketcan_encode(&f, &cf), HAL_EINVAL);
+    assert_int_equal(hal_linux_socketcan_encode(&f, &cf), LS_EINVAL);
 }
 
 static struct can_frame err_frame(canid_t cls, uint8_t d1)
@@ -186,7 +186,7 @@ static void test_decode_frames_and_error_states(void **state)
     memset(&cf, 0, sizeof cf);
     cf.can_id = 1;
     cf.can_dlc = 9;
-    assert_int_equal(hal_linux_socketcan_decode(&cf, &f, &st), HAL_EINVAL);
+    assert_int_equal(hal_linux_socketcan_decode(&cf, &f, &st), LS_EINVAL);
     assert_int_equal(st.rx_dropped, 1);
 }
 
@@ -202,7 +202,7 @@ static void open_pair(pair_t *p, int type)
     int sv[2];
     assert_int_equal(socketpair(AF_UNIX, type, 0, sv), 0);
     char msg[128];
-    assert_int_equal(hal_linux_socketcan_adopt_fd(&p->link, sv[0], "test0", msg, sizeof msg), HAL_OK);
+    assert_int_equal(hal_linux_socketcan_adopt_fd(&p->link, sv[0], "test0", msg, sizeof msg), LS_OK);
     assert_string_equal(p->link.name, "socketcan:test0");
     p->peer = sv[1];
 }
@@ -221,7 +221,7 @@ static void test_link_recv_send_and_error_frames(void **state)
     hal_can_status_t st;
 
     assert_true(hal_can_poll_fd(&p.link) >= 0);
-    assert_int_equal(hal_can_recv(&p.link, &f), HAL_EAGAIN);
+    assert_int_equal(hal_can_recv(&p.link, &f), LS_EAGAIN);
 
     struct can_frame cf;
     memset(&cf, 0, sizeof cf);
@@ -242,36 +242,36 @@ static void test_link_recv_send_and_error_frames(void **state)
     peer_write(p.peer, &cf);
     assert_int_equal(hal_can_recv(&p.link, &f), 1);
     assert_int_equal(f.id, 0x322);
-    assert_int_equal(hal_can_status(&p.link, &st), HAL_OK);
+    assert_int_equal(hal_can_status(&p.link, &st), LS_OK);
     assert_int_equal(st.state, HAL_CAN_STATE_BUS_OFF);
     assert_int_equal(st.error_frames, 1);
     /* Nothing pending while bus-off: the link says so instead of "try again". */
-    assert_int_equal(hal_can_recv(&p.link, &f), HAL_EBUSOFF);
+    assert_int_equal(hal_can_recv(&p.link, &f), LS_EBUSOFF);
 
     struct can_frame restarted = err_frame(CAN_ERR_RESTARTED, 0);
     peer_write(p.peer, &restarted);
-    assert_int_equal(hal_can_recv(&p.link, &f), HAL_EAGAIN);
-    assert_int_equal(hal_can_status(&p.link, &st), HAL_OK);
+    assert_int_equal(hal_can_recv(&p.link, &f), LS_EAGAIN);
+    assert_int_equal(hal_can_status(&p.link, &st), LS_OK);
     assert_int_equal(st.state, HAL_CAN_STATE_ACTIVE);
     assert_int_equal(st.error_frames, 2);
     assert_int_equal(st.rx_frames, 2);
 
     /* A record that is not a struct can_frame is dropped and counted. */
     assert_int_equal(write(p.peer, "abcde", 5), 5);
-    assert_int_equal(hal_can_recv(&p.link, &f), HAL_EAGAIN);
-    assert_int_equal(hal_can_status(&p.link, &st), HAL_OK);
+    assert_int_equal(hal_can_recv(&p.link, &f), LS_EAGAIN);
+    assert_int_equal(hal_can_status(&p.link, &st), LS_OK);
     assert_int_equal(st.rx_dropped, 1);
 
     hal_can_frame_t out = { .id = 0x18DA00F1, .flags = HAL_CAN_F_EXT, .len = 3, .data = { 0x02, 0x10, 0x01 } };
-    assert_int_equal(hal_can_send(&p.link, &out), HAL_OK);
+    assert_int_equal(hal_can_send(&p.link, &out), LS_OK);
     struct can_frame got;
     assert_int_equal(read(p.peer, &got, sizeof got), (ssize_t)sizeof got);
     assert_int_equal(got.can_id, 0x18DA00F1u | CAN_EFF_FLAG);
     assert_int_equal(got.can_dlc, 3);
     assert_memory_equal(got.data, ((uint8_t[]){ 0x02, 0x10, 0x01 }), 3);
     out.len = 9;
-    assert_int_equal(hal_can_send(&p.link, &out), HAL_EINVAL);
-    assert_int_equal(hal_can_status(&p.link, &st), HAL_OK);
+    assert_int_equal(hal_can_send(&p.link, &out), LS_EINVAL);
+    assert_int_equal(hal_can_status(&p.link, &st), LS_OK);
     assert_int_equal(st.tx_frames, 1);
     assert_int_equal(st.tx_dropped, 0);
     assert_int_equal(st.bitrate, 0);
@@ -288,28 +288,28 @@ static void test_link_send_full_queue_is_eagain(void **state)
     open_pair(&p, SOCK_DGRAM);
     hal_can_frame_t f = { .id = 0x100, .flags = 0, .len = 8, .data = { 0 } };
     int sent = 0;
-    int rc = HAL_OK;
-    while (sent < 100000 && (rc = hal_can_send(&p.link, &f)) == HAL_OK) {
+    int rc = LS_OK;
+    while (sent < 100000 && (rc = hal_can_send(&p.link, &f)) == LS_OK) {
         sent++;
     }
-    assert_int_equal(rc, HAL_EAGAIN);
+    assert_int_equal(rc, LS_EAGAIN);
     assert_true(sent > 0);
     hal_can_status_t st;
-    assert_int_equal(hal_can_status(&p.link, &st), HAL_OK);
+    assert_int_equal(hal_can_status(&p.link, &st), LS_OK);
     assert_int_equal(st.tx_frames, (uint32_t)sent);
     assert_int_equal(st.tx_dropped, 0);
 
     /* Once the peer reads, the retried frame goes out. */
     struct can_frame got;
     assert_int_equal(read(p.peer, &got, sizeof got), (ssize_t)sizeof got);
-    assert_int_equal(hal_can_send(&p.link, &f), HAL_OK);
+    assert_int_equal(hal_can_send(&p.link, &f), LS_OK);
 
     /* During bus-off a full queue reports bus-off. */
     struct can_frame busoff = err_frame(CAN_ERR_BUSOFF, 0);
     peer_write(p.peer, &busoff);
     hal_can_frame_t r;
-    assert_int_equal(hal_can_recv(&p.link, &r), HAL_EBUSOFF);
-    assert_int_equal(hal_can_send(&p.link, &f), HAL_EBUSOFF);
+    assert_int_equal(hal_can_recv(&p.link, &r), LS_EBUSOFF);
+    assert_int_equal(hal_can_send(&p.link, &f), LS_EBUSOFF);
     hal_can_close(&p.link);
     close(p.peer);
 }
@@ -321,10 +321,10 @@ static void test_link_peer_gone_is_eio(void **state)
     open_pair(&p, SOCK_SEQPACKET);
     close(p.peer);
     hal_can_frame_t f = { .id = 1, .flags = 0, .len = 0 };
-    assert_int_equal(hal_can_recv(&p.link, &f), HAL_EIO);
-    assert_int_equal(hal_can_send(&p.link, &f), HAL_EIO);
+    assert_int_equal(hal_can_recv(&p.link, &f), LS_EIO);
+    assert_int_equal(hal_can_send(&p.link, &f), LS_EIO);
     hal_can_status_t st;
-    assert_int_equal(hal_can_status(&p.link, &st), HAL_OK);
+    assert_int_equal(hal_can_status(&p.link, &st), LS_OK);
     assert_int_equal(st.tx_dropped, 1);
     hal_can_close(&p.link);
 }
@@ -340,7 +340,7 @@ static void test_pool_is_bounded_and_reused(void **state)
     assert_int_equal(socketpair(AF_UNIX, SOCK_DGRAM, 0, sv), 0);
     hal_can_link_t extra;
     char msg[256];
-    assert_int_equal(hal_linux_socketcan_adopt_fd(&extra, sv[0], "test9", msg, sizeof msg), HAL_EINVAL);
+    assert_int_equal(hal_linux_socketcan_adopt_fd(&extra, sv[0], "test9", msg, sizeof msg), LS_EINVAL);
     assert_non_null(strstr(msg, "all 4 SocketCAN links are in use"));
     assert_null(extra.ops);
     /* The link took ownership of the fd even on failure. */
@@ -349,9 +349,9 @@ static void test_pool_is_bounded_and_reused(void **state)
 
     hal_can_close(&p[1].link);
     assert_int_equal(socketpair(AF_UNIX, SOCK_DGRAM, 0, sv), 0);
-    assert_int_equal(hal_linux_socketcan_adopt_fd(&extra, sv[0], "test9", msg, sizeof msg), HAL_OK);
+    assert_int_equal(hal_linux_socketcan_adopt_fd(&extra, sv[0], "test9", msg, sizeof msg), LS_OK);
     hal_can_frame_t f;
-    assert_int_equal(hal_can_recv(&extra, &f), HAL_EAGAIN);
+    assert_int_equal(hal_can_recv(&extra, &f), LS_EAGAIN);
     hal_can_close(&extra);
     close(sv[1]);
     for (int i = 0; i < HAL_LINUX_SOCKETCAN_MAX_LINKS; i++) {
@@ -469,7 +469,7 @@ static void test_parse_link_reads_bitrate_and_state(void **state)
     memcpy(m.b + li_at, &huge, sizeof huge);
     memset(&info, 0, sizeof info);
     assert_int_equal(hal_linux_socketcan_parse_link(m.b, m.len, &info), 0);
-    assert_int_equal(hal_linux_socketcan_parse_link(NULL, 0, &info), HAL_EINVAL);
+    assert_int_equal(hal_linux_socketcan_parse_link(NULL, 0, &info), LS_EINVAL);
 }
 
 /* The kernel's own answer for the loopback interface: parsed, not CAN. */

@@ -129,10 +129,10 @@ static void test_joint_refusal_names_joint_and_limit(void **state)
     memcpy(q1, mt_q_home, sizeof q1);
     q1[2] = 2.9;
     char why[128];
-    assert_int_equal(ls_motion_plan_joint(&g_plan, M, mt_q_home, q1, 0.5, 0.5, why, sizeof why), LS_MOTION_ERANGE);
+    assert_int_equal(ls_motion_plan_joint(&g_plan, M, mt_q_home, q1, 0.5, 0.5, why, sizeof why), LS_ERANGE);
     assert_string_equal(why, "joint 3: 2.9 rad beyond its limit 2.618 rad");
-    assert_int_equal(ls_motion_plan_joint(&g_plan, M, mt_q_home, mt_q_home, 0.0, 0.5, why, sizeof why), LS_MOTION_EARG);
-    assert_int_equal(ls_motion_plan_joint(&g_plan, M, mt_q_home, mt_q_home, 0.5, 1.5, why, sizeof why), LS_MOTION_EARG);
+    assert_int_equal(ls_motion_plan_joint(&g_plan, M, mt_q_home, mt_q_home, 0.0, 0.5, why, sizeof why), LS_EINVAL);
+    assert_int_equal(ls_motion_plan_joint(&g_plan, M, mt_q_home, mt_q_home, 0.5, 1.5, why, sizeof why), LS_EINVAL);
 }
 
 static void test_start_refuses_wrong_start_and_double_start(void **state)
@@ -405,7 +405,7 @@ static void test_arc_collinear_refused(void **state)
     ls_motion_cart_limits_t lim;
     mt_limits(&lim);
     char why[160];
-    assert_int_equal(ls_motion_plan_arc(&g_plan, M, mt_q_home, tool, Pv, P1, &lim, why, sizeof why), LS_MOTION_EGEOM);
+    assert_int_equal(ls_motion_plan_arc(&g_plan, M, mt_q_home, tool, Pv, P1, &lim, why, sizeof why), LS_EGEOM);
     assert_non_null(strstr(why, "collinear"));
 }
 
@@ -420,14 +420,14 @@ static void test_cartesian_refusals_name_axis_and_reason(void **state)
     /* Below the floor of the workspace box (z >= 0.02 m). */
     tip_of(mt_q_home, P1);
     P1[14] = -0.05;
-    assert_int_equal(ls_motion_plan_line(&g_plan, M, mt_q_home, tool, P1, &lim, why, sizeof why), LS_MOTION_ERANGE);
+    assert_int_equal(ls_motion_plan_line(&g_plan, M, mt_q_home, tool, P1, &lim, why, sizeof why), LS_ERANGE);
     assert_non_null(strstr(why, "axis z: "));
     assert_non_null(strstr(why, "beyond the workspace limit 0.02 m"));
     /* Inside the box but out of reach. */
     tip_of(mt_q_home, P1);
     P1[12] = 0.9;
     P1[13] = 0.9;
-    assert_int_equal(ls_motion_plan_line(&g_plan, M, mt_q_home, tool, P1, &lim, why, sizeof why), LS_MOTION_ERANGE);
+    assert_int_equal(ls_motion_plan_line(&g_plan, M, mt_q_home, tool, P1, &lim, why, sizeof why), LS_ERANGE);
     assert_non_null(strstr(why, "unreachable"));
     /* Through the joint 1 axis: joint 1 would have to turn half a circle at once. */
     double q0[LS_N_JOINTS] = { 0.0, -0.2, 1.4, 0.0, 0.6, 0.0 };
@@ -437,7 +437,7 @@ static void test_cartesian_refusals_name_axis_and_reason(void **state)
     P1[12] = -P0[12];
     P1[13] = 1e-4;
     int st = ls_motion_plan_line(&g_plan, M, q0, tool, P1, &lim, why, sizeof why);
-    assert_int_equal(st, LS_MOTION_ERANGE);
+    assert_int_equal(st, LS_ERANGE);
     assert_non_null(strstr(why, ": velocity "));
     assert_non_null(strstr(why, " rad/s beyond its limit "));
     assert_true(strncmp(why, "joint ", 6) == 0);
@@ -603,8 +603,8 @@ static void test_slew_joints_arrive_on_their_own(void **state)
     q1[2] -= 0.1;
     ls_motion_seg_t slew, sync;
     char why[128];
-    assert_int_equal(ls_motion_seg_slew(&slew, M, mt_q_home, q1, 1.0, 1.0, why, sizeof why), LS_MOTION_OK);
-    assert_int_equal(ls_motion_seg_joint(&sync, M, mt_q_home, q1, 1.0, 1.0, why, sizeof why), LS_MOTION_OK);
+    assert_int_equal(ls_motion_seg_slew(&slew, M, mt_q_home, q1, 1.0, 1.0, why, sizeof why), LS_OK);
+    assert_int_equal(ls_motion_seg_joint(&sync, M, mt_q_home, q1, 1.0, 1.0, why, sizeof why), LS_OK);
     assert_double_equal(slew.traj.duration_s, sync.traj.duration_s, 1e-9); /* the slowest joint sets both */
     assert_true(slew.traj.axis[2].T < 0.5 * slew.traj.duration_s);         /* joint 3 arrives early */
     assert_double_equal(sync.traj.axis[2].T, sync.traj.duration_s, 1e-9);
@@ -617,7 +617,7 @@ static void test_slew_joints_arrive_on_their_own(void **state)
         assert_double_equal(q[j], q1[j], 0.0);
     }
     q1[2] = 9.0; /* beyond joint 3's limit: refused as a joint move is */
-    assert_int_equal(ls_motion_seg_slew(&slew, M, mt_q_home, q1, 1.0, 1.0, why, sizeof why), LS_MOTION_ERANGE);
+    assert_int_equal(ls_motion_seg_slew(&slew, M, mt_q_home, q1, 1.0, 1.0, why, sizeof why), LS_ERANGE);
     assert_non_null(strstr(why, "joint 3"));
 }
 
@@ -628,7 +628,7 @@ static void test_arc_split_midpoints_on_the_circle(void **state)
     (void)state;
     const double p0[3] = { 0.5, 0.0, 0.4 }, pv[3] = { 0.6, 0.1, 0.4 }, p1[3] = { 0.5, 0.2, 0.4 };
     double ma[3], mb[3];
-    assert_int_equal(ls_motion_arc_split(p0, pv, p1, ma, mb), LS_MOTION_OK);
+    assert_int_equal(ls_motion_arc_split(p0, pv, p1, ma, mb), LS_OK);
     const double c[3] = { 0.5, 0.1, 0.4 }; /* radius 0.1 */
     assert_double_equal(hypot(ma[0] - c[0], ma[1] - c[1]), 0.1, 1e-12);
     assert_double_equal(hypot(mb[0] - c[0], mb[1] - c[1]), 0.1, 1e-12);
@@ -639,7 +639,7 @@ static void test_arc_split_midpoints_on_the_circle(void **state)
     assert_double_equal(mb[0], 0.5 + 0.1 * sqrt(0.5), 1e-12);
     assert_double_equal(mb[1], 0.1 + 0.1 * sqrt(0.5), 1e-12);
     const double line[3] = { 0.5, 0.1, 0.4 };
-    assert_int_equal(ls_motion_arc_split(p0, line, p1, ma, mb), LS_MOTION_EGEOM);
+    assert_int_equal(ls_motion_arc_split(p0, line, p1, ma, mb), LS_EGEOM);
 }
 
 int main(void)

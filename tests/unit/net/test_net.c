@@ -42,7 +42,7 @@ typedef struct {
     size_t rx_head, rx_count;
     hal_can_frame_t tx[LINK_Q];
     size_t n_tx;
-    int refuse_send; /* send returns HAL_EAGAIN */
+    int refuse_send; /* send returns LS_EAGAIN */
     int closed;
     int held;       /* the last hal_can_hold_open */
     int hold_calls; /* how often it changed */
@@ -52,17 +52,17 @@ static int link_send(void *self, const hal_can_frame_t *frame)
 {
     fake_link_t *l = self;
     if (l->refuse_send || l->n_tx >= LINK_Q) {
-        return HAL_EAGAIN;
+        return LS_EAGAIN;
     }
     l->tx[l->n_tx++] = *frame;
-    return HAL_OK;
+    return LS_OK;
 }
 
 static int link_recv(void *self, hal_can_frame_t *frame)
 {
     fake_link_t *l = self;
     if (l->rx_count == 0) {
-        return HAL_EAGAIN;
+        return LS_EAGAIN;
     }
     *frame = l->rx[l->rx_head];
     l->rx_head = (l->rx_head + 1u) % LINK_Q;
@@ -75,7 +75,7 @@ static int link_status(void *self, hal_can_status_t *out)
     (void)self;
     memset(out, 0, sizeof *out);
     out->rx_dropped = 2;
-    return HAL_OK;
+    return LS_OK;
 }
 
 static void link_close(void *self)
@@ -88,7 +88,7 @@ static int link_hold_open(void *self, bool hold)
     fake_link_t *l = self;
     l->held = hold ? 1 : 0;
     l->hold_calls++;
-    return HAL_OK;
+    return LS_OK;
 }
 
 static const hal_can_ops_t LINK_OPS = {
@@ -219,7 +219,7 @@ static void sup_init(sup_t *s, uint8_t addr, fake_link_t *via)
     s->via = via;
     uint32_t tx = LS_ID_ISOTP_PHYS | (NODE << 8) | addr;
     uint32_t rx = LS_ID_ISOTP_PHYS | ((uint32_t)addr << 8) | NODE;
-    assert_int_equal(ls_isotp_init(&s->tp, NULL, tx, rx, sup_send, s), LS_ISOTP_OK);
+    assert_int_equal(ls_isotp_init(&s->tp, NULL, tx, rx, sup_send, s), LS_OK);
 }
 
 /* Feed the supervisor every frame the node sent to it on `link` since index *seen. */
@@ -386,8 +386,8 @@ static void test_interleaved_multi_frame_requests_stay_apart(void **state)
         mb[i] = (uint8_t)(0xFF - i);
     }
     uint64_t t = 10000;
-    assert_int_equal(ls_isotp_send(&a.tp, ma, sizeof ma, t), LS_ISOTP_OK);
-    assert_int_equal(ls_isotp_send(&b.tp, mb, sizeof mb, t), LS_ISOTP_OK);
+    assert_int_equal(ls_isotp_send(&a.tp, ma, sizeof ma, t), LS_OK);
+    assert_int_equal(ls_isotp_send(&b.tp, mb, sizeof mb, t), LS_OK);
     size_t seen_a = 0, seen_b = 0;
     for (int turn = 0; turn < 200 && g_ncalls < 2; turn++) {
         t += 100;
@@ -418,7 +418,7 @@ static void test_answer_is_sent_to_the_sender(void **state)
     sup_init(&a, SUP_A, &g_link[0]);
     g_echo_len = 100; /* multi-frame answer */
     const uint8_t req[] = { 0x40 };
-    assert_int_equal(ls_isotp_send(&a.tp, req, sizeof req, 0), LS_ISOTP_OK);
+    assert_int_equal(ls_isotp_send(&a.tp, req, sizeof req, 0), LS_OK);
     size_t seen = 0;
     uint8_t got[LS_ISOTP_MAX_PAYLOAD];
     size_t n = 0;
@@ -683,7 +683,7 @@ static void test_floods_neither_evict_a_session_nor_keep_a_new_supervisor_out(vo
     g_echo_len = 20; /* every uplink is answered, as the core does (NOT_CONNECTED to the flood) */
     uint64_t t = 1000;
     const uint8_t hello[] = { 0x01 };
-    assert_int_equal(ls_isotp_send(&owner.tp, hello, sizeof hello, t), LS_ISOTP_OK);
+    assert_int_equal(ls_isotp_send(&owner.tp, hello, sizeof hello, t), LS_OK);
     ls_net_poll(&g_net, t);
     g_session[SUP_A] = true; /* its connect made a session */
     size_t seen_owner = 0, seen_new = 0;
@@ -706,10 +706,10 @@ static void test_floods_neither_evict_a_session_nor_keep_a_new_supervisor_out(vo
         }
         /* the owner asks every 50 ms; the newcomer connects after 0.5 s */
         if (turn % 50 == 0 && !ls_isotp_tx_busy(&owner.tp)) {
-            assert_int_equal(ls_isotp_send(&owner.tp, hello, sizeof hello, t), LS_ISOTP_OK);
+            assert_int_equal(ls_isotp_send(&owner.tp, hello, sizeof hello, t), LS_OK);
         }
         if (turn == 500) {
-            assert_int_equal(ls_isotp_send(&newcomer.tp, connect_req, sizeof connect_req, t), LS_ISOTP_OK);
+            assert_int_equal(ls_isotp_send(&newcomer.tp, connect_req, sizeof connect_req, t), LS_OK);
             sent_connect = true;
         }
         size_t before = g_ncalls;

@@ -21,7 +21,7 @@ static const ls_robot_model_t *M = &ls_robot_model_default;
 static void drive_to(hal_arm_t *arm, const double q1[LS_N_JOINTS])
 {
     double q0[LS_N_JOINTS], qd[LS_N_JOINTS], q[LS_N_JOINTS], zero[LS_N_JOINTS] = { 0 };
-    assert_int_equal(hal_arm_read(arm, q0, qd), HAL_OK);
+    assert_int_equal(hal_arm_read(arm, q0, qd), LS_OK);
     const int steps = 1500; /* 1.5 s ramp at 1 kHz, then 0.5 s to settle */
     for (int k = 1; k <= steps + 500; k++) {
         double s = k >= steps ? 1.0 : (double)k / steps;
@@ -29,7 +29,7 @@ static void drive_to(hal_arm_t *arm, const double q1[LS_N_JOINTS])
         for (int j = 0; j < LS_N_JOINTS; j++) {
             q[j] = q0[j] + s * (q1[j] - q0[j]);
         }
-        assert_int_equal(hal_arm_command(arm, q, zero), HAL_OK);
+        assert_int_equal(hal_arm_command(arm, q, zero), LS_OK);
         assert_true(hal_sim_world_step(NULL, 0.001) >= 0);
     }
 }
@@ -41,10 +41,10 @@ static void test_fk_of_sim_joints_equals_sim_flange(void **state)
     hal_sim_arm_model_t am;
     ls_robot_model_to_sim(M, &am);
     hal_sim_world_config_t cfg = { .arm = &am, .dio_socket_path = NULL, .lockstep = false, .with_obstacle = false };
-    assert_int_equal(hal_sim_world_open(&cfg, msg, sizeof msg), HAL_OK);
+    assert_int_equal(hal_sim_world_open(&cfg, msg, sizeof msg), LS_OK);
     hal_arm_t arm;
     hal_sim_world_get_arm(&arm);
-    assert_int_equal(hal_arm_enable(&arm, true), HAL_OK);
+    assert_int_equal(hal_arm_enable(&arm, true), LS_OK);
     srand(7);
     double worst_m = 0.0, worst_rad = 0.0;
     for (int n = 0; n < 40; n++) {
@@ -57,9 +57,9 @@ static void test_fk_of_sim_joints_equals_sim_flange(void **state)
         target[1] = fmin(target[1], 0.3);
         drive_to(&arm, target);
         double q[LS_N_JOINTS], qd[LS_N_JOINTS], T_sim[16], T_kin[16];
-        assert_int_equal(hal_arm_read(&arm, q, qd), HAL_OK);
-        assert_int_equal(hal_sim_world_flange_pose(T_sim), HAL_OK);
-        assert_int_equal(ls_kin_fk(M, q, T_kin), LS_KIN_OK);
+        assert_int_equal(hal_arm_read(&arm, q, qd), LS_OK);
+        assert_int_equal(hal_sim_world_flange_pose(T_sim), LS_OK);
+        assert_int_equal(ls_kin_fk(M, q, T_kin), LS_OK);
         double d = ls_pose_dist(T_sim, T_kin), a = ls_pose_angle(T_sim, T_kin);
         worst_m = fmax(worst_m, d);
         worst_rad = fmax(worst_rad, a);

@@ -249,7 +249,7 @@ static void open_world(bool lockstep, bool obstacle, const char *sock)
     };
     char msg[200] = "";
     int rc = hal_sim_world_open(&cfg, msg, sizeof msg);
-    if (rc != HAL_OK) {
+    if (rc != LS_OK) {
         fail_msg("open failed (%d): %s", rc, msg);
     }
     hal_sim_world_get_arm(&arm);
@@ -258,7 +258,7 @@ static void open_world(bool lockstep, bool obstacle, const char *sock)
 
 static int cycle(const double q[NJ], const double qd[NJ])
 {
-    assert_int_equal(hal_arm_command(&arm, q, qd), HAL_OK);
+    assert_int_equal(hal_arm_command(&arm, q, qd), LS_OK);
     int rc = hal_sim_world_step(NULL, DT);
     assert_true(rc >= 0);
     return rc;
@@ -296,7 +296,7 @@ static void move_to(const double q[NJ], double speed)
 
 static void read_q(double q[NJ])
 {
-    assert_int_equal(hal_arm_read(&arm, q, NULL), HAL_OK);
+    assert_int_equal(hal_arm_read(&arm, q, NULL), LS_OK);
 }
 
 static const hal_sensor_t *sensor(const char *name)
@@ -316,14 +316,14 @@ static double laser(void)
 {
     double v = -1.0;
     const hal_sensor_t *s = sensor("laser_standoff_sensor");
-    assert_int_equal(s->read(s->self, &v), HAL_OK);
+    assert_int_equal(s->read(s->self, &v), LS_OK);
     return v;
 }
 
 static void force(double w[6])
 {
     const hal_sensor_t *s = sensor("force_sensor");
-    assert_int_equal(s->read(s->self, w), HAL_OK);
+    assert_int_equal(s->read(s->self, w), LS_OK);
 }
 
 static uint64_t rng_state = 0x9E3779B97F4A7C15u;
@@ -348,9 +348,9 @@ static void test_open_rejects_bad_config(void **state)
 {
     (void)state;
     char msg[200] = "";
-    assert_int_equal(hal_sim_world_open(NULL, msg, sizeof msg), HAL_EINVAL);
+    assert_int_equal(hal_sim_world_open(NULL, msg, sizeof msg), LS_EINVAL);
     hal_sim_world_config_t cfg = { .arm = NULL };
-    assert_int_equal(hal_sim_world_open(&cfg, msg, sizeof msg), HAL_EINVAL);
+    assert_int_equal(hal_sim_world_open(&cfg, msg, sizeof msg), LS_EINVAL);
     assert_non_null(strstr(msg, "arm model"));
     /* The description is checked: a joint count the world cannot build, a
      * link 6 off z6, a joint without torque. */
@@ -358,41 +358,41 @@ static void test_open_rejects_bad_config(void **state)
     ls_robot_model_to_sim(M, &am);
     cfg.arm = &am;
     am.n_joints = 5;
-    assert_int_equal(hal_sim_world_open(&cfg, msg, sizeof msg), HAL_EINVAL);
+    assert_int_equal(hal_sim_world_open(&cfg, msg, sizeof msg), LS_EINVAL);
     assert_non_null(strstr(msg, "6-joint"));
     ls_robot_model_to_sim(M, &am);
     am.dh[5].a_m = 0.1;
-    assert_int_equal(hal_sim_world_open(&cfg, msg, sizeof msg), HAL_EINVAL);
+    assert_int_equal(hal_sim_world_open(&cfg, msg, sizeof msg), LS_EINVAL);
     assert_non_null(strstr(msg, "link 6 along z6"));
     ls_robot_model_to_sim(M, &am);
     am.torque_max_Nm[2] = 0.0;
-    assert_int_equal(hal_sim_world_open(&cfg, msg, sizeof msg), HAL_EINVAL);
+    assert_int_equal(hal_sim_world_open(&cfg, msg, sizeof msg), LS_EINVAL);
     assert_non_null(strstr(msg, "torque_max > 0"));
     ls_robot_model_to_sim(M, &am);
     char longpath[200];
     memset(longpath, 'a', sizeof longpath - 1);
     longpath[sizeof longpath - 1] = '\0';
     cfg.dio_socket_path = longpath;
-    assert_int_equal(hal_sim_world_open(&cfg, msg, sizeof msg), HAL_EINVAL);
+    assert_int_equal(hal_sim_world_open(&cfg, msg, sizeof msg), LS_EINVAL);
     assert_non_null(strstr(msg, "longer than"));
     /* a closed world answers, never crashes */
     hal_sim_world_get_arm(&arm);
     double q[NJ];
-    assert_int_equal(hal_arm_read(&arm, q, NULL), HAL_ENODEV);
+    assert_int_equal(hal_arm_read(&arm, q, NULL), LS_ENODEV);
     double T[16];
-    assert_int_equal(hal_sim_world_flange_pose(T), HAL_ENODEV);
+    assert_int_equal(hal_sim_world_flange_pose(T), LS_ENODEV);
     open_world(false, false, NULL);
-    assert_int_equal(hal_sim_world_open(&cfg, msg, sizeof msg), HAL_EINVAL);
+    assert_int_equal(hal_sim_world_open(&cfg, msg, sizeof msg), LS_EINVAL);
     assert_non_null(strstr(msg, "already open"));
     hal_arm_info_t info;
-    assert_int_equal(hal_arm_info(&arm, &info), HAL_OK);
+    assert_int_equal(hal_arm_info(&arm, &info), LS_OK);
     assert_int_equal(info.n_joints, 6);
     assert_true(info.q_max_rad[5] == M->q_max_rad[5] && info.torque_max_Nm[1] == M->torque_max_Nm[1]);
-    assert_int_equal(hal_sim_world_step(NULL, 0.0), HAL_EINVAL);
-    assert_int_equal(hal_sim_world_step(NULL, NAN), HAL_EINVAL);
+    assert_int_equal(hal_sim_world_step(NULL, 0.0), LS_EINVAL);
+    assert_int_equal(hal_sim_world_step(NULL, NAN), LS_EINVAL);
     double bad[NJ] = { 0, NAN, 0, 0, 0, 0 };
-    assert_int_equal(hal_arm_command(&arm, bad, NULL), HAL_EINVAL);
-    assert_int_equal(hal_arm_command(&arm, NULL, NULL), HAL_EINVAL);
+    assert_int_equal(hal_arm_command(&arm, bad, NULL), LS_EINVAL);
+    assert_int_equal(hal_arm_command(&arm, NULL, NULL), LS_EINVAL);
     /* no socket: no fd, nothing to drain */
     hal_dio_t dio;
     hal_sim_world_get_dio(&dio);
@@ -404,7 +404,7 @@ static void test_geometry_matches_dh(void **state)
 {
     (void)state;
     open_world(false, true, NULL);
-    assert_int_equal(hal_arm_enable(&arm, true), HAL_OK);
+    assert_int_equal(hal_arm_enable(&arm, true), LS_OK);
     double T_ode[16], T_fk[16], q[NJ];
     /* q = 0: the built pose */
     read_q(q);
@@ -420,7 +420,7 @@ static void test_geometry_matches_dh(void **state)
         move_to(target, 1.0);
         hold(50);
         read_q(q);
-        assert_int_equal(hal_sim_world_flange_pose(T_ode), HAL_OK);
+        assert_int_equal(hal_sim_world_flange_pose(T_ode), LS_OK);
         fk(q, T_fk);
         double dp, da;
         pose_diff(T_ode, T_fk, &dp, &da);
@@ -437,7 +437,7 @@ static void test_geometry_matches_dh(void **state)
 static void run_sequence(int idle_cycles, double out[][NJ], int n_out)
 {
     double zero[NJ] = { 0 };
-    assert_int_equal(hal_arm_enable(&arm, true), HAL_OK);
+    assert_int_equal(hal_arm_enable(&arm, true), LS_OK);
     for (int k = 0; k < idle_cycles; k++) {
         cycle(zero, zero);
     }
@@ -494,7 +494,7 @@ static void test_tracking(void **state)
 {
     (void)state;
     open_world(false, false, NULL);
-    assert_int_equal(hal_arm_enable(&arm, true), HAL_OK);
+    assert_int_equal(hal_arm_enable(&arm, true), LS_OK);
     const double amp[NJ] = { 0.5, 0.4, -0.5, 0.6, 0.5, 0.8 };
     const double w = LS_PI; /* 0.5 Hz */
     double worst = 0.0;
@@ -516,7 +516,7 @@ static void test_contact_force_and_laser(void **state)
 {
     (void)state;
     open_world(false, false, NULL);
-    assert_int_equal(hal_arm_enable(&arm, true), HAL_OK);
+    assert_int_equal(hal_arm_enable(&arm, true), LS_OK);
     double q[NJ], w[6], T[16];
     double pose[6] = { 0.55, 0.0, 0.30, LS_PI, 0.0, 0.0 };
     assert_true(ik(pose, q));
@@ -547,7 +547,7 @@ static void test_contact_force_and_laser(void **state)
         cycle(qn, qd);
         memcpy(q, qn, sizeof q);
         if (++samples % 50 == 0) {
-            assert_int_equal(hal_sim_world_flange_pose(T), HAL_OK);
+            assert_int_equal(hal_sim_world_flange_pose(T), LS_OK);
             double l = laser();
             if (T[14] > 0.1005) {
                 assert_true(l < prev);
@@ -561,7 +561,7 @@ static void test_contact_force_and_laser(void **state)
     memcpy(cmd_q, q, sizeof cmd_q);
     hold(500);
     force(w);
-    assert_int_equal(hal_sim_world_flange_pose(T), HAL_OK);
+    assert_int_equal(hal_sim_world_flange_pose(T), LS_OK);
     double pen = 0.10 - T[14];
     print_message("contact: penetration %.3g m, F = %.3g %.3g %.3g N, T = %.3g %.3g %.3g Nm\n", pen, w[0], w[1], w[2],
                   w[3], w[4], w[5]);
@@ -592,37 +592,37 @@ static void test_tool_rack(void **state)
 {
     (void)state;
     open_world(false, false, NULL);
-    assert_int_equal(hal_arm_enable(&arm, true), HAL_OK);
+    assert_int_equal(hal_arm_enable(&arm, true), LS_OK);
     hal_tool_t tool;
     hal_sim_world_get_tool(&tool);
     double rack_g[6], rack_p[6], off[6];
-    assert_int_equal(tool.ops->rack_pose(tool.self, "gripper", rack_g), HAL_OK);
-    assert_int_equal(tool.ops->rack_pose(tool.self, "probe", rack_p), HAL_OK);
-    assert_int_equal(tool.ops->rack_pose(tool.self, "hammer", rack_p), HAL_EINVAL);
-    assert_int_equal(tool.ops->rack_pose(tool.self, "none", rack_p), HAL_EINVAL);
+    assert_int_equal(tool.ops->rack_pose(tool.self, "gripper", rack_g), LS_OK);
+    assert_int_equal(tool.ops->rack_pose(tool.self, "probe", rack_p), LS_OK);
+    assert_int_equal(tool.ops->rack_pose(tool.self, "hammer", rack_p), LS_EINVAL);
+    assert_int_equal(tool.ops->rack_pose(tool.self, "none", rack_p), LS_EINVAL);
     const double want_g[6] = { 0.30, 0.50, 0.35, LS_PI, 0.0, 0.0 };
     assert_memory_equal(rack_g, want_g, sizeof want_g);
-    assert_int_equal(tool.ops->tool_offset(tool.self, "gripper", off), HAL_OK);
+    assert_int_equal(tool.ops->tool_offset(tool.self, "gripper", off), LS_OK);
     const double want_off[6] = { 0, 0, 0.12, 0, 0, 0 };
     assert_memory_equal(off, want_off, sizeof off);
-    assert_int_equal(tool.ops->tool_offset(tool.self, "probe", off), HAL_OK);
+    assert_int_equal(tool.ops->tool_offset(tool.self, "probe", off), LS_OK);
     assert_true(off[2] == 0.15);
-    assert_int_equal(tool.ops->tool_offset(tool.self, "none", off), HAL_OK);
+    assert_int_equal(tool.ops->tool_offset(tool.self, "none", off), LS_OK);
     assert_true(off[2] == 0.0);
     assert_string_equal(hal_sim_world_current_tool(), "none");
-    assert_int_equal(tool.ops->set_bits(tool.self, 1, 0), HAL_EINVAL); /* no tool */
+    assert_int_equal(tool.ops->set_bits(tool.self, 1, 0), LS_EINVAL); /* no tool */
 
     /* not at the rack: refused */
-    assert_int_equal(tool.ops->couple(tool.self, "gripper", true), HAL_EINVAL);
+    assert_int_equal(tool.ops->couple(tool.self, "gripper", true), LS_EINVAL);
 
     go_to_pose(rack_g);
-    assert_true(fabs(laser() - 0.35) < 1e-3);                                    /* flange over the floor */
-    assert_int_equal(tool.ops->couple(tool.self, "probe", true), HAL_EINVAL);    /* wrong rack */
-    assert_int_equal(tool.ops->couple(tool.self, "gripper", false), HAL_EINVAL); /* not coupled */
-    assert_int_equal(tool.ops->couple(tool.self, "gripper", true), HAL_OK);
+    assert_true(fabs(laser() - 0.35) < 1e-3);                                   /* flange over the floor */
+    assert_int_equal(tool.ops->couple(tool.self, "probe", true), LS_EINVAL);    /* wrong rack */
+    assert_int_equal(tool.ops->couple(tool.self, "gripper", false), LS_EINVAL); /* not coupled */
+    assert_int_equal(tool.ops->couple(tool.self, "gripper", true), LS_OK);
     assert_string_equal(hal_sim_world_current_tool(), "gripper");
-    assert_true(fabs(laser() - 0.23) < 1e-3);                                   /* tip 0.12 below the flange */
-    assert_int_equal(tool.ops->couple(tool.self, "gripper", true), HAL_EINVAL); /* already */
+    assert_true(fabs(laser() - 0.23) < 1e-3);                                  /* tip 0.12 below the flange */
+    assert_int_equal(tool.ops->couple(tool.self, "gripper", true), LS_EINVAL); /* already */
     hold(300);
     double w[6];
     force(w);
@@ -641,11 +641,11 @@ static void test_tool_rack(void **state)
     assert_true(fabs(laser() - 0.5) < 1e-12); /* nothing ahead within range */
     go_to_pose(rack_g);
     uint32_t bits = 9;
-    assert_int_equal(tool.ops->set_bits(tool.self, 1, 0), HAL_OK);
-    assert_int_equal(tool.ops->get_bits(tool.self, &bits), HAL_OK);
+    assert_int_equal(tool.ops->set_bits(tool.self, 1, 0), LS_OK);
+    assert_int_equal(tool.ops->get_bits(tool.self, &bits), LS_OK);
     assert_int_equal(bits, 1);
-    assert_int_equal(tool.ops->set_bits(tool.self, 2, 0), HAL_EINVAL);
-    assert_int_equal(tool.ops->get_bits(tool.self, &bits), HAL_OK);
+    assert_int_equal(tool.ops->set_bits(tool.self, 2, 0), LS_EINVAL);
+    assert_int_equal(tool.ops->get_bits(tool.self, &bits), LS_OK);
     assert_int_equal(bits, 1);
 
     /* 5 cm above the rack: cannot put it back there */
@@ -653,22 +653,22 @@ static void test_tool_rack(void **state)
     memcpy(above, rack_g, sizeof above);
     above[2] += 0.05;
     go_to_pose(above);
-    assert_int_equal(tool.ops->couple(tool.self, "gripper", false), HAL_EINVAL);
+    assert_int_equal(tool.ops->couple(tool.self, "gripper", false), LS_EINVAL);
     assert_string_equal(hal_sim_world_current_tool(), "gripper");
     go_to_pose(rack_g);
-    assert_int_equal(tool.ops->couple(tool.self, "gripper", false), HAL_OK);
+    assert_int_equal(tool.ops->couple(tool.self, "gripper", false), LS_OK);
     assert_string_equal(hal_sim_world_current_tool(), "none");
-    assert_int_equal(tool.ops->get_bits(tool.self, &bits), HAL_OK);
+    assert_int_equal(tool.ops->get_bits(tool.self, &bits), LS_OK);
     assert_int_equal(bits, 0);
     assert_true(fabs(laser() - 0.35) < 1e-3);
 
     /* the probe's rack is reachable too */
     go_to_pose(rack_p);
-    assert_int_equal(tool.ops->couple(tool.self, "probe", true), HAL_OK);
+    assert_int_equal(tool.ops->couple(tool.self, "probe", true), LS_OK);
     assert_string_equal(hal_sim_world_current_tool(), "probe");
     assert_true(fabs(laser() - 0.20) < 1e-3);
-    assert_int_equal(tool.ops->set_bits(tool.self, 1, 0), HAL_EINVAL); /* no bits */
-    assert_int_equal(tool.ops->couple(tool.self, "probe", false), HAL_OK);
+    assert_int_equal(tool.ops->set_bits(tool.self, 1, 0), LS_EINVAL); /* no bits */
+    assert_int_equal(tool.ops->couple(tool.self, "probe", false), LS_OK);
 }
 
 static int send_text(int fd, const char *path, const void *text, size_t len)
@@ -699,10 +699,10 @@ static void test_dio_socket(void **state)
     assert_true(cli >= 0);
     assert_int_equal(hal_dio_unit_count(&dio), 1);
     hal_dio_unit_info_t info;
-    assert_int_equal(hal_dio_describe(&dio, 0, &info), HAL_OK);
+    assert_int_equal(hal_dio_describe(&dio, 0, &info), LS_OK);
     assert_int_equal(info.input_mask, 0xFFFFu);
     assert_int_equal(info.output_mask, 0xFFFF0000u);
-    assert_int_equal(hal_dio_describe(&dio, 1, &info), HAL_EINVAL);
+    assert_int_equal(hal_dio_describe(&dio, 1, &info), LS_EINVAL);
 
     int fd = hal_dio_poll_fd(&dio);
     assert_true(fd >= 0);
@@ -710,10 +710,10 @@ static void test_dio_socket(void **state)
     struct pollfd p = { .fd = fd, .events = POLLIN };
     assert_int_equal(poll(&p, 1, 1000), 1);
     uint32_t bits = 0xdead;
-    assert_int_equal(hal_dio_read(&dio, 0, &bits), HAL_OK);
+    assert_int_equal(hal_dio_read(&dio, 0, &bits), LS_OK);
     assert_int_equal(bits, 0); /* not applied before drain */
     assert_int_equal(hal_dio_drain_events(&dio), 1);
-    assert_int_equal(hal_dio_read(&dio, 0, &bits), HAL_OK);
+    assert_int_equal(hal_dio_read(&dio, 0, &bits), LS_OK);
     assert_int_equal(bits, 0x5);
     send_str(cli, path, "in 0x5 0\n"); /* no change */
     assert_int_equal(hal_dio_drain_events(&dio), 0);
@@ -741,46 +741,46 @@ static void test_dio_socket(void **state)
     assert_int_equal(send_text(cli, path, "in 1\0 0", 7), 7);
     assert_int_equal(hal_dio_drain_events(&dio), 0);
     assert_int_equal(hal_sim_world_malformed_messages(), (uint32_t)n_bad + 3);
-    assert_int_equal(hal_dio_read(&dio, 0, &bits), HAL_OK);
+    assert_int_equal(hal_dio_read(&dio, 0, &bits), LS_OK);
     assert_int_equal(bits, 0x5);
 
     send_str(cli, path, "in 0 1");
     send_str(cli, path, "in\t8000  0 ");
     assert_int_equal(hal_dio_drain_events(&dio), 2);
-    assert_int_equal(hal_dio_read(&dio, 0, &bits), HAL_OK);
+    assert_int_equal(hal_dio_read(&dio, 0, &bits), LS_OK);
     assert_int_equal(bits, 0x8004);
 
     /* outputs */
-    assert_int_equal(hal_dio_write(&dio, 0, 1u << 16, 0), HAL_OK);
-    assert_int_equal(hal_dio_write(&dio, 0, 1u << 3, 0), HAL_EINVAL);        /* input bit */
-    assert_int_equal(hal_dio_write(&dio, 0, 1u << 17, 1u << 2), HAL_EINVAL); /* input bit in off */
-    assert_int_equal(hal_dio_write(&dio, 1, 1u << 17, 0), HAL_EINVAL);       /* no unit 1 */
-    assert_int_equal(hal_dio_read(&dio, 0, &bits), HAL_OK);
+    assert_int_equal(hal_dio_write(&dio, 0, 1u << 16, 0), LS_OK);
+    assert_int_equal(hal_dio_write(&dio, 0, 1u << 3, 0), LS_EINVAL);        /* input bit */
+    assert_int_equal(hal_dio_write(&dio, 0, 1u << 17, 1u << 2), LS_EINVAL); /* input bit in off */
+    assert_int_equal(hal_dio_write(&dio, 1, 1u << 17, 0), LS_EINVAL);       /* no unit 1 */
+    assert_int_equal(hal_dio_read(&dio, 0, &bits), LS_OK);
     assert_int_equal(bits, 0x18004);
-    assert_int_equal(hal_dio_write(&dio, 0, 0, 1u << 16), HAL_OK);
-    assert_int_equal(hal_dio_read(&dio, 0, &bits), HAL_OK);
+    assert_int_equal(hal_dio_write(&dio, 0, 0, 1u << 16), LS_OK);
+    assert_int_equal(hal_dio_read(&dio, 0, &bits), LS_OK);
     assert_int_equal(bits, 0x8004);
     /* a bit in both on and off ends inactive, on the socket as in write() */
-    assert_int_equal(hal_dio_write(&dio, 0, 3u << 16, 1u << 16), HAL_OK);
+    assert_int_equal(hal_dio_write(&dio, 0, 3u << 16, 1u << 16), LS_OK);
     send_str(cli, path, "in 3 1");
     assert_int_equal(hal_dio_drain_events(&dio), 1);
-    assert_int_equal(hal_dio_read(&dio, 0, &bits), HAL_OK);
+    assert_int_equal(hal_dio_read(&dio, 0, &bits), LS_OK);
     assert_int_equal(bits, 0x28006);
-    assert_int_equal(hal_dio_write(&dio, 0, 0, 1u << 17), HAL_OK);
+    assert_int_equal(hal_dio_write(&dio, 0, 0, 1u << 17), LS_OK);
     send_str(cli, path, "in 0 2");
     assert_int_equal(hal_dio_drain_events(&dio), 1);
 
     /* manual device; a jog keeps a lockstep world running */
     double twist[6];
     uint32_t buttons = 7;
-    assert_int_equal(man.read(man.self, twist, &buttons), HAL_OK);
+    assert_int_equal(man.read(man.self, twist, &buttons), LS_OK);
     assert_int_equal(buttons, 0);
     double zero[NJ] = { 0 };
     assert_int_equal(cycle(zero, zero), 0);
     send_str(cli, path, "jog 0.5 -2 0 +0 -0.25 1e-1");
     send_str(cli, path, "buttons 0x3");
     assert_int_equal(hal_dio_drain_events(&dio), 2);
-    assert_int_equal(man.read(man.self, twist, &buttons), HAL_OK);
+    assert_int_equal(man.read(man.self, twist, &buttons), LS_OK);
     const double want[6] = { 0.5, -1.0, 0.0, 0.0, -0.25, 0.1 };
     for (int k = 0; k < 6; k++) {
         assert_true(fabs(twist[k] - want[k]) < 1e-15);
@@ -789,7 +789,7 @@ static void test_dio_socket(void **state)
     assert_int_equal(cycle(zero, zero), 1);
     send_str(cli, path, "jog-stop");
     assert_int_equal(hal_dio_drain_events(&dio), 1);
-    assert_int_equal(man.read(man.self, twist, &buttons), HAL_OK);
+    assert_int_equal(man.read(man.self, twist, &buttons), LS_OK);
     for (int k = 0; k < 6; k++) {
         assert_true(twist[k] == 0.0);
     }
@@ -799,14 +799,14 @@ static void test_dio_socket(void **state)
     hal_sim_world_close();
     assert_int_equal(access(path, F_OK), -1); /* unlinked */
     assert_int_equal(errno, ENOENT);
-    assert_int_equal(hal_dio_read(&dio, 0, &bits), HAL_ENODEV);
+    assert_int_equal(hal_dio_read(&dio, 0, &bits), LS_ENODEV);
 }
 
 static void test_joint_limits(void **state)
 {
     (void)state;
     open_world(false, false, NULL);
-    assert_int_equal(hal_arm_enable(&arm, true), HAL_OK);
+    assert_int_equal(hal_arm_enable(&arm, true), LS_OK);
     /* joints 1 and 5 have ODE stops, 4 and 6 (beyond +-180 deg) only the servo's */
     double beyond[NJ] = { M->q_max_rad[0] + 0.3, 0.0, 0.0, M->q_min_rad[3] - 0.3, M->q_max_rad[4] + 0.3,
                           M->q_max_rad[5] + 0.5 };
@@ -820,7 +820,7 @@ static void test_joint_limits(void **state)
     assert_true(fabs(q[5] - M->q_max_rad[5]) < 1e-3);
     /* and the geometry still agrees beyond +-180 deg */
     double T_ode[16], T_fk[16], dp, da;
-    assert_int_equal(hal_sim_world_flange_pose(T_ode), HAL_OK);
+    assert_int_equal(hal_sim_world_flange_pose(T_ode), LS_OK);
     fk(q, T_fk);
     pose_diff(T_ode, T_fk, &dp, &da);
     assert_true(dp < 1e-4 && da < 1e-4);
@@ -830,13 +830,13 @@ static void test_brakes_hold_when_disabled(void **state)
 {
     (void)state;
     open_world(false, false, NULL);
-    assert_int_equal(hal_arm_enable(&arm, true), HAL_OK);
+    assert_int_equal(hal_arm_enable(&arm, true), LS_OK);
     double target[NJ] = { 0.3, 0.6, 0.4, 0.2, 0.5, 0.1 };
     move_to(target, 0.5);
     hold(200);
     double before[NJ], after[NJ];
     read_q(before);
-    assert_int_equal(hal_arm_enable(&arm, false), HAL_OK);
+    assert_int_equal(hal_arm_enable(&arm, false), LS_OK);
     double elsewhere[NJ] = { -1, -1, -1, -1, -1, -1 };
     for (int k = 0; k < 1000; k++) {
         cycle(elsewhere, NULL); /* ignored while disabled */
@@ -850,7 +850,7 @@ static void test_brakes_hold_when_disabled(void **state)
 static void *loop_thread(void *arg)
 {
     double *fz = arg;
-    if (hal_sim_world_attach_thread() != HAL_OK) {
+    if (hal_sim_world_attach_thread() != LS_OK) {
         *fz = NAN;
         return NULL;
     }
@@ -868,9 +868,9 @@ static void *loop_thread(void *arg)
 static void test_control_loop_on_another_thread(void **state)
 {
     (void)state;
-    assert_int_equal(hal_sim_world_attach_thread(), HAL_ENODEV);
+    assert_int_equal(hal_sim_world_attach_thread(), LS_ENODEV);
     open_world(false, false, NULL);
-    assert_int_equal(hal_arm_enable(&arm, true), HAL_OK);
+    assert_int_equal(hal_arm_enable(&arm, true), LS_OK);
     double pose[6] = { 0.50, -0.10, 0.25, LS_PI, 0.0, 0.0 }, q[NJ];
     assert_true(ik(pose, q));
     move_to(q, 0.5);
@@ -920,7 +920,7 @@ static void test_cycles_do_not_allocate(void **state)
     hal_sim_world_get_dio(&dio);
     hal_sim_world_get_manual(&man);
     hal_sim_world_get_tool(&tool);
-    assert_int_equal(hal_arm_enable(&arm, true), HAL_OK);
+    assert_int_equal(hal_arm_enable(&arm, true), LS_OK);
     /* press onto the obstacle (top z 0.20): moves, contacts, sensors, I/O */
     double pose[6] = { 0.60, 0.20, 0.30, LS_PI, 0.0, 0.0 };
     double q[NJ], w[6], twist[6];
@@ -947,11 +947,11 @@ static void test_cycles_do_not_allocate(void **state)
         cycle(q, NULL);
         force(w);
         (void)laser();
-        assert_int_equal(hal_dio_read(&dio, 0, &bits), HAL_OK);
-        assert_int_equal(hal_dio_write(&dio, 0, (uint32_t)(k & 1) << 16, (uint32_t)(~k & 1) << 16), HAL_OK);
+        assert_int_equal(hal_dio_read(&dio, 0, &bits), LS_OK);
+        assert_int_equal(hal_dio_write(&dio, 0, (uint32_t)(k & 1) << 16, (uint32_t)(~k & 1) << 16), LS_OK);
         assert_true(hal_dio_drain_events(&dio) >= 0);
-        assert_int_equal(man.read(man.self, twist, &buttons), HAL_OK);
-        assert_int_equal(tool.ops->get_bits(tool.self, &bits), HAL_OK);
+        assert_int_equal(man.read(man.self, twist, &buttons), LS_OK);
+        assert_int_equal(tool.ops->get_bits(tool.self, &bits), LS_OK);
     }
     assert_int_equal(ode_allocs - before, 0);
     hal_sim_world_close();

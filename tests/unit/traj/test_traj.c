@@ -117,7 +117,7 @@ static void test_pure_jerk_profile(void **state)
     /* d=1, v=a=j=1: v_max would need 2 of distance to reach, a_max needs 2:
      * pure jerk phases, 2 v sqrt(v) = 1, Tj = (1/2)^(1/3), T = 4 Tj = 2^(5/3). */
     ls_traj_axis_t ax;
-    assert_int_equal(ls_traj_plan_axis(&ax, 0.0, 1.0, 1.0, 1.0, 1.0), LS_TRAJ_OK);
+    assert_int_equal(ls_traj_plan_axis(&ax, 0.0, 1.0, 1.0, 1.0, 1.0), LS_OK);
     assert_close(ax.T, pow(2.0, 5.0 / 3.0), 1e-14);
     assert_close(ax.t[0], cbrt(0.5), 1e-14);
     assert_true(ax.t[1] == 0.0 && ax.t[3] == 0.0);
@@ -138,14 +138,14 @@ static void test_cruise_without_const_accel(void **state)
     /* d=10, v=a=j=1: a_max is reached exactly at v_max (a^2/j = v): Tj=1,
      * Ta=0, acceleration half 2 s covering 2, cruise 8 s: T = 12. */
     ls_traj_axis_t ax;
-    assert_int_equal(ls_traj_plan_axis(&ax, 0.0, 10.0, 1.0, 1.0, 1.0), LS_TRAJ_OK);
+    assert_int_equal(ls_traj_plan_axis(&ax, 0.0, 10.0, 1.0, 1.0, 1.0), LS_OK);
     assert_close(ax.T, 12.0, 1e-15);
     assert_close(ax.t[0], 1.0, 1e-15);
     assert_close(ax.t[1], 0.0, 1e-15);
     assert_close(ax.t[3], 8.0, 1e-15);
     /* d=20, v=4, a=10, j=1: a_max unreachable (a^2/j=100 > 4): Tj = 2,
      * half covers 4*4/2... v Tacc = 16, cruise (20-16)/4 = 1: T = 9. */
-    assert_int_equal(ls_traj_plan_axis(&ax, 0.0, 20.0, 4.0, 10.0, 1.0), LS_TRAJ_OK);
+    assert_int_equal(ls_traj_plan_axis(&ax, 0.0, 20.0, 4.0, 10.0, 1.0), LS_OK);
     assert_close(ax.T, 9.0, 1e-15);
     assert_close(ax.t[0], 2.0, 1e-15);
     assert_true(ax.t[1] == 0.0);
@@ -158,7 +158,7 @@ static void test_full_profile(void **state)
     /* d=10, v=2, a=1, j=2: Tj = a/j = 0.5, Ta = v/a - Tj = 1.5, Tacc = 2.5
      * covers v Tacc = 5 (both halves), cruise 5/2 = 2.5: T = 7.5. */
     ls_traj_axis_t ax;
-    assert_int_equal(ls_traj_plan_axis(&ax, 1.0, 11.0, 2.0, 1.0, 2.0), LS_TRAJ_OK);
+    assert_int_equal(ls_traj_plan_axis(&ax, 1.0, 11.0, 2.0, 1.0, 2.0), LS_OK);
     assert_close(ax.T, 7.5, 1e-15);
     const double want[7] = { 0.5, 1.5, 0.5, 2.5, 0.5, 1.5, 0.5 };
     for (int k = 0; k < 7; ++k) {
@@ -184,7 +184,7 @@ static void test_no_cruise_with_const_accel(void **state)
     /* d=2, v=10, a=1, j=2: v^2/a + v a/j = d gives v = (sqrt(33)-1)/4 and
      * T = v/a + a/j + d/v = (1 + sqrt(33))/2. */
     ls_traj_axis_t ax;
-    assert_int_equal(ls_traj_plan_axis(&ax, 0.0, 2.0, 10.0, 1.0, 2.0), LS_TRAJ_OK);
+    assert_int_equal(ls_traj_plan_axis(&ax, 0.0, 2.0, 10.0, 1.0, 2.0), LS_OK);
     assert_close(ax.T, (1.0 + sqrt(33.0)) / 2.0, 1e-14);
     assert_close(ax.t[0], 0.5, 1e-15);
     assert_close(ax.t[1], (sqrt(33.0) - 1.0) / 4.0 - 0.5, 1e-14);
@@ -197,8 +197,8 @@ static void test_negative_distance_mirrors(void **state)
 {
     (void)state;
     ls_traj_axis_t up, down;
-    assert_int_equal(ls_traj_plan_axis(&up, 0.0, 10.0, 2.0, 1.0, 2.0), LS_TRAJ_OK);
-    assert_int_equal(ls_traj_plan_axis(&down, 3.0, -7.0, 2.0, 1.0, 2.0), LS_TRAJ_OK);
+    assert_int_equal(ls_traj_plan_axis(&up, 0.0, 10.0, 2.0, 1.0, 2.0), LS_OK);
+    assert_int_equal(ls_traj_plan_axis(&down, 3.0, -7.0, 2.0, 1.0, 2.0), LS_OK);
     assert_true(down.T == up.T);
     assert_true(down.j == -2.0);
     assert_close(down.dist, -10.0, 0.0);
@@ -217,7 +217,7 @@ static void test_zero_distance(void **state)
 {
     (void)state;
     ls_traj_axis_t ax;
-    assert_int_equal(ls_traj_plan_axis(&ax, 0.25, 0.25, 1.0, 1.0, 1.0), LS_TRAJ_OK);
+    assert_int_equal(ls_traj_plan_axis(&ax, 0.25, 0.25, 1.0, 1.0, 1.0), LS_OK);
     assert_true(ax.T == 0.0);
     assert_true(ax.j == 0.0);
     double p = -1.0, v = -1.0, a = -1.0;
@@ -236,7 +236,7 @@ static void test_endpoints_exact_and_clamped(void **state)
         random_limits(&vm, &am, &jm);
         const double p0 = urand(-100.0, 100.0), p1 = urand(-100.0, 100.0);
         ls_traj_axis_t ax;
-        assert_int_equal(ls_traj_plan_axis(&ax, p0, p1, vm, am, jm), LS_TRAJ_OK);
+        assert_int_equal(ls_traj_plan_axis(&ax, p0, p1, vm, am, jm), LS_OK);
         double p, v, a;
         ls_traj_sample_axis(&ax, 0.0, &p, &v, &a);
         assert_true(p == p0 && v == 0.0 && a == 0.0);
@@ -267,7 +267,7 @@ static void test_random_profiles_limits_continuity(void **state)
         random_limits(&vm, &am, &jm);
         const double d = urand(-10.0, 10.0);
         ls_traj_axis_t ax;
-        assert_int_equal(ls_traj_plan_axis(&ax, 0.0, d, vm, am, jm), LS_TRAJ_OK);
+        assert_int_equal(ls_traj_plan_axis(&ax, 0.0, d, vm, am, jm), LS_OK);
         assert_axis_within_limits(&ax, vm, am, jm);
         assert_axis_continuous(&ax);
         const double vpk = jm * ax.t[0] * (ax.t[0] + ax.t[1]);
@@ -287,7 +287,7 @@ static void test_duration_hand_cases(void **state)
     ls_traj_axis_t ax;
     /* d=1, v=a=j=1, T=5: pure jerk with Tj=s: T = 2 s + d/(j s^2), so s = 0.5,
      * peak v = j s^2 = 0.25, cruise 5 - 4 s = 3. */
-    assert_int_equal(ls_traj_plan_axis_duration(&ax, 0.0, 1.0, 1.0, 1.0, 1.0, 5.0), LS_TRAJ_OK);
+    assert_int_equal(ls_traj_plan_axis_duration(&ax, 0.0, 1.0, 1.0, 1.0, 1.0, 5.0), LS_OK);
     assert_true(ax.T == 5.0);
     assert_close(ax.t[0], 0.5, 1e-13);
     assert_true(ax.t[1] == 0.0);
@@ -296,7 +296,7 @@ static void test_duration_hand_cases(void **state)
     assert_axis_continuous(&ax);
     /* d=10, v=2, a=1, j=2, T=26/3: with peak 1.5, T = v/a + a/j + d/v = 26/3:
      * Tj = 0.5, Ta = 1, cruise 26/3 - 4 = 14/3. */
-    assert_int_equal(ls_traj_plan_axis_duration(&ax, 0.0, 10.0, 2.0, 1.0, 2.0, 26.0 / 3.0), LS_TRAJ_OK);
+    assert_int_equal(ls_traj_plan_axis_duration(&ax, 0.0, 10.0, 2.0, 1.0, 2.0, 26.0 / 3.0), LS_OK);
     assert_true(ax.T == 26.0 / 3.0);
     assert_close(ax.t[0], 0.5, 1e-14);
     assert_close(ax.t[1], 1.0, 1e-13);
@@ -305,7 +305,7 @@ static void test_duration_hand_cases(void **state)
     ls_traj_sample_axis(&ax, ax.T / 2.0, NULL, &v, NULL);
     assert_close(v, 1.5, 1e-13);
     /* Standing still for a given time. */
-    assert_int_equal(ls_traj_plan_axis_duration(&ax, 2.0, 2.0, 1.0, 1.0, 1.0, 3.0), LS_TRAJ_OK);
+    assert_int_equal(ls_traj_plan_axis_duration(&ax, 2.0, 2.0, 1.0, 1.0, 1.0, 3.0), LS_OK);
     assert_true(ax.T == 3.0);
     double p;
     ls_traj_sample_axis(&ax, 1.5, &p, &v, NULL);
@@ -321,7 +321,7 @@ static void test_duration_very_long(void **state)
     const double T[2] = { 1e9, 1e6 };
     for (int k = 0; k < 2; ++k) {
         ls_traj_axis_t ax;
-        assert_int_equal(ls_traj_plan_axis_duration(&ax, 0.0, 10.0, 1.0, 10.0, 1.0, T[k]), LS_TRAJ_OK);
+        assert_int_equal(ls_traj_plan_axis_duration(&ax, 0.0, 10.0, 1.0, 10.0, 1.0, T[k]), LS_OK);
         const double v = ax.t[0] * ax.t[0]; /* j Tj^2 with j = 1 */
         assert_close(v * (T[k] - 2.0 * ax.t[0]), 10.0, 1e-12);
         double pl, pr;
@@ -338,14 +338,14 @@ static void test_duration_too_short(void **state)
     ls_traj_axis_t ax, before;
     memset(&ax, 0x5a, sizeof ax);
     before = ax;
-    assert_int_equal(ls_traj_plan_axis_duration(&ax, 0.0, 10.0, 1.0, 1.0, 1.0, 11.9), LS_TRAJ_ETIME);
+    assert_int_equal(ls_traj_plan_axis_duration(&ax, 0.0, 10.0, 1.0, 1.0, 1.0, 11.9), LS_ETIME);
     assert_memory_equal(&ax, &before, sizeof ax);
     /* Rounding below the minimum is absorbed. */
-    assert_int_equal(ls_traj_plan_axis_duration(&ax, 0.0, 10.0, 1.0, 1.0, 1.0, 12.0 * (1.0 - 1e-14)), LS_TRAJ_OK);
+    assert_int_equal(ls_traj_plan_axis_duration(&ax, 0.0, 10.0, 1.0, 1.0, 1.0, 12.0 * (1.0 - 1e-14)), LS_OK);
     assert_true(ax.T == 12.0 * (1.0 - 1e-14));
-    assert_int_equal(ls_traj_plan_axis_duration(&ax, 0.0, 10.0, 1.0, 1.0, 1.0, 12.0), LS_TRAJ_OK);
+    assert_int_equal(ls_traj_plan_axis_duration(&ax, 0.0, 10.0, 1.0, 1.0, 1.0, 12.0), LS_OK);
     assert_close(ax.t[3], 8.0, 1e-15);
-    assert_int_equal(ls_traj_plan_axis_duration(&ax, 0.0, 0.0, 1.0, 1.0, 1.0, 0.0), LS_TRAJ_OK);
+    assert_int_equal(ls_traj_plan_axis_duration(&ax, 0.0, 0.0, 1.0, 1.0, 1.0, 0.0), LS_OK);
     assert_true(ax.T == 0.0);
 }
 
@@ -358,9 +358,9 @@ static void test_duration_random(void **state)
         random_limits(&vm, &am, &jm);
         const double d = urand(-10.0, 10.0);
         ls_traj_axis_t fast, ax;
-        assert_int_equal(ls_traj_plan_axis(&fast, 1.0, 1.0 + d, vm, am, jm), LS_TRAJ_OK);
+        assert_int_equal(ls_traj_plan_axis(&fast, 1.0, 1.0 + d, vm, am, jm), LS_OK);
         const double T = fast.T * (k % 3 == 0 ? urand(1.0, 1.01) : urand(1.0, 20.0));
-        assert_int_equal(ls_traj_plan_axis_duration(&ax, 1.0, 1.0 + d, vm, am, jm, T), LS_TRAJ_OK);
+        assert_int_equal(ls_traj_plan_axis_duration(&ax, 1.0, 1.0 + d, vm, am, jm, T), LS_OK);
         assert_true(ax.T == T);
         assert_close(phase_sum(&ax), T, 1e-13);
         /* The profile really covers d: the two halves meet in the middle. */
@@ -387,7 +387,7 @@ static void test_sync_hand_case(void **state)
     const double p0[3] = { 0.0, 1.0, 5.0 }, p1[3] = { 10.0, 0.0, 5.0 };
     const ls_traj_limits_t lim = { .v_max = { 1, 1, 1 }, .a_max = { 1, 1, 1 }, .j_max = { 1, 1, 1 } };
     ls_traj_t tr;
-    assert_int_equal(ls_traj_plan(&tr, 3, p0, p1, &lim), LS_TRAJ_OK);
+    assert_int_equal(ls_traj_plan(&tr, 3, p0, p1, &lim), LS_OK);
     assert_int_equal(tr.n, 3);
     assert_close(tr.duration_s, 12.0, 1e-15);
     for (int i = 0; i < 3; ++i) {
@@ -420,12 +420,11 @@ static void test_sync_random(void **state)
             p1[i] = urand(-3.0, 3.0);
             random_limits(&lim.v_max[i], &lim.a_max[i], &lim.j_max[i]);
             ls_traj_axis_t alone;
-            assert_int_equal(ls_traj_plan_axis(&alone, p0[i], p1[i], lim.v_max[i], lim.a_max[i], lim.j_max[i]),
-                             LS_TRAJ_OK);
+            assert_int_equal(ls_traj_plan_axis(&alone, p0[i], p1[i], lim.v_max[i], lim.a_max[i], lim.j_max[i]), LS_OK);
             slowest = alone.T > slowest ? alone.T : slowest;
         }
         ls_traj_t tr;
-        assert_int_equal(ls_traj_plan(&tr, n, p0, p1, &lim), LS_TRAJ_OK);
+        assert_int_equal(ls_traj_plan(&tr, n, p0, p1, &lim), LS_OK);
         assert_true(tr.duration_s == slowest);
         for (uint8_t i = 0; i < n; ++i) {
             assert_true(tr.axis[i].T == tr.duration_s);
@@ -451,7 +450,7 @@ static void test_timescale_init_and_full_ramp(void **state)
     assert_true(ls_timescale_step(&ts, 0.004) == 0.004);
     /* A full stop over 2 s: r(t) + r(2 - t) = 1 by symmetry, so the clock
      * advances by exactly 1 s; rd_max = 1.5/2, rdd_max = 4.5/4. */
-    assert_int_equal(ls_timescale_set(&ts, 0.0, 2.0), LS_TRAJ_OK);
+    assert_int_equal(ls_timescale_set(&ts, 0.0, 2.0), LS_OK);
     assert_close(ts.rd_max, 0.75, 1e-15);
     assert_close(ts.rdd_max, 1.125, 1e-15);
     assert_false(ls_timescale_settled(&ts));
@@ -476,16 +475,16 @@ static void test_timescale_reverse_mid_ramp(void **state)
     (void)state;
     ls_timescale_t ts;
     ls_timescale_init(&ts);
-    assert_int_equal(ls_timescale_set(&ts, 0.0, 1.0), LS_TRAJ_OK);
+    assert_int_equal(ls_timescale_set(&ts, 0.0, 1.0), LS_OK);
     double r_prev = ts.r, rd_prev = ts.rd;
     for (int k = 0; k < 600; ++k) {
         if (k == 300) {
             /* Resume while still slowing down: continues from r, rd without a jump. */
-            assert_int_equal(ls_timescale_set(&ts, 1.0, 1.0), LS_TRAJ_OK);
+            assert_int_equal(ls_timescale_set(&ts, 1.0, 1.0), LS_OK);
         }
         if (k == 450) {
             /* And a gentler stop while speeding up. */
-            assert_int_equal(ls_timescale_set(&ts, 0.0, 5.0), LS_TRAJ_OK);
+            assert_int_equal(ls_timescale_set(&ts, 0.0, 5.0), LS_OK);
         }
         assert_true(ls_timescale_step(&ts, KHZ_DT_S) >= 0.0);
         assert_true(ts.r >= 0.0 && ts.r <= 1.0);
@@ -502,7 +501,7 @@ static void test_timescale_reverse_mid_ramp(void **state)
     }
     assert_true(ts.r == 0.0);
     /* Partial target (speed override). */
-    assert_int_equal(ls_timescale_set(&ts, 0.5, 1.0), LS_TRAJ_OK);
+    assert_int_equal(ls_timescale_set(&ts, 0.5, 1.0), LS_OK);
     while (!ls_timescale_settled(&ts)) {
         ls_timescale_step(&ts, KHZ_DT_S);
     }
@@ -531,7 +530,7 @@ static double run_stop_resume(const ls_traj_t *tr, const ls_traj_limits_t *lim, 
     for (; tau < tr->duration_s; ++k) {
         const double t = (double)k * KHZ_DT_S;
         if (fabs(t - t_stop_s) < KHZ_DT_S / 2.0) {
-            assert_int_equal(ls_timescale_set(&ts, 0.0, ramp), LS_TRAJ_OK);
+            assert_int_equal(ls_timescale_set(&ts, 0.0, ramp), LS_OK);
         }
         if (settled_at < 0 && ts.target == 0.0 && ls_timescale_settled(&ts)) {
             settled_at = k;
@@ -539,7 +538,7 @@ static double run_stop_resume(const ls_traj_t *tr, const ls_traj_limits_t *lim, 
         }
         if (settled_at >= 0 && k == settled_at + 500) {
             assert_true(tau == tau_stopped); /* it really stood still */
-            assert_int_equal(ls_timescale_set(&ts, 1.0, ramp), LS_TRAJ_OK);
+            assert_int_equal(ls_timescale_set(&ts, 1.0, ramp), LS_OK);
         }
         /* The acceleration of this sample (centred one step back) belongs to a ramp. */
         const int ramping = !ls_timescale_settled(&ts) || ramped_last;
@@ -585,7 +584,7 @@ static void test_stop_resume_in_cruise_within_limits(void **state)
     const double p0[2] = { 0.0, 0.0 }, p1[2] = { 10.0, -5.0 };
     const ls_traj_limits_t lim = { .v_max = { 1, 1 }, .a_max = { 1, 1 }, .j_max = { 1, 1 } };
     ls_traj_t tr;
-    assert_int_equal(ls_traj_plan(&tr, 2, p0, p1, &lim), LS_TRAJ_OK);
+    assert_int_equal(ls_traj_plan(&tr, 2, p0, p1, &lim), LS_OK);
     assert_close(ls_traj_stop_ramp_s(&tr, &lim), sqrt(4.5), 1e-15);
     const double ratio = run_stop_resume(&tr, &lim, 4.0);
     assert_true(ratio <= 1.5 / sqrt(4.5) + 1e-6);
@@ -607,7 +606,7 @@ static void test_stop_resume_anywhere_bounded(void **state)
             random_limits(&lim.v_max[i], &lim.a_max[i], &lim.j_max[i]);
         }
         ls_traj_t tr;
-        assert_int_equal(ls_traj_plan(&tr, n, p0, p1, &lim), LS_TRAJ_OK);
+        assert_int_equal(ls_traj_plan(&tr, n, p0, p1, &lim), LS_OK);
         const double ratio = run_stop_resume(&tr, &lim, floor(urand(0.1, 0.9) * tr.duration_s * 1000.0) / 1000.0);
         assert_true(ratio <= 2.0 + 1e-6);
     }
@@ -623,21 +622,21 @@ static void test_bad_input(void **state)
     before = ax;
     const double bad[] = { NAN, INFINITY, -INFINITY };
     for (size_t k = 0; k < sizeof bad / sizeof bad[0]; ++k) {
-        assert_int_equal(ls_traj_plan_axis(&ax, bad[k], 1.0, 1.0, 1.0, 1.0), LS_TRAJ_EARG);
-        assert_int_equal(ls_traj_plan_axis(&ax, 0.0, bad[k], 1.0, 1.0, 1.0), LS_TRAJ_EARG);
-        assert_int_equal(ls_traj_plan_axis(&ax, 0.0, 1.0, bad[k], 1.0, 1.0), LS_TRAJ_EARG);
-        assert_int_equal(ls_traj_plan_axis(&ax, 0.0, 1.0, 1.0, bad[k], 1.0), LS_TRAJ_EARG);
-        assert_int_equal(ls_traj_plan_axis(&ax, 0.0, 1.0, 1.0, 1.0, bad[k]), LS_TRAJ_EARG);
-        assert_int_equal(ls_traj_plan_axis_duration(&ax, 0.0, 1.0, 1.0, 1.0, 1.0, bad[k]), LS_TRAJ_EARG);
+        assert_int_equal(ls_traj_plan_axis(&ax, bad[k], 1.0, 1.0, 1.0, 1.0), LS_EINVAL);
+        assert_int_equal(ls_traj_plan_axis(&ax, 0.0, bad[k], 1.0, 1.0, 1.0), LS_EINVAL);
+        assert_int_equal(ls_traj_plan_axis(&ax, 0.0, 1.0, bad[k], 1.0, 1.0), LS_EINVAL);
+        assert_int_equal(ls_traj_plan_axis(&ax, 0.0, 1.0, 1.0, bad[k], 1.0), LS_EINVAL);
+        assert_int_equal(ls_traj_plan_axis(&ax, 0.0, 1.0, 1.0, 1.0, bad[k]), LS_EINVAL);
+        assert_int_equal(ls_traj_plan_axis_duration(&ax, 0.0, 1.0, 1.0, 1.0, 1.0, bad[k]), LS_EINVAL);
     }
-    assert_int_equal(ls_traj_plan_axis(&ax, 0.0, 1.0, 0.0, 1.0, 1.0), LS_TRAJ_EARG);
-    assert_int_equal(ls_traj_plan_axis(&ax, 0.0, 1.0, 1.0, -1.0, 1.0), LS_TRAJ_EARG);
-    assert_int_equal(ls_traj_plan_axis(&ax, 0.0, 1.0, 1.0, 1.0, 0.0), LS_TRAJ_EARG);
-    assert_int_equal(ls_traj_plan_axis(&ax, -1e308, 1e308, 1.0, 1.0, 1.0), LS_TRAJ_EARG); /* p1 - p0 overflows */
-    assert_int_equal(ls_traj_plan_axis_duration(&ax, 0.0, 1.0, 1.0, 1.0, 1.0, -1.0), LS_TRAJ_EARG);
+    assert_int_equal(ls_traj_plan_axis(&ax, 0.0, 1.0, 0.0, 1.0, 1.0), LS_EINVAL);
+    assert_int_equal(ls_traj_plan_axis(&ax, 0.0, 1.0, 1.0, -1.0, 1.0), LS_EINVAL);
+    assert_int_equal(ls_traj_plan_axis(&ax, 0.0, 1.0, 1.0, 1.0, 0.0), LS_EINVAL);
+    assert_int_equal(ls_traj_plan_axis(&ax, -1e308, 1e308, 1.0, 1.0, 1.0), LS_EINVAL); /* p1 - p0 overflows */
+    assert_int_equal(ls_traj_plan_axis_duration(&ax, 0.0, 1.0, 1.0, 1.0, 1.0, -1.0), LS_EINVAL);
     assert_memory_equal(&ax, &before, sizeof ax);
-    assert_int_equal(ls_traj_plan_axis(NULL, 0.0, 1.0, 1.0, 1.0, 1.0), LS_TRAJ_EARG);
-    assert_int_equal(ls_traj_plan_axis_duration(NULL, 0.0, 1.0, 1.0, 1.0, 1.0, 5.0), LS_TRAJ_EARG);
+    assert_int_equal(ls_traj_plan_axis(NULL, 0.0, 1.0, 1.0, 1.0, 1.0), LS_EINVAL);
+    assert_int_equal(ls_traj_plan_axis_duration(NULL, 0.0, 1.0, 1.0, 1.0, 1.0, 5.0), LS_EINVAL);
 
     const double p0[LS_TRAJ_MAX_AXES + 1] = { 0 }, p1[LS_TRAJ_MAX_AXES + 1] = { 1, 1, 1, 1, 1, 1, 1, 1, 1 };
     ls_traj_limits_t lim;
@@ -647,16 +646,16 @@ static void test_bad_input(void **state)
     ls_traj_t tr, tr_before;
     memset(&tr, 0x77, sizeof tr);
     tr_before = tr;
-    assert_int_equal(ls_traj_plan(&tr, 0, p0, p1, &lim), LS_TRAJ_EARG);
-    assert_int_equal(ls_traj_plan(&tr, LS_TRAJ_MAX_AXES + 1, p0, p1, &lim), LS_TRAJ_EARG);
-    assert_int_equal(ls_traj_plan(NULL, 2, p0, p1, &lim), LS_TRAJ_EARG);
-    assert_int_equal(ls_traj_plan(&tr, 2, NULL, p1, &lim), LS_TRAJ_EARG);
-    assert_int_equal(ls_traj_plan(&tr, 2, p0, NULL, &lim), LS_TRAJ_EARG);
-    assert_int_equal(ls_traj_plan(&tr, 2, p0, p1, NULL), LS_TRAJ_EARG);
+    assert_int_equal(ls_traj_plan(&tr, 0, p0, p1, &lim), LS_EINVAL);
+    assert_int_equal(ls_traj_plan(&tr, LS_TRAJ_MAX_AXES + 1, p0, p1, &lim), LS_EINVAL);
+    assert_int_equal(ls_traj_plan(NULL, 2, p0, p1, &lim), LS_EINVAL);
+    assert_int_equal(ls_traj_plan(&tr, 2, NULL, p1, &lim), LS_EINVAL);
+    assert_int_equal(ls_traj_plan(&tr, 2, p0, NULL, &lim), LS_EINVAL);
+    assert_int_equal(ls_traj_plan(&tr, 2, p0, p1, NULL), LS_EINVAL);
     lim.j_max[3] = NAN; /* one bad axis rejects the whole plan */
-    assert_int_equal(ls_traj_plan(&tr, 4, p0, p1, &lim), LS_TRAJ_EARG);
+    assert_int_equal(ls_traj_plan(&tr, 4, p0, p1, &lim), LS_EINVAL);
     assert_memory_equal(&tr, &tr_before, sizeof tr);
-    assert_int_equal(ls_traj_plan(&tr, 3, p0, p1, &lim), LS_TRAJ_OK); /* axis 3 unused */
+    assert_int_equal(ls_traj_plan(&tr, 3, p0, p1, &lim), LS_OK); /* axis 3 unused */
 
     assert_true(ls_traj_stop_ramp_s(NULL, &lim) < 0.0);
     assert_true(ls_traj_stop_ramp_s(&tr, NULL) < 0.0);
@@ -669,15 +668,15 @@ static void test_bad_input(void **state)
     ls_timescale_t ts, ts_before;
     ls_timescale_init(&ts);
     ts_before = ts;
-    assert_int_equal(ls_timescale_set(&ts, -0.1, 1.0), LS_TRAJ_EARG);
-    assert_int_equal(ls_timescale_set(&ts, 1.1, 1.0), LS_TRAJ_EARG);
-    assert_int_equal(ls_timescale_set(&ts, NAN, 1.0), LS_TRAJ_EARG);
-    assert_int_equal(ls_timescale_set(&ts, 0.0, 0.0), LS_TRAJ_EARG);
-    assert_int_equal(ls_timescale_set(&ts, 0.0, -1.0), LS_TRAJ_EARG);
-    assert_int_equal(ls_timescale_set(&ts, 0.0, NAN), LS_TRAJ_EARG);
-    assert_int_equal(ls_timescale_set(&ts, 0.0, INFINITY), LS_TRAJ_EARG);
-    assert_int_equal(ls_timescale_set(&ts, 0.0, 1e-300), LS_TRAJ_EARG); /* limits overflow */
-    assert_int_equal(ls_timescale_set(NULL, 0.0, 1.0), LS_TRAJ_EARG);
+    assert_int_equal(ls_timescale_set(&ts, -0.1, 1.0), LS_EINVAL);
+    assert_int_equal(ls_timescale_set(&ts, 1.1, 1.0), LS_EINVAL);
+    assert_int_equal(ls_timescale_set(&ts, NAN, 1.0), LS_EINVAL);
+    assert_int_equal(ls_timescale_set(&ts, 0.0, 0.0), LS_EINVAL);
+    assert_int_equal(ls_timescale_set(&ts, 0.0, -1.0), LS_EINVAL);
+    assert_int_equal(ls_timescale_set(&ts, 0.0, NAN), LS_EINVAL);
+    assert_int_equal(ls_timescale_set(&ts, 0.0, INFINITY), LS_EINVAL);
+    assert_int_equal(ls_timescale_set(&ts, 0.0, 1e-300), LS_EINVAL); /* limits overflow */
+    assert_int_equal(ls_timescale_set(NULL, 0.0, 1.0), LS_EINVAL);
     assert_memory_equal(&ts, &ts_before, sizeof ts);
     assert_true(ls_timescale_step(&ts, NAN) == 0.0);
     assert_true(ls_timescale_step(&ts, -1.0) == 0.0);

@@ -48,7 +48,7 @@ int main(void)
         }
         ls_traj_t tr;
         const int rc = ls_traj_plan(&tr, (uint8_t)n, p0, p1, &lim);
-        if (rc != LS_TRAJ_OK) {
+        if (rc != LS_OK) {
             printf("ERR %d\n", rc);
             continue;
         }

@@ -53,7 +53,7 @@ static int can_send(void *ctx, uint32_t can_id, const uint8_t *data, uint8_t len
     (void)ctx;
     hal_can_frame_t f = { .id = can_id, .flags = HAL_CAN_F_EXT, .len = len };
     memcpy(f.data, data, len);
-    return hal_can_send(&can_link, &f) == HAL_OK ? 0 : -1;
+    return hal_can_send(&can_link, &f) == LS_OK ? 0 : -1;
 }
 
 /* Milliseconds poll() may sleep: until the link's next deadline, at most 100 ms
@@ -97,11 +97,11 @@ int main(int argc, char **argv)
     }
     char why[256] = "";
     int rc = hal_linux_socketcan_open(&can_link, ifname, why, sizeof(why));
-    if (rc != HAL_OK) {
-        fprintf(stderr, "isotp_socketcan_echo: cannot open %s: %s (%s)\n", ifname, why, hal_strerror(rc));
+    if (rc != LS_OK) {
+        fprintf(stderr, "isotp_socketcan_echo: cannot open %s: %s (%s)\n", ifname, why, ls_err_text(rc));
         return 2;
     }
-    if (ls_isotp_init(&tp_link, NULL, LS_PEER_TX_ID, LS_PEER_RX_ID, can_send, NULL) != LS_ISOTP_OK) {
+    if (ls_isotp_init(&tp_link, NULL, LS_PEER_TX_ID, LS_PEER_RX_ID, can_send, NULL) != LS_OK) {
         fprintf(stderr, "isotp_socketcan_echo: ls_isotp_init failed\n");
         hal_can_close(&can_link);
         return 2;
@@ -137,15 +137,15 @@ int main(int argc, char **argv)
                 ls_isotp_on_frame(&tp_link, f.data, f.len, t);
             }
         }
-        if (rc != HAL_EAGAIN) {
-            fprintf(stderr, "isotp_socketcan_echo: link failed: %s\n", hal_strerror(rc));
+        if (rc != LS_EAGAIN) {
+            fprintf(stderr, "isotp_socketcan_echo: link failed: %s\n", ls_err_text(rc));
             exit_code = 1;
             break;
         }
         ls_isotp_poll(&tp_link, t);
         if (!ls_isotp_tx_busy(&tp_link)) {
             size_t n = ls_isotp_take_rx(&tp_link, msg_buf, sizeof(msg_buf));
-            if (n > 0 && ls_isotp_send(&tp_link, msg_buf, n, t) == LS_ISOTP_OK) {
+            if (n > 0 && ls_isotp_send(&tp_link, msg_buf, n, t) == LS_OK) {
                 echoed++;
                 printf("echo %zu\n", n);
                 fflush(stdout);
