@@ -20,6 +20,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "../unit/isotp/peer_ids.h"
 #include "ls_isotp.h"
 
 #define QCAP 64u
@@ -128,8 +129,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     }
     memset(&rx_q, 0, sizeof(rx_q));
     memset(&tx_q, 0, sizeof(tx_q));
-    if (ls_isotp_init(&rx_link, &cfg, 0x18DAF110u, 0x18DA10F1u, fz_send, &rx_q) != LS_OK ||
-        ls_isotp_init(&tx_link, &cfg, 0x18DA10F1u, 0x18DAF110u, fz_send, &tx_q) != LS_OK) {
+    if (ls_isotp_init(&rx_link, &cfg, LS_PEER_TX_ID, LS_PEER_RX_ID, fz_send, &rx_q) != LS_OK ||
+        ls_isotp_init(&tx_link, &cfg, LS_PEER_RX_ID, LS_PEER_TX_ID, fz_send, &tx_q) != LS_OK) {
         abort();
     }
     for (size_t i = 0; i < sizeof(payload); i++) {

@@ -20,8 +20,18 @@ typedef struct {
 static feed_t g_feed;
 static uint64_t g_now;
 
+/* Ids from the schema and the DBC (ls_net.h): the device 0x10 from three hosts,
+ * a functional request, a heartbeat, an emergency, another device, telemetry. */
+#define FZ_PHYS(target, source) (LS_ID_ISOTP_PHYS | (uint32_t)(target) << 8 | (uint32_t)(source))
 static const uint32_t ids[] = {
-    0x18DA10F1u, 0x18DA10F2u, 0x18DBFFF1u, 0x14FF01F1u, 0x00FF00F1u, 0x18DA11F1u, 0x1CFF1010u, 0x18DA10F3u,
+    FZ_PHYS(0x10u, 0xF1u),
+    FZ_PHYS(0x10u, 0xF2u),
+    LS_ID_ISOTP_FUNC | LS_ADDR_ALL << 8 | 0xF1u,
+    LS_ID_HEARTBEAT | 0xF1u,
+    LS_ID_EMERGENCY | 0xF1u,
+    FZ_PHYS(0x11u, 0xF1u),
+    LS_ID_OF_DBC(LANDSCAPE_STATUS_FRAME_ID) | 0x10u,
+    FZ_PHYS(0x10u, 0xF3u),
 };
 
 static int feed_recv(void *self, hal_can_frame_t *f)

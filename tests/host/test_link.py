@@ -14,10 +14,16 @@ import can
 import pytest
 
 from landscape import BusSpec
+from landscape import telemetry as tm
+from landscape._generated import landscape_pb2 as pb
 from landscape.bus import open_bus, release_bus
 from landscape.errors import BusError
 from landscape.link import LinkBroker, LinkBusyError, busy_message, read_holder
 from pty_link import PtySlcanBus
+
+#: A device's broadcast and a host's request to it, as the broker carries them.
+DEVICE_FRAME_ID = tm.frame_id("STATUS", pb.DEFAULT_DEVICE_ADDRESS)
+HOST_FRAME_ID = pb.ISOTP_PHYSICAL_BASE | pb.DEFAULT_DEVICE_ADDRESS << 8 | pb.DEFAULT_HOST_ADDRESS
 
 
 @pytest.fixture
@@ -62,14 +68,14 @@ def test_frames_fan_out_as_on_a_bus(broker: LinkBroker, device_end: PtySlcanBus)
     try:
         time.sleep(0.2)  # both accepted
         # device -> every client
-        device_end.send(can.Message(arbitration_id=0x18FF0110, is_extended_id=True, data=b"\x01\x02"))
-        assert recv_ids(a, 1) == [0x18FF0110]
-        assert recv_ids(b, 1) == [0x18FF0110]
+        device_end.send(can.Message(arbitration_id=DEVICE_FRAME_ID, is_extended_id=True, data=b"\x01\x02"))
+        assert recv_ids(a, 1) == [DEVICE_FRAME_ID]
+        assert recv_ids(b, 1) == [DEVICE_FRAME_ID]
         # client a -> the device and client b, never back to a
-        a.send(can.Message(arbitration_id=0x18DA10F1, is_extended_id=True, data=b"\x02\x10\x01"))
+        a.send(can.Message(arbitration_id=HOST_FRAME_ID, is_extended_id=True, data=b"\x02\x10\x01"))
         got = device_end.recv(2.0)
-        assert got is not None and got.arbitration_id == 0x18DA10F1 and bytes(got.data) == b"\x02\x10\x01"
-        assert recv_ids(b, 1) == [0x18DA10F1]
+        assert got is not None and got.arbitration_id == HOST_FRAME_ID and bytes(got.data) == b"\x02\x10\x01"
+        assert recv_ids(b, 1) == [HOST_FRAME_ID]
         assert recv_ids(a, 1, timeout_s=0.3) == []
     finally:
         a.shutdown()

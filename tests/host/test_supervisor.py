@@ -238,7 +238,7 @@ def test_heartbeat_frames_role_1_counter_increments(bus, notifier, device: FakeD
         assert 0 < token <= 0xFFFFFF
         frames = []
         while (m := spy_bus.recv(timeout=0)) is not None:
-            if m.arbitration_id == 0x14FF01F1:
+            if m.arbitration_id == tm.frame_id("HEARTBEAT", ls.DEFAULT_HOST_ADDRESS):
                 frames.append(m)
         assert len(frames) >= 8
         db = tm.database()

@@ -17,6 +17,8 @@ from pathlib import Path
 import pytest
 
 from conftest import CLI, Controller
+from landscape import telemetry as tm
+from landscape._generated import landscape_pb2 as pb
 from landscape.mcap_log import CHANNELS, channel_schemas
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "host"))
@@ -108,6 +110,7 @@ def test_without_a_session_the_view_opens_its_own_and_serves_the_can_frames(cont
     assert view.returncode == 0, err
     frames = [r.json() for r in got if r.topic == "/can"]
     assert len(frames) >= 7 * len([r for r in got if r.topic == "/joint_states"]) > 0
-    assert any(f["id"] & 0x1FFFFF00 == 0x1CFF1100 and f["extended"] for f in frames)  # JOINTS_12
+    joints_12 = tm.frame_id("JOINTS_12", pb.DEFAULT_DEVICE_ADDRESS)
+    assert any(f["id"] == joints_12 and f["extended"] for f in frames)
     res = json.loads(out.strip().splitlines()[-1])["result"]
     assert res["clients"] == 1 and res["frames"] > 0 and set(res["channels"]) == set(CHANNELS)

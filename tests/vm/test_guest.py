@@ -24,6 +24,7 @@ from pathlib import Path
 import pytest
 
 from landscape import BusSpec, Supervisor
+from landscape._generated import landscape_pb2 as pb
 from landscape.supervisor import notice_data
 
 CAN_IF = os.environ.get("LS_VM_CAN_IF", "vcan0")
@@ -33,9 +34,9 @@ ROOT = Path(__file__).resolve().parents[2]
 BUILD = Path(os.environ.get("LS_BUILD_DIR", ROOT / "build"))
 ECHO = BUILD / "bin" / "isotp_socketcan_echo"
 
-# ISO-TP normal fixed 29-bit addressing, device 0x10, host 0xF1.
-HOST_TO_DEV = 0x18DA10F1
-DEV_TO_HOST = 0x18DAF110
+# ISO-TP normal fixed 29-bit addressing, the schema's default device and host addresses.
+HOST_TO_DEV = pb.ISOTP_PHYSICAL_BASE | pb.DEFAULT_DEVICE_ADDRESS << 8 | pb.DEFAULT_HOST_ADDRESS
+DEV_TO_HOST = pb.ISOTP_PHYSICAL_BASE | pb.DEFAULT_HOST_ADDRESS << 8 | pb.DEFAULT_DEVICE_ADDRESS
 
 # Linux <linux/can/isotp.h>: socket options Python does not name.
 SOL_CAN_ISOTP = 100 + socket.CAN_ISOTP  # SOL_CAN_BASE + CAN_ISOTP

@@ -262,11 +262,13 @@ static void test_link_recv_send_and_error_frames(void **state)
     assert_int_equal(hal_can_status(&p.link, &st), LS_OK);
     assert_int_equal(st.rx_dropped, 1);
 
-    hal_can_frame_t out = { .id = 0x18DA00F1, .flags = HAL_CAN_F_EXT, .len = 3, .data = { 0x02, 0x10, 0x01 } };
+    /* the HAL carries any 29-bit id; this one is no protocol's */
+    const uint32_t any_ext_id = 0x1ABCDE01u;
+    hal_can_frame_t out = { .id = any_ext_id, .flags = HAL_CAN_F_EXT, .len = 3, .data = { 0x02, 0x10, 0x01 } };
     assert_int_equal(hal_can_send(&p.link, &out), LS_OK);
     struct can_frame got;
     assert_int_equal(read(p.peer, &got, sizeof got), (ssize_t)sizeof got);
-    assert_int_equal(got.can_id, 0x18DA00F1u | CAN_EFF_FLAG);
+    assert_int_equal(got.can_id, any_ext_id | CAN_EFF_FLAG);
     assert_int_equal(got.can_dlc, 3);
     assert_memory_equal(got.data, ((uint8_t[]){ 0x02, 0x10, 0x01 }), 3);
     out.len = 9;
