@@ -267,6 +267,18 @@ int ls_isotp_resend(ls_isotp_link_t *l, uint64_t now_us)
     return LS_OK;
 }
 
+int ls_isotp_restart_waiting(ls_isotp_link_t *l, uint64_t now_us)
+{
+    if (l == NULL || l->tx_len == 0 || l->tx_state == LS_ISOTP_TX_IDLE) {
+        return LS_EINVAL;
+    }
+    if (l->tx_state != LS_ISOTP_TX_WAIT_FC) {
+        return LS_EBUSY;
+    }
+    tx_start(l, now_us);
+    return LS_OK;
+}
+
 /* Begin the transfer of the tx_len bytes in tx_buf from the first frame. */
 static void tx_start(ls_isotp_link_t *l, uint64_t now_us)
 {

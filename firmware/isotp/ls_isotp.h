@@ -145,6 +145,13 @@ int ls_isotp_send(ls_isotp_link_t *l, const uint8_t *payload, size_t len, uint64
  * nothing was ever sent) or LS_EBUSY (a transfer is under way). */
 int ls_isotp_resend(ls_isotp_link_t *l, uint64_t now_us);
 
+/* The receiver asked for the message again (a retransmitted request): a
+ * transfer that waits for a flow control is restarted from its first frame
+ * now, not after N_Bs (a receiver that lost a consecutive frame sends no
+ * flow control). Returns LS_OK when it restarted, LS_EBUSY while frames are
+ * being sent (it finishes), LS_EINVAL when no transfer is under way. */
+int ls_isotp_restart_waiting(ls_isotp_link_t *l, uint64_t now_us);
+
 /* Send due consecutive frames (honouring STmin and BS), pending flow controls,
  * and expire N_Bs / N_Cr. */
 void ls_isotp_poll(ls_isotp_link_t *l, uint64_t now_us);

@@ -189,6 +189,13 @@ int ls_net_send_downlink(void *ctx, uint8_t addr, const uint8_t *buf, size_t len
     }
     if (already_pending(p, buf, len)) {
         net->tx_deduplicated++;
+        /* The answer to a retransmitted request, while that answer is in
+         * flight: the supervisor did not get it (a lost consecutive frame
+         * leaves our transfer waiting N_Bs for a flow control that will not
+         * come), so ls_net_poll restarts a waiting transfer at once. */
+        if (p->tx_tries > 0 && p->isotp.tx_len == len && memcmp(p->isotp.tx_buf, buf, len) == 0) {
+            p->tx_asked_again = true;
+        }
         return 0;
     }
     if (p->q_count >= LS_NET_OUTQ) {
@@ -336,6 +343,12 @@ void ls_net_poll(ls_net_t *net, uint64_t now_us)
         if (n > 0) {
             ls_core_on_uplink(net->core, p->addr, net->rxbuf, n, now_us);
         }
+        if (p->tx_asked_again) {
+            p->tx_asked_again = false;
+            if (p->tx_tries > 0 && ls_isotp_restart_waiting(&p->isotp, now_us) == LS_OK) {
+                net->tx_restarted++;
+            }
+        }
         if (!ls_isotp_tx_busy(&p->isotp)) {
             settle_tx(net, p, now_us);
         }
@@ -400,15 +413,16 @@ void ls_net_describe(void *ctx, char *buf, size_t cap)
         }
     }
     size_t n = 0;
-    int w = ls_fmt_print(buf, cap,
-                         "frames_in=%u\nframes_out=%u\ntx_full=%u\nlink_rx_dropped=%u\nlink_tx_dropped=%u\n"
-                         "peers_evicted=%u\npeers_preempted=%u\ntx_retried=%u\ntx_given_up=%u\ntx_deduplicated=%u\n"
-                         "frames_bridged=%u\nfwd_dropped=%u\nfwd_emergency_dropped=%u\nlink_close_held=%u\n",
-                         (unsigned)net->frames_in, (unsigned)net->frames_out, (unsigned)net->tx_full,
-                         (unsigned)link_rx_dropped, (unsigned)link_tx_dropped, (unsigned)net->peers_evicted,
-                         (unsigned)net->peers_preempted, (unsigned)net->tx_retried, (unsigned)net->tx_given_up,
-                         (unsigned)net->tx_deduplicated, (unsigned)net->frames_bridged, (unsigned)net->fwd_dropped,
-                         (unsigned)net->fwd_emergency_dropped, (unsigned)link_close_held);
+    int w = ls_fmt_print(
+        buf, cap,
+        "frames_in=%u\nframes_out=%u\ntx_full=%u\nlink_rx_dropped=%u\nlink_tx_dropped=%u\n"
+        "peers_evicted=%u\npeers_preempted=%u\ntx_retried=%u\ntx_given_up=%u\ntx_deduplicated=%u\ntx_restarted=%u\n"
+        "frames_bridged=%u\nfwd_dropped=%u\nfwd_emergency_dropped=%u\nlink_close_held=%u\n",
+        (unsigned)net->frames_in, (unsigned)net->frames_out, (unsigned)net->tx_full, (unsigned)link_rx_dropped,
+        (unsigned)link_tx_dropped, (unsigned)net->peers_evicted, (unsigned)net->peers_preempted,
+        (unsigned)net->tx_retried, (unsigned)net->tx_given_up, (unsigned)net->tx_deduplicated,
+        (unsigned)net->tx_restarted, (unsigned)net->frames_bridged, (unsigned)net->fwd_dropped,
+        (unsigned)net->fwd_emergency_dropped, (unsigned)link_close_held);
     n = w > 0 ? (size_t)w : 0u;
     for (int r = 0; r < LS_ISOTP_N_RESULT_COUNT && n < cap; r++) {
         /* e.g. isotp_unexp_pdu=1: receive and send outcomes together, by ISO name */

@@ -98,6 +98,7 @@ typedef struct {
     uint8_t q_head, q_count;
     uint32_t q_dropped;
     uint8_t tx_tries;    /* > 0: transfers so far of the downlink in the ISO-TP link */
+    bool tx_asked_again; /* the same downlink was queued again while in flight */
     uint32_t tx_ok_mark; /* isotp.tx_results[N_OK] before its first transfer */
 } ls_net_peer_t;
 
@@ -114,9 +115,10 @@ typedef struct ls_net {
     uint32_t fwd_dropped, fwd_emergency_dropped; /* bridged frames over a link's forward budget */
     ls_net_bucket_t fwd[LS_NET_MAX_LINKS];       /* forward budget per output link */
     ls_net_bucket_t fwd_emergency[LS_NET_MAX_LINKS];
-    bool link_held[LS_NET_MAX_LINKS];                  /* told the link: sessions live on it (hal_can_hold_open) */
-    uint32_t tx_retried, tx_given_up;                  /* downlink transfers sent again; downlinks given up */
-    uint32_t tx_deduplicated;                          /* downlinks identical to one still pending: not queued twice */
+    bool link_held[LS_NET_MAX_LINKS]; /* told the link: sessions live on it (hal_can_hold_open) */
+    uint32_t tx_retried, tx_given_up; /* downlink transfers sent again; downlinks given up */
+    uint32_t tx_deduplicated;         /* downlinks identical to one still pending: not queued twice */
+    uint32_t tx_restarted;            /* of those, in flight and waiting for a flow control: restarted at once */
     uint32_t rx_results_gone[LS_ISOTP_N_RESULT_COUNT]; /* counters of evicted peers */
     uint32_t tx_results_gone[LS_ISOTP_N_RESULT_COUNT];
     uint8_t rxbuf[LS_ISOTP_MAX_PAYLOAD];

@@ -440,7 +440,11 @@ def test_estop_input_stops_motion_and_raises_the_fault_alarm(tmp_path: Path) -> 
             time.sleep(0.3)
             p2 = retry_until_answered(lambda: sup.get_robot_position(check=False))
             if p1.ok and p2.ok:
-                assert p1.result == p2.result, (p1, p2)
+                # 1e-9 rad (m) in 0.3 s is no motion; the simulated arm at rest still moves its
+                # last bits (4e-16 rad seen under load), so bit-for-bit equality was no property
+                assert p1.result.keys() == p2.result.keys()
+                for key, value in p1.result.items():
+                    assert value == pytest.approx(p2.result[key], rel=0, abs=1e-9), (key, p1, p2)
             print(f"\ne-stop: alarm {alarm.event_id} after {latency * 1000:.0f} ms, fault {st['fault']!r}")
             assert latency < 0.5, f"the e-stop alarm took {latency:.3f} s"
     finally:

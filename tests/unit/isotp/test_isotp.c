@@ -441,6 +441,28 @@ static void test_resend_after_a_failed_transfer(void **state)
     assert_int_equal(fx.ca.n, 4); /* FF, FF again, two CFs (20 = 6 + 7 + 7) */
 }
 
+static void test_restart_of_a_transfer_waiting_for_flow_control(void **state)
+{
+    (void)state;
+    setup_links(NULL, NULL);
+    assert_int_equal(ls_isotp_restart_waiting(&fx.a, 0), LS_EINVAL); /* nothing under way */
+    start_ff(100);
+    const uint8_t cts[3] = { 0x30, 0x02, 0x00 };
+    feed(&fx.a, &fx.ca, cts, 3, 10);
+    assert_int_equal(fx.ca.n, 3); /* FF + a block of 2 CFs, then it waits for the next FC */
+    assert_int_equal(fx.a.tx_state, LS_ISOTP_TX_WAIT_FC);
+    /* the receiver lost a CF and asks again: the first frame goes out now, not at N_Bs */
+    assert_int_equal(ls_isotp_restart_waiting(&fx.a, 400000), LS_OK);
+    assert_int_equal(fx.ca.n, 4);
+    assert_memory_equal(fx.ca.f[3].d, fx.ca.f[0].d, 8);
+    assert_int_equal(ls_isotp_next_deadline_us(&fx.a), 1400000);
+    const uint8_t all[3] = { 0x30, 0x00, 0x00 };
+    feed(&fx.a, &fx.ca, all, 3, 400100);
+    assert_int_equal(fx.a.tx_results[LS_ISOTP_N_OK], 1);
+    assert_int_equal(fx.a.tx_results[LS_ISOTP_N_TIMEOUT_BS], 0);
+    assert_int_equal(ls_isotp_restart_waiting(&fx.a, 400200), LS_EINVAL); /* done */
+}
+
 static void test_n_bs_timeout_between_blocks(void **state)
 {
     (void)state;
@@ -1145,6 +1167,7 @@ int main(void)
         cmocka_unit_test(test_sender_stmin_f3_is_300us),
         cmocka_unit_test(test_sender_stmin_reserved_is_127ms),
         cmocka_unit_test(test_n_bs_timeout),
+        cmocka_unit_test(test_restart_of_a_transfer_waiting_for_flow_control),
         cmocka_unit_test(test_n_bs_timeout_between_blocks),
         cmocka_unit_test(test_resend_after_a_failed_transfer),
         cmocka_unit_test(test_fc_wait_then_cts),
