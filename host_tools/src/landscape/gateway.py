@@ -1,0 +1,641 @@
+"""`landscape gateway`: an OPC UA server (asyncua) for every controller on the bus (docs/gateway.md).
+
+The gateway joins the CAN link as one more local client (bus.open_bus: it shares a line that a
+background session serves) and listens to it with one can.Notifier. A device HEARTBEAT (hb_role 0)
+from an address not seen before is a controller: it gets an object in the address space, shaped like
+OPC 40010's MotionDeviceSystem (MotionDevices -> Arm -> Axes -> J1..J6 with positions and units), fed
+by the telemetry broadcasts, and one method per command of the schema (registry.COMMANDS) plus
+AnswerRsvp.
+
+Each OPC UA session that calls a method on a controller gets its own Supervisor of it (an address of
+the configured pool, its own heartbeat): ownership, exactly-once and the disconnect handler hold per
+LAN client, and closing the session (or losing it) disconnects that supervisor. The gateway itself
+holds one read-only supervisor per controller ("observer") that reads the device description and
+turns the notices addressed to nobody in particular (alarms such as ownerLost) into events; the
+notices of a session's own requests (completions, RSVPs) come through that session's supervisor.
+
+Threads: python-can's Notifier, each Supervisor's own. They reach the event loop only through
+loop.call_soon_threadsafe; blocking Supervisor calls run in the loop's executor. Nothing polls.
+"""
+from __future__ import annotations
+
+import asyncio
+import contextvars
+import json
+import logging
+import signal
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import can
+from asyncua import ua
+from asyncua.common.node import Node
+from asyncua.crypto.permission_rules import SimpleRoleRuleset, User, UserRole
+from asyncua.server.internal_server import InternalServer
+from asyncua.server.internal_session import InternalSession, SessionState
+from asyncua.server.server import Server
+from asyncua.server.user_managers import UserManager
+from asyncua.ua.attribute_ids import AttributeIds
+from asyncua.ua.object_ids import ObjectIds
+from asyncua.ua.status_codes import StatusCodes
+from google.protobuf.descriptor import FieldDescriptor
+
+from . import telemetry as tm
+from ._generated import landscape_pb2 as pb
+from .bus import BusSpec, open_bus, release_bus
+from .errors import AddressInUseError, ArgumentError, LandscapeError
+from .gateway_config import GatewayConfig
+from .registry import COMMANDS, Command, enum_choices, field_enum_type, is_repeated, message_to_dict
+from .supervisor import RSVP_KINDS, ALARM_KINDS, Supervisor
+
+log = logging.getLogger("landscape.gateway")
+
+NAMESPACE_URI = "urn:landscape:gateway"
+ENDPOINT_PATH = "/landscape/"
+JOINTS = 6
+#: Every OPC UA method of a command returns these, in this order.
+OUTPUTS = (("RetCode", ua.VariantType.Int32, "the device's return code (docs/protocol.md \"Return codes\")"),
+           ("RetName", ua.VariantType.String, "the return code's name, e.g. CMD_STARTED_OK"),
+           ("RetMsg", ua.VariantType.String, "what was wrong and what to do, when RetCode < 0"),
+           ("Seq", ua.VariantType.UInt32, "the request's seq: a completion event's RefSeq names it"),
+           ("SessionEpoch", ua.VariantType.UInt32, "the session epoch the device answered in"),
+           ("Result", ua.VariantType.String, "the result message as JSON (schema field names)"))
+#: The notice fields every LandScapeNotice event carries besides BaseEventType's.
+EVENT_FIELDS: tuple[tuple[str, ua.VariantType], ...] = (
+    ("Device", ua.VariantType.Byte), ("Supervisor", ua.VariantType.Byte), ("Kind", ua.VariantType.String),
+    ("NoticeId", ua.VariantType.String), ("Data", ua.VariantType.String), ("RefSeq", ua.VariantType.UInt32),
+    ("SessionEpoch", ua.VariantType.UInt32), ("Final", ua.VariantType.Boolean),
+    ("RsvpId", ua.VariantType.UInt32), ("RsvpTimeoutMs", ua.VariantType.UInt32),
+    ("RsvpDefault", ua.VariantType.String))
+
+_VARIANT: dict[int, ua.VariantType] = {
+    FieldDescriptor.TYPE_DOUBLE: ua.VariantType.Double, FieldDescriptor.TYPE_FLOAT: ua.VariantType.Double,
+    FieldDescriptor.TYPE_INT32: ua.VariantType.Int32, FieldDescriptor.TYPE_SINT32: ua.VariantType.Int32,
+    FieldDescriptor.TYPE_SFIXED32: ua.VariantType.Int32, FieldDescriptor.TYPE_UINT32: ua.VariantType.UInt32,
+    FieldDescriptor.TYPE_FIXED32: ua.VariantType.UInt32, FieldDescriptor.TYPE_INT64: ua.VariantType.Int64,
+    FieldDescriptor.TYPE_SINT64: ua.VariantType.Int64, FieldDescriptor.TYPE_SFIXED64: ua.VariantType.Int64,
+    FieldDescriptor.TYPE_UINT64: ua.VariantType.UInt64, FieldDescriptor.TYPE_FIXED64: ua.VariantType.UInt64,
+    FieldDescriptor.TYPE_BOOL: ua.VariantType.Boolean, FieldDescriptor.TYPE_STRING: ua.VariantType.String,
+    FieldDescriptor.TYPE_BYTES: ua.VariantType.ByteString,
+    FieldDescriptor.TYPE_ENUM: ua.VariantType.String,      # the value's name (or short name)
+    FieldDescriptor.TYPE_MESSAGE: ua.VariantType.String,   # a JSON object with the schema's field names
+}
+
+# UNECE codes of OPC UA's EUInformation (namespace http://www.opcfoundation.org/UA/units/un/cefact)
+_UNECE = "http://www.opcfoundation.org/UA/units/un/cefact"
+_EU = {"rad": (ua.String("C81"), "rad", "radian"), "m": (ua.String("MTR"), "m", "metre")}
+
+
+def _eu(unit: str) -> ua.EUInformation:
+    code, short, long = _EU[unit]
+    # UnitId: the UNECE common code packed as OPC UA Part 8 says (one byte per character)
+    unit_id = 0
+    for ch in str(code):
+        unit_id = unit_id << 8 | ord(ch)
+    return ua.EUInformation(NamespaceUri=_UNECE, UnitId=unit_id, DisplayName=ua.LocalizedText(short),
+                            Description=ua.LocalizedText(long))
+
+
+class GatewayError(LandscapeError):
+    """The gateway cannot start (the port is taken, a certificate does not load)."""
+
+
+# ---------------------------------------------------------------- arguments
+
+
+def argument_of(fd: FieldDescriptor) -> ua.Argument:
+    """The OPC UA Argument of request field `fd`: its type from the schema, an array for a repeated
+    field, enum choices and JSON shape in the description."""
+    arg = ua.Argument()
+    arg.Name = fd.name
+    arg.DataType = _nid(_VARIANT[fd.type].value)
+    if is_repeated(fd):
+        arg.ValueRank = 1
+        arg.ArrayDimensions = [0]
+    else:
+        arg.ValueRank = -1
+    if fd.type == FieldDescriptor.TYPE_ENUM:
+        text = f"one of {enum_choices(field_enum_type(fd))} (\"\": absent)"
+    elif fd.type == FieldDescriptor.TYPE_MESSAGE:
+        text = f"a JSON object of {fd.message_type.name if fd.message_type else 'the message'}"
+    else:
+        text = fd.name
+    arg.Description = ua.LocalizedText(text)
+    return arg
+
+
+def fields_of(cmd: Command, args: Sequence[Any]) -> dict[str, Any]:
+    """The request fields of `cmd` from a method call's input arguments (in schema order; missing trailing
+    ones and "" for an enum stay absent). ArgumentError naming the field for a value that does not fit."""
+    fds = cmd.fields()
+    if len(args) > len(fds):
+        raise ArgumentError(f"{cmd.name} takes {len(fds)} arguments ({', '.join(f.name for f in fds) or 'none'}), "
+                            f"got {len(args)}")
+    out: dict[str, Any] = {}
+    for fd, value in zip(fds, args, strict=False):
+        if value is None or (fd.type == FieldDescriptor.TYPE_ENUM and value == ""):
+            continue
+        if fd.type == FieldDescriptor.TYPE_MESSAGE:
+            items = value if is_repeated(fd) else [value]
+            parsed = []
+            for item in items:
+                try:
+                    parsed.append(json.loads(item))
+                except (TypeError, json.JSONDecodeError) as exc:
+                    raise ArgumentError(f"{cmd.name}.{fd.name}: {item!r} is not a JSON object ({exc})") from None
+            value = parsed if is_repeated(fd) else parsed[0]
+        out[fd.name] = list(value) if is_repeated(fd) and not isinstance(value, list) else value
+    return out
+
+
+# ---------------------------------------------------------------- sessions and users
+
+
+_current_session: contextvars.ContextVar[GatewaySession | None] = contextvars.ContextVar(
+    "landscape_gateway_session", default=None)
+
+
+class GatewaySession(InternalSession):
+    """An OPC UA session that tells the gateway who calls a method and when it ends."""
+
+    gateway: Gateway
+
+    async def call(self, params: list[ua.CallMethodRequest]) -> list[ua.CallMethodResult]:
+        token = _current_session.set(self)
+        try:
+            return await super().call(params)
+        finally:
+            _current_session.reset(token)
+
+    async def close_session(self, delete_subs: bool = True) -> None:
+        await super().close_session(delete_subs)
+        await self.gateway.session_closed(self)
+
+
+class GatewayUsers(UserManager):
+    """Anonymous (when allowed): read-only. A configured user with the right password, or a client whose
+    certificate is a configured user's: may call methods. Anything else is refused."""
+
+    def __init__(self, cfg: GatewayConfig, certificates: dict[bytes, str]) -> None:
+        self.cfg = cfg
+        self.certificates = certificates
+
+    def get_user(self, iserver: InternalServer, username: str | None = None, password: str | None = None,
+                 certificate: Any = None) -> User | None:
+        if username is not None:
+            if password is not None and self.cfg.check_password(username, password):
+                return User(role=UserRole.User, name=username)
+            return None
+        # asyncua passes the certificate of an X509 identity token, else the secure channel's peer
+        # certificate (the client's application certificate; b"" on a channel without security): either
+        # proves its key, so a configured user's certificate is that user.
+        name = self.certificates.get(certificate) if isinstance(certificate, bytes) and certificate else None
+        if name is not None:
+            return User(role=UserRole.User, name=name)
+        return User(role=UserRole.Anonymous) if self.cfg.allow_anonymous else None
+
+
+class _Rules(SimpleRoleRuleset):
+    """asyncua's roles, with anonymous allowed what a read-only client needs on a secure channel too
+    (browse, read, subscribe, call: a method refuses an anonymous caller itself, with a clear status)."""
+
+    def __init__(self) -> None:
+        super().__init__()  # type: ignore[no-untyped-call]  # asyncua leaves it untyped
+        allowed = set(self._permission_dict[UserRole.User])
+        allowed.discard(_nid(ObjectIds.WriteRequest_Encoding_DefaultBinary))
+        self._permission_dict[UserRole.Anonymous] = allowed
+
+
+# ---------------------------------------------------------------- one controller
+
+
+@dataclass
+class Controller:
+    address: int
+    obj: Node
+    vars: dict[str, Node]
+    axes: list[Node]
+    axes_cmd: list[Node]
+    observer: Supervisor | None = None
+    joints: list[float] = field(default_factory=lambda: [0.0] * JOINTS)
+    tool: list[float] = field(default_factory=lambda: [0.0] * 6)
+    events: Any = None  # asyncua EventGenerator of the controller object
+
+
+class Gateway:
+    """The OPC UA server and its link to the bus. `run()` serves until `stop()` (or SIGINT/SIGTERM)."""
+
+    def __init__(self, cfg: GatewayConfig, spec: BusSpec, *, client_name: str = "landscape-gateway") -> None:
+        self.cfg = cfg
+        self.spec = spec
+        self.client_name = client_name
+        self.server = Server()
+        self.ns = 0
+        self.controllers: dict[int, Controller] = {}
+        self._pending: set[int] = set()
+        self._sups: dict[tuple[int, int], Supervisor] = {}           # (session id, device) -> supervisor
+        self._sup_locks: dict[tuple[int, int], asyncio.Lock] = {}
+        self._used: set[int] = set()                                   # addresses our supervisors hold
+        self._heard: dict[int, float] = {}                             # other supervisors' addresses
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._stop = asyncio.Event()
+        self._events: asyncio.Queue[tuple[int, int, pb.Notice]] = asyncio.Queue()
+        self._bus: can.BusABC | None = None
+        self._notifier: can.Notifier | None = None
+        self._root: Node | None = None
+        self._event_type: Node | None = None
+        self.url = ""
+
+    # ------------------------------------------------------------ start and stop
+
+    async def start(self) -> None:
+        self._loop = asyncio.get_running_loop()
+        certificates: dict[bytes, str] = {}
+        server = self.server
+        server.iserver.set_user_manager(GatewayUsers(self.cfg, certificates))
+        await server.init()
+        setattr(server.iserver, "create_session", self._create_session)  # noqa: B010 (our session class)
+        host = f"[{self.cfg.host}]" if ":" in self.cfg.host else self.cfg.host
+        self.url = f"opc.tcp://{host}:{self.cfg.port}{ENDPOINT_PATH}"
+        server.set_endpoint(self.url)
+        server.set_server_name("LandScape gateway")
+        await server.set_application_uri("urn:landscape:gateway:server")
+        policies = [ua.SecurityPolicyType.NoSecurity] if "None" in self.cfg.security else []
+        if "Basic256Sha256_SignAndEncrypt" in self.cfg.security:
+            policies.append(ua.SecurityPolicyType.Basic256Sha256_SignAndEncrypt)
+        server.set_security_policy(policies, permission_ruleset=_Rules())
+        tokens: list[type] = []
+        if self.cfg.allow_anonymous:
+            tokens.append(ua.AnonymousIdentityToken)
+        if self.cfg.users:
+            tokens.append(ua.UserNameIdentityToken)
+        if self.cfg.certificate_users:
+            tokens.append(ua.X509IdentityToken)
+        server.set_identity_tokens(tokens)
+        try:
+            if self.cfg.certificate is not None and self.cfg.private_key is not None:
+                await server.load_certificate(str(self.cfg.certificate))
+                await server.load_private_key(str(self.cfg.private_key))
+            from asyncua.crypto import uacrypto
+            for cu in self.cfg.certificate_users:
+                certificates[uacrypto.der_from_x509(  # type: ignore[no-untyped-call]
+                    await uacrypto.load_certificate(str(cu.certificate)))] = cu.name
+        except (OSError, ValueError) as exc:
+            raise GatewayError(f"cannot load a certificate or key of {self.cfg.source}: {exc}: check the files "
+                               f"([server] certificate, private_key, [[certificate_users]])") from None
+        self.ns = await server.register_namespace(NAMESPACE_URI)
+        self._event_type = await server.create_custom_event_type(
+            self.ns, "LandScapeNoticeEventType", ObjectIds.BaseEventType,
+            [(name, vt) for name, vt in EVENT_FIELDS])
+        self._root = await server.nodes.objects.add_folder(_nid("DeviceSet", self.ns), f"{self.ns}:DeviceSet")
+        try:
+            await server.start()
+        except OSError as exc:
+            raise GatewayError(f"cannot serve OPC UA on {self.cfg.host}:{self.cfg.port}: {exc.strerror or exc}: "
+                               f"another program listens there? pass --port, or [server] port") from None
+        try:
+            self._bus = open_bus(self.spec)
+        except BaseException:
+            await server.stop()
+            raise
+        self._notifier = can.Notifier(self._bus, [self._on_frame], timeout=0.05, loop=None)
+        asyncio.get_running_loop().create_task(self._event_pump())
+
+    async def run(self) -> None:
+        """Serve until stop(); then close every session's supervisor (the device sees each leave)."""
+        loop = asyncio.get_running_loop()
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            loop.add_signal_handler(sig, self._stop.set)
+        try:
+            await self._stop.wait()
+        finally:
+            for sig in (signal.SIGINT, signal.SIGTERM):
+                loop.remove_signal_handler(sig)
+            await self.close()
+
+    def stop(self) -> None:
+        self._stop.set()
+
+    async def close(self) -> None:
+        sups = list(self._sups.values()) + [c.observer for c in self.controllers.values() if c.observer]
+        self._sups.clear()
+        for c in self.controllers.values():
+            c.observer = None
+        loop = asyncio.get_running_loop()
+        await asyncio.gather(*(loop.run_in_executor(None, s.close) for s in sups))
+        await self.server.stop()
+        if self._notifier is not None:
+            self._notifier.stop()
+            self._notifier = None
+        if self._bus is not None:
+            try:
+                self._bus.shutdown()
+            except (can.CanError, OSError) as exc:
+                log.debug("closing the bus: %s", exc)
+            release_bus(self._bus)
+            self._bus = None
+
+    # ------------------------------------------------------------ the bus (Notifier thread -> loop)
+
+    def _on_frame(self, frame: can.Message) -> None:
+        b = tm.decode(frame)
+        if b is None or self._loop is None:
+            return
+        if b.name == "HEARTBEAT" and b.signals.get("hb_role", 0) != 0:
+            self._heard[b.sender] = time.monotonic()  # another supervisor's address is taken
+            return
+        self._loop.call_soon_threadsafe(self._apply, b)
+
+    def _apply(self, b: tm.Broadcast) -> None:
+        c = self.controllers.get(b.sender)
+        if c is None:
+            if b.name == "HEARTBEAT" and b.sender not in self._pending:
+                self._pending.add(b.sender)
+                asyncio.get_running_loop().create_task(self._add_controller(b.sender))
+            return
+        s = b.signals
+        writes: list[tuple[Node, Any, ua.VariantType]] = []
+        if b.name == "HEARTBEAT":
+            writes += [(c.vars["Owner"], int(s["hb_owner"]), ua.VariantType.Byte),
+                       (c.vars["Supervisors"], int(s["hb_supervisors"]), ua.VariantType.Byte)]
+        elif b.name == "STATUS":
+            state = int(s["st_state"])
+            writes += [(c.vars["State"], pb.State.Name(state) if state in pb.State.values() else str(state),
+                        ua.VariantType.String),
+                       (c.vars["Motion"], tm.choice_name("STATUS", "st_motion", int(s["st_motion"])),
+                        ua.VariantType.String),
+                       (c.vars["Fault"], int(s["st_fault"]), ua.VariantType.UInt32)]
+        elif b.name.startswith("JOINTS_"):
+            cmd = b.name.startswith("JOINTS_CMD_")
+            for key, value in s.items():
+                i = int(key[1]) - 1
+                if cmd:
+                    writes.append((c.axes_cmd[i], float(value), ua.VariantType.Double))
+                else:
+                    c.joints[i] = float(value)
+                    writes.append((c.axes[i], float(value), ua.VariantType.Double))
+            if not cmd and b.name == "JOINTS_56":  # the last of the three: the set is whole
+                writes.append((c.vars["JointPositions"], list(c.joints), ua.VariantType.Double))
+        elif b.name in ("TOOL_POS", "TOOL_RPY"):
+            keys = ("tool_x", "tool_y", "tool_z") if b.name == "TOOL_POS" else ("tool_roll", "tool_pitch", "tool_yaw")
+            off = 0 if b.name == "TOOL_POS" else 3
+            for i, k in enumerate(keys):
+                c.tool[off + i] = float(s[k])
+            writes.append((c.vars["ToolPose"], list(c.tool), ua.VariantType.Double))
+        for node, value, vt in writes:
+            asyncio.get_running_loop().create_task(
+                self.server.write_attribute_value(node.nodeid, ua.DataValue(ua.Variant(value, vt))))
+
+    # ------------------------------------------------------------ the address space of a controller
+
+    async def _add_controller(self, address: int) -> None:
+        assert self._root is not None
+        ns = self.ns
+        name = f"Controller_{address:02X}"
+        obj = await self._root.add_object(_nid(name, ns), f"{ns}:{name}")
+        await obj.write_attribute(AttributeIds.EventNotifier, ua.DataValue(ua.Variant(1, ua.VariantType.Byte)))
+        nid = f"{name}."
+
+        async def var(parent: Node, key: str, value: Any, vt: ua.VariantType) -> Node:
+            return await parent.add_variable(_nid(nid + key, ns), f"{ns}:{key}", ua.Variant(value, vt))
+
+        v: dict[str, Node] = {}
+        v["Address"] = await var(obj, "Address", address, ua.VariantType.Byte)
+        v["Description"] = await var(obj, "Description", "", ua.VariantType.String)
+        v["State"] = await var(obj, "State", "", ua.VariantType.String)
+        v["Motion"] = await var(obj, "Motion", "", ua.VariantType.String)
+        v["Fault"] = await var(obj, "Fault", 0, ua.VariantType.UInt32)
+        v["Owner"] = await var(obj, "Owner", 0, ua.VariantType.Byte)
+        v["Supervisors"] = await var(obj, "Supervisors", 0, ua.VariantType.Byte)
+        devices = await obj.add_folder(_nid(nid + "MotionDevices", ns), f"{ns}:MotionDevices")
+        arm = await devices.add_object(_nid(nid + "Arm", ns), f"{ns}:Arm")
+        v["JointPositions"] = await var(arm, "JointPositions", [0.0] * JOINTS, ua.VariantType.Double)
+        v["ToolPose"] = await var(arm, "ToolPose", [0.0] * 6, ua.VariantType.Double)
+        await v["ToolPose"].write_attribute(AttributeIds.Description, ua.DataValue(ua.Variant(
+            ua.LocalizedText("x, y, z (m), roll, pitch, yaw (rad) of the tool in the world frame"))))
+        axes_folder = await arm.add_folder(_nid(nid + "Axes", ns), f"{ns}:Axes")
+        axes: list[Node] = []
+        axes_cmd: list[Node] = []
+        for j in range(1, JOINTS + 1):
+            axis = await axes_folder.add_object(_nid(f"{nid}Axes.J{j}", ns), f"{ns}:J{j}")
+            params = await axis.add_folder(_nid(f"{nid}Axes.J{j}.ParameterSet", ns), f"{ns}:ParameterSet")
+            for key, out in (("ActualPosition", axes), ("CommandedPosition", axes_cmd)):
+                node = await params.add_variable(_nid(f"{nid}Axes.J{j}.{key}", ns), f"{ns}:{key}",
+                                                 ua.Variant(0.0, ua.VariantType.Double))
+                await node.add_property(ns, "EngineeringUnits", _eu("rad"))
+                out.append(node)
+        await v["ToolPose"].add_property(ns, "EngineeringUnits", _eu("m"))
+        methods = await obj.add_folder(_nid(nid + "Commands", ns), f"{ns}:Commands")
+        outs = [self._out(n, vt, d) for n, vt, d in OUTPUTS]
+        for cmd in COMMANDS.values():
+            if cmd.field in ("connect", "disconnect"):
+                continue  # the gateway holds the session: an OPC UA session is the connection
+            await methods.add_method(_nid(nid + cmd.name, ns), f"{ns}:{cmd.name}", self._method(address, cmd),
+                                     [argument_of(fd) for fd in cmd.fields()], outs)
+        rsvp_in = [self._out("RsvpId", ua.VariantType.UInt32, "the RsvpId of the RSVP event"),
+                   self._out("RetCode", ua.VariantType.Int32, ">= 0 accepts, < 0 declines"),
+                   self._out("Data", ua.VariantType.String, "recorded in the device's event log", array=True)]
+        rsvp_out = [self._out("RetCode", ua.VariantType.Int32, "the device's RsvpAck: CMD_EXEC_OK, taken"),
+                    self._out("RetMsg", ua.VariantType.String, "why a reply was refused"),
+                    self._out("Action", ua.VariantType.String, "what the device did")]
+        await methods.add_method(_nid(nid + "AnswerRsvp", ns), f"{ns}:AnswerRsvp", self._rsvp_method(address),
+                                 rsvp_in, rsvp_out)
+        c = Controller(address, obj, v, axes, axes_cmd)
+        c.events = await self.server.get_event_generator(self._event_type, obj.nodeid)
+        self.controllers[address] = c
+        self._pending.discard(address)
+        log.info("controller %#04x on the bus: %s", address, obj.nodeid.to_string())
+        try:
+            observer = await self._open_supervisor(address, f"{self.client_name}-observer")
+        except LandscapeError as exc:
+            log.warning("controller %#04x: the gateway's observer did not connect (%s): no description, and "
+                        "alarms reach only the sessions' own supervisors", address, exc)
+            return
+        c.observer = observer
+        observer.on_notice(lambda n: self._notice(address, observer.source_address, n, unsolicited=True))
+        if observer.description is not None:
+            text = json.dumps(message_to_dict(observer.description.res), sort_keys=True)
+            await v["Description"].write_value(ua.Variant(text, ua.VariantType.String))
+
+    @staticmethod
+    def _out(name: str, vt: ua.VariantType, text: str, *, array: bool = False) -> ua.Argument:
+        arg = ua.Argument()
+        arg.Name = name
+        arg.DataType = _nid(vt.value)
+        arg.ValueRank = 1 if array else -1
+        if array:
+            arg.ArrayDimensions = [0]
+        arg.Description = ua.LocalizedText(text)
+        return arg
+
+    # ------------------------------------------------------------ supervisors, one per session and device
+
+    async def _open_supervisor(self, device: int, client_name: str) -> Supervisor:
+        """A connected Supervisor of `device` from the first address of the pool that neither this gateway
+        nor a supervisor heard on the bus holds; the next on a refusal "in use"."""
+        assert self._bus is not None and self._notifier is not None
+        loop = asyncio.get_running_loop()
+        now = time.monotonic()
+        refused: list[str] = []
+        for addr in self.cfg.pool:
+            if addr in self._used or now - self._heard.get(addr, -1e9) < 1.0:
+                continue
+            self._used.add(addr)
+            sup = Supervisor(self._bus, device=device, source_address=addr, notifier=self._notifier,
+                             client_name=client_name, heartbeat_period_ms=self.cfg.heartbeat_period_ms)
+            try:
+                await loop.run_in_executor(None, sup.open)
+            except AddressInUseError:
+                self._used.discard(addr)
+                refused.append(f"{addr:#04x}")
+                continue
+            except BaseException:
+                self._used.discard(addr)
+                raise
+            return sup
+        raise AddressInUseError(
+            "connect", pb.CMD_NOT_OWNER_ERR,
+            f"no free address in the gateway's pool {', '.join(f'{a:#04x}' for a in self.cfg.pool)} (held by this "
+            f"gateway: {len(self._used)}; refused: {', '.join(refused) or 'none'}): widen [supervisors] pool or "
+            f"close OPC UA sessions")
+
+    def _create_session(self, name: str, user: User = User(role=UserRole.Anonymous),  # noqa: B008
+                        external: bool = False) -> InternalSession:
+        s = GatewaySession(self.server.iserver, self.server.iserver.aspace, self.server.iserver.subscription_service,
+                           name, user=user, external=external)
+        s.gateway = self
+        return s
+
+    async def _session_supervisor(self, session: GatewaySession, device: int) -> Supervisor:
+        key = (_session_key(session), device)
+        lock = self._sup_locks.setdefault(key, asyncio.Lock())
+        async with lock:
+            sup = self._sups.get(key)
+            if sup is not None and sup.connected:
+                return sup
+            who = session.user.name or "user"
+            sup = await self._open_supervisor(device, f"opcua:{who}"[:24])
+            sup.on_notice(lambda n: self._notice(device, sup.source_address, n, unsolicited=False))
+            if session.state == SessionState.Closed:
+                await asyncio.get_running_loop().run_in_executor(None, sup.close)  # it ended while we connected
+                self._used.discard(sup.source_address)
+                raise LandscapeError("the OPC UA session ended")
+            self._sups[key] = sup
+            log.info("session %s (%s) is supervisor %#04x of %#04x", session.name, who, sup.source_address, device)
+            return sup
+
+    async def session_closed(self, session: GatewaySession) -> None:
+        """An OPC UA session ended (closed, timed out, its connection lost): its supervisors disconnect,
+        so the device runs its disconnect handler for an owner, as for a lost CAN supervisor."""
+        k = _session_key(session)
+        gone = [(key, sup) for key, sup in self._sups.items() if key[0] == k]
+        loop = asyncio.get_running_loop()
+        for key, sup in gone:
+            del self._sups[key]
+            self._sup_locks.pop(key, None)
+            log.info("session %s ended: supervisor %#04x of %#04x leaves", session.name, sup.source_address, key[1])
+            await loop.run_in_executor(None, sup.close)
+            self._used.discard(sup.source_address)
+
+    # ------------------------------------------------------------ methods
+
+    def _caller(self) -> GatewaySession | ua.StatusCode:
+        session = _current_session.get()
+        if session is None:
+            return _status(StatusCodes.BadSessionIdInvalid)
+        if session.user.role == UserRole.Anonymous:
+            return _status(StatusCodes.BadUserAccessDenied)
+        return session
+
+    def _method(self, device: int, cmd: Command) -> Callable[..., Any]:
+        async def call(parent: ua.NodeId, *args: ua.Variant) -> Any:
+            session = self._caller()
+            if isinstance(session, ua.StatusCode):
+                return session
+            try:
+                fields = fields_of(cmd, [a.Value if isinstance(a, ua.Variant) else a for a in args])
+                sup = await self._session_supervisor(session, device)
+                rv = await asyncio.get_running_loop().run_in_executor(
+                    None, lambda: sup.request(cmd.field, check=False, **fields))
+            except ArgumentError as exc:
+                log.warning("%s from session %s: %s", cmd.name, session.name, exc)
+                return _failed(StatusCodes.BadInvalidArgument, pb.CMD_PARAM_ERR, str(exc))
+            except LandscapeError as exc:
+                log.warning("%s from session %s: %s", cmd.name, session.name, exc)
+                return _failed(StatusCodes.BadCommunicationError, pb.CMD_ERR, str(exc))
+            result = json.dumps(rv.result, sort_keys=True) if rv.result else "{}"
+            return [ua.Variant(rv.ret_code, ua.VariantType.Int32), ua.Variant(rv.ret_name, ua.VariantType.String),
+                    ua.Variant(rv.ret_msg, ua.VariantType.String), ua.Variant(rv.seq, ua.VariantType.UInt32),
+                    ua.Variant(rv.epoch, ua.VariantType.UInt32), ua.Variant(result, ua.VariantType.String)]
+        return call
+
+    def _rsvp_method(self, device: int) -> Callable[..., Any]:
+        async def call(parent: ua.NodeId, rsvp_id: ua.Variant, ret_code: ua.Variant, data: ua.Variant) -> Any:
+            session = self._caller()
+            if isinstance(session, ua.StatusCode):
+                return session
+            sup = self._sups.get((_session_key(session), device))
+            if sup is None:
+                return _status(StatusCodes.BadInvalidState)  # this session armed no RSVP here
+            rid, code = int(rsvp_id.Value), int(ret_code.Value)
+            items = [str(d) for d in (data.Value or [])]
+            try:
+                ack = await asyncio.get_running_loop().run_in_executor(
+                    None, lambda: sup.answer_rsvp(rid, code, items, check=False))
+            except LandscapeError as exc:
+                return [ua.Variant(pb.CMD_TIMEOUT_ERR, ua.VariantType.Int32), ua.Variant(str(exc)),
+                        ua.Variant("", ua.VariantType.String)]
+            return [ua.Variant(ack.ret_code, ua.VariantType.Int32), ua.Variant(ack.ret_msg, ua.VariantType.String),
+                    ua.Variant(ack.action, ua.VariantType.String)]
+        return call
+
+    # ------------------------------------------------------------ notices -> events
+
+    def _notice(self, device: int, supervisor: int, n: pb.Notice, *, unsolicited: bool) -> None:
+        """A supervisor's dispatcher thread: queue the notice as an event. The observer forwards the notices
+        of no request (alarms to every session), a session's supervisor those of its own requests."""
+        if (n.ref_seq == 0 and n.kind not in RSVP_KINDS) != unsolicited or self._loop is None:
+            return
+        self._loop.call_soon_threadsafe(self._events.put_nowait, (device, supervisor, n))
+
+    async def _event_pump(self) -> None:
+        """One task fires every event: an EventGenerator's fields are shared between triggers."""
+        while True:
+            device, supervisor, n = await self._events.get()
+            c = self.controllers.get(device)
+            if c is None or c.events is None:
+                continue
+            ev = c.events.event
+            alarm = n.kind in ALARM_KINDS
+            ev.Severity = 800 if alarm else 300
+            ev.SourceName = f"Controller_{device:02X}"
+            ev.Device, ev.Supervisor = device, supervisor
+            ev.Kind, ev.NoticeId, ev.Data = pb.NoticeKind.Name(n.kind), n.event_id, "; ".join(n.data)
+            ev.RefSeq, ev.SessionEpoch, ev.Final = n.ref_seq, n.session_epoch, n.final
+            ev.RsvpId, ev.RsvpTimeoutMs, ev.RsvpDefault = n.rsvp_id, n.rsvp_timeout_ms, n.rsvp_default
+            await c.events.trigger(message=f"{pb.NoticeKind.Name(n.kind)} {n.event_id} {' '.join(n.data)}".strip())
+
+
+def _session_key(session: InternalSession) -> int:
+    return hash(session.session_id)
+
+
+def _failed(status: int, code: int, msg: str) -> ua.CallMethodResult:
+    res = ua.CallMethodResult()
+    res.StatusCode = _status(status)
+    res.OutputArguments = [ua.Variant(code, ua.VariantType.Int32), ua.Variant(pb.RetCode.Name(code)),
+                           ua.Variant(msg), ua.Variant(0, ua.VariantType.UInt32),
+                           ua.Variant(0, ua.VariantType.UInt32), ua.Variant("{}")]
+    return res
+
+
+def _nid(identifier: str | int, ns: int = 0) -> ua.NodeId:
+    """A NodeId (asyncua types its fields with NewTypes)."""
+    ident = ua.Int32(identifier) if isinstance(identifier, int) else ua.String(identifier)
+    return ua.NodeId(ident, ua.Int16(ns))
+
+
+def _status(code: int) -> ua.StatusCode:
+    return ua.StatusCode(ua.UInt32(code))

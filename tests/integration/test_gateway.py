@@ -1,0 +1,285 @@
+"""`landscape gateway` against the running landscaped, through a client we did not write (asyncua's
+Client, and its uaread/uacall tools): browse the controller, read it anonymously, subscribe to joint
+positions while a method call moves the arm, the completion event, an RSVP answered by AnswerRsvp,
+a second user session refused ownership but allowed to read, an anonymous session refused a
+command, and a killed session whose supervisor the device drops (its disconnect handler runs)."""
+from __future__ import annotations
+
+import asyncio
+import os
+import re
+import signal
+import socket
+import subprocess
+import sys
+import textwrap
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from conftest import CLI, Controller
+from landscape._generated import landscape_pb2 as pb
+from landscape.gateway_config import hash_password
+
+from asyncua import Client, ua
+
+BIN = Path(sys.executable).parent
+TARGET = [0.4, -0.2, 0.3, 0.0, 0.4, 0.2]
+CTRL = "Controller_10"
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+@pytest.fixture
+def gateway(controller: Controller, tmp_path: Path) -> Iterator[str]:
+    port = free_port()
+    cfg = tmp_path / "gateway.toml"
+    cfg.write_text(textwrap.dedent(f"""\
+        [server]
+        port = {port}
+        [supervisors]
+        pool = "0xF8-0xFE"
+        [users]
+        alice = "{hash_password('alice-pw', iterations=1000)}"
+        bob = "{hash_password('bob-pw', iterations=1000)}"
+        """))
+    proc = subprocess.Popen([str(CLI), "--interface", "slcan", "--channel", controller.pty, "gateway",
+                             "--config", str(cfg)], stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout is not None
+        first = proc.stdout.readline()
+        m = re.match(r"gateway: (opc\.tcp://127\.0\.0\.1:\d+/landscape/) serving", first)
+        assert m, first + (proc.stderr.read() if proc.poll() is not None and proc.stderr else "")
+        yield m.group(1)
+    finally:
+        if proc.poll() is None:
+            proc.send_signal(signal.SIGTERM)
+        out, err = proc.communicate(timeout=30)
+        assert proc.returncode == 0, (out, err)
+        assert "Traceback" not in err, err
+
+
+def user_url(url: str, user: str, pw: str) -> str:
+    return url.replace("opc.tcp://", f"opc.tcp://{user}:{pw}@")
+
+
+async def controller_node(client: Client, timeout_s: float = 10.0) -> Any:
+    """The controller's object, once the gateway has discovered it and read its description."""
+    ns = await client.get_namespace_index("urn:landscape:gateway")
+    deadline = time.monotonic() + timeout_s
+    while True:
+        try:
+            node = await client.nodes.objects.get_child([f"{ns}:DeviceSet", f"{ns}:{CTRL}"])
+            if await (await node.get_child(f"{ns}:Description")).read_value():
+                return node, ns
+        except ua.UaError:
+            pass
+        assert time.monotonic() < deadline, "the gateway did not show controller 0x10 within the time"
+        await asyncio.sleep(0.2)
+
+
+async def call(node: Any, ns: int, name: str, *args: Any) -> list[Any]:
+    cmds = await node.get_child(f"{ns}:Commands")
+    out = await node.call_method(await cmds.get_child(f"{ns}:{name}"), *args)
+    return list(out) if isinstance(out, list) else [out]
+
+
+class Events:
+    def __init__(self) -> None:
+        self.got: list[Any] = []
+
+    def event_notification(self, event: Any) -> None:
+        self.got.append(event)
+
+
+class Changes:
+    def __init__(self) -> None:
+        self.values: list[Any] = []
+
+    def datachange_notification(self, node: Any, val: Any, data: Any) -> None:
+        self.values.append(val)
+
+
+def test_browse_subscribe_move_and_complete_by_method_calls(gateway: str) -> None:
+    async def run() -> None:
+        async with Client(gateway) as anon:
+            node, ns = await controller_node(anon)
+            # browse: the MotionDeviceSystem shape, axes with units, one method per command
+            names = {(await c.read_browse_name()).Name for c in await node.get_children()}
+            assert {"Description", "State", "MotionDevices", "Commands"} <= names
+            axis = await node.get_child([f"{ns}:MotionDevices", f"{ns}:Arm", f"{ns}:Axes", f"{ns}:J1",
+                                         f"{ns}:ParameterSet", f"{ns}:ActualPosition"])
+            eu = await (await axis.get_child(f"{ns}:EngineeringUnits")).read_value()
+            assert eu.DisplayName.Text == "rad"
+            methods = {(await m.read_browse_name()).Name for m in
+                       await (await node.get_child(f"{ns}:Commands")).get_children()}
+            assert {"lock", "activate", "moveAbsolute", "pathMove", "AnswerRsvp"} <= methods
+            # anonymous: reads, but is refused a command
+            assert await (await node.get_child(f"{ns}:State")).read_value() in ("IDLE", "UNLOCKED")
+            with pytest.raises(ua.UaStatusCodeError) as refused:
+                await call(node, ns, "lock")
+            assert refused.value.code == ua.StatusCodes.BadUserAccessDenied
+
+        async with Client(user_url(gateway, "alice", "alice-pw")) as c:
+            node, ns = await controller_node(c)
+            events = Events()
+            esub = await c.create_subscription(50, events)
+            await esub.subscribe_events(node, await c.nodes.root.get_child(
+                ["0:Types", "0:EventTypes", "0:BaseEventType", f"{ns}:LandScapeNoticeEventType"]))
+            joints = Changes()
+            jsub = await c.create_subscription(20, joints)
+            jp = await node.get_child([f"{ns}:MotionDevices", f"{ns}:Arm", f"{ns}:JointPositions"])
+            await jsub.subscribe_data_change(jp)
+            for name, args in (("lock", []), ("activate", []), ("setSpeed", [40.0, "PERCENT_SPEED"])):
+                out = await call(node, ns, name, *args)
+                assert out[0] >= 0, (name, out)
+            out = await call(node, ns, "moveAbsolute", "p1", "JOINT_FRAME", TARGET)
+            assert out[1] == "CMD_STARTED_OK", out
+            seq = out[3]
+            deadline = time.monotonic() + 30
+            final = None
+            while final is None and time.monotonic() < deadline:
+                await asyncio.sleep(0.1)
+                final = next((e for e in events.got if e.RefSeq == seq and e.Final), None)
+            assert final is not None, [(e.NoticeId, e.RefSeq) for e in events.got]
+            assert final.NoticeId == "moveAbsoluteComplete" and final.Kind == "EVENT", final
+            await asyncio.sleep(0.3)
+            j1 = [v[0] for v in joints.values]
+            assert len(j1) > 10, len(j1)  # followed the move, not one value
+            assert joints.values[-1] == pytest.approx(TARGET, abs=2e-3)
+            assert len({round(v, 3) for v in j1}) > 5
+    asyncio.run(run())
+
+
+def test_an_rsvp_is_answered_by_a_method_call(gateway: str) -> None:
+    async def run() -> None:
+        async with Client(user_url(gateway, "alice", "alice-pw")) as c:
+            node, ns = await controller_node(c)
+            events = Events()
+            esub = await c.create_subscription(50, events)
+            await esub.subscribe_events(node, await c.nodes.root.get_child(
+                ["0:Types", "0:EventTypes", "0:BaseEventType", f"{ns}:LandScapeNoticeEventType"]))
+            for name, args in (("lock", []), ("activate", [])):
+                assert (await call(node, ns, name, *args))[0] >= 0
+            # a path with an RSVP point (docs/protocol.md "RSVP"): the device asks "go on?"
+            tags = ['{"tag_name": "a", "joints": [0.1, 0, 0, 0, 0, 0], "aux_commands": ["rsvp goOn 5"]}',
+                    '{"tag_name": "b", "joints": [0.2, 0, 0, 0, 0, 0]}']
+            out = await call(node, ns, "pathLoad", "r", "JOINT_FRAME", "JOINT_MOTION", "ABSOLUTE_DATA", 2, tags)
+            assert out[0] >= 0, out
+            out = await call(node, ns, "pathMove", "r")
+            assert out[1] == "CMD_STARTED_OK", out
+            seq = out[3]
+            deadline = time.monotonic() + 20
+            rsvp = None
+            while rsvp is None and time.monotonic() < deadline:
+                await asyncio.sleep(0.05)
+                rsvp = next((e for e in events.got if e.RsvpId), None)
+            assert rsvp is not None, [(e.Kind, e.NoticeId) for e in events.got]
+            ack = await call(node, ns, "AnswerRsvp", ua.Variant(rsvp.RsvpId, ua.VariantType.UInt32),
+                             ua.Variant(-1, ua.VariantType.Int32), ua.Variant(["why=test"], ua.VariantType.String))
+            assert ack[0] == pb.CMD_EXEC_OK and ack[2] == "abort", ack
+            deadline = time.monotonic() + 20
+            final = None
+            while final is None and time.monotonic() < deadline:
+                await asyncio.sleep(0.05)
+                final = next((e for e in events.got if e.RefSeq == seq and e.Final), None)
+            assert final is not None and final.Kind == "ALARM" and final.NoticeId == "pathMoveAborted", final
+    asyncio.run(run())
+
+
+KILLED_CLIENT = """
+import asyncio, sys, time
+from asyncua import Client
+async def main():
+    c = Client(sys.argv[1])
+    await c.connect()
+    ns = await c.get_namespace_index("urn:landscape:gateway")
+    node = await c.nodes.objects.get_child([f"{ns}:DeviceSet", f"{ns}:Controller_10"])
+    cmds = await node.get_child(f"{ns}:Commands")
+    out = await node.call_method(await cmds.get_child(f"{ns}:lock"))
+    print("locked", out[0], flush=True)
+    await asyncio.sleep(60)
+asyncio.run(main())
+"""
+
+
+def test_a_second_client_is_refused_ownership_and_a_killed_session_is_dropped(gateway: str, tmp_path: Path) -> None:
+    script = tmp_path / "owner.py"
+    script.write_text(KILLED_CLIENT)
+
+    async def run() -> None:
+        async with Client(user_url(gateway, "bob", "bob-pw")) as bob:
+            node, ns = await controller_node(bob)
+            owner = subprocess.Popen([sys.executable, str(script), user_url(gateway, "alice", "alice-pw")],
+                                     stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+            try:
+                assert owner.stdout is not None
+                line = await asyncio.get_running_loop().run_in_executor(None, owner.stdout.readline)
+                assert line.startswith("locked 0"), line + (owner.stderr.read() if owner.stderr else "")
+                events = Events()
+                esub = await bob.create_subscription(50, events)
+                await esub.subscribe_events(node, await bob.nodes.root.get_child(
+                    ["0:Types", "0:EventTypes", "0:BaseEventType", f"{ns}:LandScapeNoticeEventType"]))
+                state = await node.get_child(f"{ns}:State")
+                owner_var = await node.get_child(f"{ns}:Owner")
+                await asyncio.sleep(0.5)
+                assert await state.read_value() == "LOCKED"
+                alice_addr = await owner_var.read_value()
+                assert 0xF8 <= alice_addr <= 0xFE
+                # bob: refused ownership, but reads
+                out = await call(node, ns, "lock")
+                assert out[1] == "CMD_NOT_OWNER_ERR", out
+                assert await (await node.get_child([f"{ns}:MotionDevices", f"{ns}:Arm",
+                                                     f"{ns}:JointPositions"])).read_value()
+                # the owner's OPC UA client dies: its session, then its supervisor, goes
+                owner.kill()
+                owner.wait(timeout=10)
+            finally:
+                if owner.poll() is None:
+                    owner.kill()
+            deadline = time.monotonic() + 20
+            while time.monotonic() < deadline and await state.read_value() == "LOCKED":
+                await asyncio.sleep(0.1)
+            assert await state.read_value() in ("UNLOCKED", "IDLE")  # stop_deactivate_release ran
+            lost = [e for e in events.got if e.NoticeId == "ownerLost"]
+            assert lost and f"supervisor={alice_addr:#04x}" in lost[0].Data.lower(), \
+                [(e.NoticeId, e.Data) for e in events.got]
+            # and now bob may own it
+            out = await call(node, ns, "lock")
+            assert out[0] >= 0, out
+    asyncio.run(run())
+
+
+def test_asyncua_command_line_tools_read_and_call(gateway: str) -> None:
+    for _ in range(50):
+        r = subprocess.run([str(BIN / "uaread"), "-u", gateway, "-n", f"ns=2;s={CTRL}.Description"],
+                           capture_output=True, text=True, timeout=30)
+        if r.returncode == 0 and "device" in r.stdout.lower():
+            break
+        time.sleep(0.2)
+    assert r.returncode == 0 and r.stdout.strip(), (r.stdout, r.stderr)
+    r = subprocess.run([str(BIN / "uaread"), "-u", gateway, "-n", f"ns=2;s={CTRL}.State"],
+                       capture_output=True, text=True, timeout=30)
+    assert r.returncode == 0 and r.stdout.strip() in ("IDLE", "UNLOCKED"), (r.stdout, r.stderr)
+    r = subprocess.run([str(BIN / "uacall"), "-u", user_url(gateway, "alice", "alice-pw"),
+                        "-n", f"ns=2;s={CTRL}", "-m", f"ns=2;s={CTRL}.getRobotPosition"],
+                       capture_output=True, text=True, timeout=30)
+    assert r.returncode == 0 and "CMD_EXEC_OK" in r.stdout, (r.stdout, r.stderr)
+
+
+def test_a_bad_config_is_one_line_and_exit_2(tmp_path: Path) -> None:
+    cfg = tmp_path / "bad.toml"
+    cfg.write_text('[users]\nalice = "alice-pw"\n')
+    r = subprocess.run([str(CLI), "--interface", "slcan", "--channel", "/nonexistent", "gateway", "--config",
+                        str(cfg)], capture_output=True, text=True, timeout=30, env={**os.environ})
+    assert r.returncode == 2, (r.stdout, r.stderr)
+    assert "Traceback" not in r.stderr
+    assert "[users] alice: not a password hash" in r.stderr and "--hash-password" in r.stderr, r.stderr
