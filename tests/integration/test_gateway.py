@@ -234,8 +234,8 @@ def test_a_second_client_is_refused_ownership_and_a_killed_session_is_dropped(ga
                 assert await state.read_value() == "LOCKED"
                 alice_addr = await owner_var.read_value()
                 assert 0xF8 <= alice_addr <= 0xFE
-                # bob: refused ownership, but reads
-                out = await call(node, ns, "lock")
+                # bob: refused ownership (alice's lock holds), but reads
+                out = await call(node, ns, "activate")
                 assert out[1] == "CMD_NOT_OWNER_ERR", out
                 assert await (await node.get_child([f"{ns}:MotionDevices", f"{ns}:Arm",
                                                      f"{ns}:JointPositions"])).read_value()
@@ -270,7 +270,7 @@ def test_asyncua_command_line_tools_read_and_call(gateway: str) -> None:
                        capture_output=True, text=True, timeout=30)
     assert r.returncode == 0 and r.stdout.strip() in ("IDLE", "UNLOCKED"), (r.stdout, r.stderr)
     r = subprocess.run([str(BIN / "uacall"), "-u", user_url(gateway, "alice", "alice-pw"),
-                        "-n", f"ns=2;s={CTRL}", "-m", f"ns=2;s={CTRL}.getRobotPosition"],
+                        "-n", f"ns=2;s={CTRL}.Commands", "-m", "2:getRobotPosition"],
                        capture_output=True, text=True, timeout=30)
     assert r.returncode == 0 and "CMD_EXEC_OK" in r.stdout, (r.stdout, r.stderr)
 
