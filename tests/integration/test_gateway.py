@@ -19,12 +19,11 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from asyncua import Client, ua
 
 from conftest import CLI, Controller
 from landscape._generated import landscape_pb2 as pb
 from landscape.gateway_config import hash_password
-
-from asyncua import Client, ua
 
 BIN = Path(sys.executable).parent
 TARGET = [0.4, -0.2, 0.3, 0.0, 0.4, 0.2]

@@ -48,7 +48,7 @@ from .bus import BusSpec, open_bus, release_bus
 from .errors import AddressInUseError, ArgumentError, LandscapeError
 from .gateway_config import GatewayConfig
 from .registry import COMMANDS, Command, enum_choices, field_enum_type, is_repeated, message_to_dict
-from .supervisor import RSVP_KINDS, ALARM_KINDS, Supervisor
+from .supervisor import ALARM_KINDS, RSVP_KINDS, Supervisor
 
 log = logging.getLogger("landscape.gateway")
 
