@@ -14,6 +14,7 @@ import re
 import shutil
 import socket
 import subprocess
+import sys
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -24,12 +25,18 @@ from conftest import BUILD, LANDSCAPED, ROOT
 DEPLOY = ROOT / "firmware" / "app" / "deploy"
 DRIVER = BUILD / "bin" / "ls_config_driver"
 CONF = DEPLOY / "landscaped.conf"
+GATEWAY_CONF = DEPLOY / "gateway.toml"
+GATEWAY_UNIT = "landscape-gateway.service"
+#: Where the gateway's unit runs the host tool from (docs/gateway.md "Installation").
+GATEWAY_EXE = Path("/opt/landscape/bin/landscape")
 PACKAGE = "landscape-controller"
 
 PACKAGED_FILES = {
     "/etc/landscape/landscaped.conf",
+    "/etc/landscape/gateway.toml",
     "/usr/bin/landscaped",
     "/usr/lib/systemd/system/landscaped.service",
+    "/usr/lib/systemd/system/landscape-gateway.service",
     "/usr/lib/sysusers.d/landscape.conf",
     "/usr/lib/udev/rules.d/60-landscape-gpio.rules",
 } | {f"/usr/share/doc/landscape/{p.name}" for p in (ROOT / "docs").glob("*.md")}
@@ -74,6 +81,7 @@ def test_deb_holds_exactly_the_deployed_files(deb: Path) -> None:
     modes = {line.split()[-1].removeprefix("."): line.split()[0] for line in r.stdout.splitlines()}
     assert modes["/usr/bin/landscaped"] == "-rwxr-xr-x"
     assert modes["/etc/landscape/landscaped.conf"] == "-rw-r--r--"
+    assert modes["/etc/landscape/gateway.toml"] == "-rw-r-----"  # password hashes
 
 
 def test_deb_control_fields(deb: Path) -> None:
@@ -88,7 +96,7 @@ def test_deb_control_fields(deb: Path) -> None:
         assert lib in depends, field("Depends")
     assert re.fullmatch(r".+ <[^@ ]+@[^> ]+>", field("Maintainer")), field("Maintainer")
     conffiles = run("dpkg-deb", "-I", deb, "conffiles", check=True).stdout.split()
-    assert conffiles == ["/etc/landscape/landscaped.conf"]
+    assert conffiles == ["/etc/landscape/landscaped.conf", "/etc/landscape/gateway.toml"]
     for script in ("postinst", "prerm", "postrm"):
         text = run("dpkg-deb", "-I", deb, script, check=True).stdout
         assert text.startswith("#!/bin/sh\n") and "set -e" in text
@@ -101,14 +109,15 @@ def test_cmake_install_layout(tmp_path: Path) -> None:
     files = {str(p.relative_to(tmp_path)) for p in tmp_path.rglob("*") if p.is_file()}
     assert files == {f.removeprefix("/usr/").removeprefix("/") for f in PACKAGED_FILES}, r.stdout
     assert (tmp_path / "etc/landscape/landscaped.conf").read_text() == CONF.read_text()
+    assert (tmp_path / "etc/landscape/gateway.toml").read_text() == GATEWAY_CONF.read_text()
     assert os.access(tmp_path / "bin/landscaped", os.X_OK)
 
 
 # ---- the unit ---------------------------------------------------------------
 
-def unit_directives() -> dict[str, list[str]]:
+def unit_directives(unit: str = "landscaped.service") -> dict[str, list[str]]:
     d: dict[str, list[str]] = {}
-    for line in (DEPLOY / "landscaped.service").read_text().splitlines():
+    for line in (DEPLOY / unit).read_text().splitlines():
         m = re.match(r"^(\w+)=(.*)$", line)
         if m:
             d.setdefault(m.group(1), []).append(m.group(2))
@@ -145,6 +154,35 @@ def test_unit_directives() -> None:
     assert re.search(r"^u landscape ", sysusers, re.M) and re.search(r"^g gpio ", sysusers, re.M)
     assert re.search(r"^m landscape gpio$", sysusers, re.M)
     assert 'GROUP="gpio"' in (DEPLOY / "60-landscape-gpio.rules").read_text()
+
+
+def test_gateway_unit_directives() -> None:
+    d = unit_directives(GATEWAY_UNIT)
+    want = {
+        "Type": ["simple"],
+        "ExecStart": [f"{GATEWAY_EXE} gateway --config /etc/landscape/gateway.toml"],
+        "User": ["landscape"],
+        "Restart": ["on-failure"],
+        "NoNewPrivileges": ["yes"],
+        "ProtectSystem": ["strict"],
+        "ProtectHome": ["yes"],
+        "PrivateTmp": ["yes"],
+        "KillSignal": ["SIGTERM"],
+        "WantedBy": ["multi-user.target"],
+    }
+    for key, value in want.items():
+        assert d.get(key) == value, key
+    # the OPC UA clients reach it over TCP; no capability at all
+    assert {"AF_INET", "AF_INET6"} <= set(d["RestrictAddressFamilies"][0].split())
+    assert d["CapabilityBoundingSet"] == [""]
+
+
+def test_shipped_gateway_config_is_valid_and_safe() -> None:
+    from landscape.gateway_config import load_config
+    cfg = load_config(GATEWAY_CONF)
+    assert cfg.host == "127.0.0.1" and cfg.port == 4840  # this machine only, OPC UA's port
+    assert cfg.allow_anonymous and not cfg.users and not cfg.certificate_users  # read-only until configured
+    assert (cfg.interface, cfg.channel) == ("socketcan", "can0")  # landscaped.conf's link
 
 
 # ---- installed for real -------------------------------------------------------
@@ -197,6 +235,25 @@ def test_installed_unit_verifies(installed: Path) -> None:
     r = run("systemd-analyze", "verify", "/usr/lib/systemd/system/landscaped.service")
     assert r.returncode == 0, r.stdout + r.stderr
     assert "landscaped.service" not in r.stdout + r.stderr, r.stdout + r.stderr
+
+
+def test_installed_gateway_unit_and_config(installed: Path) -> None:
+    conf = Path("/etc/landscape/gateway.toml")
+    st = conf.stat()
+    assert oct(st.st_mode & 0o777) == "0o640" and grp.getgrgid(st.st_gid).gr_name == "landscape"
+    # systemd-analyze verify checks that ExecStart is executable: the host tool of this checkout,
+    # installed where the unit expects it (docs/gateway.md "Installation"), for the check only
+    cli = Path(sys.executable).parent / "landscape"
+    if GATEWAY_EXE.parent.parent.exists():
+        pytest.skip(f"{GATEWAY_EXE.parent.parent} exists on this machine: not touching a real installation")
+    GATEWAY_EXE.parent.mkdir(parents=True)
+    try:
+        GATEWAY_EXE.symlink_to(cli)
+        r = run("systemd-analyze", "verify", f"/usr/lib/systemd/system/{GATEWAY_UNIT}")
+        assert r.returncode == 0, r.stdout + r.stderr
+        assert GATEWAY_UNIT not in r.stdout + r.stderr, r.stdout + r.stderr
+    finally:
+        shutil.rmtree(GATEWAY_EXE.parent.parent)
 
 
 def test_installed_config_checks_this_machine(installed: Path) -> None:

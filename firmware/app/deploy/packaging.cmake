@@ -2,7 +2,9 @@
 # Included at the end of the top CMakeLists.txt, after every target exists.
 #
 #   cmake --install build --prefix X   X/bin/landscaped, X/etc/landscape/landscaped.conf,
+#                                      X/etc/landscape/gateway.toml (mode 0640: password hashes),
 #                                      X/lib/systemd/system/landscaped.service,
+#                                      X/lib/systemd/system/landscape-gateway.service,
 #                                      X/lib/sysusers.d/landscape.conf,
 #                                      X/lib/udev/rules.d/60-landscape-gpio.rules,
 #                                      X/share/doc/landscape/*.md
@@ -28,9 +30,12 @@ install(CODE "
   endif()
   file(INSTALL DESTINATION \"\${_ls_etc}\" TYPE FILE PERMISSIONS OWNER_READ OWNER_WRITE GROUP_READ WORLD_READ
        FILES \"${LS_DEPLOY_DIR}/landscaped.conf\")
+  file(INSTALL DESTINATION \"\${_ls_etc}\" TYPE FILE PERMISSIONS OWNER_READ OWNER_WRITE GROUP_READ
+       FILES \"${LS_DEPLOY_DIR}/gateway.toml\")
 ")
 
-install(FILES ${LS_DEPLOY_DIR}/landscaped.service DESTINATION lib/systemd/system)
+install(FILES ${LS_DEPLOY_DIR}/landscaped.service ${LS_DEPLOY_DIR}/landscape-gateway.service
+        DESTINATION lib/systemd/system)
 install(FILES ${LS_DEPLOY_DIR}/landscape.sysusers DESTINATION lib/sysusers.d RENAME landscape.conf)
 install(FILES ${LS_DEPLOY_DIR}/60-landscape-gpio.rules DESTINATION lib/udev/rules.d)
 file(GLOB LS_DOC_FILES CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/docs/*.md)
@@ -46,7 +51,8 @@ set(CPACK_PACKAGE_DESCRIPTION_SUMMARY "LandScape robot controller daemon (landsc
 string(CONCAT CPACK_PACKAGE_DESCRIPTION
     "landscaped runs the LandScape command set over CAN (SocketCAN or SLCAN) with a fixed-rate\n"
     "control loop, digital I/O through libgpiod and a simulated 6-DOF arm. Includes the systemd\n"
-    "unit, the landscape user and a udev rule for /dev/gpiochip*.")
+    "unit, the landscape user and a udev rule for /dev/gpiochip*, and the unit and configuration of\n"
+    "the OPC UA gateway (landscape gateway, from the host tool).")
 # The package installs under /usr; DESTDIR staging lets the configuration
 # rule above place /etc/landscape (an absolute path) into the package.
 set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
