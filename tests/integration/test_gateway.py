@@ -8,6 +8,7 @@ from __future__ import annotations
 import asyncio
 import os
 import re
+import shlex
 import signal
 import socket
 import subprocess
@@ -282,3 +283,97 @@ def test_a_bad_config_is_one_line_and_exit_2(tmp_path: Path) -> None:
     assert r.returncode == 2, (r.stdout, r.stderr)
     assert "Traceback" not in r.stderr
     assert "[users] alice: not a password hash" in r.stderr and "--hash-password" in r.stderr, r.stderr
+
+
+DOC = Path(__file__).resolve().parents[2] / "docs" / "gateway.md"
+DOC_URL = "opc.tcp://127.0.0.1:4840/landscape/"
+
+
+def doc_block(info: str) -> str:
+    m = re.search(rf"^```{re.escape(info)}\n(.*?)^```$", DOC.read_text(), re.M | re.S)
+    assert m, f"docs/gateway.md lost its ```{info} block"
+    return m.group(1)
+
+
+def test_the_example_session_of_the_docs_runs(gateway: str) -> None:
+    """docs/gateway.md "Example session", line by line, against this test's gateway."""
+    asyncio.run(_wait_for_description(gateway))
+    lines = [ln for ln in doc_block("sh gateway-session").splitlines() if ln.strip()]
+    assert len(lines) >= 4
+    for line in lines:
+        line = line.replace("127.0.0.1:4840", gateway.split("//")[1].split("/")[0])
+        argv = shlex.split(line)
+        r = subprocess.run([str(BIN / argv[0]), *argv[1:]], capture_output=True, text=True, timeout=60)
+        assert r.returncode == 0 and "Traceback" not in r.stderr, (line, r.stdout, r.stderr)
+        if argv[0] == "uals":
+            assert "Commands" in r.stdout and "Description" in r.stdout, r.stdout
+        if "getRobotPosition" in line:
+            assert "CMD_EXEC_OK" in r.stdout, r.stdout
+    code = doc_block("python").replace(DOC_URL.replace("opc.tcp://", "opc.tcp://alice:alice-pw@"),
+                                       user_url(gateway, "alice", "alice-pw"))
+    assert gateway in code.replace("alice:alice-pw@", "")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0, (r.stdout, r.stderr)
+    assert "CMD_STARTED_OK" in r.stdout, r.stdout
+
+
+async def _wait_for_description(url: str) -> None:
+    async with Client(url) as c:
+        await controller_node(c, timeout_s=20)
+
+
+def make_pair(dir_: Path, name: str, uri: str) -> tuple[Path, Path]:
+    key, cert = dir_ / f"{name}-key.pem", dir_ / f"{name}-cert.der"
+    r = subprocess.run(["openssl", "req", "-x509", "-newkey", "rsa:2048", "-nodes", "-days", "30",
+                        "-subj", f"/CN={name}", "-addext", f"subjectAltName=URI:{uri},DNS:localhost",
+                        "-keyout", str(key), "-outform", "der", "-out", str(cert)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    return cert, key
+
+
+def test_basic256sha256_sign_and_encrypt_with_a_user(controller: Controller, tmp_path: Path) -> None:
+    port = free_port()
+    scert, skey = make_pair(tmp_path, "server", "urn:landscape:gateway:server")
+    ccert, ckey = make_pair(tmp_path, "client", "urn:freeopcua:client")
+    cfg = tmp_path / "gateway.toml"
+    cfg.write_text(textwrap.dedent(f"""\
+        [server]
+        port = {port}
+        security = ["Basic256Sha256_SignAndEncrypt"]
+        certificate = "{scert.name}"
+        private_key = "{skey.name}"
+        allow_anonymous = false
+        [users]
+        alice = "{hash_password('alice-pw', iterations=1000)}"
+        """))
+    proc = subprocess.Popen([str(CLI), "--interface", "slcan", "--channel", controller.pty, "gateway",
+                             "--config", str(cfg)], stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    url = f"opc.tcp://127.0.0.1:{port}/landscape/"
+
+    async def run() -> None:
+        # no unencrypted endpoint, and no anonymous session even encrypted
+        plain = Client(url)
+        with pytest.raises(Exception):  # noqa: B017 (asyncua: no endpoint for the None policy)
+            await plain.connect()
+        c = Client(user_url(url, "alice", "alice-pw"))
+        await c.set_security_string(f"Basic256Sha256,SignAndEncrypt,{ccert},{ckey}")
+        async with c:
+            node, ns = await controller_node(c, timeout_s=20)
+            out = await call(node, ns, "lock")
+            assert out[0] == pb.CMD_EXEC_OK, out
+        anon = Client(url)
+        await anon.set_security_string(f"Basic256Sha256,SignAndEncrypt,{ccert},{ckey}")
+        with pytest.raises(ua.UaStatusCodeError):
+            await anon.connect()
+        await anon.disconnect()
+    try:
+        assert proc.stdout is not None
+        first = proc.stdout.readline()
+        assert "security Basic256Sha256_SignAndEncrypt" in first, first
+        asyncio.run(run())
+    finally:
+        if proc.poll() is None:
+            proc.send_signal(signal.SIGTERM)
+        out, err = proc.communicate(timeout=30)
+    assert proc.returncode == 0 and "Traceback" not in err, (out, err)
