@@ -1,0 +1,128 @@
+"""The gateway's pure parts: its configuration file (every mistake one clear error), password hashes,
+the users it admits, and the OPC UA methods' arguments derived from the schema."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from asyncua.crypto.permission_rules import UserRole
+from google.protobuf.descriptor import FieldDescriptor
+
+from landscape.errors import ArgumentError
+from landscape.gateway import GatewayUsers, argument_of, fields_of
+from landscape.gateway_config import (
+    DEFAULT_POOL,
+    GatewayConfigError,
+    hash_password,
+    load_config,
+    parse_config,
+    verify_password,
+)
+from landscape.registry import COMMANDS, is_repeated, lookup
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def test_defaults_are_localhost_anonymous_read_only() -> None:
+    cfg = load_config(None)
+    assert (cfg.host, cfg.port, cfg.allow_anonymous, cfg.security) == ("127.0.0.1", 4840, True, ("None",))
+    assert cfg.users == {} and cfg.pool == DEFAULT_POOL
+
+
+def test_a_full_config(tmp_path: Path) -> None:
+    (tmp_path / "c.der").write_bytes(b"x")
+    (tmp_path / "k.pem").write_bytes(b"x")
+    cfg = parse_config(f"""
+[server]
+host = "0.0.0.0"
+port = 4841
+security = ["None", "Basic256Sha256_SignAndEncrypt"]
+certificate = "c.der"
+private_key = "k.pem"
+allow_anonymous = false
+[bus]
+interface = "slcan"
+channel = "/run/landscape/ls0"
+[supervisors]
+pool = [0xF1, "0xF2"]
+heartbeat_period_ms = 100
+[users]
+op = "{hash_password('pw', iterations=1000)}"
+""", "t.toml", base=tmp_path)
+    assert cfg.certificate == tmp_path / "c.der" and cfg.pool == (0xF1, 0xF2) and not cfg.allow_anonymous
+    assert cfg.check_password("op", "pw") and not cfg.check_password("op", "PW") and not cfg.check_password("x", "pw")
+
+
+@pytest.mark.parametrize("text, says", [
+    ("[server\n", "t.toml: not valid TOML"),
+    ("[servr]\n", "unknown section [servr]"),
+    ("[server]\nprot = 1\n", "[server] has no key 'prot'"),
+    ("[server]\nport = 70000\n", "[server] port: 70000 is not a TCP port"),
+    ("[server]\nport = \"x\"\n", "[server] port: 'x' is not a TCP port"),
+    ("[server]\nsecurity = [\"Basic128\"]\n", "security: ['Basic128']: write a list of None, Basic256Sha256"),
+    ("[server]\nsecurity = [\"Basic256Sha256_SignAndEncrypt\"]\n", "needs the server's certificate"),
+    ("[server]\ncertificate = \"nope.der\"\n", "nope.der does not exist"),
+    ("[supervisors]\npool = \"0x10-0x20\"\n", "'0x10' is not a supervisor address: use 0xf1..0xfe"),
+    ("[supervisors]\npool = \"0xFE-0xF1\"\n", "runs backwards"),
+    ("[supervisors]\nheartbeat_period_ms = 5\n", "outside 10..2000"),
+    ("[users]\nop = \"secret\"\n", "[users] op: not a password hash: write the line that `landscape gateway "
+                                   "--hash-password` prints"),
+])
+def test_every_mistake_is_named(text: str, says: str, tmp_path: Path) -> None:
+    with pytest.raises(GatewayConfigError) as exc:
+        parse_config(text, "t.toml", base=tmp_path)
+    assert says in str(exc.value)
+    assert isinstance(exc.value, ArgumentError)  # the CLI exits 2
+
+
+def test_an_unreadable_file(tmp_path: Path) -> None:
+    with pytest.raises(GatewayConfigError, match="cannot read the gateway configuration .*nope.toml"):
+        load_config(tmp_path / "nope.toml")
+
+
+def test_password_hashes_are_salted() -> None:
+    a, b = hash_password("pw", iterations=1000), hash_password("pw", iterations=1000)
+    assert a != b and verify_password("pw", a) and verify_password("pw", b) and not verify_password("pv", a)
+
+
+def test_users() -> None:
+    cfg = parse_config(f'[users]\nop = "{hash_password("pw", iterations=1000)}"\n')
+    users = GatewayUsers(cfg, {b"DER": "mes"})
+    anon = users.get_user(None, certificate=b"")
+    assert anon is not None and anon.role == UserRole.Anonymous
+    op = users.get_user(None, username="op", password="pw")
+    assert op is not None and op.role == UserRole.User and op.name == "op"
+    assert users.get_user(None, username="op", password="no") is None
+    mes = users.get_user(None, certificate=b"DER")
+    assert mes is not None and mes.name == "mes" and mes.role == UserRole.User
+    cfg.allow_anonymous = False
+    assert users.get_user(None) is None
+
+
+def test_every_command_field_has_an_argument() -> None:
+    for cmd in COMMANDS.values():
+        for fd in cmd.fields():
+            arg = argument_of(fd)
+            assert arg.Name == fd.name
+            assert arg.ValueRank == (1 if is_repeated(fd) else -1), fd.full_name
+            if fd.type == FieldDescriptor.TYPE_ENUM:
+                assert "JOINT_FRAME" in arg.Description.Text or "one of" in arg.Description.Text
+
+
+def test_method_arguments_become_request_fields() -> None:
+    move = lookup("moveAbsolute")
+    assert fields_of(move, ["p1", "JOINT_FRAME", [0.1] * 6]) == {"point_name": "p1", "frame": "JOINT_FRAME",
+                                                                 "values": [0.1] * 6}
+    assert fields_of(move, ["p1", ""]) == {"point_name": "p1"}  # "" leaves an enum absent
+    load = lookup("pathLoad")
+    got = fields_of(load, ["r", "JOINT_FRAME", "JOINT_MOTION", "ABSOLUTE_DATA", 1, ['{"joints": [0, 0, 0, 0, 0, 0]}']])
+    assert got["tags"] == [{"joints": [0, 0, 0, 0, 0, 0]}]
+    with pytest.raises(ArgumentError, match=r"pathLoad.tags: '\{bad' is not a JSON object"):
+        fields_of(load, ["r", "JOINT_FRAME", "JOINT_MOTION", "ABSOLUTE_DATA", 1, ["{bad"]])
+    with pytest.raises(ArgumentError, match="lock takes 0 arguments"):
+        fields_of(lookup("lock"), [1])
+
+
+def test_the_shipped_config_parses() -> None:
+    cfg = load_config(ROOT / "firmware" / "app" / "deploy" / "gateway.toml")
+    assert cfg.host == "127.0.0.1" and not cfg.users
