@@ -29,6 +29,9 @@ from landscape.gateway_config import hash_password
 BIN = Path(sys.executable).parent
 TARGET = [0.4, -0.2, 0.3, 0.0, 0.4, 0.2]
 CTRL = "Controller_10"
+#: asyncua's per-request time-out: a session's first method call connects its supervisor (connect and
+#: the device's description, ~200 frames), which takes seconds on a loaded machine.
+UA_TIMEOUT_S = 30
 
 
 def free_port() -> int:
@@ -71,7 +74,7 @@ def user_url(url: str, user: str, pw: str) -> str:
     return url.replace("opc.tcp://", f"opc.tcp://{user}:{pw}@")
 
 
-async def controller_node(client: Client, timeout_s: float = 10.0) -> Any:
+async def controller_node(client: Client, timeout_s: float = 30.0) -> Any:
     """The controller's object, once the gateway has discovered it and read its description."""
     ns = await client.get_namespace_index("urn:landscape:gateway")
     deadline = time.monotonic() + timeout_s
@@ -110,7 +113,7 @@ class Changes:
 
 def test_browse_subscribe_move_and_complete_by_method_calls(gateway: str) -> None:
     async def run() -> None:
-        async with Client(gateway) as anon:
+        async with Client(gateway, timeout=UA_TIMEOUT_S) as anon:
             node, ns = await controller_node(anon)
             # browse: the MotionDeviceSystem shape, axes with units, one method per command
             names = {(await c.read_browse_name()).Name for c in await node.get_children()}
@@ -128,7 +131,7 @@ def test_browse_subscribe_move_and_complete_by_method_calls(gateway: str) -> Non
                 await call(node, ns, "lock")
             assert refused.value.code == ua.StatusCodes.BadUserAccessDenied
 
-        async with Client(user_url(gateway, "alice", "alice-pw")) as c:
+        async with Client(user_url(gateway, "alice", "alice-pw"), timeout=UA_TIMEOUT_S) as c:
             node, ns = await controller_node(c)
             events = Events()
             esub = await c.create_subscription(50, events)
@@ -161,7 +164,7 @@ def test_browse_subscribe_move_and_complete_by_method_calls(gateway: str) -> Non
 
 def test_an_rsvp_is_answered_by_a_method_call(gateway: str) -> None:
     async def run() -> None:
-        async with Client(user_url(gateway, "alice", "alice-pw")) as c:
+        async with Client(user_url(gateway, "alice", "alice-pw"), timeout=UA_TIMEOUT_S) as c:
             node, ns = await controller_node(c)
             events = Events()
             esub = await c.create_subscription(50, events)
@@ -199,7 +202,7 @@ KILLED_CLIENT = """
 import asyncio, sys, time
 from asyncua import Client
 async def main():
-    c = Client(sys.argv[1])
+    c = Client(sys.argv[1], timeout=30)
     await c.connect()
     ns = await c.get_namespace_index("urn:landscape:gateway")
     node = await c.nodes.objects.get_child([f"{ns}:DeviceSet", f"{ns}:Controller_10"])
@@ -216,7 +219,7 @@ def test_a_second_client_is_refused_ownership_and_a_killed_session_is_dropped(ga
     script.write_text(KILLED_CLIENT)
 
     async def run() -> None:
-        async with Client(user_url(gateway, "bob", "bob-pw")) as bob:
+        async with Client(user_url(gateway, "bob", "bob-pw"), timeout=UA_TIMEOUT_S) as bob:
             node, ns = await controller_node(bob)
             owner = subprocess.Popen([sys.executable, str(script), user_url(gateway, "alice", "alice-pw")],
                                      stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -260,13 +263,13 @@ def test_a_second_client_is_refused_ownership_and_a_killed_session_is_dropped(ga
 
 def test_asyncua_command_line_tools_read_and_call(gateway: str) -> None:
     for _ in range(50):
-        r = subprocess.run([str(BIN / "uaread"), "-u", gateway, "-n", f"ns=2;s={CTRL}.Description"],
+        r = subprocess.run([str(BIN / "uaread"), "--timeout", "20", "-u", gateway, "-n", f"ns=2;s={CTRL}.Description"],
                            capture_output=True, text=True, timeout=30)
         if r.returncode == 0 and "device" in r.stdout.lower():
             break
         time.sleep(0.2)
     assert r.returncode == 0 and r.stdout.strip(), (r.stdout, r.stderr)
-    r = subprocess.run([str(BIN / "uaread"), "-u", gateway, "-n", f"ns=2;s={CTRL}.State"],
+    r = subprocess.run([str(BIN / "uaread"), "--timeout", "20", "-u", gateway, "-n", f"ns=2;s={CTRL}.State"],
                        capture_output=True, text=True, timeout=30)
     assert r.returncode == 0 and r.stdout.strip() in ("IDLE", "UNLOCKED"), (r.stdout, r.stderr)
     r = subprocess.run([str(BIN / "uacall"), "-u", user_url(gateway, "alice", "alice-pw"),
@@ -318,8 +321,8 @@ def test_the_example_session_of_the_docs_runs(gateway: str) -> None:
 
 
 async def _wait_for_description(url: str) -> None:
-    async with Client(url) as c:
-        await controller_node(c, timeout_s=20)
+    async with Client(url, timeout=UA_TIMEOUT_S) as c:
+        await controller_node(c)
 
 
 def make_pair(dir_: Path, name: str, uri: str) -> tuple[Path, Path]:
@@ -353,16 +356,16 @@ def test_basic256sha256_sign_and_encrypt_with_a_user(controller: Controller, tmp
 
     async def run() -> None:
         # no unencrypted endpoint, and no anonymous session even encrypted
-        plain = Client(url)
+        plain = Client(url, timeout=UA_TIMEOUT_S)
         with pytest.raises(Exception):  # noqa: B017 (asyncua: no endpoint for the None policy)
             await plain.connect()
-        c = Client(user_url(url, "alice", "alice-pw"))
+        c = Client(user_url(url, "alice", "alice-pw"), timeout=UA_TIMEOUT_S)
         await c.set_security_string(f"Basic256Sha256,SignAndEncrypt,{ccert},{ckey}")
         async with c:
-            node, ns = await controller_node(c, timeout_s=20)
+            node, ns = await controller_node(c)
             out = await call(node, ns, "lock")
             assert out[0] == pb.CMD_EXEC_OK, out
-        anon = Client(url)
+        anon = Client(url, timeout=UA_TIMEOUT_S)
         await anon.set_security_string(f"Basic256Sha256,SignAndEncrypt,{ccert},{ckey}")
         with pytest.raises(ua.UaStatusCodeError):
             await anon.connect()

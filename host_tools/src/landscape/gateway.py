@@ -25,7 +25,7 @@ import json
 import logging
 import signal
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Coroutine, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -246,7 +246,21 @@ class Gateway:
         self._notifier: can.Notifier | None = None
         self._root: Node | None = None
         self._event_type: Node | None = None
+        self._tasks: set[asyncio.Task[None]] = set()  # held until done (the loop keeps weak references)
         self.url = ""
+
+    def _spawn(self, coro: Coroutine[Any, Any, None], what: str) -> None:
+        """Run `coro` in the background; a failure is one log line, never a traceback on stderr."""
+        async def guarded() -> None:
+            try:
+                await coro
+            except asyncio.CancelledError:
+                raise
+            except Exception as exc:
+                log.warning("%s failed: %s", what, exc)
+        task = asyncio.get_running_loop().create_task(guarded())
+        self._tasks.add(task)
+        task.add_done_callback(self._tasks.discard)
 
     # ------------------------------------------------------------ start and stop
 
@@ -301,7 +315,7 @@ class Gateway:
             await server.stop()
             raise
         self._notifier = can.Notifier(self._bus, [self._on_frame], timeout=0.05, loop=None)
-        asyncio.get_running_loop().create_task(self._event_pump())
+        self._spawn(self._event_pump(), "the event pump")
 
     async def run(self) -> None:
         """Serve until stop(); then close every session's supervisor (the device sees each leave)."""
@@ -319,6 +333,8 @@ class Gateway:
         self._stop.set()
 
     async def close(self) -> None:
+        for task in list(self._tasks):
+            task.cancel()
         sups = list(self._sups.values()) + [c.observer for c in self.controllers.values() if c.observer]
         self._sups.clear()
         for c in self.controllers.values():
@@ -353,7 +369,7 @@ class Gateway:
         if c is None:
             if b.name == "HEARTBEAT" and b.sender not in self._pending:
                 self._pending.add(b.sender)
-                asyncio.get_running_loop().create_task(self._add_controller(b.sender))
+                self._spawn(self._add_controller(b.sender), f"adding controller {b.sender:#04x}")
             return
         s = b.signals
         writes: list[tuple[Node, Any, ua.VariantType]] = []
@@ -384,9 +400,12 @@ class Gateway:
             for i, k in enumerate(keys):
                 c.tool[off + i] = float(s[k])
             writes.append((c.vars["ToolPose"], list(c.tool), ua.VariantType.Double))
+        if writes:
+            self._spawn(self._write(writes), f"updating controller {b.sender:#04x}")
+
+    async def _write(self, writes: list[tuple[Node, Any, ua.VariantType]]) -> None:
         for node, value, vt in writes:
-            asyncio.get_running_loop().create_task(
-                self.server.write_attribute_value(node.nodeid, ua.DataValue(ua.Variant(value, vt))))
+            await self.server.write_attribute_value(node.nodeid, ua.DataValue(ua.Variant(value, vt)))
 
     # ------------------------------------------------------------ the address space of a controller
 
