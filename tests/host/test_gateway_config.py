@@ -26,7 +26,7 @@ ROOT = Path(__file__).resolve().parents[2]
 def test_defaults_are_localhost_anonymous_read_only() -> None:
     cfg = load_config(None)
     assert (cfg.host, cfg.port, cfg.allow_anonymous, cfg.security) == ("127.0.0.1", 4840, True, ("None",))
-    assert cfg.users == {} and cfg.pool == DEFAULT_POOL
+    assert cfg.users == {} and cfg.pool == DEFAULT_POOL and cfg.session_timeout_s == 10.0
 
 
 def test_a_full_config(tmp_path: Path) -> None:
@@ -40,6 +40,7 @@ security = ["None", "Basic256Sha256_SignAndEncrypt"]
 certificate = "c.der"
 private_key = "k.pem"
 allow_anonymous = false
+session_timeout_s = 2.5
 [bus]
 interface = "slcan"
 channel = "/run/landscape/ls0"
@@ -50,6 +51,7 @@ heartbeat_period_ms = 100
 op = "{hash_password('pw', iterations=1000)}"
 """, "t.toml", base=tmp_path)
     assert cfg.certificate == tmp_path / "c.der" and cfg.pool == (0xF1, 0xF2) and not cfg.allow_anonymous
+    assert cfg.session_timeout_s == 2.5
     assert cfg.check_password("op", "pw") and not cfg.check_password("op", "PW") and not cfg.check_password("x", "pw")
 
 
@@ -59,6 +61,10 @@ op = "{hash_password('pw', iterations=1000)}"
     ("[server]\nprot = 1\n", "[server] has no key 'prot'"),
     ("[server]\nport = 70000\n", "[server] port: 70000 is not a TCP port"),
     ("[server]\nport = \"x\"\n", "[server] port: 'x' is not a TCP port"),
+    ("[server]\nsession_timeout_s = 0\n", "[server] session_timeout_s: 0 is not a time-out in seconds, 1..3600"),
+    ("[server]\nsession_timeout_s = 3601\n", "session_timeout_s: 3601 is not a time-out"),
+    ("[server]\nsession_timeout_s = \"10\"\n", "session_timeout_s: '10' is not a time-out"),
+    ("[server]\nsession_timeout_s = true\n", "session_timeout_s: True is not a time-out"),
     ("[server]\nsecurity = [\"Basic128\"]\n", "security: ['Basic128']: write a list of None, Basic256Sha256"),
     ("[server]\nsecurity = [\"Basic256Sha256_SignAndEncrypt\"]\n", "needs the server's certificate"),
     ("[server]\ncertificate = \"nope.der\"\n", "nope.der does not exist"),

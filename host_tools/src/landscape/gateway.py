@@ -270,6 +270,11 @@ class Gateway:
         server = self.server
         server.iserver.set_user_manager(GatewayUsers(self.cfg, certificates))
         await server.init()
+        # A session whose client is gone (asyncua keeps one with subscriptions after its connection drops)
+        # ends after this time-out at most, whatever the client asked for: then its supervisors leave.
+        timeout_ms = self.cfg.session_timeout_s * 1000
+        server.iserver.max_session_timeout_ms = timeout_ms
+        server.iserver.min_session_timeout_ms = min(server.iserver.min_session_timeout_ms, timeout_ms)
         setattr(server.iserver, "create_session", self._create_session)  # noqa: B010 (our session class)
         host = f"[{self.cfg.host}]" if ":" in self.cfg.host else self.cfg.host
         self.url = f"opc.tcp://{host}:{self.cfg.port}{ENDPOINT_PATH}"

@@ -47,6 +47,7 @@ class GatewayConfig:
     certificate: Path | None = None
     private_key: Path | None = None
     allow_anonymous: bool = True
+    session_timeout_s: float = 10.0
     interface: str | None = None
     channel: str | None = None
     bitrate: int | None = None
@@ -118,7 +119,7 @@ def _pool(where: str, value: object) -> tuple[int, ...]:
 
 
 _KNOWN: dict[str, set[str]] = {
-    "server": {"host", "port", "security", "certificate", "private_key", "allow_anonymous"},
+    "server": {"host", "port", "security", "certificate", "private_key", "allow_anonymous", "session_timeout_s"},
     "bus": {"interface", "channel", "bitrate"},
     "supervisors": {"pool", "heartbeat_period_ms"},
     "users": set(),
@@ -171,6 +172,11 @@ def parse_config(text: str, source: str = "<text>", *, base: Path | None = None)
             raise GatewayConfigError(f"{where} port: {cfg.port} is not a TCP port (1..65535)")
     if "allow_anonymous" in server:
         cfg.allow_anonymous = _typed(f"{where} allow_anonymous", server["allow_anonymous"], bool, "true or false")
+    if "session_timeout_s" in server:
+        t = server["session_timeout_s"]
+        if isinstance(t, bool) or not isinstance(t, (int, float)) or not 1 <= t <= 3600:
+            raise GatewayConfigError(f"{where} session_timeout_s: {t!r} is not a time-out in seconds, 1..3600")
+        cfg.session_timeout_s = float(t)
     if "security" in server:
         sec = server["security"]
         if not isinstance(sec, list) or not sec or any(s not in SECURITY_POLICIES for s in sec):
