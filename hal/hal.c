@@ -42,6 +42,19 @@ int hal_can_hold_open(hal_can_link_t *link, bool hold)
     return HAL_CALL(link, hold_open, hold);
 }
 
+bool hal_can_tx_pending(hal_can_link_t *link)
+{
+    return link != NULL && link->ops != NULL && link->ops->tx_pending != NULL && link->ops->tx_pending(link->self);
+}
+
+uint64_t hal_can_next_due_us(hal_can_link_t *link)
+{
+    if (link == NULL || link->ops == NULL || link->ops->next_due_us == NULL) {
+        return UINT64_MAX;
+    }
+    return link->ops->next_due_us(link->self);
+}
+
 int hal_dio_unit_count(hal_dio_t *dio)
 {
     return HAL_CALL0(dio, unit_count);

@@ -293,6 +293,28 @@ static int f_hold_open(void *self, bool hold)
     return hal_can_hold_open(&f->inner, hold);
 }
 
+static bool f_tx_pending(void *self)
+{
+    faulty_t *f = self;
+    return hal_can_tx_pending(&f->inner);
+}
+
+/* Held frames are due at their release time (one held for reordering at
+ * the latest then, sooner when the next frame passes: after a recv or send). */
+static uint64_t hold_next_due(const dir_t *d, uint64_t t)
+{
+    for (size_t i = 0; i < d->n_hold; i++) {
+        t = d->hold[i].release_us < t ? d->hold[i].release_us : t;
+    }
+    return t;
+}
+
+static uint64_t f_next_due_us(void *self)
+{
+    faulty_t *f = self;
+    return hold_next_due(&f->rx, hold_next_due(&f->tx, hal_can_next_due_us(&f->inner)));
+}
+
 static const hal_can_ops_t g_ops = {
     .send = f_send,
     .recv = f_recv,
@@ -300,6 +322,8 @@ static const hal_can_ops_t g_ops = {
     .status = f_status,
     .close = f_close,
     .hold_open = f_hold_open,
+    .tx_pending = f_tx_pending,
+    .next_due_us = f_next_due_us,
 };
 
 static bool rate_ok(double p)

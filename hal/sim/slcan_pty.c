@@ -171,6 +171,22 @@ static int pty_hold_open(void *self, bool hold)
     return LS_OK;
 }
 
+/* Lines wait in tbuf only while the pty has no room: it polls writable
+ * when it has, and recv or send writes them. */
+static bool pty_tx_pending(void *self)
+{
+    const slcan_pty_t *p = self;
+    return p->tlen > 0;
+}
+
+/* Bytes read from the pty but not parsed yet (the caller stopped taking
+ * frames mid-buffer) are due at once: the fd may not poll readable again. */
+static uint64_t pty_next_due_us(void *self)
+{
+    const slcan_pty_t *p = self;
+    return p->rpos < p->rlen ? 0u : UINT64_MAX;
+}
+
 static int pty_poll_fd(void *self)
 {
     return ((slcan_pty_t *)self)->master;
@@ -209,6 +225,8 @@ static const hal_can_ops_t g_ops = {
     .status = pty_status,
     .close = pty_close,
     .hold_open = pty_hold_open,
+    .tx_pending = pty_tx_pending,
+    .next_due_us = pty_next_due_us,
 };
 
 /* flock `lock_path` for this process: the fd, or -1 with msg set. */

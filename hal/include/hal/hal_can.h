@@ -60,6 +60,20 @@ typedef struct {
      * out a deferred close. NULL: the backend has no such request
      * (SocketCAN). */
     int (*hold_open)(void *self, bool hold);
+    /* Optional. True while output the backend took waits in its own
+     * buffer for room in the medium: the caller polls poll_fd writable too
+     * and calls recv or send when it is, which write it out. It must turn
+     * false once the fd has room (no spinning on a writable fd). NULL: the
+     * backend buffers nothing (SocketCAN: the kernel queues, and a frame it
+     * refuses stays with the caller, who retries; a CAN socket's POLLOUT
+     * does not tell when the device queue has room). */
+    bool (*tx_pending)(void *self);
+    /* Optional. When the backend has work of its own to do in recv/send
+     * although poll_fd may not poll readable: received bytes it has read
+     * but not yet parsed, frames it holds until a time (fault injection).
+     * 0: at once; UINT64_MAX: nothing; else a CLOCK_MONOTONIC time in us.
+     * NULL: never. An event-driven caller sleeps no longer than this. */
+    uint64_t (*next_due_us)(void *self);
 } hal_can_ops_t;
 
 typedef struct {
@@ -74,5 +88,8 @@ int hal_can_poll_fd(hal_can_link_t *link);
 int hal_can_status(hal_can_link_t *link, hal_can_status_t *out);
 void hal_can_close(hal_can_link_t *link);
 int hal_can_hold_open(hal_can_link_t *link, bool hold);
+/* The optional operations above; a backend without them: false, UINT64_MAX. */
+bool hal_can_tx_pending(hal_can_link_t *link);
+uint64_t hal_can_next_due_us(hal_can_link_t *link);
 
 #endif
