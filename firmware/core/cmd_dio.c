@@ -364,6 +364,37 @@ static void finish_writes(ls_core_t *core, lazy_snap_t *ls, uint64_t now_us)
     }
 }
 
+static uint64_t earlier(uint64_t a, uint64_t b)
+{
+    return a < b ? a : b;
+}
+
+uint64_t ls_dio_next_deadline_us(const ls_core_t *core, uint64_t now_us)
+{
+    uint64_t t = UINT64_MAX;
+    for (int i = 0; i < LS_MAX_SUPERVISORS; i++) {
+        if (core->dio.write_wait[i].pending) {
+            t = earlier(t, now_us + LS_CORE_SAMPLE_US); /* the write shows in the snapshot's cycle count */
+        }
+    }
+    for (int i = 0; i < LS_MAX_DIO_WATCHES; i++) {
+        const ls_dio_watch_t *w = &core->dio.watch[i];
+        if (w->phase != LS_WATCH_ARMED) {
+            continue; /* changes of the levels come as loop events */
+        }
+        if (w->check_now) {
+            return 0;
+        }
+        if (w->period_us > 0u) {
+            t = earlier(t, w->next_check_us);
+        }
+        if (w->deadline_us != 0u) {
+            t = earlier(t, w->deadline_us);
+        }
+    }
+    return t;
+}
+
 void ls_dio_tick(ls_core_t *core, uint64_t now_us)
 {
     lazy_snap_t ls = { .have = false };

@@ -668,6 +668,36 @@ void ls_core_tick(ls_core_t *core, uint64_t now_us)
     ls_core_motion_tick(core, now_us);
 }
 
+uint64_t ls_core_next_deadline_us(const ls_core_t *core, uint64_t now_us)
+{
+    uint64_t t = ls_dio_next_deadline_us(core, now_us);
+    const uint64_t sample = now_us + LS_CORE_SAMPLE_US;
+    if (core->halt.active) {
+        t = sample < t ? sample : t; /* ls_run_tick: at rest yet? */
+    }
+    if (core->run.active && !core->run.react && core->ctl != NULL && (core->run.dio_pending || core->run.wait_active)) {
+        t = sample < t ? sample : t; /* ls_core_motion_tick: the DIO of a path's aux command */
+    }
+    for (int i = 0; i < LS_MAX_RSVP; i++) {
+        if (core->rsvp[i].used && core->rsvp[i].deadline_us < t) {
+            t = core->rsvp[i].deadline_us;
+        }
+    }
+    if (core->alarm_window.open) {
+        const uint64_t end = core->alarm_window.since_us + (uint64_t)LS_ALARM_WINDOW_MS * 1000u;
+        t = end < t ? end : t;
+    }
+    for (int i = 0; i < LS_MAX_SUPERVISORS; i++) {
+        const ls_session_t *s = &core->sessions[i];
+        if (s->connected) {
+            /* ls_core_tick drops it once more than the time-out has passed */
+            const uint64_t lost = s->last_heard_us + (uint64_t)s->heartbeat_timeout_ms * 1000u + 1u;
+            t = lost < t ? lost : t;
+        }
+    }
+    return t;
+}
+
 /* ---- connect / disconnect: the only commands that create or end a session */
 
 static int32_t do_connect(ls_core_t *core, uint8_t addr, ls_call_t *call)

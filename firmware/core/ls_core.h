@@ -340,6 +340,21 @@ void ls_core_on_heartbeat(ls_core_t *core, uint8_t addr, uint32_t token, uint64_
  * auxiliary commands (ls_core_motion_tick). */
 void ls_core_tick(ls_core_t *core, uint64_t now_us);
 
+/* While the core follows the control loop's state by sampling its
+ * snapshot (a halt coming to rest, a DIO write taking effect, a path's
+ * `wait` for inputs), it is ticked this often. */
+#define LS_CORE_SAMPLE_US 1000u
+
+/* When ls_core_tick next has work, for an event-driven comms thread that
+ * otherwise sleeps until a frame or a control loop event (ls_control's
+ * notify hook) arrives. `now_us`: the time of the last ls_core_tick. The
+ * earliest of: an RSVP's time-out, the end of an alarm window, a session's
+ * heartbeat time-out, a DIO watch's check, period or time-out (0: at once),
+ * and now_us + LS_CORE_SAMPLE_US while something samples the snapshot.
+ * UINT64_MAX: nothing is timed. O(sessions + RSVPs + watches), no clock
+ * read, no allocation. */
+uint64_t ls_core_next_deadline_us(const ls_core_t *core, uint64_t now_us);
+
 /* Send a notice (event, alarm) to one session (sup >= 0) or to all (sup < 0).
  * Its event id is one the schema declares (enum ls.EventId, sent by name), its
  * data "key=value" strings with the keys the schema lists for it. */

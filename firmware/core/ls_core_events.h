@@ -19,5 +19,7 @@ void ls_core_motion_failed(ls_core_t *core, uint32_t ref_seq, const char *text);
 void ls_core_on_dio_event(ls_core_t *core, uint16_t unit, uint32_t levels, uint32_t changed, uint64_t now_us);
 /* Polling time-outs and cycle times of signalDigitalIO watches. */
 void ls_dio_tick(ls_core_t *core, uint64_t now_us);
+/* The part of ls_core_next_deadline_us that ls_dio_tick serves. */
+uint64_t ls_dio_next_deadline_us(const ls_core_t *core, uint64_t now_us);
 
 #endif

@@ -79,6 +79,7 @@ int ls_net_send_frame(ls_net_t *net, const hal_can_frame_t *frame)
         net->frames_out++;
         return 0;
     }
+    net->tx_blocked = true;
     return -1;
 }
 
@@ -322,6 +323,7 @@ static void hold_links(ls_net_t *net)
 void ls_net_poll(ls_net_t *net, uint64_t now_us)
 {
     net->now_us = now_us;
+    net->tx_blocked = false;
     for (size_t i = 0; i < net->n_links; i++) {
         hal_can_frame_t f;
         /* Bounded per turn so one busy link cannot starve the others. */
@@ -349,18 +351,27 @@ void ls_net_poll(ls_net_t *net, uint64_t now_us)
                 net->tx_restarted++;
             }
         }
-        if (!ls_isotp_tx_busy(&p->isotp)) {
-            settle_tx(net, p, now_us);
-        }
-        if (p->q_count > 0 && p->tx_tries == 0 && !ls_isotp_tx_busy(&p->isotp)) {
+        /* Settle the finished transfer, start the next downlink; again while
+         * one finishes at once (a single frame the link took), so nothing
+         * is left for a later turn: an event-driven caller would sleep on
+         * it (ls_net_next_deadline_us). Bounded by LS_NET_OUTQ starts and
+         * LS_NET_TX_TRIES transfers each. */
+        for (;;) {
+            if (!ls_isotp_tx_busy(&p->isotp)) {
+                settle_tx(net, p, now_us);
+            }
+            if (p->q_count == 0 || p->tx_tries != 0 || ls_isotp_tx_busy(&p->isotp)) {
+                break;
+            }
             ls_net_msg_t *m = &p->q[p->q_head];
             uint32_t ok_mark = p->isotp.tx_results[LS_ISOTP_N_OK];
-            if (ls_isotp_send(&p->isotp, m->buf, m->len, now_us) == LS_OK) {
-                p->q_head = (uint8_t)((p->q_head + 1u) % LS_NET_OUTQ);
-                p->q_count--;
-                p->tx_tries = 1;
-                p->tx_ok_mark = ok_mark;
+            if (ls_isotp_send(&p->isotp, m->buf, m->len, now_us) != LS_OK) {
+                break;
             }
+            p->q_head = (uint8_t)((p->q_head + 1u) % LS_NET_OUTQ);
+            p->q_count--;
+            p->tx_tries = 1;
+            p->tx_ok_mark = ok_mark;
         }
     }
     hold_links(net);
@@ -370,10 +381,19 @@ uint64_t ls_net_next_deadline_us(const ls_net_t *net)
 {
     uint64_t t = UINT64_MAX;
     for (size_t i = 0; i < LS_NET_MAX_PEERS; i++) {
-        if (net->peers[i].used) {
-            uint64_t d = ls_isotp_next_deadline_us(&net->peers[i].isotp);
-            t = d < t ? d : t;
+        const ls_net_peer_t *p = &net->peers[i];
+        if (!p->used) {
+            continue;
         }
+        const bool tx_busy = ls_isotp_tx_busy(&p->isotp);
+        if (p->tx_asked_again || (!tx_busy && (p->tx_tries > 0 || p->q_count > 0))) {
+            return 0; /* a transfer to settle, start or restart (ls_net_poll's peer pass) */
+        }
+        uint64_t d = ls_isotp_next_deadline_us(&p->isotp);
+        t = d < t ? d : t;
+    }
+    if (net->tx_blocked && t <= net->now_us) {
+        t = net->now_us + LS_NET_TX_RETRY_US;
     }
     return t;
 }

@@ -60,6 +60,11 @@
  * so a supervisor that was slow for a moment still gets its answer or
  * notice (docs/protocol.md, "ISO-TP parameters"). */
 #define LS_NET_TX_TRIES 3
+/* While no link takes our frames (every hal_can_send refused them), ISO-TP
+ * timers already due wait for the link's room: the caller's poll wakes
+ * when a link polls writable (hal_can_tx_pending), and at the latest this
+ * long after the refusal (a backend whose fd cannot tell). */
+#define LS_NET_TX_RETRY_US 1000u
 
 /* The schema declares them (protocol/landscape.proto IsotpId, NodeAddress). */
 #define LS_ID_ISOTP_PHYS ((uint32_t)ls_IsotpId_ISOTP_PHYSICAL_BASE)
@@ -119,6 +124,7 @@ typedef struct ls_net {
     uint32_t tx_retried, tx_given_up; /* downlink transfers sent again; downlinks given up */
     uint32_t tx_deduplicated;         /* downlinks identical to one still pending: not queued twice */
     uint32_t tx_restarted;            /* of those, in flight and waiting for a flow control: restarted at once */
+    bool tx_blocked;                  /* this poll, a frame was refused by every link */
     uint32_t rx_results_gone[LS_ISOTP_N_RESULT_COUNT]; /* counters of evicted peers */
     uint32_t tx_results_gone[LS_ISOTP_N_RESULT_COUNT];
     uint8_t rxbuf[LS_ISOTP_MAX_PAYLOAD];
@@ -136,7 +142,14 @@ void ls_net_poll(ls_net_t *net, uint64_t now_us);
 int ls_net_send_frame(ls_net_t *net, const hal_can_frame_t *frame);
 /* The ls_core_io_t.send_downlink implementation. */
 int ls_net_send_downlink(void *net, uint8_t addr, const uint8_t *buf, size_t len);
-/* Earliest ISO-TP deadline, for the caller's poll timeout. */
+/* When ls_net_poll next has work, for an event-driven caller's sleep
+ * (frames arriving wake it otherwise): the earliest ISO-TP timer (STmin
+ * pacing, N_Bs, N_Cr, a flow control to send), 0 (at once) while a queued
+ * downlink or a restart waits to be started (downlinks queued since the
+ * last poll, by ls_core_tick or a handler), UINT64_MAX when nothing waits.
+ * While the links refuse our frames (the last poll's tx_blocked) a timer
+ * already due is put off to LS_NET_TX_RETRY_US after that poll. O(peers),
+ * no clock read. */
 uint64_t ls_net_next_deadline_us(const ls_net_t *net);
 void ls_net_close(ls_net_t *net);
 /* Transport counters as key=value lines (the ls_core_io_t.describe hook). */

@@ -1588,6 +1588,71 @@ static void test_deactivate_while_moving_answers_at_rest(void **state)
     assert_int_equal(n, 1); /* exactly one */
 }
 
+/* ls_core_next_deadline_us: the event-driven comms thread sleeps until
+ * then, so each deadline is exactly when ls_core_tick next acts. */
+static void test_next_deadline_is_when_the_tick_acts(void **state)
+{
+    (void)state;
+    g_cfg_timeout_ms = 2000;
+    setup_core(ls_State_LOCKED);
+    g_done_calls = 0;
+    /* Two sessions, heard at connect: the first heartbeat time-out. */
+    uint64_t lost = UINT64_MAX;
+    for (int i = 0; i < LS_MAX_SUPERVISORS; i++) {
+        if (g_core.sessions[i].connected) {
+            const uint64_t t = g_core.sessions[i].last_heard_us + 2000000u + 1u;
+            lost = t < lost ? t : lost;
+        }
+    }
+    assert_true(lost != UINT64_MAX);
+    assert_true(ls_core_next_deadline_us(&g_core, g_now) == lost);
+    /* An RSVP: its time-out is the earliest now. */
+    const char *data[] = { "path=p" };
+    int32_t id = ls_core_rsvp(&g_core, 0, 0, ls_NoticeKind_ALARM_RSVP, "ask", data, 1, 300, "abort", done_cb,
+                              &g_done_calls, g_now);
+    assert_true(id > 0);
+    const uint64_t due = ls_core_next_deadline_us(&g_core, g_now);
+    assert_true(due == g_now + 300000u);
+    ls_core_tick(&g_core, due - 1u);
+    assert_int_equal(g_done_calls, 0);
+    ls_core_tick(&g_core, due);
+    assert_int_equal(g_done_calls, 1);
+    /* A session's time-out: dropped at the deadline, not a microsecond before. */
+    const uint32_t dropped = g_core.sessions_dropped;
+    assert_true(ls_core_next_deadline_us(&g_core, due) == lost);
+    ls_core_tick(&g_core, lost - 1u);
+    assert_int_equal(g_core.sessions_dropped, dropped);
+    ls_core_tick(&g_core, lost);
+    assert_true(g_core.sessions_dropped > dropped);
+}
+
+static void test_next_deadline_of_watches_and_a_halt(void **state)
+{
+    (void)state;
+    int32_t code;
+    const uint64_t t0 = g_now;
+    /* A polled watch: at once (its first check), then at its period. */
+    (void)signal_dio(HOST_A, 0x8u, 100, 20, ls_CallbackType_CB_EVENT, &code);
+    assert_int_equal(code, ls_RetCode_CMD_EXEC_OK);
+    assert_true(ls_core_next_deadline_us(&g_core, t0) == 0);
+    ls_core_tick(&g_core, t0 + 1000);
+    assert_true(ls_core_next_deadline_us(&g_core, t0 + 1000) == t0 + 20000u);
+    size_t before = g_nrx;
+    g_snap.dio[0] = 0x8u;
+    ls_core_tick(&g_core, t0 + 20000u);
+    assert_int_equal(count_notices(before), 1); /* the tick at that deadline fired it */
+    /* A halt follows the snapshot until the arm rests: sampled. */
+    (void)start_move();
+    req(ls_Request_deactivate_tag);
+    assert_null(send_req(HOST_A));
+    assert_true(g_core.halt.active);
+    assert_true(ls_core_next_deadline_us(&g_core, g_now) == g_now + LS_CORE_SAMPLE_US);
+    loop_stopped();
+    ls_core_tick(&g_core, g_now + 400000);
+    assert_false(g_core.halt.active);
+    assert_true(ls_core_next_deadline_us(&g_core, g_now + 400000) > g_now + 400000 + LS_CORE_SAMPLE_US);
+}
+
 static void test_emergency_fails_the_motion_once_stopped(void **state)
 {
     (void)state;
@@ -2490,6 +2555,8 @@ int main(void)
         cmocka_unit_test_setup(test_signal_refusals_and_table_full, setup_locked),
         cmocka_unit_test_setup(test_watches_end_with_their_session, setup_locked),
         cmocka_unit_test_setup(test_rsvp_reply_and_timeout, setup_locked),
+        cmocka_unit_test(test_next_deadline_is_when_the_tick_acts),
+        cmocka_unit_test_setup(test_next_deadline_of_watches_and_a_halt, setup_locked),
         cmocka_unit_test_setup(test_signal_rsvp_accept_rearms_the_watch, setup_locked),
         cmocka_unit_test_setup(test_signal_rsvp_decline_cancels_the_watch, setup_locked),
         cmocka_unit_test_setup(test_signal_rsvp_unanswered_takes_the_default, setup_locked),

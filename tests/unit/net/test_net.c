@@ -462,6 +462,88 @@ static void test_downlink_queue_is_bounded(void **state)
     assert_true(d > 100 && d <= 100 + 1000000u);
 }
 
+/* ------------------------------------------------ the comms thread's sleep */
+
+/* ls_net_next_deadline_us says when ls_net_poll next has work: the comms
+ * thread sleeps until then unless a frame arrives. */
+static void test_next_deadline_says_when_the_poll_has_work(void **state)
+{
+    (void)state;
+    setup_net(1);
+    assert_true(ls_net_next_deadline_us(&g_net) == UINT64_MAX); /* nothing at all */
+    /* A single-frame downlink queued (by a handler, by ls_core_tick): at once. */
+    const uint8_t sf[5] = { 1, 2, 3, 4, 5 };
+    assert_int_equal(ls_net_send_downlink(&g_net, SUP_A, sf, sizeof sf), 0);
+    assert_true(ls_net_next_deadline_us(&g_net) == 0);
+    ls_net_poll(&g_net, 1000);
+    assert_int_equal(g_link[0].n_tx, 1);
+    assert_true(ls_net_next_deadline_us(&g_net) == UINT64_MAX); /* sent and settled in the same poll */
+    /* Two more: both go out in one poll, nothing is left for a later turn. */
+    const uint8_t sf2[3] = { 7, 8, 9 };
+    assert_int_equal(ls_net_send_downlink(&g_net, SUP_A, sf, sizeof sf), 0);
+    assert_int_equal(ls_net_send_downlink(&g_net, SUP_A, sf2, sizeof sf2), 0);
+    ls_net_poll(&g_net, 1500);
+    assert_int_equal(g_link[0].n_tx, 3);
+    assert_true(ls_net_next_deadline_us(&g_net) == UINT64_MAX);
+    /* A multi-frame one: its first frame, then N_Bs for the flow control. */
+    uint8_t mf[20];
+    memset(mf, 0x5A, sizeof mf);
+    assert_int_equal(ls_net_send_downlink(&g_net, SUP_A, mf, sizeof mf), 0);
+    ls_net_poll(&g_net, 2000);
+    assert_int_equal(g_link[0].n_tx, 4);
+    assert_true(ls_net_next_deadline_us(&g_net) == 2000u + g_net.isotp_cfg.n_bs_timeout_us);
+    /* The flow control comes while the link refuses our frames: the due
+     * consecutive frames wait LS_NET_TX_RETRY_US, not zero (no spinning). */
+    const uint8_t fc[8] = { 0x30, 0, 0, 0xCC, 0xCC, 0xCC, 0xCC, 0xCC };
+    link_put(&g_link[0], phys(NODE, SUP_A), HAL_CAN_F_EXT, fc, sizeof fc);
+    g_link[0].refuse_send = 1;
+    ls_net_poll(&g_net, 3000);
+    assert_int_equal(g_link[0].n_tx, 4);
+    assert_true(ls_net_next_deadline_us(&g_net) == 3000u + LS_NET_TX_RETRY_US);
+    g_link[0].refuse_send = 0;
+    ls_net_poll(&g_net, 3000u + LS_NET_TX_RETRY_US);
+    assert_int_equal(g_link[0].n_tx, 6); /* 6 + 7 bytes in two consecutive frames */
+    assert_true(ls_net_next_deadline_us(&g_net) == UINT64_MAX);
+}
+
+/* The comms thread's loop without a fixed period: it polls only when a
+ * frame is waiting or the deadline has come, and a multi-frame request
+ * and answer complete, with no time passing (STmin 0: no timer runs). */
+static void test_an_event_driven_loop_completes_an_exchange(void **state)
+{
+    (void)state;
+    setup_net(1);
+    static sup_t a;
+    sup_init(&a, SUP_A, &g_link[0]);
+    const size_t answer_len = LS_DOWNLINK_MAX < 300u ? LS_DOWNLINK_MAX : 300u;
+    g_echo_len = answer_len; /* multi-frame answer, several blocks of BS 8 */
+    uint8_t req[40];
+    memset(req, 0x40, sizeof req);
+    assert_int_equal(ls_isotp_send(&a.tp, req, sizeof req, 0), LS_OK);
+    size_t seen = 0, n = 0;
+    uint8_t got[LS_ISOTP_MAX_PAYLOAD];
+    uint64_t t = 0;
+    int polls = 0;
+    while (n == 0 && polls < 200) {
+        if (g_link[0].rx_count == 0) { /* no frame: sleep until the next deadline */
+            uint64_t due = ls_net_next_deadline_us(&g_net);
+            const uint64_t sup_due = ls_isotp_next_deadline_us(&a.tp);
+            due = sup_due < due ? sup_due : due;
+            assert_true(due != UINT64_MAX); /* else the exchange would hang */
+            t = due > t ? due : t;
+        }
+        ls_net_poll(&g_net, t);
+        polls++;
+        sup_hear(&a, &g_link[0], &seen, t);
+        ls_isotp_poll(&a.tp, t);
+        n = ls_isotp_take_rx(&a.tp, got, sizeof got);
+    }
+    assert_int_equal(n, answer_len);
+    assert_int_equal(g_calls[0].len, sizeof req);
+    assert_true(t == 0);
+    assert_true(polls < 20);
+}
+
 /* ---------------------------------------------------------------- LRU eviction */
 
 static void ping(uint8_t addr, uint64_t now_us)
@@ -935,6 +1017,8 @@ int main(void)
         cmocka_unit_test(test_interleaved_multi_frame_requests_stay_apart),
         cmocka_unit_test(test_answer_is_sent_to_the_sender),
         cmocka_unit_test(test_downlink_queue_is_bounded),
+        cmocka_unit_test(test_next_deadline_says_when_the_poll_has_work),
+        cmocka_unit_test(test_an_event_driven_loop_completes_an_exchange),
         cmocka_unit_test(test_a_downlink_without_flow_control_is_sent_again_then_given_up),
         cmocka_unit_test(test_a_downlink_sent_again_arrives_once),
         cmocka_unit_test(test_an_answer_already_pending_is_not_queued_twice),
