@@ -3,8 +3,13 @@
  *   landscaped --hal sim --link slcan:pty:/tmp/landscape0 [--link ...] [--node 0x10]
  *
  * Threads: this comms thread (links, ISO-TP, dispatcher, telemetry). Logs go
- * to stderr with a level prefix that journald understands. */
+ * to stderr with a level prefix that journald understands. The comms thread
+ * is event-driven: it sleeps until a frame arrives, the control loop pushes
+ * an event or a stop signal comes (both write the wake pipe), or the next
+ * protocol deadline (ISO-TP, sessions, RSVPs, heartbeat, telemetry) is due
+ * (docs/architecture.md "The comms thread"). */
 #include <errno.h>
+#include <fcntl.h>
 #include <inttypes.h>
 #include <poll.h>
 #include <pthread.h>
@@ -41,10 +46,53 @@
 #endif
 
 static volatile sig_atomic_t g_stop; /* the signal that asked us to stop, 0: none */
+/* The comms thread's wake pipe, both ends non-blocking: a byte written by
+ * the control loop (an event in its ring) or a stop signal's handler ends
+ * the comms thread's sleep; it drains the pipe before it drains the ring. */
+static int g_wake[2] = { -1, -1 };
+
+/* Async-signal-safe and never blocks: a full pipe already holds a wake-up. */
+static void wake_comms(void *ctx)
+{
+    (void)ctx;
+    const int saved = errno;
+    const char b = 1;
+    if (g_wake[1] >= 0) {
+        (void)!write(g_wake[1], &b, 1);
+    }
+    errno = saved;
+}
 
 static void on_signal(int sig)
 {
     g_stop = sig;
+    wake_comms(NULL);
+}
+
+static int open_wake_pipe(void)
+{
+    if (pipe(g_wake) != 0) {
+        return -1;
+    }
+    for (int i = 0; i < 2; i++) {
+        const int fl = fcntl(g_wake[i], F_GETFL);
+        if (fl < 0 || fcntl(g_wake[i], F_SETFL, fl | O_NONBLOCK) != 0 || fcntl(g_wake[i], F_SETFD, FD_CLOEXEC) != 0) {
+            return -1;
+        }
+    }
+    return 0;
+}
+
+static void drain_wake_pipe(void)
+{
+    char buf[64];
+    while (read(g_wake[0], buf, sizeof buf) > 0) {
+    }
+}
+
+static uint64_t earliest(uint64_t a, uint64_t b)
+{
+    return a < b ? a : b;
 }
 
 /* Signals (docs/reliability.md "Signals"): SIGTERM, SIGINT, SIGHUP and
@@ -220,6 +268,10 @@ static uint64_t rt_behind_us(void)
     return rs.behind_us;
 }
 
+/* Turns of the comms loop (sleeps ended by a frame, a wake-up or a
+ * deadline): about 5/s on an idle link (the heartbeat). Comms thread only. */
+static uint64_t g_comms_wakeups;
+
 static void describe_rt(void *ctx, char *buf, size_t cap)
 {
     ls_ctl_snapshot_t s;
@@ -229,10 +281,10 @@ static void describe_rt(void *ctx, char *buf, size_t cap)
     snprintf(
         buf, cap,
         "cycles=%llu\noverruns=%llu\nbehind_us=%llu\nmax_late_us=%u\nmax_cycle_us=%u\nrealtime=%s\nmemory_locked=%s\n"
-        "events_lost=%u\n",
+        "events_lost=%u\ncomms_wakeups=%llu\n",
         (unsigned long long)rs.cycles, (unsigned long long)rs.overruns, (unsigned long long)rs.behind_us,
         (unsigned)rs.max_late_us, (unsigned)rs.max_cycle_us, rs.realtime ? "yes" : "no",
-        rs.memory_locked ? "yes" : "no", (unsigned)s.events_lost);
+        rs.memory_locked ? "yes" : "no", (unsigned)s.events_lost, (unsigned long long)g_comms_wakeups);
 }
 
 static void describe_config(void *ctx, char *buf, size_t cap)
@@ -426,7 +478,8 @@ static int compose(const ls_config_t *o)
                                .sensors = sensors,
                                .n_sensors = n_sensors,
                                .rate_hz = o->rate_hz,
-                               .world_step = g_world_open ? hal_sim_world_step : NULL };
+                               .world_step = g_world_open ? hal_sim_world_step : NULL,
+                               .notify = wake_comms };
     ls_control_init(&g_ctl, &cc);
     g_core.ctl = &g_ctl;
     if (o->estop_input >= 0) {
@@ -469,6 +522,10 @@ int main(int argc, char **argv)
     if (ls_config_validate(&opt, cmsg, sizeof cmsg) != 0) {
         LOG_ERR("%s", cmsg);
         return LS_EXIT_BAD_CONFIG;
+    }
+    if (open_wake_pipe() != 0) {
+        LOG_ERR("the comms thread's wake pipe: %s", strerror(errno));
+        return 1;
     }
     install_signals();
 
@@ -529,6 +586,7 @@ int main(int argc, char **argv)
      * systemd unit's TimeoutStopSec (landscaped.service) is their sum plus a
      * margin: docs/reliability.md "Signals". */
     const uint64_t shutdown_max_us = 6000000u;
+    uint64_t now = mono_us();
     uint64_t shutdown_at = 0;
     uint64_t flushed_at = 0;
     while (rc == 0) {
@@ -561,19 +619,36 @@ int main(int argc, char **argv)
                 break;
             }
         }
-        struct pollfd fds[LS_NET_MAX_LINKS];
+        /* Sleep until a frame, a wake-up (loop event, signal) or the next
+         * deadline: no fixed poll period. */
+        uint64_t due = earliest(ls_net_next_deadline_us(&g_net), ls_core_next_deadline_us(&g_core, now));
+        due = earliest(due, next_hb);
+        if (tm_period > 0) {
+            due = earliest(due, next_tm);
+        }
+        if (shutdown_at != 0) {
+            due = earliest(due, flushed_at != 0 ? flushed_at : shutdown_at + shutdown_max_us + 1u);
+        }
+        struct pollfd fds[LS_NET_MAX_LINKS + 1];
         nfds_t n = 0;
+        fds[n++] = (struct pollfd){ .fd = g_wake[0], .events = POLLIN, .revents = 0 };
         for (size_t i = 0; i < g_net.n_links; i++) {
+            due = earliest(due, hal_can_next_due_us(&g_net.links[i]));
             int fd = hal_can_poll_fd(&g_net.links[i]);
             if (fd >= 0) {
-                fds[n].fd = fd;
-                fds[n].events = POLLIN;
-                fds[n].revents = 0;
-                n++;
+                const short out = hal_can_tx_pending(&g_net.links[i]) ? POLLOUT : 0;
+                fds[n++] = (struct pollfd){ .fd = fd, .events = (short)(POLLIN | out), .revents = 0 };
             }
         }
-        (void)poll(fds, n, 1);
-        uint64_t now = mono_us();
+        now = mono_us();
+        const uint64_t wait_us = due > now ? due - now : 0u;
+        const struct timespec ts = { .tv_sec = (time_t)(wait_us / 1000000u),
+                                     .tv_nsec = (long)(wait_us % 1000000u) * 1000L };
+        g_comms_wakeups++;
+        if (ppoll(fds, n, &ts, NULL) > 0 && (fds[0].revents & POLLIN) != 0) {
+            drain_wake_pipe(); /* before the ring is drained (ls_core_tick): no event is missed */
+        }
+        now = mono_us();
         ls_net_poll(&g_net, now);
         ls_core_tick(&g_core, now);
         if (now >= next_hb) {

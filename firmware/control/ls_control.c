@@ -38,13 +38,20 @@ static void ev_push(ls_control_t *c, const ls_ctl_event_t *ev)
     unsigned head = atomic_load_explicit(&c->ev_head, memory_order_relaxed);
     unsigned tail = atomic_load_explicit(&c->ev_tail, memory_order_acquire);
     if (head - tail >= LS_CTL_QUEUE_LEN) {
-        /* The comms thread drains every millisecond; a full ring means it is
-         * stuck. Count it: the loop must not wait. */
+        /* The comms thread drains it at once (woken by cfg.notify); a full
+         * ring means it is stuck. Count it: the loop must not wait. */
         atomic_fetch_add_explicit(&c->events_lost, 1u, memory_order_relaxed);
         return;
     }
     c->ev_ring[head % LS_CTL_QUEUE_LEN] = *ev;
     atomic_store_explicit(&c->ev_head, head + 1u, memory_order_release);
+    /* Every event: skipping the call when the ring already held one would
+     * lose a wake-up when the comms thread drained that one between our
+     * load of ev_tail and our store of ev_head. Events are few per cycle at
+     * most (a motion's notices, DIO changes). */
+    if (c->cfg.notify != NULL) {
+        c->cfg.notify(c->cfg.notify_ctx);
+    }
 }
 
 bool ls_control_next_event(ls_control_t *c, ls_ctl_event_t *out)
