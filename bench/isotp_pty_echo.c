@@ -4,12 +4,17 @@
  *
  * Addressing: normal fixed 29-bit, device 0x10, host 0xF1 (as landscaped).
  * Config: the firmware defaults (BS 8, STmin 0, padding 0xCC).
- * Usage: bench_isotp_pty_echo PATH   (PATH becomes a symlink to the pty
- * slave); runs until SIGTERM/SIGINT, then prints its counters to stderr. */
+ * Usage: bench_isotp_pty_echo PATH [ANSWER_BYTES]   (PATH becomes a symlink
+ * to the pty slave); runs until SIGTERM/SIGINT, then prints its counters to
+ * stderr. With ANSWER_BYTES every message is answered with that many bytes
+ * (the message's bytes repeated) instead of itself: an exchange of the same
+ * sizes as a command and its answer (benchmark 3). The loop sleeps until a
+ * frame or the next ISO-TP deadline, as landscaped's comms thread does. */
 #include <errno.h>
 #include <poll.h>
 #include <signal.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
@@ -52,9 +57,20 @@ static int can_send(void *ctx, uint32_t can_id, const uint8_t *data, uint8_t len
 
 int main(int argc, char **argv)
 {
-    if (argc != 2) {
-        fprintf(stderr, "usage: %s PATH\n", argv[0]);
+    if (argc != 2 && argc != 3) {
+        fprintf(stderr, "usage: %s PATH [ANSWER_BYTES]\n", argv[0]);
         return 2;
+    }
+    size_t answer_len = 0; /* 0: echo */
+    if (argc == 3) {
+        char *end = NULL;
+        const unsigned long v = strtoul(argv[2], &end, 10);
+        if (end == argv[2] || *end != '\0' || v == 0 || v > LS_ISOTP_MAX_PAYLOAD) {
+            fprintf(stderr, "bench_isotp_pty_echo: ANSWER_BYTES %s: expected 1..%u\n", argv[2],
+                    (unsigned)LS_ISOTP_MAX_PAYLOAD);
+            return 2;
+        }
+        answer_len = (size_t)v;
     }
     char msg[256];
     if (hal_sim_slcan_pty_open(&can_, argv[1], msg, sizeof msg) != LS_OK) {
@@ -96,6 +112,12 @@ int main(int argc, char **argv)
         }
         ls_isotp_poll(&link_, now_us());
         size_t n = ls_isotp_take_rx(&link_, msg_, sizeof msg_);
+        if (n > 0 && answer_len > 0) {
+            for (size_t i = n; i < answer_len; i++) {
+                msg_[i] = msg_[i % n];
+            }
+            n = answer_len;
+        }
         if (n > 0 && ls_isotp_send(&link_, msg_, n, now_us()) != LS_OK) {
             fprintf(stderr, "bench_isotp_pty_echo: echo of %zu bytes refused (still sending)\n", n);
         }

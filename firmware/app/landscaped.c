@@ -5,11 +5,10 @@
  * Threads: this comms thread (links, ISO-TP, dispatcher, telemetry). Logs go
  * to stderr with a level prefix that journald understands. The comms thread
  * is event-driven: it sleeps until a frame arrives, the control loop pushes
- * an event or a stop signal comes (both write the wake pipe), or the next
+ * an event or a stop signal comes (both write its eventfd), or the next
  * protocol deadline (ISO-TP, sessions, RSVPs, heartbeat, telemetry) is due
  * (docs/architecture.md "The comms thread"). */
 #include <errno.h>
-#include <fcntl.h>
 #include <inttypes.h>
 #include <poll.h>
 #include <pthread.h>
@@ -20,6 +19,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/eventfd.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -46,19 +46,23 @@
 #endif
 
 static volatile sig_atomic_t g_stop; /* the signal that asked us to stop, 0: none */
-/* The comms thread's wake pipe, both ends non-blocking: a byte written by
- * the control loop (an event in its ring) or a stop signal's handler ends
- * the comms thread's sleep; it drains the pipe before it drains the ring. */
-static int g_wake[2] = { -1, -1 };
+/* The comms thread's wake-up: an eventfd (non-blocking) that the control
+ * loop writes when it pushed an event into its ring, and a stop signal's
+ * handler when it set g_stop; the comms thread sleeps on it with the links
+ * and reads it before it drains the ring. An eventfd, not a pipe: its write
+ * takes a spinlock for a counter add and a wake-up (a priority-inheriting
+ * lock on PREEMPT_RT), where a pipe's write takes the pipe's sleeping mutex,
+ * which the comms thread's read holds at normal priority. */
+static int g_wake_fd = -1;
 
-/* Async-signal-safe and never blocks: a full pipe already holds a wake-up. */
+/* Async-signal-safe; never blocks (EAGAIN only at a counter of 2^64 - 2). */
 static void wake_comms(void *ctx)
 {
     (void)ctx;
     const int saved = errno;
-    const char b = 1;
-    if (g_wake[1] >= 0) {
-        (void)!write(g_wake[1], &b, 1);
+    const uint64_t one = 1;
+    if (g_wake_fd >= 0) {
+        (void)!write(g_wake_fd, &one, sizeof one);
     }
     errno = saved;
 }
@@ -69,25 +73,10 @@ static void on_signal(int sig)
     wake_comms(NULL);
 }
 
-static int open_wake_pipe(void)
+static void take_wake_ups(void)
 {
-    if (pipe(g_wake) != 0) {
-        return -1;
-    }
-    for (int i = 0; i < 2; i++) {
-        const int fl = fcntl(g_wake[i], F_GETFL);
-        if (fl < 0 || fcntl(g_wake[i], F_SETFL, fl | O_NONBLOCK) != 0 || fcntl(g_wake[i], F_SETFD, FD_CLOEXEC) != 0) {
-            return -1;
-        }
-    }
-    return 0;
-}
-
-static void drain_wake_pipe(void)
-{
-    char buf[64];
-    while (read(g_wake[0], buf, sizeof buf) > 0) {
-    }
+    uint64_t n;
+    (void)!read(g_wake_fd, &n, sizeof n); /* resets the counter */
 }
 
 static uint64_t earliest(uint64_t a, uint64_t b)
@@ -523,8 +512,9 @@ int main(int argc, char **argv)
         LOG_ERR("%s", cmsg);
         return LS_EXIT_BAD_CONFIG;
     }
-    if (open_wake_pipe() != 0) {
-        LOG_ERR("the comms thread's wake pipe: %s", strerror(errno));
+    g_wake_fd = eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
+    if (g_wake_fd < 0) {
+        LOG_ERR("the comms thread's eventfd: %s", strerror(errno));
         return 1;
     }
     install_signals();
@@ -631,7 +621,7 @@ int main(int argc, char **argv)
         }
         struct pollfd fds[LS_NET_MAX_LINKS + 1];
         nfds_t n = 0;
-        fds[n++] = (struct pollfd){ .fd = g_wake[0], .events = POLLIN, .revents = 0 };
+        fds[n++] = (struct pollfd){ .fd = g_wake_fd, .events = POLLIN, .revents = 0 };
         for (size_t i = 0; i < g_net.n_links; i++) {
             due = earliest(due, hal_can_next_due_us(&g_net.links[i]));
             int fd = hal_can_poll_fd(&g_net.links[i]);
@@ -646,7 +636,7 @@ int main(int argc, char **argv)
                                      .tv_nsec = (long)(wait_us % 1000000u) * 1000L };
         g_comms_wakeups++;
         if (ppoll(fds, n, &ts, NULL) > 0 && (fds[0].revents & POLLIN) != 0) {
-            drain_wake_pipe(); /* before the ring is drained (ls_core_tick): no event is missed */
+            take_wake_ups(); /* before the ring is drained (ls_core_tick): no event is missed */
         }
         now = mono_us();
         ls_net_poll(&g_net, now);
@@ -680,5 +670,8 @@ int main(int argc, char **argv)
         hal_dio_close(&g_dio);
     }
     ls_net_close(&g_net);
+    const int wake_fd = g_wake_fd;
+    g_wake_fd = -1; /* the control thread has stopped; a late signal finds no fd */
+    close(wake_fd);
     return rc;
 }

@@ -153,8 +153,8 @@ typedef struct {
     /* Optional: called in the loop after it pushed an event into the event
      * ring, so an event-driven comms thread wakes for it. It runs
      * in the real-time cycle, so it must neither block nor allocate: e.g.
-     * one write(2) to a non-blocking pipe (a full pipe means a wake-up is
-     * already pending). NULL: the comms thread polls on its own. */
+     * one write(2) to a non-blocking eventfd (landscaped.c says why not a
+     * pipe). NULL: the comms thread polls on its own. */
     void (*notify)(void *notify_ctx);
     void *notify_ctx;
 } ls_control_config_t;
