@@ -198,7 +198,8 @@ def fig(xs: list[float]) -> str:
 
 
 def bench_command(quick: bool) -> Section:
-    sec = Section(3, "Command round trip: getMotionControlState through the whole stack vs the link's floor")
+    sec = Section(3, "Command round trip: getMotionControlState through the whole stack vs the link's floor and "
+                     "an ISO-TP exchange of the same sizes")
     runs = 100 if quick else 500
     landscaped = need(BUILD / "bin" / "landscaped", "the firmware")
     echo = need(BIN / "bench_frame_echo", "the SLCAN frame echo")
@@ -242,4 +243,5 @@ def bench_command(quick: bool) -> Section:
         "ISO-TP single frame out and back through the same can-isotp stack the host library uses.")
     sec.commands.append("build-bench/bin/landscaped --hal sim --link slcan:pty:/tmp/ls0 &")
     sec.commands.append("build-bench/bench/bench_frame_echo /tmp/ls0 &")
+    sec.commands.append(f"build-bench/bench/bench_isotp_pty_echo /tmp/echo0 {ans_len} &   # 3c, beside landscaped")
     return sec

@@ -52,7 +52,7 @@ class Bench:
 BENCHES = [
     Bench(1, "ISO-TP efficiency", b_isotp.bench_frames, ("bench_isotp_frames",)),
     Bench(2, "ISO-TP throughput and latency (pty)", b_isotp.bench_pty, ("bench_isotp_pty_echo",)),
-    Bench(3, "Command round trip", b_cmd.bench_command, ("landscaped", "bench_frame_echo")),
+    Bench(3, "Command round trip", b_cmd.bench_command, ("landscaped", "bench_frame_echo", "bench_isotp_pty_echo")),
     Bench(4, "Trajectories vs ruckig", b_traj.bench_traj, ("bench_traj",)),
     Bench(5, "Control cycle cost", b_cycle.bench_cycle, ("bench_cycle",)),
     Bench(6, "Bytes on the wire per path point", b_wire.bench_wire, ()),
