@@ -1943,6 +1943,32 @@ static const ls_Response *connect_with(uint8_t addr, uint32_t period_ms, ls_Disc
     return must(addr);
 }
 
+/* Free session slots for `n` more clients: the profile's LS_MAX_SUPERVISORS
+ * (2 on mcu) may not hold them beside setup_core's HOST_A and HOST_B, so
+ * those disconnect as needed, HOST_B first. */
+static void make_room(int n)
+{
+    static const uint8_t setup_hosts[] = { HOST_B, HOST_A };
+    for (size_t k = 0; k < sizeof setup_hosts; k++) {
+        int connected = 0;
+        for (int i = 0; i < LS_MAX_SUPERVISORS; i++) {
+            connected += g_core.sessions[i].connected ? 1 : 0;
+        }
+        if (LS_MAX_SUPERVISORS - connected >= n) {
+            return;
+        }
+        if (ls_core_session_of(&g_core, setup_hosts[k]) >= 0) {
+            req(ls_Request_disconnect_tag);
+            assert_int_equal(must(setup_hosts[k])->ret_code, ls_RetCode_CMD_EXEC_OK);
+        }
+    }
+    int connected = 0;
+    for (int i = 0; i < LS_MAX_SUPERVISORS; i++) {
+        connected += g_core.sessions[i].connected ? 1 : 0;
+    }
+    assert_true(LS_MAX_SUPERVISORS - connected >= n);
+}
+
 static void get_units_of(uint8_t addr, const char *linear, const char *angular)
 {
     req(ls_Request_get_units_tag);
@@ -1981,13 +2007,30 @@ static void test_units_belong_to_the_session(void **state)
     assert_near(must(HOST_A)->result.get_tool_offsets.offset[2], 0.05, 1e-12);
 }
 
-/* Only HEARTBEAT frames keep a session; its time-out is max(configured, 5 stated periods). */
+/* Only HEARTBEAT frames keep a session; its time-out is max(configured, 5
+ * stated periods). Two rounds of two sessions each, so the test holds on
+ * every profile (LS_MAX_SUPERVISORS is 2 on mcu). */
 static void test_liveness_heartbeats_only_and_the_stated_period(void **state)
 {
     (void)state;
+    _Static_assert(LS_MAX_SUPERVISORS >= 2, "the test keeps two sessions at once");
     g_cfg_timeout_ms = 1000;
     setup_core(ls_State_LOCKED);
     const uint64_t t0 = g_now;
+
+    /* B keeps sending requests but no heartbeat; A sends heartbeats only */
+    g_now = t0 + LS_CONNECT_ANSWER_GRACE_US + 900000;
+    req(ls_Request_get_units_tag);
+    assert_int_equal(must(HOST_B)->ret_code, ls_RetCode_CMD_EXEC_OK);
+    beat(HOST_A, t0 + LS_CONNECT_ANSWER_GRACE_US + 900000);
+    ls_core_tick(&g_core, t0 + LS_CONNECT_ANSWER_GRACE_US + 1000001);
+    assert_int_equal(ls_core_session_of(&g_core, HOST_B), -1); /* requests do not keep a session */
+    assert_true(ls_core_session_of(&g_core, HOST_A) >= 0);
+    ls_core_tick(&g_core, t0 + LS_CONNECT_ANSWER_GRACE_US + 1900001);
+    assert_int_equal(ls_core_session_of(&g_core, HOST_A), -1);
+
+    /* stated periods: 5 of them, never below the configured time-out */
+    const uint64_t t1 = g_now = t0 + LS_CONNECT_ANSWER_GRACE_US + 2000000;
     const ls_Response *r = connect_with(0x23, 400, ls_DisconnectAction_DISCONNECT_CONFIGURED);
     assert_int_equal(r->ret_code, ls_RetCode_CMD_EXEC_OK);
     assert_int_equal(r->result.connect.heartbeat_timeout_ms, 2000);
@@ -2000,21 +2043,14 @@ static void test_liveness_heartbeats_only_and_the_stated_period(void **state)
     assert_int_equal(connect_with(0x25, 2001, ls_DisconnectAction_DISCONNECT_CONFIGURED)->ret_code,
                      ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
     assert_int_equal(ls_core_session_of(&g_core, 0x25), -1);
-
-    /* B keeps sending requests but no heartbeat; A sends heartbeats only */
-    g_now = t0 + LS_CONNECT_ANSWER_GRACE_US + 900000;
-    req(ls_Request_get_units_tag);
-    assert_int_equal(must(HOST_B)->ret_code, ls_RetCode_CMD_EXEC_OK);
-    beat(HOST_A, t0 + LS_CONNECT_ANSWER_GRACE_US + 900000);
-    beat(0x24, t0 + LS_CONNECT_ANSWER_GRACE_US + 900000);
-    ls_core_tick(&g_core, t0 + LS_CONNECT_ANSWER_GRACE_US + 1000001);
-    assert_int_equal(ls_core_session_of(&g_core, HOST_B), -1); /* requests do not keep a session */
-    assert_true(ls_core_session_of(&g_core, HOST_A) >= 0);
+    beat(0x24, t1 + LS_CONNECT_ANSWER_GRACE_US + 900000);
+    ls_core_tick(&g_core, t1 + LS_CONNECT_ANSWER_GRACE_US + 1000001);
+    assert_true(ls_core_session_of(&g_core, 0x24) >= 0);
     assert_true(ls_core_session_of(&g_core, 0x23) >= 0); /* its own, longer time-out */
-    ls_core_tick(&g_core, t0 + LS_CONNECT_ANSWER_GRACE_US + 1900001);
-    assert_int_equal(ls_core_session_of(&g_core, HOST_A), -1);
+    ls_core_tick(&g_core, t1 + LS_CONNECT_ANSWER_GRACE_US + 1900001);
+    assert_int_equal(ls_core_session_of(&g_core, 0x24), -1);
     assert_true(ls_core_session_of(&g_core, 0x23) >= 0);
-    ls_core_tick(&g_core, t0 + LS_CONNECT_ANSWER_GRACE_US + 2000001);
+    ls_core_tick(&g_core, t1 + LS_CONNECT_ANSWER_GRACE_US + 2000001);
     assert_int_equal(ls_core_session_of(&g_core, 0x23), -1);
     assert_int_equal(g_core.sessions_dropped, 4);
 }
@@ -2161,6 +2197,7 @@ static void test_connect_narrows_the_disconnect_action(void **state)
     assert_int_equal(g_core.sessions[0].disconnect_action, ls_DisconnectAction_DISCONNECT_STOP_DEACTIVATE_RELEASE);
     g_cfg_action = ls_DisconnectAction_DISCONNECT_STOP_DEACTIVATE;
     setup_core(ls_State_LOCKED);
+    make_room(2);
     const ls_Response *r = connect_with(0x23, 0, ls_DisconnectAction_DISCONNECT_STOP_DEACTIVATE_RELEASE);
     assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
     assert_string_equal(r->ret_msg, "connect: disconnect_action stop_deactivate_release is wider than the "
@@ -2314,6 +2351,7 @@ static void test_absent_required_fields_are_refused_naming_them(void **state)
 static void test_seq_0_is_refused_after_connect(void **state)
 {
     (void)state;
+    make_room(1);
     /* connect with seq 0 is fine (the seq a client that sets none sends) ... */
     ls_ConnectReq *c = &req(ls_Request_connect_tag)->cmd.connect;
     c->protocol_version = ls_Protocol_PROTOCOL_VERSION;
