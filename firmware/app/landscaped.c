@@ -258,7 +258,8 @@ static uint64_t rt_behind_us(void)
 }
 
 /* Turns of the comms loop (sleeps ended by a frame, a wake-up or a
- * deadline): about 5/s on an idle link (the heartbeat). Comms thread only. */
+ * deadline): on an idle link the heartbeat's 5/s and the telemetry's
+ * --telemetry-hz. Comms thread only. */
 static uint64_t g_comms_wakeups;
 
 static void describe_rt(void *ctx, char *buf, size_t cap)

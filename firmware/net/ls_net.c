@@ -184,8 +184,11 @@ static bool already_pending(const ls_net_peer_t *p, const uint8_t *buf, size_t l
 int ls_net_send_downlink(void *ctx, uint8_t addr, const uint8_t *buf, size_t len)
 {
     ls_net_t *net = ctx;
+    if (len == 0 || len > LS_DOWNLINK_MAX) {
+        return -1; /* ISO-TP carries 1..LS_ISOTP_MAX_PAYLOAD bytes: it would stay queued */
+    }
     ls_net_peer_t *p = get_peer(net, addr);
-    if (p == NULL || len > LS_DOWNLINK_MAX) {
+    if (p == NULL) {
         return -1;
     }
     if (already_pending(p, buf, len)) {

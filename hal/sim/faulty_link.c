@@ -312,7 +312,10 @@ static uint64_t hold_next_due(const dir_t *d, uint64_t t)
 static uint64_t f_next_due_us(void *self)
 {
     faulty_t *f = self;
-    return hold_next_due(&f->rx, hold_next_due(&f->tx, hal_can_next_due_us(&f->inner)));
+    uint64_t t = hold_next_due(&f->rx, hal_can_next_due_us(&f->inner));
+    /* While the inner link waits for room (the caller polls it writable),
+     * due TX holds wait with it: they would only be refused again. */
+    return hal_can_tx_pending(&f->inner) ? t : hold_next_due(&f->tx, t);
 }
 
 static const hal_can_ops_t g_ops = {

@@ -500,6 +500,35 @@ static void test_dup_delivers_the_copy_right_after_the_original(void **state)
     assert_int_equal(c.rx.duplicated, 2);
 }
 
+/* An event-driven caller sleeps until hal_can_next_due_us: held frames
+ * must be due exactly when recv or send would pass them on. */
+static void test_next_due_is_when_a_delayed_frame_passes(void **state)
+{
+    (void)state;
+    wrap("delay=1:3ms,seed=3");
+    assert_true(hal_can_next_due_us(&link_) == UINT64_MAX); /* nothing held */
+    const uint64_t t0 = g_now_us;
+    hal_can_frame_t a = frame_n(1), got;
+    assert_int_equal(hal_can_send(&link_, &a), LS_OK);
+    assert_int_equal(fake.n_sent, 0);
+    assert_true(hal_can_next_due_us(&link_) == t0 + 3000u);
+    g_now_us = t0 + 2999u;
+    assert_int_equal(hal_can_recv(&link_, &got), LS_EAGAIN);
+    assert_int_equal(fake.n_sent, 0);
+    g_now_us = t0 + 3000u;
+    assert_int_equal(hal_can_recv(&link_, &got), LS_EAGAIN); /* recv times TX releases too */
+    assert_int_equal(fake.n_sent, 1);
+    assert_true(hal_can_next_due_us(&link_) == UINT64_MAX);
+    /* received frames the same way */
+    fake_push_rx(&a);
+    assert_int_equal(hal_can_recv(&link_, &got), LS_EAGAIN);
+    assert_true(hal_can_next_due_us(&link_) == t0 + 6000u);
+    g_now_us = t0 + 6000u;
+    assert_int_equal(hal_can_recv(&link_, &got), 1);
+    assert_int_equal(frame_index(&got), 1);
+    assert_true(hal_can_next_due_us(&link_) == UINT64_MAX);
+}
+
 static void test_reorder_releases_after_the_next_frame(void **state)
 {
     (void)state;
@@ -935,6 +964,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_window_limits_frame_faults_in_time, setup, teardown),
         cmocka_unit_test_setup_teardown(test_window_keeps_the_decision_stream, setup, teardown),
         cmocka_unit_test_setup_teardown(test_format_names_every_counter, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_next_due_is_when_a_delayed_frame_passes, setup, teardown),
         cmocka_unit_test(test_parse_full_spec),
         cmocka_unit_test(test_parse_units_percentages_and_directions),
         cmocka_unit_test(test_parse_errors_say_what_is_wrong),

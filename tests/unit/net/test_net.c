@@ -457,6 +457,7 @@ static void test_downlink_queue_is_bounded(void **state)
     /* Too long for a downlink: refused. */
     static uint8_t big[LS_DOWNLINK_MAX + 1];
     assert_int_equal(ls_net_send_downlink(&g_net, SUP_B, big, sizeof big), -1);
+    assert_int_equal(ls_net_send_downlink(&g_net, SUP_B, big, 0), -1); /* empty: ISO-TP carries none */
     /* Waiting for a flow control: the poll deadline is N_Bs away. */
     uint64_t d = ls_net_next_deadline_us(&g_net);
     assert_true(d > 100 && d <= 100 + 1000000u);
