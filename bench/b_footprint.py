@@ -26,6 +26,10 @@ CXXFLAGS = ["-std=c++17", *TARGET]
 # No nosys.specs: the firmware formats and parses with firmware/common/ls_fmt.c, so nothing reaches newlib's
 # stdio or system calls; a libc function that needed one would fail the link here.
 LDFLAGS = ["--specs=nano.specs", "-nostartfiles", "-Wl,--gc-sections"]
+# Link-time optimisation of the image's units (not of fw_sizes.c, whose object is read, never linked). Fat
+# objects: the per-part table comes from a second link of the same objects without LTO (LTO merges every
+# unit into a few partitions, so its map cannot say which part a byte belongs to).
+LTO = ["-flto", "-ffat-lto-objects"]
 ALLOCATORS = {"malloc", "free", "calloc", "realloc", "_malloc_r", "_free_r", "_calloc_r", "_realloc_r", "_sbrk",
               "_sbrk_r", "aligned_alloc", "posix_memalign", "memalign", "_Znwj", "_Znaj", "_ZdlPv", "_ZdaPv"}
 NANOPB_RUNTIME = ("pb_encode.c", "pb_decode.c", "pb_common.c")
@@ -302,6 +306,8 @@ class Image:
     firmware_allocs: set[str]
     sizes: dict[str, int]
     limits: dict[str, int]
+    parts_map_text: str  # the map of the same objects linked without LTO (the per-part table)
+    flash_without_lto: int
 
 
 def build_image(targets: list[FwTarget], npb: Path | None, defines: list[str], tmp: Path) -> Image:
@@ -321,6 +327,8 @@ def build_image(targets: list[FwTarget], npb: Path | None, defines: list[str], t
     def compile_one(job: tuple[FwTarget, Path, Path]) -> str:
         t, src, obj = job
         cmd = [CXX, *CXXFLAGS] if src.suffix in CXX_SUFFIXES else [CC, *CFLAGS]
+        if obj != sizes_job[2]:
+            cmd += LTO
         includes = [*([npb] if npb is not None else []), *t.includes]
         cc = run([*cmd, *t.options, *(f"-D{d}" for d in [*t.defines, *defines]), *(f"-I{p}" for p in includes),
                   "-c", str(src), "-o", str(obj)])
@@ -337,13 +345,21 @@ def build_image(targets: list[FwTarget], npb: Path | None, defines: list[str], t
         if "fw_main" not in obj.name:
             firmware_allocs |= {f"{src.name}: {s}" for s in undefined & ALLOCATORS}
     elf, mapf = tmp / "fw.elf", tmp / "fw.map"
-    ld = run([CC, *CFLAGS, *LDFLAGS, *map(str, objs), f"-Wl,-Map={mapf}", "-o", str(elf), "-lm"])
+    ld = run([CC, *CFLAGS, *LTO, *LDFLAGS, *map(str, objs), f"-Wl,-Map={mapf}", "-o", str(elf), "-lm"])
     if ld.returncode != 0:
         raise BenchError(f"linking the Cortex-M4F image failed: {ld.stderr.strip()[-400:]}")
+    parts_elf, parts_map = tmp / "fw-parts.elf", tmp / "fw-parts.map"
+    ld = run([CC, *CFLAGS, "-fno-lto", *LDFLAGS, *map(str, objs), f"-Wl,-Map={parts_map}", "-o", str(parts_elf),
+              "-lm"])
+    if ld.returncode != 0:
+        raise BenchError(f"linking the Cortex-M4F image without LTO failed: {ld.stderr.strip()[-400:]}")
+    parts_text, parts_data = (int(x) for x in
+                              run(["arm-none-eabi-size", str(parts_elf)]).stdout.splitlines()[1].split()[:2])
     text, data, bss = (int(x) for x in run(["arm-none-eabi-size", str(elf)]).stdout.splitlines()[1].split()[:3])
     syms = run(["arm-none-eabi-nm", "-S", "--size-sort", str(elf)]).stdout.splitlines()
     sizes, limits = ram_parts(run(["arm-none-eabi-nm", "-S", str(sizes_job[2])]).stdout)
-    return Image(text, data, bss, syms, mapf.read_text(), firmware_allocs, sizes, limits)
+    return Image(text, data, bss, syms, mapf.read_text(), firmware_allocs, sizes, limits, parts_map.read_text(),
+                 parts_text + parts_data)
 
 
 def bench_footprint(quick: bool) -> Section:
@@ -367,7 +383,7 @@ def bench_footprint(quick: bool) -> Section:
     why = re.findall(r"\((lib_a-[\w-]+\.o)\)\s*\n?\s+\S*\((lib_a-[\w-]+\.o)\) "
                      r"\((_(?:malloc|realloc|free|calloc)_r|malloc|free|calloc)\)", img.map_text)
     breakdown: dict[str, dict[str, int]] = defaultdict(lambda: {"flash": 0, "ram": 0})
-    for path, sizes in map_breakdown(img.map_text).items():
+    for path, sizes in map_breakdown(img.parts_map_text).items():
         for k, v in sizes.items():
             breakdown[label(path)][k] += v
     big_ram = [line.split() for line in syms if line.split()[2] in "bBdD"][-4:]
@@ -396,8 +412,10 @@ def bench_footprint(quick: bool) -> Section:
                          "; _sbrk stubbed to fail: no heap region")
                         if linked_allocs else "goal none: met, no allocator in the image"))
     sec.details.append(
-        f"`{CC} {' '.join(CFLAGS)}` (C++: `{CXX} {' '.join(CXXFLAGS)}`), linked with "
-        f"`{' '.join(LDFLAGS)} -lm`. Sources: every library `landscaped` links, followed through their link "
+        f"`{CC} {' '.join(CFLAGS)} {' '.join(LTO)}` (C++: `{CXX} {' '.join(CXXFLAGS)} {' '.join(LTO)}`), linked "
+        f"with `{' '.join(LDFLAGS)} -lm`; link-time optimisation takes {(img.flash_without_lto - flash) / 1024:.1f} "
+        f"KiB off the {img.flash_without_lto / 1024:.1f} KiB of the same objects linked without it. Sources: "
+        "every library `landscaped` links, followed through their link "
         "libraries, except the OS parts (the targets under firmware/app, hal/sim, hal/linux); bench/CMakeLists.txt "
         "computes that list from the main build's targets and writes it with each target's include directories, "
         "definitions and -f options to build-bench/footprint/portable.txt, so the image compiles the same "
@@ -423,7 +441,8 @@ def bench_footprint(quick: bool) -> Section:
             "The largest parts: " + ", ".join(f"{k} {v / 1024:.1f} KiB" for k, v in code) + ". Everything computes "
             "in double, which the Cortex-M4F's single-precision FPU runs as calls into libgcc and newlib's libm; "
             "the core's share is mostly its handlers and the texts of their answers.")
-    sec.details.append("Per part (from the linker map; flash includes initialised data):\n\n"
+    sec.details.append("Per part (from the map of the same objects linked without LTO, "
+                       f"{img.flash_without_lto} B of flash; flash includes initialised data):\n\n"
                        "| part | flash B | RAM B |\n|---|---:|---:|\n" +
                        "\n".join(f"| {k} | {v['flash']} | {v['ram']} |" for k, v in rows))
     sec.details.append("Where the static RAM goes (`bench/footprint/fw_sizes.c`: each part's size as the target "
@@ -445,7 +464,7 @@ def bench_footprint(quick: bool) -> Section:
             f"shows none of {', '.join(sorted(ALLOCATORS))}, and the firmware's objects reference none "
             "(`arm-none-eabi-nm -u` on each). The image links without newlib's system-call stubs (no nosys.specs).")
     mcu_defs = " ".join(f"-D{d}" for d in profiles["mcu"])
-    sec.commands.append(f"{CC} {' '.join(CFLAGS)} {mcu_defs} -I... <sources> {' '.join(LDFLAGS)} "
+    sec.commands.append(f"{CC} {' '.join(CFLAGS)} {' '.join(LTO)} {mcu_defs} -I... <sources> {' '.join(LDFLAGS)} "
                         "-Wl,-Map=fw.map -o fw.elf -lm")
     sec.commands.append("arm-none-eabi-size fw.elf; arm-none-eabi-nm fw.elf | grep -E ' (malloc|free|_sbrk)'")
     return sec
