@@ -233,8 +233,12 @@ def bench_command(quick: bool) -> Section:
         "3c runs landscaped and `bench/isotp_pty_echo.c` (the firmware's ISO-TP on `hal/sim/slcan_pty`, "
         "answering every message with the command's answer size) on two ptys at once and alternates one "
         "command and one exchange per turn, so both see the same machine load; the request is the command's "
-        "own uplink size, sent with the host library's ISO-TP parameters. The difference is what the device "
-        "adds (dispatch, protobuf, its comms loop) and what `landscape.Supervisor` adds on the host.")
+        "own uplink size, sent with the host library's ISO-TP parameters. Both peers sleep until a frame or "
+        "their next ISO-TP deadline: landscaped's comms thread has no fixed poll period (it wakes on a link's "
+        "fd, on the eventfd the control loop and the stop signals write, or on the earliest protocol, "
+        "heartbeat or telemetry deadline; docs/architecture.md \"Threads\"), so a request is served when its "
+        "last frame arrives. The difference is what the device adds (dispatch, protobuf, its comms loop) and "
+        "what `landscape.Supervisor` adds on the host.")
     sec.details.append(
         "The command goes through `landscape.Supervisor` (protobuf request, can-isotp, python-can slcan) to "
         "`build-bench/bin/landscaped --hal sim` and back (its answer is a multi-frame ISO-TP message). Floors "
