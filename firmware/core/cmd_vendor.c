@@ -4,7 +4,8 @@
  *   status   state, owner, sessions and their counters
  *   faults   the flood counters, then the fault log (oldest first; the first entries and the latest)
  *   events   the event log (oldest first): RSVP answers with their data, time-outs, refused replies
- *   rtstats  the control loop: cycles, overruns, worst latency and cycle time, SCHED_FIFO, memory lock
+ *   rtstats  the control loop: cycles, overruns, worst latency and cycle time, SCHED_FIFO, memory lock;
+ *            the comms thread's wake-ups
  *   config   the running configuration (file and options merged)
  *   stopping the category-1 stop's bound per joint, from the robot model
  * Output is plain text, one item per line, at most 1 KiB. */
