@@ -56,6 +56,19 @@ add_library(ls_ruckig STATIC ${ls_ruckig_srcs})
 # SYSTEM: ruckig's headers do not see our -Werror set from our own sources.
 target_include_directories(ls_ruckig SYSTEM PUBLIC "${LS_RUCKIG_DIR}/include")
 # Third-party code: its own warnings are not ours to fix (-w for these TUs only).
-# ls_ruckig_no_iostream.h: see there (no static ios_base::Init per TU).
-target_compile_options(ls_ruckig PRIVATE -w -fno-exceptions -fno-rtti
-                       -include ${ls_ruckig_root}/firmware/motion/ls_ruckig_no_iostream.h)
+target_compile_options(ls_ruckig PRIVATE -w -fno-exceptions -fno-rtti)
+# LS_RUCKIG_DEFINITIONS, for every TU that includes ruckig's headers: ruckig's
+# profile.hpp, brake.hpp and calculator_target.hpp include <iostream> though
+# nothing but the cloud client (not built) uses a stream object. With GCC < 13
+# each such TU then defines a static std::ios_base::Init whose constructor
+# builds cout/cin/cerr and their locales: on the Cortex-M image (bench 7) that
+# links newlib's allocator and stdio, on Linux it is start-up work for
+# nothing. Defining libstdc++'s include guard keeps <iostream> out (<ostream>
+# and <istream> still come through <sstream>, for ruckig's to_string helpers);
+# a ruckig that used std::cout would fail to compile, not pass silently.
+# A definition, not a forced include, so the footprint's manifest carries it.
+# _DEFAULT_SOURCE: ruckig's roots.hpp uses M_PI, which newlib (the Cortex-M
+# C library) declares only outside strict ISO C++ (g++ on Linux always
+# defines _GNU_SOURCE, which implies it).
+set(LS_RUCKIG_DEFINITIONS _GLIBCXX_IOSTREAM=1 _DEFAULT_SOURCE)
+target_compile_definitions(ls_ruckig PRIVATE ${LS_RUCKIG_DEFINITIONS})
