@@ -32,6 +32,7 @@ import b_cycle
 import b_footprint
 import b_isotp
 import b_jitter
+import b_otg
 import b_traj
 import b_wire
 
@@ -62,6 +63,7 @@ BENCHES = [
           ("landscaped", "ls_cmd_table_gen", "ls_proto", "ls_dbc")),
     Bench(8, "Real-time jitter", b_jitter.bench_jitter, ("bench_rt_jitter",)),
     Bench(9, "Blended paths", b_blend.bench_blend, ("bench_blend",)),
+    Bench(10, "State-to-state trajectories vs ruckig", b_otg.bench_otg, ("bench_otg",)),
 ]
 
 
