@@ -28,6 +28,11 @@ using Calculator = ruckig::Calculator<kDofs>;
 constexpr uint32_t kMagic = 0x4f544731u; // "OTG1"
 
 struct Workspace {
+    // Explicit: ruckig's Calculator() is explicit, which clang refuses in
+    // the aggregate initialisation Workspace{} would be.
+    Workspace() : magic(0), calc(), input(), traj()
+    {
+    }
     uint32_t magic;
     Calculator calc;
     Input input;
@@ -150,7 +155,7 @@ extern "C" int ls_otg_planner_init(ls_otg_planner_t *pl)
     if (pl == nullptr) {
         return LS_EINVAL;
     }
-    Workspace *ws = new (pl->bytes_) Workspace{};
+    Workspace *ws = new (pl->bytes_) Workspace();
     ws->magic = kMagic;
     return LS_OK;
 }
