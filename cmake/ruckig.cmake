@@ -18,16 +18,20 @@ set(LS_RUCKIG_SDIST "${LS_DEPS_DIR}/ruckig-${LS_RUCKIG_VERSION}.tar.gz" CACHE FI
 
 if(NOT EXISTS "${LS_RUCKIG_SDIST}")
   message(STATUS "ruckig: downloading ${LS_RUCKIG_URL}")
-  file(DOWNLOAD "${LS_RUCKIG_URL}" "${LS_RUCKIG_SDIST}.part" STATUS ls_dl_status TLS_VERIFY ON)
+  # A name of its own, renamed when complete: configures that run at once
+  # (CI's build directories) never read each other's half-written file.
+  string(RANDOM LENGTH 8 ls_dl_tag)
+  set(ls_dl_part "${LS_RUCKIG_SDIST}.${ls_dl_tag}.part")
+  file(DOWNLOAD "${LS_RUCKIG_URL}" "${ls_dl_part}" STATUS ls_dl_status TLS_VERIFY ON)
   list(GET ls_dl_status 0 ls_dl_code)
   if(NOT ls_dl_code EQUAL 0)
     list(GET ls_dl_status 1 ls_dl_text)
-    file(REMOVE "${LS_RUCKIG_SDIST}.part")
+    file(REMOVE "${ls_dl_part}")
     message(FATAL_ERROR "ruckig: could not download ${LS_RUCKIG_URL} (${ls_dl_text}). Offline: fetch "
                         "ruckig-${LS_RUCKIG_VERSION}.tar.gz elsewhere (pip download --no-binary :all: --no-deps "
                         "ruckig==${LS_RUCKIG_VERSION}) and configure with -DLS_RUCKIG_SDIST=/path/to/it")
   endif()
-  file(RENAME "${LS_RUCKIG_SDIST}.part" "${LS_RUCKIG_SDIST}")
+  file(RENAME "${ls_dl_part}" "${LS_RUCKIG_SDIST}")
 endif()
 file(SHA256 "${LS_RUCKIG_SDIST}" ls_ruckig_sha)
 if(NOT ls_ruckig_sha STREQUAL LS_RUCKIG_SHA256)
