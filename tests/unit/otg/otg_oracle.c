@@ -69,8 +69,8 @@ int main(void)
         problem_t *p = &problems[count];
         p->n = (uint8_t)n;
         if (read_vec(p->cur.p, n) || read_vec(p->cur.v, n) || read_vec(p->cur.a, n) || read_vec(p->tgt.p, n) ||
-            read_vec(p->tgt.v, n) || read_vec(p->tgt.a, n) || read_vec(p->lim.v_max, n) ||
-            read_vec(p->lim.a_max, n) || read_vec(p->lim.j_max, n)) {
+            read_vec(p->tgt.v, n) || read_vec(p->tgt.a, n) || read_vec(p->lim.v_max, n) || read_vec(p->lim.a_max, n) ||
+            read_vec(p->lim.j_max, n)) {
             fprintf(stderr, "otg_oracle: expected 9 x %d numbers after the axis count\n", n);
             return 2;
         }
