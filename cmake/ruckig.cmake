@@ -76,3 +76,5 @@ target_compile_options(ls_ruckig PRIVATE -w -fno-exceptions -fno-rtti)
 # defines _GNU_SOURCE, which implies it).
 set(LS_RUCKIG_DEFINITIONS _GLIBCXX_IOSTREAM=1 _DEFAULT_SOURCE)
 target_compile_definitions(ls_ruckig PRIVATE ${LS_RUCKIG_DEFINITIONS})
+# Numeric third-party code: no coverage feedback under LS_FUZZ (CMakeLists.txt).
+ls_fuzz_uninstrumented(ls_ruckig)
