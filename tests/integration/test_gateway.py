@@ -6,6 +6,7 @@ command, and a killed session whose supervisor the device drops (its disconnect 
 from __future__ import annotations
 
 import asyncio
+import json
 import os
 import re
 import shlex
@@ -22,7 +23,7 @@ from typing import Any
 import pytest
 from asyncua import Client, ua
 
-from conftest import CLI, Controller
+from conftest import CLI, Controller, start_controller
 from landscape._generated import landscape_pb2 as pb
 from landscape.gateway_config import hash_password
 
@@ -69,6 +70,8 @@ def gateway(controller: Controller, tmp_path: Path) -> Iterator[str]:
         out, err = proc.communicate(timeout=30)
         assert proc.returncode == 0, (out, err)
         assert "Traceback" not in err, err
+        assert "never awaited" not in err, err  # a write left behind at shutdown
+        assert re.search(r"^gateway: stopped; served 1 controller$", out, re.M), out
 
 
 def user_url(url: str, user: str, pw: str) -> str:
@@ -266,6 +269,132 @@ def test_a_second_client_is_refused_ownership_and_a_killed_session_is_dropped(ga
             # and now bob may own it
             out = await call(node, ns, "lock")
             assert out[0] >= 0, out
+    asyncio.run(run())
+
+
+async def subscribe_notices(client: Client, node: Any, ns: int) -> Events:
+    events = Events()
+    sub = await client.create_subscription(50, events)
+    await sub.subscribe_events(node, await client.nodes.root.get_child(
+        ["0:Types", "0:EventTypes", "0:BaseEventType", f"{ns}:LandScapeNoticeEventType"]))
+    return events
+
+
+async def wait_status(var: Any, good: bool, timeout_s: float) -> ua.DataValue:
+    deadline = time.monotonic() + timeout_s
+    while True:
+        dv = await var.read_data_value(raise_on_bad_status=False)
+        if dv.StatusCode.is_good() == good:
+            return dv
+        assert time.monotonic() < deadline, f"{var} still {dv.StatusCode} after {timeout_s} s"
+        await asyncio.sleep(0.1)
+
+
+def test_a_controller_that_goes_turns_bad_and_recovers_when_it_comes_back(gateway: str,
+                                                                          controller: Controller) -> None:
+    """landscaped stops: its values turn BadNoCommunication, subscribers get controllerLost, calls are
+    refused by name; landscaped starts again on the same line: the gateway finds it, values are Good,
+    calls work, without a gateway restart."""
+    async def run() -> None:
+        async with Client(user_url(gateway, "alice", "alice-pw"), timeout=UA_TIMEOUT_S) as c:
+            node, ns = await controller_node(c)
+            state = await node.get_child(f"{ns}:State")
+            joints = await node.get_child([f"{ns}:MotionDevices", f"{ns}:Arm", f"{ns}:JointPositions"])
+            dv = await wait_status(state, True, 10)
+            assert dv.SourceTimestamp is not None and dv.ServerTimestamp is not None, dv
+            assert (await call(node, ns, "lock"))[0] >= 0
+            events = await subscribe_notices(c, node, ns)
+            assert controller.stop() == 0
+            gone_at = time.monotonic()
+            for var in (state, joints):
+                dv = await wait_status(var, False, 15)
+                assert dv.StatusCode.value == ua.StatusCodes.BadNoCommunication, dv
+            # twice the device's heartbeat time-out (1 s) and a loaded machine's slack
+            assert time.monotonic() - gone_at < 10
+            await asyncio.sleep(0.5)
+            lost = [e for e in events.got if e.NoticeId == "controllerLost"]
+            assert lost and lost[0].Kind == "ALARM" and lost[0].Severity == 800, \
+                [(e.NoticeId, e.Data) for e in events.got]
+            with pytest.raises(ua.UaStatusCodeError) as refused:
+                await call(node, ns, "getRobotPosition")
+            assert refused.value.code == ua.StatusCodes.BadNoCommunication
+            # landscaped again on the same line (a new pty behind the same name)
+            again = start_controller(Path(controller.pty))
+            controller.proc = again.proc
+            await wait_status(state, True, 30)
+            await wait_status(joints, True, 10)
+            deadline = time.monotonic() + 30
+            while not any(e.NoticeId == "controllerBack" for e in events.got):
+                assert time.monotonic() < deadline, [(e.NoticeId, e.Data) for e in events.got]
+                await asyncio.sleep(0.1)
+            # the device forgot the old session: this session's calls connect anew and work
+            deadline = time.monotonic() + 30
+            while True:
+                try:
+                    out = await call(node, ns, "getRobotPosition")
+                    break
+                except ua.UaStatusCodeError:
+                    assert time.monotonic() < deadline
+                    await asyncio.sleep(0.5)
+            assert out[1] == "CMD_EXEC_OK", out
+            assert await state.read_value() in ("IDLE", "UNLOCKED")
+    asyncio.run(run())
+
+
+def test_bad_arguments_are_refused_by_name_and_anonymous_first(gateway: str) -> None:
+    async def run() -> None:
+        async with Client(gateway, timeout=UA_TIMEOUT_S) as anon:
+            node, ns = await controller_node(anon)
+            with pytest.raises(ua.UaStatusCodeError) as refused:
+                await call(node, ns, "AnswerRsvp")  # no arguments at all: still the user first
+            assert refused.value.code == ua.StatusCodes.BadUserAccessDenied
+        async with Client(user_url(gateway, "alice", "alice-pw"), timeout=UA_TIMEOUT_S) as c:
+            node, ns = await controller_node(c)
+            for args in ([ua.Variant(5, ua.VariantType.UInt32)],
+                         ["one", ua.Variant(0, ua.VariantType.Int32), ua.Variant([], ua.VariantType.String)],
+                         [ua.Variant(5, ua.VariantType.UInt32), ua.Variant(0, ua.VariantType.Int32), "x", "y"]):
+                with pytest.raises(ua.UaStatusCodeError) as refused:
+                    await call(node, ns, "AnswerRsvp", *args)
+                assert refused.value.code == ua.StatusCodes.BadInvalidArgument, args
+            # a String where the schema wants an array: refused, not iterated character by character
+            assert (await call(node, ns, "lock"))[0] >= 0
+            assert (await call(node, ns, "activate"))[0] >= 0
+            with pytest.raises(ua.UaStatusCodeError) as refused:
+                await call(node, ns, "moveAbsolute", "p1", "JOINT_FRAME", "000000")
+            assert refused.value.code == ua.StatusCodes.BadInvalidArgument
+            with pytest.raises(ua.UaStatusCodeError) as refused:
+                await call(node, ns, "pathLoad", "r", "JOINT_FRAME", "JOINT_MOTION", "ABSOLUTE_DATA", 1,
+                           '{"tag_name": "a", "joints": [0.1, 0, 0, 0, 0, 0]}')
+            assert refused.value.code == ua.StatusCodes.BadInvalidArgument
+            state = await node.get_child(f"{ns}:State")
+            assert await state.read_value() != "MOVING"
+    asyncio.run(run())
+
+
+def test_a_full_supervisor_table_is_the_devices_refusal(gateway: str) -> None:
+    """The device takes max_sessions supervisors (the description says how many); the gateway's
+    observer holds one, each commanding OPC UA session one: the session past the limit gets the
+    device's CMD_NO_RESOURCES_ERR as a good call, not a communication error."""
+    async def run() -> None:
+        async with Client(gateway, timeout=UA_TIMEOUT_S) as anon:
+            node, ns = await controller_node(anon)
+            desc = json.loads(await (await node.get_child(f"{ns}:Description")).read_value())
+        max_sessions = int(desc["max_sessions"])
+        clients = []
+        try:
+            outs = []
+            for _ in range(max_sessions):  # the observer holds one place: the last one is refused
+                c = Client(user_url(gateway, "alice", "alice-pw"), timeout=UA_TIMEOUT_S)
+                await c.connect()
+                clients.append(c)
+                node, ns = await controller_node(c)
+                outs.append(await call(node, ns, "getMotionControlState"))
+            assert all(o[0] >= 0 for o in outs[:-1]), outs
+            assert outs[-1][1] == "CMD_NO_RESOURCES_ERR" and outs[-1][0] == pb.CMD_NO_RESOURCES_ERR, outs[-1]
+            assert "supervisors" in outs[-1][2], outs[-1]
+        finally:
+            for c in clients:
+                await c.disconnect()
     asyncio.run(run())
 
 

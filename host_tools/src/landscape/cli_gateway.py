@@ -67,7 +67,8 @@ async def _serve(cfg: GatewayConfig, spec: BusSpec, json_out: bool) -> None:
     sys.stdout.flush()
     await gw.run()
     logging.getLogger("landscape.gateway").info("gateway stopped")
-    click.echo(f"gateway: stopped; served {len(gw.controllers)} controllers")
+    n = len(gw.controllers)
+    click.echo(f"gateway: stopped; served {n} controller{'' if n == 1 else 's'}")
 
 
 def asyncua_missing() -> str | None:

@@ -21,15 +21,19 @@ from __future__ import annotations
 
 import asyncio
 import contextvars
+import datetime
+import errno
 import json
 import logging
 import signal
+import socket
 import time
 from collections.abc import Callable, Coroutine, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import can
+import isotp
 from asyncua import ua
 from asyncua.common.node import Node
 from asyncua.crypto.permission_rules import SimpleRoleRuleset, User, UserRole
@@ -45,7 +49,7 @@ from google.protobuf.descriptor import FieldDescriptor
 from . import telemetry as tm
 from ._generated import landscape_pb2 as pb
 from .bus import BusSpec, open_bus, release_bus
-from .errors import AddressInUseError, ArgumentError, LandscapeError
+from .errors import AddressInUseError, ArgumentError, CommandError, LandscapeError
 from .gateway_config import GatewayConfig
 from .registry import COMMANDS, Command, enum_choices, field_enum_type, is_repeated, message_to_dict
 from .supervisor import ALARM_KINDS, RSVP_KINDS, Supervisor
@@ -98,6 +102,21 @@ def _eu(unit: str) -> ua.EUInformation:
                             Description=ua.LocalizedText(long))
 
 
+#: The gateway's own notices (no device sends them, so the schema has none): the controller's heartbeat
+#: stopped (its values turn Bad), and it came back (Good again, calls work).
+CONTROLLER_LOST = "controllerLost"
+CONTROLLER_BACK = "controllerBack"
+#: How long a controller may stay silent before it counts as gone, until its description gives the
+#: device's own heartbeat time-out.
+DEFAULT_SILENCE_S = 1.0
+#: How often the gateway reopens its link while no controller beats.
+RELINK_S = 1.0
+#: The status of a gone controller's values (they keep the last value heard).
+GONE = StatusCodes.BadNoCommunication
+#: The variables of a controller that the telemetry feeds (Address and Description stay Good).
+LIVE_VARS = ("State", "Motion", "Fault", "Owner", "Supervisors", "JointPositions", "ToolPose")
+
+
 class GatewayError(LandscapeError):
     """The gateway cannot start (the port is taken, a certificate does not load)."""
 
@@ -137,6 +156,9 @@ def fields_of(cmd: Command, args: Sequence[Any]) -> dict[str, Any]:
     for fd, value in zip(fds, args, strict=False):
         if value is None or (fd.type == FieldDescriptor.TYPE_ENUM and value == ""):
             continue
+        if is_repeated(fd) and not isinstance(value, (list, tuple)):
+            raise ArgumentError(f"{cmd.name}.{fd.name}: an array ({_VARIANT[fd.type].name}[]) is expected, got "
+                                f"{type(value).__name__} {value!r}: pass one element per item")
         if fd.type == FieldDescriptor.TYPE_MESSAGE:
             items = value if is_repeated(fd) else [value]
             parsed = []
@@ -219,6 +241,10 @@ class Controller:
     axes: list[Node]
     axes_cmd: list[Node]
     observer: Supervisor | None = None
+    #: None while its heartbeat comes; else why the gateway counts it as gone (its values are Bad)
+    lost: str | None = None
+    heard: float = 0.0                        # time.monotonic() of its last frame
+    timer: asyncio.TimerHandle | None = None  # fires when its heartbeat stays away too long
     joints: list[float] = field(default_factory=lambda: [0.0] * JOINTS)
     tool: list[float] = field(default_factory=lambda: [0.0] * 6)
     events: Any = None  # asyncua EventGenerator of the controller object
@@ -247,6 +273,9 @@ class Gateway:
         self._root: Node | None = None
         self._event_type: Node | None = None
         self._tasks: set[asyncio.Task[None]] = set()  # held until done (the loop keeps weak references)
+        self._relinking = False
+        self._closing = False
+        self.channel = spec.describe()
         self.url = ""
 
     def _spawn(self, coro: Coroutine[Any, Any, None], what: str) -> None:
@@ -261,11 +290,13 @@ class Gateway:
         task = asyncio.get_running_loop().create_task(guarded())
         self._tasks.add(task)
         task.add_done_callback(self._tasks.discard)
+        task.add_done_callback(lambda _: coro.close())  # cancelled before it started: no "never awaited"
 
     # ------------------------------------------------------------ start and stop
 
     async def start(self) -> None:
         self._loop = asyncio.get_running_loop()
+        _quiet_isotp()
         certificates: dict[bytes, str] = {}
         server = self.server
         server.iserver.set_user_manager(GatewayUsers(self.cfg, certificates))
@@ -309,11 +340,16 @@ class Gateway:
             self.ns, "LandScapeNoticeEventType", ObjectIds.BaseEventType,
             [(name, vt) for name, vt in EVENT_FIELDS])
         self._root = await server.nodes.objects.add_folder(_nid("DeviceSet", self.ns), f"{self.ns}:DeviceSet")
+        # asyncua logs a failed start with its traceback before it raises: the one line below says it all
+        server_log = logging.getLogger("asyncua.server.server")
+        was_disabled, server_log.disabled = server_log.disabled, True
         try:
             await server.start()
         except OSError as exc:
             raise GatewayError(f"cannot serve OPC UA on {self.cfg.host}:{self.cfg.port}: {exc.strerror or exc}: "
-                               f"another program listens there? pass --port, or [server] port") from None
+                               f"{_listen_hint(exc)}") from None
+        finally:
+            server_log.disabled = was_disabled
         try:
             self._bus = open_bus(self.spec)
         except BaseException:
@@ -338,6 +374,11 @@ class Gateway:
         self._stop.set()
 
     async def close(self) -> None:
+        self._closing = True
+        for c in self.controllers.values():
+            if c.timer is not None:
+                c.timer.cancel()
+                c.timer = None
         for task in list(self._tasks):
             task.cancel()
         sups = list(self._sups.values()) + [c.observer for c in self.controllers.values() if c.observer]
@@ -347,16 +388,9 @@ class Gateway:
         loop = asyncio.get_running_loop()
         await asyncio.gather(*(loop.run_in_executor(None, s.close) for s in sups))
         await self.server.stop()
-        if self._notifier is not None:
-            self._notifier.stop()
-            self._notifier = None
-        if self._bus is not None:
-            try:
-                self._bus.shutdown()
-            except (can.CanError, OSError) as exc:
-                log.debug("closing the bus: %s", exc)
-            release_bus(self._bus)
-            self._bus = None
+        notifier, bus = self._notifier, self._bus
+        self._notifier, self._bus = None, None
+        _close_bus(notifier, bus)
 
     # ------------------------------------------------------------ the bus (Notifier thread -> loop)
 
@@ -370,11 +404,19 @@ class Gateway:
         self._loop.call_soon_threadsafe(self._apply, b)
 
     def _apply(self, b: tm.Broadcast) -> None:
+        if self._closing:
+            return
         c = self.controllers.get(b.sender)
         if c is None:
             if b.name == "HEARTBEAT" and b.sender not in self._pending:
                 self._pending.add(b.sender)
                 self._spawn(self._add_controller(b.sender), f"adding controller {b.sender:#04x}")
+            return
+        c.heard = time.monotonic()
+        if c.lost is not None:
+            if b.name == "HEARTBEAT" and b.sender not in self._pending:
+                self._pending.add(b.sender)
+                self._spawn(self._back(c), f"recovering controller {b.sender:#04x}")
             return
         s = b.signals
         writes: list[tuple[Node, Any, ua.VariantType]] = []
@@ -409,8 +451,117 @@ class Gateway:
             self._spawn(self._write(writes), f"updating controller {b.sender:#04x}")
 
     async def _write(self, writes: list[tuple[Node, Any, ua.VariantType]]) -> None:
+        now = ua.DateTime.now(datetime.UTC)
         for node, value, vt in writes:
-            await self.server.write_attribute_value(node.nodeid, ua.DataValue(ua.Variant(value, vt)))
+            await self.server.write_attribute_value(node.nodeid, ua.DataValue(
+                ua.Variant(value, vt), SourceTimestamp=now, ServerTimestamp=now))
+
+    # ------------------------------------------------------------ a controller that goes and comes back
+
+    def _live_nodes(self, c: Controller) -> list[Node]:
+        return [c.vars[k] for k in LIVE_VARS] + c.axes + c.axes_cmd
+
+    def _silence_limit_s(self, c: Controller) -> float:
+        """How long `c` may stay silent: as the CLI's supervisors judge a device (twice its heartbeat
+        time-out, the description's), DEFAULT_SILENCE_S before the description is read."""
+        limit = c.observer.device_silence_limit_s() if c.observer is not None else None
+        return limit if limit is not None else DEFAULT_SILENCE_S
+
+    def _arm(self, c: Controller) -> None:
+        assert self._loop is not None
+        if c.timer is not None:
+            c.timer.cancel()
+        c.timer = self._loop.call_later(self._silence_limit_s(c), self._check_silence, c.address)
+
+    def _check_silence(self, address: int) -> None:
+        """The timer of a controller: re-armed while it is heard, else it is gone."""
+        c = self.controllers.get(address)
+        if c is None or c.lost is not None or self._closing or self._loop is None:
+            return
+        c.timer = None
+        silent = time.monotonic() - c.heard
+        limit = self._silence_limit_s(c)
+        if silent < limit:
+            c.timer = self._loop.call_later(limit - silent, self._check_silence, address)
+            return
+        why = c.observer.link_problem() if c.observer is not None else None
+        c.lost = why or f"no heartbeat from it for {silent:.1f} s"
+        self._spawn(self._gone(c), f"marking controller {address:#04x} gone")
+
+    async def _gone(self, c: Controller) -> None:
+        """`c` stopped beating: its values turn Bad (keeping the last one heard), subscribers get the
+        CONTROLLER_LOST alarm, its supervisors leave (the device forgot them, or will), and when no
+        controller is left the gateway reopens its link until one beats again."""
+        why = c.lost or "gone"
+        log.warning("controller %#04x on %s is gone: %s: its values are BadNoCommunication until its heartbeat "
+                    "returns (is landscaped still running?)", c.address, self.channel, why)
+        self._events.put_nowait((c.address, 0, pb.Notice(kind=pb.ALARM, event_id=CONTROLLER_LOST,
+                                                         data=[f"reason={why}", f"channel={self.channel}"])))
+        now = ua.DateTime.now(datetime.UTC)
+        for node in self._live_nodes(c):
+            old = self.server.read_attribute_value(node.nodeid)
+            await self.server.write_attribute_value(node.nodeid, ua.DataValue(
+                old.Value, StatusCode=_status(GONE), SourceTimestamp=now, ServerTimestamp=now))
+        sups = [sup for key, sup in self._sups.items() if key[1] == c.address]
+        for key in [key for key in self._sups if key[1] == c.address]:
+            del self._sups[key]
+            self._sup_locks.pop(key, None)
+        if c.observer is not None:
+            sups.append(c.observer)
+            c.observer = None
+        loop = asyncio.get_running_loop()
+        await asyncio.gather(*(loop.run_in_executor(None, sup.close) for sup in sups))
+        for sup in sups:
+            self._used.discard(sup.source_address)
+        if not self._relinking and all(x.lost is not None for x in self.controllers.values()):
+            self._relinking = True
+            self._spawn(self._relink(), "reopening the link")
+
+    async def _relink(self) -> None:
+        """No controller beats: the line itself may be gone (landscaped's pty, a session's shared link),
+        so reopen it every RELINK_S until a heartbeat comes (then _back recovers the controller)."""
+        loop = asyncio.get_running_loop()
+        reported = False
+        try:
+            while not self._closing and all(c.lost is not None for c in self.controllers.values()):
+                await asyncio.sleep(RELINK_S)
+                if self._closing or any(c.lost is None or c.address in self._pending
+                                        for c in self.controllers.values()):
+                    return
+                notifier, bus = self._notifier, self._bus
+                self._notifier, self._bus = None, None
+                await loop.run_in_executor(None, _close_bus, notifier, bus)
+                try:
+                    bus = await loop.run_in_executor(None, open_bus, self.spec)
+                except LandscapeError as exc:
+                    if not reported:
+                        log.info("reopening %s: %s (trying every %g s)", self.channel, exc, RELINK_S)
+                        reported = True
+                    continue
+                self._bus = bus
+                self._notifier = can.Notifier(bus, [self._on_frame], timeout=0.05, loop=None)
+                # give its heartbeat time to come before the next reopen
+                deadline = time.monotonic() + 2 * DEFAULT_SILENCE_S
+                while time.monotonic() < deadline and all(c.lost is not None for c in self.controllers.values()):
+                    if any(c.address in self._pending for c in self.controllers.values()):
+                        return
+                    await asyncio.sleep(0.1)
+        finally:
+            self._relinking = False
+
+    async def _back(self, c: Controller) -> None:
+        """A gone controller beats again: a new observer, Good values with the next telemetry, calls work."""
+        try:
+            c.lost = None
+            c.heard = time.monotonic()
+            log.info("controller %#04x on %s is back: its values follow its telemetry again", c.address,
+                     self.channel)
+            self._events.put_nowait((c.address, 0, pb.Notice(kind=pb.EVENT, event_id=CONTROLLER_BACK,
+                                                             data=[f"channel={self.channel}"])))
+            await self._observe(c)
+        finally:
+            self._pending.discard(c.address)
+        self._arm(c)
 
     # ------------------------------------------------------------ the address space of a controller
 
@@ -468,20 +619,31 @@ class Gateway:
                                  rsvp_in, rsvp_out)
         c = Controller(address, obj, v, axes, axes_cmd)
         c.events = await self.server.get_event_generator(self._event_type, obj.nodeid)
+        c.heard = time.monotonic()
         self.controllers[address] = c
         self._pending.discard(address)
-        log.info("controller %#04x on the bus: %s", address, obj.nodeid.to_string())
+        log.info("controller %#04x on %s: %s", address, self.channel, obj.nodeid.to_string())
+        self._arm(c)
+        await self._observe(c)
+
+    async def _observe(self, c: Controller) -> None:
+        """Connect the gateway's observer of `c`: the description, and the alarms to every session."""
+        address = c.address
         try:
             observer = await self._open_supervisor(address, f"{self.client_name}-observer")
         except LandscapeError as exc:
             log.warning("controller %#04x: the gateway's observer did not connect (%s): no description, and "
                         "alarms reach only the sessions' own supervisors", address, exc)
             return
+        if c.lost is not None or self._closing:  # it went again while we connected
+            await asyncio.get_running_loop().run_in_executor(None, observer.close)
+            self._used.discard(observer.source_address)
+            return
         c.observer = observer
         observer.on_notice(lambda n: self._notice(address, observer.source_address, n, unsolicited=True))
         if observer.description is not None:
             text = json.dumps(message_to_dict(observer.description.res), sort_keys=True)
-            await v["Description"].write_value(ua.Variant(text, ua.VariantType.String))
+            await c.vars["Description"].write_value(ua.Variant(text, ua.VariantType.String))
 
     @staticmethod
     def _out(name: str, vt: ua.VariantType, text: str, *, array: bool = False) -> ua.Argument:
@@ -499,7 +661,9 @@ class Gateway:
     async def _open_supervisor(self, device: int, client_name: str) -> Supervisor:
         """A connected Supervisor of `device` from the first address of the pool that neither this gateway
         nor a supervisor heard on the bus holds; the next on a refusal "in use"."""
-        assert self._bus is not None and self._notifier is not None
+        if self._bus is None or self._notifier is None:
+            raise LandscapeError(f"the gateway's link {self.channel} is closed (it reopens it until a controller "
+                                 f"beats again)")
         loop = asyncio.get_running_loop()
         now = time.monotonic()
         refused: list[str] = []
@@ -508,7 +672,8 @@ class Gateway:
                 continue
             self._used.add(addr)
             sup = Supervisor(self._bus, device=device, source_address=addr, notifier=self._notifier,
-                             client_name=client_name, heartbeat_period_ms=self.cfg.heartbeat_period_ms)
+                             client_name=client_name, heartbeat_period_ms=self.cfg.heartbeat_period_ms,
+                             channel_name=self.channel)
             try:
                 await loop.run_in_executor(None, sup.open)
             except AddressInUseError:
@@ -573,11 +738,22 @@ class Gateway:
             return _status(StatusCodes.BadUserAccessDenied)
         return session
 
+    def _gone_message(self, device: int) -> str | None:
+        c = self.controllers.get(device)
+        if c is None or c.lost is None:
+            return None
+        return (f"controller {device:#04x} on {self.channel} is gone ({c.lost}): start landscaped again; the "
+                f"gateway finds it by its heartbeat")
+
     def _method(self, device: int, cmd: Command) -> Callable[..., Any]:
         async def call(parent: ua.NodeId, *args: ua.Variant) -> Any:
             session = self._caller()
             if isinstance(session, ua.StatusCode):
                 return session
+            gone = self._gone_message(device)
+            if gone is not None:
+                log.warning("%s from session %s: %s", cmd.name, session.name, gone)
+                return _failed(GONE, pb.CMD_ERR, gone)
             try:
                 fields = fields_of(cmd, [a.Value if isinstance(a, ua.Variant) else a for a in args])
                 sup = await self._session_supervisor(session, device)
@@ -586,6 +762,13 @@ class Gateway:
             except ArgumentError as exc:
                 log.warning("%s from session %s: %s", cmd.name, session.name, exc)
                 return _failed(StatusCodes.BadInvalidArgument, pb.CMD_PARAM_ERR, str(exc))
+            except CommandError as exc:
+                # the device refused this session's connect (its supervisor table is full, ...): a good
+                # call with the device's code and text, as for any refusal of the command itself
+                log.warning("%s from session %s: %s", cmd.name, session.name, exc)
+                return [ua.Variant(exc.ret_code, ua.VariantType.Int32), ua.Variant(exc.ret_name, ua.VariantType.String),
+                        ua.Variant(str(exc), ua.VariantType.String), ua.Variant(0, ua.VariantType.UInt32),
+                        ua.Variant(0, ua.VariantType.UInt32), ua.Variant("{}", ua.VariantType.String)]
             except LandscapeError as exc:
                 log.warning("%s from session %s: %s", cmd.name, session.name, exc)
                 return _failed(StatusCodes.BadCommunicationError, pb.CMD_ERR, str(exc))
@@ -596,15 +779,26 @@ class Gateway:
         return call
 
     def _rsvp_method(self, device: int) -> Callable[..., Any]:
-        async def call(parent: ua.NodeId, rsvp_id: ua.Variant, ret_code: ua.Variant, data: ua.Variant) -> Any:
-            session = self._caller()
+        async def call(parent: ua.NodeId, *args: ua.Variant) -> Any:
+            session = self._caller()  # first: an anonymous caller learns nothing about the arguments
             if isinstance(session, ua.StatusCode):
                 return session
+            try:
+                rid, code, items = rsvp_arguments([a.Value if isinstance(a, ua.Variant) else a for a in args])
+            except ArgumentError as exc:
+                log.warning("AnswerRsvp from session %s: %s", session.name, exc)
+                res = ua.CallMethodResult()
+                res.StatusCode = _status(StatusCodes.BadInvalidArgument)
+                res.OutputArguments = [ua.Variant(pb.CMD_PARAM_ERR, ua.VariantType.Int32), ua.Variant(str(exc)),
+                                       ua.Variant("", ua.VariantType.String)]
+                return res
+            gone = self._gone_message(device)
+            if gone is not None:
+                log.warning("AnswerRsvp from session %s: %s", session.name, gone)
+                return _status(GONE)
             sup = self._sups.get((_session_key(session), device))
             if sup is None:
                 return _status(StatusCodes.BadInvalidState)  # this session armed no RSVP here
-            rid, code = int(rsvp_id.Value), int(ret_code.Value)
-            items = [str(d) for d in (data.Value or [])]
             try:
                 ack = await asyncio.get_running_loop().run_in_executor(
                     None, lambda: sup.answer_rsvp(rid, code, items, check=False))
@@ -640,6 +834,69 @@ class Gateway:
             ev.RefSeq, ev.SessionEpoch, ev.Final = n.ref_seq, n.session_epoch, n.final
             ev.RsvpId, ev.RsvpTimeoutMs, ev.RsvpDefault = n.rsvp_id, n.rsvp_timeout_ms, n.rsvp_default
             await c.events.trigger(message=f"{pb.NoticeKind.Name(n.kind)} {n.event_id} {' '.join(n.data)}".strip())
+
+
+def rsvp_arguments(args: Sequence[Any]) -> tuple[int, int, list[str]]:
+    """AnswerRsvp's (RsvpId, RetCode, Data) from a call's input arguments; ArgumentError naming the one
+    that does not fit."""
+    if not 2 <= len(args) <= 3:
+        raise ArgumentError(f"AnswerRsvp takes RsvpId, RetCode and optionally Data, got {len(args)} arguments")
+    rid, code = args[0], args[1]
+    data = args[2] if len(args) > 2 else None
+    for name, value, low, high in (("RsvpId", rid, 0, 0xFFFFFFFF), ("RetCode", code, -2**31, 2**31 - 1)):
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise ArgumentError(f"AnswerRsvp.{name}: an integer is expected, got {type(value).__name__} {value!r}")
+        if not low <= value <= high:
+            raise ArgumentError(f"AnswerRsvp.{name}: {value} is outside {low}..{high}")
+    if data is None:
+        items: list[str] = []
+    elif isinstance(data, (list, tuple)) and all(isinstance(d, str) for d in data):
+        items = list(data)
+    else:
+        raise ArgumentError(f"AnswerRsvp.Data: an array of String is expected, got {type(data).__name__} {data!r}")
+    return rid, code, items
+
+
+class _ToDebug(logging.Filter):
+    """Lower a record to DEBUG: it reaches -vv's handler, not the last-resort one on the terminal."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        if record.levelno > logging.DEBUG:
+            record.msg = f"{record.levelname.lower()}: {record.msg}"
+            record.levelno, record.levelname = logging.DEBUG, "DEBUG"
+        return True
+
+
+def _quiet_isotp() -> None:
+    """can-isotp warns on its logger of what a shared bus shows it all the time (another supervisor's
+    FlowControl while we are idle, a FirstFrame that interrupts one): the supervisors already log its
+    errors at debug (Supervisor._isotp_error), so its own warnings go to debug too."""
+    logger = logging.getLogger(isotp.TransportLayer.LOGGER_NAME)
+    if not any(isinstance(f, _ToDebug) for f in logger.filters):
+        logger.addFilter(_ToDebug())
+
+
+def _listen_hint(exc: OSError) -> str:
+    """What to do when the server cannot listen (`exc` from binding its socket)."""
+    if exc.errno == errno.EADDRINUSE:
+        return "another program listens on that port: pass --port, or set [server] port"
+    if exc.errno == errno.EADDRNOTAVAIL or isinstance(exc, socket.gaierror):
+        return ("the host is not an address of this machine: pass --host (or set [server] host) to one of its "
+                "addresses, e.g. 127.0.0.1 or 0.0.0.0 for all")
+    if exc.errno == errno.EACCES:
+        return "a port below 1024 needs privileges: pass --port, or set [server] port"
+    return "check --host and --port ([server] host, port)"
+
+
+def _close_bus(notifier: can.Notifier | None, bus: can.BusABC | None) -> None:
+    if notifier is not None:
+        notifier.stop()
+    if bus is not None:
+        try:
+            bus.shutdown()
+        except (can.CanError, OSError) as exc:
+            log.debug("closing the bus: %s", exc)
+        release_bus(bus)
 
 
 def _session_key(session: InternalSession) -> int:
