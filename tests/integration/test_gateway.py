@@ -425,6 +425,25 @@ def test_a_bad_config_is_one_line_and_exit_2(tmp_path: Path) -> None:
     assert "[users] alice: not a password hash" in r.stderr and "--hash-password" in r.stderr, r.stderr
 
 
+def test_a_port_in_use_or_a_foreign_host_is_one_line_with_a_hint_that_fits(tmp_path: Path) -> None:
+    cfg = tmp_path / "gateway.toml"
+    cfg.write_text("[server]\nallow_anonymous = true\n")
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        cases = [(["--port", str(port)], "another program listens on that port"),
+                 (["--port", str(port), "--host", "192.0.2.1"], "not an address of this machine"),
+                 (["--port", str(port), "--host", "no.such.host.invalid"], "not an address of this machine")]
+        for extra, hint in cases:
+            r = subprocess.run([str(CLI), "--interface", "slcan", "--channel", "/nonexistent", "gateway",
+                                "--config", str(cfg), *extra], capture_output=True, text=True, timeout=60)
+            assert r.returncode == 1, (extra, r.stdout, r.stderr)
+            assert "Traceback" not in r.stderr and "error starting server" not in r.stderr, r.stderr
+            lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
+            assert len(lines) == 1 and "cannot serve OPC UA" in lines[0] and hint in lines[0], (extra, r.stderr)
+
+
 DOC = Path(__file__).resolve().parents[2] / "docs" / "gateway.md"
 DOC_URL = "opc.tcp://127.0.0.1:4840/landscape/"
 
@@ -452,9 +471,20 @@ def test_the_example_session_of_the_docs_runs(gateway: str) -> None:
     code = doc_block("python").replace(DOC_URL.replace("opc.tcp://", "opc.tcp://alice:alice-pw@"),
                                        user_url(gateway, "alice", "alice-pw"))
     assert gateway in code.replace("alice:alice-pw@", "")
-    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, (r.stdout, r.stderr)
     assert "CMD_STARTED_OK" in r.stdout, r.stdout
+    # it waited for the event that ends its move (the line the example prints for it)
+    assert re.search(r"^moveAbsoluteComplete ", r.stdout, re.M), r.stdout
+    # the arm reached the target, read by another client after the example's session ended
+    asyncio.run(_assert_joints(gateway, TARGET))
+
+
+async def _assert_joints(url: str, target: list[float]) -> None:
+    async with Client(url, timeout=UA_TIMEOUT_S) as c:
+        node, ns = await controller_node(c)
+        jp = await node.get_child([f"{ns}:MotionDevices", f"{ns}:Arm", f"{ns}:JointPositions"])
+        assert await jp.read_value() == pytest.approx(target, abs=2e-3)
 
 
 async def _wait_for_description(url: str) -> None:
