@@ -2,6 +2,8 @@
 the users it admits, and the OPC UA methods' arguments derived from the schema."""
 from __future__ import annotations
 
+import errno
+import socket
 from pathlib import Path
 
 import pytest
@@ -9,7 +11,7 @@ from asyncua.crypto.permission_rules import UserRole
 from google.protobuf.descriptor import FieldDescriptor
 
 from landscape.errors import ArgumentError
-from landscape.gateway import GatewayUsers, argument_of, fields_of
+from landscape.gateway import GatewayUsers, _listen_hint, argument_of, fields_of, rsvp_arguments
 from landscape.gateway_config import (
     DEFAULT_POOL,
     GatewayConfigError,
@@ -127,6 +129,32 @@ def test_method_arguments_become_request_fields() -> None:
         fields_of(load, ["r", "JOINT_FRAME", "JOINT_MOTION", "ABSOLUTE_DATA", 1, ["{bad"]])
     with pytest.raises(ArgumentError, match="lock takes 0 arguments"):
         fields_of(lookup("lock"), [1])
+
+
+def test_a_string_is_not_an_array() -> None:
+    """Issue 24: "000000" for moveAbsolute's values moved the arm to zeros (one value per character)."""
+    move, load = lookup("moveAbsolute"), lookup("pathLoad")
+    with pytest.raises(ArgumentError, match=r"moveAbsolute\.values: an array \(Double\[\]\) is expected, got str"):
+        fields_of(move, ["p1", "JOINT_FRAME", "000000"])
+    with pytest.raises(ArgumentError, match=r"pathLoad\.tags: an array \(String\[\]\) is expected"):
+        fields_of(load, ["r", "JOINT_FRAME", "JOINT_MOTION", "ABSOLUTE_DATA", 1, '{"joints": [0, 0, 0, 0, 0, 0]}'])
+    assert fields_of(move, ["p1", "JOINT_FRAME", (0.0,) * 6])["values"] == [0.0] * 6
+
+
+def test_answer_rsvp_arguments_are_checked_by_name() -> None:
+    assert rsvp_arguments([5, -1, ["why=test"]]) == (5, -1, ["why=test"])
+    assert rsvp_arguments([5, 0]) == (5, 0, [])
+    for args, says in (([5], "takes RsvpId, RetCode"), ([5, 0, [], "x"], "got 4 arguments"),
+                       (["one", 0, []], "AnswerRsvp.RsvpId: an integer"), ([5, True], "AnswerRsvp.RetCode"),
+                       ([-1, 0], "AnswerRsvp.RsvpId: -1 is outside"), ([5, 0, "why"], "AnswerRsvp.Data: an array")):
+        with pytest.raises(ArgumentError, match=says):
+            rsvp_arguments(args)
+
+
+def test_a_listen_failure_gets_the_hint_that_fits() -> None:
+    assert "another program listens" in _listen_hint(OSError(errno.EADDRINUSE, "in use"))
+    assert "not an address of this machine" in _listen_hint(OSError(errno.EADDRNOTAVAIL, "cannot assign"))
+    assert "not an address of this machine" in _listen_hint(socket.gaierror(socket.EAI_NONAME, "unknown"))
 
 
 def test_the_shipped_config_parses() -> None:
