@@ -263,6 +263,10 @@ def test_a_second_client_is_refused_ownership_and_a_killed_session_is_dropped(ga
             # within the fixture's session time-out (5 s) plus the device's reaction and a loaded machine's
             # slack, not asyncua's own cap (10 min) for a session with subscriptions whose client is gone
             assert time.monotonic() - killed < 15
+            # the alarm comes by ISO-TP to the observer, then a publish cycle: it may trail the STATUS broadcast
+            deadline = time.monotonic() + 5
+            while not any(e.NoticeId == "ownerLost" for e in events.got) and time.monotonic() < deadline:
+                await asyncio.sleep(0.1)
             lost = [e for e in events.got if e.NoticeId == "ownerLost"]
             assert lost and f"supervisor={alice_addr:#04x}" in lost[0].Data.lower(), \
                 [(e.NoticeId, e.Data) for e in events.got]
