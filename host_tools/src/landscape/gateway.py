@@ -111,7 +111,7 @@ CONTROLLER_BACK = "controllerBack"
 DEFAULT_SILENCE_S = 1.0
 #: How often the gateway reopens its link while no controller beats.
 RELINK_S = 1.0
-#: The status of a gone controller's values (they keep the last value heard).
+#: The status of a gone controller's values.
 GONE = StatusCodes.BadNoCommunication
 #: The variables of a controller that the telemetry feeds (Address and Description stay Good).
 LIVE_VARS = ("State", "Motion", "Fault", "Owner", "Supervisors", "JointPositions", "ToolPose")
@@ -489,7 +489,7 @@ class Gateway:
         self._spawn(self._gone(c), f"marking controller {address:#04x} gone")
 
     async def _gone(self, c: Controller) -> None:
-        """`c` stopped beating: its values turn Bad (keeping the last one heard), subscribers get the
+        """`c` stopped beating: its values turn Bad (BadNoCommunication), subscribers get the
         CONTROLLER_LOST alarm, its supervisors leave (the device forgot them, or will), and when no
         controller is left the gateway reopens its link until one beats again."""
         why = c.lost or "gone"
