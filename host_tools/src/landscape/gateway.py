@@ -14,6 +14,10 @@ holds one read-only supervisor per controller ("observer") that reads the device
 turns the notices addressed to nobody in particular (alarms such as ownerLost) into events; the
 notices of a session's own requests (completions, RSVPs) come through that session's supervisor.
 
+A controller silent for twice its heartbeat time-out is gone: its values turn BadNoCommunication, a
+controllerLost event and a log line say so, its supervisors leave; with none left the link is reopened
+every RELINK_S, and its next HEARTBEAT brings it back (controllerBack, a new observer).
+
 Threads: python-can's Notifier, each Supervisor's own. They reach the event loop only through
 loop.call_soon_threadsafe; blocking Supervisor calls run in the loop's executor. Nothing polls.
 """
