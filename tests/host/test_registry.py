@@ -182,7 +182,9 @@ def test_build_request_path_load_with_dict_tags() -> None:
     ({"values": 3.0}, "expected a sequence"),
     ({"values": ["x"]}, "'x' is not a valid number"),
     ({"point_name": 5}, "is not a valid string"),
-    ({"frame": "up"}, "'up' is not a value"),
+    ({"frame": "up"}, r"^moveAbsolute\.frame: 'up' is not a ReferenceFrame value \(one of JOINT_FRAME, "),
+    ({"frame": 9}, r"^moveAbsolute\.frame: 9 is not a ReferenceFrame value"),
+    ({"frame": True}, r"^moveAbsolute\.frame: True is not a ReferenceFrame value"),
 ])
 def test_build_request_rejects_bad_fields(fields: dict[str, object], msg: str) -> None:
     with pytest.raises(ArgumentError, match=msg):

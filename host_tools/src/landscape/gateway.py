@@ -55,7 +55,7 @@ from ._generated import landscape_pb2 as pb
 from .bus import BusSpec, open_bus, release_bus
 from .errors import AddressInUseError, ArgumentError, CommandError, LandscapeError
 from .gateway_config import GatewayConfig
-from .registry import COMMANDS, Command, enum_choices, field_enum_type, is_repeated, message_to_dict
+from .registry import COMMANDS, Command, build_request, enum_choices, field_enum_type, is_repeated, message_to_dict
 from .supervisor import ALARM_KINDS, RSVP_KINDS, Supervisor
 
 log = logging.getLogger("landscape.gateway")
@@ -173,6 +173,7 @@ def fields_of(cmd: Command, args: Sequence[Any]) -> dict[str, Any]:
                     raise ArgumentError(f"{cmd.name}.{fd.name}: {item!r} is not a JSON object ({exc})") from None
             value = parsed if is_repeated(fd) else parsed[0]
         out[fd.name] = list(value) if is_repeated(fd) and not isinstance(value, list) else value
+    build_request(cmd, **out)  # every value checked (enum names, numbers, ranges) before any supervisor connects
     return out
 
 

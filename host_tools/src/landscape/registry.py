@@ -239,7 +239,12 @@ def _scalar(fd: FieldDescriptor, value: Any, where: str) -> Any:
     t = fd.type
     try:
         if t == FieldDescriptor.TYPE_ENUM:
-            return parse_enum(field_enum_type(fd), value)
+            enum = field_enum_type(fd)
+            try:
+                return parse_enum(enum, value)
+            except ArgumentError:  # parse_enum names the type only: say which argument it was
+                raise ArgumentError(f"{where}.{fd.name}: {value!r} is not a {enum.name} value (one of "
+                                    f"{enum_choices(enum)})") from None
         if t in (FieldDescriptor.TYPE_DOUBLE, FieldDescriptor.TYPE_FLOAT):
             if isinstance(value, bool):
                 raise TypeError
