@@ -73,6 +73,8 @@ op = "{hash_password('pw', iterations=1000)}"
     ("[supervisors]\npool = \"0x10-0x20\"\n", "'0x10' is not a supervisor address: use 0xf1..0xfe"),
     ("[supervisors]\npool = \"0xFE-0xF1\"\n", "runs backwards"),
     ("[supervisors]\nheartbeat_period_ms = 5\n", "outside 10..2000"),
+    ("[server]\nallow_anonymous = false\n", "t.toml: [server] allow_anonymous = false with no [users] and no "
+                                            "[[certificate_users]]: nobody could connect: add a user"),
     ("[users]\nop = \"secret\"\n", "[users] op: not a password hash: write the line that `landscape gateway "
                                    "--hash-password` prints"),
 ])
@@ -139,6 +141,14 @@ def test_a_string_is_not_an_array() -> None:
     with pytest.raises(ArgumentError, match=r"pathLoad\.tags: an array \(String\[\]\) is expected"):
         fields_of(load, ["r", "JOINT_FRAME", "JOINT_MOTION", "ABSOLUTE_DATA", 1, '{"joints": [0, 0, 0, 0, 0, 0]}'])
     assert fields_of(move, ["p1", "JOINT_FRAME", (0.0,) * 6])["values"] == [0.0] * 6
+
+
+def test_an_unknown_enum_value_names_the_argument() -> None:
+    """Issue 24: "SpeedType: 'WARP_SPEED' is not a value" did not say which argument was wrong."""
+    with pytest.raises(ArgumentError, match=r"^setSpeed\.attribute: 'WARP_SPEED' is not a SpeedType value \(one "
+                                            r"of PERCENT_SPEED, LINEAR_SPEED, ANGULAR_SPEED\)$"):
+        fields_of(lookup("setSpeed"), [50.0, "WARP_SPEED"])
+    assert fields_of(lookup("setSpeed"), [50.0, "PERCENT_SPEED"]) == {"speed": 50.0, "attribute": "PERCENT_SPEED"}
 
 
 def test_answer_rsvp_arguments_are_checked_by_name() -> None:

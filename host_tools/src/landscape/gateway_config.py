@@ -224,6 +224,11 @@ def parse_config(text: str, source: str = "<text>", *, base: Path | None = None)
     if cfg.certificate_users and cfg.certificate is None:
         raise GatewayConfigError(f"{source}: [[certificate_users]] need the server's certificate and private_key "
                                  f"([server]): a user certificate is checked over a signed channel")
+    if not cfg.allow_anonymous and not cfg.users and not cfg.certificate_users:
+        raise GatewayConfigError(f"{where} allow_anonymous = false with no [users] and no [[certificate_users]]: "
+                                 f"nobody could connect: add a user (NAME = the line `landscape gateway "
+                                 f"--hash-password` prints) or a [[certificate_users]] entry, or set "
+                                 f"allow_anonymous = true")
     return cfg
 
 
