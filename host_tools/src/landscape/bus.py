@@ -63,6 +63,9 @@ class BusSpec:
     bitrate: int | None = None
     context: str | None = None       # python-can config context: section and env suffix
     config_file: str | None = None   # a python-can config file instead of the default ones
+    #: Where else this program takes the interface from, for the "no usable CAN interface" message
+    #: (the gateway: its configuration's [bus] section).
+    also_from: str | None = None
 
     def describe(self) -> str:
         cfg = resolve_config(self, strict=False)
@@ -87,7 +90,8 @@ def resolve_config(spec: BusSpec, *, strict: bool = True) -> dict[str, Any]:
             return given
         raise BusError(
             f"no usable CAN interface ({exc}): pass --interface and --channel "
-            f"(e.g. --interface slcan --channel /dev/pts/3), set CAN_INTERFACE and CAN_CHANNEL, or write them "
+            f"(e.g. --interface slcan --channel /dev/pts/3), {spec.also_from + ', ' if spec.also_from else ''}"
+            f"set CAN_INTERFACE and CAN_CHANNEL, or write them "
             f"in ~/.canrc ([default] interface = ..., channel = ...)") from None
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import getpass
 import json
 import logging
 import sys
@@ -10,7 +11,7 @@ from pathlib import Path
 
 import click
 
-from .bus import BusSpec
+from .bus import BusSpec, resolve_config
 from .cli_core import cli, state_of
 from .errors import LandscapeError
 from .gateway_config import GatewayConfig, hash_password, load_config
@@ -23,7 +24,8 @@ from .gateway_config import GatewayConfig, hash_password, load_config
 @click.option("--host", default=None, help="address to listen on (default 127.0.0.1: this machine only)")
 @click.option("--port", type=click.IntRange(1, 65535), default=None, help="TCP port (default 4840)")
 @click.option("--hash-password", "hash_pw", is_flag=True,
-              help="read a password on stdin, print the line to put under [users] NAME = ..., and exit")
+              help="read a password (on a terminal: a prompt, no echo; else stdin's first line), print the "
+                   "line to put under [users] NAME = ..., and exit")
 @click.pass_context
 def gateway_cmd(ctx: click.Context, config_file: Path | None, host: str | None, port: int | None,
                 hash_pw: bool) -> None:
@@ -34,7 +36,8 @@ def gateway_cmd(ctx: click.Context, config_file: Path | None, host: str | None, 
     Anonymous clients read; commands need a configured user or certificate. Each OPC UA session
     that calls a command is its own supervisor. Ctrl-C or SIGTERM closes every session and ends."""
     if hash_pw:
-        password = sys.stdin.readline().rstrip("\n")
+        # on a terminal: a prompt and no echo; from a pipe or file: its first line
+        password = getpass.getpass("password: ") if sys.stdin.isatty() else sys.stdin.readline().rstrip("\n")
         if not password:
             raise click.UsageError("--hash-password: give the password on stdin (one line, not empty)")
         click.echo(json.dumps(hash_password(password)))
@@ -49,7 +52,10 @@ def gateway_cmd(ctx: click.Context, config_file: Path | None, host: str | None, 
     if port is not None:
         cfg.port = port
     spec = BusSpec(interface=st.spec.interface or cfg.interface, channel=st.spec.channel or cfg.channel,
-                   bitrate=st.spec.bitrate or cfg.bitrate, context=st.spec.context, config_file=st.spec.config_file)
+                   bitrate=st.spec.bitrate or cfg.bitrate, context=st.spec.context, config_file=st.spec.config_file,
+                   also_from=f"write interface and channel under [bus] in "
+                             f"{config_file if config_file is not None else 'the gateway configuration (--config)'}")
+    resolve_config(spec)  # no usable interface: say so before the server listens
     asyncio.run(_serve(cfg, spec, st.json_out))
 
 
