@@ -27,6 +27,7 @@ import json
 import logging
 import os
 import random
+import re
 import signal
 import subprocess
 import sys
@@ -57,6 +58,12 @@ class Figures:
     timeouts: int = 0
     by_code: collections.Counter[str] = field(default_factory=collections.Counter)
     unexpected: list[str] = field(default_factory=list)
+    # Answers a corrupted frame made undecodable (ProtocolError "does not decode"): with
+    # corrupt > 0 on a link without a checksum (SLCAN, ISO-TP and the envelope carry none,
+    # docs/reliability.md section 4) the host's clear refusal is the right outcome, counted
+    # here and checked against the corruptions injected; without corruption it is unexpected.
+    undecodable: int = 0
+    corrupting: bool = False
     owner_lost: int = 0
     alarms: collections.Counter[str] = field(default_factory=collections.Counter)
     lock = threading.Lock()
@@ -70,8 +77,19 @@ class Figures:
                     self.ok += 1
             elif isinstance(exc, errors.ControllerTimeoutError):
                 self.timeouts += 1
+            elif self.from_corruption(exc):
+                self.undecodable += 1
             else:
                 self.unexpected.append(repr(exc))
+
+
+    def from_corruption(self, exc: BaseException | None) -> bool:
+        return self.corrupting and isinstance(exc, errors.ProtocolError) and "does not decode" in str(exc)
+
+
+def corrupts(faults: str) -> bool:
+    """Whether a --link-faults spec corrupts frames (a corrupt rate above 0)."""
+    return any(float(rate) > 0 for rate in re.findall(r"corrupt=([0-9.eE+-]+)", faults))
 
 
 class RetransmitCounter(logging.Handler):
@@ -144,7 +162,7 @@ def worker(sup: Supervisor, seed: int, stop: threading.Event, fig: Figures) -> N
             fig.record(None, exc)
         except errors.LandscapeError as exc:  # e.g. an argument the library refuses: still a clear error
             fig.record(None, exc)
-            if not isinstance(exc, errors.ArgumentError):
+            if not isinstance(exc, errors.ArgumentError) and not fig.from_corruption(exc):
                 stop.set()
         time.sleep(rng.uniform(0.0, 0.02))
 
@@ -161,7 +179,8 @@ def start_landscaped(build: Path, tmp: Path, faults: str) -> tuple[subprocess.Po
     deadline = time.monotonic() + 15
     while not all(Path(p).exists() for p in ptys):
         if proc.poll() is not None:
-            raise SystemExit(f"landscaped exited with {proc.returncode}: {proc.stderr.read().decode()}")
+            err = proc.stderr.read().decode() if proc.stderr else ""
+            raise SystemExit(f"landscaped exited with {proc.returncode}: {err}")
         if time.monotonic() > deadline:
             proc.kill()
             raise SystemExit("landscaped did not create its pty links within 15 s")
@@ -170,7 +189,7 @@ def start_landscaped(build: Path, tmp: Path, faults: str) -> tuple[subprocess.Po
 
 
 def run(duration_s: float, faults: str, rss_bound_kib: int, seed: int, build: Path) -> dict[str, Any]:
-    fig = Figures()
+    fig = Figures(corrupting=corrupts(faults))
     rt = RetransmitCounter()
     lg = logging.getLogger("landscape")
     lg.setLevel(logging.INFO)
@@ -277,6 +296,9 @@ def run(duration_s: float, faults: str, rss_bound_kib: int, seed: int, build: Pa
                         f"(bound {rss_bound_kib} KiB)")
     if fig.unexpected:
         failures.append(f"{len(fig.unexpected)} unexpected exceptions, first: {fig.unexpected[0]}")
+    corrupted = injected["tx.corrupt"] + injected["rx.corrupt"]
+    if fig.undecodable > corrupted:
+        failures.append(f"{fig.undecodable} undecodable answers but only {corrupted} corrupted frames injected")
     if not induced and (fig.owner_lost or dropped > 0):
         failures.append(f"sessions lost without an induced bus-off: ownerLost alarms {fig.owner_lost}, "
                         f"sessions_dropped {dropped}")
@@ -288,6 +310,7 @@ def run(duration_s: float, faults: str, rss_bound_kib: int, seed: int, build: Pa
         "commands_sent": fig.sent,
         "commands_ok": fig.ok,
         "timeouts": fig.timeouts,
+        "undecodable_answers": fig.undecodable,
         "retransmissions": rt.count,
         "answers_by_code": dict(sorted(fig.by_code.items())),
         "alarms": dict(fig.alarms),
