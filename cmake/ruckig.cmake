@@ -22,7 +22,14 @@ if(NOT EXISTS "${LS_RUCKIG_SDIST}")
   # (CI's build directories) never read each other's half-written file.
   string(RANDOM LENGTH 8 ls_dl_tag)
   set(ls_dl_part "${LS_RUCKIG_SDIST}.${ls_dl_tag}.part")
-  file(DOWNLOAD "${LS_RUCKIG_URL}" "${ls_dl_part}" STATUS ls_dl_status TLS_VERIFY ON)
+  # Where HTTPS goes through a proxy with a CA of its own, SSL_CERT_FILE names
+  # the bundle to trust (OpenSSL's convention, which Python follows too);
+  # otherwise curl's default, Debian's ca-certificates.
+  set(ls_dl_cainfo "")
+  if(DEFINED ENV{SSL_CERT_FILE} AND EXISTS "$ENV{SSL_CERT_FILE}")
+    set(ls_dl_cainfo TLS_CAINFO "$ENV{SSL_CERT_FILE}")
+  endif()
+  file(DOWNLOAD "${LS_RUCKIG_URL}" "${ls_dl_part}" STATUS ls_dl_status TLS_VERIFY ON ${ls_dl_cainfo})
   list(GET ls_dl_status 0 ls_dl_code)
   if(NOT ls_dl_code EQUAL 0)
     list(GET ls_dl_status 1 ls_dl_text)
