@@ -169,6 +169,18 @@ extern "C" int ls_otg_plan_position(ls_otg_planner_t *pl, ls_otg_t *tr, uint8_t 
 extern "C" int ls_otg_plan_velocity(ls_otg_planner_t *pl, ls_otg_t *tr, uint8_t n, const ls_otg_state_t *cur,
                                     const ls_otg_state_t *tgt, const ls_otg_limits_t *lim)
 {
+    // ruckig 0.19.4's velocity step 1 keeps its candidate profiles in an
+    // array of 3 but, for a target acceleration other than 0, tries four
+    // families that can yield up to 6: a write past the array on the stack
+    // (AddressSanitizer, velocity_third_step1.cpp). With a target
+    // acceleration of 0 it stops at the first profile found.
+    if (tgt != nullptr && n <= LS_OTG_MAX_AXES) {
+        for (uint8_t i = 0; i < n; i++) {
+            if (tgt->a[i] != 0.0) {
+                return LS_EINVAL;
+            }
+        }
+    }
     return plan(pl, tr, n, cur, tgt, lim, true);
 }
 

@@ -103,8 +103,10 @@ int ls_otg_planner_init(ls_otg_planner_t *pl);
 int ls_otg_plan_position(ls_otg_planner_t *pl, ls_otg_t *tr, uint8_t n, const ls_otg_state_t *cur,
                          const ls_otg_state_t *tgt, const ls_otg_limits_t *lim);
 
-/* Plans n axes from `cur` to the velocity tgt->v and acceleration tgt->a
- * (velocity interface; tgt->p is ignored). Statuses and cost as above. */
+/* Plans n axes from `cur` to the velocity tgt->v at an acceleration of 0
+ * (velocity interface; tgt->p is ignored). A tgt->a other than 0 is
+ * LS_EINVAL: ruckig 0.19.4's velocity step overflows its profile array for
+ * one (ls_otg.cpp). Statuses and cost as above. */
 int ls_otg_plan_velocity(ls_otg_planner_t *pl, ls_otg_t *tr, uint8_t n, const ls_otg_state_t *cur,
                          const ls_otg_state_t *tgt, const ls_otg_limits_t *lim);
 
