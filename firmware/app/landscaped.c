@@ -332,6 +332,7 @@ static void send_telemetry(void)
 {
     ls_ctl_snapshot_t s;
     ls_control_snapshot(&g_ctl, &s);
+    ls_core_take_loop_events(&g_core, mono_us()); /* the state agrees with the snapshot */
     uint8_t d[8];
     struct landscape_status_t st = {
         .st_state = (uint8_t)g_core.state,

@@ -645,7 +645,7 @@ static void on_loop_event(ls_core_t *core, const ls_ctl_event_t *ev, uint64_t no
     }
 }
 
-void ls_core_tick(ls_core_t *core, uint64_t now_us)
+void ls_core_take_loop_events(ls_core_t *core, uint64_t now_us)
 {
     if (core->ctl != NULL) {
         ls_ctl_event_t ev;
@@ -653,6 +653,11 @@ void ls_core_tick(ls_core_t *core, uint64_t now_us)
             on_loop_event(core, &ev, now_us);
         }
     }
+}
+
+void ls_core_tick(ls_core_t *core, uint64_t now_us)
+{
+    ls_core_take_loop_events(core, now_us);
     rsvp_tick(core, now_us);
     alarm_window_tick(core, now_us);
     for (int i = 0; i < LS_MAX_SUPERVISORS; i++) {
@@ -1188,6 +1193,7 @@ static void answer_bad_request(ls_core_t *core, uint8_t addr, int32_t code, uint
 
 void ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t len, uint64_t now_us)
 {
+    ls_core_take_loop_events(core, now_us); /* answer from the state as of the request's arrival */
     memset(&core->up, 0, sizeof core->up);
     pb_istream_t is = pb_istream_from_buffer(buf, len);
     uint32_t seq = 0, cmd = 0;

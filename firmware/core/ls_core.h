@@ -340,6 +340,14 @@ void ls_core_on_heartbeat(ls_core_t *core, uint8_t addr, uint32_t token, uint64_
  * auxiliary commands (ls_core_motion_tick). */
 void ls_core_tick(ls_core_t *core, uint64_t now_us);
 
+/* The control loop's events posted so far, taken now: what ls_core_tick
+ * does first. A request takes them before it is dispatched, so that it is
+ * answered from the state as of its arrival (a query that follows a broadcast
+ * showing the arm paused never reads MOVING), and a status report takes
+ * them after its snapshot (the loop posts a cycle's events before it
+ * publishes the cycle's snapshot, so the report's state and its motion agree). */
+void ls_core_take_loop_events(ls_core_t *core, uint64_t now_us);
+
 /* While the core follows the control loop's state by sampling its
  * snapshot (a halt coming to rest, a DIO write taking effect, a path's
  * `wait` for inputs), it is ticked this often. */

@@ -1547,6 +1547,36 @@ static bool has_data(const ls_Notice *n, const char *item)
     return false;
 }
 
+/* The loop posts a motion event as the control loop does (ls_control.c ev_push). */
+static void loop_posts(ls_motion_event_kind_t kind, uint32_t ref_seq)
+{
+    ls_ctl_event_t ev;
+    memset(&ev, 0, sizeof ev);
+    ev.kind = LS_CEV_MOTION;
+    ev.motion.kind = kind;
+    ev.motion.ref_seq = ref_seq;
+    const unsigned head = atomic_load(&g_ctl.ev_head);
+    g_ctl.ev_ring[head % LS_CTL_QUEUE_LEN] = ev;
+    atomic_store(&g_ctl.ev_head, head + 1u);
+}
+
+/* A request is answered from the state as of its arrival: the loop's events
+ * posted before it count although no ls_core_tick ran in between (the comms
+ * thread woke for both at once). */
+static void test_a_query_sees_the_loop_events_posted_before_it(void **state)
+{
+    (void)state;
+    const uint32_t move = start_move();
+    atomic_store(&g_ctl.ev_tail, atomic_load(&g_ctl.ev_head));
+    loop_posts(LS_MEV_PAUSED, move);
+    req(ls_Request_get_motion_control_state_tag);
+    const ls_Response *r = must(HOST_B);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_EXEC_OK);
+    assert_int_equal(r->result.get_motion_control_state.state, ls_State_PAUSED);
+    assert_string_equal(r->result.get_motion_control_state.motion_control_state, "robot_paused");
+    assert_int_equal(atomic_load(&g_ctl.ev_tail), atomic_load(&g_ctl.ev_head)); /* taken, once */
+}
+
 static void test_deactivate_while_moving_answers_at_rest(void **state)
 {
     (void)state;
@@ -2603,6 +2633,7 @@ int main(void)
         cmocka_unit_test(test_utf8_check_and_repair),
         cmocka_unit_test_setup(test_strings_that_are_not_utf8_are_refused_naming_the_field, setup_locked),
         cmocka_unit_test_setup(test_what_the_device_shortens_stays_utf8, setup_locked),
+        cmocka_unit_test(test_a_query_sees_the_loop_events_posted_before_it),
         cmocka_unit_test(test_deactivate_while_moving_answers_at_rest),
         cmocka_unit_test(test_emergency_fails_the_motion_once_stopped),
         cmocka_unit_test(test_an_emergency_flood_stops_once_and_counts_the_repeats),
