@@ -2,6 +2,7 @@
 one line a second opener of a held line gets."""
 from __future__ import annotations
 
+import os
 import shutil
 import subprocess
 import sys
@@ -186,3 +187,32 @@ def test_a_client_outlives_the_broker_quietly(device_end: PtySlcanBus, runtime_d
     assert thread_errors == []
     warnings = [r.getMessage() for r in caplog.records if "the shared link" in r.getMessage()]
     assert len(warnings) == 1 and warnings[0].startswith(f"the shared link {b.url} closed (")
+
+
+def test_a_claimed_line_is_read_in_chunks(device_end: PtySlcanBus, runtime_dir: Path,
+                                          monkeypatch: pytest.MonkeyPatch) -> None:
+    # python-can's slcan reader makes a read call per byte: a busy gateway then reads the pty
+    # slower than the device writes, and answers wait behind seconds of telemetry in the pty.
+    bus = open_bus(BusSpec("slcan", device_end.path))
+    try:
+        fd = bus.__wrapped__.serialPortOrig.fd  # type: ignore[attr-defined]
+        reads = 0
+        real_read = os.read
+
+        def counting_read(f: int, n: int) -> bytes:
+            nonlocal reads
+            reads += f == fd
+            return real_read(f, n)
+
+        frames = 200
+        for i in range(frames):  # all waiting in the pty (15 bytes each) before the host reads
+            device_end.send(can.Message(arbitration_id=DEVICE_FRAME_ID, data=i.to_bytes(2, "little")))
+        time.sleep(0.2)
+        monkeypatch.setattr(os, "read", counting_read)
+        got = [m for m in (bus.recv(1.0) for _ in range(frames)) if m is not None]
+        monkeypatch.undo()
+        assert [int.from_bytes(m.data, "little") for m in got] == list(range(frames))
+        assert reads <= 20, f"{reads} read calls for {frames} frames ({frames * 15} bytes): read byte by byte"
+    finally:
+        bus.shutdown()
+        release_bus(bus)

@@ -11,6 +11,7 @@ channel and says what to check.
 from __future__ import annotations
 
 import logging
+import os
 import select
 import socket
 import threading
@@ -145,8 +146,58 @@ def open_bus(spec: BusSpec | None = None, **kwargs: Any) -> can.BusABC:
             sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
             _read_lines_in_chunks(bus, sock)
     if claimed is not None:
+        _read_serial_in_chunks(bus)
         _claims[id(bus)] = claimed
     return bus
+
+
+def _take_line(buffer: bytearray) -> str | None:
+    """The first whole SLCAN line in `buffer` with its terminator, taken out of it; None if none."""
+    cut = link.line_end(buffer)
+    if cut < 0:
+        return None
+    line = bytes(buffer[:cut + 1]).decode()
+    del buffer[:cut + 1]
+    return line
+
+
+def _read_serial_in_chunks(bus: can.BusABC) -> None:
+    """Read a serial line (landscaped's pty) in chunks instead of python-can's one byte per call.
+
+    python-can's slcanBus._read costs a read system call per byte (28 per 29-bit frame), so a
+    busy process (the gateway: an OPC UA server, a Notifier and one ISO-TP stack per session)
+    reads the line slower than the device writes its telemetry and answers. The rest waits in
+    the pty, and every answer waits behind it: 1.8 s behind with 4 gateway sessions coming and
+    going, so connects timed out (docs/gateway.md "Sessions coming and going"). This reads
+    what has arrived at once, with slcanBus._read's contract (one line with its terminator, or
+    None) and its error (CanOperationError when the line fails)."""
+    inner: Any = getattr(bus, "__wrapped__", bus)
+    port = getattr(inner, "serialPortOrig", None)
+    fd = getattr(port, "fd", None)
+    if not isinstance(fd, int):
+        return  # not a POSIX serial port (a pyserial URL): python-can's reader stays
+    buffer: bytearray = inner._buffer
+
+    def read(timeout: float | None) -> str | None:
+        deadline = None if timeout is None else time.monotonic() + timeout
+        with can.exceptions.error_check("Could not read from serial device"):
+            while True:
+                line = _take_line(buffer)
+                if line is not None:
+                    return line
+                left = None if deadline is None else max(0.0, deadline - time.monotonic())
+                ready, _, _ = select.select([fd], [], [], left)
+                if not ready:
+                    return None
+                try:
+                    chunk = os.read(fd, 4096)
+                except BlockingIOError:
+                    continue
+                if not chunk:
+                    raise OSError("the line reports data but returned none: the device is gone")
+                buffer.extend(chunk)
+
+    inner._read = read
 
 
 def _read_lines_in_chunks(bus: can.BusABC, sock: socket.socket) -> None:
@@ -173,10 +224,8 @@ def _read_lines_in_chunks(bus: can.BusABC, sock: socket.socket) -> None:
     def read(timeout: float | None) -> str | None:
         deadline = None if timeout is None else time.monotonic() + timeout
         while True:
-            cut = link.line_end(buffer)
-            if cut >= 0:
-                line = bytes(buffer[:cut + 1]).decode()
-                del buffer[:cut + 1]
+            line = _take_line(buffer)
+            if line is not None:
                 return line
             left = None if deadline is None else max(0.0, deadline - time.monotonic())
             if closed.is_set():
@@ -207,6 +256,33 @@ def _read_lines_in_chunks(bus: can.BusABC, sock: socket.socket) -> None:
 
     inner._read = read
     inner._write = write
+
+
+class SharedNotifier(can.Notifier):
+    """A can.Notifier whose listeners may come and go while it delivers a frame.
+
+    python-can's Notifier calls its listeners in a `for` over its list, in its own thread, while
+    add_listener/remove_listener change that list in place from others. A listener removed
+    before the one being called shifts the rest down by one, so the next listener misses that
+    frame. Where supervisors join and leave one shared Notifier (the gateway: one per OPC UA
+    session), the frame missed is another supervisor's ISO-TP flow control or consecutive
+    frame, and its transfer stalls until a time-out. Here both replace the list instead (copy
+    on write), so a delivery in progress keeps the list it started with."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        self._listeners_lock = threading.Lock()
+        super().__init__(*args, **kwargs)
+
+    def add_listener(self, listener: can.notifier.MessageRecipient) -> None:
+        with self._listeners_lock:
+            self.listeners = [*self.listeners, listener]
+
+    def remove_listener(self, listener: can.notifier.MessageRecipient) -> None:
+        """Raises ValueError when `listener` is not registered (as can.Notifier does)."""
+        with self._listeners_lock:
+            rest = list(self.listeners)
+            rest.remove(listener)
+            self.listeners = rest
 
 
 _claims: dict[int, str] = {}

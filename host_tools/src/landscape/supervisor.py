@@ -39,6 +39,7 @@ from .bus import (
     ISOTP_PARAMS,
     MAX_MESSAGE_BYTES,
     BusSpec,
+    SharedNotifier,
     functional_id,
     open_bus,
     physical_address,
@@ -415,7 +416,7 @@ class Supervisor:
 
     def _start_transport(self) -> None:
         if self._notifier is None:
-            self._notifier = can.Notifier(self.bus, [], timeout=0.05)
+            self._notifier = SharedNotifier(self.bus, [], timeout=0.05)
         self._stop.clear()
         self._lost = None
         self._device_heard = None
