@@ -3,6 +3,7 @@ the users it admits, and the OPC UA methods' arguments derived from the schema."
 from __future__ import annotations
 
 import errno
+import logging
 import socket
 from pathlib import Path
 
@@ -107,6 +108,23 @@ def test_users() -> None:
     assert mes is not None and mes.name == "mes" and mes.role == UserRole.User
     cfg.allow_anonymous = False
     assert users.get_user(None) is None
+
+
+def test_a_refused_session_is_logged_with_its_user_never_the_password(caplog: pytest.LogCaptureFixture) -> None:
+    cfg = parse_config(f'[users]\nop = "{hash_password("pw", iterations=1000)}"\n')
+    users = GatewayUsers(cfg, {b"DER": "mes"})
+    with caplog.at_level(logging.WARNING, logger="landscape.gateway"):
+        assert users.get_user(None, username="op", password="s3cret-guess") is None
+        assert users.get_user(None, username="mallory", password="hunter2") is None
+    text = caplog.text
+    assert "refused a session as user 'op'" in text and "refused a session as user 'mallory'" in text
+    assert "s3cret-guess" not in text and "hunter2" not in text
+    caplog.clear()
+    cfg.allow_anonymous = False
+    with caplog.at_level(logging.WARNING, logger="landscape.gateway"):
+        assert users.get_user(None, certificate=b"OTHER") is None
+    assert "refused an anonymous session: allow_anonymous is false" in caplog.text
+    assert "[[certificate_users]]" in caplog.text
 
 
 def test_every_command_field_has_an_argument() -> None:

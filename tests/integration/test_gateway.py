@@ -16,7 +16,7 @@ import subprocess
 import sys
 import textwrap
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -26,6 +26,7 @@ from asyncua import Client, ua
 from conftest import CLI, Controller, start_controller
 from landscape._generated import landscape_pb2 as pb
 from landscape.gateway_config import hash_password
+from landscape.registry import lookup
 
 BIN = Path(sys.executable).parent
 TARGET = [0.4, -0.2, 0.3, 0.0, 0.4, 0.2]
@@ -129,6 +130,11 @@ def test_browse_subscribe_move_and_complete_by_method_calls(gateway: str) -> Non
             methods = {(await m.read_browse_name()).Name for m in
                        await (await node.get_child(f"{ns}:Commands")).get_children()}
             assert {"lock", "activate", "moveAbsolute", "pathMove", "AnswerRsvp"} <= methods
+            # each method says what it does, from the schema (protocol/landscape.proto summary)
+            move = await node.get_child([f"{ns}:Commands", f"{ns}:moveAbsolute"])
+            text = (await move.read_description()).Text
+            assert text.startswith(lookup("moveAbsolute").summary), text
+            assert "valid in RESTING" in text and "non-blocking" in text and "owner only" in text, text
             # anonymous: reads, but is refused a command
             assert await (await node.get_child(f"{ns}:State")).read_value() in ("IDLE", "UNLOCKED")
             with pytest.raises(ua.UaStatusCodeError) as refused:
@@ -137,10 +143,7 @@ def test_browse_subscribe_move_and_complete_by_method_calls(gateway: str) -> Non
 
         async with Client(user_url(gateway, "alice", "alice-pw"), timeout=UA_TIMEOUT_S) as c:
             node, ns = await controller_node(c)
-            events = Events()
-            esub = await c.create_subscription(50, events)
-            await esub.subscribe_events(node, await c.nodes.root.get_child(
-                ["0:Types", "0:EventTypes", "0:BaseEventType", f"{ns}:LandScapeNoticeEventType"]))
+            events = await subscribe_notices(c, node, ns)
             joints = Changes()
             jsub = await c.create_subscription(20, joints)
             jp = await node.get_child([f"{ns}:MotionDevices", f"{ns}:Arm", f"{ns}:JointPositions"])
@@ -151,11 +154,7 @@ def test_browse_subscribe_move_and_complete_by_method_calls(gateway: str) -> Non
             out = await call(node, ns, "moveAbsolute", "p1", "JOINT_FRAME", TARGET)
             assert out[1] == "CMD_STARTED_OK", out
             seq = out[3]
-            deadline = time.monotonic() + 30
-            final = None
-            while final is None and time.monotonic() < deadline:
-                await asyncio.sleep(0.1)
-                final = next((e for e in events.got if e.RefSeq == seq and e.Final), None)
+            final = await first_event(events, lambda e: e.RefSeq == seq and e.Final, 30)
             assert final is not None, [(e.NoticeId, e.RefSeq) for e in events.got]
             assert final.NoticeId == "moveAbsoluteComplete" and final.Kind == "EVENT", final
             await asyncio.sleep(0.3)
@@ -170,10 +169,7 @@ def test_an_rsvp_is_answered_by_a_method_call(gateway: str) -> None:
     async def run() -> None:
         async with Client(user_url(gateway, "alice", "alice-pw"), timeout=UA_TIMEOUT_S) as c:
             node, ns = await controller_node(c)
-            events = Events()
-            esub = await c.create_subscription(50, events)
-            await esub.subscribe_events(node, await c.nodes.root.get_child(
-                ["0:Types", "0:EventTypes", "0:BaseEventType", f"{ns}:LandScapeNoticeEventType"]))
+            events = await subscribe_notices(c, node, ns)
             for name, args in (("lock", []), ("activate", [])):
                 assert (await call(node, ns, name, *args))[0] >= 0
             # a path with an RSVP point (docs/protocol.md "RSVP"): the device asks "go on?"
@@ -184,20 +180,12 @@ def test_an_rsvp_is_answered_by_a_method_call(gateway: str) -> None:
             out = await call(node, ns, "pathMove", "r")
             assert out[1] == "CMD_STARTED_OK", out
             seq = out[3]
-            deadline = time.monotonic() + 20
-            rsvp = None
-            while rsvp is None and time.monotonic() < deadline:
-                await asyncio.sleep(0.05)
-                rsvp = next((e for e in events.got if e.RsvpId), None)
+            rsvp = await first_event(events, lambda e: e.RsvpId, 20)
             assert rsvp is not None, [(e.Kind, e.NoticeId) for e in events.got]
             ack = await call(node, ns, "AnswerRsvp", ua.Variant(rsvp.RsvpId, ua.VariantType.UInt32),
                              ua.Variant(-1, ua.VariantType.Int32), ua.Variant(["why=test"], ua.VariantType.String))
             assert ack[0] == pb.CMD_EXEC_OK and ack[2] == "abort", ack
-            deadline = time.monotonic() + 20
-            final = None
-            while final is None and time.monotonic() < deadline:
-                await asyncio.sleep(0.05)
-                final = next((e for e in events.got if e.RefSeq == seq and e.Final), None)
+            final = await first_event(events, lambda e: e.RefSeq == seq and e.Final, 20)
             assert final is not None and final.Kind == "ALARM" and final.NoticeId == "pathMoveAborted", final
     asyncio.run(run())
 
@@ -234,10 +222,7 @@ def test_a_second_client_is_refused_ownership_and_a_killed_session_is_dropped(ga
                 assert owner.stdout is not None
                 line = await asyncio.get_running_loop().run_in_executor(None, owner.stdout.readline)
                 assert line.startswith("locked 0"), line + (owner.stderr.read() if owner.stderr else "")
-                events = Events()
-                esub = await bob.create_subscription(50, events)
-                await esub.subscribe_events(node, await bob.nodes.root.get_child(
-                    ["0:Types", "0:EventTypes", "0:BaseEventType", f"{ns}:LandScapeNoticeEventType"]))
+                events = await subscribe_notices(bob, node, ns)
                 state = await node.get_child(f"{ns}:State")
                 owner_var = await node.get_child(f"{ns}:Owner")
                 await asyncio.sleep(0.5)
@@ -282,6 +267,16 @@ async def subscribe_notices(client: Client, node: Any, ns: int) -> Events:
     await sub.subscribe_events(node, await client.nodes.root.get_child(
         ["0:Types", "0:EventTypes", "0:BaseEventType", f"{ns}:LandScapeNoticeEventType"]))
     return events
+
+
+async def first_event(events: Events, match: Callable[[Any], Any], timeout_s: float) -> Any:
+    """The first notice event that `match`es, waiting up to `timeout_s`; None if none came."""
+    deadline = time.monotonic() + timeout_s
+    while True:
+        got = next((e for e in events.got if match(e)), None)
+        if got is not None or time.monotonic() > deadline:
+            return got
+        await asyncio.sleep(0.05)
 
 
 async def wait_status(var: Any, good: bool, timeout_s: float) -> ua.DataValue:

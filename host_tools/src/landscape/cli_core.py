@@ -620,10 +620,7 @@ def make_command(cmd: Command) -> click.Command:
         fields = {k: v for k, v in fields.items() if v is not None}
         return execute(ctx, cmd, fields, wait=not no_wait, wait_timeout_s=wait_timeout)
 
-    states = ", ".join(cmd.state_names)
-    kind = "blocking" if cmd.blocking else "non-blocking: waits for its final event or alarm"
-    help_text = (f"{cmd.summary}\n\nSeed command {cmd.name} ({cmd.seed_section}); valid in {states}; {kind}"
-                 + ("; owner only" if cmd.owner_only else "") + ".")
+    help_text = f"{cmd.summary}\n\n{cmd.contract('non-blocking: waits for its final event or alarm')}"
     for f in cmd.fields():
         if f.type == FieldDescriptor.TYPE_ENUM:
             names = " | ".join(v.name for v in field_enum_type(f).values)

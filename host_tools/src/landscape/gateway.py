@@ -52,7 +52,7 @@ from google.protobuf.descriptor import FieldDescriptor
 
 from . import telemetry as tm
 from ._generated import landscape_pb2 as pb
-from .bus import BusSpec, open_bus, release_bus
+from .bus import BusSpec, SharedNotifier, open_bus, release_bus
 from .errors import AddressInUseError, ArgumentError, CommandError, LandscapeError
 from .gateway_config import GatewayConfig
 from .registry import COMMANDS, Command, build_request, enum_choices, field_enum_type, is_repeated, message_to_dict
@@ -124,6 +124,9 @@ LIVE_VARS = ("State", "Motion", "Fault", "Owner", "Supervisors", "JointPositions
 class GatewayError(LandscapeError):
     """The gateway cannot start (the port is taken, a certificate does not load)."""
 
+
+#: How a non-blocking command's method answers (docs/gateway.md "Methods").
+NON_BLOCKING = "non-blocking: returns CMD_STARTED_OK, then its final event or alarm (RefSeq = the call's Seq)"
 
 # ---------------------------------------------------------------- arguments
 
@@ -201,6 +204,11 @@ class GatewaySession(InternalSession):
         await self.gateway.session_closed(self)
 
 
+def _label(session: InternalSession) -> str:
+    """A session as the log names it: the client's session name and who it is."""
+    return f"{session.name!r} ({session.user.name or session.user.role.name.lower()})"
+
+
 class GatewayUsers(UserManager):
     """Anonymous (when allowed): read-only. A configured user with the right password, or a client whose
     certificate is a configured user's: may call methods. Anything else is refused."""
@@ -214,6 +222,9 @@ class GatewayUsers(UserManager):
         if username is not None:
             if password is not None and self.cfg.check_password(username, password):
                 return User(role=UserRole.User, name=username)
+            # the name an administrator needs to see who tried; never the password
+            log.warning("refused a session as user %r: unknown user or wrong password ([users] in the "
+                        "gateway's configuration)", username)
             return None
         # asyncua passes the certificate of an X509 identity token, else the secure channel's peer
         # certificate (the client's application certificate; b"" on a channel without security): either
@@ -221,7 +232,12 @@ class GatewayUsers(UserManager):
         name = self.certificates.get(certificate) if isinstance(certificate, bytes) and certificate else None
         if name is not None:
             return User(role=UserRole.User, name=name)
-        return User(role=UserRole.Anonymous) if self.cfg.allow_anonymous else None
+        if self.cfg.allow_anonymous:
+            return User(role=UserRole.Anonymous)
+        log.warning("refused an anonymous session: allow_anonymous is false and %s",
+                    "its certificate is no [[certificate_users]] entry's" if certificate else
+                    "it gave no user name or certificate")
+        return None
 
 
 class _Rules(SimpleRoleRuleset):
@@ -360,7 +376,7 @@ class Gateway:
         except BaseException:
             await server.stop()
             raise
-        self._notifier = can.Notifier(self._bus, [self._on_frame], timeout=0.05, loop=None)
+        self._notifier = SharedNotifier(self._bus, [self._on_frame], timeout=0.05, loop=None)
         self._spawn(self._event_pump(), "the event pump")
 
     async def run(self) -> None:
@@ -544,7 +560,7 @@ class Gateway:
                         reported = True
                     continue
                 self._bus = bus
-                self._notifier = can.Notifier(bus, [self._on_frame], timeout=0.05, loop=None)
+                self._notifier = SharedNotifier(bus, [self._on_frame], timeout=0.05, loop=None)
                 # give its heartbeat time to come before the next reopen
                 deadline = time.monotonic() + 2 * DEFAULT_SILENCE_S
                 while time.monotonic() < deadline and all(c.lost is not None for c in self.controllers.values()):
@@ -612,8 +628,11 @@ class Gateway:
         for cmd in COMMANDS.values():
             if cmd.field in ("connect", "disconnect"):
                 continue  # the gateway holds the session: an OPC UA session is the connection
-            await methods.add_method(_nid(nid + cmd.name, ns), f"{ns}:{cmd.name}", self._method(address, cmd),
-                                     [argument_of(fd) for fd in cmd.fields()], outs)
+            method = await methods.add_method(_nid(nid + cmd.name, ns), f"{ns}:{cmd.name}",
+                                              self._method(address, cmd), [argument_of(fd) for fd in cmd.fields()],
+                                              outs)
+            await method.write_attribute(AttributeIds.Description, ua.DataValue(ua.Variant(
+                ua.LocalizedText(f"{cmd.summary}. {cmd.contract(NON_BLOCKING)}"))))
         rsvp_in = [self._out("RsvpId", ua.VariantType.UInt32, "the RsvpId of the RSVP event"),
                    self._out("RetCode", ua.VariantType.Int32, ">= 0 accepts, < 0 declines"),
                    self._out("Data", ua.VariantType.String, "recorded in the device's event log", array=True)]
@@ -717,7 +736,7 @@ class Gateway:
                 self._used.discard(sup.source_address)
                 raise LandscapeError("the OPC UA session ended")
             self._sups[key] = sup
-            log.info("session %s (%s) is supervisor %#04x of %#04x", session.name, who, sup.source_address, device)
+            log.info("session %s is supervisor %#04x of %#04x", _label(session), sup.source_address, device)
             return sup
 
     async def session_closed(self, session: GatewaySession) -> None:
@@ -729,7 +748,8 @@ class Gateway:
         for key, sup in gone:
             del self._sups[key]
             self._sup_locks.pop(key, None)
-            log.info("session %s ended: supervisor %#04x of %#04x leaves", session.name, sup.source_address, key[1])
+            log.info("session %s ended: supervisor %#04x of %#04x leaves", _label(session), sup.source_address,
+                     key[1])
             await loop.run_in_executor(None, sup.close)
             self._used.discard(sup.source_address)
 
@@ -757,7 +777,7 @@ class Gateway:
                 return session
             gone = self._gone_message(device)
             if gone is not None:
-                log.warning("%s from session %s: %s", cmd.name, session.name, gone)
+                log.warning("%s from session %s: %s", cmd.name, _label(session), gone)
                 return _failed(GONE, pb.CMD_ERR, gone)
             try:
                 fields = fields_of(cmd, [a.Value if isinstance(a, ua.Variant) else a for a in args])
@@ -765,17 +785,17 @@ class Gateway:
                 rv = await asyncio.get_running_loop().run_in_executor(
                     None, lambda: sup.request(cmd.field, check=False, **fields))
             except ArgumentError as exc:
-                log.warning("%s from session %s: %s", cmd.name, session.name, exc)
+                log.warning("%s from session %s: %s", cmd.name, _label(session), exc)
                 return _failed(StatusCodes.BadInvalidArgument, pb.CMD_PARAM_ERR, str(exc))
             except CommandError as exc:
                 # the device refused this session's connect (its supervisor table is full, ...): a good
                 # call with the device's code and text, as for any refusal of the command itself
-                log.warning("%s from session %s: %s", cmd.name, session.name, exc)
+                log.warning("%s from session %s: %s", cmd.name, _label(session), exc)
                 return [ua.Variant(exc.ret_code, ua.VariantType.Int32), ua.Variant(exc.ret_name, ua.VariantType.String),
                         ua.Variant(str(exc), ua.VariantType.String), ua.Variant(0, ua.VariantType.UInt32),
                         ua.Variant(0, ua.VariantType.UInt32), ua.Variant("{}", ua.VariantType.String)]
             except LandscapeError as exc:
-                log.warning("%s from session %s: %s", cmd.name, session.name, exc)
+                log.warning("%s from session %s: %s", cmd.name, _label(session), exc)
                 return _failed(StatusCodes.BadCommunicationError, pb.CMD_ERR, str(exc))
             result = json.dumps(rv.result, sort_keys=True) if rv.result else "{}"
             return [ua.Variant(rv.ret_code, ua.VariantType.Int32), ua.Variant(rv.ret_name, ua.VariantType.String),
@@ -791,7 +811,7 @@ class Gateway:
             try:
                 rid, code, items = rsvp_arguments([a.Value if isinstance(a, ua.Variant) else a for a in args])
             except ArgumentError as exc:
-                log.warning("AnswerRsvp from session %s: %s", session.name, exc)
+                log.warning("AnswerRsvp from session %s: %s", _label(session), exc)
                 res = ua.CallMethodResult()
                 res.StatusCode = _status(StatusCodes.BadInvalidArgument)
                 res.OutputArguments = [ua.Variant(pb.CMD_PARAM_ERR, ua.VariantType.Int32), ua.Variant(str(exc)),
@@ -799,7 +819,7 @@ class Gateway:
                 return res
             gone = self._gone_message(device)
             if gone is not None:
-                log.warning("AnswerRsvp from session %s: %s", session.name, gone)
+                log.warning("AnswerRsvp from session %s: %s", _label(session), gone)
                 return _status(GONE)
             sup = self._sups.get((_session_key(session), device))
             if sup is None:

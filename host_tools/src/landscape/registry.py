@@ -87,6 +87,13 @@ class Command:
         """The request message's fields in schema order."""
         return tuple(self.request_type.fields)
 
+    def contract(self, non_blocking: str) -> str:
+        """Where the seed has it, in which states it is valid, how it answers (`non_blocking`
+        says how this front end follows a non-blocking one) and whether it is the owner's."""
+        kind = "blocking" if self.blocking else non_blocking
+        return (f"Seed command {self.name} ({self.seed_section}); valid in {', '.join(self.state_names)}; {kind}"
+                + ("; owner only" if self.owner_only else "") + ".")
+
 
 def _load() -> dict[str, Command]:
     req = descriptor_of(pb.Request)
