@@ -24,6 +24,7 @@ Log times are the host's wall clock (ns since the epoch) of arrival.
 """
 from __future__ import annotations
 
+import abc
 import json
 import math
 import threading
@@ -118,7 +119,7 @@ def channel_schemas() -> list[tuple[str, str, bytes]]:
     return [(topic, schema, json.dumps(SCHEMAS[schema]).encode()) for topic, schema in CHANNELS.items()]
 
 
-class ChannelWriter:
+class ChannelWriter(abc.ABC):
     """Turns broadcasts, notices and CAN frames into the messages of the channels above (thread-safe) and
     hands each to `_write` as (topic, log time in ns since the epoch, JSON bytes). The one encoder of
     McapRecorder (a file) and view.LiveView (a Foxglove WebSocket server). The same calls as
@@ -151,12 +152,13 @@ class ChannelWriter:
     def messages(self) -> int:
         return sum(self.counts.values())
 
+    @abc.abstractmethod
     def _write(self, topic: str, ns: int, data: bytes, sequence: int) -> None:
-        """Deliver one message (called with the lock held)."""
-        raise NotImplementedError
+        """Deliver one message (called with the lock held): each sink's own."""
 
+    @abc.abstractmethod
     def _finish(self) -> None:
-        """Close the sink (called once, with the lock held)."""
+        """Close the sink (called once, with the lock held): each sink's own."""
 
     def close(self) -> None:
         with self._lock:
