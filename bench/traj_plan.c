@@ -12,6 +12,7 @@
 #include <time.h>
 
 #include "ls_traj.h"
+#include "plan_io.h"
 
 #define MAX_PROBLEMS 100000
 #define REPEAT 20
@@ -23,23 +24,6 @@ typedef struct {
 } problem_t;
 
 static problem_t problems[MAX_PROBLEMS];
-
-static int read_vec(double *x, int n)
-{
-    for (int i = 0; i < n; ++i) {
-        if (scanf("%lf", &x[i]) != 1) {
-            return -1;
-        }
-    }
-    return 0;
-}
-
-static uint64_t mono_ns(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (uint64_t)ts.tv_sec * 1000000000u + (uint64_t)ts.tv_nsec;
-}
 
 int main(void)
 {

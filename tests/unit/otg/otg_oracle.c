@@ -20,6 +20,7 @@
 #include <time.h>
 
 #include "ls_otg.h"
+#include "plan_io.h"
 
 #define MAX_PROBLEMS 20000
 #define REPEAT 20
@@ -33,23 +34,6 @@ typedef struct {
 
 static problem_t problems[MAX_PROBLEMS];
 static ls_otg_planner_t planner;
-
-static int read_vec(double *x, int n)
-{
-    for (int i = 0; i < n; ++i) {
-        if (scanf("%lf", &x[i]) != 1) {
-            return -1;
-        }
-    }
-    return 0;
-}
-
-static uint64_t mono_ns(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (uint64_t)ts.tv_sec * 1000000000u + (uint64_t)ts.tv_nsec;
-}
 
 static double ratio(double x, double lim)
 {

@@ -15,20 +15,18 @@
 
 #include "ls_otg.h"
 #include "ls_traj.h"
+#include "test_rng.h"
 
 #define KHZ_DT_S 1e-3
 #define LIMIT_REL_TOL 1e-9
 #define PROBLEMS 400
 
 static ls_otg_planner_t g_pl;
-static uint64_t rng_state = 0x2545F4914F6CDD1Du;
+static test_rng_t g_rng = { 0x2545F4914F6CDD1Du };
 
 static double urand(double lo, double hi)
 {
-    rng_state ^= rng_state << 13;
-    rng_state ^= rng_state >> 7;
-    rng_state ^= rng_state << 17;
-    return lo + (hi - lo) * (double)(rng_state >> 11) / 9007199254740992.0;
+    return test_rng_uniform(&g_rng, lo, hi);
 }
 
 static int setup(void **state)

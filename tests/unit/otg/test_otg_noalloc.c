@@ -16,15 +16,13 @@
 
 #include "alloc_counter.h"
 #include "ls_otg.h"
+#include "test_rng.h"
 
-static uint64_t rng_state = 0x9E3779B97F4A7C15u;
+static test_rng_t g_rng = { 0x9E3779B97F4A7C15u };
 
 static double urand(double lo, double hi)
 {
-    rng_state ^= rng_state << 13;
-    rng_state ^= rng_state >> 7;
-    rng_state ^= rng_state << 17;
-    return lo + (hi - lo) * (double)(rng_state >> 11) / 9007199254740992.0;
+    return test_rng_uniform(&g_rng, lo, hi);
 }
 
 static ls_otg_planner_t g_pl;

@@ -22,6 +22,7 @@
 #include "hal_sim_world.h"
 #include "ls_robot_model_sim.h"
 #include "ls_math.h"
+#include "test_rng.h"
 
 #define NJ LS_N_JOINTS
 #define DT 0.001
@@ -326,13 +327,10 @@ static void force(double w[6])
     assert_int_equal(s->read(s->self, w), LS_OK);
 }
 
-static uint64_t rng_state = 0x9E3779B97F4A7C15u;
+static test_rng_t g_rng = { 0x9E3779B97F4A7C15u };
 static double urand(void)
 {
-    rng_state ^= rng_state << 13;
-    rng_state ^= rng_state >> 7;
-    rng_state ^= rng_state << 17;
-    return (double)(rng_state >> 11) / 9007199254740992.0;
+    return test_rng_uniform(&g_rng, 0.0, 1.0);
 }
 
 static int teardown(void **state)

@@ -11,20 +11,18 @@
 #include <string.h>
 
 #include "ls_traj.h"
+#include "test_rng.h"
 
 #define REL_TOL 1e-9
 #define KHZ_DT_S 1e-3
 
 /* ---- helpers ------------------------------------------------------------ */
 
-static uint64_t rng_state = 0x9E3779B97F4A7C15u;
+static test_rng_t g_rng = { 0x9E3779B97F4A7C15u };
 
 static double urand(double lo, double hi)
 {
-    rng_state ^= rng_state << 13;
-    rng_state ^= rng_state >> 7;
-    rng_state ^= rng_state << 17;
-    return lo + (hi - lo) * (double)(rng_state >> 11) / 9007199254740992.0;
+    return test_rng_uniform(&g_rng, lo, hi);
 }
 
 static void assert_close(double got, double want, double rel)
@@ -230,7 +228,7 @@ static void test_zero_distance(void **state)
 static void test_endpoints_exact_and_clamped(void **state)
 {
     (void)state;
-    rng_state = 11;
+    g_rng.s = 11;
     for (int k = 0; k < 500; ++k) {
         double vm, am, jm;
         random_limits(&vm, &am, &jm);
@@ -260,7 +258,7 @@ static void test_endpoints_exact_and_clamped(void **state)
 static void test_random_profiles_limits_continuity(void **state)
 {
     (void)state;
-    rng_state = 12345;
+    g_rng.s = 12345;
     int shapes[4] = { 0, 0, 0, 0 }; /* [cruise?][a_max reached?] */
     for (int k = 0; k < 300; ++k) {
         double vm, am, jm;
@@ -352,7 +350,7 @@ static void test_duration_too_short(void **state)
 static void test_duration_random(void **state)
 {
     (void)state;
-    rng_state = 777;
+    g_rng.s = 777;
     for (int k = 0; k < 300; ++k) {
         double vm, am, jm;
         random_limits(&vm, &am, &jm);
@@ -409,7 +407,7 @@ static void test_sync_hand_case(void **state)
 static void test_sync_random(void **state)
 {
     (void)state;
-    rng_state = 4242;
+    g_rng.s = 4242;
     for (int k = 0; k < 100; ++k) {
         const uint8_t n = (uint8_t)(1 + k % LS_TRAJ_MAX_AXES);
         double p0[LS_TRAJ_MAX_AXES], p1[LS_TRAJ_MAX_AXES];
@@ -595,7 +593,7 @@ static void test_stop_resume_anywhere_bounded(void **state)
 {
     (void)state;
     /* Stopping while the path itself brakes adds the two terms: at most 2 a_max. */
-    rng_state = 99;
+    g_rng.s = 99;
     for (int k = 0; k < 20; ++k) {
         const uint8_t n = 3;
         double p0[3], p1[3];
