@@ -6,8 +6,9 @@ a path (seed section 6). docs/protocol.md "Speed and acceleration",
 docs/conformance.md."""
 from __future__ import annotations
 
+import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 
 import can
 import numpy as np
@@ -20,6 +21,7 @@ from landscape._generated import landscape_pb2 as pb
 from landscape.registry import lookup
 from landscape.supervisor import Supervisor, notice_data
 
+SETPOINTS: dict[int, SetpointWatch] = {}
 LINE = [0.0, 0.15, 0.0, 0.0, 0.0, 0.0]  # 15 cm along base y, no turn
 
 
@@ -29,6 +31,7 @@ def sup(controller: Controller) -> Iterator[Supervisor]:
     try:
         with Supervisor(bus, client_name="motion18") as s:
             WATCH[id(s)] = JointWatch(s)
+            SETPOINTS[id(s)] = SetpointWatch(s)
             s.lock()
             s.activate()  # metres and radians
             rv = s.move_absolute("home", HOME, speed_pct=50)
@@ -38,12 +41,70 @@ def sup(controller: Controller) -> Iterator[Supervisor]:
         bus.shutdown()
 
 
+class SetpointWatch:
+    """The commanded joint positions of every telemetry cycle (JOINTS_CMD_12/34/56) with
+    that cycle's device time stamp (TOOL_POS `tool_time_ms`, sent after them: the control
+    loop's clock modulo 65.536 s), so that a test times a motion's set-point by the
+    device's clock. The host's wall clock would add the request's and the completion
+    notice's latency, which grows under load and sanitizers, and the measured joints
+    would add the servo's lag."""
+
+    def __init__(self, sup: Supervisor) -> None:
+        self._lock = threading.Lock()
+        self._cmd: dict[str, float] = {}
+        self._samples: list[tuple[int, tuple[float, ...]]] = []
+        sup.on_telemetry(self._on)
+
+    def _on(self, b: object) -> None:
+        name = getattr(b, "name", "")
+        sg = getattr(b, "signals", {})
+        with self._lock:
+            if name.startswith("JOINTS_CMD_"):
+                self._cmd.update(sg)
+            elif name == "TOOL_POS" and len(self._cmd) == 6:
+                self._samples.append((int(sg["tool_time_ms"]),
+                                      tuple(float(self._cmd[f"j{i}_cmd"]) for i in range(1, 7))))
+                self._cmd = {}
+
+    def mark(self) -> int:
+        with self._lock:
+            return len(self._samples)
+
+    def wait_samples(self, mark: int, count: int, timeout_s: float = 2.0) -> list[tuple[int, tuple[float, ...]]]:
+        deadline = time.monotonic() + timeout_s
+        while True:
+            with self._lock:
+                got = list(self._samples[mark:])
+            if len(got) >= count:
+                return got
+            if time.monotonic() > deadline:
+                raise AssertionError(f"{len(got)} telemetry cycles within {timeout_s} s, wanted {count}")
+            time.sleep(0.01)
+
+
+def _device_timed(watch: SetpointWatch, run: Callable[[], None]) -> float:
+    """Device seconds the set-point moved while `run` started a motion and waited for its
+    end: from the last telemetry cycle at the start joints to the first that stays at the
+    end joints. At 50 cycles/s this overstates the motion by at most two periods (40 ms)."""
+    m = watch.mark()
+    before = watch.wait_samples(m, 2)[-1]  # at rest: a cycle sent after the previous motion ended
+    m = watch.mark()
+    run()
+    after = watch.mark()
+    samples = [before, *watch.wait_samples(m, after - m + 3)]  # and 3 after the end, at rest
+    start, end = samples[0][1], samples[-1][1]
+    away = [i for i, (_, p) in enumerate(samples) if p != start]
+    assert away, "the tool did not move"
+    i_start = away[0] - 1
+    i_end = max(i for i, (_, p) in enumerate(samples) if p != end) + 1
+    return ((samples[i_end][0] - samples[i_start][0]) % 65536) / 1000.0
+
+
 def _timed_line(sup: Supervisor, values: list[float]) -> float:
-    """Seconds from the start of a Cartesian relative move to its completion (then back)."""
-    t0 = time.monotonic()
-    rv = sup.move_relative("line", values, frame=pb.BASE_CARTESIAN_FRAME)
-    sup.wait_complete(rv, timeout_s=30)
-    took = time.monotonic() - t0
+    """Device seconds of a Cartesian relative move (then back, untimed)."""
+    def line() -> None:
+        sup.wait_complete(sup.move_relative("line", values, frame=pb.BASE_CARTESIAN_FRAME), timeout_s=30)
+    took = _device_timed(SETPOINTS[id(sup)], line)
     back = sup.move_relative("back", [-v for v in values], frame=pb.BASE_CARTESIAN_FRAME)
     sup.wait_complete(back, timeout_s=30)
     return took
@@ -91,9 +152,9 @@ def test_point_percents_scale_straight_path_segments(sup: Supervisor) -> None:
         sup.path_load(f"s{pct:.0f}", [{"pose": a, "speed_pct": pct, "accel_pct": 100.0},
                                       {"pose": b, "speed_pct": pct, "accel_pct": 100.0}],
                       frame=pb.BASE_CARTESIAN_FRAME, motion_type=pb.STRAIGHT_MOTION)
-        t0 = time.monotonic()
-        sup.wait_complete(sup.path_move(f"s{pct:.0f}", number_of_cycles=1), timeout_s=30)
-        took[pct] = time.monotonic() - t0
+        def run(name: str = f"s{pct:.0f}") -> None:
+            sup.wait_complete(sup.path_move(name, number_of_cycles=1), timeout_s=30)
+        took[pct] = _device_timed(SETPOINTS[id(sup)], run)
     assert took[10.0] / took[90.0] > 2.5, took  # planned about 3.1, as for the single line
 
 

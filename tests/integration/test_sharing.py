@@ -74,16 +74,28 @@ def wait_moving(sup: Supervisor, timeout_s: float = 20.0) -> None:
 
 
 def wait_paused(sup: Supervisor, since: float, timeout_s: float = 10.0) -> float:
-    """Seconds from `since` until telemetry says the motion no longer runs: paused, or
-    ended. A one-shot's stopMotion is followed by its disconnect, whose handler may
-    end the pause (robot_stopping, then none) before a 10 ms poll sees it; the ASan
-    tier in the fresh root did so. The callers then check that the joints are still."""
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        st = sup.telemetry().get("STATUS", {})
-        if int(st.get("st_motion", RUNNING[0])) not in RUNNING:
-            return time.monotonic() - since
-        time.sleep(0.01)
+    """Seconds from `since` until a STATUS broadcast received after `since` says the motion no
+    longer runs: paused, or ended. Only a broadcast received after `since` counts: the latest
+    one before it may predate the move (the move's start is seen by a query, which can beat the
+    next broadcast). A one-shot's stopMotion is followed by its disconnect, whose handler may
+    end the pause (robot_stopping, then none) before a 10 ms poll sees it; the ASan tier in the
+    fresh root did so. The callers then check that the joints are still."""
+    seen: list[tuple[float, int]] = []
+
+    def on_status(b: tm.Broadcast) -> None:
+        if b.name == "STATUS":
+            seen.append((b.timestamp, int(b.signals["st_motion"])))
+
+    sup.on_telemetry(on_status)
+    try:
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            for t, motion in list(seen):
+                if t >= since and motion not in RUNNING:
+                    return t - since
+            time.sleep(0.01)
+    finally:
+        sup.remove_telemetry_callback(on_status)
     raise AssertionError(f"the arm did not pause within {timeout_s} s: {sup.get_motion_control_state()}")
 
 

@@ -13,6 +13,7 @@ import sys
 import time
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -80,7 +81,16 @@ def test_a_websocket_client_follows_a_move_on_the_live_view(session: Controller)
     assert js[-1]["position_rad"] == pytest.approx(TARGET, abs=2e-3)
     assert max(abs(v) for m in js for v in m["velocity_rad_s"] if v is not None) > 0.05
     assert max(abs(e) for m in js for e in m["following_error_rad"]) > 1e-5  # commanded minus measured, live
-    assert len([r for r in got if r.topic == "/tf"]) == len(js)
+    # one /tf per joint state, with its time stamp; the two are sent back to back, so a
+    # collecting window may end between them: at most the first and the last may lack a partner
+    def stamp(m: dict[str, Any]) -> tuple[int, int]:
+        return int(m["timestamp"]["sec"]), int(m["timestamp"]["nsec"])
+    js_stamps = [stamp(m) for m in js]
+    tf_stamps = [stamp(r.json()["transforms"][0]) for r in got if r.topic == "/tf"]
+    lo, hi = max(js_stamps[0], tf_stamps[0]), min(js_stamps[-1], tf_stamps[-1])
+    assert [t for t in tf_stamps if lo <= t <= hi] == [t for t in js_stamps if lo <= t <= hi]
+    assert len([t for t in tf_stamps if not lo <= t <= hi]) <= 1
+    assert len([t for t in js_stamps if not lo <= t <= hi]) <= 1
     assert any(r.json()["name"] == "moveAbsoluteComplete" for r in got if r.topic == "/notices")
     assert any(r.json()["signals"]["st_motion"] == 1 for r in got if r.topic == "/status")
     # Ctrl-C ends the view: exit 0, a summary line, no traceback
