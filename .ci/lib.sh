@@ -62,13 +62,28 @@ _ci_kill_bg() {
 }
 trap _ci_kill_bg EXIT
 
+# ci_background: lower the calling session's CPU weight as a whole. With the
+# kernel's autogroup scheduling (sched_autogroup_enabled, on by default in
+# Debian's kernels), every session (setsid) is one scheduling group and groups
+# share the CPU equally whatever their tasks' nice: a `setsid nice -n 19`
+# build measured 73 % of a core against the foreground's 109 % on 2 cores.
+# Setting the session's autogroup nice restores what nice 19 promises
+# (0.4 % against 173 %). Without autogroup the file is absent and nice alone
+# does it.
+ci_background() {
+  if [ -w /proc/self/autogroup ]; then
+    echo 19 >/proc/self/autogroup 2>/dev/null || true
+  fi
+}
+export -f ci_background
+
 step_bg() {
   local name=$1 log
   shift
   log=$(_ci_log_path "$name")
   echo "== $name (started in the background, log: $log)"
   # setsid: its own process group, so the EXIT trap ends the whole tree.
-  setsid nice -n 19 "$@" >"$log" 2>&1 &
+  setsid bash -c 'ci_background; exec nice -n 19 "$@"' _ "$@" >"$log" 2>&1 &
   _ci_bg_pid[$name]=$!
 }
 
