@@ -2,17 +2,21 @@
 the users it admits, and the OPC UA methods' arguments derived from the schema."""
 from __future__ import annotations
 
+import asyncio
 import errno
 import logging
 import socket
+import time
 from pathlib import Path
 
+import can
 import pytest
 from asyncua.crypto.permission_rules import UserRole
 from google.protobuf.descriptor import FieldDescriptor
 
-from landscape.errors import ArgumentError
-from landscape.gateway import GatewayUsers, _listen_hint, argument_of, fields_of, rsvp_arguments
+from landscape.bus import BusSpec
+from landscape.errors import AddressInUseError, ArgumentError
+from landscape.gateway import Gateway, GatewayUsers, _listen_hint, argument_of, fields_of, rsvp_arguments
 from landscape.gateway_config import (
     DEFAULT_POOL,
     GatewayConfigError,
@@ -188,3 +192,26 @@ def test_a_listen_failure_gets_the_hint_that_fits() -> None:
 def test_the_shipped_config_parses() -> None:
     cfg = load_config(ROOT / "firmware" / "app" / "deploy" / "gateway.toml")
     assert cfg.host == "127.0.0.1" and not cfg.users
+
+
+def test_a_full_pool_says_which_addresses_are_held_and_heard() -> None:
+    """No address left: the error names the gateway's own, those another supervisor beats from, and
+    what to do, so an operator can tell a busy gateway from an address clash on the bus."""
+    cfg = parse_config('[supervisors]\npool = ["0xF7", "0xF8", "0xF9"]\n', "test.toml")
+    gw = Gateway(cfg, BusSpec("virtual", "pool-test"))
+    bus = can.Bus(interface="virtual", channel="pool-test")
+    notifier = can.Notifier(bus, [], timeout=0.05)
+    try:
+        gw._bus, gw._notifier = bus, notifier
+        gw._used = {0xF7}
+        gw._heard = {0xF8: time.monotonic(), 0xF9: time.monotonic()}
+        with pytest.raises(AddressInUseError) as err:
+            asyncio.run(gw._open_supervisor(0x10, "t"))
+    finally:
+        notifier.stop()
+        bus.shutdown()
+    msg = str(err.value)
+    assert "held by this gateway's sessions: 1" in msg, msg
+    assert "another supervisor: 0xf8, 0xf9" in msg, msg
+    assert "refused by the controller as in use: none" in msg, msg
+    assert "widen [supervisors] pool" in msg, msg

@@ -128,6 +128,9 @@ class GatewayError(LandscapeError):
 #: How a non-blocking command's method answers (docs/gateway.md "Methods").
 NON_BLOCKING = "non-blocking: returns CMD_STARTED_OK, then its final event or alarm (RefSeq = the call's Seq)"
 
+#: A pool address whose heartbeat another supervisor sent this recently is taken: the gateway skips it.
+HEARD_HOLDS_S = 1.0
+
 # ---------------------------------------------------------------- arguments
 
 
@@ -691,8 +694,12 @@ class Gateway:
         loop = asyncio.get_running_loop()
         now = time.monotonic()
         refused: list[str] = []
+        heard: list[str] = []
         for addr in self.cfg.pool:
-            if addr in self._used or now - self._heard.get(addr, -1e9) < 1.0:
+            if addr in self._used:
+                continue
+            if now - self._heard.get(addr, -1e9) < HEARD_HOLDS_S:
+                heard.append(f"{addr:#04x}")
                 continue
             self._used.add(addr)
             sup = Supervisor(self._bus, device=device, source_address=addr, notifier=self._notifier,
@@ -711,8 +718,9 @@ class Gateway:
         raise AddressInUseError(
             "connect", pb.CMD_NOT_OWNER_ERR,
             f"no free address in the gateway's pool {', '.join(f'{a:#04x}' for a in self.cfg.pool)} (held by this "
-            f"gateway: {len(self._used)}; refused: {', '.join(refused) or 'none'}): widen [supervisors] pool or "
-            f"close OPC UA sessions")
+            f"gateway's sessions: {len(self._used)}; heard beating on the bus from another supervisor: "
+            f"{', '.join(heard) or 'none'}; refused by the controller as in use: {', '.join(refused) or 'none'}): "
+            f"widen [supervisors] pool or close OPC UA sessions")
 
     def _create_session(self, name: str, user: User = User(role=UserRole.Anonymous),  # noqa: B008
                         external: bool = False) -> InternalSession:
