@@ -278,6 +278,22 @@ def test_device_drops_owner_when_heartbeat_stops(bus, notifier, device: FakeDevi
         assert [r.seq for r in device.requests[-2:]] == [1, 2] and sup.get_tag_id(check=False).seq == 3
 
 
+def test_a_description_given_is_used_by_the_first_connect_only(bus, notifier, device: FakeDevice) -> None:
+    """The gateway's sessions take the observer's description instead of reading it again; a reconnect
+    (the device may have restarted) reads its own."""
+    with sup_on(bus, notifier, source_address=0xF1) as observer:
+        known = observer.description
+        assert known is not None and known.from_device
+        with sup_on(bus, notifier, source_address=0xF2, description=known) as session:
+            mine = [r.WhichOneof("cmd") for r in device.requests if r.WhichOneof("cmd") in ("connect", "describe")]
+            assert mine == ["connect", "describe", "connect"], mine  # the second supervisor read none
+            assert session.description is known
+            session.disconnect()
+            session.connect()
+            assert device.requests[-1].WhichOneof("cmd") == "describe"
+            assert session.description is not known and session.description is not None
+
+
 def test_two_supervisors_share_one_bus_and_notifier(bus, notifier, device: FakeDevice) -> None:
     with sup_on(bus, notifier, source_address=0xF1) as a, sup_on(bus, notifier, source_address=0xF2) as b:
         assert set(device.sessions) == {0xF1, 0xF2}

@@ -702,9 +702,14 @@ class Gateway:
                 heard.append(f"{addr:#04x}")
                 continue
             self._used.add(addr)
+            # the observer read the description; a session's supervisor takes its copy
+            c = self.controllers.get(device)
+            known = c.observer.description if c is not None and c.observer is not None else None
+            if known is not None and not known.from_device:
+                known = None  # the host's stand-in: let this session try the device's own
             sup = Supervisor(self._bus, device=device, source_address=addr, notifier=self._notifier,
                              client_name=client_name, heartbeat_period_ms=self.cfg.heartbeat_period_ms,
-                             channel_name=self.channel)
+                             channel_name=self.channel, description=known)
             try:
                 await loop.run_in_executor(None, sup.open)
             except AddressInUseError:

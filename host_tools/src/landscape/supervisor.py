@@ -273,13 +273,19 @@ class Supervisor:
 
     `notifier`: share one can.Notifier between every stack and listener on the
     bus; when None the supervisor creates one and stops it on close.
+
+    `description`: the description of this same device that another supervisor read during
+    this run of it (the gateway's observer, for each OPC UA session's supervisor): the first
+    connect takes it instead of reading the device's largest answer (about 140 frames) again.
+    A later connect (after a dropped session; the device may have restarted) reads its own.
     """
 
     def __init__(self, bus: can.BusABC, *, device: int = DEFAULT_DEVICE,
                  source_address: int | None = None, notifier: can.Notifier | None = None,
                  client_name: str = "landscape", heartbeat_period_ms: int = 200, retries: int = 2,
                  timeout_s: float | None = None, channel_name: str | None = None,
-                 owns_bus: bool = False, disconnect_action: Enum | None = None) -> None:
+                 owns_bus: bool = False, disconnect_action: Enum | None = None,
+                 description: DeviceDescription | None = None) -> None:
         if retries < 0:
             raise ArgumentError("retries must be >= 0")
         if heartbeat_period_ms <= 0:
@@ -297,6 +303,7 @@ class Supervisor:
         #: reconnect of this object is the same client, another object is another client).
         self.nonce = secrets.randbits(64)
         self._hb_token = 0  # ConnectRes.heartbeat_token of the current session
+        self._given_description = description  # for the first connect only
         self._heard: dict[int, float] = {}  # supervisor address -> when its heartbeat was last heard
         self.client_name = client_name
         self.heartbeat_period_ms = heartbeat_period_ms
@@ -481,7 +488,8 @@ class Supervisor:
         self.connected = True
         self._start_heartbeat()
         self.description = None
-        self.description = self._read_description()
+        given, self._given_description = self._given_description, None
+        self.description = given if given is not None else self._read_description()
         self.connect_result = ConnectResult(rv, res)
         return self.connect_result
 
