@@ -113,6 +113,9 @@ def test_negative_codes_raise_their_subclass(bus, notifier, device: FakeDevice, 
             sup.get_tag_id()
         assert type(ei.value) is type(errors.error_for_code("x", code, ""))
         assert (ei.value.ret_code, ei.value.ret_msg, ei.value.command) == (code, "reason from the device", "getTagId")
+        if code == ls.CMD_NOT_CONNECTED_ERR:  # the device says it dropped the session: connect again first
+            assert not sup.connected
+            sup.connect()
         rv = sup.get_tag_id(check=False)
         assert (rv.ret_code, rv.ret_msg, rv.message, rv.result) == (code, "reason from the device", None, {})
 
@@ -274,6 +277,7 @@ def test_device_drops_owner_when_heartbeat_stops(bus, notifier, device: FakeDevi
         assert device.owner is None and 0xF1 not in device.sessions
         with pytest.raises(errors.NotConnectedError):
             sup.get_tag_id()
+        assert not sup.connected  # so the session daemon, the CLI and the gateway connect again
         sup.connect()  # a new session: seq starts again at 1 (connect), 2 (describe)
         assert [r.seq for r in device.requests[-2:]] == [1, 2] and sup.get_tag_id(check=False).seq == 3
 

@@ -17,6 +17,7 @@ import sys
 import textwrap
 import time
 from collections.abc import Callable, Iterator
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -42,8 +43,20 @@ def free_port() -> int:
         return int(s.getsockname()[1])
 
 
+@dataclass
+class GatewayRun:
+    url: str
+    proc: subprocess.Popen[str]
+    log: Path  # its stderr, readable while it runs
+
+
 @pytest.fixture
-def gateway(controller: Controller, tmp_path: Path) -> Iterator[str]:
+def gateway(gateway_run: GatewayRun) -> str:
+    return gateway_run.url
+
+
+@pytest.fixture
+def gateway_run(controller: Controller, tmp_path: Path) -> Iterator[GatewayRun]:
     port = free_port()
     cfg = tmp_path / "gateway.toml"
     cfg.write_text(textwrap.dedent(f"""\
@@ -56,19 +69,22 @@ def gateway(controller: Controller, tmp_path: Path) -> Iterator[str]:
         alice = "{hash_password('alice-pw', iterations=1000)}"
         bob = "{hash_password('bob-pw', iterations=1000)}"
         """))
-    proc = subprocess.Popen([str(CLI), "--interface", "slcan", "--channel", controller.pty, "gateway",
-                             "--config", str(cfg)], stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+    log = tmp_path / "gateway.log"
+    with open(log, "w") as err_file:
+        proc = subprocess.Popen([str(CLI), "--interface", "slcan", "--channel", controller.pty, "gateway",
+                                 "--config", str(cfg)], stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                                stderr=err_file, text=True)
     try:
         assert proc.stdout is not None
         first = proc.stdout.readline()
         m = re.match(r"gateway: (opc\.tcp://127\.0\.0\.1:\d+/landscape/) serving", first)
-        assert m, first + (proc.stderr.read() if proc.poll() is not None and proc.stderr else "")
-        yield m.group(1)
+        assert m, first + (log.read_text() if proc.poll() is not None else "")
+        yield GatewayRun(m.group(1), proc, log)
     finally:
         if proc.poll() is None:
             proc.send_signal(signal.SIGTERM)
-        out, err = proc.communicate(timeout=30)
+        out, _ = proc.communicate(timeout=30)
+        err = log.read_text()
         assert proc.returncode == 0, (out, err)
         assert "Traceback" not in err, err
         assert "never awaited" not in err, err  # a write left behind at shutdown
@@ -259,6 +275,50 @@ def test_a_second_client_is_refused_ownership_and_a_killed_session_is_dropped(ga
             out = await call(node, ns, "lock")
             assert out[0] >= 0, out
     asyncio.run(run())
+
+
+async def sessions_dropped(node: Any, ns: int) -> int:
+    """The device's count of supervisors it dropped for a lost heartbeat (sendCommand status)."""
+    out = await call(node, ns, "sendCommand", "status")
+    assert out[0] >= 0, out
+    m = re.search(r"sessions_dropped=(\d+)", json.loads(out[5])["result"])
+    assert m, out
+    return int(m.group(1))
+
+
+def test_a_stalled_gateway_connects_its_observer_and_a_sessions_supervisor_again(gateway_run: GatewayRun) -> None:
+    """The gateway stops for longer than the device's heartbeat time-out (1 s) but shorter than its
+    own judgement of a silent controller (2 s): the device drops the observer and alice's supervisor.
+    The observer is connected again within OBSERVER_CHECK_S (so alarms keep coming), alice's next
+    call says her session was dropped and the one after works."""
+    async def run() -> None:
+        async with Client(user_url(gateway_run.url, "alice", "alice-pw"), timeout=UA_TIMEOUT_S) as alice:
+            node, ns = await controller_node(alice)
+            supervisors = await node.get_child(f"{ns}:Supervisors")
+            before = await sessions_dropped(node, ns)  # alice's supervisor connects
+            deadline = time.monotonic() + 10
+            while await supervisors.read_value() != 2:  # the observer and alice's
+                assert time.monotonic() < deadline, await supervisors.read_value()
+                await asyncio.sleep(0.1)
+            gateway_run.proc.send_signal(signal.SIGSTOP)
+            try:
+                time.sleep(1.6)
+            finally:
+                gateway_run.proc.send_signal(signal.SIGCONT)
+            first = await call(node, ns, "getMotionControlState")
+            assert first[1] == "CMD_NOT_CONNECTED_ERR", first
+            second = await call(node, ns, "getMotionControlState")
+            assert second[0] >= 0, second
+            assert await sessions_dropped(node, ns) == before + 2  # the stall did drop both
+            deadline = time.monotonic() + 10
+            while await supervisors.read_value() != 2:
+                assert time.monotonic() < deadline, ("the observer did not connect again",
+                                                     await supervisors.read_value())
+                await asyncio.sleep(0.1)
+    asyncio.run(run())
+    log = gateway_run.log.read_text()
+    assert "controller 0x10 dropped the gateway's observer" in log, log
+    assert "is gone" not in log, log  # the stall was shorter than the gateway's own silence limit
 
 
 async def subscribe_notices(client: Client, node: Any, ns: int) -> Events:

@@ -19,7 +19,10 @@ controllerLost event and a log line say so, its supervisors leave; with none lef
 every RELINK_S, and its next HEARTBEAT brings it back (controllerBack, a new observer).
 
 Threads: python-can's Notifier, each Supervisor's own. They reach the event loop only through
-loop.call_soon_threadsafe; blocking Supervisor calls run in the loop's executor. Nothing polls.
+loop.call_soon_threadsafe; blocking Supervisor calls run in the loop's executor. One thing polls: every
+OBSERVER_CHECK_S each observer asks its controller a query, since an observer sends no requests that
+would find out that the device dropped its session (its heartbeats late: this process stalled); then
+it connects again. A session's supervisor finds out on its next call and connects again on the one after.
 """
 from __future__ import annotations
 
@@ -27,6 +30,7 @@ import asyncio
 import contextvars
 import datetime
 import errno
+import functools
 import json
 import logging
 import signal
@@ -115,6 +119,10 @@ CONTROLLER_BACK = "controllerBack"
 DEFAULT_SILENCE_S = 1.0
 #: How often the gateway reopens its link while no controller beats.
 RELINK_S = 1.0
+#: How often the gateway asks each controller whether its observer's session still lives: a device
+#: drops a supervisor whose heartbeats stop for longer than its time-out (this process stalled, the
+#: bus lost them), and an observer sends no requests of its own that would find out.
+OBSERVER_CHECK_S = 2.0
 #: The status of a gone controller's values.
 GONE = StatusCodes.BadNoCommunication
 #: The variables of a controller that the telemetry feeds (Address and Description stay Good).
@@ -381,6 +389,7 @@ class Gateway:
             raise
         self._notifier = SharedNotifier(self._bus, [self._on_frame], timeout=0.05, loop=None)
         self._spawn(self._event_pump(), "the event pump")
+        self._spawn(self._watch_observers(), "watching the observers")
 
     async def run(self) -> None:
         """Serve until stop(); then close every session's supervisor (the device sees each leave)."""
@@ -587,6 +596,32 @@ class Gateway:
             self._pending.discard(c.address)
         self._arm(c)
 
+    async def _watch_observers(self) -> None:
+        """Every OBSERVER_CHECK_S, a query from each live controller's observer: when the device answers
+        that it dropped the observer's session (Supervisor.connected turns False), connect it again, so
+        the description and the alarms keep reaching the sessions."""
+        loop = asyncio.get_running_loop()
+        while not self._closing:
+            await asyncio.sleep(OBSERVER_CHECK_S)
+            for c in list(self.controllers.values()):
+                observer = c.observer
+                if observer is None or c.lost is not None or self._closing:
+                    continue
+                try:
+                    await loop.run_in_executor(None, functools.partial(
+                        observer.request, "get_motion_control_state", check=False))
+                    if observer.connected or c.observer is not observer:
+                        continue
+                    log.warning("controller %#04x dropped the gateway's observer %#04x (its heartbeats did not "
+                                "reach the controller in time: this process stalled or the bus lost them); "
+                                "connecting it again", c.address, observer.source_address)
+                    await loop.run_in_executor(None, observer.connect)
+                    log.info("controller %#04x: the observer %#04x is connected again", c.address,
+                             observer.source_address)
+                except LandscapeError as exc:
+                    # silence is the silence timer's to judge (_check_silence); this says only what failed
+                    log.info("controller %#04x: checking the observer's session: %s", c.address, exc)
+
     # ------------------------------------------------------------ the address space of a controller
 
     async def _add_controller(self, address: int) -> None:
@@ -741,6 +776,20 @@ class Gateway:
             sup = self._sups.get(key)
             if sup is not None and sup.connected:
                 return sup
+            if sup is not None:
+                # the device dropped this session's supervisor (a call was answered CMD_NOT_CONNECTED_ERR):
+                # connect it again from its address, as the CLI's session does
+                try:
+                    await asyncio.get_running_loop().run_in_executor(None, sup.connect)
+                    log.info("session %s: supervisor %#04x of %#04x is connected again", _label(session),
+                             sup.source_address, device)
+                    return sup
+                except LandscapeError as exc:
+                    log.warning("session %s: supervisor %#04x of %#04x did not connect again (%s): a new one "
+                                "takes its place", _label(session), sup.source_address, device, exc)
+                    del self._sups[key]
+                    await asyncio.get_running_loop().run_in_executor(None, sup.close)
+                    self._used.discard(sup.source_address)
             who = session.user.name or "user"
             sup = await self._open_supervisor(device, f"opcua:{who}"[:24])
             sup.on_notice(lambda n: self._notice(device, sup.source_address, n, unsolicited=False))

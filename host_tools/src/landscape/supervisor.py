@@ -682,6 +682,13 @@ class Supervisor:
             req.seq = self._seq
             resp = self._transact(cmd, req, timeout_s)
         rv = self._retval(cmd, resp)
+        if rv.ret_code == pb.CMD_NOT_CONNECTED_ERR and cmd.field not in ("connect", "disconnect") and self.connected:
+            # The device dropped this session (its heartbeats stopped reaching it for longer than its
+            # time-out: this process stalled, or the bus lost them). Every front end connects again
+            # on its next request when `connected` is False (session daemon, CLI, gateway).
+            log.warning("the device at %#04x dropped this session (%#04x): its heartbeats did not reach it in "
+                        "time; the next request connects again", self.device, self.source_address)
+            self.connected = False
         if check and rv.ret_code < 0:
             raise error_for_code(cmd.name, rv.ret_code, rv.ret_msg)
         return rv
