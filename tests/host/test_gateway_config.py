@@ -14,9 +14,18 @@ import pytest
 from asyncua.crypto.permission_rules import UserRole
 from google.protobuf.descriptor import FieldDescriptor
 
+from landscape._generated import landscape_pb2 as pb
 from landscape.bus import BusSpec
-from landscape.errors import AddressInUseError, ArgumentError
-from landscape.gateway import Gateway, GatewayUsers, _listen_hint, argument_of, fields_of, rsvp_arguments
+from landscape.errors import ArgumentError
+from landscape.gateway import (
+    Gateway,
+    GatewayUsers,
+    PoolExhaustedError,
+    _listen_hint,
+    argument_of,
+    fields_of,
+    rsvp_arguments,
+)
 from landscape.gateway_config import (
     DEFAULT_POOL,
     GatewayConfigError,
@@ -205,13 +214,28 @@ def test_a_full_pool_says_which_addresses_are_held_and_heard() -> None:
         gw._bus, gw._notifier = bus, notifier
         gw._used = {0xF7}
         gw._heard = {0xF8: time.monotonic(), 0xF9: time.monotonic()}
-        with pytest.raises(AddressInUseError) as err:
+        with pytest.raises(PoolExhaustedError) as err:
             asyncio.run(gw._open_supervisor(0x10, "t"))
     finally:
         notifier.stop()
         bus.shutdown()
+    assert err.value.ret_code == pb.CMD_NO_RESOURCES_ERR  # a shortage, as the device's own table-full refusal
     msg = str(err.value)
-    assert "held by this gateway's sessions: 1" in msg, msg
+    assert "held by this gateway: 0xf7 (a session)" in msg, msg
     assert "another supervisor: 0xf8, 0xf9" in msg, msg
     assert "refused by the controller as in use: none" in msg, msg
     assert "widen [supervisors] pool" in msg, msg
+
+
+def test_the_log_names_a_session_by_its_clients_address_and_user() -> None:
+    """asyncua names a session by its peer (host, port): the log shows it as host:port and the user."""
+    from types import SimpleNamespace
+
+    from landscape.gateway import _label
+
+    alice = SimpleNamespace(name=("127.0.0.1", 60740), user=SimpleNamespace(name="alice", role=UserRole.User))
+    anon = SimpleNamespace(name=("::1", 4841, 0, 0), user=SimpleNamespace(name=None, role=UserRole.Anonymous))
+    other = SimpleNamespace(name="Session1", user=SimpleNamespace(name=None, role=UserRole.User))
+    assert _label(alice) == "127.0.0.1:60740 (alice)"  # type: ignore[arg-type]
+    assert _label(anon) == "::1:4841 (anonymous)"  # type: ignore[arg-type]
+    assert _label(other) == "Session1 (user)"  # type: ignore[arg-type]

@@ -400,7 +400,9 @@ def test_a_controller_that_goes_turns_bad_and_recovers_when_it_comes_back(gatewa
     asyncio.run(run())
 
 
-def test_bad_arguments_are_refused_by_name_and_anonymous_first(gateway: str) -> None:
+def test_bad_arguments_are_refused_by_name_and_anonymous_first(gateway_run: GatewayRun) -> None:
+    gateway = gateway_run.url
+
     async def run() -> None:
         async with Client(gateway, timeout=UA_TIMEOUT_S) as anon:
             node, ns = await controller_node(anon)
@@ -428,6 +430,11 @@ def test_bad_arguments_are_refused_by_name_and_anonymous_first(gateway: str) -> 
             state = await node.get_child(f"{ns}:State")
             assert await state.read_value() != "MOVING"
     asyncio.run(run())
+    log = gateway_run.log.read_text()
+    # who was refused, by address and user, and what to do about it
+    assert re.search(r"refused a method call from anonymous session 127\.0\.0\.1:\d+ \(anonymous\): commands "
+                     r"need a user", log), log
+    assert re.search(r"moveAbsolute from session 127\.0\.0\.1:\d+ \(alice\): ", log), log
 
 
 def test_a_full_supervisor_table_is_the_devices_refusal(gateway: str) -> None:

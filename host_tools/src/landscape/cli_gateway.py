@@ -67,7 +67,8 @@ async def _serve(cfg: GatewayConfig, spec: BusSpec, json_out: bool) -> None:
         click.echo(json.dumps({"command": "gateway", "url": gw.url, "bus": spec.describe()}))
     else:
         users = len(cfg.users) + len(cfg.certificate_users)
-        click.echo(f"gateway: {gw.url} serving the controllers on {spec.describe()} ({users} users, anonymous "
+        who = f"{users} user" + ("" if users == 1 else "s")
+        click.echo(f"gateway: {gw.url} serving the controllers on {spec.describe()} ({who}, anonymous "
                    f"{'read-only' if cfg.allow_anonymous else 'refused'}, security {', '.join(cfg.security)}); "
                    f"Ctrl-C ends")
     sys.stdout.flush()

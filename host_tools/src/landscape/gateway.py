@@ -136,6 +136,14 @@ class GatewayError(LandscapeError):
 #: How a non-blocking command's method answers (docs/gateway.md "Methods").
 NON_BLOCKING = "non-blocking: returns CMD_STARTED_OK, then its final event or alarm (RefSeq = the call's Seq)"
 
+class PoolExhaustedError(CommandError):
+    """No address of the gateway's pool is free for a session's supervisor. Answered as the device
+    answers a full supervisor table (CMD_NO_RESOURCES_ERR) although no device was asked; the message
+    names the addresses held, heard and refused."""
+
+    code = pb.CMD_NO_RESOURCES_ERR
+
+
 #: A pool address whose heartbeat another supervisor sent this recently is taken: the gateway skips it.
 HEARD_HOLDS_S = 1.0
 
@@ -216,8 +224,11 @@ class GatewaySession(InternalSession):
 
 
 def _label(session: InternalSession) -> str:
-    """A session as the log names it: the client's session name and who it is."""
-    return f"{session.name!r} ({session.user.name or session.user.role.name.lower()})"
+    """A session as the log names it: where its client connects from and who it is
+    ("127.0.0.1:60740 (alice)"; asyncua names a session by its peer address)."""
+    peer = session.name
+    where = f"{peer[0]}:{peer[1]}" if isinstance(peer, tuple) and len(peer) >= 2 else str(peer)
+    return f"{where} ({session.user.name or session.user.role.name.lower()})"
 
 
 class GatewayUsers(UserManager):
@@ -755,11 +766,14 @@ class Gateway:
                 self._used.discard(addr)
                 raise
             return sup
-        raise AddressInUseError(
-            "connect", pb.CMD_NOT_OWNER_ERR,
-            f"no free address in the gateway's pool {', '.join(f'{a:#04x}' for a in self.cfg.pool)} (held by this "
-            f"gateway's sessions: {len(self._used)}; heard beating on the bus from another supervisor: "
-            f"{', '.join(heard) or 'none'}; refused by the controller as in use: {', '.join(refused) or 'none'}): "
+        observers = {c.observer.source_address: c.address for c in self.controllers.values() if c.observer}
+        held = [f"{a:#04x} (the observer of {observers[a]:#04x})" if a in observers else f"{a:#04x} (a session)"
+                for a in sorted(self._used)]
+        raise PoolExhaustedError(
+            "connect", pb.CMD_NO_RESOURCES_ERR,
+            f"no free address in the gateway's pool {', '.join(f'{a:#04x}' for a in self.cfg.pool)}; held by this "
+            f"gateway: {', '.join(held) or 'none'}; heard beating on the bus from another supervisor: "
+            f"{', '.join(heard) or 'none'}; refused by the controller as in use: {', '.join(refused) or 'none'}: "
             f"widen [supervisors] pool or close OPC UA sessions")
 
     def _create_session(self, name: str, user: User = User(role=UserRole.Anonymous),  # noqa: B008
@@ -822,6 +836,8 @@ class Gateway:
         if session is None:
             return _status(StatusCodes.BadSessionIdInvalid)
         if session.user.role == UserRole.Anonymous:
+            log.warning("refused a method call from anonymous session %s: commands need a user ([users] or "
+                        "[[certificate_users]] in the gateway's configuration)", _label(session))
             return _status(StatusCodes.BadUserAccessDenied)
         return session
 
@@ -854,7 +870,8 @@ class Gateway:
                 # call with the device's code and text, as for any refusal of the command itself
                 log.warning("%s from session %s: %s", cmd.name, _label(session), exc)
                 return [ua.Variant(exc.ret_code, ua.VariantType.Int32), ua.Variant(exc.ret_name, ua.VariantType.String),
-                        ua.Variant(str(exc), ua.VariantType.String), ua.Variant(0, ua.VariantType.UInt32),
+                        ua.Variant(f"{exc.command}: {exc.ret_msg}", ua.VariantType.String),
+                        ua.Variant(0, ua.VariantType.UInt32),
                         ua.Variant(0, ua.VariantType.UInt32), ua.Variant("{}", ua.VariantType.String)]
             except LandscapeError as exc:
                 log.warning("%s from session %s: %s", cmd.name, _label(session), exc)
