@@ -300,9 +300,12 @@ def test_a_stalled_gateway_connects_its_observer_and_a_sessions_supervisor_again
             while await supervisors.read_value() != 2:  # the observer and alice's
                 assert time.monotonic() < deadline, await supervisors.read_value()
                 await asyncio.sleep(0.1)
+            # The device drops a supervisor 1 s after its last heartbeat (sent every 200 ms); the gateway
+            # counts the controller gone 2 s after its last frame (HEARTBEAT every 200 ms). 1.4 s leaves
+            # 0.2-0.4 s on either side.
             gateway_run.proc.send_signal(signal.SIGSTOP)
             try:
-                time.sleep(1.6)
+                time.sleep(1.4)
             finally:
                 gateway_run.proc.send_signal(signal.SIGCONT)
             first = await call(node, ns, "getMotionControlState")
