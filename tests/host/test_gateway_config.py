@@ -18,6 +18,7 @@ from landscape._generated import landscape_pb2 as pb
 from landscape.bus import BusSpec
 from landscape.errors import ArgumentError
 from landscape.gateway import (
+    ArgumentShapeError,
     Gateway,
     GatewayUsers,
     PoolExhaustedError,
@@ -167,9 +168,10 @@ def test_method_arguments_become_request_fields() -> None:
 def test_a_string_is_not_an_array() -> None:
     """Issue 24: "000000" for moveAbsolute's values moved the arm to zeros (one value per character)."""
     move, load = lookup("moveAbsolute"), lookup("pathLoad")
-    with pytest.raises(ArgumentError, match=r"moveAbsolute\.values: an array \(Double\[\]\) is expected, got str"):
+    with pytest.raises(ArgumentShapeError,
+                       match=r"moveAbsolute\.values: an array \(Double\[\]\) is expected, got str"):
         fields_of(move, ["p1", "JOINT_FRAME", "000000"])
-    with pytest.raises(ArgumentError, match=r"pathLoad\.tags: an array \(String\[\]\) is expected"):
+    with pytest.raises(ArgumentShapeError, match=r"pathLoad\.tags: an array \(String\[\]\) is expected"):
         fields_of(load, ["r", "JOINT_FRAME", "JOINT_MOTION", "ABSOLUTE_DATA", 1, '{"joints": [0, 0, 0, 0, 0, 0]}'])
     assert fields_of(move, ["p1", "JOINT_FRAME", (0.0,) * 6])["values"] == [0.0] * 6
 
@@ -179,6 +181,10 @@ def test_an_unknown_enum_value_names_the_argument() -> None:
     with pytest.raises(ArgumentError, match=r"^setSpeed\.attribute: 'WARP_SPEED' is not a SpeedType value \(one "
                                             r"of PERCENT_SPEED, LINEAR_SPEED, ANGULAR_SPEED\)$"):
         fields_of(lookup("setSpeed"), [50.0, "WARP_SPEED"])
+    # a value of the right shape: the call answers CMD_PARAM_ERR with this text, not BadInvalidArgument
+    with pytest.raises(ArgumentError) as err:
+        fields_of(lookup("setSpeed"), [50.0, "WARP_SPEED"])
+    assert not isinstance(err.value, ArgumentShapeError)
     assert fields_of(lookup("setSpeed"), [50.0, "PERCENT_SPEED"]) == {"speed": 50.0, "attribute": "PERCENT_SPEED"}
 
 

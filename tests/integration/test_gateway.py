@@ -430,6 +430,13 @@ def test_bad_arguments_are_refused_by_name_and_anonymous_first(gateway_run: Gate
                 await call(node, ns, "pathLoad", "r", "JOINT_FRAME", "JOINT_MOTION", "ABSOLUTE_DATA", 1,
                            '{"tag_name": "a", "joints": [0.1, 0, 0, 0, 0, 0]}')
             assert refused.value.code == ua.StatusCodes.BadInvalidArgument
+            # a value of the right shape that does not fit: the device's way, CMD_PARAM_ERR with the reason,
+            # so a client on the LAN reads which argument and why
+            out = await call(node, ns, "moveAbsolute", "p1", "NOT_A_FRAME", [0.1] * 6)
+            assert out[:2] == [pb.CMD_PARAM_ERR, "CMD_PARAM_ERR"], out
+            assert "moveAbsolute.frame: 'NOT_A_FRAME' is not a ReferenceFrame value (one of JOINT_FRAME" in out[2], out
+            out = await call(node, ns, "moveAbsolute", "p" * 80, "JOINT_FRAME", [0.1] * 6)
+            assert out[1] == "CMD_PARAM_ERR" and "point_name" in out[2] and "63" in out[2], out
             state = await node.get_child(f"{ns}:State")
             assert await state.read_value() != "MOVING"
     asyncio.run(run())

@@ -57,7 +57,7 @@ from google.protobuf.descriptor import FieldDescriptor
 from . import telemetry as tm
 from ._generated import landscape_pb2 as pb
 from .bus import BusSpec, SharedNotifier, open_bus, release_bus
-from .errors import AddressInUseError, ArgumentError, CommandError, LandscapeError
+from .errors import AddressInUseError, ArgumentError, CommandError, LandscapeError, ret_name
 from .gateway_config import GatewayConfig
 from .registry import COMMANDS, Command, build_request, enum_choices, field_enum_type, is_repeated, message_to_dict
 from .supervisor import ALARM_KINDS, RSVP_KINDS, Supervisor
@@ -171,19 +171,27 @@ def argument_of(fd: FieldDescriptor) -> ua.Argument:
     return arg
 
 
+class ArgumentShapeError(ArgumentError):
+    """A method call's arguments do not have the shape of the method's InputArguments (too many, a scalar
+    for an array, a String that is no JSON object): the client's program is wrong, and the call is
+    BadInvalidArgument. A value of the right shape that does not fit (an enum name, a range, a length)
+    is an ArgumentError, answered as the device answers it: CMD_PARAM_ERR with the reason."""
+
+
 def fields_of(cmd: Command, args: Sequence[Any]) -> dict[str, Any]:
     """The request fields of `cmd` from a method call's input arguments (in schema order; missing trailing
-    ones and "" for an enum stay absent). ArgumentError naming the field for a value that does not fit."""
+    ones and "" for an enum stay absent). ArgumentShapeError for arguments of the wrong shape, ArgumentError
+    for a value that does not fit; each names the field."""
     fds = cmd.fields()
     if len(args) > len(fds):
-        raise ArgumentError(f"{cmd.name} takes {len(fds)} arguments ({', '.join(f.name for f in fds) or 'none'}), "
+        raise ArgumentShapeError(f"{cmd.name} takes {len(fds)} arguments ({', '.join(f.name for f in fds) or 'none'}), "
                             f"got {len(args)}")
     out: dict[str, Any] = {}
     for fd, value in zip(fds, args, strict=False):
         if value is None or (fd.type == FieldDescriptor.TYPE_ENUM and value == ""):
             continue
         if is_repeated(fd) and not isinstance(value, (list, tuple)):
-            raise ArgumentError(f"{cmd.name}.{fd.name}: an array ({_VARIANT[fd.type].name}[]) is expected, got "
+            raise ArgumentShapeError(f"{cmd.name}.{fd.name}: an array ({_VARIANT[fd.type].name}[]) is expected, got "
                                 f"{type(value).__name__} {value!r}: pass one element per item")
         if fd.type == FieldDescriptor.TYPE_MESSAGE:
             items = value if is_repeated(fd) else [value]
@@ -192,7 +200,7 @@ def fields_of(cmd: Command, args: Sequence[Any]) -> dict[str, Any]:
                 try:
                     parsed.append(json.loads(item))
                 except (TypeError, json.JSONDecodeError) as exc:
-                    raise ArgumentError(f"{cmd.name}.{fd.name}: {item!r} is not a JSON object ({exc})") from None
+                    raise ArgumentShapeError(f"{cmd.name}.{fd.name}: {item!r} is not a JSON object ({exc})") from None
             value = parsed if is_repeated(fd) else parsed[0]
         out[fd.name] = list(value) if is_repeated(fd) and not isinstance(value, list) else value
     build_request(cmd, **out)  # every value checked (enum names, numbers, ranges) before any supervisor connects
@@ -862,17 +870,18 @@ class Gateway:
                 sup = await self._session_supervisor(session, device)
                 rv = await asyncio.get_running_loop().run_in_executor(
                     None, lambda: sup.request(cmd.field, check=False, **fields))
-            except ArgumentError as exc:
+            except ArgumentShapeError as exc:
                 log.warning("%s from session %s: %s", cmd.name, _label(session), exc)
                 return _failed(StatusCodes.BadInvalidArgument, pb.CMD_PARAM_ERR, str(exc))
+            except ArgumentError as exc:
+                # a value that does not fit: answered as the device answers one, so a client on the LAN reads why
+                log.warning("%s from session %s: %s", cmd.name, _label(session), exc)
+                return _refused(pb.CMD_PARAM_ERR, str(exc))
             except CommandError as exc:
                 # the device refused this session's connect (its supervisor table is full, ...): a good
                 # call with the device's code and text, as for any refusal of the command itself
                 log.warning("%s from session %s: %s", cmd.name, _label(session), exc)
-                return [ua.Variant(exc.ret_code, ua.VariantType.Int32), ua.Variant(exc.ret_name, ua.VariantType.String),
-                        ua.Variant(f"{exc.command}: {exc.ret_msg}", ua.VariantType.String),
-                        ua.Variant(0, ua.VariantType.UInt32),
-                        ua.Variant(0, ua.VariantType.UInt32), ua.Variant("{}", ua.VariantType.String)]
+                return _refused(exc.ret_code, f"{exc.command}: {exc.ret_msg}")
             except LandscapeError as exc:
                 log.warning("%s from session %s: %s", cmd.name, _label(session), exc)
                 return _failed(StatusCodes.BadCommunicationError, pb.CMD_ERR, str(exc))
@@ -1005,6 +1014,13 @@ def _close_bus(notifier: can.Notifier | None, bus: can.BusABC | None) -> None:
 
 def _session_key(session: InternalSession) -> int:
     return hash(session.session_id)
+
+
+def _refused(code: int, msg: str) -> list[ua.Variant]:
+    """A good call's outputs for a refusal that no device answer carries (no Seq, no epoch)."""
+    return [ua.Variant(code, ua.VariantType.Int32), ua.Variant(ret_name(code), ua.VariantType.String),
+            ua.Variant(msg, ua.VariantType.String), ua.Variant(0, ua.VariantType.UInt32),
+            ua.Variant(0, ua.VariantType.UInt32), ua.Variant("{}", ua.VariantType.String)]
 
 
 def _failed(status: int, code: int, msg: str) -> ua.CallMethodResult:
