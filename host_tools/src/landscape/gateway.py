@@ -1026,9 +1026,7 @@ def _refused(code: int, msg: str) -> list[ua.Variant]:
 def _failed(status: int, code: int, msg: str) -> ua.CallMethodResult:
     res = ua.CallMethodResult()
     res.StatusCode = _status(status)
-    res.OutputArguments = [ua.Variant(code, ua.VariantType.Int32), ua.Variant(pb.RetCode.Name(code)),
-                           ua.Variant(msg), ua.Variant(0, ua.VariantType.UInt32),
-                           ua.Variant(0, ua.VariantType.UInt32), ua.Variant("{}")]
+    res.OutputArguments = _refused(code, msg)
     return res
 
 
