@@ -9,6 +9,7 @@ must agree with what getMotionControlState reports."""
 from __future__ import annotations
 
 import math
+import statistics
 import threading
 import time
 from collections.abc import Iterator
@@ -132,8 +133,13 @@ def check_heartbeats(found: list[tuple[float, str, dict[str, Any]]], state: str,
     assert int(CAPTURE_S / HEARTBEAT_PERIOD_S) - 1 <= len(hbs) <= int(CAPTURE_S / HEARTBEAT_PERIOD_S) + 1, hbs
     for (_, a), (_, b) in zip(hbs, hbs[1:], strict=False):
         assert b["hb_counter"] == (a["hb_counter"] + 1) % 256
+    # The device sends each heartbeat 200 ms after the last. The times here are when this process's reader
+    # thread got the frames: a starved reader delivers two at once (CI under ASan: gaps 0.14, 0.20, 0.37,
+    # 0.06, 0.21 s, a 0.17 s delay on one frame and none lost). One late frame moves two gaps, one up and
+    # one down, and leaves the median where the device put it; the counters above prove none was missed.
+    # Per-frame jitter is host timing on a shared machine, a figure and not a test.
     gaps = [tb - ta for (ta, _), (tb, _) in zip(hbs, hbs[1:], strict=False)]
-    assert all(0.1 < g < 0.3 for g in gaps), gaps
+    assert 0.75 * HEARTBEAT_PERIOD_S < statistics.median(gaps) < 1.25 * HEARTBEAT_PERIOD_S, gaps
     for _, s in hbs:
         assert s["hb_state"] == pb.State.Value(state)
         assert s["hb_role"] == 0
