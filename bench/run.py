@@ -30,6 +30,7 @@ import b_blend
 import b_cmd
 import b_cycle
 import b_footprint
+import b_heartbeat
 import b_isotp
 import b_jitter
 import b_otg
@@ -64,6 +65,7 @@ BENCHES = [
     Bench(8, "Real-time jitter", b_jitter.bench_jitter, ("bench_rt_jitter",)),
     Bench(9, "Blended paths", b_blend.bench_blend, ("bench_blend",)),
     Bench(10, "State-to-state trajectories vs ruckig", b_otg.bench_otg, ("bench_otg",)),
+    Bench(11, "Heartbeat period", b_heartbeat.bench_heartbeat, ("landscaped",)),
 ]
 
 
