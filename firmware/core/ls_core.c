@@ -945,6 +945,20 @@ static int32_t dispatch(ls_core_t *core, uint8_t addr, ls_call_t *call, ls_Reque
     if ((d->states & (uint8_t)core->state) == 0u) {
         char valid[64];
         describe_states(d->states, valid, sizeof valid);
+        /* The way to the state is the owner's to take (release, activate,
+         * ...): a supervisor that is not the owner is told who is. */
+        if (core->owner >= 0 && core->owner != call->sup) {
+            return ls_reply(
+                call, ls_RetCode_CMD_WRONG_STATE_ERR,
+                "%s is valid in %s, the device is %s and supervisor 0x%02X (%s) owns it; queries still work", d->name,
+                valid, ls_State_name(core->state), core->sessions[core->owner].addr, core->sessions[core->owner].name);
+        }
+        if (core->owner < 0 && core->held) {
+            return ls_reply(call, ls_RetCode_CMD_WRONG_STATE_ERR,
+                            "%s is valid in %s, the device is %s: 0x%02X (%s) was lost and keeps the lock until it "
+                            "connects again",
+                            d->name, valid, ls_State_name(core->state), core->held_addr, core->held_name);
+        }
         return ls_reply(call, ls_RetCode_CMD_WRONG_STATE_ERR, "%s is valid in %s, the device is %s: %s", d->name, valid,
                         ls_State_name(core->state), how_to_reach(d->states, core->state));
     }

@@ -2121,6 +2121,17 @@ static const char *fault_log_text(void)
 }
 
 /* `stop`: the drives stay on and the lock is kept for the owner's address until it connects again. */
+/* Send the request being built from `addr`; assert the answer's code and, when `text` is not NULL, its text. */
+static const ls_Response *expect_answer(uint8_t addr, ls_RetCode code, const char *text)
+{
+    const ls_Response *r = must(addr);
+    assert_int_equal(r->ret_code, code);
+    if (text != NULL) {
+        assert_string_equal(r->ret_msg, text);
+    }
+    return r;
+}
+
 static void test_disconnect_action_stop_keeps_drives_and_lock(void **state)
 {
     (void)state;
@@ -2148,6 +2159,10 @@ static void test_disconnect_action_stop_keeps_drives_and_lock(void **state)
     assert_int_equal(r->ret_code, ls_RetCode_CMD_NOT_OWNER_ERR);
     assert_string_equal(r->ret_msg, "setSpeed needs the owner: 0x21 (test-21) was lost and keeps the lock "
                                     "(disconnect action stop) until it connects again");
+    req(ls_Request_lock_tag);
+    expect_answer(HOST_B, ls_RetCode_CMD_WRONG_STATE_ERR,
+                  "lock is valid in UNLOCKED, the device is RESTING: 0x21 (test-21) was lost and keeps the lock until "
+                  "it connects again");
     /* nobody left but the lock is held: not IDLE */
     req(ls_Request_disconnect_tag);
     assert_int_equal(must(HOST_B)->ret_code, ls_RetCode_CMD_EXEC_OK);
@@ -2160,6 +2175,30 @@ static void test_disconnect_action_stop_keeps_drives_and_lock(void **state)
     sp->speed = 50.0;
     sp->has_speed = sp->has_attribute = true; /* PERCENT_SPEED */
     assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
+}
+
+/* Outside a command's states, the owner is told the way there, anyone else whose the way is. */
+static void test_wrong_state_names_the_owner_to_the_others(void **state)
+{
+    (void)state;
+    setup_core(ls_State_LOCKED);
+    req(ls_Request_lock_tag);
+    expect_answer(HOST_B, ls_RetCode_CMD_WRONG_STATE_ERR,
+                  "lock is valid in UNLOCKED, the device is LOCKED and supervisor 0x21 (test-21) owns it; queries "
+                  "still work");
+    req(ls_Request_deactivate_tag);
+    const ls_Response *r = expect_answer(HOST_B, ls_RetCode_CMD_WRONG_STATE_ERR, NULL);
+    assert_non_null(strstr(r->ret_msg, "the device is LOCKED and supervisor 0x21 (test-21) owns it"));
+    /* the owner gets the way there */
+    req(ls_Request_lock_tag);
+    expect_answer(HOST_A, ls_RetCode_CMD_WRONG_STATE_ERR,
+                  "lock is valid in UNLOCKED, the device is LOCKED: release the device first");
+    /* no owner: the way there */
+    g_core.owner = -1;
+    g_core.state = ls_State_UNLOCKED;
+    req(ls_Request_activate_tag);
+    expect_answer(HOST_B, ls_RetCode_CMD_WRONG_STATE_ERR,
+                  "activate is valid in LOCKED, the device is UNLOCKED: lock the device first");
 }
 
 /* `stop` during a motion: it pauses along the path, is dropped with the drives on, then the notices. */
@@ -2645,6 +2684,7 @@ int main(void)
         cmocka_unit_test_setup(test_units_belong_to_the_session, setup_locked),
         cmocka_unit_test(test_liveness_heartbeats_only_and_the_stated_period),
         cmocka_unit_test(test_disconnect_action_stop_keeps_drives_and_lock),
+        cmocka_unit_test(test_wrong_state_names_the_owner_to_the_others),
         cmocka_unit_test(test_disconnect_action_stop_during_a_motion),
         cmocka_unit_test(test_disconnect_action_stop_deactivate),
         cmocka_unit_test(test_connect_narrows_the_disconnect_action),
