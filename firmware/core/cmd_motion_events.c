@@ -13,14 +13,20 @@
 #include "ls_kin.h"
 #include "ls_units.h"
 
+#define LS_JOINT_TEXT_ZERO 1e-9
+
 static void joints_text(const ls_core_t *core, const double q[LS_N_JOINTS], char *out, size_t cap)
 {
-    /* Fit the notice's 64 characters: fewer digits when needed. */
+    /* Fit the notice's 64 characters: fewer digits when needed. A value
+     * below LS_JOINT_TEXT_ZERO (far below any encoder's resolution, e.g. a
+     * joint the simulation holds at 2.6e-20 rad) is written 0. */
+    const double per_unit = ls_units_to_si_angular(ls_core_run_units(core).angular, 1.0);
     for (int prec = 6; prec >= 3; prec--) {
         size_t len = (size_t)ls_fmt_print(out, cap, "joints=");
         for (int j = 0; j < LS_N_JOINTS && len < cap; j++) {
+            const double v = q[j] / per_unit;
             len += (size_t)ls_fmt_print(out + len, cap - len, "%s%.*g", j ? "," : "", prec,
-                                        q[j] / ls_units_to_si_angular(ls_core_run_units(core).angular, 1.0));
+                                        fabs(v) < LS_JOINT_TEXT_ZERO ? 0.0 : v);
         }
         if (len < cap) {
             return;

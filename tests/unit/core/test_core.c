@@ -2545,6 +2545,22 @@ static void test_path_move_cycles_absent_is_one_zero_is_a_dry_run_that_says_so(v
     assert_false(g_ctl.plan_slot.dry_run);
 }
 
+/* The final notice's joints: what a user reads, so no 2.6e-20 for a joint held at 0. */
+static void test_final_notice_writes_a_joint_at_rest_as_0(void **state)
+{
+    (void)state;
+    const char *msg;
+    const uint32_t seq = start_tagged_path(false, 0, &msg);
+    size_t from = g_nrx, n;
+    ls_motion_event_t done = { .kind = LS_MEV_DONE,
+                               .ref_seq = seq,
+                               .q_rad = { 2.57046e-20, -0.3, 0.6, 2.95667e-17, 0.9, -1e-12 } };
+    ls_core_on_motion_event(&g_core, &done);
+    const ls_Notice *fin = the_final(from, seq, &n);
+    assert_non_null(fin);
+    assert_true(has_data(fin, "joints=0,-0.3,0.6,0,0.9,0"));
+}
+
 static void test_describe_publishes_the_limits_from_their_homes(void **state)
 {
     (void)state;
@@ -2693,6 +2709,7 @@ int main(void)
         cmocka_unit_test_setup(test_a_second_client_on_a_live_address_is_refused, setup_locked),
         cmocka_unit_test_setup(test_heartbeats_keep_a_session_only_with_its_token, setup_locked),
         cmocka_unit_test(test_path_move_cycles_absent_is_one_zero_is_a_dry_run_that_says_so),
+        cmocka_unit_test(test_final_notice_writes_a_joint_at_rest_as_0),
         cmocka_unit_test_setup(test_describe_publishes_the_limits_from_their_homes, setup_locked),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
