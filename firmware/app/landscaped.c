@@ -408,6 +408,23 @@ static void send_telemetry(void)
     }
 }
 
+/* --setpoint-trace: the simulated arm keeps the first this many seconds of
+ * the loop's set-points (docs/deploy.md "Test-only keys"). */
+#define SETPOINT_TRACE_S 120u
+
+/* At shutdown, once the control loop has stopped: the set-point trace the
+ * simulated arm recorded goes to its file; a failure is logged, never fatal. */
+static void write_setpoint_trace(void)
+{
+    char msg[640];
+    int r = hal_sim_world_trace_write(msg, sizeof msg);
+    if (r < 0) {
+        LOG_ERR("--setpoint-trace: %s", msg);
+    } else if (r > 0) {
+        LOG_INFO("setpoint trace: %s", msg);
+    }
+}
+
 static int compose(const ls_config_t *o)
 {
     char msg[256] = "";
@@ -423,12 +440,19 @@ static int compose(const ls_config_t *o)
             .dio_socket_path = o->dio_socket[0] != '\0' ? o->dio_socket : NULL,
             .lockstep = strcmp(o->clock, "lockstep") == 0,
             .with_obstacle = true,
+            .trace = { .path = o->setpoint_trace,
+                       .rate_hz = o->rate_hz,
+                       .capacity = (size_t)SETPOINT_TRACE_S * o->rate_hz },
         };
         if (hal_sim_world_open(&wc, msg, sizeof msg) < 0) {
             LOG_ERR("--arm sim: %s", msg);
             return -1;
         }
         g_world_open = true;
+        if (o->setpoint_trace[0] != '\0') {
+            LOG_WARN("arm sim: recording the first %u s of set-points for %s (a test option)", SETPOINT_TRACE_S,
+                     o->setpoint_trace);
+        }
         hal_sim_world_get_arm(&g_arm);
         hal_sim_world_get_tool(&g_tool);
         hal_sim_world_get_manual(&g_manual);
@@ -666,6 +690,7 @@ int main(int argc, char **argv)
         (void)hal_arm_enable(&g_arm, false);
     }
     if (g_world_open) {
+        write_setpoint_trace();
         hal_sim_world_close();
     }
     if (g_dio.ops != NULL && !g_world_open) {

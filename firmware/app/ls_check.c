@@ -248,6 +248,28 @@ static void check_dio(report_t *r, const ls_config_t *cfg)
     }
 }
 
+/* ---- set-point trace (tests) ----------------------------------------------- */
+
+/* The simulated arm creates PATH.tmp at start and renames it to PATH at exit. */
+static void check_setpoint_trace(report_t *r, const ls_config_t *cfg)
+{
+    if (cfg->setpoint_trace[0] == '\0') {
+        return;
+    }
+    char dir[256];
+    struct stat sb;
+    if (stat(cfg->setpoint_trace, &sb) == 0 && S_ISDIR(sb.st_mode)) {
+        report(r, LS_CHECK_FAIL, "setpoint_trace", "%s is a directory; fix: give the path of a file to write",
+               cfg->setpoint_trace);
+    } else if (parent_writable(cfg->setpoint_trace, dir, sizeof dir) != 0) {
+        report(r, LS_CHECK_FAIL, "setpoint_trace",
+               "cannot create %s.tmp in %s: %s; fix: create the directory or choose a writable one",
+               cfg->setpoint_trace, dir, strerror(errno));
+    } else {
+        report(r, LS_CHECK_PASS, "setpoint_trace", "%s writable (a test key: the simulated arm's set-points)", dir);
+    }
+}
+
 /* ---- real time -------------------------------------------------------------- */
 
 typedef struct {
@@ -346,6 +368,7 @@ int ls_check_run(const ls_config_t *cfg, FILE *out)
     check_afcan(&r, cfg);
     check_links(&r, cfg);
     check_dio(&r, cfg);
+    check_setpoint_trace(&r, cfg);
     check_realtime(&r, cfg);
     check_memlock(&r, cfg);
     int code = summary(&r);

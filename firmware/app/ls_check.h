@@ -14,9 +14,9 @@
  * hal_linux_socketcan_probe; slcan:pty: /dev/ptmx and the symlink's
  * directory); the DIO backend (gpiod: the chip through hal_linux_gpiod_probe,
  * then the configured lines requested and released; dio_socket's
- * directory); SCHED_FIFO at rt_priority on a short-lived thread; rt_cpu in
- * the allowed CPU set; memory locking (RLIMIT_MEMLOCK and an mlockall trial,
- * undone at once).
+ * directory); setpoint_trace's directory, when set; SCHED_FIFO at
+ * rt_priority on a short-lived thread; rt_cpu in the allowed CPU set; memory
+ * locking (RLIMIT_MEMLOCK and an mlockall trial, undone at once).
  *
  * Init-time only, from the main thread before anything else runs: it opens
  * and closes devices, starts and joins one thread and briefly locks the

@@ -269,6 +269,19 @@ static int set_link_faults(ls_config_t *cfg, const char *v, char *why, size_t wh
     return 0;
 }
 
+/* A file path ("" = no trace); the simulated arm creates PATH.tmp at start
+ * and renames it to PATH at exit, so a directory ("dir/") is no file name. */
+static int set_setpoint_trace(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    size_t n = strlen(v);
+    if ((n > 0 && v[n - 1] == '/') || copy_str(cfg->setpoint_trace, sizeof cfg->setpoint_trace, v) != 0) {
+        cfg->setpoint_trace[0] = '\0';
+        return EXPECT("the path of a file to write, of at most %zu characters, or nothing for none",
+                      sizeof cfg->setpoint_trace - 1);
+    }
+    return 0;
+}
+
 static int set_clock(ls_config_t *cfg, const char *v, char *why, size_t whylen)
 {
     if (strcmp(v, "realtime") != 0 && strcmp(v, "lockstep") != 0) {
@@ -359,6 +372,7 @@ static const key_def_t KEYS[] = {
     { "hal", "dio", "dio", false, set_dio },
     { "hal", "dio_socket", "dio-socket", false, set_dio_socket },
     { "hal", "link_faults", "link-faults", false, set_link_faults },
+    { "hal", "setpoint_trace", "setpoint-trace", false, set_setpoint_trace },
     { "hal", "clock", "clock", false, set_clock },
     { "control", "rate_hz", "rate", false, set_rate },
     { "control", "telemetry_hz", "telemetry-hz", false, set_telemetry },
@@ -609,6 +623,8 @@ void ls_config_usage(FILE *f)
             "  --arm sim|none            [hal] arm (default sim)\n"
             "  --dio sim|none|gpiod:CHIP [hal] dio: digital I/O backend (default sim)\n"
             "  --link-faults SPEC        [hal] link_faults: inject faults on every link (tests; docs/reliability.md)\n"
+            "  --setpoint-trace PATH     [hal] setpoint_trace: write every cycle's commanded joints to the CSV\n"
+            "                            file PATH at exit (tests; arm sim only; docs/deploy.md)\n"
             "  --dio-socket PATH         [hal] dio_socket: sim DIO/jog control socket\n"
             "  --clock realtime|lockstep [hal] clock (default realtime)\n"
             "  --node ADDR               [device] node: node address 1..0xFE on the bus (default 0x10)\n"
@@ -744,6 +760,12 @@ int ls_config_validate(const ls_config_t *cfg, char *msg, size_t msglen)
         }
     }
     bool gpiod = strncmp(cfg->dio, "gpiod:", 6) == 0;
+    if (cfg->setpoint_trace[0] != '\0' && strcmp(cfg->arm, "sim") != 0) {
+        return opt_error(msg, msglen,
+                         "[hal] setpoint_trace = %s needs arm = sim: the set-point trace is recorded by the "
+                         "simulated arm, and arm = %s (remove setpoint_trace / --setpoint-trace, or set arm = sim)",
+                         cfg->setpoint_trace, cfg->arm);
+    }
     if (strcmp(cfg->dio, "sim") == 0 && strcmp(cfg->arm, "sim") != 0) {
         return opt_error(msg, msglen,
                          "[hal] dio = sim needs arm = sim: the simulated DIO lives in the simulated "

@@ -36,8 +36,10 @@ typedef struct {
     char dio[128]; /* dio = sim | gpiod:CHIP | none (default sim) */
     char link_faults
         [192]; /* [hal] link_faults, --link-faults SPEC: tests only, faults injected on every link ("" = none) */
-    char dio_socket[128]; /* dio_socket = PATH (sim DIO/jog control socket; "" = none) */
-    char clock[16];       /* clock = realtime | lockstep (default realtime) */
+    char dio_socket[128];     /* dio_socket = PATH (sim DIO/jog control socket; "" = none) */
+    char setpoint_trace[256]; /* [hal] setpoint_trace, --setpoint-trace PATH: tests only, arm = sim only: every
+                                 cycle's commanded joints to a CSV file at exit ("" = none) */
+    char clock[16];           /* clock = realtime | lockstep (default realtime) */
     /* [control] */
     uint32_t rate_hz;      /* rate_hz = 1000 (100..10000) */
     uint32_t telemetry_hz; /* telemetry_hz = 50 (0..200, <= rate_hz; 0 = off) */
@@ -80,8 +82,8 @@ int ls_config_load_file(ls_config_t *cfg, const char *path, char *msg, size_t ms
 
 /* Whole-configuration checks the single keys cannot make: at least one
  * link, telemetry_hz <= rate_hz, inputs and outputs disjoint, estop_input
- * within the configured inputs and a DIO backend present for it. 0 or -1
- * with msg. */
+ * within the configured inputs and a DIO backend present for it,
+ * setpoint_trace only with arm = sim. 0 or -1 with msg. */
 int ls_config_validate(const ls_config_t *cfg, char *msg, size_t msglen);
 
 /* The --help text. */

@@ -327,6 +327,8 @@ def test_check_of_the_shipped_config(which: str) -> None:
     ("[control]\nrate = 100\n",
      "2: [control] rate: unknown key; expected one of rate_hz, telemetry_hz, rt_priority, rt_cpu, lock_memory"),
     ("[hal]\narm = sim\narm = none\n", "3: [hal] arm: given twice (first on line 2); keep one"),
+    ("[hal]\nsetpoint_trace = /tmp/\n", "2: [hal] setpoint_trace: got '/tmp/', expected the path of a file to "
+     "write, of at most 255 characters, or nothing for none"),
 ])
 def test_config_error_is_one_line_with_file_key_and_reason(which: str, text: str, tail: str, tmp_path: Path) -> None:
     exe = executable(which)
@@ -402,3 +404,27 @@ def test_a_configuration_refused_as_a_whole_exits_2_with_check_too(which: str, t
     r = run(exe, "--config", conf, timeout=30)
     assert r.returncode == 2
     assert not Path("/tmp/never").exists()
+
+
+@pytest.mark.parametrize("which", ["driver", "landscaped"])
+@pytest.mark.parametrize("given", ["file", "option"])
+def test_setpoint_trace_is_refused_without_the_simulated_arm(which: str, given: str, tmp_path: Path) -> None:
+    """[hal] setpoint_trace (--setpoint-trace, a test key: docs/deploy.md "Test-only keys") is
+    recorded by the simulated arm: with arm = none the configuration is refused as a whole,
+    naming the key, the arm and what to do; nothing is created."""
+    exe = executable(which)
+    pty = tmp_path / "ls0"
+    trace = tmp_path / "setpoints.csv"
+    conf = tmp_path / "trace.conf"
+    conf.write_text(f"[hal]\nlink = slcan:pty:{pty}\narm = none\ndio = none\n"
+                    + (f"setpoint_trace = {trace}\n" if given == "file" else ""))
+    option = ["--setpoint-trace", str(trace)] if given == "option" else []
+    want = (f"[hal] setpoint_trace = {trace} needs arm = sim: the set-point trace is recorded by the simulated "
+            "arm, and arm = none (remove setpoint_trace / --setpoint-trace, or set arm = sim)")
+    r = run(exe, "--config", conf, *option, timeout=30)
+    assert r.returncode == 2, r.stderr
+    assert r.stderr == f"<3>landscaped: error: {want}\n"
+    r = run(exe, "--config", conf, *option, "--check", timeout=30)
+    assert r.returncode == 2, r.stdout
+    assert r.stdout.splitlines()[0] == f"FAIL  configuration: {conf}: {want}"
+    assert not pty.exists() and not trace.exists() and not Path(f"{trace}.tmp").exists()

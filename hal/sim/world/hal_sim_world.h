@@ -155,7 +155,29 @@
  * dJointGroupEmpty and are reused). No spaces are used: the few collision
  * pairs are tested with dCollide into a stack array. tests/unit/simworld
  * checks with counting allocation hooks that steady-state cycles allocate
- * nothing.
+ * nothing. The set-point trace (below) allocates its buffer at open.
+ *
+ * ---------------------------------------------------------------------------
+ * Set-point trace (tests only: landscaped --setpoint-trace PATH)
+ * ---------------------------------------------------------------------------
+ * With cfg.trace.path set, the arm's command() records every accepted call:
+ * the world's time and the 6 commanded joint positions, into a buffer of
+ * cfg.trace.capacity samples that open() allocates and touches (so the
+ * control loop neither allocates nor takes a first-touch page fault). The
+ * world's time is the sum of the dt of every hal_sim_world_step() since open,
+ * lockstep-held steps included: the control loop's time, one period per
+ * cycle, whatever the wall clock did. A full buffer keeps its samples and
+ * counts the later ones as dropped (the start of a run is what a test reads).
+ * command() does no I/O and takes no lock: the file is written by
+ * hal_sim_world_trace_write() after the control loop has stopped.
+ * open() creates PATH.tmp (so that an unwritable PATH fails at start, not at
+ * exit); the write fills it and renames it to PATH:
+ *
+ *     # landscaped setpoint trace: rate_hz=1000 samples=N dropped=D
+ *     t_s,q1,q2,q3,q4,q5,q6
+ *     (N rows: the time in s and the joints in rad, each number as %.17g)
+ *
+ * rate_hz is cfg.trace.rate_hz (the caller's control rate, for the reader).
  */
 #ifndef HAL_SIM_WORLD_H
 #define HAL_SIM_WORLD_H
@@ -187,16 +209,27 @@ typedef struct {
     double link_radius_m;                    /* capsule radius of every link */
 } hal_sim_arm_model_t;
 
+#define HAL_SIM_TRACE_PATH_MAX 255 /* characters of a set-point trace's PATH */
+
+/* The set-point trace (see "Set-point trace" above). */
+typedef struct {
+    const char *path; /* NULL or "": no trace */
+    uint32_t rate_hz; /* the control rate, written in the file's first line (> 0) */
+    size_t capacity;  /* samples preallocated at open (> 0) */
+} hal_sim_trace_config_t;
+
 typedef struct {
     const hal_sim_arm_model_t *arm; /* copied by open */
     const char *dio_socket_path;    /* NULL: no external control socket */
     bool lockstep;                  /* see "Lockstep" above */
     bool with_obstacle;             /* a box on the table */
+    hal_sim_trace_config_t trace;   /* all zero: no set-point trace */
 } hal_sim_world_config_t;
 
 /* Build the world. Init only; allocates. Returns LS_OK, or LS_EINVAL (bad
- * config, world already open, socket path too long or taken by a non-socket)
- * or LS_EIO (socket/ODE failure), with a reason in msg (msglen may be 0). */
+ * config, world already open, socket path too long or taken by a non-socket,
+ * trace path too long or a directory) or LS_EIO (socket/ODE failure, trace
+ * buffer or PATH.tmp not made), with a reason in msg (msglen may be 0). */
 int hal_sim_world_open(const hal_sim_world_config_t *cfg, char *msg, size_t msglen);
 
 /* ODE keeps per-thread collision data: a control-loop thread other than
@@ -204,10 +237,20 @@ int hal_sim_world_open(const hal_sim_world_config_t *cfg, char *msg, size_t msgl
  * LS_OK, LS_ENODEV when not open, LS_EIO when ODE fails. */
 int hal_sim_world_attach_thread(void);
 
-/* Tear everything down (ODE, socket, socket file). Safe when not open. The
- * device handles obtained below become invalid: their close ops do nothing,
- * the world is closed only here. */
+/* Tear everything down (ODE, socket, socket file, the trace's buffer and,
+ * when hal_sim_world_trace_write() did not run, its PATH.tmp). Safe when not
+ * open. The device handles obtained below become invalid: their close ops do
+ * nothing, the world is closed only here. */
 void hal_sim_world_close(void);
+
+/* Write the set-point trace recorded since open to its PATH (PATH.tmp, then
+ * rename). Shutdown only, once the control loop has stopped: it does file
+ * I/O and reads the buffer without a lock. Returns 1 when written, with
+ * "N samples (D dropped) written to PATH" in msg; 0 when no trace is
+ * configured or it was written already; LS_ENODEV when not open; LS_EIO when
+ * writing or renaming failed, with msg naming the file and the cause (the
+ * partial PATH.tmp is removed, an earlier PATH is left as it was). */
+int hal_sim_world_trace_write(char *msg, size_t msglen);
 
 /* Advance the world by dt_s (0 < dt_s <= 0.1): the joint servo, contacts and
  * one ODE step (see "Lockstep" above). Called by the control loop once per

@@ -5,9 +5,11 @@
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 
 #include "hal/hal_dio.h"
 #include "hal/hal_arm.h"
+#include "hal_sim_world.h"
 
 #define SIM_CTL_MAX_MSG 255u
 #define SIM_DIO_INPUT_MASK 0x0000FFFFu
@@ -33,6 +35,33 @@ int sim_ctl_apply(sim_ctl_t *ctl, const char *text, size_t len);
 /* Read and apply every pending datagram; the number that changed state. */
 int sim_ctl_drain(sim_ctl_t *ctl);
 bool sim_ctl_jog_active(const sim_ctl_t *ctl);
+
+/* The set-point trace (hal_sim_world.h "Set-point trace"). */
+typedef struct {
+    double t_s; /* the world's time at the command */
+    double q_rad[HAL_SIM_ARM_JOINTS];
+} sim_trace_sample_t;
+
+typedef struct {
+    FILE *tmp_file;                        /* PATH.tmp from open to the write; NULL otherwise */
+    char path[HAL_SIM_TRACE_PATH_MAX + 1]; /* "" = no trace */
+    char tmp[HAL_SIM_TRACE_PATH_MAX + 5];  /* path + ".tmp" */
+    uint32_t rate_hz;
+    sim_trace_sample_t *buf; /* capacity samples, allocated at open */
+    size_t capacity, n;
+    uint64_t dropped; /* commands after the buffer filled */
+} sim_trace_t;
+
+/* Reset; with a path, allocate and touch the buffer and create PATH.tmp.
+ * Init only. LS_OK (also with no path), LS_EINVAL or LS_EIO with msg. */
+int sim_trace_open(sim_trace_t *tr, const hal_sim_trace_config_t *cfg, char *msg, size_t msglen);
+/* Control loop: append one sample, or count it as dropped when full. No
+ * allocation, no I/O, no lock; nothing without a trace. */
+void sim_trace_record(sim_trace_t *tr, double t_s, const double *q_rad);
+/* Shutdown: write PATH.tmp and rename it to PATH (hal_sim_world_trace_write). */
+int sim_trace_write(sim_trace_t *tr, char *msg, size_t msglen);
+/* Free the buffer; remove PATH.tmp when it was never written. Safe twice. */
+void sim_trace_close(sim_trace_t *tr);
 
 extern const hal_dio_ops_t sim_dio_ops; /* self = sim_ctl_t* (NULL: closed) */
 int sim_manual_read(void *self, double *twist, uint32_t *buttons);
