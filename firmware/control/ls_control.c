@@ -434,8 +434,17 @@ static void handle_command(ls_control_t *c, const ls_ctl_cmd_t *cmd)
         }
         return;
     case LS_CTL_RESUME:
-        if (c->react.active ? ls_react_resume(&c->react) != 0 : ls_motion_resume(&c->motion) != 0) {
-            cmd_failed(c, cmd->ref_seq, "no paused motion to resume");
+        if (c->react.active) {
+            if (ls_react_resume(&c->react) != 0) {
+                cmd_failed(c, cmd->ref_seq, "no paused motion to resume");
+            }
+        } else {
+            const int r = ls_motion_resume(&c->motion);
+            if (r != 0) {
+                cmd_failed(c, cmd->ref_seq,
+                           r == -2 ? "the motion could not be re-planned from where it stopped: abort it"
+                                   : "no paused motion to resume");
+            }
         }
         return;
     case LS_CTL_ABORT:

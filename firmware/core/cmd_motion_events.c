@@ -65,8 +65,11 @@ void ls_core_on_motion_event(ls_core_t *core, const ls_motion_event_t *ev)
         }
         if (core->run.stop_pending) {
             core->run.stop_pending = false;
-            ls_core_finish_deferred(core, core->run.stop_sup, ls_RetCode_CMD_EXEC_OK,
-                                    "paused on the planned path: resumeMotion continues, abortMotion drops it");
+            char msg[128];
+            ls_fmt_print(msg, sizeof msg,
+                         "paused on the planned path (%s): resumeMotion continues, abortMotion drops it",
+                         ev->text[0] != '\0' ? ev->text : "between two points");
+            ls_core_finish_deferred(core, core->run.stop_sup, ls_RetCode_CMD_EXEC_OK, msg);
         }
         return;
     case LS_MEV_FAULT: {

@@ -10,12 +10,11 @@
 #include "ls_math.h"
 
 #define START_TOL_RAD 1e-3
-#define MIN_STOP_RAMP_S 0.05
-/* Stop ramps are this many times the shortest one that keeps the ramp's own
- * terms within the limits: stopping while the path itself brakes adds both
- * (ls_traj.h), so the doubled ramp keeps the sum within 1.5 x a_max at worst
- * and within a_max during cruise. */
-#define STOP_RAMP_MARGIN 2.0
+#define END_TOL_S 1e-9
+/* While two segments blend, a stop's ramps and a resume's profiles give each
+ * this share of its limits, so that the sum of the two stays within them
+ * whatever the directions of the two motions. */
+#define BLEND_SHARE 0.5
 #define SAMPLE_STEP_M 1e-3
 #define SAMPLE_STEP_RAD (0.5 * LS_PI / 180.0)
 #define SAMPLE_STEP_S 0.01
@@ -53,20 +52,12 @@ static bool frac_ok(double f)
 
 /* ------------------------------------------------------------------ init */
 
-static void ts_zero(ls_timescale_t *ts)
-{
-    ls_timescale_init(ts);
-    ts->r = 0.0;
-    ts->target = 0.0;
-}
-
 void ls_motion_init(ls_motion_t *m, const ls_robot_model_t *model)
 {
     memset(m, 0, sizeof *m);
     m->model = model;
     m->phase = LS_MOTION_IDLE;
     m->following_error_max_rad = LS_MOTION_FOLLOWING_ERROR_RAD;
-    ls_timescale_init(&m->ts);
 }
 
 void ls_motion_hold(ls_motion_t *m, const double q[LS_N_JOINTS])
@@ -75,6 +66,7 @@ void ls_motion_hold(ls_motion_t *m, const double q[LS_N_JOINTS])
     m->phase = LS_MOTION_IDLE;
     m->blending_ = false;
     m->sub_ = SUB_MOVE;
+    m->ramping_ = false;
 }
 
 /* -------------------------------------------------------------- planners */
@@ -99,8 +91,6 @@ static void seg_clear_motion(ls_motion_seg_t *s, ls_seg_kind_t kind)
     /* Point attributes (tag, aux, delay) belong to the caller: keep them. */
     s->kind = kind;
     memset(&s->traj, 0, sizeof s->traj);
-    s->stop_ramp_s = MIN_STOP_RAMP_S;
-    s->fast_stop_ramp_s = MIN_STOP_RAMP_S;
     s->radius_m = s->angle_rad = s->length_m = s->turn_rad = 0.0;
     s->overlap_s = 0.0;
     memset(s->lim_, 0, sizeof s->lim_);
@@ -123,40 +113,74 @@ static void joint_limits(const ls_robot_model_t *model, double speed_frac, doubl
     }
 }
 
-/* Stop ramps of a joint segment planned within `lim`: its own, and the fast
- * one within the model's maxima. */
-static void joint_ramps(ls_motion_seg_t *s, const ls_robot_model_t *model, const ls_traj_limits_t *lim)
+/* The phase of a phase-synchronised joint profile: sigma from 0 to 1, each
+ * joint at x0 + (q1 - x0) sigma, within every moving joint's limits (the
+ * tightest of limit / |q1 - x0| per derivative). Each joint's axis of *tr is
+ * sigma's profile scaled by its distance, so sampling it gives the joint. */
+static int phase_profile(const double x0[LS_N_JOINTS], const double q1[LS_N_JOINTS], const ls_traj_limits_t *lim,
+                         ls_traj_t *tr)
 {
-    double ramp = ls_traj_stop_ramp_s(&s->traj, lim);
-    s->stop_ramp_s = fmax(MIN_STOP_RAMP_S, STOP_RAMP_MARGIN * (ramp > 0.0 ? ramp : 0.0));
-    ls_traj_limits_t full;
-    joint_limits(model, 1.0, 1.0, NULL, &full);
-    ramp = ls_traj_stop_ramp_s(&s->traj, &full);
-    s->fast_stop_ramp_s = fmin(s->stop_ramp_s, fmax(MIN_STOP_RAMP_S, STOP_RAMP_MARGIN * (ramp > 0.0 ? ramp : 0.0)));
+    double vs = INFINITY, as = INFINITY, js = INFINITY;
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        const double d = fabs(q1[j] - x0[j]);
+        if (d > 0.0) {
+            vs = fmin(vs, lim->v_max[j] / d);
+            as = fmin(as, lim->a_max[j] / d);
+            js = fmin(js, lim->j_max[j] / d);
+        }
+    }
+    if (!isfinite(vs)) { /* nothing moves */
+        return ls_traj_plan(tr, LS_N_JOINTS, x0, q1, lim) == LS_OK ? 0 : -1;
+    }
+    ls_traj_axis_t sig;
+    if (ls_traj_plan_axis(&sig, 0.0, 1.0, vs, as, js) != LS_OK) {
+        return -1;
+    }
+    memset(tr, 0, sizeof *tr);
+    tr->n = LS_N_JOINTS;
+    tr->duration_s = sig.T;
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        ls_traj_axis_t *ax = &tr->axis[j];
+        *ax = sig;
+        ax->p0 = x0[j];
+        ax->p1 = q1[j];
+        ax->dist = q1[j] - x0[j];
+        ax->j = sig.j * ax->dist;
+    }
+    return 0;
 }
 
-/* Plan the profile of joint segment s (q0, q1 set) at its stored fractions
- * and jerk scale: synchronised, or each joint on its own (slew). */
-static int joint_profile(ls_motion_seg_t *s, const ls_robot_model_t *model)
+/* The profile of joint segment s from the joints at x0 to q1 at its stored
+ * fractions and jerk scale times `share`: phase-synchronised (a straight line
+ * in joint space, so that a stop and a resume keep to it), or each joint on
+ * its own (slew). The plan itself starts at q0 with share 1; a resume starts
+ * where a stop left the joints. */
+static int joint_profile_from(const ls_motion_seg_t *s, const ls_robot_model_t *model, const double x0[LS_N_JOINTS],
+                              double share, ls_traj_t *out)
 {
     ls_traj_limits_t lim;
-    joint_limits(model, s->lim_[0], s->lim_[1], s->jerk_scale_, &lim);
+    joint_limits(model, s->lim_[0] * share, s->lim_[1] * share, s->jerk_scale_, &lim);
     ls_traj_t tr;
-    if (ls_traj_plan(&tr, LS_N_JOINTS, s->q0, s->q1, &lim) != LS_OK) {
+    if (phase_profile(x0, s->q1, &lim, &tr) != 0) {
         return -1;
     }
     if (s->slew_) {
         tr.duration_s = 0.0;
         for (int j = 0; j < LS_N_JOINTS; j++) {
-            if (ls_traj_plan_axis(&tr.axis[j], s->q0[j], s->q1[j], lim.v_max[j], lim.a_max[j], lim.j_max[j]) != LS_OK) {
+            if (ls_traj_plan_axis(&tr.axis[j], x0[j], s->q1[j], lim.v_max[j], lim.a_max[j], lim.j_max[j]) != LS_OK) {
                 return -(j + 2);
             }
             tr.duration_s = fmax(tr.duration_s, tr.axis[j].T);
         }
     }
-    s->traj = tr;
-    joint_ramps(s, model, &lim);
+    *out = tr;
     return 0;
+}
+
+/* Plan the profile of joint segment s (q0, q1 set). */
+static int joint_profile(ls_motion_seg_t *s, const ls_robot_model_t *model)
+{
+    return joint_profile_from(s, model, s->q0, 1.0, &s->traj);
 }
 
 int ls_motion_seg_joint(ls_motion_seg_t *s, const ls_robot_model_t *model, const double q0[LS_N_JOINTS],
@@ -328,45 +352,35 @@ static int check_box(const ls_robot_model_t *model, const double T[16], char *wh
     return LS_OK;
 }
 
-/* Plan the profile of a Cartesian segment over s in [0, 1] at its stored
- * limits of s (lim_[0..2]) and jerk scale, and its stop ramps (the fast one
- * with the model's Cartesian maxima on the path parameter). */
-static int cart_profile(ls_motion_seg_t *s, const ls_robot_model_t *model)
+static bool cart_still(const ls_motion_seg_t *s)
 {
-    const double L = s->length_m, A = s->turn_rad;
-    const bool still = !(L > 1e-9 || A > 1e-9);
+    return !(s->length_m > 1e-9 || s->turn_rad > 1e-9);
+}
+
+/* The profile of Cartesian segment s over its path parameter from x0 to 1
+ * at its stored limits of s (lim_[0..2]) and jerk scale times `share` (the
+ * plan: from 0 with share 1; a resume: from where a stop left it). */
+static int cart_profile_from(const ls_motion_seg_t *s, double x0, double share, ls_traj_t *out)
+{
+    const bool still = cart_still(s);
     ls_traj_limits_t tl;
     memset(&tl, 0, sizeof tl);
-    tl.v_max[0] = still ? 1.0 : s->lim_[0];
-    tl.a_max[0] = still ? 1.0 : s->lim_[1];
-    tl.j_max[0] = still ? 1.0 : s->lim_[2] * s->jerk_scale_[0];
-    const double p0 = 0.0, p1 = still ? 0.0 : 1.0;
-    if (ls_traj_plan(&s->traj, 1, &p0, &p1, &tl) != LS_OK) {
-        return -1;
-    }
-    double ramp = ls_traj_stop_ramp_s(&s->traj, &tl);
-    s->stop_ramp_s = fmax(MIN_STOP_RAMP_S, STOP_RAMP_MARGIN * (ramp > 0.0 ? ramp : 0.0));
-    if (!still) {
-        double af = INFINITY, jf = INFINITY;
-        if (L > 1e-9) {
-            af = fmin(af, model->max_linear_accel_m_s2 / L);
-            jf = fmin(jf, model->max_linear_jerk_m_s3 / L);
-        }
-        if (A > 1e-9) {
-            af = fmin(af, model->max_angular_accel_rad_s2 / A);
-            jf = fmin(jf, model->max_angular_jerk_rad_s3 / A);
-        }
-        tl.a_max[0] = fmax(af, tl.a_max[0]);
-        tl.j_max[0] = fmax(jf, tl.j_max[0]);
-        ramp = ls_traj_stop_ramp_s(&s->traj, &tl);
-    }
-    s->fast_stop_ramp_s = fmin(s->stop_ramp_s, fmax(MIN_STOP_RAMP_S, STOP_RAMP_MARGIN * (ramp > 0.0 ? ramp : 0.0)));
-    return 0;
+    tl.v_max[0] = still ? 1.0 : s->lim_[0] * share;
+    tl.a_max[0] = still ? 1.0 : s->lim_[1] * share;
+    tl.j_max[0] = still ? 1.0 : s->lim_[2] * s->jerk_scale_[0] * share;
+    const double p1 = still ? 0.0 : 1.0;
+    return ls_traj_plan(out, 1, &x0, &p1, &tl) == LS_OK ? 0 : -1;
+}
+
+/* Plan the profile of a Cartesian segment over s in [0, 1]. */
+static int cart_profile(ls_motion_seg_t *s)
+{
+    return cart_profile_from(s, 0.0, 1.0, &s->traj);
 }
 
 /* Time the segment over s in [0, 1] with the slower of the linear and the
  * angular limits, then sample it: workspace box, IK, joint limits and joint
- * velocities. Fills traj, stop ramp and q1. */
+ * velocities. Fills traj and q1. */
 static int cart_time_and_check(ls_motion_seg_t *s, const ls_robot_model_t *model, const ls_motion_cart_limits_t *lim,
                                char *why, unsigned whylen)
 {
@@ -387,7 +401,7 @@ static int cart_time_and_check(ls_motion_seg_t *s, const ls_robot_model_t *model
     s->lim_[1] = a;
     s->lim_[2] = j;
     s->lim_[3] = lim->joint_speed_frac;
-    if (cart_profile(s, model) != 0) {
+    if (cart_profile(s) != 0) {
         return refuse(why, whylen, LS_EINVAL, "Cartesian move: the profile could not be planned");
     }
 
@@ -759,7 +773,7 @@ static int seg_replan(ls_motion_seg_t *s, const ls_robot_model_t *model)
     if (s->kind == LS_SEG_JOINT) {
         return joint_profile(s, model);
     }
-    return s->kind == LS_SEG_LINE ? cart_profile(s, model) : 0;
+    return s->kind == LS_SEG_LINE ? cart_profile(s) : 0;
 }
 
 /* The segment b that a = seg[i] blends into (ls_motion_prog_blend), or -1. */
@@ -941,6 +955,7 @@ static void fault(ls_motion_t *m, ls_motion_events_t *ev, const char *fmt, ...)
     m->phase = LS_MOTION_IDLE;
     m->blending_ = false;
     m->sub_ = SUB_MOVE;
+    m->ramping_ = false;
 }
 
 int ls_motion_start(ls_motion_t *m, const ls_motion_plan_t *p)
@@ -965,22 +980,194 @@ int ls_motion_start(ls_motion_t *m, const ls_motion_plan_t *p)
     m->t_next_s_ = 0.0;
     m->sub_ = SUB_MOVE;
     m->aux_wait_ = false;
-    ls_timescale_init(&m->ts);
+    m->ramping_ = false;
+    m->off_plan_[0] = m->off_plan_[1] = false;
     m->phase = LS_MOTION_RUNNING;
     return 0;
 }
 
-static double current_stop_ramp(const ls_motion_t *m, bool fast)
+/* A joint segment other than a slew moves along a straight line in joint
+ * space, parameterised by its phase sigma (phase_profile). */
+static bool seg_phased(const ls_motion_seg_t *s)
 {
-    const ls_motion_seg_t *s = plan_seg(&m->plan, m->seg_i_, m->cycle_);
-    double r = fast ? s->fast_stop_ramp_s : s->stop_ramp_s;
-    if (m->blending_) {
-        const ls_motion_seg_t *nx = next_seg(m);
-        if (nx != NULL) {
-            r = fmax(r, fast ? nx->fast_stop_ramp_s : nx->stop_ramp_s);
+    return s->kind == LS_SEG_JOINT && !s->slew_;
+}
+
+/* The axes the executor drives for segment s: a slew's joints each on its
+ * own, else one path parameter (a joint segment's phase, a Cartesian
+ * segment's s). */
+static int seg_axes(const ls_motion_seg_t *s)
+{
+    return (s->kind == LS_SEG_JOINT && s->slew_) ? LS_N_JOINTS : 1;
+}
+
+/* The moving segment [0] and, while blending, the one it blends into [1]. */
+static int moving_segs(const ls_motion_t *m, const ls_motion_seg_t *seg[2])
+{
+    seg[0] = plan_seg(&m->plan, m->seg_i_, m->cycle_);
+    seg[1] = m->blending_ ? next_seg(m) : NULL;
+    return seg[1] != NULL ? 2 : 1;
+}
+
+/* The profile segment k runs: its planned one, or the one a resume made. */
+static const ls_traj_t *seg_traj(const ls_motion_t *m, int k, const ls_motion_seg_t *s)
+{
+    return m->off_plan_[k] ? &m->rtraj_[k] : &s->traj;
+}
+
+/* The joint that moves furthest in a phase-synchronised profile (-1: none). */
+static int lead_joint(const ls_traj_t *tr)
+{
+    int lead = -1;
+    double d = 0.0;
+    for (int j = 0; j < tr->n; j++) {
+        if (fabs(tr->axis[j].dist) > d) {
+            d = fabs(tr->axis[j].dist);
+            lead = j;
         }
     }
-    return r;
+    return lead;
+}
+
+/* Position, velocity and acceleration of axis i of profile tr at t: the
+ * axis itself, or for a phase-synchronised profile its phase (read from
+ * the joint that moves furthest). */
+static void profile_axis(const ls_traj_t *tr, bool phased, int i, double t, double *p, double *v, double *a)
+{
+    if (!phased) {
+        ls_traj_sample_axis(&tr->axis[i], t, p, v, a);
+        return;
+    }
+    const int lead = lead_joint(tr);
+    if (lead < 0) {
+        *p = *v = *a = 0.0;
+        return;
+    }
+    const ls_traj_axis_t *ax = &tr->axis[lead];
+    ls_traj_sample_axis(ax, t, p, v, a);
+    *p = (*p - ax->p0) / ax->dist;
+    *v /= ax->dist;
+    *a /= ax->dist;
+}
+
+/* Position, velocity and acceleration of segment k's axes now: from the
+ * stop's ramps while they drive the axes, else from the profile at the
+ * segment's clock. xd and xdd may be NULL. */
+static void seg_state(const ls_motion_t *m, int k, const ls_motion_seg_t *s, double *x, double *xd, double *xdd)
+{
+    const double t = k == 0 ? m->t_s : m->t_next_s_;
+    const ls_traj_t *tr = seg_traj(m, k, s);
+    for (int i = 0; i < seg_axes(s); i++) {
+        double p, v, a;
+        if (m->ramping_) {
+            ls_ramp_sample(&m->ramp_[k][i], m->ramp_t_s_, &p, &v, &a);
+        } else {
+            profile_axis(tr, seg_phased(s), i, t, &p, &v, &a);
+        }
+        x[i] = p;
+        if (xd != NULL) {
+            xd[i] = v;
+        }
+        if (xdd != NULL) {
+            xdd[i] = a;
+        }
+    }
+}
+
+/* The joints (and their velocities, qd may be NULL) of joint segment k at
+ * its axes x, xd: a slew's are its axes, a phase-synchronised segment's
+ * x0 + (q1 - x0) sigma along the profile it runs. */
+static void seg_joints(const ls_motion_t *m, int k, const ls_motion_seg_t *s, const double *x, const double *xd,
+                       double q[LS_N_JOINTS], double qd[LS_N_JOINTS])
+{
+    const ls_traj_t *tr = seg_traj(m, k, s);
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        if (seg_phased(s)) {
+            q[j] = tr->axis[j].p0 + tr->axis[j].dist * x[0];
+            if (qd != NULL) {
+                qd[j] = tr->axis[j].dist * xd[0];
+            }
+        } else {
+            q[j] = x[j];
+            if (qd != NULL) {
+                qd[j] = xd[j];
+            }
+        }
+    }
+}
+
+/* The acceleration and jerk limits of a stop of axis i of segment s
+ * running profile tr: the segment's own (its joints' at its acceleration
+ * fraction, on a phase: the tightest over the moving joints; its path
+ * parameter's), or for a fast stop the model's maxima (on the path
+ * parameter: the model's Cartesian maxima over the segment's length and
+ * turn, when they are higher than the segment's). */
+static void stop_limits(const ls_robot_model_t *model, const ls_motion_seg_t *s, const ls_traj_t *tr, int i, bool fast,
+                        double *a, double *j)
+{
+    if (s->kind == LS_SEG_JOINT) {
+        const double f = fast ? 1.0 : s->lim_[1];
+        if (!s->slew_) {
+            *a = *j = INFINITY;
+            for (int k = 0; k < LS_N_JOINTS; k++) {
+                const double d = fabs(tr->axis[k].dist);
+                if (d > 0.0) {
+                    *a = fmin(*a, model->qdd_max_rad_s2[k] * f / d);
+                    *j = fmin(*j, model->qddd_max_rad_s3[k] * f / d);
+                }
+            }
+        } else {
+            *a = model->qdd_max_rad_s2[i] * f;
+            *j = model->qddd_max_rad_s3[i] * f;
+        }
+    } else {
+        *a = s->lim_[1];
+        *j = s->lim_[2];
+        if (fast && !cart_still(s)) {
+            double af = INFINITY, jf = INFINITY;
+            if (s->length_m > 1e-9) {
+                af = fmin(af, model->max_linear_accel_m_s2 / s->length_m);
+                jf = fmin(jf, model->max_linear_jerk_m_s3 / s->length_m);
+            }
+            if (s->turn_rad > 1e-9) {
+                af = fmin(af, model->max_angular_accel_rad_s2 / s->turn_rad);
+                jf = fmin(jf, model->max_angular_jerk_rad_s3 / s->turn_rad);
+            }
+            *a = fmax(af, *a);
+            *j = fmax(jf, *j);
+        }
+    }
+    if (!(*a > 0.0 && isfinite(*a)) || !(*j > 0.0 && isfinite(*j))) {
+        *a = *j = 1.0; /* a segment that does not move: its ramps are empty */
+    }
+}
+
+/* Start (or, for a fast stop during a stop, re-plan) the ramps that bring
+ * every axis of the moving segments to rest from its current state. */
+static void begin_ramps(ls_motion_t *m, bool fast)
+{
+    const ls_motion_seg_t *seg[2];
+    const int n = moving_segs(m, seg);
+    const double share = n == 2 ? BLEND_SHARE : 1.0;
+    double x[2][LS_N_JOINTS], xd[2][LS_N_JOINTS], xdd[2][LS_N_JOINTS];
+    for (int k = 0; k < n; k++) {
+        seg_state(m, k, seg[k], x[k], xd[k], xdd[k]); /* before the ramps change */
+    }
+    double T = 0.0;
+    for (int k = 0; k < n; k++) {
+        for (int i = 0; i < seg_axes(seg[k]); i++) {
+            double a, j;
+            stop_limits(m->model, seg[k], seg_traj(m, k, seg[k]), i, fast, &a, &j);
+            ls_ramp_t *r = &m->ramp_[k][i];
+            if (ls_ramp_plan(r, x[k][i], xd[k][i], xdd[k][i], 0.0, a * share, j * share) != LS_OK) {
+                (void)ls_ramp_plan(r, x[k][i], 0.0, 0.0, 0.0, 1.0, 1.0); /* not finite: hold */
+            }
+            T = fmax(T, r->duration_s);
+        }
+    }
+    m->ramping_ = true;
+    m->ramp_t_s_ = 0.0;
+    m->ramp_T_s_ = T;
 }
 
 void ls_motion_stop(ls_motion_t *m)
@@ -990,7 +1177,7 @@ void ls_motion_stop(ls_motion_t *m)
     }
     m->phase = LS_MOTION_STOPPING;
     if (m->sub_ == SUB_MOVE) {
-        (void)ls_timescale_set(&m->ts, 0.0, current_stop_ramp(m, false));
+        begin_ramps(m, false);
     }
     /* At a point (auxiliary command, dwell) the arm is at rest already: the
      * next step reports the pause. */
@@ -1003,7 +1190,7 @@ void ls_motion_stop_fast(ls_motion_t *m)
     }
     m->phase = LS_MOTION_STOPPING;
     if (m->sub_ == SUB_MOVE) {
-        (void)ls_timescale_set(&m->ts, 0.0, current_stop_ramp(m, true));
+        begin_ramps(m, true);
     }
 }
 
@@ -1012,16 +1199,49 @@ int ls_motion_fast_stop_bound(const ls_robot_model_t *model, int j, double *time
     if (model == NULL || j < 0 || j >= LS_N_JOINTS || time_s == NULL || dist_rad == NULL) {
         return -1;
     }
-    /* The fast ramp of a joint segment whose peak speed is the joint's limit
-     * (ls_motion_seg_joint); a slower segment has a shorter ramp. */
-    const double v = model->qd_max_rad_s[j];
-    const double by_acc = LS_TIMESCALE_RD_GAIN * v / model->qdd_max_rad_s2[j];
-    const double by_jerk = sqrt(LS_TIMESCALE_RDD_GAIN * v / model->qddd_max_rad_s3[j]);
-    const double ramp = fmax(MIN_STOP_RAMP_S, STOP_RAMP_MARGIN * fmax(by_acc, by_jerk));
-    /* r falls from 1 to 0 symmetrically over the ramp: the path clock
-     * advances by ramp / 2, at most v per second of path time. */
-    *time_s = ramp;
-    *dist_rad = v * ramp / 2.0;
+    /* The fast stop's ramp from (v_max, +a_max): more speed or more
+     * acceleration only lengthens a ramp, and no plan has both at once. */
+    const double a = model->qdd_max_rad_s2[j];
+    ls_ramp_t r;
+    if (ls_ramp_plan(&r, 0.0, model->qd_max_rad_s[j], a, 0.0, a, model->qddd_max_rad_s3[j]) != LS_OK) {
+        return -1;
+    }
+    *time_s = r.duration_s;
+    ls_ramp_sample(&r, r.duration_s, dist_rad, NULL, NULL);
+    return 0;
+}
+
+/* Re-plan each moving segment from where the stop's ramps left its axes to
+ * its end, from rest, within its limits (a share while two blend). -1,
+ * changing nothing, when a profile cannot be planned (its limits planned it
+ * once, so only a corrupted plan gets there). */
+static int plan_from_ramps(ls_motion_t *m)
+{
+    const ls_motion_seg_t *seg[2];
+    const int n = moving_segs(m, seg);
+    const double share = n == 2 ? BLEND_SHARE : 1.0;
+    ls_traj_t tr[2];
+    for (int k = 0; k < n; k++) {
+        double x[LS_N_JOINTS], q[LS_N_JOINTS];
+        seg_state(m, k, seg[k], x, NULL, NULL);
+        int r;
+        if (seg[k]->kind == LS_SEG_JOINT) {
+            seg_joints(m, k, seg[k], x, NULL, q, NULL);
+            r = joint_profile_from(seg[k], m->model, q, share, &tr[k]);
+        } else {
+            r = cart_profile_from(seg[k], x[0], share, &tr[k]);
+        }
+        if (r != 0) {
+            return -1;
+        }
+    }
+    for (int k = 0; k < n; k++) {
+        m->rtraj_[k] = tr[k];
+        m->off_plan_[k] = true;
+    }
+    m->ramping_ = false;
+    m->t_s = 0.0;
+    m->t_next_s_ = 0.0;
     return 0;
 }
 
@@ -1030,8 +1250,10 @@ int ls_motion_resume(ls_motion_t *m)
     if (m->phase != LS_MOTION_PAUSED) {
         return -1;
     }
+    if (m->ramping_ && plan_from_ramps(m) != 0) {
+        return -2;
+    }
     m->phase = LS_MOTION_RUNNING;
-    (void)ls_timescale_set(&m->ts, 1.0, current_stop_ramp(m, false));
     return 0;
 }
 
@@ -1041,7 +1263,7 @@ void ls_motion_abort(ls_motion_t *m)
     m->blending_ = false;
     m->sub_ = SUB_MOVE;
     m->aux_wait_ = false;
-    ls_timescale_init(&m->ts);
+    m->ramping_ = false;
 }
 
 void ls_motion_aux_done(ls_motion_t *m)
@@ -1049,61 +1271,61 @@ void ls_motion_aux_done(ls_motion_t *m)
     m->aux_wait_ = false;
 }
 
+/* Paused: after the ramps (ramping_ stays set: where they left the axes is
+ * where a resume starts), or at a point. The event says where. */
 static void pause_now(ls_motion_t *m, ls_motion_events_t *ev)
 {
     m->phase = LS_MOTION_PAUSED;
-    ts_zero(&m->ts);
-    (void)push_event(m, ev, LS_MEV_PAUSED);
+    ls_motion_event_t *e = push_event(m, ev, LS_MEV_PAUSED);
+    if (e != NULL) {
+        ls_fmt_print(e->text, sizeof e->text, "%s",
+                     m->sub_ != SUB_MOVE ? "at a point"
+                                         : (m->blending_ ? "inside the blend of two points" : "between two points"));
+    }
 }
 
-/* Position of segment s at its clock t (joint: sampled; Cartesian: IK
- * seeded by the last set-point). Returns an ls_kin status. */
-static int seg_position(const ls_motion_t *m, const ls_motion_seg_t *s, double t, double q[LS_N_JOINTS],
-                        double qd[LS_N_JOINTS])
+/* The set-point q and its velocity qd from the axes of the moving segment s
+ * (xa, xda) and, while blending, of nx (xb, xdb): joint into joint in joint
+ * space (qd: the sum), line into line by one IK of the blended tip pose; a
+ * Cartesian segment alone by IK seeded by the last set-point (qd: the
+ * set-point's change over dt_s); exactly q1 at the end of the segment.
+ * Returns an ls_kin status. */
+static int setpoint(const ls_motion_t *m, const ls_motion_seg_t *s, const double *xa, const double *xda,
+                    const ls_motion_seg_t *nx, const double *xb, const double *xdb, bool at_end, double dt_s,
+                    double q[LS_N_JOINTS], double qd[LS_N_JOINTS])
 {
+    int ks = LS_OK;
     if (s->kind == LS_SEG_JOINT) {
-        ls_traj_sample(&s->traj, t, q, qd, NULL);
-        return LS_OK;
-    }
-    for (int j = 0; j < LS_N_JOINTS; j++) {
-        qd[j] = 0.0; /* filled by the caller from the set-point difference */
-    }
-    if (t >= s->traj.duration_s) {
-        memcpy(q, s->q1, LS_N_JOINTS * sizeof(double));
-        return LS_OK;
-    }
-    double x;
-    ls_traj_sample_axis(&s->traj.axis[0], t, &x, NULL, NULL);
-    return seg_ik(m->model, s, x, m->q_cmd, q);
-}
-
-/* The set-point of the current segment s, blended with nx when it is not
- * NULL: joint into joint in joint space (qd: the sum), line into line by
- * one IK of the blended tip pose (qd: filled by the caller). */
-static int step_position(const ls_motion_t *m, const ls_motion_seg_t *s, const ls_motion_seg_t *nx,
-                         double q[LS_N_JOINTS], double qd[LS_N_JOINTS])
-{
-    if (nx == NULL || s->kind == LS_SEG_JOINT) {
-        int ks = seg_position(m, s, m->t_s, q, qd);
-        if (nx != NULL && ks == LS_OK) {
-            double q2[LS_N_JOINTS], qd2[LS_N_JOINTS];
-            ks = seg_position(m, nx, m->t_next_s_, q2, qd2);
+        seg_joints(m, 0, s, xa, xda, q, qd);
+        if (nx != NULL) {
+            double qb[LS_N_JOINTS], qdb[LS_N_JOINTS];
+            seg_joints(m, 1, nx, xb, xdb, qb, qdb);
             for (int j = 0; j < LS_N_JOINTS; j++) {
-                q[j] += q2[j] - nx->q0[j];
-                qd[j] += qd2[j];
+                q[j] += qb[j] - nx->q0[j];
+                qd[j] += qdb[j];
             }
         }
-        return ks;
+        if (at_end && nx == NULL) {
+            memcpy(q, s->q1, LS_N_JOINTS * sizeof(double));
+        }
+        return LS_OK;
+    }
+    if (nx == NULL) {
+        if (at_end) {
+            memcpy(q, s->q1, LS_N_JOINTS * sizeof(double));
+        } else {
+            ks = seg_ik(m->model, s, xa[0], m->q_cmd, q);
+        }
+    } else {
+        double T[16], F[16];
+        blend_pose(s, xa[0], nx, xb[0], T);
+        ls_pose_mul(T, s->tool_inv, F);
+        ks = ls_kin_ik_nearest(m->model, F, m->q_cmd, q);
     }
     for (int j = 0; j < LS_N_JOINTS; j++) {
-        qd[j] = 0.0;
+        qd[j] = (q[j] - m->q_cmd[j]) / dt_s;
     }
-    double xa, xb, T[16], F[16];
-    ls_traj_sample_axis(&s->traj.axis[0], m->t_s, &xa, NULL, NULL);
-    ls_traj_sample_axis(&nx->traj.axis[0], m->t_next_s_, &xb, NULL, NULL);
-    blend_pose(s, xa, nx, xb, T);
-    ls_pose_mul(T, s->tool_inv, F);
-    return ls_kin_ik_nearest(m->model, F, m->q_cmd, q);
+    return ks;
 }
 
 /* Move on to the next point of the plan. at_rest: no blend in progress, so
@@ -1123,6 +1345,7 @@ static void advance(ls_motion_t *m, ls_motion_events_t *ev, bool at_rest)
     }
     m->t_s = 0.0;
     m->sub_ = SUB_MOVE;
+    m->off_plan_[0] = m->off_plan_[1] = false;
     if (at_rest && m->phase == LS_MOTION_STOPPING) {
         pause_now(m, ev);
     }
@@ -1175,69 +1398,86 @@ static void check_following(ls_motion_t *m, const double q_meas[LS_N_JOINTS], ls
     }
 }
 
-/* One step along segment s (and the next one while blending into it):
- * the set-point and its velocity qd, arrival at the segment's end (tags,
- * auxiliary commands, dwell, the next segment), and the pause that ends a
- * stop. */
+/* At the end of segment s: the point's tag, then the segment it blends
+ * into becomes the current one, or the point's auxiliary commands, or its
+ * dwell, or the next segment. */
+static void end_of_segment(ls_motion_t *m, const ls_motion_seg_t *s, double qd[LS_N_JOINTS], ls_motion_events_t *ev)
+{
+    arrive(m, s, ev);
+    if (m->blending_) {
+        /* The next segment is under way: make it the current one, with the
+         * profile it runs (its own, or a resume's). */
+        const double t_next = m->t_next_s_;
+        const bool off = m->off_plan_[1];
+        m->blending_ = false;
+        advance(m, ev, false);
+        m->t_s = t_next;
+        if (off) {
+            m->rtraj_[0] = m->rtraj_[1];
+            m->off_plan_[0] = true;
+        }
+        return;
+    }
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        qd[j] = 0.0;
+    }
+    if (s->n_aux > 0 && !m->plan.dry_run) {
+        m->sub_ = SUB_AUX;
+        m->aux_k_ = 0;
+        announce_aux(m, s, ev);
+    } else {
+        after_aux(m, s, ev);
+    }
+}
+
+/* One step along segment s (and the next one while blending into it), or
+ * of a stop's ramps: the set-point and its velocity qd, arrival at the
+ * segment's end, and the pause that ends a stop. A segment blends into the
+ * next only on its planned profile (after a resume it arrives at rest). */
 static void move_step(ls_motion_t *m, const ls_motion_seg_t *s, double dt_s, double qd[LS_N_JOINTS],
                       ls_motion_events_t *ev)
 {
-    const double dtau = ls_timescale_step(&m->ts, dt_s);
     const ls_motion_seg_t *nx = NULL;
-    m->t_s += dtau;
-    if (m->blending_) {
-        m->t_next_s_ += dtau;
-        nx = next_seg(m);
-    } else if (s->overlap_s > 0.0 && m->t_s >= s->traj.duration_s - s->overlap_s) {
-        nx = next_seg(m);
-        if (nx != NULL) {
-            m->blending_ = true;
-            m->t_next_s_ = m->t_s - (s->traj.duration_s - s->overlap_s);
+    if (m->ramping_) {
+        m->ramp_t_s_ += dt_s;
+        nx = m->blending_ ? next_seg(m) : NULL;
+    } else {
+        m->t_s += dt_s;
+        if (m->blending_) {
+            m->t_next_s_ += dt_s;
+            nx = next_seg(m);
+        } else if (s->overlap_s > 0.0 && !m->off_plan_[0] && m->t_s >= s->traj.duration_s - s->overlap_s) {
+            nx = next_seg(m);
+            if (nx != NULL) {
+                m->blending_ = true;
+                m->t_next_s_ = m->t_s - (s->traj.duration_s - s->overlap_s);
+            }
         }
     }
+    double xa[LS_N_JOINTS], xda[LS_N_JOINTS], xb[LS_N_JOINTS] = { 0 }, xdb[LS_N_JOINTS] = { 0 };
+    seg_state(m, 0, s, xa, xda, NULL);
+    if (nx != NULL) {
+        seg_state(m, 1, nx, xb, xdb, NULL);
+    }
+    /* The clock sums dt_s: within END_TOL_S of the end counts as there (the
+     * profile is at rest then, a jerk phase's cube away from q1). */
+    const bool at_end = !m->ramping_ && m->t_s >= seg_traj(m, 0, s)->duration_s - END_TOL_S;
     double q[LS_N_JOINTS];
-    const int ks = step_position(m, s, m->blending_ ? nx : NULL, q, qd);
+    const int ks = setpoint(m, s, xa, xda, nx, xb, xdb, at_end, dt_s, q, qd);
     if (ks != LS_OK) {
         fault(m, ev, "no joint solution on the planned path (IK status %d): stopped", ks);
-    } else {
-        if (s->kind == LS_SEG_JOINT) {
-            for (int j = 0; j < LS_N_JOINTS; j++) {
-                qd[j] *= m->ts.r;
-            }
-        } else {
-            for (int j = 0; j < LS_N_JOINTS; j++) {
-                qd[j] = (q[j] - m->q_cmd[j]) / dt_s;
-            }
-        }
-        memcpy(m->q_cmd, q, sizeof m->q_cmd);
-        if (m->t_s >= s->traj.duration_s) {
-            arrive(m, s, ev);
-            if (m->blending_) {
-                /* The next segment is under way: make it the current one. */
-                const double t_next = m->t_next_s_;
-                m->blending_ = false;
-                advance(m, ev, false);
-                m->t_s = t_next;
-            } else if (s->n_aux > 0 && !m->plan.dry_run) {
-                m->sub_ = SUB_AUX;
-                m->aux_k_ = 0;
-                for (int j = 0; j < LS_N_JOINTS; j++) {
-                    qd[j] = 0.0;
-                }
-                announce_aux(m, s, ev);
-            } else {
-                for (int j = 0; j < LS_N_JOINTS; j++) {
-                    qd[j] = 0.0;
-                }
-                after_aux(m, s, ev);
-            }
-        }
-        if (m->phase == LS_MOTION_STOPPING && m->sub_ == SUB_MOVE && ls_timescale_settled(&m->ts) && m->ts.r == 0.0) {
+        return;
+    }
+    memcpy(m->q_cmd, q, sizeof m->q_cmd);
+    if (m->ramping_) {
+        if (m->ramp_t_s_ >= m->ramp_T_s_) {
             for (int j = 0; j < LS_N_JOINTS; j++) {
                 qd[j] = 0.0;
             }
             pause_now(m, ev);
         }
+    } else if (at_end) {
+        end_of_segment(m, s, qd, ev);
     }
 }
 

@@ -24,6 +24,7 @@
 #include <stdint.h>
 
 #include "ls_err.h"
+#include "ls_ramp.h"
 #include "ls_robot_model.h"
 #include "ls_traj.h"
 
@@ -62,7 +63,8 @@ typedef enum {
 typedef enum {
     LS_MEV_DONE = 1, /* the plan finished: name = point or path name, q_rad = final set-point */
     LS_MEV_TAG,      /* a tagged path point was reached: name = tag, text = path, index, cycle */
-    LS_MEV_PAUSED,   /* a stop finished decelerating */
+    LS_MEV_PAUSED,   /* a stop finished decelerating: text = "at a point", "between two points" or
+                        "inside the blend of two points" */
     LS_MEV_FAULT,    /* following error, IK failure: text; the executor is idle afterwards */
     LS_MEV_AUX,      /* a path auxiliary command is due: text = the command, index = point,
                         cycle; the executor waits until ls_motion_aux_done() */
@@ -95,9 +97,7 @@ typedef enum { LS_SEG_JOINT = 1, LS_SEG_LINE, LS_SEG_ARC } ls_seg_kind_t;
  * the caller). */
 typedef struct {
     ls_seg_kind_t kind;
-    ls_traj_t traj;          /* JOINT: 6 joints; LINE/ARC: 1 axis, the path parameter s from 0 to 1 */
-    double stop_ramp_s;      /* time-scale ramp that stops it within its limits */
-    double fast_stop_ramp_s; /* the same within the model's maximum limits (ls_motion_stop_fast) */
+    ls_traj_t traj; /* JOINT: 6 joints; LINE/ARC: 1 axis, the path parameter s from 0 to 1 */
     double q0[LS_N_JOINTS], q1[LS_N_JOINTS];
     double P0[16], P1[16];                               /* LINE/ARC: tool-tip poses at s = 0 and 1, base frame */
     double tool_inv[16];                                 /* LINE/ARC: flange = tip * tool_inv */
@@ -157,7 +157,6 @@ typedef struct {
     ls_motion_phase_t phase;
     ls_motion_plan_t plan;
     double t_s; /* trajectory clock of the current segment */
-    ls_timescale_t ts;
     double following_error_max_rad;
     double q_cmd[LS_N_JOINTS];
     /* private to ls_motion.c */
@@ -169,6 +168,18 @@ typedef struct {
     uint8_t aux_k_;
     bool aux_wait_;
     double dwell_left_s_;
+    /* Stops and resumes (docs/architecture.md, "Stopping and resuming").
+     * The moving segment [0] and the one it blends into [1] each have their
+     * own axes: a joint segment its joints, a Cartesian one its path
+     * parameter. A stop drives every axis to rest on its own jerk-limited
+     * ramp (ramp_, from where it was); a resume re-plans each segment from
+     * where its ramps left it to its end (rtraj_). */
+    bool ramping_;    /* the ramps drive the axes (STOPPING), or left them at rest (PAUSED) */
+    double ramp_t_s_; /* time since the ramps began */
+    double ramp_T_s_; /* when the last of them ends */
+    ls_ramp_t ramp_[2][LS_N_JOINTS];
+    bool off_plan_[2]; /* segment k runs rtraj_[k], not its planned profile */
+    ls_traj_t rtraj_[2];
 } ls_motion_t;
 
 /* Init-time: idle, holding q = 0 until ls_motion_hold. */
@@ -279,18 +290,30 @@ int ls_motion_prog_blend(ls_motion_program_t *prog, const ls_robot_model_t *mode
  * motion is already running, -2 when the plan does not start within 1e-3 rad
  * of the held set-point (nothing changes). Copies the plan (not a program). */
 int ls_motion_start(ls_motion_t *m, const ls_motion_plan_t *p);
-void ls_motion_stop(ls_motion_t *m); /* decelerate along the path, then LS_MEV_PAUSED */
-/* The same at the model's maximum deceleration (faults, emergency, shutdown):
- * also shortens a stop already under way. */
+/* Stop, then LS_MEV_PAUSED: every axis of the moving segment (a joint
+ * segment's joints, a Cartesian segment's path parameter, and those of the
+ * segment it blends into) comes to rest on its own time-optimal
+ * jerk-limited ramp (ls_ramp.h) from its current position, velocity and
+ * acceleration, within the segment's own acceleration and jerk limits
+ * (half of them each while two segments blend, so that their sum stays
+ * within the limits). A Cartesian segment stops on its path; a joint
+ * segment's joints stop each on their own, near the planned joint path. */
+void ls_motion_stop(ls_motion_t *m);
+/* The same within the model's maximum acceleration and jerk (faults,
+ * emergency, shutdown): also shortens a stop already under way. */
 void ls_motion_stop_fast(ls_motion_t *m);
-/* The category-1 stop's bound for joint j (0-based) moving at up to its
- * velocity limit in a joint move, from the model alone (docs/reliability.md,
- * "Stopping distance and time"): once the loop takes the stop, the joint
- * comes to rest within *time_s and travels at most *dist_rad. The user's speed
- * and acceleration settings can only make the stop shorter. Returns 0, -1 on
- * a bad argument (nothing written). */
+/* The category-1 stop's bound for joint j (0-based), from the model alone
+ * (docs/reliability.md, "Stopping distance and time"): the fast stop's ramp
+ * from the joint's velocity limit while it still accelerates at its
+ * acceleration limit, a state no plan reaches, so every stop the loop takes
+ * ends within *time_s and *dist_rad. The user's settings can only make it
+ * shorter. Returns 0, -1 on a bad argument (nothing written). */
 int ls_motion_fast_stop_bound(const ls_robot_model_t *model, int j, double *time_s, double *dist_rad);
-int ls_motion_resume(ls_motion_t *m); /* from PAUSED; -1 otherwise */
+/* From PAUSED; -1 otherwise. After a stop inside a segment each segment is
+ * re-planned from rest where its ramps left it to its end, within its own
+ * limits (half of them while two segments blend), and does not blend into
+ * the next: it arrives at rest. Control-loop safe: closed-form planning. */
+int ls_motion_resume(ls_motion_t *m);
 void ls_motion_abort(ls_motion_t *m); /* drop the motion at once: hold the current set-point */
 /* The auxiliary command announced by LS_MEV_AUX finished: go on. */
 void ls_motion_aux_done(ls_motion_t *m);

@@ -449,9 +449,9 @@ static void test_turning_lines_blend_within_angular_limits(void **state)
 
 /* Joint into joint: each joint within its velocity, acceleration and jerk
  * limits, joint 1 continuing and joint 3 reversing through the points. */
-static void test_joint_blend_within_joint_limits(void **state)
+/* Three joint moves (joints 1 and 3) blended through their first two points. */
+static void make_joint_blend_path(void)
 {
-    (void)state;
     char why[128];
     memset(&g_prog, 0, sizeof g_prog);
     double q_prev[LS_N_JOINTS];
@@ -471,6 +471,12 @@ static void test_joint_blend_within_joint_limits(void **state)
     }
     g_prog.n = 3;
     assert_int_equal(ls_motion_prog_blend(&g_prog, M, 1, why, sizeof why), 0);
+}
+
+static void test_joint_blend_within_joint_limits(void **state)
+{
+    (void)state;
+    make_joint_blend_path();
     assert_true(isnan(ls_motion_seg_blend_dev_m(&g_prog.seg[0], &g_prog.seg[1])));
     assert_true(g_prog.seg[0].jerk_scale_[0] == 0.5 && g_prog.seg[0].jerk_scale_[2] == 1.0);
     assert_int_equal(ls_motion_plan_path(&g_plan, &g_prog, 1, false, "j"), 0);
@@ -514,6 +520,130 @@ static void test_joint_blend_within_joint_limits(void **state)
     assert_memory_equal(g_m.q_cmd, g_prog.seg[2].q1, sizeof g_m.q_cmd);
 }
 
+/* What a run with a stop and a resume measured from the set-points. */
+typedef struct {
+    double tip_j, tip_a;   /* peaks of the tool tip's jerk and acceleration */
+    double joint_j_ratio;  /* the largest |joint jerk| / the joint's jerk limit */
+    bool stopped_blending; /* the stop came while two segments overlapped */
+    int paused, tags, done;
+} stop_run_t;
+
+/* Run g_plan from home; `at_ms` cycles into blend number `blend` (1 = the
+ * first corner) stop (fast: ls_motion_stop_fast), hold 50 cycles paused,
+ * resume and run to the end. Jerks by third differences of the set-points
+ * (a weighted mean of the true jerk over three cycles, never above its
+ * peak), including the cycles where the stop and the resume begin. */
+static stop_run_t run_stopping_in_blend(int blend, long at_ms, bool fast)
+{
+    stop_run_t r = { 0 };
+    ls_motion_init(&g_m, M);
+    ls_motion_hold(&g_m, mt_q_home);
+    assert_int_equal(ls_motion_start(&g_m, &g_plan), 0);
+    double h[4][LS_N_JOINTS], p[4][3], P[16];
+    tip_of(mt_q_home, P);
+    for (int i = 0; i < 4; i++) {
+        memcpy(h[i], mt_q_home, sizeof h[i]);
+        memcpy(p[i], P + 12, sizeof p[i]);
+    }
+    ev_log_t log = { .n = 0 };
+    int blends = 0;
+    long in_blend = -1, paused_for = 0;
+    bool was_blending = false;
+    for (long k = 0; k < MAX_STEPS && r.done == 0; k++) {
+        double q[LS_N_JOINTS], qd[LS_N_JOINTS];
+        const int before = log.n;
+        mt_step(&g_m, q, qd, &log);
+        memmove(h[1], h[0], 3 * sizeof h[0]);
+        memcpy(h[0], q, sizeof h[0]);
+        tip_of(q, P);
+        memmove(p[1], p[0], 3 * sizeof p[0]);
+        memcpy(p[0], P + 12, sizeof p[0]);
+        if (k >= 3) {
+            for (int j = 0; j < LS_N_JOINTS; j++) {
+                const double jk = (h[0][j] - 3.0 * h[1][j] + 3.0 * h[2][j] - h[3][j]) / (DT_S * DT_S * DT_S);
+                r.joint_j_ratio = fmax(r.joint_j_ratio, fabs(jk) / M->qddd_max_rad_s3[j]);
+            }
+            double a[3], j3[3];
+            const double zero[3] = { 0, 0, 0 };
+            for (int i = 0; i < 3; i++) {
+                a[i] = (p[0][i] - 2.0 * p[1][i] + p[2][i]) / (DT_S * DT_S);
+                j3[i] = (p[0][i] - 3.0 * p[1][i] + 3.0 * p[2][i] - p[3][i]) / (DT_S * DT_S * DT_S);
+            }
+            r.tip_a = fmax(r.tip_a, dist3(a, zero));
+            r.tip_j = fmax(r.tip_j, dist3(j3, zero));
+        }
+        for (int e = before; e < log.n; e++) {
+            r.tags += log.ev[e].kind == LS_MEV_TAG;
+            r.paused += log.ev[e].kind == LS_MEV_PAUSED;
+            r.done += log.ev[e].kind == LS_MEV_DONE;
+            assert_true(log.ev[e].kind != LS_MEV_FAULT);
+        }
+        if (log.n > MAX_LOG - 8) {
+            log.n = 0; /* counted above */
+        }
+        blends += g_m.blending_ && !was_blending;
+        was_blending = g_m.blending_;
+        if (blends == blend && in_blend < 0) {
+            in_blend = 0;
+        }
+        if (in_blend >= 0 && g_m.phase == LS_MOTION_RUNNING && r.paused == 0 && in_blend++ == at_ms) {
+            r.stopped_blending = g_m.blending_;
+            if (fast) {
+                ls_motion_stop_fast(&g_m);
+            } else {
+                ls_motion_stop(&g_m);
+            }
+        }
+        if (g_m.phase == LS_MOTION_PAUSED && paused_for++ == 50) {
+            assert_int_equal(ls_motion_resume(&g_m), 0);
+        }
+    }
+    return r;
+}
+
+/* A stop while two segments blend, early, midway and late in the blend:
+ * both come to rest each on its own ramp at half its limits, so the sum
+ * keeps the jerk limit (the tool's for lines, every joint's for joints),
+ * the arm pauses once, and the resume finishes the path through every point
+ * with the jerk limit kept too. */
+static void test_stop_while_blending_keeps_the_jerk_limit(void **state)
+{
+    (void)state;
+    ls_motion_cart_limits_t lim;
+    mt_limits(&lim);
+    const double fracs[3] = { 0.1, 0.5, 0.9 };
+    for (int f = 0; f < 3; f++) {
+        make_zigzag(4, 1.0, -1, 1.0);
+        const long at_ms = (long)(fracs[f] * g_prog.seg[1].overlap_s / DT_S);
+        for (int fast = 0; fast < 2; fast++) {
+            const stop_run_t r = run_stopping_in_blend(2, at_ms, fast != 0);
+            const double j_lim = fast ? M->max_linear_jerk_m_s3 : lim.j_lin_m_s3;
+            print_message("lines, stop %s %.0f %% into the blend: tip jerk %.4g m/s^3 (limit %.4g), accel %.4g\n",
+                          fast ? "fast" : "", 100.0 * fracs[f], r.tip_j, j_lim, r.tip_a);
+            assert_true(r.stopped_blending);
+            assert_int_equal(r.paused, 1);
+            assert_int_equal(r.tags, 4);
+            assert_int_equal(r.done, 1);
+            assert_true(r.tip_j <= j_lim * (1.0 + 1e-6));
+            assert_memory_equal(g_m.q_cmd, g_prog.seg[3].q1, sizeof g_m.q_cmd);
+        }
+        make_joint_blend_path();
+        assert_int_equal(ls_motion_plan_path(&g_plan, &g_prog, 1, false, "j"), 0);
+        const long at_j = (long)(fracs[f] * g_prog.seg[0].overlap_s / DT_S);
+        for (int fast = 0; fast < 2; fast++) {
+            const stop_run_t r = run_stopping_in_blend(1, at_j, fast != 0);
+            print_message("joints, stop %s %.0f %% into the blend: joint jerk %.4g of the limit\n", fast ? "fast" : "",
+                          100.0 * fracs[f], r.joint_j_ratio);
+            assert_true(r.stopped_blending);
+            assert_int_equal(r.paused, 1);
+            assert_int_equal(r.tags, 3);
+            assert_int_equal(r.done, 1);
+            assert_true(r.joint_j_ratio <= 1.0 + 1e-6);
+            assert_memory_equal(g_m.q_cmd, g_prog.seg[2].q1, sizeof g_m.q_cmd);
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -523,6 +653,7 @@ int main(void)
         cmocka_unit_test(test_blended_lines_over_two_cycles),
         cmocka_unit_test(test_turning_lines_blend_within_angular_limits),
         cmocka_unit_test(test_joint_blend_within_joint_limits),
+        cmocka_unit_test(test_stop_while_blending_keeps_the_jerk_limit),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
