@@ -71,8 +71,8 @@ void ls_mcmd_cart_limits(const ls_core_t *core, double speed_pct, double accel_p
     lim->a_lin_m_s2 = fmin(lim->a_lin_m_s2, m->max_linear_accel_m_s2);
     lim->a_ang_rad_s2 = fmin(lim->a_ang_rad_s2, m->max_angular_accel_rad_s2);
     /* Jerk follows the acceleration's share of the maximum. */
-    lim->j_lin_m_s3 = m->max_linear_jerk_m_s3 * lim->a_lin_m_s2 / m->max_linear_accel_m_s2;
-    lim->j_ang_rad_s3 = m->max_angular_jerk_rad_s3 * lim->a_ang_rad_s2 / m->max_angular_accel_rad_s2;
+    lim->j_lin_m_s3 = ls_robot_model_linear_jerk(m, lim->a_lin_m_s2);
+    lim->j_ang_rad_s3 = ls_robot_model_angular_jerk(m, lim->a_ang_rad_s2);
     lim->joint_speed_frac = 1.0;
 }
 

@@ -203,7 +203,10 @@ static int32_t plan_and_start(ls_core_t *core, ls_call_t *call, const char *what
     const ls_settings_t *set = &core->settings;
     int32_t code;
     plan->a_m_s2 = fmin(set->linear_accel_m_s2, core->model->max_linear_accel_m_s2);
+    plan->j_m_s3 = ls_robot_model_linear_jerk(core->model, plan->a_m_s2);
+    /* The brake: the model's maxima, jerk-limited as every other motion. */
     plan->a_stop_m_s2 = core->model->max_linear_accel_m_s2;
+    plan->j_stop_m_s3 = core->model->max_linear_jerk_m_s3;
     ls_fmt_print(plan->sensor, sizeof plan->sensor, "%s", sensor->name);
     ls_mcmd_tool_pose(core, plan->tool);
 
@@ -514,6 +517,8 @@ int32_t ls_h_manual_control(struct ls_core *core, struct ls_call *call)
         jog.v_ang_rad_s = frac * m->max_angular_speed_rad_s;
         jog.a_lin_m_s2 = fmin(set->linear_accel_m_s2, m->max_linear_accel_m_s2);
         jog.a_ang_rad_s2 = fmin(set->angular_accel_rad_s2, m->max_angular_accel_rad_s2);
+        jog.j_lin_m_s3 = ls_robot_model_linear_jerk(m, jog.a_lin_m_s2);
+        jog.j_ang_rad_s3 = ls_robot_model_angular_jerk(m, jog.a_ang_rad_s2);
         ls_mcmd_tool_pose(core, jog.tool);
         ok = ls_control_set_manual(core->ctl, core->manual, &jog, call->req->seq);
     } else {

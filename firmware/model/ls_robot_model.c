@@ -34,6 +34,16 @@ const ls_robot_model_t ls_robot_model_default = {
     .workspace_max_m = { 0.95, 0.95, 1.40 },
 };
 
+double ls_robot_model_linear_jerk(const ls_robot_model_t *m, double a_m_s2)
+{
+    return m->max_linear_jerk_m_s3 * a_m_s2 / m->max_linear_accel_m_s2;
+}
+
+double ls_robot_model_angular_jerk(const ls_robot_model_t *m, double a_rad_s2)
+{
+    return m->max_angular_jerk_rad_s3 * a_rad_s2 / m->max_angular_accel_rad_s2;
+}
+
 double ls_robot_model_reach_m(const ls_robot_model_t *m)
 {
     double r = 0.0;

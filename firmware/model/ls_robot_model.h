@@ -37,6 +37,13 @@ typedef struct {
  * "Limits"). */
 double ls_robot_model_reach_m(const ls_robot_model_t *m);
 
+/* The Cartesian jerk that goes with a Cartesian acceleration: the same
+ * share of the model's maximum (a move at half the maximum acceleration
+ * gets half the maximum jerk). Moves, guarded moves and jogs all take their
+ * jerk from here. */
+double ls_robot_model_linear_jerk(const ls_robot_model_t *m, double a_m_s2);
+double ls_robot_model_angular_jerk(const ls_robot_model_t *m, double a_rad_s2);
+
 /* The simulated arm (about the size of a small industrial arm). */
 extern const ls_robot_model_t ls_robot_model_default;
 

@@ -144,6 +144,46 @@ static int refuse(char *why, size_t len, const char *text)
     return -1;
 }
 
+/* The travel from rest at `from` to `to`: a rest-to-rest profile at speed
+ * v within the plan's travel acceleration and jerk (checked > 0 by
+ * ls_react_check_plan, so it plans). */
+static void plan_travel(ls_react_t *r, double from, double to, double v)
+{
+    (void)ls_traj_plan_axis(&r->prof_, from, to, v, r->plan.a_m_s2, r->plan.j_m_s3);
+    r->prof_t_ = 0.0;
+    r->braking_ = false;
+}
+
+/* A brake of the travel from where it is (s_, v_, a_) to rest within the
+ * plan's stop acceleration and jerk. */
+static void plan_brake(ls_react_t *r)
+{
+    if (ls_ramp_plan(&r->brake_, r->s_, r->v_, r->a_, 0.0, r->plan.a_stop_m_s2, r->plan.j_stop_m_s3) != LS_OK) {
+        (void)ls_ramp_plan(&r->brake_, r->s_, 0.0, 0.0, 0.0, 1.0, 1.0);
+    }
+    r->prof_t_ = 0.0;
+    r->braking_ = true;
+}
+
+/* One cycle of the travel along the brake or the profile: s_next_, v_, a_.
+ * True when it has reached its end (at rest). */
+static bool travel_step(ls_react_t *r, double dt_s)
+{
+    r->prof_t_ += dt_s;
+    bool end;
+    if (r->braking_) {
+        ls_ramp_sample(&r->brake_, r->prof_t_, &r->s_next_, &r->v_, &r->a_);
+        end = r->prof_t_ >= r->brake_.duration_s;
+    } else {
+        ls_traj_sample_axis(&r->prof_, r->prof_t_, &r->s_next_, &r->v_, &r->a_);
+        end = r->prof_t_ >= r->prof_.T - 1e-9;
+    }
+    if (end) {
+        r->v_ = r->a_ = 0.0;
+    }
+    return end;
+}
+
 int ls_react_check_plan(const ls_react_plan_t *p, char *why, size_t whylen)
 {
     if (p == NULL) {
@@ -153,14 +193,16 @@ int ls_react_check_plan(const ls_react_plan_t *p, char *why, size_t whylen)
         return refuse(why, whylen, "unknown kind of sensor-guided move");
     }
     if (!finite_n(p->tool, 16) || !finite_n(p->dir_tool, 3) || !isfinite(p->dist_m) || !isfinite(p->v_m_s) ||
-        !isfinite(p->a_m_s2) || !isfinite(p->a_stop_m_s2) || !isfinite(p->threshold) || !isfinite(p->envelope)) {
+        !isfinite(p->a_m_s2) || !isfinite(p->j_m_s3) || !isfinite(p->a_stop_m_s2) || !isfinite(p->j_stop_m_s3) ||
+        !isfinite(p->threshold) || !isfinite(p->envelope)) {
         return refuse(why, whylen, "non-finite number in the plan");
     }
     if (fabs(norm3(p->dir_tool) - 1.0) > 1e-6 || !(p->dist_m > 0.0)) {
         return refuse(why, whylen, "the direction of travel must be a unit vector and the distance > 0");
     }
-    if (!(p->v_m_s > 0.0) || !(p->a_m_s2 > 0.0) || !(p->a_stop_m_s2 > 0.0)) {
-        return refuse(why, whylen, "speed and accelerations must be > 0");
+    if (!(p->v_m_s > 0.0) || !(p->a_m_s2 > 0.0) || !(p->a_stop_m_s2 > 0.0) || !(p->j_m_s3 > 0.0) ||
+        !(p->j_stop_m_s3 > 0.0)) {
+        return refuse(why, whylen, "speed, accelerations and jerks must be > 0");
     }
     if (p->envelope < 0.0) {
         return refuse(why, whylen, "the envelope must be >= 0 (0: none)");
@@ -211,12 +253,14 @@ int ls_react_start(ls_react_t *r, const ls_react_plan_t *p, const double q_cmd[L
     } else {
         memset(r->n_, 0, sizeof r->n_);
     }
-    r->s_ = r->v_ = r->c_ = r->vc_ = r->t_ = r->s_trigger_ = r->e_prev_ = r->de_f_ = r->travel_t_ = 0.0;
+    r->s_ = r->v_ = r->a_ = r->c_ = r->vc_ = r->t_ = r->s_trigger_ = r->e_prev_ = r->de_f_ = r->travel_t_ = 0.0;
     r->have_e_ = false;
+    r->stopping_ = false;
     r->end_ = (ls_react_end_t)0;
     r->stop_req_ = false;
     r->paused = false;
     r->phase_ = p->kind == LS_REACT_COMPLY ? PH_SEEK : PH_RUN;
+    plan_travel(r, 0.0, p->kind == LS_REACT_COMPLY ? 0.0 : p->dist_m, p->v_m_s);
     r->active = true;
     return 0;
 }
@@ -235,6 +279,14 @@ int ls_react_resume(ls_react_t *r)
     }
     r->paused = false;
     r->stop_req_ = false;
+    /* From rest where the brake left it: the rest of the phase's travel. */
+    if (r->phase_ == PH_RUN) {
+        plan_travel(r, r->s_, r->plan.dist_m, r->plan.v_m_s);
+    } else if (r->phase_ == PH_RETURN) {
+        plan_travel(r, r->s_, r->s_trigger_, fmin(r->plan.v_m_s, LS_REACT_RETURN_SPEED_M_S));
+    } else if (r->phase_ == PH_BRAKE) {
+        plan_brake(r); /* at rest already: an empty brake, then the phase goes on */
+    }
     return 0;
 }
 
@@ -264,21 +316,11 @@ void ls_react_abort(ls_react_t *r, const double q_meas[LS_N_JOINTS], ls_motion_e
     if (!r->active) {
         return;
     }
-    r->v_ = r->vc_ = 0.0;
+    r->v_ = r->a_ = r->vc_ = 0.0;
     finish(r, LS_REACT_END_ABORTED, q_meas, ev);
 }
 
 /* ------------------------------------------------------------- guarded and compliant moves */
-
-/* Speed along a profile that accelerates at a, cruises at vmax and stops at
- * `remaining` (>= 0) with deceleration a. */
-static double profile_speed(double v, double vmax, double a, double remaining, double dt_s)
-{
-    double up = v + a * dt_s;
-    double stop = sqrt(2.0 * a * (remaining > 0.0 ? remaining : 0.0));
-    double out = up < vmax ? up : vmax;
-    return out < stop ? out : stop;
-}
 
 static double toward_zero(double v, double a, double dt_s)
 {
@@ -316,41 +358,34 @@ static bool guarded_step(ls_react_t *r, const double *reading, double env, doubl
             r->report.trigger = r->end_ == LS_REACT_END_ENVELOPE ? env : reading[p->component];
             r->s_trigger_ = r->s_;
             r->phase_ = PH_BRAKE;
-            r->v_ = toward_zero(r->v_, p->a_stop_m_s2, dt_s);
+            plan_brake(r);
+            (void)travel_step(r, dt_s);
             break;
         }
-        r->v_ = profile_speed(r->v_, p->v_m_s, p->a_m_s2, p->dist_m - r->s_, dt_s);
-        if (p->dist_m - r->s_ <= 1e-9 || (r->v_ < 1e-9 && r->s_ > 0.0)) {
-            r->s_ = p->dist_m;
-            r->v_ = 0.0;
+        if (travel_step(r, dt_s)) {
+            r->s_next_ = p->dist_m;
             r->end_ = LS_REACT_END_MAX_DISTANCE;
             r->phase_ = PH_SETTLE;
             r->t_ = 0.0;
         }
         break;
     case PH_BRAKE:
-        r->v_ = toward_zero(r->v_, p->a_stop_m_s2, dt_s);
-        if (r->v_ == 0.0) {
+        if (travel_step(r, dt_s)) {
+            /* Back to where the reading crossed: the overshoot of the stop
+             * would otherwise keep pressing with the contact's stiffness. */
             r->phase_ = PH_RETURN;
+            plan_travel(r, r->s_next_, r->s_trigger_, fmin(p->v_m_s, LS_REACT_RETURN_SPEED_M_S));
         }
         break;
-    case PH_RETURN: {
-        /* Back to where the reading crossed: the overshoot of the stop
-         * would otherwise keep pressing with the contact's stiffness. */
-        double back = r->s_ - r->s_trigger_;
-        double vr = p->v_m_s < LS_REACT_RETURN_SPEED_M_S ? p->v_m_s : LS_REACT_RETURN_SPEED_M_S;
-        double sp = profile_speed(-r->v_, vr, p->a_m_s2, back, dt_s);
-        r->v_ = -sp;
-        if (back <= 1e-9 || (sp < 1e-9 && back < 1e-6)) {
-            r->s_ = r->s_trigger_;
-            r->v_ = 0.0;
+    case PH_RETURN:
+        if (travel_step(r, dt_s)) {
+            r->s_next_ = r->s_trigger_;
             r->phase_ = PH_SETTLE;
             r->t_ = 0.0;
         }
         break;
-    }
     case PH_SETTLE:
-        r->v_ = 0.0;
+        r->v_ = r->a_ = 0.0;
         if (r->t_ >= SETTLE_AFTER_RETURN_S) {
             finish(r, r->end_, q_meas, ev);
             return false;
@@ -372,13 +407,14 @@ static bool comply_step(ls_react_t *r, const double *reading, double env, double
     if (r->phase_ != PH_BRAKE) {
         if (env > p->panic_N) {
             /* Panic: stop at once, no braking ramp (comply speeds are low). */
-            r->v_ = r->vc_ = 0.0;
+            r->v_ = r->a_ = r->vc_ = 0.0;
             finish(r, LS_REACT_END_PANIC, q_meas, ev);
             return false;
         }
         if (r->t_ > p->timeout_s) {
             r->end_ = LS_REACT_END_TIMEOUT;
             r->phase_ = PH_BRAKE;
+            plan_brake(r);
         }
     }
     /* PD on the force error, as a correction speed along n. */
@@ -409,11 +445,12 @@ static bool comply_step(ls_react_t *r, const double *reading, double env, double
         r->vc_ = vc;
         if (fabs(e) <= LS_REACT_CONTACT_BAND * fabs(p->f_target_N)) {
             r->phase_ = PH_RUN;
+            plan_travel(r, r->s_, p->dist_m, p->v_m_s);
         }
         break;
-    case PH_RUN:
+    case PH_RUN: {
         r->vc_ = vc;
-        r->v_ = profile_speed(r->v_, p->v_m_s, p->a_m_s2, p->dist_m - r->s_, dt_s);
+        const bool arrived = travel_step(r, dt_s);
         r->travel_t_ += dt_s;
         if (r->travel_t_ >= LS_REACT_SETTLE_S) {
             r->report.fn_mean_N += fn;
@@ -421,17 +458,17 @@ static bool comply_step(ls_react_t *r, const double *reading, double env, double
             r->report.fn_max_N = fmax(r->report.fn_max_N, fn);
             r->report.fn_samples++;
         }
-        if (p->dist_m - r->s_ <= 1e-9 || (r->v_ < 1e-9 && r->s_ > 0.0)) {
+        if (arrived) {
             r->s_ = p->dist_m;
-            r->v_ = 0.0;
             finish(r, LS_REACT_END_MAX_DISTANCE, q_meas, ev);
             return false;
         }
         break;
+    }
     case PH_BRAKE:
         r->vc_ = 0.0;
-        r->v_ = toward_zero(r->v_, p->a_stop_m_s2, dt_s);
-        if (r->v_ == 0.0) {
+        if (travel_step(r, dt_s)) {
+            r->s_ = r->s_next_;
             finish(r, r->end_, q_meas, ev);
             return false;
         }
@@ -447,7 +484,7 @@ static void advance_tip(ls_react_t *r, double dt_s, bool comply, const double q_
                         double q_cmd[LS_N_JOINTS], double qd_cmd[LS_N_JOINTS], ls_motion_events_t *ev)
 {
     const ls_react_plan_t *p = &r->plan;
-    double s_new = r->s_ + r->v_ * dt_s;
+    double s_new = r->s_next_;
     if (r->phase_ == PH_RUN && s_new > p->dist_m) {
         s_new = p->dist_m;
     }
@@ -468,7 +505,7 @@ static void advance_tip(ls_react_t *r, double dt_s, bool comply, const double q_
     double q_new[LS_N_JOINTS];
     char why[64];
     if (solve(r->model, P, r->tool_inv_, r->q_cmd_, dt_s, q_new, why, sizeof why) != 0) {
-        r->v_ = r->vc_ = 0.0;
+        r->v_ = r->a_ = r->vc_ = 0.0;
         finish(r, LS_REACT_END_UNREACHABLE, q_meas, ev);
         return;
     }
@@ -511,14 +548,21 @@ void ls_react_step(ls_react_t *r, double dt_s, const double q_meas[LS_N_JOINTS],
     bool comply = p->kind == LS_REACT_COMPLY;
     double env = envelope_value(reading, r->report.n_values);
 
+    r->s_next_ = r->s_; /* phases that do not travel keep it */
     if (r->stop_req_) {
-        /* stopMotion: brake both motions and pause where they come to rest. */
-        r->v_ = toward_zero(r->v_, p->a_stop_m_s2, dt_s);
+        /* stopMotion: brake both motions and pause where they come to rest
+         * (the force correction at the stop acceleration: not jerk-limited). */
+        if (!r->stopping_) {
+            plan_brake(r);
+            r->stopping_ = true;
+        }
+        const bool at_rest = travel_step(r, dt_s);
         r->vc_ = toward_zero(r->vc_, p->a_stop_m_s2, dt_s);
-        if (r->v_ == 0.0 && r->vc_ == 0.0) {
+        if (at_rest && r->vc_ == 0.0) {
             r->paused = true;
             r->stop_req_ = false;
-            emit(ev, LS_MEV_PAUSED, p->ref_seq, 0, "paused", q_meas);
+            r->stopping_ = false;
+            emit(ev, LS_MEV_PAUSED, p->ref_seq, 0, "on the move's line", q_meas);
         }
     } else if (!comply) {
         if (!guarded_step(r, reading, env, dt_s, q_meas, ev)) {
@@ -535,6 +579,7 @@ void ls_react_step(ls_react_t *r, double dt_s, const double q_meas[LS_N_JOINTS],
 void ls_react_jog_config(ls_react_t *r, const ls_jog_config_t *cfg)
 {
     memset(r->jv_, 0, sizeof r->jv_);
+    memset(r->ja_, 0, sizeof r->ja_);
     r->jog_limited_ = false;
     if (cfg == NULL) {
         r->jog_on_ = false;
@@ -547,6 +592,7 @@ void ls_react_jog_config(ls_react_t *r, const ls_jog_config_t *cfg)
 void ls_react_jog_halt(ls_react_t *r)
 {
     memset(r->jv_, 0, sizeof r->jv_);
+    memset(r->ja_, 0, sizeof r->ja_);
 }
 
 bool ls_react_jog_on(const ls_react_t *r)
@@ -554,15 +600,50 @@ bool ls_react_jog_on(const ls_react_t *r)
     return r->jog_on_;
 }
 
-/* Move v (3) toward target by at most a*dt (vector norm). */
-static void approach(double v[3], const double target[3], double a, double dt_s)
+/* One cycle of a twist vector (3 components, with their rates a) toward
+ * its target: each component on its own time-optimal jerk-limited ramp
+ * (ls_ramp), re-planned every cycle from the state it reached (the rest of
+ * the same ramp while the target holds). Component i gets the share w_i /
+ * |w| of a_max and j_max, w_i = max(|d_i| / |d|, |a_i| / a_max) for the
+ * change d = target - v: from rest the components move in proportion (the
+ * vector keeps its direction and ramps as one axis would), and as the
+ * shares' squares sum to 1 the vector's acceleration and jerk keep a_max and
+ * j_max. Writes the exact displacement over dt_s. */
+static void approach(double v[3], double a[3], const double target[3], double a_max, double j_max, double dt_s,
+                     double disp[3])
 {
-    double d[3] = { target[0] - v[0], target[1] - v[1], target[2] - v[2] };
-    double n = norm3(d), lim = a * dt_s;
-    double k = n > lim ? lim / n : 1.0;
+    const double d[3] = { target[0] - v[0], target[1] - v[1], target[2] - v[2] };
+    const double dn = norm3(d);
+    double w[3];
     for (int i = 0; i < 3; i++) {
-        v[i] += k * d[i];
+        w[i] = fmax(dn > 1e-12 ? fabs(d[i]) / dn : 0.0, fabs(a[i]) / a_max);
     }
+    const double wn = norm3(w);
+    for (int i = 0; i < 3; i++) {
+        ls_ramp_t rp;
+        if (!(wn > 0.0)) { /* at the target and not accelerating: hold it */
+            v[i] = target[i];
+            a[i] = 0.0;
+            disp[i] = v[i] * dt_s;
+            continue;
+        }
+        const double share = fmax(w[i] / wn, 1e-9);
+        if (ls_ramp_plan(&rp, 0.0, v[i], a[i], target[i], a_max * share, j_max * share) != LS_OK) {
+            v[i] = a[i] = disp[i] = 0.0; /* not finite: stop */
+            continue;
+        }
+        ls_ramp_sample(&rp, dt_s, &disp[i], &v[i], &a[i]);
+    }
+}
+
+static bool jog_still(const ls_react_t *r)
+{
+    for (int i = 0; i < 6; i++) {
+        if (fabs(r->jv_[i]) >= 1e-12 || fabs(r->ja_[i]) >= 1e-9) {
+            return false;
+        }
+    }
+    return true;
 }
 
 bool ls_react_jog_step(ls_react_t *r, double dt_s, const double *twist, double q_cmd[LS_N_JOINTS],
@@ -593,26 +674,30 @@ bool ls_react_jog_step(ls_react_t *r, double dt_s, const double *twist, double q
     double vt[3], wt[3];
     rot_apply(P, vt_tool, vt);
     rot_apply(P, wt_tool, wt);
-    approach(r->jv_, vt, c->a_lin_m_s2, dt_s);
-    approach(r->jv_ + 3, wt, c->a_ang_rad_s2, dt_s);
-    if (norm3(r->jv_) < 1e-12 && norm3(r->jv_ + 3) < 1e-12) {
-        memset(r->jv_, 0, sizeof r->jv_);
-        return false;
+    double dp[3], w[3];
+    approach(r->jv_, r->ja_, vt, c->a_lin_m_s2, c->j_lin_m_s3, dt_s, dp);
+    approach(r->jv_ + 3, r->ja_ + 3, wt, c->a_ang_rad_s2, c->j_ang_rad_s3, dt_s, w);
+    const bool still = jog_still(r);
+    if (still) {
+        ls_react_jog_halt(r); /* at rest: exactly, from now on */
+        if (norm3(dp) < 1e-15 && norm3(w) < 1e-15) {
+            return false;
+        }
+        /* else the last cycle of a ramp: its displacement still counts */
     }
-    double w[3] = { r->jv_[3] * dt_s, r->jv_[4] * dt_s, r->jv_[5] * dt_s };
     double Rw[16], Pr[16], P1[16];
     rot_of_vector(w, Rw);
     memcpy(Pr, P, sizeof Pr);
     Pr[12] = Pr[13] = Pr[14] = 0.0;
     ls_pose_mul(Rw, Pr, P1);
     for (int i = 0; i < 3; i++) {
-        P1[12 + i] = P[12 + i] + r->jv_[i] * dt_s;
+        P1[12 + i] = P[12 + i] + dp[i];
     }
     double tool_inv[16], q_new[LS_N_JOINTS];
     ls_pose_inv(c->tool, tool_inv);
     char why[64];
     if (solve(r->model, P1, tool_inv, q_cmd, dt_s, q_new, why, sizeof why) != 0) {
-        memset(r->jv_, 0, sizeof r->jv_);
+        ls_react_jog_halt(r);
         if (!r->jog_limited_) {
             r->jog_limited_ = true;
             char t[80];

@@ -8,11 +8,20 @@
  *       error moves the tip along a compliance direction to hold a force;
  *   jog (manualControl): the tip follows a twist from a manual device.
  *
- * All three are Cartesian velocity control: each cycle the executor advances
- * the commanded tip pose by a velocity that respects the acceleration limit,
- * solves IK nearest to the previous set-point and hands out the joint
- * set-point and its velocity. Orientation is held (guarded, comply) or turned
- * by the twist (jog).
+ * The travel of a guarded or compliant move is a jerk-limited rest-to-rest
+ * profile along its line (ls_traj.h); its brake (a threshold, the envelope,
+ * a time-out, stopMotion) is a jerk-limited ramp to rest (ls_ramp.h) from
+ * wherever the travel is, at the plan's stop acceleration and jerk; the
+ * return to the crossing point and a resume are rest-to-rest profiles again.
+ * A jog's twist follows the device on jerk-limited ramps, per component
+ * within a share of the acceleration and jerk limits whose squares sum to 1
+ * (so that the linear and the angular vectors keep them; from rest the
+ * components move in proportion). Each cycle the executor solves IK nearest to
+ * the previous set-point and hands out the joint set-point and its velocity.
+ * Orientation is held (guarded, comply) or turned by the twist (jog). Not
+ * jerk-limited: a compliant move's force correction along its compliance
+ * direction (a PD law whose speed a filter would delay), a panic stop, and
+ * a jog stopped at a limit (it stops where IK fails).
  *
  * Where: ls_react_init at init; every other function in the control loop
  * (O(1): one or two IK of about 3 us per cycle, no allocation, no blocking).
@@ -32,7 +41,9 @@
 #include <stdint.h>
 
 #include "ls_motion.h"
+#include "ls_ramp.h"
 #include "ls_robot_model.h"
+#include "ls_traj.h"
 
 #define LS_REACT_MAX_VALUES 8
 #define LS_REACT_SENSOR_NAME_LEN 32
@@ -72,8 +83,8 @@ typedef struct {
     double dir_tool[3];                    /* unit direction of travel */
     double dist_m;                         /* guarded: maximum distance; comply: travel (> 0) */
     double v_m_s;                          /* travel speed (> 0) */
-    double a_m_s2;                         /* acceleration and normal braking (> 0) */
-    double a_stop_m_s2;                    /* braking after a threshold, envelope, panic or stop (> 0) */
+    double a_m_s2, j_m_s3;                 /* travel acceleration and jerk (> 0) */
+    double a_stop_m_s2, j_stop_m_s3;       /* brake after a threshold, envelope, time-out or stop (> 0) */
     /* guarded */
     uint8_t component; /* watched component of the reading */
     bool below;        /* stop when reading <= threshold, else when >= threshold */
@@ -107,6 +118,7 @@ typedef struct {
 typedef struct {
     double v_lin_m_s, v_ang_rad_s; /* at a full-scale twist (1.0) */
     double a_lin_m_s2, a_ang_rad_s2;
+    double j_lin_m_s3, j_ang_rad_s3;
     double tool[16];
 } ls_jog_config_t;
 
@@ -123,14 +135,21 @@ typedef struct {
     double q_cmd_[LS_N_JOINTS];
     double P0_[16], tool_inv_[16];
     double d_[3], n_[3]; /* base frame */
-    double s_, v_, c_, vc_, t_, s_trigger_, e_prev_, de_f_, travel_t_;
+    double s_, v_, a_, c_, vc_, t_, s_trigger_, e_prev_, de_f_, travel_t_;
     bool have_e_;
+    /* the travel along d_: a profile from rest (prof_) or a brake (brake_),
+     * timed by prof_t_; s_next_ is where this cycle takes it */
+    ls_traj_axis_t prof_;
+    ls_ramp_t brake_;
+    double prof_t_, s_next_;
+    bool braking_, stopping_;
     ls_react_end_t end_;
     /* jog */
     bool jog_on_;
     bool jog_limited_;
     ls_jog_config_t jog_;
     double jv_[6]; /* current twist, base frame */
+    double ja_[6]; /* its rate of change */
 } ls_react_t;
 
 /* Init-time. */
@@ -144,7 +163,8 @@ int ls_react_check_plan(const ls_react_plan_t *p, char *why, size_t whylen);
  * for a plan that ls_react_check_plan refuses. */
 int ls_react_start(ls_react_t *r, const ls_react_plan_t *p, const double q_cmd[LS_N_JOINTS], uint8_t n_values);
 
-/* Brake at a_stop and pause (LS_MEV_PAUSED); resume continues the move. */
+/* Brake at the plan's stop limits and pause (LS_MEV_PAUSED); resume plans
+ * the rest of the travel (or the return) again from rest. */
 void ls_react_stop(ls_react_t *r);
 int ls_react_resume(ls_react_t *r); /* -1 when not paused */
 /* End at once, holding the current set-point: LS_MEV_REACT_END (ABORTED)

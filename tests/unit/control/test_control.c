@@ -349,7 +349,9 @@ static void fill_react(fx_t *f, const char *sensor, double dist_m, uint32_t ref_
     p->dist_m = dist_m;
     p->v_m_s = 0.02;
     p->a_m_s2 = 1.0;
+    p->j_m_s3 = 10.0;
     p->a_stop_m_s2 = 4.0;
+    p->j_stop_m_s3 = 40.0;
     p->component = 2;
     p->threshold = 10.0;
 }
@@ -362,6 +364,8 @@ static ls_jog_config_t jog_cfg(void)
     c.v_ang_rad_s = 0.3;
     c.a_lin_m_s2 = 1.0;
     c.a_ang_rad_s2 = 3.0;
+    c.j_lin_m_s3 = 10.0;
+    c.j_ang_rad_s3 = 30.0;
     const double z[6] = { 0 };
     ls_pose_from_xyzrpy(z, c.tool);
     return c;

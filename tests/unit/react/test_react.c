@@ -90,7 +90,9 @@ static void guarded_plan(ls_react_plan_t *p, double dist_m, double v_m_s, double
     p->dist_m = dist_m;
     p->v_m_s = v_m_s;
     p->a_m_s2 = 1.0;
+    p->j_m_s3 = 10.0;
     p->a_stop_m_s2 = 4.0;
+    p->j_stop_m_s3 = 40.0;
     p->component = 2;
     p->threshold = threshold;
 }
@@ -111,24 +113,58 @@ static void collect(log_t *log, const ls_motion_events_t *ev)
     }
 }
 
+/* Push the tip position of P into the history h (newest first) and return
+ * the norm of its third difference: the tip's jerk over the last 3 cycles. */
+static double push_tip_jerk(double h[4][3], const double P[16])
+{
+    memmove(h[1], h[0], 3 * sizeof h[0]);
+    memcpy(h[0], P + 12, sizeof h[0]);
+    double j2 = 0.0;
+    for (int k = 0; k < 3; k++) {
+        const double jk = (h[0][k] - 3.0 * h[1][k] + 3.0 * h[2][k] - h[3][k]) / (DT_S * DT_S * DT_S);
+        j2 += jk * jk;
+    }
+    return sqrt(j2);
+}
+
+/* The largest tool-tip jerk of the last run() (third differences of the
+ * tip's position, each a weighted mean of the true jerk over three cycles). */
+static double g_max_tip_jerk;
+
 /* Run the move against the world until it ends (or max cycles); returns cycles. */
 static long run(ls_react_t *r, world_t *w, double q[LS_N_JOINTS], log_t *log, long max_cycles, double *max_pen_m)
 {
-    double qd[LS_N_JOINTS], reading[6];
+    double qd[LS_N_JOINTS], reading[6], h[4][3];
+    double P[16];
+    tip(q, r->plan.tool, P);
+    for (int k = 0; k < 4; k++) {
+        memcpy(h[k], P + 12, sizeof h[k]);
+    }
+    g_max_tip_jerk = 0.0;
     long i;
     for (i = 0; i < max_cycles && r->active; i++) {
         read_force(w, q, r->plan.tool, i, reading);
         ls_motion_events_t ev = { .n = 0 };
         ls_react_step(r, DT_S, q, reading, q, qd, &ev);
         collect(log, &ev);
+        tip(q, r->plan.tool, P);
+        g_max_tip_jerk = fmax(g_max_tip_jerk, push_tip_jerk(h, P));
         if (max_pen_m != NULL) {
-            double P[16];
-            tip(q, r->plan.tool, P);
             double pen = along(w->P0, P, w->u) - w->wall_m;
             *max_pen_m = fmax(*max_pen_m, pen);
         }
     }
     return i;
+}
+
+/* How far a jerk-limited brake from v at (a, j) to rest travels. */
+static double brake_distance(double v, double a, double j)
+{
+    ls_ramp_t rp;
+    assert_int_equal(ls_ramp_plan(&rp, 0.0, v, 0.0, 0.0, a, j), LS_OK);
+    double d;
+    ls_ramp_sample(&rp, rp.duration_s, &d, NULL, NULL);
+    return d;
 }
 
 /* ---------------------------------------------------------------- guarded */
@@ -154,9 +190,15 @@ static void test_guarded_stops_at_the_wall_and_comes_back(void **state)
     assert_int_equal(log.last.kind, LS_MEV_REACT_END);
     assert_int_equal(log.last.index, LS_REACT_END_THRESHOLD);
     assert_int_equal(log.last.ref_seq, 42);
-    /* braking from 0.15 m/s at 4 m/s^2: 2.8 mm plus one cycle of detection */
-    assert_true(max_pen <= 0.15 * 0.15 / (2 * 4.0) + 2 * 0.15 * DT_S);
-    assert_true(max_pen > 1e-4);
+    /* braking from 0.15 m/s jerk-limited at 4 m/s^2 and 40 m/s^3: 9.2 mm
+     * (sqrt(40 x 0.15) = 2.4 m/s^2 peak, 122 ms) plus a cycle of detection;
+     * the tip's jerk never beyond the brake's, the travel's (10) below it */
+    const double d_brake = brake_distance(0.15, 4.0, 40.0);
+    assert_double_equal(d_brake, 0.15 * sqrt(0.15 / 40.0), 1e-12);
+    assert_true(max_pen <= d_brake + 2 * 0.15 * DT_S);
+    assert_true(max_pen > 0.9 * d_brake);
+    assert_true(g_max_tip_jerk <= 40.0 * (1.0 + 1e-6));
+    assert_true(g_max_tip_jerk > 30.0);
     /* comes back to where the force crossed 5 N (0.1 mm into the spring) */
     double P[16];
     tip(q, p.tool, P);
@@ -343,7 +385,9 @@ static void comply_plan(ls_react_plan_t *p, double target_N)
     p->c_max_m = 0.05;
     p->v_m_s = 0.03;
     p->a_m_s2 = 1.0;
+    p->j_m_s3 = 10.0;
     p->a_stop_m_s2 = 4.0;
+    p->j_stop_m_s3 = 40.0;
     p->f_target_N = target_N;
     p->kp_m_s_N = 5e-4;
     p->vc_max_m_s = 0.01;
@@ -427,6 +471,8 @@ static ls_jog_config_t jog_cfg(void)
     c.v_ang_rad_s = 0.3;
     c.a_lin_m_s2 = 1.0;
     c.a_ang_rad_s2 = 3.0;
+    c.j_lin_m_s3 = 10.0;
+    c.j_ang_rad_s3 = 30.0;
     identity(c.tool);
     return c;
 }
@@ -446,10 +492,14 @@ static void test_jog_respects_speed_and_acceleration(void **state)
     double P0[16], Pprev[16], P[16];
     tip(q, c.tool, P0);
     memcpy(Pprev, P0, sizeof Pprev);
-    double vprev = 0.0, vmax = 0.0, amax = 0.0;
+    double vprev = 0.0, vmax = 0.0, amax = 0.0, h[4][3];
+    for (int k = 0; k < 4; k++) {
+        memcpy(h[k], P0 + 12, sizeof h[k]);
+    }
     for (int i = 0; i < 1000; i++) {
         assert_true(ls_react_jog_step(&r, DT_S, tw, q, qd, NULL));
         tip(q, c.tool, P);
+        assert_true(push_tip_jerk(h, P) <= 10.0 * (1.0 + 1e-6));
         double v = ls_pose_dist(P, Pprev) / DT_S;
         vmax = fmax(vmax, v);
         amax = fmax(amax, fabs(v - vprev) / DT_S);
@@ -458,8 +508,14 @@ static void test_jog_respects_speed_and_acceleration(void **state)
     }
     assert_double_equal(vmax, 0.1, 1e-6);
     assert_true(amax <= 1.0 + 1e-3);
-    /* 1 s: 0.1 s ramp (5 mm) then 0.9 s at 0.1 m/s along the tool x, orientation held */
-    assert_double_equal(ls_pose_dist(P, P0), 0.005 + 0.09, 2e-4);
+    /* 1 s: the jerk-limited ramp to 0.1 m/s at a = 1, j = 10 (two 0.1 s jerk
+     * phases, 10 mm), then 0.1 m/s along the tool x, orientation held */
+    ls_ramp_t up;
+    assert_int_equal(ls_ramp_plan(&up, 0.0, 0.0, 0.0, 0.1, 1.0, 10.0), LS_OK);
+    assert_double_equal(up.duration_s, 0.2, 1e-12);
+    double want;
+    ls_ramp_sample(&up, 1.0, &want, NULL, NULL);
+    assert_double_equal(ls_pose_dist(P, P0), want, 1e-6);
     assert_double_equal(ls_pose_angle(P, P0), 0.0, 1e-9);
     double dx[3] = { P[12] - P0[12], P[13] - P0[13], P[14] - P0[14] };
     assert_double_equal((dx[0] * P0[0] + dx[1] * P0[1] + dx[2] * P0[2]) / ls_pose_dist(P, P0), 1.0, 1e-9);
@@ -467,8 +523,14 @@ static void test_jog_respects_speed_and_acceleration(void **state)
     int moving = 0;
     for (int i = 0; i < 300; i++) {
         moving += ls_react_jog_step(&r, DT_S, NULL, q, qd, NULL);
+        tip(q, c.tool, P);
+        const double jerk = push_tip_jerk(h, P);
+        if (!(jerk <= 10.0 * (1.0 + 1e-6))) {
+            fail_msg("released: tip jerk %.9g m/s^3 beyond 10 at cycle %d", jerk, i);
+        }
     }
-    assert_true(moving >= 99 && moving <= 101);
+    const int ramp_cycles = (int)ceil(up.duration_s / DT_S);
+    assert_true(moving >= ramp_cycles - 1 && moving <= ramp_cycles + 1);
     ls_react_jog_config(&r, NULL);
     assert_false(ls_react_jog_on(&r));
 }
