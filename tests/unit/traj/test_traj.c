@@ -1,4 +1,4 @@
-/* ls_traj: seven-segment profiles, synchronisation, sampling, time scaling.
+/* ls_traj: seven-segment profiles, synchronisation, sampling.
  * Expected durations and phase lengths are worked out by hand in the
  * comments; random cases use a fixed seed. */
 #include <setjmp.h>
@@ -436,180 +436,6 @@ static void test_sync_random(void **state)
     }
 }
 
-/* ---- time scaling -------------------------------------------------------- */
-
-static void test_timescale_init_and_full_ramp(void **state)
-{
-    (void)state;
-    ls_timescale_t ts;
-    ls_timescale_init(&ts);
-    assert_true(ts.r == 1.0 && ts.rd == 0.0 && ts.target == 1.0);
-    assert_true(ls_timescale_settled(&ts));
-    assert_true(ls_timescale_step(&ts, 0.004) == 0.004);
-    /* A full stop over 2 s: r(t) + r(2 - t) = 1 by symmetry, so the clock
-     * advances by exactly 1 s; rd_max = 1.5/2, rdd_max = 4.5/4. */
-    assert_int_equal(ls_timescale_set(&ts, 0.0, 2.0), LS_OK);
-    assert_close(ts.rd_max, 0.75, 1e-15);
-    assert_close(ts.rdd_max, 1.125, 1e-15);
-    assert_false(ls_timescale_settled(&ts));
-    double tau = 0.0, rd_prev = 0.0;
-    int steps = 0;
-    while (!ls_timescale_settled(&ts)) {
-        tau += ls_timescale_step(&ts, KHZ_DT_S);
-        assert_true(ts.r >= 0.0 && ts.r <= 1.0);
-        assert_true(fabs(ts.rd) <= ts.rd_max * (1.0 + 1e-12));
-        assert_true(fabs(ts.rd - rd_prev) <= ts.rdd_max * KHZ_DT_S * (1.0 + 1e-9));
-        rd_prev = ts.rd;
-        assert_true(++steps < 5000);
-    }
-    assert_int_equal(steps, 2000);
-    assert_close(tau, 1.0, 1e-12);
-    assert_true(ts.r == 0.0 && ts.rd == 0.0);
-    assert_true(ls_timescale_step(&ts, KHZ_DT_S) == 0.0);
-}
-
-static void test_timescale_reverse_mid_ramp(void **state)
-{
-    (void)state;
-    ls_timescale_t ts;
-    ls_timescale_init(&ts);
-    assert_int_equal(ls_timescale_set(&ts, 0.0, 1.0), LS_OK);
-    double r_prev = ts.r, rd_prev = ts.rd;
-    for (int k = 0; k < 600; ++k) {
-        if (k == 300) {
-            /* Resume while still slowing down: continues from r, rd without a jump. */
-            assert_int_equal(ls_timescale_set(&ts, 1.0, 1.0), LS_OK);
-        }
-        if (k == 450) {
-            /* And a gentler stop while speeding up. */
-            assert_int_equal(ls_timescale_set(&ts, 0.0, 5.0), LS_OK);
-        }
-        assert_true(ls_timescale_step(&ts, KHZ_DT_S) >= 0.0);
-        assert_true(ts.r >= 0.0 && ts.r <= 1.0);
-        assert_true(fabs(ts.r - r_prev) <= 1.5 * KHZ_DT_S * (1.0 + 1e-9));
-        assert_true(fabs(ts.rd - rd_prev) <= 4.5 * KHZ_DT_S * (1.0 + 1e-9));
-        r_prev = ts.r;
-        rd_prev = ts.rd;
-    }
-    int steps = 0;
-    while (!ls_timescale_settled(&ts)) {
-        ls_timescale_step(&ts, KHZ_DT_S);
-        assert_true(ts.r >= 0.0 && ts.r <= 1.0);
-        assert_true(++steps < 10000);
-    }
-    assert_true(ts.r == 0.0);
-    /* Partial target (speed override). */
-    assert_int_equal(ls_timescale_set(&ts, 0.5, 1.0), LS_OK);
-    while (!ls_timescale_settled(&ts)) {
-        ls_timescale_step(&ts, KHZ_DT_S);
-    }
-    assert_true(ts.r == 0.5);
-    assert_close(ls_timescale_step(&ts, 0.002), 0.001, 1e-15);
-}
-
-/* Drive a trajectory the way the executor does: tau += step(dt), q = q(tau).
- * Stop at t_stop with the ramp from ls_traj_stop_ramp_s, wait, resume, and
- * watch the real-time velocity and acceleration (finite differences of the
- * commanded positions, which are averages of the true derivatives). Returns
- * the largest |accel| / a_max seen. */
-static double run_stop_resume(const ls_traj_t *tr, const ls_traj_limits_t *lim, double t_stop_s)
-{
-    const double ramp = ls_traj_stop_ramp_s(tr, lim);
-    assert_true(ramp > 0.0);
-    ls_timescale_t ts;
-    ls_timescale_init(&ts);
-    const uint8_t n = tr->n;
-    double q[3][LS_TRAJ_MAX_AXES];
-    double tau = 0.0, tau_stopped = -1.0, acc_ratio = 0.0;
-    ls_traj_sample(tr, 0.0, q[0], NULL, NULL);
-    memcpy(q[1], q[0], sizeof q[0]);
-    long k = 0, settled_at = -1;
-    int ramped_last = 0;
-    for (; tau < tr->duration_s; ++k) {
-        const double t = (double)k * KHZ_DT_S;
-        if (fabs(t - t_stop_s) < KHZ_DT_S / 2.0) {
-            assert_int_equal(ls_timescale_set(&ts, 0.0, ramp), LS_OK);
-        }
-        if (settled_at < 0 && ts.target == 0.0 && ls_timescale_settled(&ts)) {
-            settled_at = k;
-            tau_stopped = tau;
-        }
-        if (settled_at >= 0 && k == settled_at + 500) {
-            assert_true(tau == tau_stopped); /* it really stood still */
-            assert_int_equal(ls_timescale_set(&ts, 1.0, ramp), LS_OK);
-        }
-        /* The acceleration of this sample (centred one step back) belongs to a ramp. */
-        const int ramping = !ls_timescale_settled(&ts) || ramped_last;
-        ramped_last = !ls_timescale_settled(&ts);
-        const double dtau = ls_timescale_step(&ts, KHZ_DT_S);
-        assert_true(dtau >= 0.0); /* tau is monotone: we stay on the path */
-        tau += dtau;
-        ls_traj_sample(tr, tau, q[2], NULL, NULL);
-        for (uint8_t i = 0; i < n; ++i) {
-            const double vel = (q[2][i] - q[1][i]) / KHZ_DT_S;
-            const double acc = (q[2][i] - 2.0 * q[1][i] + q[0][i]) / (KHZ_DT_S * KHZ_DT_S);
-            if (fabs(vel) > lim->v_max[i] * (1.0 + 1e-9)) {
-                fail_msg("axis %d speed %.17g above %g while stopping", i, vel, lim->v_max[i]);
-            }
-            const double ratio = fabs(acc) / lim->a_max[i];
-            if (ramping && ratio > acc_ratio) {
-                acc_ratio = ratio;
-            }
-        }
-        memcpy(q[0], q[1], sizeof q[0]);
-        memcpy(q[1], q[2], sizeof q[0]);
-        assert_true(k < 1000000);
-    }
-    /* The stop took about ramp seconds, unless the path ended first. */
-    assert_true(settled_at > 0 || ts.target == 0.0);
-    if (settled_at > 0) {
-        assert_true(fabs((double)settled_at * KHZ_DT_S - t_stop_s - ramp) <= 2.0 * KHZ_DT_S);
-    }
-    double p_end[LS_TRAJ_MAX_AXES];
-    ls_traj_sample(tr, tau, p_end, NULL, NULL);
-    ls_traj_sample(tr, tr->duration_s, q[0], NULL, NULL);
-    assert_memory_equal(p_end, q[0], n * sizeof(double));
-    return acc_ratio;
-}
-
-static void test_stop_resume_in_cruise_within_limits(void **state)
-{
-    (void)state;
-    /* d=10 at v=a=j=1 cruises from 2 s to 10 s; the stop ramp is
-     * max(1.5 v/a, sqrt(4.5 v/j)) = sqrt(4.5) s and covers sqrt(4.5)/2 s of
-     * path: the whole stop happens in the cruise, where q'' = 0, so the real
-     * acceleration is q' dr/dt only, at most 1.5 / sqrt(4.5) = 0.707 a_max. */
-    const double p0[2] = { 0.0, 0.0 }, p1[2] = { 10.0, -5.0 };
-    const ls_traj_limits_t lim = { .v_max = { 1, 1 }, .a_max = { 1, 1 }, .j_max = { 1, 1 } };
-    ls_traj_t tr;
-    assert_int_equal(ls_traj_plan(&tr, 2, p0, p1, &lim), LS_OK);
-    assert_close(ls_traj_stop_ramp_s(&tr, &lim), sqrt(4.5), 1e-15);
-    const double ratio = run_stop_resume(&tr, &lim, 4.0);
-    assert_true(ratio <= 1.5 / sqrt(4.5) + 1e-6);
-    assert_true(ratio >= 0.7); /* and the bound is nearly attained: the test can fail */
-}
-
-static void test_stop_resume_anywhere_bounded(void **state)
-{
-    (void)state;
-    /* Stopping while the path itself brakes adds the two terms: at most 2 a_max. */
-    g_rng.s = 99;
-    for (int k = 0; k < 20; ++k) {
-        const uint8_t n = 3;
-        double p0[3], p1[3];
-        ls_traj_limits_t lim;
-        for (uint8_t i = 0; i < n; ++i) {
-            p0[i] = urand(-2.0, 2.0);
-            p1[i] = urand(-2.0, 2.0);
-            random_limits(&lim.v_max[i], &lim.a_max[i], &lim.j_max[i]);
-        }
-        ls_traj_t tr;
-        assert_int_equal(ls_traj_plan(&tr, n, p0, p1, &lim), LS_OK);
-        const double ratio = run_stop_resume(&tr, &lim, floor(urand(0.1, 0.9) * tr.duration_s * 1000.0) / 1000.0);
-        assert_true(ratio <= 2.0 + 1e-6);
-    }
-}
-
 /* ---- bad input ----------------------------------------------------------- */
 
 static void test_bad_input(void **state)
@@ -655,33 +481,8 @@ static void test_bad_input(void **state)
     assert_memory_equal(&tr, &tr_before, sizeof tr);
     assert_int_equal(ls_traj_plan(&tr, 3, p0, p1, &lim), LS_OK); /* axis 3 unused */
 
-    assert_true(ls_traj_stop_ramp_s(NULL, &lim) < 0.0);
-    assert_true(ls_traj_stop_ramp_s(&tr, NULL) < 0.0);
-    lim.a_max[1] = 0.0;
-    assert_true(ls_traj_stop_ramp_s(&tr, &lim) < 0.0);
-
     ls_traj_sample(NULL, 1.0, NULL, NULL, NULL); /* no crash */
     ls_traj_sample_axis(NULL, 1.0, NULL, NULL, NULL);
-
-    ls_timescale_t ts, ts_before;
-    ls_timescale_init(&ts);
-    ts_before = ts;
-    assert_int_equal(ls_timescale_set(&ts, -0.1, 1.0), LS_EINVAL);
-    assert_int_equal(ls_timescale_set(&ts, 1.1, 1.0), LS_EINVAL);
-    assert_int_equal(ls_timescale_set(&ts, NAN, 1.0), LS_EINVAL);
-    assert_int_equal(ls_timescale_set(&ts, 0.0, 0.0), LS_EINVAL);
-    assert_int_equal(ls_timescale_set(&ts, 0.0, -1.0), LS_EINVAL);
-    assert_int_equal(ls_timescale_set(&ts, 0.0, NAN), LS_EINVAL);
-    assert_int_equal(ls_timescale_set(&ts, 0.0, INFINITY), LS_EINVAL);
-    assert_int_equal(ls_timescale_set(&ts, 0.0, 1e-300), LS_EINVAL); /* limits overflow */
-    assert_int_equal(ls_timescale_set(NULL, 0.0, 1.0), LS_EINVAL);
-    assert_memory_equal(&ts, &ts_before, sizeof ts);
-    assert_true(ls_timescale_step(&ts, NAN) == 0.0);
-    assert_true(ls_timescale_step(&ts, -1.0) == 0.0);
-    assert_true(ls_timescale_step(&ts, 0.0) == 0.0);
-    assert_true(ls_timescale_step(NULL, 1.0) == 0.0);
-    assert_false(ls_timescale_settled(NULL));
-    assert_memory_equal(&ts, &ts_before, sizeof ts);
 }
 
 int main(void)
@@ -701,10 +502,6 @@ int main(void)
         cmocka_unit_test(test_duration_random),
         cmocka_unit_test(test_sync_hand_case),
         cmocka_unit_test(test_sync_random),
-        cmocka_unit_test(test_timescale_init_and_full_ramp),
-        cmocka_unit_test(test_timescale_reverse_mid_ramp),
-        cmocka_unit_test(test_stop_resume_in_cruise_within_limits),
-        cmocka_unit_test(test_stop_resume_anywhere_bounded),
         cmocka_unit_test(test_bad_input),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
