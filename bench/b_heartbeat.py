@@ -21,7 +21,7 @@ from landscape import telemetry
 from landscape._generated import landscape_pb2 as pb
 from landscape.bus import BusSpec, open_bus, release_bus
 
-PERIOD_S = 0.2  # landscaped.c: the next heartbeat 200 ms after the last
+PERIOD_S = telemetry.cycle_time_s("HEARTBEAT")  # the DBC's GenMsgCycleTime, which landscaped.c sends at
 
 
 class Beats(can.Listener):

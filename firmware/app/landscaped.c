@@ -669,7 +669,7 @@ int main(int argc, char **argv)
         ls_core_tick(&g_core, now);
         if (now >= next_hb) {
             send_heartbeat(&g_net, &g_core, hb_counter++);
-            next_hb = now + 200000u;
+            next_hb = now + (uint64_t)LANDSCAPE_HEARTBEAT_CYCLE_TIME_MS * 1000u; /* the DBC's GenMsgCycleTime */
         }
         if (tm_period > 0 && now >= next_tm) {
             send_telemetry();

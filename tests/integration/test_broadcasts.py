@@ -29,7 +29,7 @@ from landscape.supervisor import Supervisor
 DEVICE = 0x10
 HOST = 0xF1
 ID_MASK = 0x1FFFFF00
-HEARTBEAT_PERIOD_S = 0.2
+HEARTBEAT_PERIOD_S = tm.cycle_time_s("HEARTBEAT")
 CAPTURE_S = 1.2
 TELEMETRY = ("STATUS", "JOINTS_12", "JOINTS_34", "JOINTS_56", "JOINTS_CMD_12", "JOINTS_CMD_34", "JOINTS_CMD_56",
              "TOOL_POS", "TOOL_RPY", "DIO")

@@ -83,6 +83,15 @@ def choice_value(message: str, signal: str, name: str) -> int:
     raise ArgumentError(f"{message}.{signal} has no value named {name!r} in landscape.dbc (known: {known})")
 
 
+def cycle_time_s(message: str) -> float:
+    """The period at which the device sends broadcast `message`, from the DBC's
+    GenMsgCycleTime (s). ArgumentError when the DBC gives the message none."""
+    ms = database().get_message_by_name(message).cycle_time
+    if not ms:
+        raise ArgumentError(f"{message} has no GenMsgCycleTime in landscape.dbc: it is not sent periodically")
+    return ms / 1000.0
+
+
 def decode(frame: can.Message) -> Broadcast | None:
     """The broadcast carried by `frame`, or None when it is not one of the DBC's."""
     if not frame.is_extended_id or frame.is_error_frame or frame.is_remote_frame:
