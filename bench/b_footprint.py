@@ -213,13 +213,14 @@ def label(path: str) -> str:
                      ("ls_react", "firmware/motion/ls_react.c"), ("ls_control", "firmware/control"),
                      ("ls_net", "firmware/net"),
                      ("ls_isotp", "firmware/isotp"), ("ls_traj", "firmware/motion/ls_traj.c"),
+                     ("ls_ramp", "firmware/motion/ls_ramp.c"),
                      ("ls_robot_model", "firmware/model"), ("pb_", "nanopb runtime"),
                      ("landscape.pb", "generated nanopb codecs"),
                      ("dbc_landscape", "generated DBC code (cantools)"), ("hal.", "hal wrappers"),
                      ("fw_main", "bench main + HAL stubs, with the static ls_core_t and ls_net_t")):
         if key in name:
             return lab
-    return name
+    return re.sub(r"^\d+_", "", name)  # an object this table does not know yet, without its build index
 
 
 # Where the static RAM goes: the parts bench/footprint/fw_sizes.c measures (fp_<name>), what each one is and
