@@ -4,10 +4,15 @@ keys"): the joint positions the control loop handed to the simulated arm, one ro
 from __future__ import annotations
 
 import re
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
+from conftest import ROOT, open_slcan, start_controller
+from landscape.supervisor import Supervisor
 
 FIRST_LINE = re.compile(r"# landscaped setpoint trace: rate_hz=(\d+) samples=(\d+) dropped=(\d+)")
 COLUMNS = "t_s,q1,q2,q3,q4,q5,q6"
@@ -31,6 +36,37 @@ class Derivatives:
     velocity: np.ndarray      # (n-1, 6) rad/s: first difference / dt
     acceleration: np.ndarray  # (n-2, 6) rad/s^2: second difference / dt^2
     jerk: np.ndarray          # (n-3, 6) rad/s^3: third difference / dt^3
+
+
+def model_source_values(field: str) -> list[float]:
+    """The numbers of `.field = ...` in the model source, firmware/model/ls_robot_model.c
+    (a braced list or one number): the limits the device does not publish, such as jerk."""
+    text = (ROOT / "firmware" / "model" / "ls_robot_model.c").read_text()
+    m = re.search(rf"\.{field} = (\{{[^}}]*\}}|[^,\n]+),", text)
+    assert m is not None, f"ls_robot_model.c has no .{field} = ...: update this parser"
+    return [float(v) for v in m[1].strip("{} ").split(",")]
+
+
+@contextmanager
+def traced(tmp_path: Path, name: str) -> Iterator[tuple[Supervisor, Path]]:
+    """landscaped (sim arm) with a set-point trace and a connected Supervisor; on the way
+    out landscaped is stopped, and must have exited 0 with the trace written, at the path
+    yielded with the Supervisor."""
+    trace_path = tmp_path / f"{name}.csv"
+    c = start_controller(tmp_path / name, "--setpoint-trace", str(trace_path))
+    try:
+        bus = open_slcan(c.pty)
+        try:
+            with Supervisor(bus, client_name=name) as sup:
+                yield sup, trace_path
+        finally:
+            bus.shutdown()
+    finally:
+        code = c.stop()
+    log = c.log.read_text(errors="replace")
+    assert code == 0, f"landscaped exited with {code}:\n{log[-4000:]}"
+    assert "Sanitizer" not in log, log[-4000:]
+    assert f"written to {trace_path}" in log, log[-4000:]
 
 
 def read_trace(path: Path) -> Trace:

@@ -12,9 +12,9 @@ import subprocess
 from pathlib import Path
 
 import numpy as np
-from setpoint_trace import Trace, derivatives, read_trace
+from setpoint_trace import Trace, derivatives, model_source_values, read_trace, traced
 
-from conftest import LANDSCAPED, ROOT, open_slcan, start_controller
+from conftest import LANDSCAPED
 from landscape.supervisor import Supervisor
 
 #: Two joint points, every joint moving between them (rad), inside the joint limits and
@@ -26,10 +26,7 @@ MARGIN = 1.05  # finite differences of a jerk-limited profile stay within its li
 
 def model_jerk_limits() -> np.ndarray:
     """qddd_max_rad_s3 of the model source (rad/s^3 per joint)."""
-    text = (ROOT / "firmware" / "model" / "ls_robot_model.c").read_text()
-    m = re.search(r"\.qddd_max_rad_s3 = \{([^}]*)\}", text)
-    assert m is not None, "ls_robot_model.c has no .qddd_max_rad_s3 = { ... }: update this parser"
-    limits = np.array([float(v) for v in m[1].split(",")])
+    limits = np.array(model_source_values("qddd_max_rad_s3"))
     assert limits.shape == (6,), f"qddd_max_rad_s3 has {limits.size} values, not 6"
     return limits
 
@@ -42,33 +39,21 @@ def device_rate_hz(sup: Supervisor) -> int:
     return int(m[1])
 
 
-def run_moves(tmp_path: Path, trace_path: Path) -> tuple[np.ndarray, np.ndarray, int]:
-    """Start landscaped with the trace, run the two moves, stop it with SIGTERM. The device's
-    velocity and acceleration limits per joint and its control rate."""
-    c = start_controller(tmp_path / "ls0", "--setpoint-trace", str(trace_path))
-    try:
-        bus = open_slcan(c.pty)
-        try:
-            with Supervisor(bus, client_name="trace") as sup:
-                assert sup.description is not None, "the device did not describe itself"
-                joints = sup.description.res.joints
-                qd_max = np.array([j.max_velocity_rad_s for j in joints])
-                qdd_max = np.array([j.max_accel_rad_s2 for j in joints])
-                rate_hz = device_rate_hz(sup)
-                sup.lock()
-                sup.activate()  # metres and radians
-                sup.set_acceleration(100)
-                for name, point in (("A", POINT_A), ("B", POINT_B)):
-                    sup.wait_complete(sup.move_absolute(name, point, speed_pct=100), timeout_s=30)
-        finally:
-            bus.shutdown()
-    finally:
-        code = c.stop()
-    log = c.log.read_text(errors="replace")
-    assert code == 0, f"landscaped exited with {code}:\n{log[-4000:]}"
-    assert "Sanitizer" not in log, log[-4000:]
-    assert f"written to {trace_path}" in log, log[-4000:]
-    return qd_max, qdd_max, rate_hz
+def run_moves(tmp_path: Path) -> tuple[Path, np.ndarray, np.ndarray, int]:
+    """Start landscaped with the trace, run the two moves, stop it with SIGTERM. The trace,
+    the device's velocity and acceleration limits per joint and its control rate."""
+    with traced(tmp_path, "trace") as (sup, trace_path):
+        assert sup.description is not None, "the device did not describe itself"
+        joints = sup.description.res.joints
+        qd_max = np.array([j.max_velocity_rad_s for j in joints])
+        qdd_max = np.array([j.max_accel_rad_s2 for j in joints])
+        rate_hz = device_rate_hz(sup)
+        sup.lock()
+        sup.activate()  # metres and radians
+        sup.set_acceleration(100)
+        for name, point in (("A", POINT_A), ("B", POINT_B)):
+            sup.wait_complete(sup.move_absolute(name, point, speed_pct=100), timeout_s=30)
+    return trace_path, qd_max, qdd_max, rate_hz
 
 
 def moving_stretches(trace: Trace) -> list[tuple[int, int]]:
@@ -79,8 +64,7 @@ def moving_stretches(trace: Trace) -> list[tuple[int, int]]:
 
 
 def test_joint_moves_stay_within_the_models_limits_cycle_by_cycle(tmp_path: Path) -> None:
-    trace_path = tmp_path / "setpoints.csv"
-    qd_max, qdd_max, rate_hz = run_moves(tmp_path, trace_path)
+    trace_path, qd_max, qdd_max, rate_hz = run_moves(tmp_path)
     assert trace_path.exists() and not Path(f"{trace_path}.tmp").exists()
     trace = read_trace(trace_path)
     assert trace.dropped == 0

@@ -15,7 +15,6 @@ model source, as test_setpoint_trace does."""
 from __future__ import annotations
 
 import math
-import re
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -23,11 +22,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from setpoint_trace import Trace, derivatives, read_trace
+from setpoint_trace import Trace, derivatives, model_source_values, read_trace, traced
 from test_motion import fk
 from test_setpoint_trace import model_jerk_limits
 
-from conftest import ROOT, open_slcan, start_controller
 from landscape._generated import landscape_pb2 as pb
 from landscape.supervisor import Supervisor, notice_data
 from sensor_fixtures import Q_OVER_TABLE
@@ -43,33 +41,18 @@ AIMS_S = (0.05, 0.09, 0.03, 0.12, 0.07, 0.02, 0.15, 0.04)
 
 def model_linear_jerk_limit() -> float:
     """max_linear_jerk_m_s3 of the model source (m/s^3)."""
-    text = (ROOT / "firmware" / "model" / "ls_robot_model.c").read_text()
-    m = re.search(r"\.max_linear_jerk_m_s3 = ([0-9.eE+-]+),", text)
-    assert m is not None, "ls_robot_model.c has no .max_linear_jerk_m_s3 = ...: update this parser"
-    return float(m[1])
+    return model_source_values("max_linear_jerk_m_s3")[0]
 
 
 @contextmanager
-def traced(tmp_path: Path, name: str) -> Iterator[tuple[Supervisor, Path]]:
-    """landscaped with a set-point trace, one owner that locked and activated (m, rad); the
-    trace file once landscaped has exited cleanly."""
-    trace_path = tmp_path / f"{name}.csv"
-    c = start_controller(tmp_path / name, "--setpoint-trace", str(trace_path))
-    try:
-        bus = open_slcan(c.pty)
-        try:
-            with Supervisor(bus, client_name=name) as sup:
-                sup.lock()
-                sup.activate()
-                sup.set_acceleration(100)
-                yield sup, trace_path
-        finally:
-            bus.shutdown()
-    finally:
-        code = c.stop()
-    log = c.log.read_text(errors="replace")
-    assert code == 0, f"landscaped exited with {code}:\n{log[-4000:]}"
-    assert f"written to {trace_path}" in log, log[-4000:]
+def active(tmp_path: Path, name: str) -> Iterator[tuple[Supervisor, Path]]:
+    """A traced landscaped with one owner that locked and activated (m, rad) at 100 %
+    acceleration; the trace file once it has exited cleanly."""
+    with traced(tmp_path, name) as (sup, trace_path):
+        sup.lock()
+        sup.activate()
+        sup.set_acceleration(100)
+        yield sup, trace_path
 
 
 def joint_jerk_ratio(trace: Trace) -> np.ndarray:
@@ -125,7 +108,7 @@ def stop_in_a_blend(sup: Supervisor, name: str, aim_s: float) -> str:
 def test_a_stop_while_blending_keeps_every_joints_jerk_limit(tmp_path: Path) -> None:
     pts = joint_zigzag()
     answers = []
-    with traced(tmp_path, "blend") as (sup, trace_path):
+    with active(tmp_path, "blend") as (sup, trace_path):
         sup.wait_complete(sup.move_absolute("start", Q_OVER_TABLE, speed_pct=50), timeout_s=20)
         sup.path_load("zig", [{"joints": p, "tag_name": f"J{k}", "speed_pct": 100.0, "accel_pct": 100.0,
                                "transition_speed_pct": 100.0} for k, p in enumerate(pts)])
@@ -150,7 +133,7 @@ OVER = [0.5, -0.1, 0.35, math.pi, 0.0, 0.0]  # tool pointing down, 0.25 m above 
 
 
 def test_move_react_brakes_and_stops_within_the_cartesian_jerk_limit(tmp_path: Path) -> None:
-    with traced(tmp_path, "react") as (sup, trace_path):
+    with active(tmp_path, "react") as (sup, trace_path):
         sup.wait_complete(sup.move_absolute("over_table", Q_OVER_TABLE), timeout_s=20)
         sup.wait_complete(sup.move_absolute("over", OVER, frame=pb.BASE_CARTESIAN_FRAME), timeout_s=20)
         # stopMotion during the travel of a move that meets nothing, then the rest of it
