@@ -294,7 +294,9 @@ static int run_react(const char *which, long n)
     p.ref_seq = 1;
     p.v_m_s = 0.03;
     p.a_m_s2 = 1.0;
-    p.a_stop_m_s2 = 4.0;
+    p.j_m_s3 = ls_robot_model_linear_jerk(&ls_robot_model_default, p.a_m_s2);
+    p.a_stop_m_s2 = ls_robot_model_default.max_linear_accel_m_s2;
+    p.j_stop_m_s3 = ls_robot_model_default.max_linear_jerk_m_s3;
     /* Travel long enough that all N cycles move: 0.03 m/s for N ms, plus the ramps. */
     p.dist_m = 0.03 * (double)n * DT_S + 0.01;
     double reading[6] = { 0 };
