@@ -11,16 +11,17 @@
 
 #define START_TOL_RAD 1e-3
 #define END_TOL_S 1e-9
-/* While two segments blend, a stop's ramps and a resume's profiles give each
- * this share of its limits, so that the sum of the two stays within them
- * whatever the directions of the two motions. */
-#define BLEND_SHARE 0.5
+/* While two segments blend, a stop's ramps give each at most this share of
+ * its jerk limit, so that the sum of the two stays within the limit whatever
+ * the directions of the two motions. */
+#define BLEND_STOP_JERK_SHARE 0.5
 #define SAMPLE_STEP_M 1e-3
 #define SAMPLE_STEP_RAD (0.5 * LS_PI / 180.0)
 #define SAMPLE_STEP_S 0.01
 #define MAX_SAMPLES 20000
 
 enum { SUB_MOVE = 0, SUB_AUX, SUB_DWELL };
+enum { STOP_NONE = 0, STOP_NORMAL, STOP_FAST }; /* ls_motion_t.stop_at_end_ */
 
 static int refuse(char *why, unsigned whylen, int code, const char *fmt, ...) __attribute__((format(printf, 4, 5)));
 
@@ -67,6 +68,7 @@ void ls_motion_hold(ls_motion_t *m, const double q[LS_N_JOINTS])
     m->blending_ = false;
     m->sub_ = SUB_MOVE;
     m->ramping_ = false;
+    m->stop_at_end_ = STOP_NONE;
 }
 
 /* -------------------------------------------------------------- planners */
@@ -151,15 +153,15 @@ static int phase_profile(const double x0[LS_N_JOINTS], const double q1[LS_N_JOIN
 }
 
 /* The profile of joint segment s from the joints at x0 to q1 at its stored
- * fractions and jerk scale times `share`: phase-synchronised (a straight line
- * in joint space, so that a stop and a resume keep to it), or each joint on
- * its own (slew). The plan itself starts at q0 with share 1; a resume starts
- * where a stop left the joints. */
+ * fractions and jerk scale: phase-synchronised (a straight line in joint
+ * space, so that a stop and a resume keep to it), or each joint on its own
+ * (slew). The plan itself starts at q0; a resume starts where a stop left
+ * the joints. */
 static int joint_profile_from(const ls_motion_seg_t *s, const ls_robot_model_t *model, const double x0[LS_N_JOINTS],
-                              double share, ls_traj_t *out)
+                              ls_traj_t *out)
 {
     ls_traj_limits_t lim;
-    joint_limits(model, s->lim_[0] * share, s->lim_[1] * share, s->jerk_scale_, &lim);
+    joint_limits(model, s->lim_[0], s->lim_[1], s->jerk_scale_, &lim);
     ls_traj_t tr;
     if (phase_profile(x0, s->q1, &lim, &tr) != 0) {
         return -1;
@@ -180,7 +182,7 @@ static int joint_profile_from(const ls_motion_seg_t *s, const ls_robot_model_t *
 /* Plan the profile of joint segment s (q0, q1 set). */
 static int joint_profile(ls_motion_seg_t *s, const ls_robot_model_t *model)
 {
-    return joint_profile_from(s, model, s->q0, 1.0, &s->traj);
+    return joint_profile_from(s, model, s->q0, &s->traj);
 }
 
 int ls_motion_seg_joint(ls_motion_seg_t *s, const ls_robot_model_t *model, const double q0[LS_N_JOINTS],
@@ -213,9 +215,8 @@ int ls_motion_seg_slew(ls_motion_seg_t *s, const ls_robot_model_t *model, const 
                        const double q1[LS_N_JOINTS], double speed_frac, double accel_frac, char *why, unsigned whylen)
 {
     /* The synchronised planner checks the arguments and the limits; then
-     * each joint gets its own minimum-time profile. The stop ramps follow
-     * each joint's peak speed, which is at its limit here as in the slowest
-     * joint of a synchronised move. */
+     * each joint gets its own minimum-time profile (and a stop, its own
+     * ramp: the joints share no path). */
     int r = ls_motion_seg_joint(s, model, q0, q1, speed_frac, accel_frac, why, whylen);
     if (r < 0) {
         return r;
@@ -358,16 +359,16 @@ static bool cart_still(const ls_motion_seg_t *s)
 }
 
 /* The profile of Cartesian segment s over its path parameter from x0 to 1
- * at its stored limits of s (lim_[0..2]) and jerk scale times `share` (the
- * plan: from 0 with share 1; a resume: from where a stop left it). */
-static int cart_profile_from(const ls_motion_seg_t *s, double x0, double share, ls_traj_t *out)
+ * at its stored limits of s (lim_[0..2]) and jerk scale (the plan: from 0;
+ * a resume: from where a stop left it). */
+static int cart_profile_from(const ls_motion_seg_t *s, double x0, ls_traj_t *out)
 {
     const bool still = cart_still(s);
     ls_traj_limits_t tl;
     memset(&tl, 0, sizeof tl);
-    tl.v_max[0] = still ? 1.0 : s->lim_[0] * share;
-    tl.a_max[0] = still ? 1.0 : s->lim_[1] * share;
-    tl.j_max[0] = still ? 1.0 : s->lim_[2] * s->jerk_scale_[0] * share;
+    tl.v_max[0] = still ? 1.0 : s->lim_[0];
+    tl.a_max[0] = still ? 1.0 : s->lim_[1];
+    tl.j_max[0] = still ? 1.0 : s->lim_[2] * s->jerk_scale_[0];
     const double p1 = still ? 0.0 : 1.0;
     return ls_traj_plan(out, 1, &x0, &p1, &tl) == LS_OK ? 0 : -1;
 }
@@ -375,7 +376,7 @@ static int cart_profile_from(const ls_motion_seg_t *s, double x0, double share, 
 /* Plan the profile of a Cartesian segment over s in [0, 1]. */
 static int cart_profile(ls_motion_seg_t *s)
 {
-    return cart_profile_from(s, 0.0, 1.0, &s->traj);
+    return cart_profile_from(s, 0.0, &s->traj);
 }
 
 /* Time the segment over s in [0, 1] with the slower of the linear and the
@@ -956,6 +957,7 @@ static void fault(ls_motion_t *m, ls_motion_events_t *ev, const char *fmt, ...)
     m->blending_ = false;
     m->sub_ = SUB_MOVE;
     m->ramping_ = false;
+    m->stop_at_end_ = STOP_NONE;
 }
 
 int ls_motion_start(ls_motion_t *m, const ls_motion_plan_t *p)
@@ -982,6 +984,7 @@ int ls_motion_start(ls_motion_t *m, const ls_motion_plan_t *p)
     m->aux_wait_ = false;
     m->ramping_ = false;
     m->off_plan_[0] = m->off_plan_[1] = false;
+    m->stop_at_end_ = STOP_NONE;
     m->phase = LS_MOTION_RUNNING;
     return 0;
 }
@@ -1096,14 +1099,26 @@ static void seg_joints(const ls_motion_t *m, int k, const ls_motion_seg_t *s, co
     }
 }
 
+/* The jerk share of a stop ramp: 1 alone; while two segments blend the
+ * smaller of BLEND_STOP_JERK_SHARE (the two sum within the limit) and the
+ * scale the segment was planned with (a turning pair's rotation terms keep
+ * the budget the plan left them). */
+static double stop_jerk_share(const ls_motion_seg_t *s, int i, bool blend)
+{
+    return blend ? fmin(BLEND_STOP_JERK_SHARE, s->jerk_scale_[i]) : 1.0;
+}
+
 /* The acceleration and jerk limits of a stop of axis i of segment s
  * running profile tr: the segment's own (its joints' at its acceleration
  * fraction, on a phase: the tightest over the moving joints; its path
  * parameter's), or for a fast stop the model's maxima (on the path
  * parameter: the model's Cartesian maxima over the segment's length and
- * turn, when they are higher than the segment's). */
+ * turn, when they are higher than the segment's); the jerk times
+ * stop_jerk_share. Never below the acceleration the segment was planned
+ * with, nor (alone) its jerk: the ramp then stops no further than the
+ * planned profile would, short of the segment's end. */
 static void stop_limits(const ls_robot_model_t *model, const ls_motion_seg_t *s, const ls_traj_t *tr, int i, bool fast,
-                        double *a, double *j)
+                        bool blend, double *a, double *j)
 {
     if (s->kind == LS_SEG_JOINT) {
         const double f = fast ? 1.0 : s->lim_[1];
@@ -1113,12 +1128,12 @@ static void stop_limits(const ls_robot_model_t *model, const ls_motion_seg_t *s,
                 const double d = fabs(tr->axis[k].dist);
                 if (d > 0.0) {
                     *a = fmin(*a, model->qdd_max_rad_s2[k] * f / d);
-                    *j = fmin(*j, model->qddd_max_rad_s3[k] * f / d);
+                    *j = fmin(*j, model->qddd_max_rad_s3[k] * f * stop_jerk_share(s, k, blend) / d);
                 }
             }
         } else {
             *a = model->qdd_max_rad_s2[i] * f;
-            *j = model->qddd_max_rad_s3[i] * f;
+            *j = model->qddd_max_rad_s3[i] * f * stop_jerk_share(s, i, blend);
         }
     } else {
         *a = s->lim_[1];
@@ -1136,35 +1151,59 @@ static void stop_limits(const ls_robot_model_t *model, const ls_motion_seg_t *s,
             *a = fmax(af, *a);
             *j = fmax(jf, *j);
         }
+        *j *= stop_jerk_share(s, 0, blend);
     }
     if (!(*a > 0.0 && isfinite(*a)) || !(*j > 0.0 && isfinite(*j))) {
         *a = *j = 1.0; /* a segment that does not move: its ramps are empty */
     }
 }
 
+/* Whether ramp r of axis i of a segment running profile tr (phased: its
+ * phase, from 0 to 1) comes to rest beyond the profile's end. */
+static bool ramp_passes_end(const ls_ramp_t *r, const ls_traj_t *tr, bool phased, int i)
+{
+    const double p0 = phased ? 0.0 : tr->axis[i].p0, p1 = phased ? 1.0 : tr->axis[i].p1;
+    double p;
+    ls_ramp_sample(r, r->duration_s, &p, NULL, NULL);
+    return (p1 > p0 && p > p1 + 1e-12) || (p1 < p0 && p < p1 - 1e-12);
+}
+
 /* Start (or, for a fast stop during a stop, re-plan) the ramps that bring
- * every axis of the moving segments to rest from its current state. */
+ * every axis of the moving segments to rest from its current state. While
+ * two segments blend, a ramp at the shared jerk may not stop the segment
+ * that has just started before its end (a short one, planned at the full
+ * jerk); then nothing changes yet and the stop begins when the blend ends
+ * (stop_at_end_), on the one segment left, at most the overlap later.
+ * ramp_ is only written once the ramps are known to be taken. */
 static void begin_ramps(ls_motion_t *m, bool fast)
 {
     const ls_motion_seg_t *seg[2];
     const int n = moving_segs(m, seg);
-    const double share = n == 2 ? BLEND_SHARE : 1.0;
     double x[2][LS_N_JOINTS], xd[2][LS_N_JOINTS], xdd[2][LS_N_JOINTS];
     for (int k = 0; k < n; k++) {
         seg_state(m, k, seg[k], x[k], xd[k], xdd[k]); /* before the ramps change */
     }
+    ls_ramp_t r[2][LS_N_JOINTS];
     double T = 0.0;
+    bool passes = false;
     for (int k = 0; k < n; k++) {
+        const ls_traj_t *tr = seg_traj(m, k, seg[k]);
         for (int i = 0; i < seg_axes(seg[k]); i++) {
             double a, j;
-            stop_limits(m->model, seg[k], seg_traj(m, k, seg[k]), i, fast, &a, &j);
-            ls_ramp_t *r = &m->ramp_[k][i];
-            if (ls_ramp_plan(r, x[k][i], xd[k][i], xdd[k][i], 0.0, a * share, j * share) != LS_OK) {
-                (void)ls_ramp_plan(r, x[k][i], 0.0, 0.0, 0.0, 1.0, 1.0); /* not finite: hold */
+            stop_limits(m->model, seg[k], tr, i, fast, n == 2, &a, &j);
+            if (ls_ramp_plan(&r[k][i], x[k][i], xd[k][i], xdd[k][i], 0.0, a, j) != LS_OK) {
+                (void)ls_ramp_plan(&r[k][i], x[k][i], 0.0, 0.0, 0.0, 1.0, 1.0); /* not finite: hold */
             }
-            T = fmax(T, r->duration_s);
+            passes = passes || ramp_passes_end(&r[k][i], tr, seg_phased(seg[k]), i);
+            T = fmax(T, r[k][i].duration_s);
         }
     }
+    if (n == 2 && passes) {
+        m->stop_at_end_ = fast ? STOP_FAST : (m->stop_at_end_ == STOP_FAST ? STOP_FAST : STOP_NORMAL);
+        return;
+    }
+    memcpy(m->ramp_, r, sizeof r);
+    m->stop_at_end_ = STOP_NONE;
     m->ramping_ = true;
     m->ramp_t_s_ = 0.0;
     m->ramp_T_s_ = T;
@@ -1212,14 +1251,15 @@ int ls_motion_fast_stop_bound(const ls_robot_model_t *model, int j, double *time
 }
 
 /* Re-plan each moving segment from where the stop's ramps left its axes to
- * its end, from rest, within its limits (a share while two blend). -1,
- * changing nothing, when a profile cannot be planned (its limits planned it
- * once, so only a corrupted plan gets there). */
+ * its end, from rest, within its limits. Two that were blending run one
+ * after the other: the one blending in waits (its clock below 0) until the
+ * other has arrived, so each has its whole limits. -1, changing nothing,
+ * when a profile cannot be planned (its limits planned it once, so only a
+ * corrupted plan gets there). */
 static int plan_from_ramps(ls_motion_t *m)
 {
     const ls_motion_seg_t *seg[2];
     const int n = moving_segs(m, seg);
-    const double share = n == 2 ? BLEND_SHARE : 1.0;
     ls_traj_t tr[2];
     for (int k = 0; k < n; k++) {
         double x[LS_N_JOINTS], q[LS_N_JOINTS];
@@ -1227,9 +1267,9 @@ static int plan_from_ramps(ls_motion_t *m)
         int r;
         if (seg[k]->kind == LS_SEG_JOINT) {
             seg_joints(m, k, seg[k], x, NULL, q, NULL);
-            r = joint_profile_from(seg[k], m->model, q, share, &tr[k]);
+            r = joint_profile_from(seg[k], m->model, q, &tr[k]);
         } else {
-            r = cart_profile_from(seg[k], x[0], share, &tr[k]);
+            r = cart_profile_from(seg[k], x[0], &tr[k]);
         }
         if (r != 0) {
             return -1;
@@ -1241,7 +1281,7 @@ static int plan_from_ramps(ls_motion_t *m)
     }
     m->ramping_ = false;
     m->t_s = 0.0;
-    m->t_next_s_ = 0.0;
+    m->t_next_s_ = n == 2 ? -tr[0].duration_s : 0.0;
     return 0;
 }
 
@@ -1264,6 +1304,7 @@ void ls_motion_abort(ls_motion_t *m)
     m->sub_ = SUB_MOVE;
     m->aux_wait_ = false;
     m->ramping_ = false;
+    m->stop_at_end_ = STOP_NONE;
 }
 
 void ls_motion_aux_done(ls_motion_t *m)
@@ -1415,6 +1456,9 @@ static void end_of_segment(ls_motion_t *m, const ls_motion_seg_t *s, double qd[L
         if (off) {
             m->rtraj_[0] = m->rtraj_[1];
             m->off_plan_[0] = true;
+        }
+        if (m->stop_at_end_ != STOP_NONE && m->phase == LS_MOTION_STOPPING) {
+            begin_ramps(m, m->stop_at_end_ == STOP_FAST); /* the one segment left */
         }
         return;
     }

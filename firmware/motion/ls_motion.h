@@ -113,7 +113,8 @@ typedef struct {
     uint8_t n_aux;
     char aux[LS_MOTION_AUX_PER_POINT][LS_MOTION_AUX_LEN];
     /* private to ls_motion.c: what the profile was planned with, so that a
-     * blend can re-plan it with a lower jerk (ls_motion_prog_blend) */
+     * blend can re-plan it with a lower jerk (ls_motion_prog_blend) and a
+     * stop and a resume plan within the same limits */
     double lim_[4]; /* JOINT: speed_frac, accel_frac; LINE/ARC: v, a, j of s, joint_speed_frac */
     double jerk_scale_[LS_N_JOINTS];
     bool slew_;
@@ -178,7 +179,8 @@ typedef struct {
     double ramp_t_s_; /* time since the ramps began */
     double ramp_T_s_; /* when the last of them ends */
     ls_ramp_t ramp_[2][LS_N_JOINTS];
-    bool off_plan_[2]; /* segment k runs rtraj_[k], not its planned profile */
+    bool off_plan_[2];    /* segment k runs rtraj_[k], not its planned profile */
+    uint8_t stop_at_end_; /* a stop that waits for the blend to end: 0 none, 1 normal, 2 fast */
     ls_traj_t rtraj_[2];
 } ls_motion_t;
 
@@ -294,10 +296,13 @@ int ls_motion_start(ls_motion_t *m, const ls_motion_plan_t *p);
  * segment's joints, a Cartesian segment's path parameter, and those of the
  * segment it blends into) comes to rest on its own time-optimal
  * jerk-limited ramp (ls_ramp.h) from its current position, velocity and
- * acceleration, within the segment's own acceleration and jerk limits
- * (half of them each while two segments blend, so that their sum stays
- * within the limits). A Cartesian segment stops on its path; a joint
- * segment's joints stop each on their own, near the planned joint path. */
+ * acceleration, within the segment's own acceleration and jerk limits (a
+ * joint segment: on its phase, so the joints stay on their straight line; a
+ * Cartesian segment: on its path parameter; a slew: each joint on its own).
+ * While two segments blend each gets at most half its jerk limit, so that
+ * the sum stays within it; when that cannot bring the segment that has just
+ * started to rest before its end, the stop waits for the blend to end (at
+ * most the overlap) and then stops that segment alone. */
 void ls_motion_stop(ls_motion_t *m);
 /* The same within the model's maximum acceleration and jerk (faults,
  * emergency, shutdown): also shortens a stop already under way. */
@@ -306,13 +311,16 @@ void ls_motion_stop_fast(ls_motion_t *m);
  * (docs/reliability.md, "Stopping distance and time"): the fast stop's ramp
  * from the joint's velocity limit while it still accelerates at its
  * acceleration limit, a state no plan reaches, so every stop the loop takes
- * ends within *time_s and *dist_rad. The user's settings can only make it
- * shorter. Returns 0, -1 on a bad argument (nothing written). */
+ * ends within *time_s and *dist_rad (a stop that waits for a blend to end:
+ * measured within it, tests/unit/motion/test_blend.c, not proved). The
+ * user's settings can only make it shorter. Returns 0, -1 on a bad argument (nothing written). */
 int ls_motion_fast_stop_bound(const ls_robot_model_t *model, int j, double *time_s, double *dist_rad);
 /* From PAUSED; -1 otherwise. After a stop inside a segment each segment is
  * re-planned from rest where its ramps left it to its end, within its own
- * limits (half of them while two segments blend), and does not blend into
- * the next: it arrives at rest. Control-loop safe: closed-form planning. */
+ * limits; two that were blending run one after the other. The segment
+ * then arrives at rest instead of blending into the next. -2 (still
+ * paused) when a profile cannot be planned. Control-loop safe: closed-form
+ * planning, about 3.5 KB of stack. */
 int ls_motion_resume(ls_motion_t *m);
 void ls_motion_abort(ls_motion_t *m); /* drop the motion at once: hold the current set-point */
 /* The auxiliary command announced by LS_MEV_AUX finished: go on. */

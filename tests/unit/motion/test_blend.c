@@ -522,9 +522,11 @@ static void test_joint_blend_within_joint_limits(void **state)
 
 /* What a run with a stop and a resume measured from the set-points. */
 typedef struct {
-    double tip_j, tip_a;   /* peaks of the tool tip's jerk and acceleration */
-    double joint_j_ratio;  /* the largest |joint jerk| / the joint's jerk limit */
-    bool stopped_blending; /* the stop came while two segments overlapped */
+    double tip_j, tip_a;                         /* peaks of the tool tip's jerk and acceleration */
+    double joint_j_ratio;                        /* the largest |joint jerk| / the joint's jerk limit */
+    double q_lo[LS_N_JOINTS], q_hi[LS_N_JOINTS]; /* the set-points' range per joint */
+    bool stopped_blending;                       /* the stop came while two segments overlapped */
+    long stop_cycles;                            /* from the stop to the pause */
     int paused, tags, done;
 } stop_run_t;
 
@@ -536,6 +538,9 @@ typedef struct {
 static stop_run_t run_stopping_in_blend(int blend, long at_ms, bool fast)
 {
     stop_run_t r = { 0 };
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        r.q_lo[j] = r.q_hi[j] = mt_q_home[j];
+    }
     ls_motion_init(&g_m, M);
     ls_motion_hold(&g_m, mt_q_home);
     assert_int_equal(ls_motion_start(&g_m, &g_plan), 0);
@@ -547,7 +552,7 @@ static stop_run_t run_stopping_in_blend(int blend, long at_ms, bool fast)
     }
     ev_log_t log = { .n = 0 };
     int blends = 0;
-    long in_blend = -1, paused_for = 0;
+    long in_blend = -1, paused_for = 0, stop_at = -1;
     bool was_blending = false;
     for (long k = 0; k < MAX_STEPS && r.done == 0; k++) {
         double q[LS_N_JOINTS], qd[LS_N_JOINTS];
@@ -555,6 +560,10 @@ static stop_run_t run_stopping_in_blend(int blend, long at_ms, bool fast)
         mt_step(&g_m, q, qd, &log);
         memmove(h[1], h[0], 3 * sizeof h[0]);
         memcpy(h[0], q, sizeof h[0]);
+        for (int j = 0; j < LS_N_JOINTS; j++) {
+            r.q_lo[j] = fmin(r.q_lo[j], q[j]);
+            r.q_hi[j] = fmax(r.q_hi[j], q[j]);
+        }
         tip_of(q, P);
         memmove(p[1], p[0], 3 * sizeof p[0]);
         memcpy(p[0], P + 12, sizeof p[0]);
@@ -575,6 +584,9 @@ static stop_run_t run_stopping_in_blend(int blend, long at_ms, bool fast)
         for (int e = before; e < log.n; e++) {
             r.tags += log.ev[e].kind == LS_MEV_TAG;
             r.paused += log.ev[e].kind == LS_MEV_PAUSED;
+            if (log.ev[e].kind == LS_MEV_PAUSED && stop_at >= 0) {
+                r.stop_cycles = k - stop_at;
+            }
             r.done += log.ev[e].kind == LS_MEV_DONE;
             assert_true(log.ev[e].kind != LS_MEV_FAULT);
         }
@@ -588,6 +600,7 @@ static stop_run_t run_stopping_in_blend(int blend, long at_ms, bool fast)
         }
         if (in_blend >= 0 && g_m.phase == LS_MOTION_RUNNING && r.paused == 0 && in_blend++ == at_ms) {
             r.stopped_blending = g_m.blending_;
+            stop_at = k;
             if (fast) {
                 ls_motion_stop_fast(&g_m);
             } else {
@@ -644,6 +657,55 @@ static void test_stop_while_blending_keeps_the_jerk_limit(void **state)
     }
 }
 
+/* Joint 1 out by the longest distance its profile covers in jerk phases
+ * alone (2 A^3 / J^2 at the full limits) and back, blended at the turn: the
+ * segment blending in is planned at the full jerk (joint 1 reverses, so its
+ * jerk scale is 1). A stop late in the blend cannot bring it to rest at half
+ * that jerk before its end; the stop waits for the blend to end and then
+ * stops that segment alone at its own limits. Joint 1 never leaves the range
+ * of the path, the jerk stays within the limit, the stop pauses once and
+ * the path ends where it should. */
+static void test_a_stop_late_in_a_blend_into_a_short_segment_stays_on_the_path(void **state)
+{
+    (void)state;
+    char why[128];
+    const double a = M->qdd_max_rad_s2[0], J = M->qddd_max_rad_s3[0];
+    const double out = 2.0 * a * a * a / (J * J);
+    double q1[LS_N_JOINTS];
+    memcpy(q1, mt_q_home, sizeof q1);
+    q1[0] += out;
+    const double fracs[4] = { 0.5, 0.9, 0.97, 1.0 };
+    for (int f = 0; f < 4; f++) {
+        for (int fast = 0; fast < 2; fast++) {
+            memset(&g_prog, 0, sizeof g_prog);
+            g_prog.seg[0].blend_frac = 1.0;
+            snprintf(g_prog.seg[0].tag, sizeof g_prog.seg[0].tag, "OUT");
+            snprintf(g_prog.seg[1].tag, sizeof g_prog.seg[1].tag, "BACK");
+            assert_int_equal(ls_motion_seg_joint(&g_prog.seg[0], M, mt_q_home, q1, 1.0, 1.0, why, sizeof why), 0);
+            assert_int_equal(ls_motion_seg_joint(&g_prog.seg[1], M, q1, mt_q_home, 1.0, 1.0, why, sizeof why), 0);
+            g_prog.n = 2;
+            assert_int_equal(ls_motion_prog_blend(&g_prog, M, 1, why, sizeof why), 0);
+            assert_true(g_prog.seg[1].jerk_scale_[0] == 1.0 && g_prog.seg[0].overlap_s > 0.1);
+            assert_int_equal(ls_motion_plan_path(&g_plan, &g_prog, 1, false, "out"), 0);
+            const long at = (long)(fracs[f] * g_prog.seg[0].overlap_s / DT_S) - 1;
+            const stop_run_t r = run_stopping_in_blend(1, at, fast != 0);
+            double bound_s, bound_rad;
+            assert_int_equal(ls_motion_fast_stop_bound(M, 0, &bound_s, &bound_rad), 0);
+            print_message("out and back, stop%s %.0f %% into the blend: joint 1 in [%.6f, %.6f] of [%.6f, %.6f], "
+                          "jerk %.4f of the limit, %ld ms to the pause (bound %.0f ms)\n",
+                          fast ? " fast" : "", 100.0 * fracs[f], r.q_lo[0], r.q_hi[0], mt_q_home[0], q1[0],
+                          r.joint_j_ratio, r.stop_cycles, 1e3 * bound_s);
+            assert_true((double)r.stop_cycles * DT_S <= bound_s);
+            assert_true(r.q_lo[0] >= mt_q_home[0] - 1e-9 && r.q_hi[0] <= q1[0] + 1e-9);
+            assert_true(r.joint_j_ratio <= 1.0 + 1e-6);
+            assert_int_equal(r.paused, 1);
+            assert_int_equal(r.tags, 2);
+            assert_int_equal(r.done, 1);
+            assert_memory_equal(g_m.q_cmd, mt_q_home, sizeof g_m.q_cmd);
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -654,6 +716,7 @@ int main(void)
         cmocka_unit_test(test_turning_lines_blend_within_angular_limits),
         cmocka_unit_test(test_joint_blend_within_joint_limits),
         cmocka_unit_test(test_stop_while_blending_keeps_the_jerk_limit),
+        cmocka_unit_test(test_a_stop_late_in_a_blend_into_a_short_segment_stays_on_the_path),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
