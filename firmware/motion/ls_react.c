@@ -145,11 +145,14 @@ static int refuse(char *why, size_t len, const char *text)
 }
 
 /* The travel from rest at `from` to `to`: a rest-to-rest profile at speed
- * v within the plan's travel acceleration and jerk (checked > 0 by
- * ls_react_check_plan, so it plans). */
+ * v within the plan's travel acceleration and jerk (checked finite and > 0
+ * by ls_react_check_plan). Should numbers that extreme still not plan, it
+ * holds at `from` (the phase ends there) rather than keep an old profile. */
 static void plan_travel(ls_react_t *r, double from, double to, double v)
 {
-    (void)ls_traj_plan_axis(&r->prof_, from, to, v, r->plan.a_m_s2, r->plan.j_m_s3);
+    if (ls_traj_plan_axis(&r->prof_, from, to, v, r->plan.a_m_s2, r->plan.j_m_s3) != LS_OK) {
+        (void)ls_traj_plan_axis(&r->prof_, from, from, 1.0, 1.0, 1.0);
+    }
     r->prof_t_ = 0.0;
     r->braking_ = false;
 }
@@ -603,31 +606,38 @@ bool ls_react_jog_on(const ls_react_t *r)
 /* One cycle of a twist vector (3 components, with their rates a) toward
  * its target: each component on its own time-optimal jerk-limited ramp
  * (ls_ramp), re-planned every cycle from the state it reached (the rest of
- * the same ramp while the target holds). Component i gets the share w_i /
- * |w| of a_max and j_max, w_i = max(|d_i| / |d|, |a_i| / a_max) for the
- * change d = target - v: from rest the components move in proportion (the
- * vector keeps its direction and ramps as one axis would), and as the
- * shares' squares sum to 1 the vector's acceleration and jerk keep a_max and
- * j_max. Writes the exact displacement over dt_s. */
+ * the same ramp while the target holds). Component i gets the share
+ *   s_i = sqrt(b_i^2 + R (d_i / |d|)^2),  b_i = |a_i| / a_max,  R = 1 - sum b^2
+ * of a_max and j_max, for the change d = target - v: never below what it
+ * accelerates at already, the shares' squares summing to 1, so the vector's
+ * acceleration and jerk keep a_max and j_max; from rest the components move
+ * in proportion (the vector keeps its direction and ramps as one axis
+ * would). Writes the exact displacement over dt_s. */
 static void approach(double v[3], double a[3], const double target[3], double a_max, double j_max, double dt_s,
                      double disp[3])
 {
     const double d[3] = { target[0] - v[0], target[1] - v[1], target[2] - v[2] };
     const double dn = norm3(d);
-    double w[3];
+    double b[3], bsum = 0.0;
     for (int i = 0; i < 3; i++) {
-        w[i] = fmax(dn > 1e-12 ? fabs(d[i]) / dn : 0.0, fabs(a[i]) / a_max);
+        b[i] = fabs(a[i]) / a_max;
+        bsum += b[i] * b[i];
     }
-    const double wn = norm3(w);
+    const double rest = bsum < 1.0 ? 1.0 - bsum : 0.0;
     for (int i = 0; i < 3; i++) {
-        ls_ramp_t rp;
-        if (!(wn > 0.0)) { /* at the target and not accelerating: hold it */
-            v[i] = target[i];
-            a[i] = 0.0;
+        const double di = dn > 1e-12 ? d[i] / dn : 0.0;
+        const double share = sqrt(b[i] * b[i] + rest * di * di);
+        if (!(share > 0.0)) {
+            /* Not accelerating (b_i = 0) and no budget left, or at its
+             * target: it keeps its speed this cycle (a rounding's worth
+             * from the target: takes it). */
+            if (fabs(d[i]) <= 1e-12) {
+                v[i] = target[i];
+            }
             disp[i] = v[i] * dt_s;
             continue;
         }
-        const double share = fmax(w[i] / wn, 1e-9);
+        ls_ramp_t rp;
         if (ls_ramp_plan(&rp, 0.0, v[i], a[i], target[i], a_max * share, j_max * share) != LS_OK) {
             v[i] = a[i] = disp[i] = 0.0; /* not finite: stop */
             continue;

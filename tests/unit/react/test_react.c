@@ -535,6 +535,43 @@ static void test_jog_respects_speed_and_acceleration(void **state)
     assert_false(ls_react_jog_on(&r));
 }
 
+/* The device's twist changes while the jog still ramps (x pushed, then x
+ * and y, then y alone, then released): the tip's acceleration and jerk
+ * vectors stay within the limits through every change. */
+static void test_jog_keeps_its_limits_when_the_twist_changes_mid_ramp(void **state)
+{
+    (void)state;
+    ls_react_t r;
+    ls_react_init(&r, M);
+    ls_jog_config_t c = jog_cfg();
+    ls_react_jog_config(&r, &c);
+    double q[LS_N_JOINTS], qd[LS_N_JOINTS], P[16], h[4][3];
+    memcpy(q, Q0, sizeof q);
+    tip(q, c.tool, P);
+    for (int k = 0; k < 4; k++) {
+        memcpy(h[k], P + 12, sizeof h[k]);
+    }
+    const double x[6] = { 1, 0, 0, 0, 0, 0 }, xy[6] = { 0.3, 1, 0, 0, 0, 0 }, y[6] = { 0, -1, 0, 0, 0, 0 };
+    double a_max = 0.0, j_max = 0.0;
+    for (int i = 0; i < 1200; i++) {
+        const double *tw = i < 150 ? x : (i < 300 ? xy : (i < 600 ? y : NULL));
+        (void)ls_react_jog_step(&r, DT_S, tw, q, qd, NULL);
+        tip(q, c.tool, P);
+        j_max = fmax(j_max, push_tip_jerk(h, P));
+        double acc2 = 0.0;
+        for (int k = 0; k < 3; k++) {
+            const double ak = (h[0][k] - 2.0 * h[1][k] + h[2][k]) / (DT_S * DT_S);
+            acc2 += ak * ak;
+        }
+        a_max = fmax(a_max, sqrt(acc2));
+    }
+    print_message("jog with changes mid-ramp: tip acceleration %.6f m/s^2 (limit 1), jerk %.6f m/s^3 (limit 10)\n",
+                  a_max, j_max);
+    assert_true(a_max <= 1.0 * (1.0 + 1e-6));
+    assert_true(j_max <= 10.0 * (1.0 + 1e-6));
+    assert_true(a_max > 0.9); /* it does ramp at the limit */
+}
+
 static void test_jog_stops_at_a_joint_limit_without_a_fault(void **state)
 {
     (void)state;
@@ -588,6 +625,7 @@ int main(void)
         cmocka_unit_test(test_comply_holds_the_force_on_a_spring),
         cmocka_unit_test(test_comply_panic_and_timeout),
         cmocka_unit_test(test_jog_respects_speed_and_acceleration),
+        cmocka_unit_test(test_jog_keeps_its_limits_when_the_twist_changes_mid_ramp),
         cmocka_unit_test(test_jog_stops_at_a_joint_limit_without_a_fault),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
