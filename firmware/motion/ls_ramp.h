@@ -9,16 +9,19 @@
  * acceleration goes from a0 to a peak, holds it, and returns to 0. The
  * time-optimal one (ls_ramp_plan) peaks at the largest acceleration the
  * limits allow; ls_ramp_plan_duration gives the one that takes exactly T
- * (a lower peak), so that several axes stop together. Both are closed form
+ * (a lower peak), for a caller that stops several axes together (the
+ * executor stops each axis on its own; tests/unit/ramp checks synchronised
+ * stops against ruckig's). Both are closed form
  * (a square root or a quadratic; no iteration): O(1), no allocation, no
  * clock, no I/O, safe in the control loop. tests/unit/ramp compares the
  * minimum durations with ruckig's (ls_otg_plan_velocity) and samples the
  * profiles against the limits.
  *
  * A start beyond the acceleration limit (|a0| > a_max) is allowed: the first
- * phase brings it back to the peak, still at j_max. Velocity is not limited
- * (the caller's state is within its velocity limit, and a ramp to v1 only
- * passes v1 by what a0 carries: |v0 + a0 |a0| / (2 j_max)| at most). */
+ * phase brings it back to the peak, still at j_max. Velocity is not limited:
+ * the speed stays within v0, v1 and v0 + a0 |a0| / (2 j_max) (where a0
+ * carries it before it can turn), so a state within its velocity limit and
+ * a target within it keep to it. */
 #ifndef LS_RAMP_H
 #define LS_RAMP_H
 

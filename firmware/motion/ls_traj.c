@@ -17,8 +17,6 @@
 
 /* Durations within this relative margin below the minimum are rounding. */
 #define DURATION_REL_TOL 1e-12
-/* A time-scale ramp this close to its end (relative) counts as finished. */
-#define SETTLE_REL_TOL 1e-9
 
 static int is_limit(double x)
 {
