@@ -38,6 +38,7 @@ from .cli_core import (
     description_of,
     fmt_notice,
     one_line,
+    say_link_lost,
     send,
     session_units,
     state_of,
@@ -194,9 +195,7 @@ def shell_line(ctx: click.Context, line: str, names: Sequence[str]) -> bool:
         code, msg = classify(exc)
         st = state_of(ctx)
         if isinstance(exc, LinkLostError):
-            if st.lost is None:  # a follower may have said it already
-                click.echo(msg, err=True)
-                st.lost = exc
+            say_link_lost(st, exc, msg)  # a follower may have said it already
             return False  # the device is gone: nothing more this shell can do
         click.echo(msg if code is not None else f"error: {type(exc).__name__}: {one_line(exc)}", err=True)
         if code in (EXIT_BUS, EXIT_VERSION, EXIT_ERROR) and st.client is not None:

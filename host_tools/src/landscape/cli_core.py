@@ -420,6 +420,24 @@ def call(backend: Backend, cmd: Command, fields: dict[str, Any], *, wait: bool, 
     return rv, notices, final
 
 
+_LINK_LOST_SAID = threading.Lock()
+
+
+def say_link_lost(st: CliState, exc: LinkLostError, line: str, then: Callable[[], None] | None = None) -> None:
+    """The shell's lost link, said once (by the first thread to see it: the prompt's or a
+    follower's), then recorded in st.lost, on which the shell ends with exit 4. `then` runs
+    between the two (a follower marks itself ended there, so that the shell, once it sees
+    st.lost, never finds it still running)."""
+    with _LINK_LOST_SAID:
+        first = st.lost is None
+        if first:
+            click.echo(line, err=True)
+        if then is not None:
+            then()
+        if first:
+            st.lost = exc
+
+
 class MotionFollower:
     """A motion the shell started, followed in a thread of its own: its notices print as they
     arrive and its end is reported, while the prompt takes the next line (stop-motion above
@@ -434,13 +452,15 @@ class MotionFollower:
         self.st = st
         self.thread = threading.Thread(target=self._run, daemon=True, name=f"landscape-follow-{cmd.cli_name}")
         self.abandoned = threading.Event()  # the shell is leaving: say nothing more
+        self.ended = threading.Event()  # its end (or the link's loss) has been said
 
     def start(self) -> None:
         self.thread.start()
 
     @property
     def running(self) -> bool:
-        return self.thread.is_alive()
+        """Still following: its end has not been said (the thread may be closing)."""
+        return self.thread.is_alive() and not self.ended.is_set()
 
     def _run(self) -> None:
         try:
@@ -448,17 +468,19 @@ class MotionFollower:
                                on_notice=lambda n: click.echo(fmt_notice(n)))
             check_outcome(self.cmd, self.rv, final, wait=True, wait_timeout_s=self.wait_timeout_s)
             click.echo(f"{self.cmd.cli_name}: done" + (f" ({final.event_id})" if final is not None else ""))
+            self.ended.set()
         except Exception as exc:  # noqa: BLE001 (one line, never a traceback; the shell goes on)
             if self.abandoned.is_set():
                 return
             code, msg = classify(exc)
-            if isinstance(exc, LinkLostError) and self.st is not None:
-                if self.st.lost is not None:
-                    return  # said once
-                self.st.lost = exc  # the shell ends at its next line with exit 4
-            click.echo(f"error: {msg}" if code is not None else f"error: {type(exc).__name__}: {one_line(exc)}",
-                       err=True)
+            line = f"error: {msg}" if code is not None else f"error: {type(exc).__name__}: {one_line(exc)}"
+            if not (isinstance(exc, LinkLostError) and self.st is not None):
+                click.echo(line, err=True)
+                self.ended.set()
+                return
+            say_link_lost(self.st, exc, line, then=self.ended.set)
         finally:
+            self.ended.set()
             if isinstance(self.backend, SessionClient):
                 self.backend.close()
 
