@@ -20,6 +20,9 @@ const char *ls_err_name(int status)
     case LS_ELIMITS: return "LS_ELIMITS";
     case LS_ERANGE: return "LS_ERANGE";
     case LS_EGEOM: return "LS_EGEOM";
+    case LS_ETIMEDOUT: return "LS_ETIMEDOUT";
+    case LS_EABORTED: return "LS_EABORTED";
+    case LS_EPROTO: return "LS_EPROTO";
     default: return status >= 0 ? "LS_OK" : "LS_E?";
     }
 }
@@ -43,6 +46,9 @@ const char *ls_err_text(int status)
     case LS_ELIMITS: return "beyond the joint limits";
     case LS_ERANGE: return "beyond a limit";
     case LS_EGEOM: return "degenerate geometry";
+    case LS_ETIMEDOUT: return "no answer within the time-out";
+    case LS_EABORTED: return "the peer refused the transfer";
+    case LS_EPROTO: return "the peer broke the protocol";
     default: return status >= 0 ? "ok" : "unknown error";
     }
 }

@@ -29,6 +29,10 @@ extern "C" {
 #define LS_ELIMITS (-14)      /* reachable, but no branch within the joint limits */
 #define LS_ERANGE (-15)       /* a joint, velocity or workspace limit, or unreachable */
 #define LS_EGEOM (-16)        /* degenerate geometry: collinear or coinciding arc points */
+/* Field buses (CANopen drives). */
+#define LS_ETIMEDOUT (-17) /* the peer did not answer within its time-out (SDO, boot-up, heartbeat) */
+#define LS_EABORTED (-18)  /* the peer refused the transfer (an SDO abort code says why) */
+#define LS_EPROTO (-19)    /* the peer broke the protocol (a frame that does not fit the exchange) */
 
 /* The code's name ("LS_EAGAIN"), "LS_OK" for zero or positive, "LS_E?" for a
  * negative value that is none of the above. Never NULL; O(1); any context. */
