@@ -1,6 +1,7 @@
 /* Thin wrappers of the HAL contracts: an operation a backend leaves NULL
  * answers LS_EUNSUPPORTED, so callers never test for NULL themselves. */
 #include <stddef.h>
+#include <string.h>
 
 #include "hal/hal_arm.h"
 #include "hal/hal_can.h"
@@ -108,6 +109,27 @@ void hal_arm_close(hal_arm_t *arm)
     if (arm != NULL && arm->ops != NULL && arm->ops->close != NULL) {
         arm->ops->close(arm->self);
     }
+}
+int hal_arm_status(hal_arm_t *arm, bool enabled, uint8_t n_joints, hal_joint_status_t *out)
+{
+    if (out == NULL || n_joints > HAL_ARM_MAX_JOINTS) {
+        return LS_EINVAL;
+    }
+    if (arm != NULL && arm->ops != NULL && arm->ops->status != NULL) {
+        return arm->ops->status(arm->self, out);
+    }
+    for (uint8_t j = 0; j < n_joints; j++) {
+        memset(&out[j], 0, sizeof out[j]);
+        out[j].state = enabled ? HAL_JOINT_ENABLED : HAL_JOINT_OFF;
+    }
+    return LS_OK;
+}
+int hal_arm_update(hal_arm_t *arm, uint64_t now_us)
+{
+    if (arm != NULL && arm->ops != NULL && arm->ops->update != NULL) {
+        return arm->ops->update(arm->self, now_us);
+    }
+    return LS_OK;
 }
 
 uint64_t hal_clock_now_us(const hal_clock_t *clock)

@@ -183,13 +183,30 @@ static void fault(ls_control_t *c, const char *text)
     /* The core ends whatever ran with its final alarm on LS_CEV_FAULT. */
     ls_react_abort(&c->react, c->q, NULL);
     ls_react_jog_halt(&c->react);
-    if (c->enabled) {
+    if (c->enabled || c->enabling) {
         (void)hal_arm_enable(c->cfg.arm, false);
         c->enabled = false;
+        c->enabling = false;
     }
     ls_ctl_event_t ev;
     memset(&ev, 0, sizeof ev);
     ev.kind = LS_CEV_FAULT;
+    strncpy(ev.text, text, sizeof ev.text - 1u);
+    ev_push(c, &ev);
+}
+
+/* LS_CTL_ENABLE ended with the drives off: LS_CEV_ENABLE_FAILED saying why. */
+static void enable_failed(ls_control_t *c, const char *text)
+{
+    if (c->cfg.arm != NULL) {
+        (void)hal_arm_enable(c->cfg.arm, false);
+    }
+    c->enabling = false;
+    c->enabled = false;
+    ls_ctl_event_t ev;
+    memset(&ev, 0, sizeof ev);
+    ev.kind = LS_CEV_ENABLE_FAILED;
+    ev.ref_seq = c->enable_ref_seq;
     strncpy(ev.text, text, sizeof ev.text - 1u);
     ev_push(c, &ev);
 }
@@ -365,26 +382,143 @@ static void stop_then_disable(ls_control_t *c, bool fast)
     }
     ls_motion_abort(&c->motion);
     react_abort(c);
+    if (c->enabling) {
+        enable_failed(c, "enabling cancelled: the drives were switched off");
+    }
     (void)hal_arm_enable(c->cfg.arm, false);
     c->enabled = false;
     c->disable_pending = false;
 }
 
-/* LS_CTL_ENABLE: drives on, holding where the arm is. */
-static void enable_drives(ls_control_t *c, const ls_ctl_cmd_t *cmd)
+/* Every joint confirmed: hold where the arm is, not where an old command
+ * pointed (the drives' own targets were their actual positions meanwhile). */
+static void enabled_now(ls_control_t *c)
 {
-    c->disable_pending = false;
-    if (c->cfg.arm == NULL || hal_arm_enable(c->cfg.arm, true) < 0) {
-        cmd_failed(c, cmd->ref_seq, "the drives could not be enabled");
-        return;
-    }
-    /* Hold where the arm is, not where an old command pointed. */
+    c->enabling = false;
     ls_motion_hold(&c->motion, c->q);
     memcpy(c->q_cmd, c->q, sizeof c->q_cmd);
+    memset(c->qd_cmd, 0, sizeof c->qd_cmd);
     c->enabled = true;
+    ls_ctl_event_t ev;
+    memset(&ev, 0, sizeof ev);
+    ev.kind = LS_CEV_ENABLED;
+    ev.ref_seq = c->enable_ref_seq;
+    ev_push(c, &ev);
     if (c->manual != NULL) {
         ls_react_jog_halt(&c->react);
-        jog_ready(c, cmd->ref_seq);
+        jog_ready(c, c->enable_ref_seq);
+    }
+}
+
+/* LS_CTL_ENABLE: ask the drives; check_joints() finishes it when every
+ * joint has confirmed (LS_CEV_ENABLED) or one cannot be enabled
+ * (LS_CEV_ENABLE_FAILED). Asked again while enabled, it confirms at once. */
+static void enable_drives(ls_control_t *c, uint32_t ref_seq)
+{
+    c->disable_pending = false;
+    c->enable_ref_seq = ref_seq;
+    if (c->enabled) {
+        enabled_now(c);
+        return;
+    }
+    if (c->enabling) {
+        return;
+    }
+    if (c->cfg.arm == NULL) {
+        enable_failed(c, "no arm backend is composed (arm = none): nothing can be enabled");
+        return;
+    }
+    const int r = hal_arm_enable(c->cfg.arm, true);
+    if (r < 0) {
+        char text[LS_CTL_TEXT_LEN];
+        ls_fmt_print(text, sizeof text, "the arm backend refused to enable the drives (%s)", ls_err_name(r));
+        enable_failed(c, text);
+        return;
+    }
+    c->enabling = true;
+    const uint32_t ms = c->cfg.enable_timeout_ms != 0u ? c->cfg.enable_timeout_ms : LS_CTL_ENABLE_TIMEOUT_MS;
+    c->enable_deadline_us = c->now_us + (uint64_t)ms * 1000u;
+}
+
+/* "joint 3 (node 0x23): " or "joint 3: " before what its drive said. */
+static void joint_line(char *out, size_t cap, int j, const hal_joint_status_t *st, const char *what)
+{
+    if (st->node != 0u) {
+        ls_fmt_print(out, cap, "joint %d (node 0x%02X): %s", j + 1, (unsigned)st->node, what);
+    } else {
+        ls_fmt_print(out, cap, "joint %d: %s", j + 1, what);
+    }
+}
+
+static const char *joint_state_name(hal_joint_state_t s)
+{
+    switch (s) {
+    case HAL_JOINT_OFF: return "OFF";
+    case HAL_JOINT_ENABLING: return "ENABLING";
+    case HAL_JOINT_ENABLED: return "ENABLED";
+    case HAL_JOINT_FAULT: return "FAULT";
+    case HAL_JOINT_LOST: return "LOST";
+    }
+    return "?";
+}
+
+/* The drives' states, once per cycle: finish an enable, and fault when a
+ * joint under control faults or is lost. A backend whose status() fails is
+ * a lost arm. */
+static void check_joints(ls_control_t *c)
+{
+    if (c->cfg.arm == NULL) {
+        return;
+    }
+    const int r = hal_arm_status(c->cfg.arm, c->enabled || c->enabling, LS_N_JOINTS, c->joints);
+    if (r < 0) {
+        for (int j = 0; j < LS_N_JOINTS; j++) {
+            memset(&c->joints[j], 0, sizeof c->joints[j]);
+            c->joints[j].state = HAL_JOINT_LOST;
+            ls_fmt_print(c->joints[j].text, sizeof c->joints[j].text, "the arm backend's status failed (%s)",
+                         ls_err_name(r));
+        }
+    }
+    if (!c->enabling && !c->enabled) {
+        return;
+    }
+    int bad = -1, waiting = -1;
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        const hal_joint_state_t s = c->joints[j].state;
+        if ((s == HAL_JOINT_FAULT || s == HAL_JOINT_LOST || (c->enabled && s != HAL_JOINT_ENABLED)) && bad < 0) {
+            bad = j;
+        } else if (s != HAL_JOINT_ENABLED && waiting < 0) {
+            waiting = j;
+        }
+    }
+    char what[LS_CTL_TEXT_LEN], line[LS_CTL_TEXT_LEN];
+    if (bad >= 0) {
+        const hal_joint_status_t *st = &c->joints[bad];
+        if (st->text[0] != '\0') {
+            ls_fmt_print(what, sizeof what, "%s", st->text);
+        } else {
+            ls_fmt_print(what, sizeof what, "%s", joint_state_name(st->state));
+        }
+        joint_line(line, sizeof line, bad, st, what);
+        if (c->enabling) {
+            enable_failed(c, line);
+        } else {
+            fault(c, line);
+        }
+        return;
+    }
+    if (!c->enabling) {
+        return;
+    }
+    if (waiting < 0) {
+        enabled_now(c);
+    } else if (c->now_us >= c->enable_deadline_us) {
+        const hal_joint_status_t *st = &c->joints[waiting];
+        const uint32_t ms = c->cfg.enable_timeout_ms != 0u ? c->cfg.enable_timeout_ms : LS_CTL_ENABLE_TIMEOUT_MS;
+        ls_fmt_print(what, sizeof what, "not enabled within %u ms (%s%s%s)", (unsigned)ms, joint_state_name(st->state),
+                     st->text[0] != '\0' ? ": " : "", st->text);
+        joint_line(line, sizeof line, waiting, st, what);
+        enable_failed(c, line);
     }
 }
 
@@ -421,7 +555,7 @@ static void start_react(ls_control_t *c, const ls_ctl_cmd_t *cmd)
 static void handle_command(ls_control_t *c, const ls_ctl_cmd_t *cmd)
 {
     switch (cmd->kind) {
-    case LS_CTL_ENABLE: enable_drives(c, cmd); return;
+    case LS_CTL_ENABLE: enable_drives(c, cmd->ref_seq); return;
     case LS_CTL_DISABLE:
     case LS_CTL_HALT: stop_then_disable(c, cmd->kind == LS_CTL_HALT); return;
     case LS_CTL_START: start_plan(c, cmd); return;
@@ -519,11 +653,13 @@ static void read_dio(ls_control_t *c)
 
 void ls_control_cycle(ls_control_t *c, uint64_t now_us)
 {
+    c->now_us = now_us;
     ls_ctl_cmd_t cmd;
     while (cmd_pop(c, &cmd)) {
         handle_command(c, &cmd);
     }
     read_dio(c);
+    check_joints(c);
     ls_motion_events_t mev;
     mev.n = 0;
     c->jogging = false;
@@ -554,6 +690,9 @@ void ls_control_cycle(ls_control_t *c, uint64_t now_us)
         c->enabled = false;
         c->disable_pending = false;
     }
+    if (c->cfg.arm != NULL && hal_arm_update(c->cfg.arm, now_us) < 0 && (c->enabled || c->enabling)) {
+        fault(c, "the arm backend's bus failed");
+    }
     if (c->cfg.world_step != NULL) {
         (void)c->cfg.world_step(c->cfg.world_ctx, c->dt_s); /* physics advances with the drives off too (brakes) */
     }
@@ -566,6 +705,10 @@ void ls_control_cycle(ls_control_t *c, uint64_t now_us)
     s.cycle = c->cycles;
     s.t_us = now_us;
     s.enabled = c->enabled;
+    s.enabling = c->enabling;
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        s.joint_state[j] = (uint8_t)c->joints[j].state;
+    }
     s.phase = c->react.active ? (c->react.paused ? LS_MOTION_PAUSED : LS_MOTION_RUNNING) : c->motion.phase;
     s.react_active = c->react.active;
     s.manual_on = c->manual != NULL;

@@ -46,9 +46,13 @@
 #define LS_CTL_QUEUE_LEN 32u
 #endif
 #define LS_CTL_MAX_DIO_UNITS 4
+/* The default of ls_control_config_t.enable_timeout_ms: a CiA 402 drive takes
+ * three confirmed steps of one drive cycle each (a few ms to tens of ms);
+ * within the host's time-out of activate (the schema's host_timeout_ms). */
+#define LS_CTL_ENABLE_TIMEOUT_MS 2000u
 
 typedef enum {
-    LS_CTL_ENABLE = 1, /* drives on: hold the measured position */
+    LS_CTL_ENABLE = 1, /* drives on, then hold the measured position: LS_CEV_ENABLED or LS_CEV_ENABLE_FAILED */
     LS_CTL_DISABLE,    /* drives off; a running motion first stops along its path */
     LS_CTL_START,      /* start the plan in the plan slot */
     LS_CTL_STOP,       /* decelerate along the path and pause */
@@ -86,19 +90,26 @@ typedef struct {
 } ls_ctl_cmd_t;
 
 typedef enum {
-    LS_CEV_MOTION = 1,  /* motion: a motion executor event */
-    LS_CEV_FAULT,       /* text: the loop disabled the drives (HAL error), or is stopping a motion
+    LS_CEV_MOTION = 1,    /* motion: a motion executor event */
+    LS_CEV_FAULT,         /* text: the loop disabled the drives (HAL error), or is stopping a motion
                             along its path at the model's maximum deceleration before it
                             disables them (e-stop input) */
-    LS_CEV_DIO_CHANGED, /* dio.unit, dio.on = new levels, dio.off = bits that changed */
-    LS_CEV_CMD_FAILED,  /* ref_seq, text: a command the loop could not carry out */
+    LS_CEV_DIO_CHANGED,   /* dio.unit, dio.on = new levels, dio.off = bits that changed */
+    LS_CEV_CMD_FAILED,    /* ref_seq, text: a command the loop could not carry out */
+    LS_CEV_ENABLED,       /* ref_seq: every joint confirmed ENABLED (LS_CTL_ENABLE): the arm holds where it is */
+    LS_CEV_ENABLE_FAILED, /* ref_seq, text: LS_CTL_ENABLE ended with the drives off: which joint, its node and
+                             what its drive said, or that no arm is composed, or that it was cancelled */
 } ls_cev_kind_t;
+
+/* An event's text: one line naming a joint, its drive's node and what the
+ * drive said ("joint 3 (node 0x23): FAULT, EMCY 0x8611 following error"). */
+#define LS_CTL_TEXT_LEN 128
 
 typedef struct {
     ls_cev_kind_t kind;
     uint32_t ref_seq;
     ls_motion_event_t motion;
-    char text[64];
+    char text[LS_CTL_TEXT_LEN];
     struct {
         uint16_t unit;
         uint32_t on, off;
@@ -111,6 +122,7 @@ typedef struct {
     uint64_t cycle;
     uint64_t t_us;
     bool enabled;
+    bool enabling; /* LS_CTL_ENABLE asked, not every joint has confirmed yet */
     ls_motion_phase_t phase;
     double q_rad[LS_N_JOINTS];
     double qd_rad_s[LS_N_JOINTS];
@@ -121,9 +133,10 @@ typedef struct {
     double flange_pose[16]; /* FK of q_rad, base frame, column-major */
     uint32_t events_lost;
     uint32_t max_cycle_us;
-    bool react_active; /* a guarded/compliant move runs or is paused */
-    bool manual_on;    /* jogging is switched on */
-    bool jogging;      /* the set-point moved by jogging this cycle */
+    bool react_active;                /* a guarded/compliant move runs or is paused */
+    bool manual_on;                   /* jogging is switched on */
+    bool jogging;                     /* the set-point moved by jogging this cycle */
+    uint8_t joint_state[LS_N_JOINTS]; /* hal_joint_state_t of each joint's drive */
 } ls_ctl_snapshot_t;
 
 /* The snapshot as 32-bit words: the seqlock copies it word by word with
@@ -145,6 +158,9 @@ typedef struct {
     const hal_sensor_t *sensors; /* read every cycle into the snapshot */
     size_t n_sensors;
     uint32_t rate_hz;
+    /* How long LS_CTL_ENABLE waits for every joint to confirm before it
+     * fails naming the joints still enabling (ms; 0: LS_CTL_ENABLE_TIMEOUT_MS). */
+    uint32_t enable_timeout_ms;
     /* A simulated world: advanced once per cycle after the arm command, with
      * the drives on or off (brakes), before the feedback is read. NULL on
      * hardware. E.g. hal_sim_world_step with world_ctx NULL. */
@@ -189,7 +205,12 @@ typedef struct ls_control {
     double sens[HAL_MAX_SENSORS][HAL_SENSOR_MAX_VALUES]; /* last reading, SI */
     bool jogging;
     bool enabled;
-    bool disable_pending; /* DISABLE while moving: stop along the path first */
+    bool enabling; /* LS_CTL_ENABLE asked: waiting for every joint's ENABLED */
+    uint64_t enable_deadline_us;
+    uint32_t enable_ref_seq;                /* the LS_CTL_ENABLE being carried out */
+    uint64_t now_us;                        /* the current cycle's time */
+    bool disable_pending;                   /* DISABLE while moving: stop along the path first */
+    hal_joint_status_t joints[LS_N_JOINTS]; /* this cycle's status of each joint's drive */
     double q[LS_N_JOINTS], qd[LS_N_JOINTS], q_cmd[LS_N_JOINTS], qd_cmd[LS_N_JOINTS];
     uint32_t dio_levels[LS_CTL_MAX_DIO_UNITS];
     uint16_t estop_unit;

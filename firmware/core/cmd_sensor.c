@@ -705,7 +705,9 @@ bool ls_core_sensor_on_event(ls_core_t *core, const ls_ctl_event_t *ev)
             return true;
         }
         return false;
-    case LS_CEV_DIO_CHANGED: return false;
+    case LS_CEV_DIO_CHANGED:
+    case LS_CEV_ENABLED:
+    case LS_CEV_ENABLE_FAILED: return false;
     }
     return false;
 }

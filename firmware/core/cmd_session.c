@@ -32,7 +32,13 @@ int32_t ls_h_activate(struct ls_core *core, struct ls_call *call)
         int r = core->act.enable_drives(core->act.ctx, true);
         if (r < 0) {
             return ls_reply(call, ls_RetCode_CMD_UNSUPPORTED_ERR,
-                            "the drives could not be enabled (HAL status %d): check the arm backend (--arm)", r);
+                            "the drives could not be enabled (%s): check the arm backend (--arm)", ls_err_name(r));
+        }
+        if (r > 0) {
+            /* Real drives enable in steps: answered when every joint has
+             * confirmed, or one could not (ls_core_on_enable_result). */
+            core->activating = call->sup;
+            return LS_CALL_DEFERRED;
         }
     }
     core->state = ls_State_RESTING;
@@ -56,4 +62,41 @@ int32_t ls_h_deactivate(struct ls_core *core, struct ls_call *call)
     }
     core->state = ls_State_LOCKED;
     return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "inactive: drives disabled");
+}
+
+void ls_core_on_enable_result(ls_core_t *core, const char *failure, uint64_t now_us)
+{
+    const int sup = core->activating;
+    core->activating = -1;
+    if (failure != NULL) {
+        ls_core_log_fault(core, now_us, "activate: the drives are off: %s", failure);
+        if (sup >= 0) {
+            char msg[sizeof core->down.msg.response.ret_msg];
+            ls_fmt_print(msg, sizeof msg, "activate failed, the drives are off: %s", failure);
+            ls_core_finish_deferred(core, sup, ls_RetCode_CMD_ERR, msg);
+        }
+        return;
+    }
+    /* Every joint confirmed. The drives stay on only for the session that
+     * asked, while it still owns the device and no fault came meanwhile (an
+     * emergency frame, an owner loss); else they go off again at once. */
+    const bool asked = sup >= 0 && core->sessions[sup].connected && core->owner == sup;
+    if (!asked || core->state != ls_State_LOCKED || core->fault[0] != '\0') {
+        if (core->state == ls_State_LOCKED || core->state == ls_State_UNLOCKED) {
+            if (core->act.enable_drives != NULL) {
+                (void)core->act.enable_drives(core->act.ctx, false);
+            }
+            ls_core_log_event(core, now_us, "the drives came on after their activate ended: switched off again");
+        }
+        if (sup >= 0) {
+            char msg[sizeof core->down.msg.response.ret_msg];
+            ls_fmt_print(msg, sizeof msg, "activate failed, the drives are off again: %s",
+                         core->fault[0] != '\0' ? core->fault : "the device changed state while they enabled");
+            ls_core_finish_deferred(core, sup, ls_RetCode_CMD_FAULT_ERR, msg);
+        }
+        return;
+    }
+    core->state = ls_State_RESTING;
+    ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_at_rest");
+    ls_core_finish_deferred(core, sup, ls_RetCode_CMD_EXEC_OK, "active: drives enabled");
 }

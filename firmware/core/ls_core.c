@@ -86,6 +86,7 @@ void ls_core_init(ls_core_t *core, const ls_core_config_t *cfg, const ls_core_io
     }
     core->state = ls_State_IDLE;
     core->owner = -1;
+    core->activating = -1;
     ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_at_rest");
     core->settings.speed_pct = 25.0;
     core->settings.accel_pct = 50.0;
@@ -629,6 +630,8 @@ static void on_loop_event(ls_core_t *core, const ls_ctl_event_t *ev, uint64_t no
     case LS_CEV_MOTION: ls_core_on_motion_event(core, &ev->motion); break;
     case LS_CEV_FAULT: ls_core_fault(core, ev->text, now_us); break; /* its halt ends the motion */
     case LS_CEV_DIO_CHANGED: ls_core_on_dio_event(core, ev->dio.unit, ev->dio.on, ev->dio.off, now_us); break;
+    case LS_CEV_ENABLED: ls_core_on_enable_result(core, NULL, now_us); break;
+    case LS_CEV_ENABLE_FAILED: ls_core_on_enable_result(core, ev->text, now_us); break;
     case LS_CEV_CMD_FAILED: {
         char d[80];
         ls_fmt_print(d, sizeof d, "reason=%s", ev->text);

@@ -230,7 +230,10 @@ typedef struct {
 
 /* Actions the core asks of the rest of the firmware (drives, motion). */
 typedef struct {
-    /* Enable or disable the drives; returns 0 or a negative HAL status. */
+    /* Enable or disable the drives; returns 0 when done, a negative HAL
+     * status, or (on) 1 when enabling has started and its end comes as a
+     * loop event (LS_CEV_ENABLED or LS_CEV_ENABLE_FAILED): activate then
+     * answers when it comes. */
     int (*enable_drives)(void *ctx, bool on);
     /* Stop any motion along its path at the configured deceleration (pause). */
     void (*stop_motion)(void *ctx);
@@ -276,7 +279,8 @@ typedef struct ls_core {
     char held_name[sizeof(((ls_ConnectReq *)0)->client_name)]; /* the session name, whole */
     ls_DisconnectAction held_action;
     ls_State state;
-    int owner; /* index in sessions[], -1 when unlocked */
+    int owner;      /* index in sessions[], -1 when unlocked */
+    int activating; /* the session whose activate waits for the drives (LS_CEV_ENABLED), -1: none */
     ls_session_t sessions[LS_MAX_SUPERVISORS];
     char fault[96];                               /* latched fault, empty when none */
     char motion_state[32];                        /* seed 3.3.1 motionControlState (docs/state-machine.md) */
@@ -383,6 +387,12 @@ void ls_core_notify_named_to(ls_core_t *core, uint8_t addr, uint32_t epoch, ls_N
  * motion along its path at the model's maximum deceleration, then drives off
  * (ACTIVE -> LOCKED once they are off; the motion's final notice then). */
 void ls_core_fault(ls_core_t *core, const char *text, uint64_t now_us);
+/* The control loop's answer to the drives' enable (LS_CEV_ENABLED with
+ * `failure` NULL, LS_CEV_ENABLE_FAILED with its text): finishes the
+ * deferred activate of core->activating (RESTING, or refused naming the
+ * joint and what its drive said); drives that came on for a session that
+ * ended or lost the lock are switched off again. Comms thread. */
+void ls_core_on_enable_result(ls_core_t *core, const char *failure, uint64_t now_us);
 /* The same for an EMERGENCY frame on the bus (reason=emergency). Repeats of
  * the alarm within LS_ALARM_WINDOW_MS are counted, not sent; the stop is
  * never delayed. */

@@ -3,10 +3,15 @@
 #include "ls_control.h"
 #include "ls_core.h"
 
+/* Enabling ends in the loop (every drive confirms, or one cannot): 1 tells
+ * the core to wait for LS_CEV_ENABLED / LS_CEV_ENABLE_FAILED. */
 static int act_enable(void *ctx, bool on)
 {
     ls_ctl_cmd_t cmd = { .kind = on ? LS_CTL_ENABLE : LS_CTL_DISABLE };
-    return ls_control_post((ls_control_t *)ctx, &cmd) ? 0 : LS_EAGAIN;
+    if (!ls_control_post((ls_control_t *)ctx, &cmd)) {
+        return LS_EAGAIN;
+    }
+    return on ? 1 : 0;
 }
 
 static void act_halt(void *ctx)

@@ -1,6 +1,10 @@
 /* Arm contract: joint commands and feedback, sensors, tool changer and a
  * manual input device. hal/sim implements all of them on an ODE world; a real
  * controller implements what its hardware has and leaves the rest NULL.
+ * The arm of real drives (firmware/drives: CiA 402 over CANopen) enables in
+ * steps, one per drive cycle, and its feedback arrives once per drive cycle:
+ * enable() asks, status() tells when each joint is under control, and read()
+ * returns the latest feedback with its age in status().
  *
  * Threading: every operation except open/close is called from the control
  * loop: no blocking, no allocation. Units: SI (m, rad, N, Nm, s).
@@ -17,6 +21,7 @@
 #define HAL_ARM_MAX_JOINTS 8
 #define HAL_MAX_SENSORS 4
 #define HAL_SENSOR_MAX_VALUES 8
+#define HAL_JOINT_TEXT_LEN 96 /* hal_joint_status_t.text with its NUL */
 
 typedef struct {
     uint8_t n_joints;
@@ -25,15 +30,47 @@ typedef struct {
     double torque_max_Nm[HAL_ARM_MAX_JOINTS];
 } hal_arm_info_t;
 
+/* One joint's drive, as the backend knows it this cycle. */
+typedef enum {
+    HAL_JOINT_OFF = 0,  /* disabled: no torque, a holding brake holds */
+    HAL_JOINT_ENABLING, /* enable() asked, the drive has not confirmed yet */
+    HAL_JOINT_ENABLED,  /* under control: follows the set-points */
+    HAL_JOINT_FAULT,    /* the drive reports a fault (code, text); it holds no set-point */
+    HAL_JOINT_LOST,     /* the drive stopped answering (heartbeat, feedback, bus) */
+} hal_joint_state_t;
+
+typedef struct {
+    hal_joint_state_t state;
+    uint16_t node;         /* the drive's bus address, 0 when it has none (a simulated arm) */
+    uint32_t code;         /* the drive's error code (CiA 402: EMCY / 0x603F), 0 when none */
+    uint32_t feedback_age; /* control cycles since this joint's feedback was fresh; 0: fresh */
+    /* What the drive said, for one-line messages, e.g. "FAULT, EMCY 0x8611 following
+     * error" or "no heartbeat for 300 ms"; "" when there is nothing to say. */
+    char text[HAL_JOINT_TEXT_LEN];
+} hal_joint_status_t;
+
 typedef struct {
     int (*info)(void *self, hal_arm_info_t *out);
-    /* Enable or disable the drives. Disabled drives hold nothing (brakes in sim). */
+    /* Ask the drives to enable (on) or disable. Returns at once: a drive
+     * enables in steps that status() reports (ENABLING, then ENABLED), and a
+     * joint that cannot be enabled reports FAULT or LOST there. Disabling
+     * takes effect for the caller at once (set-points are no longer
+     * followed); brakes engage as the drives confirm. */
     int (*enable)(void *self, bool on);
     /* Set-point for this cycle: position and velocity feed-forward per joint. */
     int (*command)(void *self, const double *q_rad, const double *qd_rad_s);
-    /* Measured joint positions and velocities. */
+    /* The latest measured joint positions and velocities (their age: status). */
     int (*read)(void *self, double *q_rad, double *qd_rad_s);
     void (*close)(void *self);
+    /* Optional: each joint's state, n_joints entries. NULL: every joint
+     * follows enable() at once (ENABLED after enable(true), OFF after
+     * enable(false)), never faults and reads fresh feedback every cycle. */
+    int (*status)(void *self, hal_joint_status_t *out);
+    /* Optional: the backend's own work once per control cycle, after
+     * command() and before read(): bus traffic and protocol timers (a drive
+     * bus sends the cycle's set-points and its SYNC, takes the drives'
+     * answers). `now_us` is the cycle's time. NULL: nothing to do. */
+    int (*update)(void *self, uint64_t now_us);
 } hal_arm_ops_t;
 
 typedef struct {
@@ -85,5 +122,10 @@ int hal_arm_enable(hal_arm_t *arm, bool on);
 int hal_arm_command(hal_arm_t *arm, const double *q_rad, const double *qd_rad_s);
 int hal_arm_read(hal_arm_t *arm, double *q_rad, double *qd_rad_s);
 void hal_arm_close(hal_arm_t *arm);
+/* The optional operations: status() without a backend operation fills
+ * `out` per enable()'s contract above from `enabled` (the caller's view)
+ * and returns LS_OK; update() without one returns LS_OK. */
+int hal_arm_status(hal_arm_t *arm, bool enabled, uint8_t n_joints, hal_joint_status_t *out);
+int hal_arm_update(hal_arm_t *arm, uint64_t now_us);
 
 #endif

@@ -87,6 +87,71 @@ static int world_step(void *world_ctx, double dt_s)
 
 static const hal_arm_ops_t ARM_OPS = { .enable = arm_enable, .command = arm_command, .read = arm_read };
 
+/* The same arm behind drives that confirm enable() only after `enable_cycles`
+ * calls of update() (one per control cycle), as CiA 402 drives do in steps;
+ * `fault_joint` (1-based; 0: none) reports FAULT with a drive's text. */
+typedef struct {
+    fake_arm_t arm;
+    int enable_cycles;
+    int fault_joint;
+    bool wanted;  /* enable(true) asked */
+    int progress; /* update() calls since */
+    uint64_t last_update_us;
+    int updates;
+} fake_drives_t;
+
+static int drives_enable(void *self, bool on)
+{
+    fake_drives_t *d = self;
+    d->wanted = on;
+    d->progress = 0;
+    d->arm.enabled = false;
+    return LS_OK;
+}
+
+static int drives_command(void *self, const double *q_rad, const double *qd_rad_s)
+{
+    return arm_command(&((fake_drives_t *)self)->arm, q_rad, qd_rad_s);
+}
+
+static int drives_read(void *self, double *q_rad, double *qd_rad_s)
+{
+    return arm_read(&((fake_drives_t *)self)->arm, q_rad, qd_rad_s);
+}
+
+static int drives_update(void *self, uint64_t now_us)
+{
+    fake_drives_t *d = self;
+    d->updates++;
+    d->last_update_us = now_us;
+    if (d->wanted && ++d->progress >= d->enable_cycles) {
+        d->arm.enabled = true;
+    }
+    return LS_OK;
+}
+
+static int drives_status(void *self, hal_joint_status_t *out)
+{
+    const fake_drives_t *d = self;
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        memset(&out[j], 0, sizeof out[j]);
+        out[j].node = (uint16_t)(0x21 + j);
+        out[j].state = d->arm.enabled ? HAL_JOINT_ENABLED : d->wanted ? HAL_JOINT_ENABLING : HAL_JOINT_OFF;
+        if (j + 1 == d->fault_joint) {
+            out[j].state = HAL_JOINT_FAULT;
+            out[j].code = 0x8611u;
+            strcpy(out[j].text, "FAULT, EMCY 0x8611 following error");
+        }
+    }
+    return LS_OK;
+}
+
+static const hal_arm_ops_t DRIVES_OPS = { .enable = drives_enable,
+                                          .command = drives_command,
+                                          .read = drives_read,
+                                          .status = drives_status,
+                                          .update = drives_update };
+
 /* ---------------------------------------------------------------- fake DIO */
 
 #define DIO_LOG 64
@@ -265,11 +330,16 @@ static void post_dio(fx_t *f, ls_ctl_kind_t kind, uint32_t ref_seq, uint16_t uni
     assert_true(ls_control_post(&f->ctl, &c));
 }
 
+static ls_ctl_event_t next(fx_t *f, ls_cev_kind_t kind);
+
+/* Drives on: the fake arm has no status(), so every joint confirms in the
+ * cycle that takes the command (hal_arm.h), which reports LS_CEV_ENABLED. */
 static void enable(fx_t *f)
 {
     post(f, LS_CTL_ENABLE, 1);
     cycle(f);
     assert_true(snap(f).enabled);
+    (void)next(f, LS_CEV_ENABLED);
 }
 
 /* The next event, which must exist and be of `kind`. */
@@ -501,6 +571,122 @@ static void test_plan_slot_freed_when_ring_full_or_start_refused(void **state)
 
 /* ---------------------------------------------------------------- command kinds */
 
+/* Drives that confirm in steps: the loop waits for every joint, never
+ * blocks, and reports LS_CEV_ENABLED once, with the arm held where it is. */
+static fake_drives_t g_drives;
+static hal_arm_t g_drives_arm;
+
+static fx_t *fx_drives(int enable_cycles, uint32_t timeout_ms)
+{
+    fx_t *f = fx_init(false);
+    memset(&g_drives, 0, sizeof g_drives);
+    memcpy(g_drives.arm.q, Q0, sizeof Q0);
+    g_drives.enable_cycles = enable_cycles;
+    g_drives_arm = (hal_arm_t){ .ops = &DRIVES_OPS, .self = &g_drives, .name = "drives" };
+    ls_control_config_t cfg = { .model = M, .arm = &g_drives_arm, .rate_hz = 1000, .enable_timeout_ms = timeout_ms };
+    ls_control_init(&f->ctl, &cfg);
+    return f;
+}
+
+static void test_enable_waits_for_every_joint_to_confirm(void **state)
+{
+    (void)state;
+    fx_t *f = fx_drives(5, 0);
+    post(f, LS_CTL_ENABLE, 12);
+    for (int i = 0; i < 4; i++) {
+        cycle(f);
+        const ls_ctl_snapshot_t s = snap(f);
+        assert_false(s.enabled);
+        assert_true(s.enabling);
+        assert_int_equal(s.joint_state[2], HAL_JOINT_ENABLING);
+        assert_no_event(f);
+    }
+    cycle(f); /* the fifth update confirmed: the next cycle's status sees it */
+    cycle(f);
+    const ls_ctl_snapshot_t s = snap(f);
+    assert_true(s.enabled);
+    assert_false(s.enabling);
+    assert_int_equal(s.joint_state[5], HAL_JOINT_ENABLED);
+    assert_int_equal(next(f, LS_CEV_ENABLED).ref_seq, 12);
+    assert_no_event(f);
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        assert_true(s.q_cmd_rad[j] == Q0[j]); /* holds where it is */
+    }
+    /* update() ran once per cycle with the cycle's time */
+    assert_int_equal(g_drives.updates, 6);
+    assert_int_equal(g_drives.last_update_us, f->now_us);
+}
+
+static void test_enable_fails_naming_the_joint_its_node_and_what_its_drive_said(void **state)
+{
+    (void)state;
+    fx_t *f = fx_drives(50, 0);
+    post(f, LS_CTL_ENABLE, 13);
+    cycle(f);
+    cycle(f);
+    g_drives.fault_joint = 3;
+    cycle(f);
+    ls_ctl_event_t ev = next(f, LS_CEV_ENABLE_FAILED);
+    assert_int_equal(ev.ref_seq, 13);
+    assert_string_equal(ev.text, "joint 3 (node 0x23): FAULT, EMCY 0x8611 following error");
+    assert_false(g_drives.wanted); /* every drive asked off again */
+    assert_false(snap(f).enabling);
+    assert_false(snap(f).enabled);
+    assert_no_event(f);
+}
+
+static void test_enable_times_out_naming_a_joint_still_enabling(void **state)
+{
+    (void)state;
+    fx_t *f = fx_drives(1000000, 20);
+    post(f, LS_CTL_ENABLE, 14);
+    for (int i = 0; i < 20; i++) {
+        cycle(f);
+        assert_no_event(f);
+    }
+    cycle(f);
+    ls_ctl_event_t ev = next(f, LS_CEV_ENABLE_FAILED);
+    assert_string_equal(ev.text, "joint 1 (node 0x21): not enabled within 20 ms (ENABLING)");
+    assert_false(g_drives.wanted);
+    assert_false(snap(f).enabling);
+}
+
+static void test_disable_cancels_an_enable_in_progress(void **state)
+{
+    (void)state;
+    fx_t *f = fx_drives(50, 0);
+    post(f, LS_CTL_ENABLE, 15);
+    cycle(f);
+    post(f, LS_CTL_DISABLE, 16);
+    cycle(f);
+    ls_ctl_event_t ev = next(f, LS_CEV_ENABLE_FAILED);
+    assert_int_equal(ev.ref_seq, 15);
+    assert_string_equal(ev.text, "enabling cancelled: the drives were switched off");
+    assert_false(g_drives.wanted);
+    for (int i = 0; i < 60; i++) {
+        cycle(f);
+    }
+    assert_false(snap(f).enabled);
+    assert_no_event(f);
+}
+
+static void test_a_joint_that_faults_under_control_faults_the_arm(void **state)
+{
+    (void)state;
+    fx_t *f = fx_drives(1, 0);
+    post(f, LS_CTL_ENABLE, 17);
+    cycle(f);
+    cycle(f);
+    (void)next(f, LS_CEV_ENABLED);
+    g_drives.fault_joint = 6;
+    cycle(f);
+    ls_ctl_event_t ev = next(f, LS_CEV_FAULT);
+    assert_string_equal(ev.text, "joint 6 (node 0x26): FAULT, EMCY 0x8611 following error");
+    assert_false(snap(f).enabled);
+    assert_false(g_drives.wanted);
+    assert_int_equal(snap(f).joint_state[5], HAL_JOINT_FAULT);
+}
+
 static void test_enable_and_disable(void **state)
 {
     (void)state;
@@ -509,9 +695,9 @@ static void test_enable_and_disable(void **state)
     f->arm_state.fail_enable = 1;
     post(f, LS_CTL_ENABLE, 7);
     cycle(f);
-    ls_ctl_event_t ev = next(f, LS_CEV_CMD_FAILED);
+    ls_ctl_event_t ev = next(f, LS_CEV_ENABLE_FAILED);
     assert_int_equal(ev.ref_seq, 7);
-    assert_string_equal(ev.text, "the drives could not be enabled");
+    assert_string_equal(ev.text, "the arm backend refused to enable the drives (LS_EIO)");
     assert_false(snap(f).enabled);
     f->arm_state.fail_enable = 0;
     enable(f);
@@ -549,11 +735,12 @@ static void test_enable_without_arm_fails(void **state)
     ls_control_cycle(c, 1000);
     ls_ctl_event_t ev;
     assert_true(ls_control_next_event(c, &ev));
-    assert_int_equal(ev.kind, LS_CEV_CMD_FAILED);
-    assert_int_equal(ev.ref_seq, 9);
+    assert_int_equal(ev.kind, LS_CEV_ENABLE_FAILED);
+    assert_non_null(strstr(ev.text, "no arm backend is composed"));
     ls_ctl_snapshot_t s;
     assert_true(ls_control_snapshot(c, &s));
     assert_false(s.enabled);
+    assert_false(s.enabling);
     assert_int_equal(s.cycle, 1);
 }
 
@@ -680,8 +867,10 @@ static void test_estop_line_faults_and_disables(void **state)
     /* Line 0 (none): the same input no longer faults. */
     post_dio(f, LS_CTL_ESTOP_LINE, 41, 1, 0, 0);
     f->dio_state.levels[1] = 0x0;
-    enable(f);
-    next(f, LS_CEV_DIO_CHANGED);
+    post(f, LS_CTL_ENABLE, 1);
+    cycle(f);
+    next(f, LS_CEV_DIO_CHANGED); /* read before the drives' states */
+    next(f, LS_CEV_ENABLED);
     f->dio_state.levels[1] = 0x4;
     cycle(f);
     next(f, LS_CEV_DIO_CHANGED);
@@ -783,6 +972,7 @@ static void test_manual_jogging(void **state)
     assert_no_event(f); /* drives off: not ready yet */
     post(f, LS_CTL_ENABLE, 71);
     cycle(f);
+    assert_int_equal(next(f, LS_CEV_ENABLED).ref_seq, 71);
     ls_ctl_event_t ev = next_motion(f, LS_MEV_JOG);
     assert_int_equal(ev.motion.index, 0);
     assert_string_equal(ev.motion.text, "ready");
@@ -1064,6 +1254,11 @@ int main(void)
         cmocka_unit_test(test_plan_slot_hand_over),
         cmocka_unit_test(test_plan_slot_freed_when_ring_full_or_start_refused),
         cmocka_unit_test(test_enable_and_disable),
+        cmocka_unit_test(test_enable_waits_for_every_joint_to_confirm),
+        cmocka_unit_test(test_enable_fails_naming_the_joint_its_node_and_what_its_drive_said),
+        cmocka_unit_test(test_enable_times_out_naming_a_joint_still_enabling),
+        cmocka_unit_test(test_disable_cancels_an_enable_in_progress),
+        cmocka_unit_test(test_a_joint_that_faults_under_control_faults_the_arm),
         cmocka_unit_test(test_world_steps_every_cycle),
         cmocka_unit_test(test_enable_without_arm_fails),
         cmocka_unit_test(test_disable_while_moving_stops_along_the_path_first),
