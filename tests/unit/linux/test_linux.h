@@ -12,6 +12,7 @@
 int run_socketcan_tests(void);
 int run_gpiod_tests(void);
 int run_rt_tests(void);
+int run_slcan_tty_tests(void);
 
 /* argv[1] that makes the binary run the no-privilege child instead. */
 #define RT_CHILD_ARG "--rt-child-without-privilege"

@@ -11,5 +11,6 @@ int main(int argc, char **argv)
     failed += run_socketcan_tests();
     failed += run_gpiod_tests();
     failed += run_rt_tests();
+    failed += run_slcan_tty_tests();
     return failed;
 }
