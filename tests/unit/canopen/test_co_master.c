@@ -454,6 +454,34 @@ static void test_heartbeat_time_out_counts_only_after_the_first_heartbeat(void *
     assert_int_equal(counters().heartbeats_lost, 1);
 }
 
+/* A heartbeat before the node acknowledged our 0x1017 comes at the period
+ * it had stored: it must not start our time-out. */
+static void test_heartbeats_before_the_producer_time_is_acknowledged_start_no_time_out(void **state)
+{
+    (void)state;
+    configure_world(1);
+    fake(0x21)->dead = true;
+    start_world();
+    run_ms(1);
+    fake(0x21)->dead = false;
+    fake_boot(fake(0x21));
+    fake(0x21)->dead = true; /* deaf while the 0x1017 write goes out */
+    flush_fakes();
+    deliver();
+    hal_can_frame_t request = w.bus.f[w.bus.n - 1u];
+    assert_int_equal(request.id, LS_CO_COB_SDO_RX + 0x21u);
+    uint8_t pre = LS_CO_NMT_PREOPERATIONAL;
+    hal_can_frame_t beat = can_frame(LS_CO_COB_HEARTBEAT + 0x21u, 1, &pre);
+    ls_co_master_on_frame(&w.m, &beat, w.now_us); /* at its stored period */
+    run_ms(3u * NODE_HB_TIMEOUT_MS);              /* slow, but within the SDO time-out */
+    assert_int_equal(phase(0x21), LS_CO_PHASE_CONFIGURING);
+    fake(0x21)->dead = false;
+    fake_hear(fake(0x21), &request, w.now_us); /* it answers at last */
+    flush_fakes();
+    run_ms(2 * NODE_HB_MS);
+    assert_int_equal(phase(0x21), LS_CO_PHASE_READY);
+}
+
 static void test_a_boot_up_while_ready_makes_the_node_lost_until_rebooted(void **state)
 {
     (void)state;
@@ -902,6 +930,7 @@ int main(void)
         cmocka_unit_test(test_the_pdo_remapping_order_runs_end_to_end_against_a_strict_server),
         cmocka_unit_test(test_remapping_out_of_order_is_refused_and_named),
         cmocka_unit_test(test_heartbeat_time_out_counts_only_after_the_first_heartbeat),
+        cmocka_unit_test(test_heartbeats_before_the_producer_time_is_acknowledged_start_no_time_out),
         cmocka_unit_test(test_a_boot_up_while_ready_makes_the_node_lost_until_rebooted),
         cmocka_unit_test(test_a_boot_up_during_configuration_restarts_the_script),
         cmocka_unit_test(test_a_node_that_stays_pre_operational_after_start_fails_at_the_deadline),
