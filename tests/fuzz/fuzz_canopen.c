@@ -31,6 +31,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "../unit/canopen/co_test_bus.h"
 #include "ls_canopen.h"
 #include "ls_co_master.h"
 
@@ -154,15 +155,6 @@ static void feed(const hal_can_frame_t *f, uint64_t now_us)
     check();
 }
 
-static hal_can_frame_t mk(uint32_t id, uint8_t len)
-{
-    hal_can_frame_t f;
-    memset(&f, 0, sizeof(f));
-    f.id = id;
-    f.len = len;
-    return f;
-}
-
 /* The answer a compliant server gives to the node's pending request. */
 static void answer(size_t i, uint8_t v, uint64_t now_us)
 {
@@ -172,7 +164,7 @@ static void answer(size_t i, uint8_t v, uint64_t now_us)
     }
     z->has_request = false;
     const uint8_t *q = z->request.data;
-    hal_can_frame_t f = mk(LS_CO_COB_SDO_TX + BASE_ID + (uint32_t)i, 8);
+    hal_can_frame_t f = can_frame(LS_CO_COB_SDO_TX + BASE_ID + (uint32_t)i, 8, NULL);
     memcpy(&f.data[1], &q[1], 3); /* the multiplexer */
     switch (q[0] & LS_CO_SDO_CS_MASK) {
     case LS_CO_SDO_CCS_DOWNLOAD_INITIATE: f.data[0] = LS_CO_SDO_SCS_DOWNLOAD_INITIATE; break;
@@ -210,18 +202,14 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     cfg.node_count = N_NODES;
     for (size_t i = 0; i < N_NODES; i++) {
         ls_co_node_config_t *nc = &cfg.nodes[i];
-        nc->node_id = (uint8_t)(BASE_ID + i);
+        /* scripts of 0, 8, 6 and 4 steps */
+        co_test_node(nc, (uint8_t)(BASE_ID + i), k_script,
+                     i == 0u ? 0u : sizeof(k_script) / sizeof(k_script[0]) - (i - 1u) * 2u);
         nc->boot_timeout_ms = 500;
-        nc->heartbeat_ms = 50;
-        nc->heartbeat_timeout_ms = 150;
-        nc->script = k_script;
-        nc->script_len = i == 0u ? 0u : sizeof(k_script) / sizeof(k_script[0]) - (i - 1u) * 2u;
-        for (size_t k = 0; k < LS_CO_NODE_PDOS; k++) {
-            nc->rpdo[k].cob_id = (uint16_t)LS_CO_COB_RPDO(k + 1u, nc->node_id);
-            nc->rpdo[k].len = (uint8_t)(k == 0u ? 6u : 4u);
-            nc->tpdo[k].cob_id = (uint16_t)LS_CO_COB_TPDO(k + 1u, nc->node_id);
-            nc->tpdo[k].len = (uint8_t)(k == 0u ? 6u : 8u);
-        }
+        nc->rpdo[1].cob_id = (uint16_t)LS_CO_COB_RPDO(2, nc->node_id);
+        nc->rpdo[1].len = 4;
+        nc->tpdo[1].cob_id = (uint16_t)LS_CO_COB_TPDO(2, nc->node_id);
+        nc->tpdo[1].len = 8;
     }
     memset(nodes, 0, sizeof(nodes));
     q_full = false;
@@ -251,7 +239,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             p += 3;
             static const uint32_t k_fn[] = { LS_CO_COB_SDO_TX, LS_CO_COB_HEARTBEAT, LS_CO_COB_EMCY, LS_CO_COB_TPDO1,
                                              LS_CO_COB_TPDO1 + 0x100u };
-            hal_can_frame_t f = mk(0, len);
+            hal_can_frame_t f = can_frame(0, len, NULL);
             if (kind < 5u) {
                 f.id = k_fn[kind] + id;
             } else if (kind == 5u) {
@@ -314,7 +302,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         case 3: {
             uint8_t v = p < size ? data[p++] : 0u;
             for (size_t i = 0; i < N_NODES; i++) {
-                hal_can_frame_t hb = mk(LS_CO_COB_HEARTBEAT + BASE_ID + (uint32_t)i, 1);
+                hal_can_frame_t hb = can_frame(LS_CO_COB_HEARTBEAT + BASE_ID + (uint32_t)i, 1, NULL);
                 if (nodes[i].need_bootup) {
                     nodes[i].need_bootup = false;
                     hb.data[0] = LS_CO_NMT_BOOTUP;

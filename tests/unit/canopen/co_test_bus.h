@@ -12,9 +12,12 @@
 
 #include "hal/hal_can.h"
 #include "ls_canopen.h"
+#include "ls_co_master.h"
 #include "ls_err.h"
 
 #define BUS_CAP 4096u
+#define NODE_HB_MS 50u          /* the tests' nodes beat at this period ... */
+#define NODE_HB_TIMEOUT_MS 150u /* ... and the master gives up after this */
 
 typedef struct {
     hal_can_frame_t f[BUS_CAP];
@@ -69,8 +72,8 @@ static inline hal_can_frame_t can_frame(uint32_t id, uint8_t len, const uint8_t 
     memset(&f, 0, sizeof(f));
     f.id = id;
     f.len = len;
-    if (len > 0u) {
-        memcpy(f.data, data, len);
+    if (data != NULL) { /* NULL: zeros */
+        memcpy(f.data, data, len < 8u ? len : 8u);
     }
     return f;
 }
@@ -112,6 +115,23 @@ static inline bool frame_eq(const hal_can_frame_t *a, const hal_can_frame_t *b)
 {
     return a != NULL && b != NULL && a->id == b->id && a->len == b->len && a->flags == b->flags &&
            memcmp(a->data, b->data, a->len) == 0;
+}
+
+/* A node as the tests configure it: its id and script, heartbeat
+ * NODE_HB_MS watched with NODE_HB_TIMEOUT_MS, RPDO1 and TPDO1 of 6 bytes
+ * at their predefined COB-IDs. */
+static inline void co_test_node(ls_co_node_config_t *nc, uint8_t id, const ls_co_step_t *script, size_t script_len)
+{
+    memset(nc, 0, sizeof(*nc));
+    nc->node_id = id;
+    nc->heartbeat_ms = NODE_HB_MS;
+    nc->heartbeat_timeout_ms = NODE_HB_TIMEOUT_MS;
+    nc->script = script;
+    nc->script_len = script_len;
+    nc->rpdo[0].cob_id = (uint16_t)LS_CO_COB_RPDO(1, id);
+    nc->rpdo[0].len = 6;
+    nc->tpdo[0].cob_id = (uint16_t)LS_CO_COB_TPDO(1, id);
+    nc->tpdo[0].len = 6;
 }
 
 #endif

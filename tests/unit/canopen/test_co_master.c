@@ -15,8 +15,6 @@
 
 #define MASTER_ID 0x7Fu
 #define MASTER_HB_MS 100u
-#define NODE_HB_MS 50u
-#define NODE_HB_TIMEOUT_MS 150u
 #define MAX_FAKES 4u
 
 typedef struct {
@@ -44,14 +42,7 @@ static void configure_world(size_t n)
     w.cfg.heartbeat_ms = MASTER_HB_MS;
     w.cfg.node_count = n;
     for (size_t i = 0; i < n; i++) {
-        ls_co_node_config_t *nc = &w.cfg.nodes[i];
-        nc->node_id = id_of(i);
-        nc->heartbeat_ms = NODE_HB_MS;
-        nc->heartbeat_timeout_ms = NODE_HB_TIMEOUT_MS;
-        nc->rpdo[0].cob_id = (uint16_t)LS_CO_COB_RPDO(1, id_of(i));
-        nc->rpdo[0].len = 6;
-        nc->tpdo[0].cob_id = (uint16_t)LS_CO_COB_TPDO(1, id_of(i));
-        nc->tpdo[0].len = 6;
+        co_test_node(&w.cfg.nodes[i], id_of(i), NULL, 0);
         fake_init(&w.fakes[i], id_of(i));
     }
     w.n_fakes = n;
@@ -114,9 +105,25 @@ static void run_ms(unsigned ms)
     }
 }
 
+/* One node 0x21 with `script`, booted. */
+static void start_one(const ls_co_step_t *script, size_t script_len)
+{
+    configure_world(1);
+    w.cfg.nodes[0].script = script;
+    w.cfg.nodes[0].script_len = script_len;
+    start_world();
+}
+
 static ls_co_phase_t phase(uint8_t id)
 {
     return ls_co_master_node_phase(&w.m, id);
+}
+
+/* The node is in `want`, and its line says `text`. */
+static void expect_phase(uint8_t id, ls_co_phase_t want, const char *text)
+{
+    assert_string_equal(ls_co_phase_name(phase(id)), ls_co_phase_name(want));
+    assert_string_equal(ls_co_master_node_text(&w.m, id), text);
 }
 
 static ls_co_counters_t counters(void)
@@ -258,8 +265,7 @@ static void test_a_node_without_boot_up_fails_at_its_deadline(void **state)
     run_ms(LS_CO_BOOT_TIMEOUT_MS_DEFAULT - 1u);
     assert_int_equal(phase(0x22), LS_CO_PHASE_BOOTING);
     run_ms(1);
-    assert_int_equal(phase(0x22), LS_CO_PHASE_FAILED);
-    assert_string_equal(ls_co_master_node_text(&w.m, 0x22), "node 0x22: no boot-up within 2000 ms");
+    expect_phase(0x22, LS_CO_PHASE_FAILED, "node 0x22: no boot-up within 2000 ms");
     assert_int_equal(phase(0x21), LS_CO_PHASE_READY);
     /* it stays FAILED: the master reboots nothing by itself */
     fake(0x22)->dead = false;
@@ -279,14 +285,10 @@ static void test_a_refused_script_step_fails_the_node_naming_object_and_abort(vo
         LS_CO_WRITE(LS_CO_OBJ_RPDO_MAP, 1, 4, LS_CO_PDO_MAP_ENTRY(0x2000, 0, 32)),
         LS_CO_WRITE(LS_CO_OBJ_MODES, 0, 1, LS_CO_MODE_CSP),
     };
-    configure_world(1);
-    w.cfg.nodes[0].script = script;
-    w.cfg.nodes[0].script_len = 4;
-    start_world();
+    start_one(script, 4);
     run_ms(10);
-    assert_int_equal(phase(0x21), LS_CO_PHASE_FAILED);
-    assert_string_equal(ls_co_master_node_text(&w.m, 0x21),
-                        "node 0x21: SDO write 0x1600:01 aborted 0x06040041 (object cannot be mapped to the PDO)");
+    expect_phase(0x21, LS_CO_PHASE_FAILED,
+                 "node 0x21: SDO write 0x1600:01 aborted 0x06040041 (object cannot be mapped to the PDO)");
     assert_int_equal(fake(0x21)->n_log, 3); /* 0x1017 and the first two; nothing after the refusal */
     assert_int_equal(counters().sdo_aborts_received, 1);
     run_ms(1000);
@@ -305,10 +307,7 @@ static void test_an_optional_step_refused_is_recorded_and_configuration_goes_on(
           .optional = true },
         LS_CO_WRITE(LS_CO_OBJ_MODES, 0, 1, LS_CO_MODE_CSP),
     };
-    configure_world(1);
-    w.cfg.nodes[0].script = script;
-    w.cfg.nodes[0].script_len = 2;
-    start_world();
+    start_one(script, 2);
     run_ms(2 * NODE_HB_MS);
     assert_int_equal(phase(0x21), LS_CO_PHASE_READY);
     assert_int_equal(fake(0x21)->log[1].index, LS_CO_OBJ_MODES);
@@ -324,22 +323,14 @@ static void test_a_read_expect_mismatch_names_node_object_and_both_values(void *
     static const ls_co_step_t script[] = {
         LS_CO_EXPECT(LS_CO_OBJ_IDENTITY, 1, 0x000000FBu, 0, "vendor id", "the EDS"),
     };
-    configure_world(1);
-    w.cfg.nodes[0].script = script;
-    w.cfg.nodes[0].script_len = 1;
-    start_world();
+    start_one(script, 1);
     run_ms(10);
-    assert_int_equal(phase(0x21), LS_CO_PHASE_FAILED);
-    assert_string_equal(ls_co_master_node_text(&w.m, 0x21),
-                        "node 0x21: vendor id 0x1018:01 is 0x000000FC, the EDS says 0x000000FB");
+    expect_phase(0x21, LS_CO_PHASE_FAILED, "node 0x21: vendor id 0x1018:01 is 0x000000FC, the EDS says 0x000000FB");
 
     static const ls_co_step_t masked[] = {
         LS_CO_EXPECT(LS_CO_OBJ_DEVICE_TYPE, 0, 401u, LS_CO_DEVICE_PROFILE_MASK, "device type", NULL),
     };
-    configure_world(1);
-    w.cfg.nodes[0].script = masked;
-    w.cfg.nodes[0].script_len = 1;
-    start_world();
+    start_one(masked, 1);
     run_ms(10);
     assert_string_equal(ls_co_master_node_text(&w.m, 0x21), "node 0x21: device type 0x1000:00 is 0x00000192, "
                                                             "expected 0x00000191 (bits 0x0000FFFF)");
@@ -351,43 +342,35 @@ static void test_read_into_stores_the_value_for_the_caller(void **state)
     static uint32_t position;
     static const ls_co_step_t script[] = { LS_CO_READ_INTO(LS_CO_OBJ_POSITION_ACTUAL, 0, &position) };
     position = 0;
-    configure_world(1);
-    w.cfg.nodes[0].script = script;
-    w.cfg.nodes[0].script_len = 1;
-    start_world();
+    start_one(script, 1);
     run_ms(2 * NODE_HB_MS);
     assert_int_equal(phase(0x21), LS_CO_PHASE_READY);
     assert_int_equal(position, 123456u);
 }
 
-/* The remapping the drive layer runs (CiA 301 7.5.2.36): invalidate the
- * PDO, count 0, entries, count N, validate; RPDO1 = controlword + target
- * position, TPDO1 = statusword + position actual, both synchronous. */
+/* The remapping the drive layer runs (CiA 301 7.5.2.36) of one PDO:
+ * invalidate it, count 0, entries, count N, validate. */
+#define REMAP_PDO(comm, map, cob, entry1, entry2)                                                                      \
+    LS_CO_WRITE(comm, LS_CO_PDO_SUB_COB_ID, 4, LS_CO_COBID_INVALID | (cob)),                                           \
+        LS_CO_WRITE(comm, LS_CO_PDO_SUB_TYPE, 1, LS_CO_PDO_TYPE_SYNC_MIN), LS_CO_WRITE(map, 0, 1, 0),                  \
+        LS_CO_WRITE(map, 1, 4, entry1), LS_CO_WRITE(map, 2, 4, entry2), LS_CO_WRITE(map, 0, 1, 2),                     \
+        LS_CO_WRITE(comm, LS_CO_PDO_SUB_COB_ID, 4, cob)
+/* RPDO1 = controlword + target position, TPDO1 = statusword + position
+ * actual, both synchronous. */
 #define REMAP_STEPS(id)                                                                                                \
-    LS_CO_WRITE(LS_CO_OBJ_RPDO_COMM, LS_CO_PDO_SUB_COB_ID, 4, LS_CO_COBID_INVALID | LS_CO_COB_RPDO(1, id)),            \
-        LS_CO_WRITE(LS_CO_OBJ_RPDO_COMM, LS_CO_PDO_SUB_TYPE, 1, LS_CO_PDO_TYPE_SYNC_MIN),                              \
-        LS_CO_WRITE(LS_CO_OBJ_RPDO_MAP, 0, 1, 0),                                                                      \
-        LS_CO_WRITE(LS_CO_OBJ_RPDO_MAP, 1, 4, LS_CO_PDO_MAP_ENTRY(LS_CO_OBJ_CONTROLWORD, 0, 16)),                      \
-        LS_CO_WRITE(LS_CO_OBJ_RPDO_MAP, 2, 4, LS_CO_PDO_MAP_ENTRY(LS_CO_OBJ_TARGET_POSITION, 0, 32)),                  \
-        LS_CO_WRITE(LS_CO_OBJ_RPDO_MAP, 0, 1, 2),                                                                      \
-        LS_CO_WRITE(LS_CO_OBJ_RPDO_COMM, LS_CO_PDO_SUB_COB_ID, 4, LS_CO_COB_RPDO(1, id)),                              \
-        LS_CO_WRITE(LS_CO_OBJ_TPDO_COMM, LS_CO_PDO_SUB_COB_ID, 4, LS_CO_COBID_INVALID | LS_CO_COB_TPDO(1, id)),        \
-        LS_CO_WRITE(LS_CO_OBJ_TPDO_COMM, LS_CO_PDO_SUB_TYPE, 1, LS_CO_PDO_TYPE_SYNC_MIN),                              \
-        LS_CO_WRITE(LS_CO_OBJ_TPDO_MAP, 0, 1, 0),                                                                      \
-        LS_CO_WRITE(LS_CO_OBJ_TPDO_MAP, 1, 4, LS_CO_PDO_MAP_ENTRY(LS_CO_OBJ_STATUSWORD, 0, 16)),                       \
-        LS_CO_WRITE(LS_CO_OBJ_TPDO_MAP, 2, 4, LS_CO_PDO_MAP_ENTRY(LS_CO_OBJ_POSITION_ACTUAL, 0, 32)),                  \
-        LS_CO_WRITE(LS_CO_OBJ_TPDO_MAP, 0, 1, 2),                                                                      \
-        LS_CO_WRITE(LS_CO_OBJ_TPDO_COMM, LS_CO_PDO_SUB_COB_ID, 4, LS_CO_COB_TPDO(1, id))
+    REMAP_PDO(LS_CO_OBJ_RPDO_COMM, LS_CO_OBJ_RPDO_MAP, LS_CO_COB_RPDO(1, id),                                          \
+              LS_CO_PDO_MAP_ENTRY(LS_CO_OBJ_CONTROLWORD, 0, 16),                                                       \
+              LS_CO_PDO_MAP_ENTRY(LS_CO_OBJ_TARGET_POSITION, 0, 32)),                                                  \
+        REMAP_PDO(LS_CO_OBJ_TPDO_COMM, LS_CO_OBJ_TPDO_MAP, LS_CO_COB_TPDO(1, id),                                      \
+                  LS_CO_PDO_MAP_ENTRY(LS_CO_OBJ_STATUSWORD, 0, 16),                                                    \
+                  LS_CO_PDO_MAP_ENTRY(LS_CO_OBJ_POSITION_ACTUAL, 0, 32))
 
 static void test_the_pdo_remapping_order_runs_end_to_end_against_a_strict_server(void **state)
 {
     (void)state;
     static const ls_co_step_t script[] = { REMAP_STEPS(0x21) };
     const size_t n = sizeof(script) / sizeof(script[0]);
-    configure_world(1);
-    w.cfg.nodes[0].script = script;
-    w.cfg.nodes[0].script_len = n;
-    start_world();
+    start_one(script, n);
     run_ms(2 * NODE_HB_MS);
     assert_int_equal(phase(0x21), LS_CO_PHASE_READY);
     fake_t *k = fake(0x21);
@@ -411,14 +394,10 @@ static void test_remapping_out_of_order_is_refused_and_named(void **state)
     static const ls_co_step_t script[] = {
         LS_CO_WRITE(LS_CO_OBJ_RPDO_MAP, 0, 1, 0),
     };
-    configure_world(1);
-    w.cfg.nodes[0].script = script;
-    w.cfg.nodes[0].script_len = 1;
-    start_world();
+    start_one(script, 1);
     run_ms(10);
-    assert_int_equal(phase(0x21), LS_CO_PHASE_FAILED);
-    assert_string_equal(ls_co_master_node_text(&w.m, 0x21),
-                        "node 0x21: SDO write 0x1600:00 aborted 0x06010000 (unsupported access to an object)");
+    expect_phase(0x21, LS_CO_PHASE_FAILED,
+                 "node 0x21: SDO write 0x1600:00 aborted 0x06010000 (unsupported access to an object)");
 }
 
 /* ---- heartbeats ------------------------------------------------------- */
@@ -434,9 +413,8 @@ static void test_heartbeat_time_out_counts_only_after_the_first_heartbeat(void *
     /* far beyond the 150 ms time-out, yet not LOST: monitoring never began */
     assert_int_equal(phase(0x21), LS_CO_PHASE_STARTING);
     run_ms(1);
-    assert_int_equal(phase(0x21), LS_CO_PHASE_FAILED);
-    assert_string_equal(ls_co_master_node_text(&w.m, 0x21),
-                        "node 0x21: not OPERATIONAL within 1000 ms of NMT start (no heartbeat since its boot-up)");
+    expect_phase(0x21, LS_CO_PHASE_FAILED,
+                 "node 0x21: not OPERATIONAL within 1000 ms of NMT start (no heartbeat since its boot-up)");
     assert_int_equal(counters().heartbeats_lost, 0);
 
     boot_to_ready(1);
@@ -488,8 +466,7 @@ static void test_a_boot_up_while_ready_makes_the_node_lost_until_rebooted(void *
     boot_to_ready(2);
     fake_boot(fake(0x22)); /* it reset by itself */
     flush_fakes();
-    assert_int_equal(phase(0x22), LS_CO_PHASE_LOST);
-    assert_string_equal(ls_co_master_node_text(&w.m, 0x22), "node 0x22: reset itself (boot-up while READY)");
+    expect_phase(0x22, LS_CO_PHASE_LOST, "node 0x22: reset itself (boot-up while READY)");
     size_t sdo_before = fake(0x22)->sdo_requests;
     run_ms(3000);
     assert_int_equal(phase(0x22), LS_CO_PHASE_LOST); /* never reconfigured by itself */
@@ -541,8 +518,7 @@ static void test_a_boot_up_during_configuration_restarts_the_script(void **state
         fake_boot(fake(0x21));
         flush_fakes();
     }
-    assert_int_equal(phase(0x21), LS_CO_PHASE_FAILED);
-    assert_string_equal(ls_co_master_node_text(&w.m, 0x21), "node 0x21: reset itself 4 times during configuration");
+    expect_phase(0x21, LS_CO_PHASE_FAILED, "node 0x21: reset itself 4 times during configuration");
 }
 
 static void test_a_node_that_stays_pre_operational_after_start_fails_at_the_deadline(void **state)
@@ -552,9 +528,8 @@ static void test_a_node_that_stays_pre_operational_after_start_fails_at_the_dead
     fake(0x21)->ignores_start = true;
     start_world();
     run_ms(LS_CO_BOOT_TIMEOUT_MS_DEFAULT);
-    assert_int_equal(phase(0x21), LS_CO_PHASE_FAILED);
-    assert_string_equal(ls_co_master_node_text(&w.m, 0x21),
-                        "node 0x21: not OPERATIONAL within 2000 ms of NMT start (its heartbeat says PRE-OPERATIONAL)");
+    expect_phase(0x21, LS_CO_PHASE_FAILED,
+                 "node 0x21: not OPERATIONAL within 2000 ms of NMT start (its heartbeat says PRE-OPERATIONAL)");
 }
 
 static void test_a_ready_node_reporting_another_state_twice_in_a_row_is_lost(void **state)
@@ -565,9 +540,9 @@ static void test_a_ready_node_reporting_another_state_twice_in_a_row_is_lost(voi
     run_ms(NODE_HB_MS);
     assert_int_equal(phase(0x21), LS_CO_PHASE_READY); /* one heartbeat may predate a command */
     run_ms(NODE_HB_MS);
-    assert_int_equal(phase(0x21), LS_CO_PHASE_LOST);
-    assert_string_equal(ls_co_master_node_text(&w.m, 0x21), "node 0x21: heartbeat says PRE-OPERATIONAL, not "
-                                                            "OPERATIONAL");
+    expect_phase(0x21, LS_CO_PHASE_LOST,
+                 "node 0x21: heartbeat says PRE-OPERATIONAL, not "
+                 "OPERATIONAL");
 }
 
 static void test_the_master_heartbeat_carries_its_state_at_its_period(void **state)
@@ -817,9 +792,7 @@ static void test_nmt_commands_reach_one_node_or_all_and_set_the_expected_state(v
     run_ms(2 * NODE_HB_MS);
     assert_int_equal(ls_co_master_node_nmt_state(&w.m, 0x22), LS_CO_NMT_OPERATIONAL);
     assert_int_equal(ls_co_master_nmt(&w.m, 0x21, LS_CO_NMT_RESET_NODE, w.now_us), LS_OK);
-    assert_int_equal(phase(0x21), LS_CO_PHASE_IDLE);
-    assert_string_equal(ls_co_master_node_text(&w.m, 0x21),
-                        "node 0x21: reset by the master (NMT 0x81); boot it again to use it");
+    expect_phase(0x21, LS_CO_PHASE_IDLE, "node 0x21: reset by the master (NMT 0x81); boot it again to use it");
     run_ms(2 * NODE_HB_MS);
     assert_int_equal(phase(0x21), LS_CO_PHASE_IDLE);
     assert_int_equal(ls_co_master_nmt(&w.m, 0x21, 0x03, w.now_us), LS_EINVAL);

@@ -86,17 +86,13 @@ static void test_the_master_never_allocates(void **state)
     cfg.heartbeat_ms = 100;
     cfg.node_count = N_NODES;
     for (uint8_t i = 0; i < N_NODES; i++) {
-        ls_co_node_config_t *nc = &cfg.nodes[i];
-        nc->node_id = (uint8_t)(0x21u + i);
-        nc->heartbeat_ms = 50;
-        nc->heartbeat_timeout_ms = 150;
-        nc->script = i == 3u ? k_bad_script : k_script;
-        nc->script_len = i == 3u ? 1u : sizeof(k_script) / sizeof(k_script[0]);
-        nc->rpdo[0].cob_id = (uint16_t)LS_CO_COB_RPDO(1, nc->node_id);
-        nc->rpdo[0].len = 6;
-        nc->tpdo[0].cob_id = (uint16_t)LS_CO_COB_TPDO(1, nc->node_id);
-        nc->tpdo[0].len = 6;
-        fake_init(&fakes[i], nc->node_id);
+        uint8_t id = (uint8_t)(0x21u + i);
+        if (i == 3u) {
+            co_test_node(&cfg.nodes[i], id, k_bad_script, 1);
+        } else {
+            co_test_node(&cfg.nodes[i], id, k_script, sizeof(k_script) / sizeof(k_script[0]));
+        }
+        fake_init(&fakes[i], id);
     }
     fakes[2].dead = true; /* never boots: its deadline formats a line */
 
