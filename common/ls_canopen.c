@@ -196,11 +196,54 @@ unsigned ls_co_type_size(uint16_t data_type)
     case LS_CO_TYPE_UNSIGNED8: return 1u;
     case LS_CO_TYPE_INTEGER16:
     case LS_CO_TYPE_UNSIGNED16: return 2u;
+    case LS_CO_TYPE_INTEGER24:
+    case LS_CO_TYPE_UNSIGNED24: return 3u;
     case LS_CO_TYPE_INTEGER32:
     case LS_CO_TYPE_UNSIGNED32:
     case LS_CO_TYPE_REAL32: return 4u;
+    case LS_CO_TYPE_INTEGER40:
+    case LS_CO_TYPE_UNSIGNED40: return 5u;
+    case LS_CO_TYPE_INTEGER48:
+    case LS_CO_TYPE_UNSIGNED48:
+    case LS_CO_TYPE_TIME_OF_DAY:
+    case LS_CO_TYPE_TIME_DIFFERENCE: return 6u;
+    case LS_CO_TYPE_INTEGER56:
+    case LS_CO_TYPE_UNSIGNED56: return 7u;
     case LS_CO_TYPE_INTEGER64:
-    case LS_CO_TYPE_UNSIGNED64: return 8u;
+    case LS_CO_TYPE_UNSIGNED64:
+    case LS_CO_TYPE_REAL64: return 8u;
     default: return 0u;
+    }
+}
+
+const char *ls_co_type_name(uint16_t data_type)
+{
+    switch (data_type) {
+    case LS_CO_TYPE_BOOLEAN: return "BOOLEAN";
+    case LS_CO_TYPE_INTEGER8: return "INTEGER8";
+    case LS_CO_TYPE_INTEGER16: return "INTEGER16";
+    case LS_CO_TYPE_INTEGER32: return "INTEGER32";
+    case LS_CO_TYPE_UNSIGNED8: return "UNSIGNED8";
+    case LS_CO_TYPE_UNSIGNED16: return "UNSIGNED16";
+    case LS_CO_TYPE_UNSIGNED32: return "UNSIGNED32";
+    case LS_CO_TYPE_REAL32: return "REAL32";
+    case LS_CO_TYPE_VISIBLE_STRING: return "VISIBLE_STRING";
+    case LS_CO_TYPE_OCTET_STRING: return "OCTET_STRING";
+    case LS_CO_TYPE_UNICODE_STRING: return "UNICODE_STRING";
+    case LS_CO_TYPE_TIME_OF_DAY: return "TIME_OF_DAY";
+    case LS_CO_TYPE_TIME_DIFFERENCE: return "TIME_DIFFERENCE";
+    case LS_CO_TYPE_DOMAIN: return "DOMAIN";
+    case LS_CO_TYPE_INTEGER24: return "INTEGER24";
+    case LS_CO_TYPE_REAL64: return "REAL64";
+    case LS_CO_TYPE_INTEGER40: return "INTEGER40";
+    case LS_CO_TYPE_INTEGER48: return "INTEGER48";
+    case LS_CO_TYPE_INTEGER56: return "INTEGER56";
+    case LS_CO_TYPE_INTEGER64: return "INTEGER64";
+    case LS_CO_TYPE_UNSIGNED24: return "UNSIGNED24";
+    case LS_CO_TYPE_UNSIGNED40: return "UNSIGNED40";
+    case LS_CO_TYPE_UNSIGNED48: return "UNSIGNED48";
+    case LS_CO_TYPE_UNSIGNED56: return "UNSIGNED56";
+    case LS_CO_TYPE_UNSIGNED64: return "UNSIGNED64";
+    default: return NULL;
     }
 }

@@ -240,12 +240,43 @@ extern "C" {
 #define LS_CO_TYPE_REAL32 0x0008u
 #define LS_CO_TYPE_VISIBLE_STRING 0x0009u
 #define LS_CO_TYPE_OCTET_STRING 0x000Au
+#define LS_CO_TYPE_UNICODE_STRING 0x000Bu
+#define LS_CO_TYPE_TIME_OF_DAY 0x000Cu     /* 48 bits: ms after midnight (28) + days since 1984 (16) */
+#define LS_CO_TYPE_TIME_DIFFERENCE 0x000Du /* 48 bits, as TIME_OF_DAY */
+#define LS_CO_TYPE_DOMAIN 0x000Fu
+#define LS_CO_TYPE_INTEGER24 0x0010u
+#define LS_CO_TYPE_REAL64 0x0011u
+#define LS_CO_TYPE_INTEGER40 0x0012u
+#define LS_CO_TYPE_INTEGER48 0x0013u
+#define LS_CO_TYPE_INTEGER56 0x0014u
 #define LS_CO_TYPE_INTEGER64 0x0015u
+#define LS_CO_TYPE_UNSIGNED24 0x0016u
+#define LS_CO_TYPE_UNSIGNED40 0x0018u
+#define LS_CO_TYPE_UNSIGNED48 0x0019u
+#define LS_CO_TYPE_UNSIGNED56 0x001Au
 #define LS_CO_TYPE_UNSIGNED64 0x001Bu
+/* 0x000E and 0x0017 are reserved; above 0x001B come the complex and
+ * manufacturer-specific types, which EDS files describe in sections of
+ * their own. */
 
-/* The size in bytes of a fixed-size data type above; 0 for strings and
- * types not listed. */
+/* The size in bytes of a fixed-size data type above; 0 for strings, DOMAIN
+ * and types not listed. */
 unsigned ls_co_type_size(uint16_t data_type);
+
+/* "UNSIGNED32" etc. for a data type above (CiA 301's names); NULL for a
+ * reserved or unknown code, so that a caller can tell a basic type from
+ * anything else. O(1); any context. */
+const char *ls_co_type_name(uint16_t data_type);
+
+/* ---- Object codes of an EDS/DCF's ObjectType (CiA 301 table 42, CiA 306) */
+
+#define LS_CO_OBJECT_NULL 0x0u
+#define LS_CO_OBJECT_DOMAIN 0x2u
+#define LS_CO_OBJECT_DEFTYPE 0x5u
+#define LS_CO_OBJECT_DEFSTRUCT 0x6u
+#define LS_CO_OBJECT_VAR 0x7u
+#define LS_CO_OBJECT_ARRAY 0x8u
+#define LS_CO_OBJECT_RECORD 0x9u
 
 /* ---- Names, for one-line messages. Never NULL; O(n) in a small table;
  * any context (constant data only). */
