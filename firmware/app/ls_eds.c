@@ -428,8 +428,8 @@ static bool parse_integer_field(ctx_t *c, const ls_eds_entry_t *e, key_t_ k, con
         const unsigned nbits = bits_of(e->data_type);
         if (class_of(e->data_type) == SIGNED) {
             const int64_t smax = nbits >= 64u ? INT64_MAX : (int64_t)(((uint64_t)1 << (nbits - 1u)) - 1u);
-            const int64_t b = as_signed(base);
-            ok = b >= -smax - 1 - (int64_t)LS_CO_NODE_MIN && b <= smax - (int64_t)LS_CO_NODE_MAX;
+            /* node ids are positive: only the top can be passed */
+            ok = as_signed(base) <= smax - (int64_t)LS_CO_NODE_MAX;
         } else {
             const uint64_t umax = nbits >= 64u ? UINT64_MAX : ((uint64_t)1 << nbits) - 1u;
             ok = base <= umax - LS_CO_NODE_MAX;

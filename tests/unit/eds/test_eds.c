@@ -370,22 +370,24 @@ static void test_each_access_type_reads_writes_and_maps_as_cia_306_says(void **s
 static void test_numbers_are_decimal_hex_or_octal_and_may_follow_the_node_id(void **state)
 {
     (void)state;
-    static const char text[] =
-        DEVICE_INFO "[2000]\nParameterName=dec\nDataType=0x7\nAccessType=rw\nDefaultValue=1234\n"
-                    "[2001]\nParameterName=hex\nDataType=0x7\nAccessType=rw\nDefaultValue=0xBEEF\n"
-                    "[2002]\nParameterName=oct\nDataType=0x7\nAccessType=rw\nDefaultValue=0017\n"
-                    "[2003]\nParameterName=neg\nDataType=0x4\nAccessType=rw\nDefaultValue=-2147483648\n"
-                    "[2004]\nParameterName=twos\nDataType=0x2\nAccessType=rw\nDefaultValue=0xFD\n"
-                    "[2005]\nParameterName=after\nDataType=0x7\nAccessType=rw\nDefaultValue=$NODEID+0x180\n"
-                    "[2006]\nParameterName=before\nDataType=0x7\nAccessType=rw\nDefaultValue=0x600 + $nodeid\n"
-                    "[2007]\nParameterName=alone\nDataType=0x5\nAccessType=rw\nDefaultValue=$NODEID\n"
-                    "[2008]\nParameterName=u64\nDataType=0x1B\nAccessType=rw\nDefaultValue=0xFFFFFFFFFFFFFFFF\n"
-                    "[2009]\nParameterName=i64\nDataType=0x15\nAccessType=rw\nDefaultValue=-9223372036854775808\n"
-                    "[200A]\nParameterName=real\nDataType=0x8\nAccessType=rw\nDefaultValue=-2.5e3\n"
-                    "[200B]\nParameterName=bool\nDataType=0x1\nAccessType=rw\nDefaultValue=1\n"
-                    "[200C]\nParameterName=empty\nDataType=0x7\nAccessType=rw\nDefaultValue=\n"
-                    "[200D]\nParameterName=zero\nDataType=0x7\nAccessType=rw\nDefaultValue=0\n"
-                    "[200E]\nParameterName=i24\nDataType=0x10\nAccessType=rw\nDefaultValue=0xFFFFFF\n";
+    static const char text[] = DEVICE_INFO
+        "[2000]\nParameterName=dec\nDataType=0x7\nAccessType=rw\nDefaultValue=1234\n"
+        "[2001]\nParameterName=hex\nDataType=0x7\nAccessType=rw\nDefaultValue=0xBEEF\n"
+        "[2002]\nParameterName=oct\nDataType=0x7\nAccessType=rw\nDefaultValue=0017\n"
+        "[2003]\nParameterName=neg\nDataType=0x4\nAccessType=rw\nDefaultValue=-2147483648\n"
+        "[2004]\nParameterName=twos\nDataType=0x2\nAccessType=rw\nDefaultValue=0xFD\n"
+        "[2005]\nParameterName=after\nDataType=0x7\nAccessType=rw\nDefaultValue=$NODEID+0x180\n"
+        "[2006]\nParameterName=before\nDataType=0x7\nAccessType=rw\nDefaultValue=0x600 + $nodeid\n"
+        "[2007]\nParameterName=alone\nDataType=0x5\nAccessType=rw\nDefaultValue=$NODEID\n"
+        "[2008]\nParameterName=u64\nDataType=0x1B\nAccessType=rw\nDefaultValue=0xFFFFFFFFFFFFFFFF\n"
+        "[2009]\nParameterName=i64\nDataType=0x15\nAccessType=rw\nDefaultValue=-9223372036854775808\n"
+        "[200A]\nParameterName=real\nDataType=0x8\nAccessType=rw\nDefaultValue=-2.5e3\n"
+        "[200B]\nParameterName=bool\nDataType=0x1\nAccessType=rw\nDefaultValue=1\n"
+        "[200C]\nParameterName=empty\nDataType=0x7\nAccessType=rw\nDefaultValue=\n"
+        "[200D]\nParameterName=zero\nDataType=0x7\nAccessType=rw\nDefaultValue=0\n"
+        "[200E]\nParameterName=i24\nDataType=0x10\nAccessType=rw\nDefaultValue=0xFFFFFF\n"
+        "[200F]\nParameterName=i64 rel\nDataType=0x15\nAccessType=rw\nDefaultValue=$NODEID+-9223372036854775808\n"
+        "[2010]\nParameterName=i8 rel\nDataType=0x2\nAccessType=rw\nDefaultValue=$NODEID+-5\n";
     assert_int_equal(load_text(text), LS_OK);
     assert_int_equal(uint_of(0x2000, 0, 1), 1234);
     assert_int_equal(uint_of(0x2001, 0, 1), 0xBEEF);
@@ -406,6 +408,9 @@ static void test_numbers_are_decimal_hex_or_octal_and_may_follow_the_node_id(voi
     assert_int_equal(value_of(0x200C, 0, 1).kind, LS_EDS_VALUE_NONE);
     assert_int_equal(uint_of(0x200D, 0, 1), 0);
     assert_int_equal(int_of(0x200E, 0, 1), -1);
+    assert_int_equal(int_of(0x200F, 0, 1), INT64_MIN + 1);
+    assert_int_equal(int_of(0x2010, 0, 1), -4);
+    assert_int_equal(int_of(0x2010, 0, 127), 122);
     /* a node id out of 1..127 is refused, the value untouched */
     ls_eds_value_t keep = { .kind = LS_EDS_VALUE_REAL, .r = 7.0 };
     v = keep;
@@ -534,6 +539,9 @@ static void test_a_malformed_or_misfit_number_is_refused_in_one_line(void **stat
     assert_refused(VAR_SECTION("0x7", "DefaultValue", "$NODEID+0xFFFFFFFF"),
                    "t.eds:8: [1000] DefaultValue: '$NODEID+0xFFFFFFFF' is too large for its data type (UNSIGNED32) "
                    "for some node id 1 to 127");
+    assert_refused(VAR_SECTION("0x2", "DefaultValue", "$NODEID+1"),
+                   "t.eds:8: [1000] DefaultValue: '$NODEID+1' is too large for its data type (INTEGER8) for some node "
+                   "id 1 to 127");
     assert_refused(VAR_SECTION("0x8", "DefaultValue", "0x10"),
                    "t.eds:8: [1000] DefaultValue: '0x10' is not a finite decimal number (REAL32)");
     assert_refused(VAR_SECTION("0x8", "DefaultValue", "1e39"),
