@@ -32,9 +32,9 @@ enum { KIND_NONE = 0, KIND_NUMBER, KIND_RELATIVE, KIND_TEXT };
 enum { HAS_VENDOR = 1u, HAS_PRODUCT = 2u, HAS_REVISION = 4u };
 
 #define NODEID_TOKEN "$NODEID"
-#define SECTION_NAME_MAX 48u /* longer names are no section of CiA 306 */
-#define MAX_OTHER_SECTIONS 64u
-#define N_DUMMIES 7u /* DummyUsage lists Dummy0001..Dummy0007 */
+#define SECTION_NAME_MAX 48u    /* longer names are no section of CiA 306 */
+#define MAX_OTHER_SECTIONS 256u /* [FileInfo], [Comments], a modular device's [M1ModuleInfo] ... */
+#define N_DUMMIES 7u            /* DummyUsage lists Dummy0001..Dummy0007 */
 #define READ_CHUNK 4096u
 #define INIH_LINE_MAX 200u /* libinih's line buffer (INI_MAX_LINE), end of line and NUL included */
 
@@ -432,7 +432,7 @@ static bool parse_integer_field(ctx_t *c, const ls_eds_entry_t *e, key_t_ k, con
             ok = as_signed(base) <= smax - (int64_t)LS_CO_NODE_MAX;
         } else {
             const uint64_t umax = nbits >= 64u ? UINT64_MAX : ((uint64_t)1 << nbits) - 1u;
-            ok = base <= umax - LS_CO_NODE_MAX;
+            ok = umax >= LS_CO_NODE_MAX && base <= umax - LS_CO_NODE_MAX; /* no node id fits a BOOLEAN */
         }
         why = "too large for its data type";
     }

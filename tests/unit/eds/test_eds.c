@@ -542,6 +542,13 @@ static void test_a_malformed_or_misfit_number_is_refused_in_one_line(void **stat
     assert_refused(VAR_SECTION("0x2", "DefaultValue", "$NODEID+1"),
                    "t.eds:8: [1000] DefaultValue: '$NODEID+1' is too large for its data type (INTEGER8) for some node "
                    "id 1 to 127");
+    assert_refused(
+        VAR_SECTION("0x1", "DefaultValue", "$NODEID"),
+        "t.eds:8: [1000] DefaultValue: '$NODEID' is too large for its data type (BOOLEAN) for some node id 1 "
+        "to 127");
+    assert_refused(VAR_SECTION("0x5", "DefaultValue", "$NODEID+0x81"),
+                   "t.eds:8: [1000] DefaultValue: '$NODEID+0x81' is too large for its data type (UNSIGNED8) for some "
+                   "node id 1 to 127");
     assert_refused(VAR_SECTION("0x8", "DefaultValue", "0x10"),
                    "t.eds:8: [1000] DefaultValue: '0x10' is not a finite decimal number (REAL32)");
     assert_refused(VAR_SECTION("0x8", "DefaultValue", "1e39"),
