@@ -113,6 +113,20 @@ static void assert_mapping(uint16_t map_index, uint8_t node, const uint32_t *obj
 
 #define OBJ(index, sub) (((uint32_t)(index) << 8) | (sub))
 
+/* A PDO's power-on mapping: the mapping object and the objects it maps. */
+typedef struct {
+    uint16_t map_index;
+    unsigned n;
+    uint32_t objects[LS_CO_PDO_MAX_ENTRIES];
+} pdo_map_t;
+
+static void assert_mappings(const pdo_map_t *maps, size_t n, uint8_t node)
+{
+    for (size_t i = 0; i < n; i++) {
+        assert_mapping(maps[i].map_index, node, maps[i].objects, maps[i].n);
+    }
+}
+
 /* ---- the EPOS4 DCF ------------------------------------------------------ */
 
 static void test_the_epos4_dcf_loads_with_its_identity(void **state)
@@ -163,21 +177,17 @@ static void test_every_epos4_pdo_is_valid_and_synchronous_with_its_power_on_mapp
         assert_int_equal(uint_of((uint16_t)(LS_CO_OBJ_TPDO_COMM + n - 1u), LS_CO_PDO_SUB_TYPE, node), 1);
         assert_int_equal(uint_of((uint16_t)(LS_CO_OBJ_TPDO_COMM + n - 1u), LS_CO_PDO_SUB_INHIBIT, node), 10);
     }
-    const uint32_t r1[] = { OBJ(0x6040, 0), OBJ(0x60FF, 0) };
-    const uint32_t r2[] = { OBJ(0x607A, 0), OBJ(0x6081, 0) };
-    const uint32_t r3[] = { OBJ(0x6083, 0), OBJ(0x6084, 0) };
-    const uint32_t r4[] = { OBJ(0x6071, 0), OBJ(0x6060, 0) };
-    const uint32_t t1[] = { OBJ(0x6041, 0), OBJ(0x6061, 0) };
-    const uint32_t t2[] = { OBJ(0x606B, 0), OBJ(0x606C, 0) };
-    const uint32_t t3[] = { OBJ(0x6064, 0), OBJ(0x30D3, 1) };
-    assert_mapping(LS_CO_OBJ_RPDO_MAP + 0, node, r1, 2);
-    assert_mapping(LS_CO_OBJ_RPDO_MAP + 1, node, r2, 2);
-    assert_mapping(LS_CO_OBJ_RPDO_MAP + 2, node, r3, 2);
-    assert_mapping(LS_CO_OBJ_RPDO_MAP + 3, node, r4, 2);
-    assert_mapping(LS_CO_OBJ_TPDO_MAP + 0, node, t1, 2);
-    assert_mapping(LS_CO_OBJ_TPDO_MAP + 1, node, t2, 2);
-    assert_mapping(LS_CO_OBJ_TPDO_MAP + 2, node, t3, 2);
-    assert_mapping(LS_CO_OBJ_TPDO_MAP + 3, node, NULL, 0); /* TPDO4: nothing mapped */
+    static const pdo_map_t maps[] = {
+        { LS_CO_OBJ_RPDO_MAP + 0, 2, { OBJ(0x6040, 0), OBJ(0x60FF, 0) } },
+        { LS_CO_OBJ_RPDO_MAP + 1, 2, { OBJ(0x607A, 0), OBJ(0x6081, 0) } },
+        { LS_CO_OBJ_RPDO_MAP + 2, 2, { OBJ(0x6083, 0), OBJ(0x6084, 0) } },
+        { LS_CO_OBJ_RPDO_MAP + 3, 2, { OBJ(0x6071, 0), OBJ(0x6060, 0) } },
+        { LS_CO_OBJ_TPDO_MAP + 0, 2, { OBJ(0x6041, 0), OBJ(0x6061, 0) } },
+        { LS_CO_OBJ_TPDO_MAP + 1, 2, { OBJ(0x606B, 0), OBJ(0x606C, 0) } },
+        { LS_CO_OBJ_TPDO_MAP + 2, 2, { OBJ(0x6064, 0), OBJ(0x30D3, 1) } },
+        { LS_CO_OBJ_TPDO_MAP + 3, 0, { 0 } }, /* TPDO4: nothing mapped */
+    };
+    assert_mappings(maps, sizeof maps / sizeof maps[0], node);
 }
 
 static void test_the_epos4_dcf_has_the_402_objects_and_lacks_what_its_readme_says(void **state)
@@ -300,22 +310,17 @@ static void test_the_ros2_canopen_eds_has_its_quirks(void **state)
         assert_int_equal(uint_of((uint16_t)(LS_CO_OBJ_TPDO_COMM + n - 1u), LS_CO_PDO_SUB_TYPE, node),
                          n == 4 ? LS_CO_PDO_TYPE_EVENT_MFR : 1);
     }
-    const uint32_t r1[] = { OBJ(0x6040, 0) };
-    const uint32_t r2[] = { OBJ(0x6040, 0), OBJ(0x6060, 0) };
-    const uint32_t r3[] = { OBJ(0x6040, 0), OBJ(0x607A, 0) };
-    const uint32_t r4[] = { OBJ(0x6040, 0), OBJ(0x60FF, 0) };
-    const uint32_t t1[] = { OBJ(0x6041, 0) };
-    const uint32_t t2[] = { OBJ(0x6041, 0), OBJ(0x6061, 0) };
-    const uint32_t t3[] = { OBJ(0x6041, 0), OBJ(0x6064, 0) };
-    const uint32_t t4[] = { OBJ(0x6041, 0), OBJ(0x606C, 0) };
-    assert_mapping(LS_CO_OBJ_RPDO_MAP + 0, node, r1, 1);
-    assert_mapping(LS_CO_OBJ_RPDO_MAP + 1, node, r2, 2);
-    assert_mapping(LS_CO_OBJ_RPDO_MAP + 2, node, r3, 2);
-    assert_mapping(LS_CO_OBJ_RPDO_MAP + 3, node, r4, 2);
-    assert_mapping(LS_CO_OBJ_TPDO_MAP + 0, node, t1, 1);
-    assert_mapping(LS_CO_OBJ_TPDO_MAP + 1, node, t2, 2);
-    assert_mapping(LS_CO_OBJ_TPDO_MAP + 2, node, t3, 2);
-    assert_mapping(LS_CO_OBJ_TPDO_MAP + 3, node, t4, 2);
+    static const pdo_map_t maps[] = {
+        { LS_CO_OBJ_RPDO_MAP + 0, 1, { OBJ(0x6040, 0) } },
+        { LS_CO_OBJ_RPDO_MAP + 1, 2, { OBJ(0x6040, 0), OBJ(0x6060, 0) } },
+        { LS_CO_OBJ_RPDO_MAP + 2, 2, { OBJ(0x6040, 0), OBJ(0x607A, 0) } },
+        { LS_CO_OBJ_RPDO_MAP + 3, 2, { OBJ(0x6040, 0), OBJ(0x60FF, 0) } },
+        { LS_CO_OBJ_TPDO_MAP + 0, 1, { OBJ(0x6041, 0) } },
+        { LS_CO_OBJ_TPDO_MAP + 1, 2, { OBJ(0x6041, 0), OBJ(0x6061, 0) } },
+        { LS_CO_OBJ_TPDO_MAP + 2, 2, { OBJ(0x6041, 0), OBJ(0x6064, 0) } },
+        { LS_CO_OBJ_TPDO_MAP + 3, 2, { OBJ(0x6041, 0), OBJ(0x606C, 0) } },
+    };
+    assert_mappings(maps, sizeof maps / sizeof maps[0], node);
     /* no default for the controlword and the following error window */
     assert_int_equal(value_of(LS_CO_OBJ_CONTROLWORD, 0, 1).kind, LS_EDS_VALUE_NONE);
     assert_int_equal(value_of(LS_CO_OBJ_FOLLOWING_WINDOW, 0, 1).kind, LS_EDS_VALUE_NONE);
@@ -511,52 +516,59 @@ static void test_a_file_that_is_not_an_eds_is_refused_in_one_line(void **state)
     assert_refused(DEVICE_INFO "[Sub]\n=3\n", "t.eds:5: [Sub]: '=3' has no key before its '='");
 }
 
+/* One VAR of `type` with `key=value`, and the line that refuses it. */
+typedef struct {
+    const char *type, *key, *value, *line;
+} number_case_t;
+
 static void test_a_malformed_or_misfit_number_is_refused_in_one_line(void **state)
 {
     (void)state;
-#define VAR_SECTION(type, key, value)                                                                                  \
-    DEVICE_INFO "[1000]\nParameterName=x\nDataType=" type "\nAccessType=rw\n" key "=" value "\n"
-    assert_refused(VAR_SECTION("0x7", "DefaultValue", "0x12G4"),
-                   "t.eds:8: [1000] DefaultValue: '0x12G4' is not a number: write decimal, 0x hex or 0-prefixed octal");
-    assert_refused(VAR_SECTION("0x7", "DefaultValue", "09"),
-                   "t.eds:8: [1000] DefaultValue: '09' is not a number: write decimal, 0x hex or 0-prefixed octal");
-    assert_refused(VAR_SECTION("0x7", "DefaultValue", "0x"),
-                   "t.eds:8: [1000] DefaultValue: '0x' is not a number: write decimal, 0x hex or 0-prefixed octal");
-    assert_refused(VAR_SECTION("0x7", "ParameterValue", "$NODEID-1"),
-                   "t.eds:8: [1000] ParameterValue: '$NODEID-1' is not a number: write decimal, 0x hex or 0-prefixed "
-                   "octal, as $NODEID+N or N+$NODEID");
-    assert_refused(VAR_SECTION("0x5", "DefaultValue", "256"),
-                   "t.eds:8: [1000] DefaultValue: '256' is too large for its data type (UNSIGNED8)");
-    assert_refused(VAR_SECTION("0x6", "LowLimit", "-1"),
-                   "t.eds:8: [1000] LowLimit: '-1' is a negative value for an unsigned type (UNSIGNED16)");
-    assert_refused(VAR_SECTION("0x2", "HighLimit", "128"),
-                   "t.eds:8: [1000] HighLimit: '128' is too large for its data type (INTEGER8)");
-    assert_refused(VAR_SECTION("0x2", "DefaultValue", "-129"),
-                   "t.eds:8: [1000] DefaultValue: '-129' is too small for its data type (INTEGER8)");
-    assert_refused(VAR_SECTION("0x7", "DefaultValue", "0x1FFFFFFFFFFFFFFFF"),
-                   "t.eds:8: [1000] DefaultValue: '0x1FFFFFFFFFFFFFFFF' is not a number: write decimal, 0x hex or "
-                   "0-prefixed octal");
-    assert_refused(VAR_SECTION("0x7", "DefaultValue", "$NODEID+0xFFFFFFFF"),
-                   "t.eds:8: [1000] DefaultValue: '$NODEID+0xFFFFFFFF' is too large for its data type (UNSIGNED32) "
-                   "for some node id 1 to 127");
-    assert_refused(VAR_SECTION("0x2", "DefaultValue", "$NODEID+1"),
-                   "t.eds:8: [1000] DefaultValue: '$NODEID+1' is too large for its data type (INTEGER8) for some node "
-                   "id 1 to 127");
-    assert_refused(
-        VAR_SECTION("0x1", "DefaultValue", "$NODEID"),
-        "t.eds:8: [1000] DefaultValue: '$NODEID' is too large for its data type (BOOLEAN) for some node id 1 "
-        "to 127");
-    assert_refused(VAR_SECTION("0x5", "DefaultValue", "$NODEID+0x81"),
-                   "t.eds:8: [1000] DefaultValue: '$NODEID+0x81' is too large for its data type (UNSIGNED8) for some "
-                   "node id 1 to 127");
-    assert_refused(VAR_SECTION("0x8", "DefaultValue", "0x10"),
-                   "t.eds:8: [1000] DefaultValue: '0x10' is not a finite decimal number (REAL32)");
-    assert_refused(VAR_SECTION("0x8", "DefaultValue", "1e39"),
-                   "t.eds:8: [1000] DefaultValue: '1e39' is not a finite decimal number (REAL32)");
-    assert_refused(VAR_SECTION("0x7", "PDOMapping", "2"),
-                   "t.eds:8: [1000] PDOMapping: '2' is not a number from 0 to 1");
-    assert_refused(VAR_SECTION("0x7", "LowLimit", "10\nHighLimit=9"),
-                   "t.eds:8: [1000] LowLimit: '10' is above HighLimit '9'");
+    static const number_case_t cases[] = {
+        { "0x7", "DefaultValue", "0x12G4",
+          "t.eds:8: [1000] DefaultValue: '0x12G4' is not a number: write decimal, 0x hex or 0-prefixed octal" },
+        { "0x7", "DefaultValue", "09",
+          "t.eds:8: [1000] DefaultValue: '09' is not a number: write decimal, 0x hex or 0-prefixed octal" },
+        { "0x7", "DefaultValue", "0x",
+          "t.eds:8: [1000] DefaultValue: '0x' is not a number: write decimal, 0x hex or 0-prefixed octal" },
+        { "0x7", "ParameterValue", "$NODEID-1",
+          "t.eds:8: [1000] ParameterValue: '$NODEID-1' is not a number: write decimal, 0x hex or 0-prefixed octal, as "
+          "$NODEID+N or N+$NODEID" },
+        { "0x5", "DefaultValue", "256",
+          "t.eds:8: [1000] DefaultValue: '256' is too large for its data type (UNSIGNED8)" },
+        { "0x6", "LowLimit", "-1",
+          "t.eds:8: [1000] LowLimit: '-1' is a negative value for an unsigned type (UNSIGNED16)" },
+        { "0x2", "HighLimit", "128", "t.eds:8: [1000] HighLimit: '128' is too large for its data type (INTEGER8)" },
+        { "0x2", "DefaultValue", "-129",
+          "t.eds:8: [1000] DefaultValue: '-129' is too small for its data type (INTEGER8)" },
+        { "0x7", "DefaultValue", "0x1FFFFFFFFFFFFFFFF",
+          "t.eds:8: [1000] DefaultValue: '0x1FFFFFFFFFFFFFFFF' is not a number: write decimal, 0x hex or 0-prefixed "
+          "octal" },
+        { "0x7", "DefaultValue", "$NODEID+0xFFFFFFFF",
+          "t.eds:8: [1000] DefaultValue: '$NODEID+0xFFFFFFFF' is too large for its data type (UNSIGNED32) for some "
+          "node id 1 to 127" },
+        { "0x2", "DefaultValue", "$NODEID+1",
+          "t.eds:8: [1000] DefaultValue: '$NODEID+1' is too large for its data type (INTEGER8) for some node id 1 to "
+          "127" },
+        { "0x1", "DefaultValue", "$NODEID",
+          "t.eds:8: [1000] DefaultValue: '$NODEID' is too large for its data type (BOOLEAN) for some node id 1 to "
+          "127" },
+        { "0x5", "DefaultValue", "$NODEID+0x81",
+          "t.eds:8: [1000] DefaultValue: '$NODEID+0x81' is too large for its data type (UNSIGNED8) for some node id 1 "
+          "to 127" },
+        { "0x8", "DefaultValue", "0x10",
+          "t.eds:8: [1000] DefaultValue: '0x10' is not a finite decimal number (REAL32)" },
+        { "0x8", "DefaultValue", "1e39",
+          "t.eds:8: [1000] DefaultValue: '1e39' is not a finite decimal number (REAL32)" },
+        { "0x7", "PDOMapping", "2", "t.eds:8: [1000] PDOMapping: '2' is not a number from 0 to 1" },
+        { "0x7", "LowLimit", "10\nHighLimit=9", "t.eds:8: [1000] LowLimit: '10' is above HighLimit '9'" },
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        char text[512];
+        snprintf(text, sizeof text, DEVICE_INFO "[1000]\nParameterName=x\nDataType=%s\nAccessType=rw\n%s=%s\n",
+                 cases[i].type, cases[i].key, cases[i].value);
+        assert_refused(text, cases[i].line);
+    }
     assert_refused(DEVICE_INFO "[DeviceComissioning]\nNodeID=128\n",
                    "t.eds:5: [DeviceComissioning] NodeID: '128' is not a number from 0 to 127");
     assert_refused("[DeviceInfo]\nVendorNumber=0x1FFFFFFFF\n",
