@@ -10,6 +10,7 @@
 #include <getopt.h>
 #include <ini.h>
 #include <limits.h>
+#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -57,6 +58,22 @@ static int parse_int(const char *s, long lo, long hi, int *out)
         return -1;
     }
     *out = (int)v;
+    return 0;
+}
+
+/* A finite decimal within [lo, hi]; no blanks, no trailing junk. */
+static int parse_double(const char *s, double lo, double hi, double *out)
+{
+    if (s[0] == '\0' || isspace((unsigned char)s[0])) {
+        return -1;
+    }
+    char *end = NULL;
+    errno = 0;
+    const double v = strtod(s, &end);
+    if (errno != 0 || *end != '\0' || !isfinite(v) || v < lo || v > hi) {
+        return -1;
+    }
+    *out = v;
     return 0;
 }
 
@@ -227,8 +244,8 @@ static int set_link(ls_config_t *cfg, const char *v, char *why, size_t whylen)
 
 static int set_arm(ls_config_t *cfg, const char *v, char *why, size_t whylen)
 {
-    if (strcmp(v, "sim") != 0 && strcmp(v, "none") != 0) {
-        return EXPECT("sim or none (the ODE-simulated arm, or no arm)");
+    if (strcmp(v, "sim") != 0 && strcmp(v, "cia402") != 0 && strcmp(v, "none") != 0) {
+        return EXPECT("sim, cia402 or none (the ODE-simulated arm, CiA 402 drives on the [drives] bus, or no arm)");
     }
     (void)copy_str(cfg->arm, sizeof cfg->arm, v);
     return 0;
@@ -349,7 +366,203 @@ static int set_estop(ls_config_t *cfg, const char *v, char *why, size_t whylen)
     return 0;
 }
 
+/* ---- [drives] */
+
+static int set_drives_link(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    static const char *forms = "socketcan:IFNAME, slcan:tty:PATH (a serial SLCAN adapter) or slcan:pty:PATH";
+    bool ok = false;
+    if (strncmp(v, "socketcan:", 10) == 0) {
+        const char *ifn = v + 10;
+        const size_t n = strlen(ifn);
+        ok = n > 0 && n < 16 && strchr(ifn, '/') == NULL && strchr(ifn, ':') == NULL;
+    } else if (strncmp(v, "slcan:tty:", 10) == 0 || strncmp(v, "slcan:pty:", 10) == 0) {
+        ok = v[10] != '\0';
+    }
+    if (!ok || copy_str(cfg->drives_link, sizeof cfg->drives_link, v) != 0) {
+        return EXPECT("%s (the drive bus, its own CAN bus)", forms);
+    }
+    return 0;
+}
+
+static int set_drives_bitrate(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    static const uint32_t rates[] = { 10000, 20000, 50000, 100000, 125000, 250000, 500000, 800000, 1000000 };
+    uint32_t x = 0;
+    if (parse_u32(v, 1, 1000000, &x) == 0) {
+        for (size_t i = 0; i < sizeof rates / sizeof rates[0]; i++) {
+            if (rates[i] == x) {
+                cfg->drives_bitrate = x;
+                return 0;
+            }
+        }
+    }
+    return EXPECT("a CANopen bitrate: 10000, 20000, 50000, 100000, 125000, 250000, 500000, 800000 or 1000000 bit/s");
+}
+
+static int set_drives_cycle(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    if (parse_u32(v, 1, 100, &cfg->drives_cycle) != 0) {
+        return EXPECT("1..100 (control periods per drive cycle: the SYNC period is cycle / rate_hz)");
+    }
+    return 0;
+}
+
+static int set_drives_master_node(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    uint32_t x;
+    if (parse_u32(v, 1, 127, &x) != 0) {
+        return EXPECT("1..127 (the controller's CANopen node id on the drive bus: its heartbeat's id)");
+    }
+    cfg->drives_master_node = (uint8_t)x;
+    return 0;
+}
+
+static int set_drives_heartbeat(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    if (parse_u32(v, 10, 10000, &cfg->drives_heartbeat_ms) != 0) {
+        return EXPECT("10..10000 ms (the controller's heartbeat period, and each drive's, 0x1017)");
+    }
+    return 0;
+}
+
+static int set_drives_heartbeat_timeout(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    if (parse_u32(v, 20, 60000, &cfg->drives_heartbeat_timeout_ms) != 0) {
+        return EXPECT("20..60000 ms (a drive, or the controller, is lost after this long without heartbeat)");
+    }
+    return 0;
+}
+
+static int set_drives_boot_timeout(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    if (parse_u32(v, 100, 60000, &cfg->drives_boot_timeout_ms) != 0) {
+        return EXPECT("100..60000 ms (each drive's boot-up and configuration at start)");
+    }
+    return 0;
+}
+
+static int set_drives_budget(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    if (parse_u32(v, 10, 100, &cfg->drives_budget_pct) != 0) {
+        return EXPECT("10..100 (per cent of the bus a drive cycle may take, worst-case bit stuffing included)");
+    }
+    return 0;
+}
+
+static int set_drives_abort(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    static const struct {
+        const char *name;
+        ls_drive_abort_t value;
+    } k[] = { { "none", LS_DRIVE_ABORT_NONE },
+              { "fault", LS_DRIVE_ABORT_FAULT },
+              { "disable_voltage", LS_DRIVE_ABORT_DISABLE_VOLTAGE },
+              { "quick_stop", LS_DRIVE_ABORT_QUICK_STOP } };
+    for (size_t i = 0; i < sizeof k / sizeof k[0]; i++) {
+        if (strcmp(v, k[i].name) == 0) {
+            cfg->drives_abort = (uint8_t)k[i].value;
+            return 0;
+        }
+    }
+    return EXPECT("quick_stop, fault, disable_voltage or none (what a drive does when the controller's "
+                  "heartbeat stops: CiA 402 0x6007)");
+}
+
+static int set_drives_feedforward(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    if (parse_bool(v, &cfg->drives_feedforward) != 0) {
+        return EXPECT("true or false (map the velocity feed-forward 0x60B1 where a drive can)");
+    }
+    return 0;
+}
+
+/* ---- [joint.N] */
+
+typedef int (*joint_setter_fn)(ls_config_joint_t *j, const char *v, char *why, size_t whylen);
+
+static int set_joint_node(ls_config_joint_t *j, const char *v, char *why, size_t whylen)
+{
+    uint32_t x;
+    if (parse_u32(v, 1, 127, &x) != 0) {
+        return EXPECT("1..127 (the drive's CANopen node id)");
+    }
+    j->node = (uint8_t)x;
+    return 0;
+}
+
+static int set_joint_eds(ls_config_joint_t *j, const char *v, char *why, size_t whylen)
+{
+    if (v[0] == '\0' || copy_str(j->eds, sizeof j->eds, v) != 0) {
+        return EXPECT("the path of the drive's EDS or DCF file, of at most %zu characters", sizeof j->eds - 1);
+    }
+    return 0;
+}
+
+static int set_joint_counts(ls_config_joint_t *j, const char *v, char *why, size_t whylen)
+{
+    if (parse_double(v, 1e-3, 1e12, &j->counts_per_rad) != 0) {
+        return EXPECT("a number 0.001..1e12 (the drive's position units per joint radian: encoder counts "
+                      "per motor turn x gear ratio / 2 pi)");
+    }
+    return 0;
+}
+
+static int set_joint_vel_counts(ls_config_joint_t *j, const char *v, char *why, size_t whylen)
+{
+    if (parse_double(v, 1e-6, 1e12, &j->vel_counts_per_rad_s) != 0) {
+        return EXPECT("a number 1e-6..1e12 (the drive's velocity units per joint rad/s)");
+    }
+    return 0;
+}
+
+static int set_joint_sign(ls_config_joint_t *j, const char *v, char *why, size_t whylen)
+{
+    if (strcmp(v, "1") == 0 || strcmp(v, "+1") == 0) {
+        j->sign = 1;
+    } else if (strcmp(v, "-1") == 0) {
+        j->sign = -1;
+    } else {
+        return EXPECT("1 or -1 (-1 when the drive counts against the joint's positive direction)");
+    }
+    return 0;
+}
+
+static int set_joint_offset(ls_config_joint_t *j, const char *v, char *why, size_t whylen)
+{
+    if (parse_double(v, -1e3, 1e3, &j->offset_rad) != 0) {
+        return EXPECT("radians -1000..1000 (the joint angle at which the drive reads 0)");
+    }
+    return 0;
+}
+
 #undef EXPECT
+
+typedef struct {
+    const char *key;
+    joint_setter_fn set;
+    bool required;
+} joint_key_def_t;
+
+static const joint_key_def_t JOINT_KEYS[] = {
+    { "node", set_joint_node, true },
+    { "eds", set_joint_eds, true },
+    { "counts_per_rad", set_joint_counts, true },
+    { "sign", set_joint_sign, false },
+    { "offset_rad", set_joint_offset, false },
+    { "velocity_counts_per_rad_s", set_joint_vel_counts, false },
+};
+#define N_JOINT_KEYS (sizeof JOINT_KEYS / sizeof JOINT_KEYS[0])
+
+/* "joint.3" -> 2; -1 when `section` is no [joint.N] of this arm. */
+static int joint_section(const char *section)
+{
+    if (strncmp(section, "joint.", 6) != 0 || section[6] < '1' || section[6] > '9' || section[7] != '\0') {
+        return -1;
+    }
+    const int n = section[6] - '0';
+    return n <= LS_N_JOINTS ? n - 1 : -1;
+}
 
 /* ---- the key table ----------------------------------------------------- */
 
@@ -383,13 +596,26 @@ static const key_def_t KEYS[] = {
     { "dio", "outputs", "outputs", false, set_outputs },
     { "dio", "estop_input", "estop-input", false, set_estop },
     { "device", "disconnect_action", "disconnect-action", false, set_disconnect_action },
+    { "drives", "link", NULL, false, set_drives_link },
+    { "drives", "bitrate", NULL, false, set_drives_bitrate },
+    { "drives", "cycle", NULL, false, set_drives_cycle },
+    { "drives", "master_node", NULL, false, set_drives_master_node },
+    { "drives", "heartbeat_ms", NULL, false, set_drives_heartbeat },
+    { "drives", "heartbeat_timeout_ms", NULL, false, set_drives_heartbeat_timeout },
+    { "drives", "boot_timeout_ms", NULL, false, set_drives_boot_timeout },
+    { "drives", "budget_pct", NULL, false, set_drives_budget },
+    { "drives", "abort_connection", NULL, false, set_drives_abort },
+    { "drives", "velocity_feedforward", NULL, false, set_drives_feedforward },
 };
 #define N_KEYS (sizeof KEYS / sizeof KEYS[0])
 
-static const char *SECTIONS = "[device], [hal], [control] or [dio]";
+static const char *SECTIONS = "[device], [hal], [control], [dio], [drives] or [joint.1] .. [joint.6]";
 
 static bool known_section(const char *s)
 {
+    if (joint_section(s) >= 0) {
+        return true;
+    }
     for (size_t i = 0; i < N_KEYS; i++) {
         if (strcmp(KEYS[i].section, s) == 0) {
             return true;
@@ -427,6 +653,18 @@ void ls_config_defaults(ls_config_t *cfg)
     cfg->rt_cpu = -1;
     cfg->lock_memory = true;
     cfg->estop_input = -1;
+    cfg->drives_bitrate = 1000000;
+    cfg->drives_cycle = 4;
+    cfg->drives_master_node = 0x7F;
+    cfg->drives_heartbeat_ms = 100;
+    cfg->drives_heartbeat_timeout_ms = 350;
+    cfg->drives_boot_timeout_ms = 5000;
+    cfg->drives_budget_pct = 70;
+    cfg->drives_abort = (uint8_t)LS_DRIVE_ABORT_QUICK_STOP;
+    cfg->drives_feedforward = true;
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        cfg->joint[j].sign = 1;
+    }
 }
 
 /* ---- INI file ---------------------------------------------------------- */
@@ -440,6 +678,7 @@ typedef struct {
     char *msg;
     size_t msglen;
     int seen_line[N_KEYS]; /* first line of each key in this file */
+    int joint_seen_line[LS_N_JOINTS][N_JOINT_KEYS];
     bool links_started;
 } ini_ctx_t;
 
@@ -526,6 +765,36 @@ static int ini_handler_fn(void *user, const char *section, const char *name, con
     if (section[0] == '\0') {
         ctx_error(c, "key '%s' outside any section: put it under %s", name, SECTIONS);
         return 0;
+    }
+    const int jn = joint_section(section);
+    if (jn >= 0) {
+        size_t k = 0;
+        while (k < N_JOINT_KEYS && strcmp(JOINT_KEYS[k].key, name) != 0) {
+            k++;
+        }
+        if (k == N_JOINT_KEYS) {
+            char keys[256];
+            size_t used = 0;
+            keys[0] = '\0';
+            for (size_t i = 0; i < N_JOINT_KEYS && used < sizeof keys; i++) {
+                const int w = snprintf(keys + used, sizeof keys - used, "%s%s", i > 0 ? ", " : "", JOINT_KEYS[i].key);
+                used += w > 0 ? (size_t)w : 0u;
+            }
+            ctx_error(c, "[%s] %s: unknown key; expected one of %s", section, name, keys);
+            return 0;
+        }
+        if (c->joint_seen_line[jn][k] != 0) {
+            ctx_error(c, "[%s] %s: given twice (first on line %d); keep one", section, name, c->joint_seen_line[jn][k]);
+            return 0;
+        }
+        c->joint_seen_line[jn][k] = c->line;
+        c->cfg->joint[jn].present = true;
+        char why[256];
+        if (JOINT_KEYS[k].set(&c->cfg->joint[jn], value, why, sizeof why) != 0) {
+            ctx_error(c, "[%s] %s: got '%s', expected %s", section, name, value, why);
+            return 0;
+        }
+        return 1;
     }
     size_t k = 0;
     while (k < N_KEYS && !(strcmp(KEYS[k].section, section) == 0 && strcmp(KEYS[k].key, name) == 0)) {
@@ -620,7 +889,8 @@ void ls_config_usage(FILE *f)
             "  --link SPEC               [hal] link: slcan:pty:PATH (SLCAN on a new pseudo-terminal; PATH\n"
             "                            becomes a symlink to it) or socketcan:IFNAME (e.g. socketcan:can0);\n"
             "                            repeatable: every link is one segment of the same bus\n"
-            "  --arm sim|none            [hal] arm (default sim)\n"
+            "  --arm sim|cia402|none     [hal] arm (default sim; cia402: the drives of [drives] and\n"
+            "                            [joint.1] .. [joint.6] in the --config file, docs/deploy.md)\n"
             "  --dio sim|none|gpiod:CHIP [hal] dio: digital I/O backend (default sim)\n"
             "  --link-faults SPEC        [hal] link_faults: inject faults on every link (tests; docs/reliability.md)\n"
             "  --setpoint-trace PATH     [hal] setpoint_trace: write every cycle's commanded joints to the CSV\n"
@@ -756,6 +1026,57 @@ int ls_config_validate(const ls_config_t *cfg, char *msg, size_t msglen)
             if (cfg->input_offsets[i] == cfg->output_offsets[j]) {
                 return opt_error(msg, msglen, "[dio] line %u is both in inputs and in outputs: a line has one role",
                                  cfg->input_offsets[i]);
+            }
+        }
+    }
+    const bool cia402 = strcmp(cfg->arm, "cia402") == 0;
+    bool any_joint = false;
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        any_joint = any_joint || cfg->joint[j].present;
+    }
+    if (!cia402 && (cfg->drives_link[0] != '\0' || any_joint)) {
+        return opt_error(msg, msglen,
+                         "[drives] and [joint.N] describe CiA 402 drives, but [hal] arm = %s: set arm = cia402 "
+                         "to drive them, or remove those sections",
+                         cfg->arm);
+    }
+    if (cia402) {
+        if (cfg->drives_link[0] == '\0') {
+            return opt_error(msg, msglen,
+                             "[hal] arm = cia402 needs the drive bus: 'link = socketcan:IFNAME' (or slcan:tty:PATH) "
+                             "under [drives] in the --config file (docs/deploy.md \"Drives\")");
+        }
+        if (cfg->drives_heartbeat_timeout_ms <= cfg->drives_heartbeat_ms) {
+            return opt_error(msg, msglen,
+                             "[drives] heartbeat_timeout_ms = %u is not above heartbeat_ms = %u: one late "
+                             "heartbeat would lose a drive; use at least 2 x heartbeat_ms plus a margin",
+                             (unsigned)cfg->drives_heartbeat_timeout_ms, (unsigned)cfg->drives_heartbeat_ms);
+        }
+        for (int j = 0; j < LS_N_JOINTS; j++) {
+            const ls_config_joint_t *jc = &cfg->joint[j];
+            const char *missing = !jc->present                ? "the section"
+                                  : jc->node == 0u            ? "node"
+                                  : jc->eds[0] == '\0'        ? "eds"
+                                  : jc->counts_per_rad <= 0.0 ? "counts_per_rad"
+                                                              : NULL;
+            if (missing != NULL) {
+                return opt_error(msg, msglen,
+                                 "[joint.%d]: %s is missing: arm = cia402 needs [joint.1] .. [joint.%d], each with "
+                                 "node, eds and counts_per_rad (docs/deploy.md \"Drives\")",
+                                 j + 1, missing, LS_N_JOINTS);
+            }
+            if (jc->node == cfg->drives_master_node) {
+                return opt_error(msg, msglen,
+                                 "[joint.%d] node = 0x%02X is the controller's own [drives] master_node: give "
+                                 "each drive and the controller distinct node ids",
+                                 j + 1, (unsigned)jc->node);
+            }
+            for (int k = 0; k < j; k++) {
+                if (cfg->joint[k].node == jc->node) {
+                    return opt_error(msg, msglen,
+                                     "[joint.%d] node = 0x%02X is also [joint.%d]'s: each drive has its own node id",
+                                     j + 1, (unsigned)jc->node, k + 1);
+                }
             }
         }
     }

@@ -16,11 +16,33 @@
 #include <stdint.h>
 #include <stdio.h>
 
+#include "ls_robot_model.h" /* LS_N_JOINTS: one [joint.N] section per joint */
+
 #define LS_CONFIG_MAX_LINKS 4
 #define LS_CONFIG_MAX_LINES 16
 #define LS_CONFIG_MAX_OFFSET 1023u /* highest gpiod line offset accepted in inputs/outputs */
 #define LS_CONFIG_DEFAULT_PATH "/etc/landscape/landscaped.conf"
 
+/* What a drive does when it loses the controller's heartbeat (CiA 402 0x6007,
+ * abort connection option code): the values are the profile's. */
+typedef enum {
+    LS_DRIVE_ABORT_NONE = 0,            /* no action: the drive keeps its last set-point */
+    LS_DRIVE_ABORT_FAULT = 1,           /* fault: the drive's fault reaction, then FAULT */
+    LS_DRIVE_ABORT_DISABLE_VOLTAGE = 2, /* power off at once: the brake catches the joint */
+    LS_DRIVE_ABORT_QUICK_STOP = 3,      /* decelerate on the quick-stop ramp, then per 0x605A */
+} ls_drive_abort_t;
+
+/* One [joint.N] section: the CiA 402 drive of joint N (arm = cia402). */
+typedef struct {
+    bool present;                /* the section was given */
+    uint8_t node;                /* node = 0x21 (1..127): the drive's CANopen node id */
+    char eds[256];               /* eds = PATH: the drive's EDS or DCF file */
+    double counts_per_rad;       /* counts_per_rad = N (> 0): the drive's position units per joint radian */
+    int sign;                    /* sign = 1 | -1: -1 when the drive counts against the joint's direction */
+    double offset_rad;           /* offset_rad = 0 (finite): the joint angle where the drive reads 0 */
+    double vel_counts_per_rad_s; /* velocity_counts_per_rad_s = N (> 0; default counts_per_rad): units of
+                                     0x60B1/0x606C per rad/s */
+} ls_config_joint_t;
 typedef struct {
     char config_path[256]; /* --config FILE ("" = none) */
     /* [device] */
@@ -32,7 +54,7 @@ typedef struct {
     /* [hal] */
     char links[LS_CONFIG_MAX_LINKS][128]; /* link = slcan:pty:PATH | socketcan:IFNAME (repeatable) */
     size_t n_links;
-    char arm[16];  /* arm = sim | none (default sim) */
+    char arm[16];  /* arm = sim | cia402 | none (default sim) */
     char dio[128]; /* dio = sim | gpiod:CHIP | none (default sim) */
     char link_faults
         [192]; /* [hal] link_faults, --link-faults SPEC: tests only, faults injected on every link ("" = none) */
@@ -53,6 +75,18 @@ typedef struct {
     uint8_t n_outputs;
     unsigned output_offsets[LS_CONFIG_MAX_LINES]; /* outputs = 8,9 (default none) */
     int estop_input; /* estop_input = -1 (input bit index 0..15 that stops everything when active) */
+    /* [drives]: the CiA 402 drive bus (arm = cia402) */
+    char drives_link[128];                /* link = socketcan:IFNAME | slcan:tty:PATH | slcan:pty:PATH */
+    uint32_t drives_bitrate;              /* bitrate = 1000000 (bit/s; SLCAN adapters and the bus budget) */
+    uint32_t drives_cycle;                /* cycle = 4 (1..100 control periods per drive cycle: SYNC period) */
+    uint8_t drives_master_node;           /* master_node = 0x7F (1..127: the controller's node id, its heartbeat) */
+    uint32_t drives_heartbeat_ms;         /* heartbeat_ms = 100 (10..10000: ours, and each drive's 0x1017) */
+    uint32_t drives_heartbeat_timeout_ms; /* heartbeat_timeout_ms = 350 (both directions; > heartbeat_ms) */
+    uint32_t drives_boot_timeout_ms;      /* boot_timeout_ms = 5000 (100..60000: boot-up and configuration) */
+    uint32_t drives_budget_pct;           /* budget_pct = 70 (10..100: the bus load a drive cycle may take) */
+    uint8_t drives_abort;                 /* abort_connection = quick_stop (ls_drive_abort_t) */
+    bool drives_feedforward;              /* velocity_feedforward = true (map 0x60B1 where the drive can) */
+    ls_config_joint_t joint[LS_N_JOINTS];
     /* modes */
     bool check;   /* --check: self-check and exit */
     bool hal_sim; /* --hal sim: the skeleton's shorthand for arm=sim dio=sim clock=realtime */

@@ -239,15 +239,16 @@ static void test_key_in_wrong_section(void **state)
 
 static void test_unknown_section(void **state)
 {
-    refused(*state, "[device]\nnode = 3\n[motors]\n",
-            "3: unknown section [motors]; expected [device], [hal], "
-            "[control] or [dio]");
+    refused(
+        *state, "[device]\nnode = 3\n[motors]\n",
+        "3: unknown section [motors]; expected [device], [hal], [control], [dio], [drives] or [joint.1] .. [joint.6]");
 }
 
 static void test_key_outside_section(void **state)
 {
     refused(*state, "# no section yet\nnode = 3\n",
-            "2: key 'node' outside any section: put it under [device], [hal], [control] or [dio]");
+            "2: key 'node' outside any section: put it under [device], [hal], [control], [dio], [drives] or [joint.1] "
+            ".. [joint.6]");
 }
 
 static void test_wrong_type(void **state)
@@ -396,7 +397,9 @@ static void test_line_too_long(void **state)
 static void test_byte_order_mark_and_nul(void **state)
 {
     fx_t *f = *state;
-    refused(f, "\xEF\xBB\xBF[motors]\n", "1: unknown section [motors]; expected [device], [hal], [control] or [dio]");
+    refused(
+        f, "\xEF\xBB\xBF[motors]\n",
+        "1: unknown section [motors]; expected [device], [hal], [control], [dio], [drives] or [joint.1] .. [joint.6]");
     unlink(f->path);
     assert_int_equal(load(f, "\xEF\xBB\xBF[device]\nnode = 7\n"), 0);
     assert_int_equal(f->cfg.node, 7);
@@ -619,6 +622,129 @@ static void test_validate(void **state)
     invalid(f, "[dio] estop_input = 1 needs a DIO backend but [hal] dio = none");
 }
 
+/* ---- the drive bus and its joints (arm = cia402) ----------------------- */
+
+static const char DRIVES_FILE[] = "[hal]\n"
+                                  "arm = cia402\n"
+                                  "[drives]\n"
+                                  "link = slcan:tty:/dev/ttyACM0\n"
+                                  "bitrate = 500000\n"
+                                  "cycle = 8\n"
+                                  "master_node = 0x70\n"
+                                  "heartbeat_ms = 50\n"
+                                  "heartbeat_timeout_ms = 175\n"
+                                  "boot_timeout_ms = 2500\n"
+                                  "budget_pct = 60\n"
+                                  "abort_connection = disable_voltage\n"
+                                  "velocity_feedforward = no\n"
+                                  "[joint.1]\nnode = 0x21\neds = /a.eds\ncounts_per_rad = 2086000.5\n"
+                                  "[joint.2]\nnode = 34\neds = /b.dcf\ncounts_per_rad = 1e6\nsign = -1\n"
+                                  "offset_rad = -1.5707963\nvelocity_counts_per_rad_s = 9.549\n"
+                                  "[joint.3]\nnode = 0x23\neds = /a.eds\ncounts_per_rad = 1000\n"
+                                  "[joint.4]\nnode = 0x24\neds = /a.eds\ncounts_per_rad = 1000\n"
+                                  "[joint.5]\nnode = 0x25\neds = /a.eds\ncounts_per_rad = 1000\n"
+                                  "[joint.6]\nnode = 0x26\neds = /a.eds\ncounts_per_rad = 1000\n";
+
+static void test_a_drive_configuration_sets_every_drive_key(void **state)
+{
+    fx_t *f = *state;
+    assert_int_equal(load(f, DRIVES_FILE), 0);
+    const ls_config_t *c = &f->cfg;
+    assert_string_equal(c->arm, "cia402");
+    assert_string_equal(c->drives_link, "slcan:tty:/dev/ttyACM0");
+    assert_int_equal(c->drives_bitrate, 500000);
+    assert_int_equal(c->drives_cycle, 8);
+    assert_int_equal(c->drives_master_node, 0x70);
+    assert_int_equal(c->drives_heartbeat_ms, 50);
+    assert_int_equal(c->drives_heartbeat_timeout_ms, 175);
+    assert_int_equal(c->drives_boot_timeout_ms, 2500);
+    assert_int_equal(c->drives_budget_pct, 60);
+    assert_int_equal(c->drives_abort, LS_DRIVE_ABORT_DISABLE_VOLTAGE);
+    assert_false(c->drives_feedforward);
+    assert_true(c->joint[0].present);
+    assert_int_equal(c->joint[0].node, 0x21);
+    assert_string_equal(c->joint[0].eds, "/a.eds");
+    assert_true(c->joint[0].counts_per_rad == 2086000.5);
+    assert_int_equal(c->joint[0].sign, 1); /* the default */
+    assert_int_equal(c->joint[1].node, 34);
+    assert_int_equal(c->joint[1].sign, -1);
+    assert_true(c->joint[1].offset_rad == -1.5707963);
+    assert_true(c->joint[1].vel_counts_per_rad_s == 9.549);
+    f->cfg.n_links = 1;
+    strcpy(f->cfg.links[0], "slcan:pty:/tmp/a");
+    strcpy(f->cfg.dio, "none");
+    assert_int_equal(ls_config_validate(&f->cfg, f->msg, sizeof f->msg), 0);
+}
+
+static void test_drive_keys_refuse_bad_values_naming_what_is_allowed(void **state)
+{
+    fx_t *f = *state;
+    refused(f, "[drives]\nlink = can0\n",
+            "2: [drives] link: got 'can0', expected socketcan:IFNAME, slcan:tty:PATH (a serial SLCAN adapter) or "
+            "slcan:pty:PATH (the drive bus, its own CAN bus)");
+    refused(f, "[drives]\nbitrate = 1000001\n",
+            "2: [drives] bitrate: got '1000001', expected a CANopen bitrate: 10000, 20000, 50000, 100000, 125000, "
+            "250000, 500000, 800000 or 1000000 bit/s");
+    refused(f, "[drives]\ncycle = 0\n",
+            "2: [drives] cycle: got '0', expected 1..100 (control periods per drive cycle: the SYNC period is "
+            "cycle / rate_hz)");
+    refused(f, "[drives]\nabort_connection = stop\n",
+            "2: [drives] abort_connection: got 'stop', expected quick_stop, fault, disable_voltage or none (what a "
+            "drive does when the controller's heartbeat stops: CiA 402 0x6007)");
+    refused(f, "[joint.7]\nnode = 1\n",
+            "1: unknown section [joint.7]; expected [device], [hal], [control], [dio], [drives] or [joint.1] .. "
+            "[joint.6]");
+    refused(f, "[joint.2]\nnode = 128\n",
+            "2: [joint.2] node: got '128', expected 1..127 (the drive's CANopen node id)");
+    refused(f, "[joint.2]\ncounts_per_rad = nan\n",
+            "2: [joint.2] counts_per_rad: got 'nan', expected a number 0.001..1e12 (the drive's position units per "
+            "joint radian: encoder counts per motor turn x gear ratio / 2 pi)");
+    refused(f, "[joint.2]\nsign = 2\n",
+            "2: [joint.2] sign: got '2', expected 1 or -1 (-1 when the drive counts against the joint's positive "
+            "direction)");
+    refused(f, "[joint.1]\nnode = 1\nnode = 2\n", "3: [joint.1] node: given twice (first on line 2); keep one");
+    refused(f, "[joint.1]\nnodes = 1\n",
+            "2: [joint.1] nodes: unknown key; expected one of node, eds, counts_per_rad, sign, offset_rad, "
+            "velocity_counts_per_rad_s");
+}
+
+static void test_validate_a_drive_configuration(void **state)
+{
+    fx_t *f = *state;
+    ls_config_t *c = &f->cfg;
+    assert_int_equal(load(f, DRIVES_FILE), 0);
+    c->n_links = 1;
+    strcpy(c->links[0], "slcan:pty:/tmp/a");
+    strcpy(c->dio, "none");
+    c->joint[3].node = 0x70;
+    invalid(f, "[joint.4] node = 0x70 is the controller's own [drives] master_node: give each drive and the "
+               "controller distinct node ids");
+    c->joint[3].node = 0x21;
+    invalid(f, "[joint.4] node = 0x21 is also [joint.1]'s: each drive has its own node id");
+    c->joint[3].node = 0x24;
+    c->joint[4].eds[0] = '\0';
+    invalid(f, "[joint.5]: eds is missing: arm = cia402 needs [joint.1] .. [joint.6], each with node, eds and "
+               "counts_per_rad (docs/deploy.md \"Drives\")");
+    strcpy(c->joint[4].eds, "/a.eds");
+    c->joint[5].present = false;
+    invalid(f, "[joint.6]: the section is missing: arm = cia402 needs [joint.1] .. [joint.6], each with node, eds "
+               "and counts_per_rad (docs/deploy.md \"Drives\")");
+    c->joint[5].present = true;
+    c->drives_heartbeat_timeout_ms = 50;
+    invalid(f, "[drives] heartbeat_timeout_ms = 50 is not above heartbeat_ms = 50: one late heartbeat would lose a "
+               "drive; use at least 2 x heartbeat_ms plus a margin");
+    c->drives_heartbeat_timeout_ms = 175;
+    c->drives_link[0] = '\0';
+    invalid(f, "[hal] arm = cia402 needs the drive bus: 'link = socketcan:IFNAME' (or slcan:tty:PATH) under [drives] "
+               "in the --config file (docs/deploy.md \"Drives\")");
+    strcpy(c->drives_link, "socketcan:can1");
+    assert_int_equal(ls_config_validate(c, f->msg, sizeof f->msg), 0);
+    /* drives described for an arm that is not cia402: said, not ignored */
+    strcpy(c->arm, "sim");
+    invalid(f, "[drives] and [joint.N] describe CiA 402 drives, but [hal] arm = sim: set arm = cia402 to drive "
+               "them, or remove those sections");
+}
+
 int tc_run_config_tests(void)
 {
     const struct CMUnitTest tests[] = {
@@ -652,6 +778,9 @@ int tc_run_config_tests(void)
         cmocka_unit_test_setup_teardown(test_missing_config_through_args, setup, teardown),
         cmocka_unit_test_setup_teardown(test_help, setup, teardown),
         cmocka_unit_test_setup_teardown(test_validate, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_a_drive_configuration_sets_every_drive_key, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_drive_keys_refuse_bad_values_naming_what_is_allowed, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_validate_a_drive_configuration, setup, teardown),
     };
     return cmocka_run_group_tests_name("config", tests, NULL, NULL);
 }
