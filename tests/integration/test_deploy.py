@@ -373,12 +373,12 @@ def test_options_override_the_file(tmp_path: Path) -> None:
 def test_deploy_doc_lists_every_key() -> None:
     """docs/deploy.md's key table, the shipped file and ls_config.h agree."""
     doc = (ROOT / "docs" / "deploy.md").read_text()
-    table = set(re.findall(r"^\| `\[(\w+)\] (\w+)` \|", doc, re.M))
+    table = set(re.findall(r"^\| `\[(\w+(?:\.N)?)\] (\w+)` \|", doc, re.M))
     shipped = set()
     section = ""
     for line in CONF.read_text().splitlines():
-        if m := re.match(r"^\[(\w+)\]$", line):
-            section = m.group(1)
+        if m := re.match(r"^\[(\w+)(\.\d)?\]$", line):
+            section = m.group(1) + (".N" if m.group(2) else "")
         elif m := re.match(r"^(\w+) =", line):
             shipped.add((section, m.group(1)))
     header = set(re.findall(r"/\* (\w+) = ", (ROOT / "firmware" / "app" / "ls_config.h").read_text()))
