@@ -90,6 +90,9 @@ void hal_dio_close(hal_dio_t *dio)
 
 int hal_arm_info(hal_arm_t *arm, hal_arm_info_t *out)
 {
+    if (out != NULL) {
+        memset(out, 0, sizeof *out); /* what a backend leaves unset is 0 */
+    }
     return HAL_CALL(arm, info, out);
 }
 int hal_arm_enable(hal_arm_t *arm, bool on)

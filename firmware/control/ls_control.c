@@ -300,6 +300,10 @@ void ls_control_init(ls_control_t *c, const ls_control_config_t *cfg)
     c->dt_s = 1.0 / (double)(cfg->rate_hz != 0u ? cfg->rate_hz : 1000u);
     ls_motion_init(&c->motion, cfg->model);
     ls_react_init(&c->react, cfg->model);
+    hal_arm_info_t info;
+    if (cfg->arm != NULL && hal_arm_info(cfg->arm, &info) >= 0) {
+        ls_motion_set_feedback_lag(&c->motion, info.feedback_lag_cycles);
+    }
     c->react_sensor = -1;
     read_feedback(c);
     read_sensors(c);

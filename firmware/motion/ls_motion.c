@@ -61,9 +61,20 @@ void ls_motion_init(ls_motion_t *m, const ls_robot_model_t *model)
     m->following_error_max_rad = LS_MOTION_FOLLOWING_ERROR_RAD;
 }
 
+void ls_motion_set_feedback_lag(ls_motion_t *m, uint16_t cycles)
+{
+    m->lag_cycles_ = cycles < LS_MOTION_LAG_MAX ? cycles : (uint16_t)(LS_MOTION_LAG_MAX - 1u);
+    for (unsigned k = 0; k < LS_MOTION_LAG_MAX; k++) {
+        memcpy(m->q_hist_[k], m->q_cmd, sizeof m->q_cmd);
+    }
+}
+
 void ls_motion_hold(ls_motion_t *m, const double q[LS_N_JOINTS])
 {
     memcpy(m->q_cmd, q, sizeof m->q_cmd);
+    for (unsigned k = 0; m->lag_cycles_ > 0u && k < LS_MOTION_LAG_MAX; k++) {
+        memcpy(m->q_hist_[k], q, sizeof m->q_cmd); /* a hold starts a new history */
+    }
     m->phase = LS_MOTION_IDLE;
     m->blending_ = false;
     m->sub_ = SUB_MOVE;
@@ -1430,7 +1441,12 @@ static void check_following(ls_motion_t *m, const double q_meas[LS_N_JOINTS], ls
 {
     if (m->phase != LS_MOTION_IDLE && m->phase != LS_MOTION_PAUSED && q_meas != NULL) {
         for (int j = 0; j < LS_N_JOINTS; j++) {
-            const double e = q_meas[j] - m->q_cmd[j];
+            double e = q_meas[j] - m->q_cmd[j];
+            for (unsigned k = 1; k <= m->lag_cycles_ && fabs(e) > m->following_error_max_rad; k++) {
+                const unsigned i = (m->hist_head_ + LS_MOTION_LAG_MAX - k) % LS_MOTION_LAG_MAX;
+                const double ek = q_meas[j] - m->q_hist_[i][j];
+                e = fabs(ek) < fabs(e) ? ek : e;
+            }
             if (fabs(e) > m->following_error_max_rad) {
                 fault(m, ev, "following error joint %d: %.4g rad", j + 1, e);
                 break;
@@ -1555,5 +1571,9 @@ void ls_motion_step(ls_motion_t *m, double dt_s, const double q_meas[LS_N_JOINTS
     memcpy(q_cmd, m->q_cmd, sizeof m->q_cmd);
     if (qd_cmd != NULL) {
         memcpy(qd_cmd, qd, sizeof qd);
+    }
+    if (m->lag_cycles_ > 0u) {
+        m->hist_head_ = (uint16_t)((m->hist_head_ + 1u) % LS_MOTION_LAG_MAX);
+        memcpy(m->q_hist_[m->hist_head_], m->q_cmd, sizeof m->q_cmd);
     }
 }

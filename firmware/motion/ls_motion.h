@@ -47,6 +47,13 @@
 #endif
 #define LS_MOTION_MAX_SEGS (LS_PATH_MAX_POINTS + 1) /* a path plus the segment that closes a cycle */
 #define LS_MOTION_FOLLOWING_ERROR_RAD 0.05
+/* Set-points kept for the following check of an arm whose feedback lags its
+ * set-points (drives on a bus: ls_motion_set_feedback_lag). Per profile. */
+#if LS_PROFILE_MCU
+#define LS_MOTION_LAG_MAX 32u
+#else
+#define LS_MOTION_LAG_MAX 64u
+#endif
 
 /* Planner statuses (ls_err.h; negative = refused, `why` says which joint/axis
  * and limit): LS_OK; LS_EINVAL (NULL, non-finite value, fraction outside
@@ -160,6 +167,11 @@ typedef struct {
     double t_s; /* trajectory clock of the current segment */
     double following_error_max_rad;
     double q_cmd[LS_N_JOINTS];
+    /* The last set-points, newest at q_hist_[hist_head_]: a measurement
+     * lagging by up to lag_cycles_ cycles is compared with the nearest of
+     * them (ls_motion_set_feedback_lag). */
+    double q_hist_[LS_MOTION_LAG_MAX][LS_N_JOINTS];
+    uint16_t hist_head_, lag_cycles_;
     /* private to ls_motion.c */
     uint16_t seg_i_;
     int32_t cycle_;
@@ -325,6 +337,16 @@ int ls_motion_resume(ls_motion_t *m);
 void ls_motion_abort(ls_motion_t *m); /* drop the motion at once: hold the current set-point */
 /* The auxiliary command announced by LS_MEV_AUX finished: go on. */
 void ls_motion_aux_done(ls_motion_t *m);
+
+/* The arm's feedback lags its set-points by up to `cycles` control cycles
+ * (drives on a bus: the set-point goes out at the next drive cycle, the
+ * drive interpolates over one more, its answer comes after the next SYNC).
+ * The following check then compares each measured joint with the nearest
+ * of its last `cycles` + 1 set-points, so a joint that follows its path a
+ * few cycles late is not taken for one that does not follow. 0 (the
+ * default): the current set-point only. Clamped to LS_MOTION_LAG_MAX - 1.
+ * Init time. */
+void ls_motion_set_feedback_lag(ls_motion_t *m, uint16_t cycles);
 
 /* One control cycle: produce the set-point from the plan; check following
  * error against q_meas; append events (ev may be NULL). When idle or paused,

@@ -28,6 +28,11 @@ typedef struct {
     double q_min_rad[HAL_ARM_MAX_JOINTS];
     double q_max_rad[HAL_ARM_MAX_JOINTS];
     double torque_max_Nm[HAL_ARM_MAX_JOINTS];
+    /* How many control cycles the measured joints lag the set-points at
+     * most (a drive bus: the set-point's way out, the drive's
+     * interpolation, the feedback's way back); 0: they follow within the
+     * cycle. The following-error check allows for it. */
+    uint16_t feedback_lag_cycles;
 } hal_arm_info_t;
 
 /* One joint's drive, as the backend knows it this cycle. */
