@@ -34,7 +34,9 @@
 #include "ls_control.h"
 #include "ls_core.h"
 #include "ls_core_events.h"
+#include "ls_drive_setup.h"
 #include "ls_kin.h"
+#include "ls_link_open.h"
 #include "faulty_link.h"
 #include "ls_net.h"
 #include "ls_robot_model_sim.h"
@@ -163,16 +165,7 @@ static uint64_t mono_us(void)
 static int open_link(const char *spec, hal_can_link_t *out)
 {
     char msg[256] = "";
-    int r;
-    if (strncmp(spec, "slcan:pty:", 10) == 0) {
-        r = hal_sim_slcan_pty_open(out, spec + 10, msg, sizeof msg);
-    } else if (strncmp(spec, "socketcan:", 10) == 0) {
-        r = hal_linux_socketcan_open(out, spec + 10, msg, sizeof msg);
-    } else {
-        LOG_ERR("--link %s: unknown link kind; expected slcan:pty:PATH or socketcan:IFNAME", spec);
-        return -1;
-    }
-    if (r < 0) {
+    if (ls_link_open(spec, 0, false, out, msg, sizeof msg) < 0) {
         LOG_ERR("--link %s: %s", spec, msg);
         return -1;
     }
@@ -464,6 +457,16 @@ static int compose(const ls_config_t *o)
             hal_sim_world_get_dio(&g_dio);
             dio = &g_dio;
         }
+    } else if (strcmp(o->arm, "cia402") == 0) {
+        /* The drives boot and are configured here, within their deadline,
+         * before the control loop reads the arm (docs/deploy.md "Drives"). */
+        char dmsg[512];
+        if (ls_drive_compose(o, &g_arm, stderr, dmsg, sizeof dmsg) != LS_OK) {
+            LOG_ERR("%s", dmsg);
+            return -1;
+        }
+        arm = &g_arm;
+        LOG_INFO("drives: %u joints ready on %s", (unsigned)LS_N_JOINTS, o->drives_link);
     }
     if (strncmp(o->dio, "gpiod:", 6) == 0) {
         hal_linux_gpiod_config_t gc;
@@ -689,6 +692,7 @@ int main(int argc, char **argv)
     if (g_core.ctl != NULL) {
         (void)hal_arm_enable(&g_arm, false);
     }
+    ls_drive_shutdown();
     if (g_world_open) {
         write_setpoint_trace();
         hal_sim_world_close();

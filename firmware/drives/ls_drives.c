@@ -1,0 +1,543 @@
+/* The arm of CiA 402 drives (ls_drives.h). */
+#include "ls_drives.h"
+
+#include <string.h>
+
+#include "ls_canopen.h"
+#include "ls_fmt.h"
+
+/* ---- configuration scripts ---------------------------------------------- */
+
+static const char k_eds[] = "the EDS";
+
+/* Append one step; false when the script is full (init refuses then). */
+static bool add(ls_co_step_t *script, size_t *n, ls_co_step_t step)
+{
+    if (*n >= LS_DRIVES_SCRIPT_MAX) {
+        return false;
+    }
+    script[(*n)++] = step;
+    return true;
+}
+
+#define ADD(step) ok = ok && add(script, &n, (ls_co_step_t)step)
+
+/* Map one PDO in the order CiA 301 asks: the COB-ID invalid first (the
+ * drive refuses mapping writes on a valid PDO), the transmission type,
+ * sub 0 = 0, the entries, sub 0 = N, then the COB-ID valid. */
+static bool map_pdo(ls_co_step_t *script, size_t *np, const ls_drive_joint_t *jc, uint16_t comm, uint16_t map,
+                    uint32_t cob, const uint32_t *entries, uint8_t n_entries, bool tpdo)
+{
+    size_t n = *np;
+    bool ok = true;
+    ADD(LS_CO_WRITE(comm, LS_CO_PDO_SUB_COB_ID, 4, cob | LS_CO_COBID_INVALID));
+    if (jc->write_pdo_type) {
+        ADD(LS_CO_WRITE(comm, LS_CO_PDO_SUB_TYPE, 1, LS_CO_PDO_TYPE_SYNC_MIN));
+    }
+    if (tpdo && jc->write_tpdo_inhibit) {
+        ADD(LS_CO_WRITE(comm, LS_CO_PDO_SUB_INHIBIT, 2, 0));
+    }
+    ADD(LS_CO_WRITE(map, 0, 1, 0));
+    for (uint8_t i = 0; i < n_entries; i++) {
+        ADD(LS_CO_WRITE(map, (uint8_t)(i + 1u), 4, entries[i]));
+    }
+    ADD(LS_CO_WRITE(map, 0, 1, n_entries));
+    ADD(LS_CO_WRITE(comm, LS_CO_PDO_SUB_COB_ID, 4, cob));
+    *np = n;
+    return ok;
+}
+
+/* The interpolation period 0x60C2 as value x 10^index s: the drive cycle
+ * in whole ms when it is one, else in 100 us or 10 us steps. */
+static void interp_period(uint32_t cycle_us, uint8_t *value, int8_t *index)
+{
+    uint32_t v = cycle_us;
+    int8_t e = -6;
+    while (v % 10u == 0u && e < -3) {
+        v /= 10u;
+        e++;
+    }
+    while (v > 255u) {
+        v /= 10u;
+        e++;
+    }
+    *value = (uint8_t)v;
+    *index = e;
+}
+
+static bool build_script(ls_drives_t *d, int j, size_t *len)
+{
+    const ls_drive_joint_t *jc = &d->cfg.joint[j];
+    ls_drive_axis_t *a = &d->axis[j];
+    ls_co_step_t *script = d->script[j];
+    const uint8_t node = jc->node_id;
+    size_t n = 0;
+    bool ok = true;
+    ADD(LS_CO_EXPECT(LS_CO_OBJ_DEVICE_TYPE, 0, LS_CO_PROFILE_DRIVE, LS_CO_DEVICE_PROFILE_MASK,
+                     "device profile (bits 0-15)", "a CiA 402 drive"));
+    if (jc->has_vendor) {
+        ADD(LS_CO_EXPECT(LS_CO_OBJ_IDENTITY, 1, jc->vendor_id, 0, "vendor id", k_eds));
+    }
+    if (jc->has_product) {
+        ADD(LS_CO_EXPECT(LS_CO_OBJ_IDENTITY, 2, jc->product_code, 0, "product code", k_eds));
+    }
+    if (jc->has_revision) {
+        ls_co_step_t s = LS_CO_EXPECT(LS_CO_OBJ_IDENTITY, 3, jc->revision, 0, "revision number", k_eds);
+        s.optional = true; /* firmware updates change it; the vendor and product say what the drive is */
+        ok = ok && add(script, &n, s);
+    }
+    if (jc->write_consumer_hb) {
+        ADD(LS_CO_WRITE(LS_CO_OBJ_CONSUMER_HB, 1, 4,
+                        ((uint32_t)d->cfg.master_node << 16) | (uint32_t)d->cfg.heartbeat_timeout_ms));
+    }
+    if (jc->write_abort_option) {
+        ADD(LS_CO_WRITE(LS_CO_OBJ_ABORT_CONNECTION, 0, 2, (uint16_t)d->cfg.abort_option));
+    }
+    /* Every PDO the drive has goes off first: a drive's power-on PDOs (all
+     * valid on some) would otherwise add their frames to every SYNC. */
+    for (uint8_t p = 0; p < LS_DRIVES_PDO_SETS; p++) {
+        if (jc->rpdo_present[p]) {
+            ADD(LS_CO_WRITE(LS_CO_OBJ_RPDO_COMM + p, LS_CO_PDO_SUB_COB_ID, 4,
+                            LS_CO_COB_RPDO(p + 1u, node) | LS_CO_COBID_INVALID));
+        }
+        if (jc->tpdo_present[p]) {
+            ADD(LS_CO_WRITE(LS_CO_OBJ_TPDO_COMM + p, LS_CO_PDO_SUB_COB_ID, 4,
+                            LS_CO_COB_TPDO(p + 1u, node) | LS_CO_COBID_INVALID));
+        }
+    }
+    const uint32_t rpdo1[] = { LS_CO_PDO_MAP_ENTRY(LS_CO_OBJ_CONTROLWORD, 0, 16),
+                               LS_CO_PDO_MAP_ENTRY(LS_CO_OBJ_TARGET_POSITION, 0, 32) };
+    ok = ok && map_pdo(script, &n, jc, LS_CO_OBJ_RPDO_COMM, LS_CO_OBJ_RPDO_MAP, LS_CO_COB_RPDO(1, node), rpdo1, 2,
+                       false);
+    if (jc->feedforward) {
+        const uint32_t rpdo2[] = { LS_CO_PDO_MAP_ENTRY(LS_CO_OBJ_VELOCITY_OFFSET, 0, 32) };
+        ok = ok && map_pdo(script, &n, jc, LS_CO_OBJ_RPDO_COMM + 1u, LS_CO_OBJ_RPDO_MAP + 1u,
+                           LS_CO_COB_RPDO(2, node), rpdo2, 1, false);
+    }
+    const uint32_t tpdo1[] = { LS_CO_PDO_MAP_ENTRY(LS_CO_OBJ_STATUSWORD, 0, 16),
+                               LS_CO_PDO_MAP_ENTRY(LS_CO_OBJ_POSITION_ACTUAL, 0, 32) };
+    ok = ok && map_pdo(script, &n, jc, LS_CO_OBJ_TPDO_COMM, LS_CO_OBJ_TPDO_MAP, LS_CO_COB_TPDO(1, node), tpdo1, 2,
+                       true);
+    if (jc->write_interp_period) {
+        uint8_t value;
+        int8_t index;
+        interp_period(d->cfg.control_period_us * d->cfg.cycle_ticks, &value, &index);
+        ADD(LS_CO_WRITE(LS_CO_OBJ_INTERP_PERIOD, 1, 1, value));
+        ADD(LS_CO_WRITE(LS_CO_OBJ_INTERP_PERIOD, 2, 1, (uint8_t)index));
+    }
+    /* CSP, confirmed in the display before anything enables the drive. */
+    ADD(LS_CO_WRITE(LS_CO_OBJ_MODES, 0, 1, (uint8_t)LS_CO_MODE_CSP));
+    ADD(LS_CO_EXPECT(LS_CO_OBJ_MODES_DISPLAY, 0, (uint32_t)LS_CO_MODE_CSP, 0xFFu, "modes of operation display",
+                     "0x6060 = 8 (cyclic synchronous position)"));
+    ADD(LS_CO_READ_INTO(LS_CO_OBJ_POSITION_ACTUAL, 0, &a->pos0));
+    ADD(LS_CO_READ_INTO(LS_CO_OBJ_STATUSWORD, 0, &a->sw0));
+    *len = n;
+    return ok;
+}
+
+#undef ADD
+
+/* ---- init and boot -------------------------------------------------------- */
+
+static int link_send(void *ctx, const hal_can_frame_t *frame)
+{
+    const int r = hal_can_send((hal_can_link_t *)ctx, frame);
+    return r == LS_OK ? LS_OK : LS_EAGAIN;
+}
+
+static int refuse(ls_drives_t *d, const char *text)
+{
+    ls_fmt_print(d->text, sizeof d->text, "%s", text);
+    return LS_EINVAL;
+}
+
+int ls_drives_init(ls_drives_t *d, const ls_drives_config_t *cfg)
+{
+    if (d == NULL) {
+        return LS_EINVAL;
+    }
+    memset(d, 0, sizeof *d);
+    if (cfg == NULL || cfg->link == NULL) {
+        return refuse(d, "drives: no configuration or no drive bus");
+    }
+    d->cfg = *cfg;
+    if (cfg->n_joints == 0u || cfg->n_joints > HAL_ARM_MAX_JOINTS || cfg->n_joints > LS_CO_MAX_NODES) {
+        return refuse(d, "drives: the number of joints is outside 1..the master's node count");
+    }
+    if (cfg->cycle_ticks == 0u || cfg->control_period_us == 0u || cfg->heartbeat_ms == 0u ||
+        cfg->heartbeat_timeout_ms <= cfg->heartbeat_ms) {
+        return refuse(d, "drives: a drive cycle, control period or heartbeat of 0, or a heartbeat time-out not "
+                         "above the heartbeat");
+    }
+    if (d->cfg.stale_cycles == 0u) {
+        d->cfg.stale_cycles = LS_DRIVES_STALE_CYCLES;
+    }
+    ls_co_master_config_t mc;
+    memset(&mc, 0, sizeof mc);
+    mc.node_id = cfg->master_node;
+    mc.heartbeat_ms = cfg->heartbeat_ms;
+    mc.node_count = cfg->n_joints;
+    /* An enable must end within the control loop's time-out (and the host's
+     * for activate): a step not followed within LS_DRIVES_STEP_TIMEOUT_MS,
+     * LS_DRIVES_RESET_EDGES fault resets. */
+    ls_402_config_t ac;
+    ls_402_default_config(&ac, cfg->control_period_us * cfg->cycle_ticks);
+    ac.step_timeout_cycles = (LS_DRIVES_STEP_TIMEOUT_MS * 1000u + cfg->control_period_us * cfg->cycle_ticks - 1u) /
+                             (cfg->control_period_us * cfg->cycle_ticks);
+    ac.fault_reset_edges = LS_DRIVES_RESET_EDGES;
+    for (uint8_t j = 0; j < cfg->n_joints; j++) {
+        const ls_drive_joint_t *jc = &cfg->joint[j];
+        ls_drive_axis_t *a = &d->axis[j];
+        ls_402_scale_t s;
+        if (ls_402_scale_init(&s, jc->scale.counts_per_rad, jc->scale.sign, jc->scale.zero_offset_rad,
+                              jc->scale.vel_counts_per_rad) != LS_OK) {
+            ls_fmt_print(d->text, sizeof d->text, "joint %u: its scaling is invalid (counts_per_rad > 0, sign 1 or -1)",
+                         (unsigned)j + 1u);
+            return LS_EINVAL;
+        }
+        d->cfg.joint[j].scale = s;
+        (void)ls_402_init(&a->ax, &ac);
+        ls_402_unwrap_reset(&a->unwrap);
+        size_t len = 0;
+        if (!build_script(d, (int)j, &len)) {
+            ls_fmt_print(d->text, sizeof d->text, "joint %u: its configuration needs more than %u SDO steps",
+                         (unsigned)j + 1u, (unsigned)LS_DRIVES_SCRIPT_MAX);
+            return LS_EINVAL;
+        }
+        ls_co_node_config_t *nc = &mc.nodes[j];
+        nc->node_id = jc->node_id;
+        nc->boot_timeout_ms = cfg->boot_timeout_ms;
+        nc->heartbeat_ms = cfg->heartbeat_ms;
+        nc->heartbeat_timeout_ms = cfg->heartbeat_timeout_ms;
+        nc->script = d->script[j];
+        nc->script_len = len;
+        nc->rpdo[0] = (ls_co_pdo_t){ .cob_id = (uint16_t)LS_CO_COB_RPDO(1, jc->node_id), .len = 6 };
+        if (jc->feedforward) {
+            nc->rpdo[1] = (ls_co_pdo_t){ .cob_id = (uint16_t)LS_CO_COB_RPDO(2, jc->node_id), .len = 4 };
+        }
+        nc->tpdo[0] = (ls_co_pdo_t){ .cob_id = (uint16_t)LS_CO_COB_TPDO(1, jc->node_id), .len = 6 };
+    }
+    if (ls_co_master_init(&d->master, &mc, link_send, cfg->link) != LS_OK) {
+        ls_fmt_print(d->text, sizeof d->text, "drives: %s", ls_co_master_text(&d->master));
+        return LS_EINVAL;
+    }
+    return LS_OK;
+}
+
+int ls_drives_boot(ls_drives_t *d, uint64_t now_us)
+{
+    if (d == NULL) {
+        return LS_EINVAL;
+    }
+    d->booted = false;
+    d->text[0] = '\0';
+    return ls_co_master_boot(&d->master, now_us);
+}
+
+const char *ls_drives_text(const ls_drives_t *d)
+{
+    return d != NULL ? d->text : "";
+}
+
+static int32_t le32(const uint8_t *b)
+{
+    return (int32_t)((uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24);
+}
+
+static void put_le16(uint8_t *b, uint16_t v)
+{
+    b[0] = (uint8_t)(v & 0xFFu);
+    b[1] = (uint8_t)(v >> 8);
+}
+
+static void put_le32(uint8_t *b, int32_t v)
+{
+    const uint32_t u = (uint32_t)v;
+    b[0] = (uint8_t)(u & 0xFFu);
+    b[1] = (uint8_t)((u >> 8) & 0xFFu);
+    b[2] = (uint8_t)((u >> 16) & 0xFFu);
+    b[3] = (uint8_t)(u >> 24);
+}
+
+/* Every drive READY for the first time: take what the scripts read. */
+static void booted(ls_drives_t *d)
+{
+    d->booted = true;
+    for (uint8_t j = 0; j < d->cfg.n_joints; j++) {
+        ls_drive_axis_t *a = &d->axis[j];
+        a->statusword = (uint16_t)a->sw0;
+        a->pos_raw = (int32_t)a->pos0;
+        a->hold_raw = a->pos_raw;
+        ls_402_unwrap_reset(&a->unwrap);
+        a->q = ls_402_pos_rad(&d->cfg.joint[j].scale, ls_402_unwrap(&a->unwrap, a->pos_raw));
+        a->qd = 0.0;
+        a->fresh_seen = false;
+        a->last_age = 0;
+    }
+}
+
+int ls_drives_service(ls_drives_t *d, uint64_t now_us)
+{
+    for (unsigned i = 0; i < LS_DRIVES_RX_PER_CYCLE; i++) {
+        hal_can_frame_t f;
+        const int r = hal_can_recv(d->cfg.link, &f);
+        if (r == 1) {
+            ls_co_master_on_frame(&d->master, &f, now_us);
+        } else if (r == LS_EAGAIN) {
+            break;
+        } else {
+            ls_fmt_print(d->text, sizeof d->text, "the drive bus %s failed (%s)", d->cfg.link->name, ls_err_name(r));
+            return LS_EIO;
+        }
+    }
+    ls_co_master_poll(&d->master, now_us);
+    if (d->booted) {
+        return 1;
+    }
+    for (uint8_t j = 0; j < d->cfg.n_joints; j++) {
+        const uint8_t node = d->cfg.joint[j].node_id;
+        if (ls_co_master_node_phase(&d->master, node) == LS_CO_PHASE_FAILED) {
+            ls_fmt_print(d->text, sizeof d->text, "joint %u: %s", (unsigned)j + 1u,
+                         ls_co_master_node_text(&d->master, node));
+            return LS_EIO;
+        }
+    }
+    if (!ls_co_master_all_ready(&d->master)) {
+        return 0;
+    }
+    booted(d);
+    return 1;
+}
+
+/* ---- the drive cycle ------------------------------------------------------- */
+
+static void take_feedback(ls_drives_t *d, uint8_t j)
+{
+    ls_drive_axis_t *a = &d->axis[j];
+    const uint8_t node = d->cfg.joint[j].node_id;
+    uint8_t b[8];
+    size_t len = 0;
+    uint32_t age = 0;
+    if (ls_co_master_tpdo_get(&d->master, node, 0, b, &len, &age) != LS_OK) {
+        a->last_age++;
+        return;
+    }
+    a->last_age = age;
+    if (age != 0u || len < 6u) {
+        return; /* no answer to the last SYNC: keep the last feedback, let it age */
+    }
+    const double q_old = a->q;
+    const uint32_t missed = a->fresh_seen && a->feedback_age > d->cfg.cycle_ticks
+                                ? a->feedback_age / d->cfg.cycle_ticks - 1u
+                                : 0u;
+    a->statusword = (uint16_t)((uint16_t)b[0] | (uint16_t)((uint16_t)b[1] << 8));
+    a->pos_raw = le32(&b[2]);
+    a->q = ls_402_pos_rad(&d->cfg.joint[j].scale, ls_402_unwrap(&a->unwrap, a->pos_raw));
+    const double dt = (double)d->cfg.control_period_us * 1e-6 * (double)d->cfg.cycle_ticks * (double)(1u + missed);
+    a->qd = a->fresh_seen ? (a->q - q_old) / dt : 0.0;
+    a->fresh_seen = true;
+    a->feedback_age = 0;
+}
+
+static void drive_cycle(ls_drives_t *d, uint64_t now_us)
+{
+    const ls_402_want_t want = d->want_enabled ? LS_402_WANT_ENABLED : LS_402_WANT_DISABLED;
+    for (uint8_t j = 0; j < d->cfg.n_joints; j++) {
+        ls_drive_axis_t *a = &d->axis[j];
+        const ls_drive_joint_t *jc = &d->cfg.joint[j];
+        if (ls_co_master_node_phase(&d->master, jc->node_id) != LS_CO_PHASE_READY) {
+            continue;
+        }
+        take_feedback(d, j);
+        (void)ls_402_step(&a->ax, a->statusword, want, d->reset_allowed, &a->out);
+        a->step_epoch = d->enable_epoch;
+        /* Target = actual until the drive is under control, then held
+         * there until the loop gives set-points: no axis jumps. */
+        int32_t target = a->pos_raw;
+        if (a->out.state == LS_402_OPERATION_ENABLED) {
+            target = a->hold_raw;
+            int32_t raw;
+            if (a->cmd_valid && ls_402_target_raw(&jc->scale, &a->unwrap, a->q_cmd, &raw) == LS_OK) {
+                target = raw;
+            }
+        } else {
+            a->hold_raw = a->pos_raw;
+        }
+        uint8_t b[6];
+        put_le16(b, a->out.controlword);
+        put_le32(&b[2], target);
+        (void)ls_co_master_rpdo_set(&d->master, jc->node_id, 0, b, sizeof b);
+        if (jc->feedforward) {
+            int32_t v = 0;
+            if (!(a->cmd_valid && a->out.state == LS_402_OPERATION_ENABLED &&
+                  ls_402_vel_raw(&jc->scale, a->qd_cmd, &v) == LS_OK)) {
+                v = 0;
+            }
+            uint8_t f[4];
+            put_le32(f, v);
+            (void)ls_co_master_rpdo_set(&d->master, jc->node_id, 1, f, sizeof f);
+        }
+    }
+    /* Fault resets belong to the enable that asked for them: once every
+     * drive is under control, a drive that faults stays in FAULT until the
+     * next enable (nothing resumes by itself). */
+    bool all_enabled = d->want_enabled;
+    for (uint8_t j = 0; j < d->cfg.n_joints && all_enabled; j++) {
+        all_enabled = d->axis[j].out.enabled && d->axis[j].step_epoch == d->enable_epoch;
+    }
+    if (all_enabled) {
+        d->reset_allowed = false;
+    }
+    (void)ls_co_master_sync(&d->master, now_us);
+}
+
+/* ---- the HAL arm operations ------------------------------------------------ */
+
+static int drives_info(void *self, hal_arm_info_t *out)
+{
+    const ls_drives_t *d = self;
+    memset(out, 0, sizeof *out);
+    out->n_joints = d->cfg.n_joints;
+    /* A set-point waits up to a drive cycle for its RPDO, takes effect at
+     * the SYNC and is interpolated over the next drive cycle; the position
+     * is reported at the SYNC after and read in the next control cycle. */
+    out->feedback_lag_cycles = (uint16_t)(2u * d->cfg.cycle_ticks + 2u);
+    return LS_OK;
+}
+
+static int drives_enable(void *self, bool on)
+{
+    ls_drives_t *d = self;
+    d->want_enabled = on;
+    d->reset_allowed = on;
+    d->enable_epoch++; /* what the axes said before this call no longer answers it */
+    for (uint8_t j = 0; j < d->cfg.n_joints; j++) {
+        d->axis[j].cmd_valid = false;
+    }
+    return LS_OK;
+}
+
+static int drives_command(void *self, const double *q_rad, const double *qd_rad_s)
+{
+    ls_drives_t *d = self;
+    if (!d->want_enabled) {
+        return LS_OK; /* disabled drives take no set-points */
+    }
+    for (uint8_t j = 0; j < d->cfg.n_joints; j++) {
+        d->axis[j].q_cmd = q_rad[j];
+        d->axis[j].qd_cmd = qd_rad_s != NULL ? qd_rad_s[j] : 0.0;
+        d->axis[j].cmd_valid = true;
+    }
+    return LS_OK;
+}
+
+static int drives_read(void *self, double *q_rad, double *qd_rad_s)
+{
+    const ls_drives_t *d = self;
+    for (uint8_t j = 0; j < d->cfg.n_joints; j++) {
+        q_rad[j] = d->axis[j].q;
+        qd_rad_s[j] = d->axis[j].qd;
+    }
+    return LS_OK;
+}
+
+static int drives_update(void *self, uint64_t now_us)
+{
+    ls_drives_t *d = self;
+    const int r = ls_drives_service(d, now_us);
+    for (uint8_t j = 0; j < d->cfg.n_joints; j++) {
+        ls_drive_axis_t *a = &d->axis[j];
+        ls_co_emcy_t e;
+        while (ls_co_master_next_emcy(&d->master, d->cfg.joint[j].node_id, &e) == 1) {
+            a->emcy_code = e.code;
+            a->emcy_name = e.name;
+        }
+        if (a->feedback_age < UINT32_MAX) {
+            a->feedback_age++;
+        }
+    }
+    if (r < 0) {
+        return r;
+    }
+    if (++d->tick >= d->cfg.cycle_ticks) {
+        d->tick = 0;
+        drive_cycle(d, now_us);
+    }
+    return LS_OK;
+}
+
+static int drives_status(void *self, hal_joint_status_t *out)
+{
+    const ls_drives_t *d = self;
+    for (uint8_t j = 0; j < d->cfg.n_joints; j++) {
+        const ls_drive_axis_t *a = &d->axis[j];
+        const uint8_t node = d->cfg.joint[j].node_id;
+        hal_joint_status_t *s = &out[j];
+        memset(s, 0, sizeof *s);
+        s->node = node;
+        s->feedback_age = a->feedback_age;
+        const ls_co_phase_t phase = ls_co_master_node_phase(&d->master, node);
+        if (phase != LS_CO_PHASE_READY) {
+            s->state = HAL_JOINT_LOST;
+            const char *why = ls_co_master_node_text(&d->master, node);
+            if (why[0] != '\0') {
+                ls_fmt_print(s->text, sizeof s->text, "%s", why);
+            } else {
+                ls_fmt_print(s->text, sizeof s->text, "the drive is %s, not operational", ls_co_phase_name(phase));
+            }
+        } else if (a->last_age > d->cfg.stale_cycles) {
+            s->state = HAL_JOINT_LOST;
+            ls_fmt_print(s->text, sizeof s->text, "no feedback (TPDO1) for %u drive cycles", (unsigned)a->last_age);
+        } else if (a->out.fault || a->out.error != LS_402_OK) {
+            /* While an enable asked for it, a FAULT is being reset (the
+             * stepper's edges) until it stays: only then is it one. */
+            const bool resetting = d->want_enabled && d->reset_allowed && a->out.error == LS_402_OK;
+            s->state = resetting ? HAL_JOINT_ENABLING : HAL_JOINT_FAULT;
+            s->code = a->emcy_code;
+            char fault[64] = "", why[LS_CO_TEXT_LEN] = "";
+            if (a->emcy_code != 0u) {
+                ls_fmt_print(fault, sizeof fault, "FAULT, EMCY 0x%04X %s", (unsigned)a->emcy_code,
+                             a->emcy_name != NULL ? a->emcy_name : ls_co_emcy_name(a->emcy_code));
+            } else if (a->out.fault) {
+                ls_fmt_print(fault, sizeof fault, "FAULT (statusword 0x%04X)", (unsigned)a->statusword);
+            }
+            if (a->out.error != LS_402_OK) {
+                (void)ls_402_describe(&a->out, why, sizeof why);
+            }
+            ls_fmt_print(s->text, sizeof s->text, "%s%s%s%s", resetting ? "resetting its " : "", fault,
+                         fault[0] != '\0' && why[0] != '\0' ? ": " : "", why);
+        } else if (d->want_enabled) {
+            const bool confirmed = a->step_epoch == d->enable_epoch && a->out.enabled && !a->out.target_ignored;
+            s->state = confirmed ? HAL_JOINT_ENABLED : HAL_JOINT_ENABLING;
+            if (s->state == HAL_JOINT_ENABLING) {
+                (void)ls_402_describe(&a->out, s->text, sizeof s->text);
+            }
+        } else {
+            s->state = HAL_JOINT_OFF;
+        }
+    }
+    return LS_OK;
+}
+
+static void drives_close(void *self)
+{
+    (void)self; /* the link is the caller's */
+}
+
+static const hal_arm_ops_t k_ops = {
+    .info = drives_info,
+    .enable = drives_enable,
+    .command = drives_command,
+    .read = drives_read,
+    .close = drives_close,
+    .status = drives_status,
+    .update = drives_update,
+};
+
+void ls_drives_arm(ls_drives_t *d, hal_arm_t *out)
+{
+    memset(out, 0, sizeof *out);
+    out->ops = &k_ops;
+    out->self = d;
+    ls_fmt_print(out->name, sizeof out->name, "cia402:%s", d->cfg.link != NULL ? d->cfg.link->name : "?");
+}

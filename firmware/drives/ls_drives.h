@@ -1,0 +1,158 @@
+/* The arm of CiA 402 servo drives on their own CAN bus: the HAL arm
+ * contract (hal/hal_arm.h) on a CiA 301 master (firmware/canopen) and one
+ * CiA 402 axis per joint (ls_cia402.h), in cyclic synchronous position mode
+ * (CSP, 0x6060 = 8).
+ *
+ * What it does on the bus:
+ *  - At start (ls_drives_boot, then ls_drives_service until it says done):
+ *    each drive is reset (NMT reset communication), must send its boot-up
+ *    within the boot deadline, and is configured over SDO by a script built
+ *    from its ls_drive_joint_t (built from the drive's EDS by the app, which
+ *    only asks for objects the EDS lists as writable or mappable): its type
+ *    (0x1000: a CiA 402 device) and identity (0x1018 against the EDS), its
+ *    heartbeat (0x1017) and its watch of ours (0x1016), what it does when
+ *    ours stops (0x6007), every PDO it has disabled, then RPDO1 = controlword
+ *    + target position, RPDO2 = velocity offset (0x60B1) when fed forward,
+ *    TPDO1 = statusword + position actual, all synchronous, each remapped
+ *    in the order CiA 301 asks (COB-ID invalid, transmission type, sub 0 =
+ *    0, entries, sub 0 = N, COB-ID valid); the interpolation period 0x60C2
+ *    = the drive cycle; 0x6060 = 8 confirmed in 0x6061; its position actual
+ *    and statusword read. Then NMT start.
+ *  - Every drive cycle (cycle_ticks control cycles, in update()): the
+ *    drives' TPDOs of the previous SYNC are taken (statusword, position:
+ *    unwrapped across the int32 wrap), each axis's CiA 402 stepper gives
+ *    the controlword, and every RPDO goes out before the SYNC. No SDO
+ *    traffic while the drives are in operation.
+ *  - Enable: one confirmed 402 step per drive cycle up to OPERATION ENABLED
+ *    (a fault reset edge first when a drive is in FAULT); the target
+ *    position is the drive's actual position until the enable-operation
+ *    step and then held there until command() gives set-points, so no axis
+ *    jumps. Disable: shutdown (READY TO SWITCH ON: no torque, brake on).
+ *
+ * Joint status (hal_joint_status_t): ENABLED when its drive confirmed
+ * OPERATION ENABLED and follows the target (statusword bit 12); FAULT with
+ * the drive's EMCY code and its name (or the 402 stepper's words: a drive
+ * stuck in a state, one that stays in FAULT); LOST when the master lost the
+ * node (heartbeat, an unexpected boot-up) or its TPDO is older than
+ * stale_cycles drive cycles; feedback_age in control cycles.
+ *
+ * Threading: init, boot and the boot's service loop at init (main thread);
+ * from then on every operation from the control thread, which owns the
+ * drive link: no blocking, no allocation, O(joints) per call plus the
+ * frames received. Memory: the caller owns the ls_drives_t (about 40 kB
+ * with its scripts; static in landscaped). */
+#ifndef LS_DRIVES_H
+#define LS_DRIVES_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "hal/hal_arm.h"
+#include "hal/hal_can.h"
+#include "ls_cia402.h"
+#include "ls_co_master.h"
+
+#define LS_DRIVES_SCRIPT_MAX 64u /* SDO steps of one drive's configuration */
+#define LS_DRIVES_PDO_SETS 4u    /* RPDO and TPDO parameter sets a drive may have disabled at start */
+#define LS_DRIVES_RX_PER_CYCLE 64u /* frames taken per update(): bounds a cycle's time under a flood */
+#define LS_DRIVES_STALE_CYCLES 5u  /* default stale_cycles */
+/* An enable's steps: a drive follows one within a few cycles (a brake's
+ * release takes a few hundred ms on common drives); two fault resets. Both
+ * keep an enable within the control loop's LS_CTL_ENABLE_TIMEOUT_MS. */
+#define LS_DRIVES_STEP_TIMEOUT_MS 500u
+#define LS_DRIVES_RESET_EDGES 2u
+
+/* One joint's drive: what the configuration says and what its EDS offers. */
+typedef struct {
+    uint8_t node_id;          /* 1..127 */
+    ls_402_scale_t scale;     /* joint radians <-> drive counts (ls_402_scale_init) */
+    /* Identity to check (0x1018 :01 vendor, :02 product, :03 revision against
+     * the EDS's DeviceInfo); a field is checked when its has_ flag is set.
+     * The revision is checked as optional: a mismatch is recorded, not fatal. */
+    bool has_vendor, has_product, has_revision;
+    uint32_t vendor_id, product_code, revision;
+    bool write_consumer_hb;     /* 0x1016:01 writable: the drive watches our heartbeat */
+    bool write_abort_option;    /* 0x6007 writable */
+    bool write_interp_period;   /* 0x60C2:01/:02 writable */
+    bool write_pdo_type;        /* 0x1400:02 etc. writable (else the EDS's types must be synchronous) */
+    bool write_tpdo_inhibit;    /* 0x1800:03 writable: set 0 (a synchronous TPDO needs none) */
+    bool feedforward;           /* 0x60B1 mappable and wanted: RPDO2 carries it */
+    bool rpdo_present[LS_DRIVES_PDO_SETS]; /* 0x1400 + n in the EDS: disabled unless used */
+    bool tpdo_present[LS_DRIVES_PDO_SETS]; /* 0x1800 + n */
+} ls_drive_joint_t;
+
+typedef struct {
+    uint8_t n_joints; /* 1..HAL_ARM_MAX_JOINTS (and at most LS_CO_MAX_NODES) */
+    ls_drive_joint_t joint[HAL_ARM_MAX_JOINTS];
+    hal_can_link_t *link;          /* the drive bus; the caller opened it and keeps it */
+    uint32_t control_period_us;    /* the control loop's period */
+    uint16_t cycle_ticks;          /* control periods per drive cycle (>= 1) */
+    uint8_t master_node;           /* our node id: our heartbeat */
+    uint16_t heartbeat_ms;         /* ours and the drives' (0x1017) */
+    uint16_t heartbeat_timeout_ms; /* both ways: the drives' 0x1016 and our watch of them */
+    uint16_t boot_timeout_ms;
+    int16_t abort_option; /* 0x6007 value (ls_config.h ls_drive_abort_t) */
+    uint8_t stale_cycles; /* a TPDO older than this many drive cycles: LOST; 0: LS_DRIVES_STALE_CYCLES */
+} ls_drives_config_t;
+
+/* One axis's run-time state (private to ls_drives.c). */
+typedef struct {
+    ls_402_axis_t ax;
+    ls_402_out_t out;
+    ls_402_unwrap_t unwrap;
+    bool fresh_seen;     /* a TPDO arrived since the node became READY */
+    uint32_t last_age;   /* age of the TPDO, in SYNC periods */
+    uint32_t sw0, pos0;  /* the script's READ_INTO targets: statusword, position actual */
+    uint16_t statusword;
+    int32_t pos_raw;
+    int32_t hold_raw; /* the target while no set-point was given */
+    double q, qd;
+    double q_cmd, qd_cmd;
+    bool cmd_valid;        /* command() gave a set-point since enable */
+    uint16_t emcy_code;    /* the last EMCY's error code (0: none since boot) */
+    const char *emcy_name; /* its name */
+    uint32_t feedback_age; /* control cycles since the last fresh TPDO */
+    uint32_t step_epoch;   /* the enable_epoch of the last 402 step: `out` answers that enable() */
+} ls_drive_axis_t;
+
+typedef struct {
+    ls_drives_config_t cfg;
+    ls_co_master_t master;
+    ls_co_step_t script[HAL_ARM_MAX_JOINTS][LS_DRIVES_SCRIPT_MAX];
+    ls_drive_axis_t axis[HAL_ARM_MAX_JOINTS];
+    bool want_enabled;
+    bool reset_allowed; /* an enable asked since the last disable: FAULTs may be reset */
+    uint32_t enable_epoch; /* enable() calls: a joint is ENABLED only by a step taken since the last one */
+    uint32_t tick;      /* control cycles since boot, modulo cycle_ticks */
+    bool booted;
+    char text[LS_CO_TEXT_LEN]; /* why init or boot failed */
+} ls_drives_t;
+
+/* Check the configuration and prepare the master and the scripts (init
+ * time; sends nothing). Returns LS_OK, or LS_EINVAL with ls_drives_text()
+ * naming what is wrong (NULL pointers, joint counts, a scale that
+ * ls_402_scale_init refuses, a cycle or heartbeat of 0, what
+ * ls_co_master_init refuses); *d is not usable then. */
+int ls_drives_init(ls_drives_t *d, const ls_drives_config_t *cfg);
+
+/* Start the boot of every drive (NMT reset communication, the master's
+ * boot-up and heartbeat). Init time. */
+int ls_drives_boot(ls_drives_t *d, uint64_t now_us);
+
+/* The bus work of one moment: take received frames (at most
+ * LS_DRIVES_RX_PER_CYCLE), run the master's timers. Call it often (1 ms)
+ * while booting; update() calls it every control cycle. Returns 1 when
+ * every drive is READY, 0 while some still boot, LS_ETIMEDOUT / LS_EIO /
+ * LS_EPROTO when one failed (boot deadline, a refused step, an identity
+ * mismatch: ls_drives_text() names the joint, the node, the object and
+ * the cause), LS_EIO also when the link failed. */
+int ls_drives_service(ls_drives_t *d, uint64_t now_us);
+
+/* One line on the latest failure; "" when none. Never NULL. */
+const char *ls_drives_text(const ls_drives_t *d);
+
+/* The HAL arm whose operations are these drives' (self = d). */
+void ls_drives_arm(ls_drives_t *d, hal_arm_t *out);
+
+#endif
