@@ -1,5 +1,12 @@
 """Integration tier: start the built landscaped (sim HAL, SLCAN on a pty) and
-drive it through the host library and the CLI."""
+drive it through the host library and the CLI.
+
+The arm behind landscaped is the environment's `LS_ARM`: `sim` (the default: the
+simulated arm in landscaped's process) or `cia402`: the same simulated arm behind six
+CiA 402 drives, `ls-simdrives`, on a drive bus of its own (an SLCAN pty the drives
+offer, landscaped's `[drives] link = slcan:tty:PATH`). The motion and lifecycle suites
+run on both (ctest pytest_drives); what needs the simulated world inside landscaped
+(its DIO, sensors, tool rack, set-point trace) runs on `sim` only."""
 from __future__ import annotations
 
 import os
@@ -17,7 +24,12 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 BUILD = Path(os.environ.get("LS_BUILD_DIR", ROOT / "build"))
 LANDSCAPED = BUILD / "bin" / "landscaped"
+SIMDRIVES = BUILD / "bin" / "ls-simdrives"
+SIMDRIVE_EDS = BUILD / "share" / "landscape" / "ls-simdrive.eds"
 CLI = Path(sys.executable).parent / "landscape"
+ARM = os.environ.get("LS_ARM", "sim")
+DRIVE_NODES = (0x21, 0x22, 0x23, 0x24, 0x25, 0x26)
+COUNTS_PER_RAD = 2**17 * 100 / (2 * 3.141592653589793)  # a 17-bit encoder behind a 100:1 gear
 
 
 @dataclass
@@ -25,6 +37,8 @@ class Controller:
     pty: str
     proc: subprocess.Popen[bytes]
     log: Path
+    drives: subprocess.Popen[bytes] | None = None  # ls-simdrives, with LS_ARM=cia402
+    drives_control: Path | None = None  # its misbehaviour socket
 
     def cli(self, *args: str, timeout: float = 60.0, check: bool = False) -> subprocess.CompletedProcess[str]:
         return run_cli("--interface", "slcan", "--channel", self.pty, *args, timeout=timeout, check=check)
@@ -37,6 +51,8 @@ class Controller:
         except subprocess.TimeoutExpired:
             self.proc.kill()
             raise AssertionError("landscaped did not stop within 10 s of a signal") from None
+        finally:
+            stop_drives(self.drives)
 
 
 def run_cli(*args: str, timeout: float = 60.0, check: bool = False) -> subprocess.CompletedProcess[str]:
@@ -53,24 +69,71 @@ def wait_for_path(path: Path, proc: subprocess.Popen[bytes], timeout_s: float = 
         time.sleep(0.02)
 
 
+def stop_drives(drives: subprocess.Popen[bytes] | None) -> None:
+    if drives is not None and drives.poll() is None:
+        drives.send_signal(signal.SIGTERM)
+        try:
+            drives.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            drives.kill()
+
+
+def start_simdrives(path: Path, *extra: str) -> tuple[subprocess.Popen[bytes], Path]:
+    """ls-simdrives offering its drive bus as an SLCAN pty at `path`; returns the process
+    and its misbehaviour socket."""
+    if not SIMDRIVES.exists():
+        raise AssertionError(f"{SIMDRIVES} is missing: build first (bash .ci/build)")
+    control = path.with_name(path.name + ".ctl")
+    with open(path.with_name(path.name + ".log"), "wb") as err_file:
+        proc = subprocess.Popen([str(SIMDRIVES), "--link", f"slcan:pty:{path}", "--control", str(control),
+                                 "--counts-per-rad", repr(COUNTS_PER_RAD), *extra],
+                                stdout=subprocess.DEVNULL, stderr=err_file)
+    wait_for_path(path, proc)
+    return proc, control
+
+
+def drive_config(path: Path, drive_pty: Path, **drives: str) -> Path:
+    """A landscaped.conf for arm = cia402 on `drive_pty`: six joints of ls-simdrives;
+    `drives` sets more [drives] keys."""
+    lines = ["[hal]", "arm = cia402", "dio = none", "[drives]", f"link = slcan:tty:{drive_pty}",
+             *(f"{k} = {v}" for k, v in drives.items())]
+    for j, node in enumerate(DRIVE_NODES):
+        lines += [f"[joint.{j + 1}]", f"node = {node:#x}", f"eds = {SIMDRIVE_EDS}",
+                  f"counts_per_rad = {COUNTS_PER_RAD!r}"]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
 def start_controller(path: Path, *extra: str) -> Controller:
     if not LANDSCAPED.exists():
         raise AssertionError(f"{LANDSCAPED} is missing: build first (bash .ci/build)")
     # stderr to a file, never a pipe: a pipe nobody reads would block the controller's logging
     log = path.with_name(path.name + ".log")
+    drives: subprocess.Popen[bytes] | None = None
+    control: Path | None = None
+    if ARM == "cia402":
+        drives, control = start_simdrives(path.with_name(path.name + "-drives"))
+        conf = drive_config(path.with_name(path.name + "-drives.conf"), path.with_name(path.name + "-drives"))
+        hal = ["--config", str(conf)]
+    else:
+        hal = ["--hal", "sim"]
     with open(log, "wb") as err_file:
-        proc = subprocess.Popen([str(LANDSCAPED), "--hal", "sim", "--link", f"slcan:pty:{path}", *extra],
+        proc = subprocess.Popen([str(LANDSCAPED), *hal, "--link", f"slcan:pty:{path}", *extra],
                                 stdout=subprocess.DEVNULL, stderr=err_file)
     deadline = time.monotonic() + 10
-    while not path.exists():
+    # with drives, the control loop (and the link's answers) start once they are configured
+    ready = "ready: node" if drives is not None else None
+    while not path.exists() or (ready is not None and ready not in log.read_text(errors="replace")):
         if proc.poll() is not None:
             err = log.read_text(errors="replace")
+            stop_drives(drives)
             raise AssertionError(f"landscaped exited with {proc.returncode}: {err}")
         if time.monotonic() > deadline:
             proc.kill()
-            raise AssertionError("landscaped did not create its pty link within 10 s")
+            stop_drives(drives)
+            raise AssertionError("landscaped did not create its pty link (and boot its drives) within 10 s")
         time.sleep(0.02)
-    return Controller(str(path), proc, log)
+    return Controller(str(path), proc, log, drives, control)
 
 
 @pytest.fixture
