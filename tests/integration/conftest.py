@@ -170,3 +170,21 @@ def notifier(bus: can.BusABC) -> Iterator[can.Notifier]:
         yield n
     finally:
         n.stop()
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    config.addinivalue_line(
+        "markers", "sim_world: needs the simulated world inside landscaped (its DIO, sensors, tool rack, set-point "
+                   "trace): runs with LS_ARM=sim only (the cia402 tier deselects it with -m 'not sim_world')")
+
+
+@pytest.hookimpl(trylast=True)  # after -m has deselected what it deselects
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """A sim_world test selected for the drive arm is a mistake in the selection: stop
+    with the list rather than let it fail on a missing DIO or pass on nothing."""
+    if ARM != "cia402":
+        return
+    wrong = [item.nodeid for item in items if item.get_closest_marker("sim_world") is not None]
+    if wrong:
+        raise pytest.UsageError(f"LS_ARM=cia402 has no simulated world for {', '.join(wrong)}: "
+                                "select with -m 'not sim_world'")

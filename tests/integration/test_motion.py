@@ -274,6 +274,7 @@ def test_refusals_name_the_limit_and_nothing_moves(sup: Supervisor) -> None:
     assert sup.get_motion_control_state().result["state"] == "RESTING"
 
 
+@pytest.mark.sim_world
 def test_wait_aux_times_out_into_path_move_failed(sup: Supervisor) -> None:
     """A `wait` that times out ends the path with pathMoveFailed naming the point
     and the cause; the device stays RESTING and takes the next motion."""
