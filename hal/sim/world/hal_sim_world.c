@@ -65,6 +65,7 @@ static struct {
     dBodyID link[NJ];
     double frame_off[NJ][3]; /* origin of DH frame i in body i coordinates */
     dJointID hinge[NJ];
+    dJointFeedback hinge_fb[NJ]; /* what each hinge applied in the last step (joint torque) */
     dBodyID tool_body;
     dJointID sensor_joint;
     dJointFeedback fb;
@@ -76,7 +77,7 @@ static struct {
     int tool; /* index in k_tools, -1: none */
     uint32_t tool_bits;
 
-    bool enabled;
+    bool joint_on[NJ]; /* false: the joint's brake holds it */
     double q[NJ], qd[NJ];
     double q_cmd[NJ], qd_cmd[NJ];
     double last_q_cmd[NJ], last_qd_cmd[NJ];
@@ -367,6 +368,7 @@ static void build_arm(void)
             dJointSetHingeParam(h, dParamLoStop, m->q_min_rad[i]);
             dJointSetHingeParam(h, dParamHiStop, m->q_max_rad[i]);
         }
+        dJointSetFeedback(h, &W.hinge_fb[i]);
         W.hinge[i] = h;
     }
 
@@ -410,7 +412,7 @@ static void set_motors(double dt)
     const hal_sim_arm_model_t *m = W.m;
     for (int i = 0; i < NJ; i++) {
         double vel, fmax, cfm;
-        if (W.enabled) {
+        if (W.joint_on[i]) {
             vel = W.qd_cmd[i] + SERVO_KP_1_S * (W.q_cmd[i] - W.q[i]);
             double vmax = (m->q_max_rad[i] - W.q[i]) / dt;
             double vmin = (m->q_min_rad[i] - W.q[i]) / dt;
@@ -512,6 +514,7 @@ static void warm_up(void)
         dBodySetLinearVel(bodies[i], lv[i][0], lv[i][1], lv[i][2]);
         dBodySetAngularVel(bodies[i], av[i][0], av[i][1], av[i][2]);
     }
+    memset(W.hinge_fb, 0, sizeof W.hinge_fb); /* no step has happened yet */
     read_joints();
 }
 
@@ -630,7 +633,49 @@ static int arm_enable(void *self, bool on)
     if (!W.open) {
         return LS_ENODEV;
     }
-    W.enabled = on;
+    for (int i = 0; i < NJ; i++) {
+        W.joint_on[i] = on;
+    }
+    return LS_OK;
+}
+
+int hal_sim_world_enable_joint(unsigned joint, bool on)
+{
+    if (!W.open) {
+        return LS_ENODEV;
+    }
+    if (joint >= NJ) {
+        return LS_EINVAL;
+    }
+    W.joint_on[joint] = on;
+    return LS_OK;
+}
+
+/* ODE reports the force and torque a joint applies to its first body (the
+ * child link) at that body's centre of mass. Moved to the hinge's anchor the
+ * force carries no torque about the axis, so the torque along the axis is
+ * what the motor (or brake, or stop) applied. */
+int hal_sim_world_joint_torque(double tau_Nm[HAL_SIM_ARM_JOINTS])
+{
+    if (!W.open) {
+        return LS_ENODEV;
+    }
+    if (tau_Nm == NULL) {
+        return LS_EINVAL;
+    }
+    for (int i = 0; i < NJ; i++) {
+        const dJointFeedback *fb = &W.hinge_fb[i];
+        dVector3 anchor, axis;
+        dJointGetHingeAnchor(W.hinge[i], anchor);
+        dJointGetHingeAxis(W.hinge[i], axis);
+        const dReal *c = dBodyGetPosition(W.link[i]);
+        double r[3] = { anchor[0] - c[0], anchor[1] - c[1], anchor[2] - c[2] };
+        double f[3] = { fb->f1[0], fb->f1[1], fb->f1[2] };
+        double rxf[3];
+        cross(r, f, rxf);
+        double t[3] = { fb->t1[0] - rxf[0], fb->t1[1] - rxf[1], fb->t1[2] - rxf[2] };
+        tau_Nm[i] = t[0] * axis[0] + t[1] * axis[1] + t[2] * axis[2];
+    }
     return LS_OK;
 }
 

@@ -43,6 +43,9 @@
  * q_min/q_max back this up for joints whose range fits in (-pi, pi) (1, 2, 3, 5).
  * Disabled drives (enable(false)) model brakes: target velocity 0 with a
  * holding torque of 2 * torque_max, so the arm stays put unless overloaded.
+ * The arm's enable() switches every joint; hal_sim_world_enable_joint()
+ * switches one (a drive per joint, hal/sim/drives: a faulted drive's joint
+ * brakes while the others move). A fresh world has every joint braked.
  * Integrator: dWorldStep (the exact Dantzig LCP solver), dt as the caller
  * passes it (1 ms typically); world ERP 0.2, CFM 1e-10.
  *
@@ -269,6 +272,20 @@ void hal_sim_world_get_dio(hal_dio_t *out);
 const hal_sensor_t *hal_sim_world_sensors(size_t *count);
 void hal_sim_world_get_tool(hal_tool_t *out);
 void hal_sim_world_get_manual(hal_manual_t *out);
+
+/* Drive (true) or brake (false) one joint, 0..5: the per-joint form of the
+ * arm's enable(), which sets all six. Takes effect at the next step. Control
+ * loop; O(1). LS_OK, LS_EINVAL for a joint past the last, LS_ENODEV when
+ * not open. */
+int hal_sim_world_enable_joint(unsigned joint, bool on);
+
+/* The torque (Nm) each joint's hinge applied about its axis in the last
+ * step: the servo's motor torque while the joint is driven, the brake's
+ * while it is braked (a joint stop's too, when the joint sits on one); the
+ * sign is that of q. Zeros before the first step. Control loop; O(joints),
+ * no allocation. LS_OK, LS_EINVAL for NULL, LS_ENODEV when not open
+ * (tau_Nm untouched on error). */
+int hal_sim_world_joint_torque(double tau_Nm[HAL_SIM_ARM_JOINTS]);
 
 /* Ground truth for tests: the flange pose (DH frame 6) as ODE has it,
  * column-major 4x4, base frame. LS_OK or LS_ENODEV. */

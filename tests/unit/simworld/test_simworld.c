@@ -50,19 +50,28 @@ static void m4_mul(const double A[16], const double B[16], double C[16])
     memcpy(C, t, sizeof t);
 }
 
-static void fk(const double q[NJ], double T[16])
+/* Frame i of the model (0: base) at q, column-major: standard DH, each
+ * joint Rz(theta) Tz(d) Tx(a) Rx(alpha). */
+static void fk_frames(const double q[NJ], double T[NJ + 1][16])
 {
     double acc[16] = { 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1 };
+    memcpy(T[0], acc, sizeof acc);
     for (int i = 0; i < NJ; i++) {
         const ls_dh_t *d = &M->dh[i];
         double th = q[i] + d->theta_offset_rad;
         double ct = cos(th), st = sin(th), ca = cos(d->alpha_rad), sa = sin(d->alpha_rad);
-        /* standard DH: Rz(theta) Tz(d) Tx(a) Rx(alpha), column-major */
         double A[16] = { ct,      st,       0,  0, -st * ca,    ct * ca,     sa,     0,
                          st * sa, -ct * sa, ca, 0, d->a_m * ct, d->a_m * st, d->d_m, 1 };
         m4_mul(acc, A, acc);
+        memcpy(T[i + 1], acc, sizeof acc);
     }
-    memcpy(T, acc, sizeof acc);
+}
+
+static void fk(const double q[NJ], double T[16])
+{
+    double frames[NJ + 1][16];
+    fk_frames(q, frames);
+    memcpy(T, frames[NJ], sizeof frames[NJ]);
 }
 
 /* R = Rz(yaw) Ry(pitch) Rx(roll), column-major 3x3 inside a 4x4 T. */
@@ -845,6 +854,84 @@ static void test_brakes_hold_when_disabled(void **state)
     }
 }
 
+static void test_a_braked_joint_holds_while_the_others_move(void **state)
+{
+    (void)state;
+    open_world(false, false, NULL);
+    assert_int_equal(hal_sim_world_enable_joint(NJ, true), LS_EINVAL);
+    assert_int_equal(hal_arm_enable(&arm, true), LS_OK);
+    double start[NJ] = { 0.3, 0.6, 0.4, 0.2, 0.5, 0.1 };
+    move_to(start, 0.5);
+    hold(200);
+    double before[NJ], after[NJ];
+    read_q(before);
+    assert_int_equal(hal_sim_world_enable_joint(2, false), LS_OK); /* joint 3 brakes */
+    double target[NJ] = { -0.2, 0.3, -0.5, -0.3, 0.2, 0.6 };
+    move_to(target, 0.5);
+    hold(300);
+    read_q(after);
+    for (int j = 0; j < NJ; j++) {
+        if (j == 2) {
+            assert_true(fabs(after[j] - before[j]) < 1e-5);
+        } else {
+            assert_true(fabs(after[j] - target[j]) < 1e-3);
+        }
+    }
+    /* and the arm's enable() sets every joint again */
+    assert_int_equal(hal_arm_enable(&arm, true), LS_OK);
+    hold(600);
+    read_q(after);
+    assert_true(fabs(after[2] - target[2]) < 1e-3);
+    hal_sim_world_close();
+    assert_int_equal(hal_sim_world_enable_joint(0, true), LS_ENODEV);
+}
+
+static void test_joint_torque_is_the_static_gravity_load(void **state)
+{
+    (void)state;
+    double tau[NJ];
+    assert_int_equal(hal_sim_world_joint_torque(tau), LS_ENODEV);
+    open_world(false, false, NULL);
+    assert_int_equal(hal_sim_world_joint_torque(NULL), LS_EINVAL);
+    assert_int_equal(hal_sim_world_joint_torque(tau), LS_OK);
+    for (int j = 0; j < NJ; j++) {
+        assert_true(tau[j] == 0.0); /* no step yet */
+    }
+    assert_int_equal(hal_arm_enable(&arm, true), LS_OK);
+    double q[NJ] = { 0.3, 0.6, 0.4, 0.2, 0.5, 0.1 };
+    move_to(q, 0.5);
+    hold(500);
+    read_q(q);
+    assert_int_equal(hal_sim_world_joint_torque(tau), LS_OK);
+    /* The oracle: every link's mass at the middle of its segment (frame
+     * i-1 to frame i), the 0.1 kg flange plate half its 5 mm thickness
+     * inside the flange; the motor holds the moment of their weight. */
+    double T[NJ + 1][16], c[NJ + 1][3], m[NJ + 1];
+    fk_frames(q, T);
+    for (int i = 0; i < NJ; i++) {
+        for (int k = 0; k < 3; k++) {
+            c[i][k] = (T[i][12 + k] + T[i + 1][12 + k]) / 2.0;
+        }
+        m[i] = M->link_mass_kg[i];
+    }
+    for (int k = 0; k < 3; k++) {
+        c[NJ][k] = T[NJ][12 + k] - 0.0025 * T[NJ][8 + k];
+    }
+    m[NJ] = 0.1;
+    for (int j = 0; j < NJ; j++) {
+        const double *o = &T[j][12], *z = &T[j][8];
+        double expect = 0.0;
+        for (int b = j; b <= NJ; b++) {
+            double r[3] = { c[b][0] - o[0], c[b][1] - o[1], c[b][2] - o[2] };
+            double F[3] = { 0.0, 0.0, -9.81 * m[b] };
+            double rxF[3] = { r[1] * F[2] - r[2] * F[1], r[2] * F[0] - r[0] * F[2], r[0] * F[1] - r[1] * F[0] };
+            expect -= z[0] * rxF[0] + z[1] * rxF[1] + z[2] * rxF[2];
+        }
+        print_message("joint %d: torque %.4f Nm, gravity load %.4f Nm\n", j + 1, tau[j], expect);
+        assert_true(fabs(tau[j] - expect) < 0.005 * fabs(expect) + 0.002);
+    }
+}
+
 static void *loop_thread(void *arg)
 {
     double *fz = arg;
@@ -967,6 +1054,8 @@ int main(void)
         cmocka_unit_test_teardown(test_dio_socket, teardown),
         cmocka_unit_test_teardown(test_joint_limits, teardown),
         cmocka_unit_test_teardown(test_brakes_hold_when_disabled, teardown),
+        cmocka_unit_test_teardown(test_a_braked_joint_holds_while_the_others_move, teardown),
+        cmocka_unit_test_teardown(test_joint_torque_is_the_static_gravity_load, teardown),
         cmocka_unit_test_teardown(test_control_loop_on_another_thread, teardown),
         cmocka_unit_test_teardown(test_cycles_do_not_allocate, teardown),
     };
