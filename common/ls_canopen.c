@@ -90,7 +90,7 @@ static const code_name_t k_emcy[] = {
     { LS_CO_EMCY_HEARTBEAT, "heartbeat error" },
     { LS_CO_EMCY_BUS_OFF_RECOVERED, "recovered from bus-off" },
     { 0x8150u, "CAN-ID collision" },
-    { 0x8210u, "PDO not processed due to length error" },
+    { LS_CO_EMCY_PDO_LENGTH, "PDO not processed due to length error" },
     { 0x8220u, "PDO length exceeded" },
     { 0x8240u, "unexpected SYNC data length" },
     { 0x8250u, "RPDO time-out" },
@@ -175,6 +175,27 @@ const char *ls_co_emcy_name(uint16_t error_code)
         s = lookup(k_emcy_class, N_OF(k_emcy_class), ((uint32_t)error_code >> 8) & 0xF0u);
     }
     return s != NULL ? s : "unknown error code";
+}
+
+uint8_t ls_co_error_register_bits(uint16_t error_code)
+{
+    if (error_code == LS_CO_EMCY_NO_ERROR) {
+        return 0u;
+    }
+    uint8_t bits = LS_CO_ERR_REG_GENERIC;
+    switch (error_code >> 12) { /* the class's high nibble, CiA 301 table 21 */
+    case 0x2: bits |= LS_CO_ERR_REG_CURRENT; break;
+    case 0x3: bits |= LS_CO_ERR_REG_VOLTAGE; break;
+    case 0x4: bits |= LS_CO_ERR_REG_TEMPERATURE; break;
+    case 0x8: bits |= (error_code >> 8) <= 0x82u ? LS_CO_ERR_REG_COMMUNICATION : LS_CO_ERR_REG_PROFILE; break;
+    case 0xF:
+        if ((error_code >> 8) == 0xFFu) {
+            bits |= LS_CO_ERR_REG_MANUFACTURER;
+        }
+        break;
+    default: break;
+    }
+    return bits;
 }
 
 const char *ls_co_nmt_state_name(uint8_t state)

@@ -36,9 +36,22 @@ extern "C" {
 #define LS_CO_COB_RPDO(n, node) (LS_CO_COB_RPDO1 + 0x100u * ((uint32_t)(n)-1u) + (uint32_t)(node))
 
 /* COB-ID object values (0x1400-0x15FF:01, 0x1800-0x19FF:01, 0x1005, 0x1014). */
-#define LS_CO_COBID_INVALID 0x80000000u /* bit 31: the PDO (or EMCY) does not exist / is disabled */
-#define LS_CO_COBID_NO_RTR 0x40000000u  /* bit 30: TPDO: no RTR allowed; RPDO: reserved */
-#define LS_CO_COBID_FRAME 0x20000000u   /* bit 29: 29-bit identifier */
+#define LS_CO_COBID_INVALID 0x80000000u  /* bit 31: the PDO (or EMCY) does not exist / is disabled */
+#define LS_CO_COBID_NO_RTR 0x40000000u   /* bit 30: TPDO: no RTR allowed; RPDO: reserved */
+#define LS_CO_COBID_FRAME 0x20000000u    /* bit 29: 29-bit identifier */
+#define LS_CO_COBID_SYNC_GEN 0x40000000u /* 0x1005 bit 30: this node produces the SYNC */
+#define LS_CO_COBID_RESERVED 0x1FFFF800u /* bits 11-28: zero for an 11-bit COB-ID */
+
+/* Consumer heartbeat time entries (0x1016:n). */
+#define LS_CO_HB_CONSUMER_NODE_SHIFT 16u
+#define LS_CO_HB_CONSUMER_NODE_MASK 0x00FF0000u
+#define LS_CO_HB_CONSUMER_TIME_MASK 0x0000FFFFu /* ms; 0: the entry is off */
+#define LS_CO_HB_CONSUMER_RESERVED 0xFF000000u
+
+/* Error behaviour 0x1029:01: the NMT state a communication error leads to. */
+#define LS_CO_ERR_BEHAVIOUR_PREOP 0u     /* to PRE-OPERATIONAL (when OPERATIONAL) */
+#define LS_CO_ERR_BEHAVIOUR_NO_CHANGE 1u /* stay */
+#define LS_CO_ERR_BEHAVIOUR_STOPPED 2u   /* to STOPPED */
 
 /* ---- NMT */
 
@@ -66,6 +79,8 @@ extern "C" {
 #define LS_CO_SDO_CCS_UPLOAD_INITIATE 0x40u
 #define LS_CO_SDO_CCS_UPLOAD_SEGMENT 0x60u /* | t << 4 */
 #define LS_CO_SDO_CS_ABORT 0x80u           /* both directions */
+#define LS_CO_SDO_CCS_BLOCK_DOWNLOAD 0xC0u /* block transfers (not used: a server may refuse them) */
+#define LS_CO_SDO_CCS_BLOCK_UPLOAD 0xA0u
 /* server -> client (scs) */
 #define LS_CO_SDO_SCS_UPLOAD_SEGMENT 0x00u    /* | t << 4 | n << 1 | c */
 #define LS_CO_SDO_SCS_DOWNLOAD_SEGMENT 0x20u  /* | t << 4 */
@@ -118,6 +133,7 @@ extern "C" {
 
 #define LS_CO_OBJ_DEVICE_TYPE 0x1000u     /* u32: bits 0-15 the device profile (402) */
 #define LS_CO_OBJ_ERROR_REGISTER 0x1001u  /* u8 */
+#define LS_CO_OBJ_DEVICE_NAME 0x1008u     /* VISIBLE_STRING: manufacturer device name */
 #define LS_CO_OBJ_COB_ID_SYNC 0x1005u     /* u32 */
 #define LS_CO_OBJ_COMM_CYCLE 0x1006u      /* u32, us: the SYNC period */
 #define LS_CO_OBJ_COB_ID_EMCY 0x1014u     /* u32 */
@@ -129,6 +145,10 @@ extern "C" {
 #define LS_CO_OBJ_RPDO_MAP 0x1600u        /* + n - 1: :00 count, :01.. entries */
 #define LS_CO_OBJ_TPDO_COMM 0x1800u /* + n - 1: :01 COB-ID, :02 type, :03 inhibit (100 us), :05 event timer (ms) */
 #define LS_CO_OBJ_TPDO_MAP 0x1A00u  /* + n - 1 */
+
+/* The communication profile area: what NMT reset communication restores. */
+#define LS_CO_OBJ_COMM_FIRST 0x1000u
+#define LS_CO_OBJ_COMM_LAST 0x1FFFu
 
 #define LS_CO_DEVICE_PROFILE_MASK 0xFFFFu
 #define LS_CO_PROFILE_DRIVE 402u /* CiA 402 in 0x1000 bits 0-15 */
@@ -153,9 +173,20 @@ extern "C" {
 #define LS_CO_EMCY_LEN 8u
 /* A few codes the master acts on by number; ls_co_emcy_name() names them all. */
 #define LS_CO_EMCY_NO_ERROR 0x0000u
-#define LS_CO_EMCY_HEARTBEAT 0x8130u /* life guard or heartbeat error */
+#define LS_CO_EMCY_COMMUNICATION 0x8100u /* communication, generic */
+#define LS_CO_EMCY_HEARTBEAT 0x8130u     /* life guard or heartbeat error */
 #define LS_CO_EMCY_BUS_OFF_RECOVERED 0x8140u
 #define LS_CO_EMCY_FOLLOWING_ERROR 0x8611u /* CiA 402 */
+#define LS_CO_EMCY_PDO_LENGTH 0x8210u      /* PDO not processed due to length error */
+
+/* Error register (0x1001, EMCY byte 2) bits. */
+#define LS_CO_ERR_REG_GENERIC 0x01u
+#define LS_CO_ERR_REG_CURRENT 0x02u
+#define LS_CO_ERR_REG_VOLTAGE 0x04u
+#define LS_CO_ERR_REG_TEMPERATURE 0x08u
+#define LS_CO_ERR_REG_COMMUNICATION 0x10u
+#define LS_CO_ERR_REG_PROFILE 0x20u /* device profile specific */
+#define LS_CO_ERR_REG_MANUFACTURER 0x80u
 
 /* ---- Objects of the drive profile (CiA 402) */
 
@@ -174,10 +205,12 @@ extern "C" {
 #define LS_CO_OBJ_TARGET_POSITION 0x607Au   /* i32 */
 #define LS_CO_OBJ_HOME_OFFSET 0x607Cu       /* i32 */
 #define LS_CO_OBJ_SW_POSITION_LIMIT 0x607Du /* :01 min, :02 max, i32 */
+#define LS_CO_OBJ_QUICK_STOP_DECEL 0x6085u  /* u32, position units / s^2 */
 #define LS_CO_OBJ_HOMING_METHOD 0x6098u     /* i8 */
 #define LS_CO_OBJ_VELOCITY_OFFSET 0x60B1u   /* i32: velocity feed-forward in CSP */
 #define LS_CO_OBJ_TORQUE_OFFSET 0x60B2u     /* i16 */
 #define LS_CO_OBJ_INTERP_PERIOD 0x60C2u     /* :01 u8 value, :02 i8 index: value x 10^index s */
+#define LS_CO_OBJ_FOLLOWING_ACTUAL 0x60F4u  /* i32: following error actual value */
 #define LS_CO_OBJ_SUPPORTED_MODES 0x6502u   /* u32: bit (mode - 1) set when the mode is supported */
 
 /* Modes of operation (0x6060/0x6061). */
@@ -187,6 +220,25 @@ extern "C" {
 #define LS_CO_MODE_CSP 8  /* cyclic synchronous position */
 #define LS_CO_MODE_CSV 9  /* cyclic synchronous velocity */
 #define LS_CO_MODE_CST 10 /* cyclic synchronous torque */
+
+/* Abort connection option code (0x6007): the drive's reaction to a lost
+ * heartbeat, bus-off or NMT stop while its power stage is on. */
+#define LS_CO_ABORT_CONN_NONE 0
+#define LS_CO_ABORT_CONN_FAULT 1
+#define LS_CO_ABORT_CONN_DISABLE_VOLTAGE 2
+#define LS_CO_ABORT_CONN_QUICK_STOP 3
+
+/* Quick stop option code (0x605A): 0 disables the drive at once; 1-4 stop
+ * (on a ramp) and go to SWITCH ON DISABLED; 5-8 stop and stay in QUICK
+ * STOP ACTIVE (from where enable operation resumes). */
+#define LS_CO_QS_DISABLE_DRIVE 0
+#define LS_CO_QS_STAY_MIN 5
+#define LS_CO_QS_STAY_MAX 8
+
+/* Homing methods (0x6098) on the current position: it becomes the home
+ * offset 0x607C (37 in CiA 402 v4; 35 in earlier editions). */
+#define LS_CO_HOMING_CURRENT_POSITION 37
+#define LS_CO_HOMING_CURRENT_POSITION_OLD 35
 
 /* Statusword bits (0x6041). */
 #define LS_CO_SW_READY_TO_SWITCH_ON 0x0001u
@@ -222,6 +274,7 @@ extern "C" {
 #define LS_CO_CW_ENABLE_OPERATION 0x0008u
 #define LS_CO_CW_FAULT_RESET 0x0080u /* acts on its rising edge */
 #define LS_CO_CW_HALT 0x0100u
+#define LS_CO_CW_HOMING_START 0x0010u         /* HM: operation mode specific bit 4, acts on its rising edge */
 #define LS_CO_CW_CMD_SHUTDOWN 0x0006u         /* -> READY TO SWITCH ON */
 #define LS_CO_CW_CMD_SWITCH_ON 0x0007u        /* -> SWITCHED ON (also: disable operation) */
 #define LS_CO_CW_CMD_ENABLE_OPERATION 0x000Fu /* -> OPERATION ENABLED */
@@ -290,6 +343,13 @@ const char *ls_co_abort_name(uint32_t abort_code);
  * else its class: 0x23xx "current, device output side", 0xFFxx "device
  * specific", ...); "no error" for 0x0000. */
 const char *ls_co_emcy_name(uint16_t error_code);
+
+/* The error register bits (0x1001) CiA 301 associates with an EMCY code:
+ * generic for every error, plus its class's bit (current, voltage,
+ * temperature, communication for 0x81xx-0x82xx, device profile for the
+ * other monitoring codes 0x83xx-0x8Fxx, manufacturer for 0xFFxx); 0 for
+ * 0x0000. O(1); any context. */
+uint8_t ls_co_error_register_bits(uint16_t error_code);
 
 /* "OPERATIONAL" etc. for a heartbeat state byte; "unknown" otherwise. */
 const char *ls_co_nmt_state_name(uint8_t state);
