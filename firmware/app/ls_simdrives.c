@@ -1,0 +1,211 @@
+/* ls-simdrives: the simulated arm behind six CiA 402 drives on a CAN link.
+ *
+ *   ls-simdrives --link slcan:pty:/tmp/drives0 [--nodes 0x21,...] [--control PATH]
+ *
+ * A composition: the robot model as the world's arm (as landscaped does),
+ * the world, the link, and the drives of hal/sim/drives, whose header says
+ * what a master sees. One thread, event-driven: it sleeps until a frame or a
+ * control command arrives or a node's timer is due (heartbeats, time-outs),
+ * and exits cleanly on SIGTERM or SIGINT. Logs go to stderr with the
+ * sd-daemon level prefixes journald understands. */
+#include <errno.h>
+#include <inttypes.h>
+#include <poll.h>
+#include <signal.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+#include <time.h>
+
+#include "faulty_link.h"
+#include "hal_linux_socketcan.h"
+#include "hal_sim_drives.h"
+#include "hal_sim_world.h"
+#include "ls_check.h"
+#include "ls_robot_model_sim.h"
+#include "ls_simdrives_opts.h"
+#include "slcan_pty.h"
+
+static volatile sig_atomic_t g_stop;
+
+static void on_signal(int sig)
+{
+    g_stop = sig;
+}
+
+static void logf_(int level, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void logf_(int level, const char *fmt, ...)
+{
+    static const char *names[] = { "", "", "", "error", "warning", "", "info", "debug" };
+    va_list ap;
+    va_start(ap, fmt);
+    fprintf(stderr, "<%d>ls-simdrives: %s: ", level, names[level & 7]);
+    vfprintf(stderr, fmt, ap);
+    fputc('\n', stderr);
+    va_end(ap);
+}
+#define LOG_ERR(...) logf_(3, __VA_ARGS__)
+#define LOG_WARN(...) logf_(4, __VA_ARGS__)
+#define LOG_INFO(...) logf_(6, __VA_ARGS__)
+
+static uint64_t mono_us(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (uint64_t)ts.tv_sec * 1000000u + (uint64_t)ts.tv_nsec / 1000u;
+}
+
+static uint64_t fault_now_us(void *self)
+{
+    (void)self;
+    return mono_us();
+}
+
+static int open_link(const ls_simdrives_opts_t *o, hal_can_link_t *link)
+{
+    char msg[256] = "";
+    int r = strncmp(o->link, "slcan:pty:", 10) == 0 ? hal_sim_slcan_pty_open(link, o->link + 10, msg, sizeof msg)
+                                                    : hal_linux_socketcan_open(link, o->link + 10, msg, sizeof msg);
+    if (r < 0) {
+        LOG_ERR("--link %s: %s", o->link, msg);
+        return r;
+    }
+    if (o->link_faults[0] != '\0') {
+        hal_sim_fault_config_t fc;
+        (void)hal_sim_fault_parse(o->link_faults, &fc, msg, sizeof msg); /* checked with the options */
+        fc.clock = (hal_clock_t){ .now_us = fault_now_us, .self = NULL };
+        hal_can_link_t faulty;
+        if (hal_sim_faulty_wrap(&faulty, link, &fc) != LS_OK) {
+            LOG_ERR("--link-faults: no free fault injector");
+            hal_can_close(link);
+            return LS_EINVAL;
+        }
+        *link = faulty;
+        LOG_WARN("link %s: injecting faults %s", link->name, o->link_faults);
+    }
+    return LS_OK;
+}
+
+/* Sleep until a frame, a command, room for pending output or `due`; a
+ * stop signal, blocked outside, ends the sleep (ppoll unblocks it). */
+static void wait_for_work(hal_can_link_t *link, uint64_t due, const sigset_t *unblocked)
+{
+    struct pollfd fds[2];
+    nfds_t n = 0;
+    int lfd = hal_can_poll_fd(link);
+    if (lfd >= 0) {
+        short out = (hal_can_tx_pending(link) || hal_sim_drives_tx_pending()) ? POLLOUT : 0;
+        fds[n++] = (struct pollfd){ .fd = lfd, .events = (short)(POLLIN | out), .revents = 0 };
+    }
+    if (hal_sim_drives_control_fd() >= 0) {
+        fds[n++] = (struct pollfd){ .fd = hal_sim_drives_control_fd(), .events = POLLIN, .revents = 0 };
+    }
+    uint64_t now = mono_us();
+    uint64_t wait_us = due > now ? due - now : 0u;
+    if (wait_us > 1000000u) {
+        wait_us = 1000000u;
+    }
+    const struct timespec ts = { .tv_sec = (time_t)(wait_us / 1000000u),
+                                 .tv_nsec = (long)(wait_us % 1000000u) * 1000L };
+    (void)ppoll(fds, n, &ts, unblocked);
+}
+
+int main(int argc, char **argv)
+{
+    static ls_simdrives_opts_t o;
+    char msg[512] = "";
+    int pr = ls_simdrives_parse(argc, argv, &o, msg, sizeof msg);
+    if (pr == 1) {
+        fputs(ls_simdrives_usage, stdout);
+        return LS_EXIT_OK;
+    }
+    if (pr < 0) {
+        LOG_ERR("%s", msg);
+        return LS_EXIT_BAD_CONFIG;
+    }
+    /* Stop signals are blocked but inside ppoll: no race between the flag's
+     * test and the sleep. */
+    sigset_t stop_set, unblocked;
+    sigemptyset(&stop_set);
+    sigaddset(&stop_set, SIGTERM);
+    sigaddset(&stop_set, SIGINT);
+    (void)sigprocmask(SIG_BLOCK, &stop_set, &unblocked);
+    sigdelset(&unblocked, SIGTERM);
+    sigdelset(&unblocked, SIGINT);
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigemptyset(&sa.sa_mask);
+    (void)sigaction(SIGTERM, &sa, NULL);
+    (void)sigaction(SIGINT, &sa, NULL);
+    signal(SIGPIPE, SIG_IGN);
+
+    hal_sim_arm_model_t arm;
+    ls_robot_model_to_sim(&ls_robot_model_default, &arm);
+    hal_sim_world_config_t wc = { .arm = &arm, .dio_socket_path = NULL, .lockstep = false, .with_obstacle = true };
+    if (hal_sim_world_open(&wc, msg, sizeof msg) < 0) {
+        LOG_ERR("the simulated world: %s", msg);
+        return 1;
+    }
+    hal_can_link_t link;
+    if (open_link(&o, &link) < 0) {
+        hal_sim_world_close();
+        return 1;
+    }
+    hal_sim_drives_config_t dc = { .link = &link,
+                                   .n_drives = o.n_nodes,
+                                   .counts_per_rad = o.counts_per_rad,
+                                   .control_socket_path = o.control[0] != '\0' ? o.control : NULL };
+    for (size_t i = 0; i < o.n_nodes; i++) {
+        dc.drives[i] = (hal_sim_drive_config_t){ .node_id = o.nodes[i],
+                                                 .joint = (uint8_t)i,
+                                                 .position_offset_counts = o.offsets[i] };
+    }
+    int rc = hal_sim_drives_open(&dc, mono_us(), msg, sizeof msg);
+    if (rc < 0) {
+        LOG_ERR("%s", msg);
+        hal_can_close(&link);
+        hal_sim_world_close();
+        return rc == LS_EINVAL ? LS_EXIT_BAD_CONFIG : 1;
+    }
+    char nodes[6 * HAL_SIM_DRIVES_MAX + 1] = "";
+    for (size_t i = 0; i < o.n_nodes; i++) {
+        snprintf(nodes + strlen(nodes), sizeof nodes - strlen(nodes), "%s0x%02X", i > 0 ? "," : "", o.nodes[i]);
+    }
+    LOG_INFO("ready: nodes %s (joints 1-%zu) on %s, %.6g counts/rad, control %s", nodes, o.n_nodes, link.name,
+             o.counts_per_rad, o.control[0] != '\0' ? o.control : "(none)");
+    uint32_t malformed = 0;
+    int exit_code = LS_EXIT_OK;
+    while (!g_stop) {
+        uint64_t now = mono_us();
+        uint64_t due = hal_sim_drives_next_due_us(now);
+        uint64_t link_due = hal_can_next_due_us(&link);
+        wait_for_work(&link, link_due < due ? link_due : due, &unblocked);
+        int r = hal_sim_drives_poll(mono_us());
+        if (r < 0) {
+            LOG_ERR("link %s failed (%s): stopping", link.name, ls_err_text(r));
+            exit_code = 1;
+            break;
+        }
+        if (hal_sim_drives_malformed_messages() != malformed) {
+            malformed = hal_sim_drives_malformed_messages();
+            LOG_WARN("control: a malformed command was ignored (%" PRIu32 " so far; see hal_sim_drives.h)", malformed);
+        }
+    }
+    if (g_stop) {
+        LOG_INFO("%s received: shutting down", g_stop == SIGINT ? "SIGINT" : "SIGTERM");
+    }
+    hal_sim_drives_stats_t st;
+    hal_sim_drives_stats(&st);
+    LOG_INFO("%" PRIu64 " SYNCs stepped the physics (%" PRIu64 " sub-steps); frames: %" PRIu64 " in, %" PRIu64
+             " out, %" PRIu64 " lost",
+             st.syncs, st.substeps, st.rx_frames, st.tx_frames, st.tx_dropped);
+    char faults[512];
+    if (hal_sim_faulty_format(&link, faults, sizeof faults) >= 0) {
+        LOG_INFO("link %s faults: %s", link.name, faults);
+    }
+    hal_sim_drives_close();
+    hal_can_close(&link);
+    hal_sim_world_close();
+    return exit_code;
+}
