@@ -14,27 +14,27 @@
 #include "ls_err.h"
 #include "ls_math.h"
 
-const char ls_simdrives_usage[] =
-    "usage: ls-simdrives --link slcan:pty:PATH|socketcan:IFNAME [options]\n"
-    "\n"
-    "The simulated arm behind CiA 402 drives, one CANopen node per joint\n"
-    "(hal/sim/drives/hal_sim_drives.h; the drive's EDS: ls-simdrive.eds).\n"
-    "\n"
-    "  --link SPEC              the drive bus: slcan:pty:PATH (a pty a master opens as\n"
-    "                           an SLCAN device) or socketcan:IFNAME\n"
-    "  --nodes ID,ID,...        node ids for joints 1, 2, ... (default 0x21 to 0x26)\n"
-    "  --first-node ID          with --count: nodes ID, ID+1, ... for joints 1, 2, ...\n"
-    "  --count N                number of drives, 1 to 6 (default 6)\n"
-    "  --counts-per-rad N       position unit (default 2^17 x 100 / 2 pi: a 17-bit\n"
-    "                           encoder behind a 100:1 gear)\n"
-    "  --position-offset-counts V | ID=V,...\n"
-    "                           the encoder count at the joint's zero, for every node\n"
-    "                           or per node (e.g. 2147483000: the int32 counter wraps)\n"
-    "  --control PATH           the misbehaviour socket (Unix datagrams: emcy, silence,\n"
-    "                           freeze-tpdo, sticky-fault, no-boot, identity, sto,\n"
-    "                           bus-off, reset)\n"
-    "  --link-faults SPEC       inject faults on the link (tests; as landscaped's)\n"
-    "  --help                   this text\n";
+const char ls_simdrives_usage[] = "usage: ls-simdrives --link slcan:pty:PATH|socketcan:IFNAME [options]\n"
+                                  "\n"
+                                  "The simulated arm behind CiA 402 drives, one CANopen node per joint\n"
+                                  "(hal/sim/drives/hal_sim_drives.h; the drive's EDS: ls-simdrive.eds).\n"
+                                  "\n"
+                                  "  --link SPEC              the drive bus: slcan:pty:PATH (a pty a master opens as\n"
+                                  "                           an SLCAN device) or socketcan:IFNAME\n"
+                                  "  --nodes ID,ID,...        node ids for joints 1, 2, ... (default 0x21 to 0x26)\n"
+                                  "  --first-node ID          with --count: nodes ID, ID+1, ... for joints 1, 2, ...\n"
+                                  "  --count N                number of drives, 1 to 6 (default 6)\n"
+                                  "  --counts-per-rad N       position unit (default 2^17 x 100 / 2 pi: a 17-bit\n"
+                                  "                           encoder behind a 100:1 gear)\n"
+                                  "  --position-offset-counts V | ID=V,...\n"
+                                  "                           the encoder count at the joint's zero, for every node\n"
+                                  "                           or per node (e.g. 2147483000: the int32 counter wraps);\n"
+                                  "                           repeatable, a node's own value wins\n"
+                                  "  --control PATH           the misbehaviour socket (Unix datagrams: emcy, silence,\n"
+                                  "                           freeze-tpdo, sticky-fault, no-boot, identity, sto,\n"
+                                  "                           bus-off, reset)\n"
+                                  "  --link-faults SPEC       inject faults on the link (tests; as landscaped's)\n"
+                                  "  --help                   this text\n";
 
 static int fail(char *msg, size_t msglen, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 static int fail(char *msg, size_t msglen, const char *fmt, ...)
@@ -139,7 +139,8 @@ static int parse_offsets(const char *s, offsets_t *off, char *msg, size_t msglen
     int32_t v = 0;
     if (strchr(s, '=') == NULL) {
         if (!parse_offset(p, &p, &v) || *p != '\0') {
-            return fail(msg, msglen, "--position-offset-counts %s: expected an int32 count (e.g. -5, 2147483000) or ID=V,...", s);
+            return fail(msg, msglen,
+                        "--position-offset-counts %s: expected an int32 count (e.g. -5, 2147483000) or ID=V,...", s);
         }
         off->all = true;
         off->all_value = v;
@@ -148,7 +149,9 @@ static int parse_offsets(const char *s, offsets_t *off, char *msg, size_t msglen
     for (;;) {
         uint8_t id = 0;
         if (!parse_node(p, &p, &id) || *p != '=' || !parse_offset(p + 1, &p, &v) || (*p != '\0' && *p != ',')) {
-            return fail(msg, msglen, "--position-offset-counts %s: expected ID=V pairs separated by commas, e.g. 0x21=2147483000", s);
+            return fail(msg, msglen,
+                        "--position-offset-counts %s: expected ID=V pairs separated by commas, e.g. 0x21=2147483000",
+                        s);
         }
         if (off->n == HAL_SIM_DRIVES_MAX) {
             return fail(msg, msglen, "--position-offset-counts %s: more than %d nodes", s, HAL_SIM_DRIVES_MAX);
@@ -269,7 +272,8 @@ int ls_simdrives_parse(int argc, char **argv, ls_simdrives_opts_t *o, char *msg,
     }
     if (!have_nodes) {
         if (first + count - 1u > LS_CO_NODE_MAX) {
-            return fail(msg, msglen, "--first-node 0x%02X with --count %lu goes past node 0x7F", (unsigned)first, count);
+            return fail(msg, msglen, "--first-node 0x%02X with --count %lu goes past node 0x7F", (unsigned)first,
+                        count);
         }
         o->n_nodes = count;
         for (size_t i = 0; i < count; i++) {
@@ -285,7 +289,8 @@ int ls_simdrives_parse(int argc, char **argv, ls_simdrives_opts_t *o, char *msg,
             i++;
         }
         if (i == o->n_nodes) {
-            return fail(msg, msglen, "--position-offset-counts: node 0x%02X is not one of the drives", (unsigned)off.node[k]);
+            return fail(msg, msglen, "--position-offset-counts: node 0x%02X is not one of the drives",
+                        (unsigned)off.node[k]);
         }
         o->offsets[i] = off.value[k];
     }

@@ -44,15 +44,22 @@ class Controller:
         return run_cli("--interface", "slcan", "--channel", self.pty, *args, timeout=timeout, check=check)
 
     def stop(self, sig: int = signal.SIGTERM) -> int:
-        if self.proc.poll() is None:
-            self.proc.send_signal(sig)
         try:
-            return self.proc.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            self.proc.kill()
-            raise AssertionError("landscaped did not stop within 10 s of a signal") from None
+            return stop_process(self.proc, "landscaped", sig)
         finally:
             stop_drives(self.drives)
+
+
+def stop_process(proc: subprocess.Popen[bytes], name: str, sig: int = signal.SIGTERM) -> int:
+    """Send `sig` to a program a test started (when it still runs) and wait for its exit
+    code; kill it and fail when it has not stopped within 10 s."""
+    if proc.poll() is None:
+        proc.send_signal(sig)
+    try:
+        return proc.wait(timeout=10)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        raise AssertionError(f"{name} did not stop within 10 s of a signal") from None
 
 
 def run_cli(*args: str, timeout: float = 60.0, check: bool = False) -> subprocess.CompletedProcess[str]:
