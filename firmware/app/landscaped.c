@@ -28,6 +28,7 @@
 #include "hal_linux_socketcan.h"
 #include "hal_sim_world.h"
 #include "landscape.h" /* cantools: DBC pack functions */
+#include "ls_app_log.h"
 #include "cmd_sensor.h"
 #include "ls_check.h"
 #include "ls_config.h"
@@ -140,20 +141,9 @@ static const char *signal_name(int sig)
 }
 
 /* sd-daemon style level prefixes: journald stores them as priorities. */
-static void logf_(int level, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
-static void logf_(int level, const char *fmt, ...)
-{
-    static const char *names[] = { "", "", "", "error", "warning", "", "info", "debug" };
-    va_list ap;
-    va_start(ap, fmt);
-    fprintf(stderr, "<%d>landscaped: %s: ", level, names[level & 7]);
-    vfprintf(stderr, fmt, ap);
-    fputc('\n', stderr);
-    va_end(ap);
-}
-#define LOG_ERR(...) logf_(3, __VA_ARGS__)
-#define LOG_WARN(...) logf_(4, __VA_ARGS__)
-#define LOG_INFO(...) logf_(6, __VA_ARGS__)
+#define LOG_ERR(...) ls_app_log("landscaped", LS_APP_LOG_ERR, __VA_ARGS__)
+#define LOG_WARN(...) ls_app_log("landscaped", LS_APP_LOG_WARNING, __VA_ARGS__)
+#define LOG_INFO(...) ls_app_log("landscaped", LS_APP_LOG_INFO, __VA_ARGS__)
 
 static uint64_t mono_us(void)
 {

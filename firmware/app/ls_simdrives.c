@@ -12,7 +12,6 @@
 #include <inttypes.h>
 #include <poll.h>
 #include <signal.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
 #include <time.h>
@@ -21,6 +20,7 @@
 #include "hal_linux_socketcan.h"
 #include "hal_sim_drives.h"
 #include "hal_sim_world.h"
+#include "ls_app_log.h"
 #include "ls_check.h"
 #include "ls_robot_model_sim.h"
 #include "ls_simdrives_opts.h"
@@ -33,20 +33,9 @@ static void on_signal(int sig)
     g_stop = sig;
 }
 
-static void logf_(int level, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
-static void logf_(int level, const char *fmt, ...)
-{
-    static const char *names[] = { "", "", "", "error", "warning", "", "info", "debug" };
-    va_list ap;
-    va_start(ap, fmt);
-    fprintf(stderr, "<%d>ls-simdrives: %s: ", level, names[level & 7]);
-    vfprintf(stderr, fmt, ap);
-    fputc('\n', stderr);
-    va_end(ap);
-}
-#define LOG_ERR(...) logf_(3, __VA_ARGS__)
-#define LOG_WARN(...) logf_(4, __VA_ARGS__)
-#define LOG_INFO(...) logf_(6, __VA_ARGS__)
+#define LOG_ERR(...) ls_app_log("ls-simdrives", LS_APP_LOG_ERR, __VA_ARGS__)
+#define LOG_WARN(...) ls_app_log("ls-simdrives", LS_APP_LOG_WARNING, __VA_ARGS__)
+#define LOG_INFO(...) ls_app_log("ls-simdrives", LS_APP_LOG_INFO, __VA_ARGS__)
 
 static uint64_t mono_us(void)
 {
