@@ -520,3 +520,51 @@ def test_check_fails_for_a_missing_interface_and_a_busy_line(which: str, tmp_pat
     fails = [ln for ln in r.stdout.splitlines() if ln.startswith("FAIL")]
     assert any(ln.startswith("FAIL  link socketcan:vcan9") for ln in fails), r.stdout
     assert any(ln.startswith("FAIL  gpio") and re.search(rf"\b{busy}\b", ln) for ln in fails), r.stdout
+
+
+# ---------------------------------------------------------------- simulated drives on vcan
+
+SIMDRIVES = BUILD / "bin" / "ls-simdrives"
+SIMDRIVE_EDS = ROOT / "hal" / "sim" / "drives" / "ls-simdrive.eds"
+
+
+def test_simulated_drives_answer_python_canopen_over_vcan(tmp_path: Path) -> None:
+    """ls-simdrives on real SocketCAN (docs/simulated-drives.md): python-canopen over
+    python-can's socketcan interface resets a node, hears its boot-up, reads objects
+    expedited and segmented, and gets a synchronous TPDO for a SYNC."""
+    import threading
+
+    import canopen
+
+    assert SIMDRIVES.exists(), f"{SIMDRIVES} missing: build first (bash .ci/build)"
+    log = log_dir(tmp_path) / "ls-simdrives.log"
+    with log.open("w") as f:
+        proc = subprocess.Popen([str(SIMDRIVES), "--link", f"socketcan:{CAN_IF}", "--nodes", "0x21,0x22"],
+                                stdout=subprocess.DEVNULL, stderr=f)
+    net = canopen.Network()
+    try:
+        wait_for(lambda: "ready:" in log.read_text() or proc.poll() is not None, 60, "ls-simdrives ready")
+        assert proc.poll() is None, log.read_text()
+        net.connect(interface="socketcan", channel=CAN_IF)
+        node = canopen.RemoteNode(0x21, str(SIMDRIVE_EDS))
+        net.add_node(node)
+        booted = threading.Event()
+        node.nmt.add_heartbeat_callback(lambda state: booted.set() if state == 0 else None)
+        node.nmt.send_command(0x81)
+        assert booted.wait(30), "no boot-up after NMT reset node"
+        node.sdo.RESPONSE_TIMEOUT = 5.0  # the emulated guest is slow
+        assert node.sdo[0x1000].raw & 0xFFFF == 402
+        assert node.sdo[0x1008].raw == "LandScape simulated drive"  # segmented
+        node.tpdo.read()
+        assert node.tpdo[3].enabled and node.tpdo[3].trans_type == 1  # statusword + position, every SYNC
+        node.nmt.state = "OPERATIONAL"
+        time.sleep(0.5)
+        net.sync.transmit()
+        assert node.tpdo[3].wait_for_reception(10) is not None, "no TPDO after a SYNC"
+        assert node.tpdo[3][0x6041].raw & 0x4F == 0x40  # SWITCH ON DISABLED
+    finally:
+        net.disconnect()
+        if proc.poll() is None:
+            proc.terminate()
+        rc = proc.wait(timeout=30)
+    assert rc == 0, log.read_text()
