@@ -31,6 +31,7 @@
 #include <stdint.h>
 
 #include "hal/hal_arm.h"
+#include "hal/hal_manual.h"
 #include "hal/hal_clock.h"
 #include "hal/hal_dio.h"
 #include "ls_motion.h"

@@ -11,6 +11,7 @@
 #include <stdint.h>
 
 #include "hal/hal_arm.h"
+#include "hal/hal_manual.h"
 #include "hal/hal_dio.h"
 #include "landscape.pb.h"
 #include "ls_cmd_table.h"

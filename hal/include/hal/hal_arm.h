@@ -1,6 +1,7 @@
-/* Arm contract: joint commands and feedback, sensors, tool changer and a
- * manual input device. hal/sim implements all of them on an ODE world; a real
- * controller implements what its hardware has and leaves the rest NULL.
+/* Arm contract: joint commands and feedback, sensors and a tool changer
+ * (the manual input devices have their own contract: hal/hal_manual.h).
+ * hal/sim implements all of them on an ODE world; a real controller
+ * implements what its hardware has and leaves the rest NULL.
  * The arm of real drives (firmware/drives: CiA 402 over CANopen) enables in
  * steps, one per drive cycle, and its feedback arrives once per drive cycle:
  * enable() asks, status() tells when each joint is under control, and read()
@@ -114,13 +115,6 @@ typedef struct {
     const hal_tool_ops_t *ops;
     void *self;
 } hal_tool_t;
-
-/* Manual input device (teach pendant, 6-DOF mouse): a normalised twist. */
-typedef struct {
-    /* twist[6] in -1..1 (vx vy vz wx wy wz, tool frame), buttons bit mask. */
-    int (*read)(void *self, double *twist, uint32_t *buttons);
-    void *self;
-} hal_manual_t;
 
 int hal_arm_info(hal_arm_t *arm, hal_arm_info_t *out);
 int hal_arm_enable(hal_arm_t *arm, bool on);

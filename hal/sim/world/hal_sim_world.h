@@ -190,6 +190,7 @@
 #include <stdint.h>
 
 #include "hal/hal_arm.h"
+#include "hal/hal_manual.h"
 #include "hal/hal_dio.h"
 
 #define HAL_SIM_ARM_JOINTS 6

@@ -9,6 +9,7 @@
 
 #include "hal/hal_dio.h"
 #include "hal/hal_arm.h"
+#include "hal/hal_manual.h"
 #include "hal_sim_world.h"
 
 #define SIM_CTL_MAX_MSG 255u
