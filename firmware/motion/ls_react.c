@@ -581,9 +581,10 @@ void ls_react_step(ls_react_t *r, double dt_s, const double q_meas[LS_N_JOINTS],
 
 void ls_react_jog_config(ls_react_t *r, const ls_jog_config_t *cfg)
 {
-    memset(r->jv_, 0, sizeof r->jv_);
-    memset(r->ja_, 0, sizeof r->ja_);
+    ls_react_jog_halt(r);
     r->jog_limited_ = false;
+    r->jframe_ = r->jframe_next_ = LS_JOG_TOOL;
+    r->jjoint_ = r->jjoint_next_ = false;
     if (cfg == NULL) {
         r->jog_on_ = false;
         return;
@@ -592,10 +593,28 @@ void ls_react_jog_config(ls_react_t *r, const ls_jog_config_t *cfg)
     r->jog_on_ = true;
 }
 
+void ls_react_jog_mode(ls_react_t *r, ls_jog_frame_t frame, bool joint)
+{
+    r->jframe_next_ = (unsigned)frame < LS_JOG_FRAMES ? frame : LS_JOG_TOOL;
+    r->jjoint_next_ = joint;
+}
+
+ls_jog_frame_t ls_react_jog_frame(const ls_react_t *r)
+{
+    return r->jframe_;
+}
+
+bool ls_react_jog_joint(const ls_react_t *r)
+{
+    return r->jjoint_;
+}
+
 void ls_react_jog_halt(ls_react_t *r)
 {
     memset(r->jv_, 0, sizeof r->jv_);
     memset(r->ja_, 0, sizeof r->ja_);
+    memset(r->jqv_, 0, sizeof r->jqv_);
+    memset(r->jqa_, 0, sizeof r->jqa_);
 }
 
 bool ls_react_jog_on(const ls_react_t *r)
@@ -653,7 +672,106 @@ static bool jog_still(const ls_react_t *r)
             return false;
         }
     }
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        if (fabs(r->jqv_[j]) >= 1e-12 || fabs(r->jqa_[j]) >= 1e-9) {
+            return false;
+        }
+    }
     return true;
+}
+
+/* Where joint j comes to rest braking from (q, v, a) on its jog ramp. */
+static double joint_rest(const ls_jog_config_t *c, int j, double q, double v, double a)
+{
+    ls_ramp_t rp;
+    if (ls_ramp_plan(&rp, q, v, a, 0.0, c->qdd_rad_s2[j], c->qddd_rad_s3[j]) != LS_OK) {
+        return q;
+    }
+    return rp.p_[3];
+}
+
+/* One cycle of single-joint jogging: the largest component of tw drives its
+ * joint, the other joints ramp to rest. Each joint follows its target on
+ * its own jerk-limited ramp (ls_ramp) and brakes in time for its limits: a
+ * step whose braking distance would pass a limit becomes a brake (braking
+ * from where the previous cycle's check held stays within the limit). */
+static bool jog_joint_step(ls_react_t *r, double dt_s, const double tw[6], double q_cmd[LS_N_JOINTS],
+                           double qd_cmd[LS_N_JOINTS], ls_motion_events_t *ev)
+{
+    const ls_jog_config_t *c = &r->jog_;
+    const ls_robot_model_t *m = r->model;
+    int k = -1;
+    for (int i = 0; i < LS_N_JOINTS && i < 6; i++) {
+        if (tw[i] != 0.0 && (k < 0 || fabs(tw[i]) > fabs(tw[k]))) {
+            k = i;
+        }
+    }
+    double q_new[LS_N_JOINTS];
+    int limited = -1;
+    bool moved = false;
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        const double target = j == k ? tw[j] * c->qd_rad_s[j] : 0.0;
+        double p = q_cmd[j], v = r->jqv_[j], a = r->jqa_[j];
+        ls_ramp_t rp;
+        if (ls_ramp_plan(&rp, q_cmd[j], r->jqv_[j], r->jqa_[j], target, c->qdd_rad_s2[j], c->qddd_rad_s3[j]) == LS_OK) {
+            ls_ramp_sample(&rp, dt_s, &p, &v, &a);
+        } else {
+            v = a = 0.0; /* not finite: stop */
+        }
+        const double rest = joint_rest(c, j, p, v, a);
+        if (rest < m->q_min_rad[j] || rest > m->q_max_rad[j]) {
+            /* brake: from the state whose rest the previous cycle found inside */
+            if (ls_ramp_plan(&rp, q_cmd[j], r->jqv_[j], r->jqa_[j], 0.0, c->qdd_rad_s2[j], c->qddd_rad_s3[j]) ==
+                LS_OK) {
+                ls_ramp_sample(&rp, dt_s, &p, &v, &a);
+            }
+            if (j == k) {
+                limited = j;
+            }
+        }
+        if (p < m->q_min_rad[j] || p > m->q_max_rad[j]) {
+            /* a start outside (it never is when the jog began inside): hold */
+            p = q_cmd[j];
+            v = a = 0.0;
+            if (j == k) {
+                limited = j;
+            }
+        }
+        q_new[j] = p;
+        r->jqv_[j] = v;
+        r->jqa_[j] = a;
+        moved = moved || p != q_cmd[j];
+    }
+    double F[16], P[16];
+    ls_kin_fk(m, q_new, F);
+    ls_pose_mul(F, c->tool, P);
+    for (int i = 0; i < 3 && moved; i++) {
+        if (P[12 + i] < m->workspace_min_m[i] || P[12 + i] > m->workspace_max_m[i]) {
+            ls_react_jog_halt(r);
+            if (!r->jog_limited_) {
+                r->jog_limited_ = true;
+                char t[80];
+                ls_fmt_print(t, sizeof t, "stopped at workspace: tip %c %.4g m outside [%.4g, %.4g]", "xyz"[i],
+                             P[12 + i], m -> workspace_min_m[i], m -> workspace_max_m[i]);
+                emit(ev, LS_MEV_JOG, 0, 1, t, q_cmd);
+            }
+            return false;
+        }
+    }
+    if (limited >= 0 && !r->jog_limited_) {
+        r->jog_limited_ = true;
+        char t[80];
+        ls_fmt_print(t, sizeof t, "stopped at joint %d limit", limited + 1);
+        emit(ev, LS_MEV_JOG, 0, 1, t, q_cmd);
+    }
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        qd_cmd[j] = (q_new[j] - q_cmd[j]) / dt_s;
+        q_cmd[j] = q_new[j];
+    }
+    if (jog_still(r)) {
+        ls_react_jog_halt(r); /* at rest: exactly, from now on */
+    }
+    return moved;
 }
 
 bool ls_react_jog_step(ls_react_t *r, double dt_s, const double *twist, double q_cmd[LS_N_JOINTS],
@@ -675,15 +793,32 @@ bool ls_react_jog_step(ls_react_t *r, double dt_s, const double *twist, double q
     if (!any) {
         r->jog_limited_ = false; /* released: the next push may report a limit again */
     }
+    if (r->jframe_next_ != r->jframe_ || r->jjoint_next_ != r->jjoint_) {
+        if (jog_still(r)) {
+            r->jframe_ = r->jframe_next_;
+            r->jjoint_ = r->jjoint_next_;
+        } else {
+            memset(tw, 0, sizeof tw); /* to rest in the old mode first */
+        }
+    }
+    if (r->jjoint_) {
+        return jog_joint_step(r, dt_s, tw, q_cmd, qd_cmd, ev);
+    }
     const ls_jog_config_t *c = &r->jog_;
     double F[16], P[16];
     ls_kin_fk(r->model, q_cmd, F);
     ls_pose_mul(F, c->tool, P);
-    double vt_tool[3] = { tw[0] * c->v_lin_m_s, tw[1] * c->v_lin_m_s, tw[2] * c->v_lin_m_s };
-    double wt_tool[3] = { tw[3] * c->v_ang_rad_s, tw[4] * c->v_ang_rad_s, tw[5] * c->v_ang_rad_s };
+    double vt_jog[3] = { tw[0] * c->v_lin_m_s, tw[1] * c->v_lin_m_s, tw[2] * c->v_lin_m_s };
+    double wt_jog[3] = { tw[3] * c->v_ang_rad_s, tw[4] * c->v_ang_rad_s, tw[5] * c->v_ang_rad_s };
     double vt[3], wt[3];
-    rot_apply(P, vt_tool, vt);
-    rot_apply(P, wt_tool, wt);
+    if (r->jframe_ == LS_JOG_BASE) {
+        memcpy(vt, vt_jog, sizeof vt);
+        memcpy(wt, wt_jog, sizeof wt);
+    } else {
+        const double *axes = r->jframe_ == LS_JOG_WORLD ? c->world : P;
+        rot_apply(axes, vt_jog, vt);
+        rot_apply(axes, wt_jog, wt);
+    }
     double dp[3], w[3];
     approach(r->jv_, r->ja_, vt, c->a_lin_m_s2, c->j_lin_m_s3, dt_s, dp);
     approach(r->jv_ + 3, r->ja_ + 3, wt, c->a_ang_rad_s2, c->j_ang_rad_s3, dt_s, w);

@@ -114,12 +114,25 @@ typedef struct {
     double compliance_m; /* comply: final offset along n */
 } ls_react_report_t;
 
+/* The axes a jog's twist is taken along (ls_react_jog_mode). Translation
+ * and rotation are always about the tool tip; the frame gives the axes. */
+typedef enum {
+    LS_JOG_TOOL = 0, /* the tool frame FK(q) * tool: the axes turn with the tool */
+    LS_JOG_BASE,     /* the base frame's axes */
+    LS_JOG_WORLD,    /* the world frame's axes (ls_jog_config_t.world) */
+} ls_jog_frame_t;
+#define LS_JOG_FRAMES 3
+
 /* Jogging limits, SI, > 0. The twist's tool frame is FK(q) * tool. */
 typedef struct {
     double v_lin_m_s, v_ang_rad_s; /* at a full-scale twist (1.0) */
     double a_lin_m_s2, a_ang_rad_s2;
     double j_lin_m_s3, j_ang_rad_s3;
     double tool[16];
+    double world[16]; /* base -> world frame (LS_JOG_WORLD) */
+    /* Single-joint mode: joint speed at a full-scale component, and the
+     * joint's acceleration and jerk. */
+    double qd_rad_s[LS_N_JOINTS], qdd_rad_s2[LS_N_JOINTS], qddd_rad_s3[LS_N_JOINTS];
 } ls_jog_config_t;
 
 typedef struct {
@@ -148,8 +161,11 @@ typedef struct {
     bool jog_on_;
     bool jog_limited_;
     ls_jog_config_t jog_;
-    double jv_[6]; /* current twist, base frame */
-    double ja_[6]; /* its rate of change */
+    double jv_[6];                               /* current twist, base frame */
+    double ja_[6];                               /* its rate of change */
+    double jqv_[LS_N_JOINTS], jqa_[LS_N_JOINTS]; /* single-joint mode: joint speeds and their rates */
+    ls_jog_frame_t jframe_, jframe_next_;
+    bool jjoint_, jjoint_next_;
 } ls_react_t;
 
 /* Init-time. */
@@ -179,17 +195,28 @@ bool ls_react_moving(const ls_react_t *r);
 void ls_react_step(ls_react_t *r, double dt_s, const double q_meas[LS_N_JOINTS], const double *reading,
                    double q_cmd[LS_N_JOINTS], double qd_cmd[LS_N_JOINTS], ls_motion_events_t *ev);
 
-/* Jogging: cfg NULL turns it off (the twist is then ignored). */
+/* Jogging: cfg NULL turns it off (the twist is then ignored). Turning it on
+ * starts in the tool frame, Cartesian. */
 void ls_react_jog_config(ls_react_t *r, const ls_jog_config_t *cfg);
 bool ls_react_jog_on(const ls_react_t *r);
+/* The jog's frame and single-joint mode (joint true: component i of the
+ * twist is the speed of joint i + 1, and only the largest component counts:
+ * one joint moves at a time). A change takes effect at rest: a jog that
+ * moves ramps to rest first, ignoring the twist meanwhile, so no speed of
+ * the old mode carries over into the new one. */
+void ls_react_jog_mode(ls_react_t *r, ls_jog_frame_t frame, bool joint);
+/* The mode in effect (a requested change may still wait for rest). */
+ls_jog_frame_t ls_react_jog_frame(const ls_react_t *r);
+bool ls_react_jog_joint(const ls_react_t *r);
 /* Forget the jog's speed (drives switched on or off, fault): the next jog
  * cycle starts from rest. */
 void ls_react_jog_halt(ls_react_t *r);
 /* One jog cycle from the set-point q_cmd (updated in place) with the device's
- * twist (-1..1 each, tool frame; NULL = still). Stops, without a fault, in
- * front of a joint limit, the workspace box, a singularity or a joint speed
- * limit (one LS_MEV_JOG event saying which, when it first stops there).
- * Returns true when the set-point moved. */
+ * twist (-1..1 each, in the jog frame; NULL = still). Stops, without a
+ * fault, in front of a joint limit, the workspace box, a singularity or a
+ * joint speed limit (one LS_MEV_JOG event saying which, when it first stops
+ * there). In single-joint mode a joint brakes on its ramp in time to stop
+ * at its limit. Returns true when the set-point moved. */
 bool ls_react_jog_step(ls_react_t *r, double dt_s, const double *twist, double q_cmd[LS_N_JOINTS],
                        double qd_cmd[LS_N_JOINTS], ls_motion_events_t *ev);
 

@@ -612,6 +612,99 @@ static void test_jog_stops_at_a_joint_limit_without_a_fault(void **state)
     assert_true(q[5] < at - 1e-3);
 }
 
+static ls_jog_config_t joint_jog_cfg(void)
+{
+    ls_jog_config_t c = jog_cfg();
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        c.qd_rad_s[j] = 0.25 * M->qd_max_rad_s[j];
+        c.qdd_rad_s2[j] = M->qdd_max_rad_s2[j];
+        c.qddd_rad_s3[j] = M->qddd_max_rad_s3[j];
+    }
+    return c;
+}
+
+/* Single-joint mode: the largest component drives its joint alone, within
+ * the joint's acceleration and jerk, and the joint brakes on its ramp in
+ * time to stop at its limit (reported once). */
+static void test_jog_in_joint_mode_moves_one_joint_and_brakes_before_its_limit(void **state)
+{
+    (void)state;
+    ls_react_t r;
+    ls_react_init(&r, M);
+    ls_jog_config_t c = joint_jog_cfg();
+    ls_react_jog_config(&r, &c);
+    ls_react_jog_mode(&r, LS_JOG_TOOL, true);
+    double q[LS_N_JOINTS], qd[LS_N_JOINTS];
+    memcpy(q, Q0, sizeof q);
+    q[5] = M->q_max_rad[5] - 0.3;
+    const double q4 = q[4];
+    const double tw[6] = { 0.0, 0.0, 0.0, 0.0, 0.3, 1.0 }; /* joint 6 wins over joint 5 */
+    log_t log = { 0 };
+    double h[4] = { q[5], q[5], q[5], q[5] };
+    double v_max = 0.0, a_max = 0.0, j_max = 0.0;
+    for (int i = 0; i < 2000; i++) {
+        ls_motion_events_t ev = { .n = 0 };
+        (void)ls_react_jog_step(&r, DT_S, tw, q, qd, &ev);
+        collect(&log, &ev);
+        assert_true(ls_react_jog_joint(&r));
+        assert_true(q[5] <= M->q_max_rad[5]);
+        assert_true(q[4] == q4);
+        memmove(h + 1, h, 3 * sizeof h[0]);
+        h[0] = q[5];
+        if (i >= 3) {
+            v_max = fmax(v_max, fabs(h[0] - h[1]) / DT_S);
+            a_max = fmax(a_max, fabs(h[0] - 2.0 * h[1] + h[2]) / (DT_S * DT_S));
+            j_max = fmax(j_max, fabs(h[0] - 3.0 * h[1] + 3.0 * h[2] - h[3]) / (DT_S * DT_S * DT_S));
+        }
+    }
+    print_message("joint jog: speed %.4f rad/s (%.4f), acceleration %.3f (%.3f), jerk %.2f (%.2f); stopped %.2e rad "
+                  "before the limit\n",
+                  v_max, c.qd_rad_s[5], a_max, c.qdd_rad_s2[5], j_max, c.qddd_rad_s3[5], M->q_max_rad[5] - q[5]);
+    assert_true(v_max <= c.qd_rad_s[5] * (1.0 + 1e-9));
+    assert_true(a_max <= c.qdd_rad_s2[5] * 1.01);
+    assert_true(j_max <= c.qddd_rad_s3[5] * 1.01);
+    assert_true(M->q_max_rad[5] - q[5] < 5e-3);
+    assert_int_equal(log.n_fault, 0);
+    assert_int_equal(log.n_jog, 1);
+    assert_string_equal(log.last.text, "stopped at joint 6 limit");
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        assert_true(qd[j] == 0.0); /* at rest at the limit */
+    }
+}
+
+/* A change of frame or mode waits for rest: the jog first ramps down in the
+ * mode it had, then moves in the new one. */
+static void test_a_jog_mode_change_takes_effect_at_rest(void **state)
+{
+    (void)state;
+    ls_react_t r;
+    ls_react_init(&r, M);
+    ls_jog_config_t c = joint_jog_cfg();
+    ls_react_jog_config(&r, &c);
+    double q[LS_N_JOINTS], qd[LS_N_JOINTS];
+    memcpy(q, Q0, sizeof q);
+    const double tw[6] = { 1.0, 0.0, 0.0, 0.0, 0.0, 0.0 };
+    for (int i = 0; i < 300; i++) {
+        assert_true(ls_react_jog_step(&r, DT_S, tw, q, qd, NULL));
+    }
+    ls_react_jog_mode(&r, LS_JOG_BASE, true);
+    int cartesian = 0;
+    double q0_before = q[0];
+    for (int i = 0; i < 1000 && !ls_react_jog_joint(&r); i++) {
+        (void)ls_react_jog_step(&r, DT_S, tw, q, qd, NULL);
+        cartesian++;
+    }
+    assert_true(ls_react_jog_joint(&r));
+    assert_int_equal(ls_react_jog_frame(&r), LS_JOG_BASE);
+    assert_in_range(cartesian, 190, 215); /* the Cartesian ramp down: 0.1 / 1 + 1 / 10 s */
+    const double q1 = q[1];
+    for (int i = 0; i < 100; i++) {
+        (void)ls_react_jog_step(&r, DT_S, tw, q, qd, NULL);
+    }
+    assert_true(q[0] > q0_before); /* joint 1 moves now */
+    assert_true(fabs(q[1] - q1) < 1e-15);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -627,6 +720,8 @@ int main(void)
         cmocka_unit_test(test_jog_respects_speed_and_acceleration),
         cmocka_unit_test(test_jog_keeps_its_limits_when_the_twist_changes_mid_ramp),
         cmocka_unit_test(test_jog_stops_at_a_joint_limit_without_a_fault),
+        cmocka_unit_test(test_jog_in_joint_mode_moves_one_joint_and_brakes_before_its_limit),
+        cmocka_unit_test(test_a_jog_mode_change_takes_effect_at_rest),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
