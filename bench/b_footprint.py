@@ -211,6 +211,7 @@ def label(path: str) -> str:
                      ("ls_fmt", "firmware/common/ls_fmt.c"), ("ls_kin", "firmware/kinematics"),
                      ("ls_motion", "firmware/motion/ls_motion.c"),
                      ("ls_react", "firmware/motion/ls_react.c"), ("ls_control", "firmware/control"),
+                     ("ls_manual", "firmware/control"),
                      ("ls_net", "firmware/net"),
                      ("ls_isotp", "firmware/isotp"), ("ls_traj", "firmware/motion/ls_traj.c"),
                      ("ls_ramp", "firmware/motion/ls_ramp.c"),

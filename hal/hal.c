@@ -7,6 +7,7 @@
 #include "hal/hal_can.h"
 #include "hal/hal_clock.h"
 #include "hal/hal_dio.h"
+#include "hal/hal_manual.h"
 
 #define HAL_CALL(obj, op, ...)                                                                                         \
     (((obj) != NULL && (obj)->ops != NULL && (obj)->ops->op != NULL) ? (obj)->ops->op((obj)->self, __VA_ARGS__)        \
@@ -133,6 +134,36 @@ int hal_arm_update(hal_arm_t *arm, uint64_t now_us)
         return arm->ops->update(arm->self, now_us);
     }
     return LS_OK;
+}
+
+const char *hal_manual_button_name(unsigned index)
+{
+    /* in the order of the HAL_MANUAL_BTN_* bits */
+    static const char *const names[HAL_MANUAL_BTN_COUNT] = { "enable",     "panic", "speed_up",
+                                                             "speed_down", "frame", "joint" };
+    return index < HAL_MANUAL_BTN_COUNT ? names[index] : NULL;
+}
+
+const char *hal_manual_axis_name(unsigned index)
+{
+    static const char *const names[6] = { "vx", "vy", "vz", "wx", "wy", "wz" };
+    return index < 6u ? names[index] : NULL;
+}
+
+int hal_manual_read(const hal_manual_t *dev, hal_manual_state_t *out)
+{
+    if (out == NULL) {
+        return LS_EINVAL;
+    }
+    if (dev == NULL || dev->read == NULL) {
+        memset(out, 0, sizeof *out);
+        return LS_EUNSUPPORTED;
+    }
+    int st = dev->read(dev->self, out);
+    if (st < 0) {
+        memset(out, 0, sizeof *out);
+    }
+    return st;
 }
 
 uint64_t hal_clock_now_us(const hal_clock_t *clock)

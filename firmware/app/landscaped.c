@@ -215,7 +215,7 @@ static hal_linux_rt_t g_rt;
 static hal_arm_t g_arm;
 static hal_dio_t g_dio;
 static hal_tool_t g_tool;
-static hal_manual_t g_manual;
+static hal_manual_t g_manual_sim;
 static bool g_world_open;
 static _Atomic bool g_loop_attached;
 
@@ -438,11 +438,13 @@ static int compose(const ls_config_t *o)
         }
         hal_sim_world_get_arm(&g_arm);
         hal_sim_world_get_tool(&g_tool);
-        hal_sim_world_get_manual(&g_manual);
+        hal_sim_world_get_manual(&g_manual_sim);
         sensors = hal_sim_world_sensors(&n_sensors);
         arm = &g_arm;
         g_core.tool = &g_tool;
-        g_core.manual = &g_manual;
+        for (int k = 0; k < LS_MANUAL_KINDS; k++) {
+            g_core.manual[k] = &g_manual_sim; /* the control socket's jog, for both kinds */
+        }
         if (strcmp(o->dio, "sim") == 0) {
             hal_sim_world_get_dio(&g_dio);
             dio = &g_dio;

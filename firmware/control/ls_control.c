@@ -101,7 +101,8 @@ bool ls_control_start_react(ls_control_t *c, uint32_t ref_seq)
     return true;
 }
 
-bool ls_control_set_manual(ls_control_t *c, const hal_manual_t *dev, const ls_jog_config_t *jog, uint32_t ref_seq)
+bool ls_control_set_manual(ls_control_t *c, const hal_manual_t *dev, const ls_jog_config_t *jog,
+                           const ls_manual_config_t *gate, uint32_t ref_seq)
 {
     ls_ctl_cmd_t cmd;
     memset(&cmd, 0, sizeof cmd);
@@ -111,6 +112,9 @@ bool ls_control_set_manual(ls_control_t *c, const hal_manual_t *dev, const ls_jo
     if (on) {
         cmd.manual.dev = dev;
         cmd.manual.jog = *jog;
+        if (gate != NULL) {
+            cmd.manual.gate = *gate;
+        }
     }
     if (!cmd_push(c, &cmd)) {
         return false;
@@ -410,6 +414,7 @@ static void enabled_now(ls_control_t *c)
     ev_push(c, &ev);
     if (c->manual != NULL) {
         ls_react_jog_halt(&c->react);
+        ls_manual_block(&c->gate); /* an enabling switch held through the switch-on must be pressed again */
         jog_ready(c, c->enable_ref_seq);
     }
 }
@@ -592,6 +597,7 @@ static void handle_command(ls_control_t *c, const ls_ctl_cmd_t *cmd)
     case LS_CTL_MANUAL:
         c->manual = cmd->manual.dev;
         ls_react_jog_config(&c->react, c->manual != NULL ? &cmd->manual.jog : NULL);
+        ls_manual_start(&c->gate, &cmd->manual.gate);
         if (c->manual != NULL && c->enabled) {
             jog_ready(c, cmd->ref_seq);
         }
@@ -655,6 +661,30 @@ static void read_dio(ls_control_t *c)
     }
 }
 
+/* The manual device through its gate, every cycle while manual control is
+ * on (drives on or off): its events go out, its frame and joint mode go to
+ * the jog, and twist gets what the jog may follow (zeros when it may not). */
+static void read_manual(ls_control_t *c, double twist[6])
+{
+    memset(twist, 0, 6 * sizeof twist[0]);
+    if (c->manual == NULL) {
+        return;
+    }
+    hal_manual_state_t st;
+    const int rs = hal_manual_read(c->manual, &st);
+    ls_manual_events_t gev;
+    gev.n = 0;
+    (void)ls_manual_step(&c->gate, &st, rs, twist, &gev);
+    ls_react_jog_mode(&c->react, ls_manual_frame(&c->gate), ls_manual_joint(&c->gate));
+    for (uint8_t i = 0; i < gev.n; i++) {
+        ls_ctl_event_t ev;
+        memset(&ev, 0, sizeof ev);
+        ev.kind = LS_CEV_MANUAL;
+        ev.manual = gev.ev[i];
+        ev_push(c, &ev);
+    }
+}
+
 void ls_control_cycle(ls_control_t *c, uint64_t now_us)
 {
     c->now_us = now_us;
@@ -664,6 +694,8 @@ void ls_control_cycle(ls_control_t *c, uint64_t now_us)
     }
     read_dio(c);
     check_joints(c);
+    double twist[6];
+    read_manual(c, twist);
     ls_motion_events_t mev;
     mev.n = 0;
     c->jogging = false;
@@ -674,10 +706,7 @@ void ls_control_cycle(ls_control_t *c, uint64_t now_us)
             /* The path executor holds where the guarded move is (or ended). */
             ls_motion_hold(&c->motion, c->q_cmd);
         } else if (c->motion.phase == LS_MOTION_IDLE && c->manual != NULL) {
-            double twist[6];
-            uint32_t buttons = 0;
-            bool have = c->manual->read != NULL && c->manual->read(c->manual->self, twist, &buttons) >= 0;
-            c->jogging = ls_react_jog_step(&c->react, c->dt_s, have ? twist : NULL, c->q_cmd, c->qd_cmd, &mev);
+            c->jogging = ls_react_jog_step(&c->react, c->dt_s, twist, c->q_cmd, c->qd_cmd, &mev);
             ls_motion_hold(&c->motion, c->q_cmd);
         } else {
             ls_motion_step(&c->motion, c->dt_s, c->q, c->q_cmd, c->qd_cmd, &mev);

@@ -15,7 +15,9 @@
  * and the jogging of ls_react: a guarded or compliant move is handed over in
  * a react slot like a plan (ls_control_react_slot/ls_control_start_react);
  * jogging is switched with ls_control_set_manual and then follows the manual
- * device's twist whenever the drives are on and nothing else moves; tool
+ * device's twist, as its gate (ls_manual.h: enabling switch, lost device,
+ * override and frame buttons) lets it through, whenever the drives are on
+ * and nothing else moves; tool
  * coupling and tool bits run in the loop too (LS_CTL_TOOL_*), because the
  * devices are the loop's (the simulated world is single-threaded).
  *
@@ -31,9 +33,10 @@
 #include <stdint.h>
 
 #include "hal/hal_arm.h"
-#include "hal/hal_manual.h"
 #include "hal/hal_clock.h"
 #include "hal/hal_dio.h"
+#include "hal/hal_manual.h"
+#include "ls_manual.h"
 #include "ls_motion.h"
 #include "ls_react.h"
 #include "ls_robot_model.h"
@@ -87,6 +90,7 @@ typedef struct {
     struct {
         const hal_manual_t *dev; /* NULL: jogging off */
         ls_jog_config_t jog;
+        ls_manual_config_t gate; /* the device's enabling switch, staleness, override steps */
     } manual;
 } ls_ctl_cmd_t;
 
@@ -100,6 +104,7 @@ typedef enum {
     LS_CEV_ENABLED,       /* ref_seq: every joint confirmed ENABLED (LS_CTL_ENABLE): the arm holds where it is */
     LS_CEV_ENABLE_FAILED, /* ref_seq, text: LS_CTL_ENABLE ended with the drives off: which joint, its node and
                              what its drive said, or that no arm is composed, or that it was cancelled */
+    LS_CEV_MANUAL,        /* manual: what the operator's device did (ls_manual.h), while manual control is on */
 } ls_cev_kind_t;
 
 /* An event's text: one line naming a joint, its drive's node and what the
@@ -116,6 +121,7 @@ typedef struct {
         uint32_t on, off;
     } dio;
     ls_react_report_t react; /* LS_MEV_REACT_END: the reading and the force statistics */
+    ls_manual_event_t manual;
 } ls_ctl_event_t;
 
 /* What the comms thread may read at any time (copied under a seqlock). */
@@ -203,6 +209,7 @@ typedef struct ls_control {
     ls_react_t react;
     int react_sensor; /* index of the running move's sensor, -1: none */
     const hal_manual_t *manual;
+    ls_manual_t gate;                                    /* the manual device's enabling switch and buttons */
     double sens[HAL_MAX_SENSORS][HAL_SENSOR_MAX_VALUES]; /* last reading, SI */
     bool jogging;
     bool enabled;
@@ -242,8 +249,13 @@ ls_react_plan_t *ls_control_react_slot(ls_control_t *c);
  * answers LS_CEV_CMD_FAILED when it cannot start it (drives off, a motion
  * runs), else the move ends with one LS_MEV_REACT_END (or LS_MEV_FAULT). */
 bool ls_control_start_react(ls_control_t *c, uint32_t ref_seq);
-/* Jogging on (dev and jog non-NULL) or off (dev NULL). false when the queue is full. */
-bool ls_control_set_manual(ls_control_t *c, const hal_manual_t *dev, const ls_jog_config_t *jog, uint32_t ref_seq);
+/* Jogging on (dev and jog non-NULL) or off (dev NULL), with the device's
+ * gate (NULL: no enabling switch, no staleness, no override steps). From
+ * then on the loop reads the device every cycle, through ls_manual (events
+ * LS_CEV_MANUAL), and jogs with what it lets through whenever the drives
+ * are on and nothing else moves. false when the queue is full. */
+bool ls_control_set_manual(ls_control_t *c, const hal_manual_t *dev, const ls_jog_config_t *jog,
+                           const ls_manual_config_t *gate, uint32_t ref_seq);
 bool ls_control_manual_on(ls_control_t *c);
 /* A consistent copy of the loop's state: true when `out` is the latest one
  * the loop published. Bounded: at most LS_CTL_SNAPSHOT_TRIES copies of

@@ -486,50 +486,73 @@ int32_t ls_h_comply(struct ls_core *core, struct ls_call *call)
 
 /* ------------------------------------------------------------- manualControl */
 
+/* The jog's limits for a full-deflection speed of `frac` of the model's
+ * maxima: Cartesian at the setAcceleration limits, single-joint mode at the
+ * joints' maxima scaled by the acceleration percent. */
+static void jog_config(ls_core_t *core, double frac, ls_jog_config_t *jog)
+{
+    const ls_robot_model_t *m = core->model;
+    const ls_settings_t *set = &core->settings;
+    memset(jog, 0, sizeof *jog);
+    jog->v_lin_m_s = frac * m->max_linear_speed_m_s;
+    jog->v_ang_rad_s = frac * m->max_angular_speed_rad_s;
+    jog->a_lin_m_s2 = fmin(set->linear_accel_m_s2, m->max_linear_accel_m_s2);
+    jog->a_ang_rad_s2 = fmin(set->angular_accel_rad_s2, m->max_angular_accel_rad_s2);
+    jog->j_lin_m_s3 = ls_robot_model_linear_jerk(m, jog->a_lin_m_s2);
+    jog->j_ang_rad_s3 = ls_robot_model_angular_jerk(m, jog->a_ang_rad_s2);
+    ls_mcmd_tool_pose(core, jog->tool);
+    ls_pose_from_xyzrpy(set->world_frame, jog->world);
+    const double share = fmin(fmax(set->accel_pct, 1.0), 100.0) / 100.0;
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        jog->qd_rad_s[j] = frac * m->qd_max_rad_s[j];
+        jog->qdd_rad_s2[j] = share * m->qdd_max_rad_s2[j];
+        jog->qddd_rad_s3[j] = share * m->qddd_max_rad_s3[j];
+    }
+}
+
 int32_t ls_h_manual_control(struct ls_core *core, struct ls_call *call)
 {
     const ls_units_t un = ls_core_units(core, call->sup);
     const char *type = call->req->cmd.manual_control.type;
-    double frac;
-    if (strcmp(type, "teachpendant") == 0) {
+    double frac = 0.0;
+    int kind = -1;
+    if (strcmp(type, LS_MANUAL_NAME_TEACHPENDANT) == 0) {
         frac = JOG_FRAC_TEACHPENDANT;
-    } else if (strcmp(type, "spaceball") == 0) {
+        kind = LS_MANUAL_TEACHPENDANT;
+    } else if (strcmp(type, LS_MANUAL_NAME_SPACEBALL) == 0) {
         frac = JOG_FRAC_SPACEBALL;
-    } else if (strcmp(type, "off") == 0) {
-        frac = 0.0;
-    } else {
-        return ls_reply(call, ls_RetCode_CMD_PARAM_ERR,
-                        "manualControl: unknown type '%s': give teachpendant, spaceball or off", type);
+        kind = LS_MANUAL_SPACEBALL;
+    } else if (strcmp(type, "off") != 0) {
+        return ls_reply(call, ls_RetCode_CMD_PARAM_ERR, "manualControl: unknown type '%s': give %s, %s or off", type,
+                        LS_MANUAL_NAME_TEACHPENDANT, LS_MANUAL_NAME_SPACEBALL);
     }
     if (core->ctl == NULL || core->model == NULL) {
         return ls_mcmd_no_arm(call, "manualControl");
     }
-    if (frac > 0.0 && (core->manual == NULL || core->manual->read == NULL)) {
+    hal_manual_t *dev = kind >= 0 ? core->manual[kind] : NULL;
+    if (kind >= 0 && (dev == NULL || dev->read == NULL)) {
         return ls_reply(call, ls_RetCode_CMD_UNSUPPORTED_ERR,
-                        "manualControl: no manual device is composed in this controller");
+                        "manualControl: no %s is composed in this controller (docs/deploy.md \"Manual devices\")",
+                        type);
     }
-    const ls_robot_model_t *m = core->model;
-    const ls_settings_t *set = &core->settings;
     bool ok;
     ls_jog_config_t jog;
-    if (frac > 0.0) {
-        jog.v_lin_m_s = frac * m->max_linear_speed_m_s;
-        jog.v_ang_rad_s = frac * m->max_angular_speed_rad_s;
-        jog.a_lin_m_s2 = fmin(set->linear_accel_m_s2, m->max_linear_accel_m_s2);
-        jog.a_ang_rad_s2 = fmin(set->angular_accel_rad_s2, m->max_angular_accel_rad_s2);
-        jog.j_lin_m_s3 = ls_robot_model_linear_jerk(m, jog.a_lin_m_s2);
-        jog.j_ang_rad_s3 = ls_robot_model_angular_jerk(m, jog.a_ang_rad_s2);
-        ls_mcmd_tool_pose(core, jog.tool);
-        ok = ls_control_set_manual(core->ctl, core->manual, &jog, call->req->seq);
+    if (kind >= 0) {
+        jog_config(core, frac, &jog);
+        ls_manual_config_t gate = core->manual_gate[kind];
+        /* docs/conformance.md "manualControl": a teach pendant jogs only while its enabling switch is held */
+        gate.enabling_switch = kind == LS_MANUAL_TEACHPENDANT;
+        ok = ls_control_set_manual(core->ctl, dev, &jog, &gate, call->req->seq);
     } else {
-        ok = ls_control_set_manual(core->ctl, NULL, NULL, call->req->seq);
+        ok = ls_control_set_manual(core->ctl, NULL, NULL, NULL, call->req->seq);
     }
     if (!ok) {
         return ls_reply(call, ls_RetCode_CMD_BUSY_ERR,
                         "manualControl: the control loop's command queue is full; try again");
     }
     ls_fmt_print(core->sensor.mode, sizeof core->sensor.mode, "%s", type);
-    core->sensor.sup = frac > 0.0 ? call->sup : -1;
+    core->sensor.sup = kind >= 0 ? call->sup : -1;
+    core->sensor.kind = kind;
     if (frac > 0.0) {
         ls_fmt_print(core->motion_state, sizeof core->motion_state, "manual_%s", type);
         return ls_reply(call, ls_RetCode_CMD_EXEC_OK,
@@ -551,10 +574,11 @@ void ls_core_manual_off(ls_core_t *core)
         return;
     }
     if (core->ctl != NULL) {
-        (void)ls_control_set_manual(core->ctl, NULL, NULL, 0);
+        (void)ls_control_set_manual(core->ctl, NULL, NULL, NULL, 0);
     }
     ls_fmt_print(core->sensor.mode, sizeof core->sensor.mode, "off");
     core->sensor.sup = -1;
+    core->sensor.kind = -1;
     if (strncmp(core->motion_state, "manual_", 7) == 0) {
         ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_at_rest");
     }
@@ -655,9 +679,10 @@ static void jog_event(ls_core_t *core, const ls_ctl_event_t *ev)
         /* drives on with manual control on: only the supervisor that
          * switched it on may jog; a new owner gets it switched off. */
         if (core->sensor.sup < 0 || core->owner != core->sensor.sup) {
-            (void)ls_control_set_manual(core->ctl, NULL, NULL, 0);
+            (void)ls_control_set_manual(core->ctl, NULL, NULL, NULL, 0);
             ls_fmt_print(core->sensor.mode, sizeof core->sensor.mode, "off");
             core->sensor.sup = -1;
+            core->sensor.kind = -1;
             return;
         }
         if (core->state == ls_State_RESTING) {
@@ -669,6 +694,58 @@ static void jog_event(ls_core_t *core, const ls_ctl_event_t *ev)
     ls_fmt_print(d1, sizeof d1, "reason=%s", ev->motion.text);
     const char *data[] = { d1 };
     ls_core_notify(core, core->sensor.sup, ls_NoticeKind_EVENT, ls_EventId_manualLimit, 0, false, data, 1);
+}
+
+/* What the operator did on the manual device, to the session that switched
+ * manual control on: an event each, an alarm (and a log line) for a lost
+ * device. Nothing once manual control is off. */
+static void manual_event(ls_core_t *core, const ls_ctl_event_t *ev)
+{
+    if (core->sensor.sup < 0 || core->sensor.kind < 0 || core->sensor.kind >= LS_MANUAL_KINDS) {
+        return;
+    }
+    const ls_manual_event_t *e = &ev->manual;
+    const hal_manual_t *dev = core->manual[core->sensor.kind];
+    const char *path = dev != NULL ? dev->name : "";
+    char d0[32], d1[HAL_MANUAL_NAME_LEN + 8], d2[HAL_MANUAL_NAME_LEN + 8];
+    ls_fmt_print(d0, sizeof d0, "device=%s", core->sensor.mode);
+    const char *data[] = { d0, d1, d2 };
+    ls_NoticeKind kind = ls_NoticeKind_EVENT;
+    ls_EventId id;
+    size_t n = 2;
+    switch (e->kind) {
+    case LS_MANUAL_EV_SWITCH:
+        id = ls_EventId_manualSwitch;
+        ls_fmt_print(d1, sizeof d1, "switch=%s", ls_manual_switch_name((ls_manual_switch_t)e->value));
+        break;
+    case LS_MANUAL_EV_OVERRIDE:
+        id = ls_EventId_manualOverride;
+        ls_fmt_print(d1, sizeof d1, "percent=%d", (int)e->value);
+        break;
+    case LS_MANUAL_EV_FRAME:
+        id = ls_EventId_manualFrame;
+        ls_fmt_print(d1, sizeof d1, "frame=%s", e->joint ? "joint" : ls_manual_frame_name((ls_jog_frame_t)e->value));
+        break;
+    case LS_MANUAL_EV_LOST:
+        kind = ls_NoticeKind_ALARM;
+        id = ls_EventId_manualDeviceLost;
+        ls_fmt_print(d1, sizeof d1, "reason=%s", ls_manual_lost_name((ls_manual_lost_t)e->value));
+        ls_fmt_print(d2, sizeof d2, "path=%s", path);
+        n = 3;
+        if (core->act.log_warn != NULL) {
+            char line[HAL_MANUAL_NAME_LEN + 96];
+            ls_fmt_print(line, sizeof line, "manual device %s (%s) lost (%s): the jog stopped", core->sensor.mode, path,
+                         ls_manual_lost_name((ls_manual_lost_t)e->value));
+            core->act.log_warn(core->act.ctx, line);
+        }
+        break;
+    case LS_MANUAL_EV_FOUND:
+        id = ls_EventId_manualDeviceFound;
+        ls_fmt_print(d1, sizeof d1, "path=%s", path);
+        break;
+    default: return;
+    }
+    ls_core_notify(core, core->sensor.sup, kind, id, 0, false, data, n);
 }
 
 bool ls_core_sensor_on_event(ls_core_t *core, const ls_ctl_event_t *ev)
@@ -708,6 +785,7 @@ bool ls_core_sensor_on_event(ls_core_t *core, const ls_ctl_event_t *ev)
     case LS_CEV_DIO_CHANGED:
     case LS_CEV_ENABLED:
     case LS_CEV_ENABLE_FAILED: return false;
+    case LS_CEV_MANUAL: manual_event(core, ev); return true;
     }
     return false;
 }

@@ -100,6 +100,7 @@ void ls_core_init(ls_core_t *core, const ls_core_config_t *cfg, const ls_core_io
     core->halt.answer_sup = -1;
     ls_fmt_print(core->sensor.mode, sizeof core->sensor.mode, "off");
     core->sensor.sup = -1;
+    core->sensor.kind = -1;
     ls_fmt_print(core->tool_cmds.held, sizeof core->tool_cmds.held, "none");
 }
 
@@ -632,6 +633,7 @@ static void on_loop_event(ls_core_t *core, const ls_ctl_event_t *ev, uint64_t no
     case LS_CEV_DIO_CHANGED: ls_core_on_dio_event(core, ev->dio.unit, ev->dio.on, ev->dio.off, now_us); break;
     case LS_CEV_ENABLED: ls_core_on_enable_result(core, NULL, now_us); break;
     case LS_CEV_ENABLE_FAILED: ls_core_on_enable_result(core, ev->text, now_us); break;
+    case LS_CEV_MANUAL: break; /* cmd_sensor.c takes them all */
     case LS_CEV_CMD_FAILED: {
         char d[80];
         ls_fmt_print(d, sizeof d, "reason=%s", ev->text);

@@ -11,8 +11,8 @@
 #include <stdint.h>
 
 #include "hal/hal_arm.h"
-#include "hal/hal_manual.h"
 #include "hal/hal_dio.h"
+#include "hal/hal_manual.h"
 #include "landscape.pb.h"
 #include "ls_cmd_table.h"
 #include "ls_core_state.h"
@@ -261,7 +261,11 @@ typedef struct ls_core {
     const hal_sensor_t *sensors;
     size_t n_sensors;
     hal_tool_t *tool;
-    hal_manual_t *manual;
+    /* The manual devices by ls_manual_kind_t (NULL: not composed) and their
+     * gates' override steps and staleness; manualControl adds the enabling
+     * switch (the teach pendant's). */
+    hal_manual_t *manual[LS_MANUAL_KINDS];
+    ls_manual_config_t manual_gate[LS_MANUAL_KINDS];
     hal_dio_unit_info_t dio_info[LS_CORE_MAX_DIO_UNITS]; /* input/output masks per unit */
     uint16_t dio_units;
     ls_dio_state_t dio; /* signalDigitalIO watches, setDigitalIO in flight */

@@ -79,6 +79,7 @@ typedef struct {
 typedef struct {
     char mode[16];         /* "off", or the manualControl mode that is on */
     int sup;               /* the session that switched it on, -1 when off */
+    int kind;              /* its ls_manual_kind_t, -1 when off */
     ls_motion_seg_t check; /* scratch for the reachability check of a move's line */
 } ls_sensor_cmds_t;
 

@@ -998,8 +998,11 @@ void hal_sim_world_get_dio(hal_dio_t *out)
 
 void hal_sim_world_get_manual(hal_manual_t *out)
 {
+    memset(out, 0, sizeof *out);
     out->read = sim_manual_read;
     out->self = &W.ctl;
+    out->stale_ms = 0; /* the socket's state holds until changed */
+    snprintf(out->name, sizeof out->name, "sim");
 }
 
 /* ---- ground truth ---- */

@@ -132,7 +132,12 @@
  *                              set the manual twist (tool frame), decimals,
  *                              each clamped to -1..1
  *     jog-stop                 zero the twist
- *     buttons <hex>            set the manual button mask (32 bits)
+ *     buttons <hex>            set the manual buttons held: HAL_MANUAL_BTN_* bits
+ *                              (hal/hal_manual.h; 1 = the enabling switch;
+ *                              32 bits taken, the others read as 0)
+ *     unplug / plug            the manual device goes away (read: not
+ *                              present; twist and buttons zeroed) / comes
+ *                              back as a new device (its generation counts up)
  * The socket queue is short (net.unix.max_dgram_qlen, often 10 datagrams): a
  * sender whose messages are not drained blocks, or gets EAGAIN if its socket
  * is non-blocking.
@@ -190,8 +195,8 @@
 #include <stdint.h>
 
 #include "hal/hal_arm.h"
-#include "hal/hal_manual.h"
 #include "hal/hal_dio.h"
+#include "hal/hal_manual.h"
 
 #define HAL_SIM_ARM_JOINTS 6
 

@@ -33,6 +33,7 @@ int sim_ctl_open(sim_ctl_t *ctl, const char *path, char *msg, size_t msglen)
 {
     memset(ctl, 0, sizeof *ctl);
     ctl->fd = -1;
+    ctl->manual_generation = 1;
     if (path == NULL) {
         ctl->open = true;
         return LS_OK;
@@ -297,6 +298,19 @@ int sim_ctl_apply(sim_ctl_t *ctl, const char *text, size_t len)
         ctl->buttons = b;
         return changed;
     }
+    if ((tok_is(t[0], "unplug") || tok_is(t[0], "plug")) && n == 1) {
+        const bool unplug = tok_is(t[0], "unplug");
+        if (unplug == ctl->unplugged) {
+            return 0;
+        }
+        ctl->unplugged = unplug;
+        if (!unplug) {
+            ctl->manual_generation++; /* a new device: what it held before is forgotten */
+        }
+        memset(ctl->twist, 0, sizeof ctl->twist);
+        ctl->buttons = 0;
+        return 1;
+    }
     return malformed(ctl);
 }
 
@@ -413,16 +427,23 @@ const hal_dio_ops_t sim_dio_ops = {
 
 /* ---- manual device ---- */
 
-int sim_manual_read(void *self, double *twist, uint32_t *buttons)
+int sim_manual_read(void *self, hal_manual_state_t *out)
 {
+    if (out == NULL) {
+        return LS_EINVAL;
+    }
+    memset(out, 0, sizeof *out);
     sim_ctl_t *ctl = ctl_of(self);
     if (ctl == NULL) {
         return LS_ENODEV;
     }
-    if (twist == NULL || buttons == NULL) {
-        return LS_EINVAL;
+    out->generation = ctl->manual_generation;
+    if (ctl->unplugged) {
+        return LS_OK;
     }
-    memcpy(twist, ctl->twist, sizeof ctl->twist);
-    *buttons = ctl->buttons;
+    out->present = true;
+    memcpy(out->twist, ctl->twist, sizeof ctl->twist);
+    out->buttons = ctl->buttons & HAL_MANUAL_BTN_ALL;
+    out->age_us = 0; /* the socket's state holds until changed: always current */
     return LS_OK;
 }

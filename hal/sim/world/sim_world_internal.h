@@ -19,12 +19,14 @@
 /* The control socket and the state it drives (DIO inputs, jog, buttons). */
 typedef struct {
     bool open;
-    int fd;            /* -1 without a socket */
-    char path[108];    /* sun_path, unlinked at close */
-    uint32_t dio_bits; /* inputs (0-15) and outputs (16-31) */
-    double twist[6];   /* -1..1 */
-    uint32_t buttons;
-    uint32_t malformed; /* messages ignored since open */
+    int fd;                     /* -1 without a socket */
+    char path[108];             /* sun_path, unlinked at close */
+    uint32_t dio_bits;          /* inputs (0-15) and outputs (16-31) */
+    double twist[6];            /* -1..1 */
+    uint32_t buttons;           /* HAL_MANUAL_BTN_* */
+    bool unplugged;             /* the manual device is "unplugged" (words unplug / plug) */
+    uint32_t manual_generation; /* counts plugs, from 1 at open */
+    uint32_t malformed;         /* messages ignored since open */
 } sim_ctl_t;
 
 /* Reset the state; bind the socket when path != NULL. Init only. */
@@ -65,6 +67,6 @@ int sim_trace_write(sim_trace_t *tr, char *msg, size_t msglen);
 void sim_trace_close(sim_trace_t *tr);
 
 extern const hal_dio_ops_t sim_dio_ops; /* self = sim_ctl_t* (NULL: closed) */
-int sim_manual_read(void *self, double *twist, uint32_t *buttons);
+int sim_manual_read(void *self, hal_manual_state_t *out);
 
 #endif

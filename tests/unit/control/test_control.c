@@ -246,12 +246,21 @@ static const hal_tool_ops_t TOOL_OPS = { .couple = tool_couple, .set_bits = tool
 
 typedef struct {
     double twist[6];
+    uint32_t buttons;
+    bool unplugged;
 } fake_manual_t;
 
-static int manual_read(void *self, double *twist, uint32_t *buttons)
+static int manual_read(void *self, hal_manual_state_t *out)
 {
-    memcpy(twist, ((fake_manual_t *)self)->twist, 6 * sizeof twist[0]);
-    *buttons = 0;
+    const fake_manual_t *m = self;
+    memset(out, 0, sizeof *out);
+    out->generation = 1;
+    if (m->unplugged) {
+        return LS_OK;
+    }
+    out->present = true;
+    memcpy(out->twist, m->twist, sizeof out->twist);
+    out->buttons = m->buttons;
     return LS_OK;
 }
 
@@ -283,7 +292,7 @@ static fx_t *fx_init(bool with_sensor)
     f->dio = (hal_dio_t){ .ops = &DIO_OPS, .self = &f->dio_state, .name = "fake" };
     f->sensor = (hal_sensor_t){ .name = "force_sensor", .n_values = 6, .read = sensor_read, .self = &f->sensor_state };
     f->tool = (hal_tool_t){ .ops = &TOOL_OPS, .self = &f->tool_state };
-    f->manual = (hal_manual_t){ .read = manual_read, .self = &f->manual_state };
+    f->manual = (hal_manual_t){ .read = manual_read, .self = &f->manual_state, .stale_ms = 0, .name = "fake" };
     ls_control_config_t cfg = { .model = M,
                                 .arm = &f->arm,
                                 .dio = &f->dio,
@@ -962,7 +971,7 @@ static void test_manual_jogging(void **state)
     fx_t *f = fx_init(false);
     ls_jog_config_t jog = jog_cfg();
     assert_false(ls_control_manual_on(&f->ctl));
-    assert_true(ls_control_set_manual(&f->ctl, &f->manual, &jog, 70));
+    assert_true(ls_control_set_manual(&f->ctl, &f->manual, &jog, NULL, 70));
     /* Plans and guarded moves are refused at once while jogging is on. */
     assert_true(ls_control_manual_on(&f->ctl));
     assert_null(ls_control_plan_slot(&f->ctl));
@@ -994,7 +1003,7 @@ static void test_manual_jogging(void **state)
     assert_true(moved > 0.005);
     /* Off: the set-point holds and plans are possible again. */
     f->manual_state.twist[2] = 0.0;
-    assert_true(ls_control_set_manual(&f->ctl, NULL, NULL, 72));
+    assert_true(ls_control_set_manual(&f->ctl, NULL, NULL, NULL, 72));
     assert_false(ls_control_manual_on(&f->ctl));
     cycle(f);
     s = snap(f);
@@ -1002,14 +1011,119 @@ static void test_manual_jogging(void **state)
     assert_false(s.jogging);
     assert_non_null(ls_control_plan_slot(&f->ctl));
     /* A full ring: the switch is refused and manual_on does not change. */
-    assert_true(ls_control_set_manual(&f->ctl, &f->manual, &jog, 73));
+    assert_true(ls_control_set_manual(&f->ctl, &f->manual, &jog, NULL, 73));
     cycle(f);
     next_motion(f, LS_MEV_JOG);
     for (uint32_t i = 0; i < LS_CTL_QUEUE_LEN; i++) {
         post(f, LS_CTL_AUX_DONE, i);
     }
-    assert_false(ls_control_set_manual(&f->ctl, NULL, NULL, 74));
+    assert_false(ls_control_set_manual(&f->ctl, NULL, NULL, NULL, 74));
     assert_true(ls_control_manual_on(&f->ctl));
+}
+
+/* The manual events of the ring (other events are dropped); the count. */
+static int manual_events(fx_t *f, ls_manual_event_kind_t kind, int32_t value)
+{
+    int n = 0;
+    ls_ctl_event_t ev;
+    while (ls_control_next_event(&f->ctl, &ev)) {
+        n += ev.kind == LS_CEV_MANUAL && ev.manual.kind == kind && ev.manual.value == value;
+    }
+    return n;
+}
+
+static double flange_speed(fx_t *f, double P0[3])
+{
+    ls_ctl_snapshot_t s = snap(f);
+    double d = 0.0;
+    for (int i = 0; i < 3; i++) {
+        d += (s.flange_pose[12 + i] - P0[i]) * (s.flange_pose[12 + i] - P0[i]);
+        P0[i] = s.flange_pose[12 + i];
+    }
+    return sqrt(d) / 1e-3;
+}
+
+/* A teach pendant through the loop: the switch held when the drives come on
+ * starts nothing; pressed again, the jog follows; released, the tip brakes
+ * on the jog's ramp (v / a + a / j = 0.2 s from 0.1 m/s at 1 m/s^2 and
+ * 10 m/s^3) and stays still; unplugged, the loop reports it once. */
+static void test_the_enabling_switch_gates_the_jog_and_a_release_brakes_on_the_ramp(void **state)
+{
+    (void)state;
+    fx_t *f = fx_init(false);
+    ls_jog_config_t jog = jog_cfg();
+    ls_manual_config_t gate = { .enabling_switch = true };
+    assert_true(ls_control_set_manual(&f->ctl, &f->manual, &jog, &gate, 90));
+    cycle(f);
+    f->manual_state.buttons = HAL_MANUAL_BTN_ENABLE;
+    f->manual_state.twist[0] = 1.0;
+    post(f, LS_CTL_ENABLE, 91);
+    for (int i = 0; i < 100; i++) {
+        cycle(f);
+        assert_false(snap(f).jogging);
+    }
+    assert_int_equal(manual_events(f, LS_MANUAL_EV_SWITCH, LS_MANUAL_SWITCH_HELD_OVER), 1);
+    f->manual_state.buttons = 0;
+    cycle(f);
+    f->manual_state.buttons = HAL_MANUAL_BTN_ENABLE;
+    cycle(f);
+    assert_int_equal(manual_events(f, LS_MANUAL_EV_SWITCH, LS_MANUAL_SWITCH_ENABLED), 1);
+    double P[3] = { 0 };
+    (void)flange_speed(f, P);
+    double v_jog = 0.0;
+    for (int i = 0; i < 500; i++) {
+        cycle(f);
+        v_jog = flange_speed(f, P);
+    }
+    assert_true(fabs(v_jog - 0.1) < 1e-3); /* at the jog speed */
+    f->manual_state.buttons = 0;           /* released: the tip brakes on the ramp */
+    int moving = 0;
+    double v_prev = 0.1;
+    for (int i = 0; i < 400; i++) {
+        cycle(f);
+        const double v = flange_speed(f, P);
+        assert_true(v <= v_prev + 1e-6); /* never speeds up */
+        v_prev = v;
+        moving += snap(f).jogging;
+    }
+    assert_in_range(moving, 195, 205);
+    assert_true(v_prev < 1e-9);
+    assert_int_equal(manual_events(f, LS_MANUAL_EV_SWITCH, LS_MANUAL_SWITCH_RELEASED), 1);
+    f->manual_state.unplugged = true;
+    cycle(f);
+    cycle(f);
+    assert_int_equal(manual_events(f, LS_MANUAL_EV_LOST, LS_MANUAL_LOST_ABSENT), 1);
+    f->manual_state.unplugged = false;
+    cycle(f);
+    assert_int_equal(manual_events(f, LS_MANUAL_EV_FOUND, 1), 1);
+}
+
+/* The frame button changes the jog's axes: in the base frame +x moves the
+ * tip along the base's x whatever the tool's orientation. */
+static void test_the_frame_button_switches_the_jog_to_the_base_frame(void **state)
+{
+    (void)state;
+    fx_t *f = fx_init(false);
+    ls_jog_config_t jog = jog_cfg();
+    assert_true(ls_control_set_manual(&f->ctl, &f->manual, &jog, NULL, 92));
+    post(f, LS_CTL_ENABLE, 93);
+    cycle(f);
+    f->manual_state.buttons = HAL_MANUAL_BTN_FRAME;
+    cycle(f);
+    f->manual_state.buttons = 0;
+    cycle(f);
+    assert_int_equal(manual_events(f, LS_MANUAL_EV_FRAME, LS_JOG_BASE), 1);
+    ls_ctl_snapshot_t s0 = snap(f);
+    f->manual_state.twist[0] = 1.0;
+    for (int i = 0; i < 300; i++) {
+        cycle(f);
+    }
+    ls_ctl_snapshot_t s1 = snap(f);
+    const double dx = s1.flange_pose[12] - s0.flange_pose[12];
+    const double dy = s1.flange_pose[13] - s0.flange_pose[13];
+    const double dz = s1.flange_pose[14] - s0.flange_pose[14];
+    assert_true(dx > 0.01);
+    assert_true(fabs(dy) < 1e-6 * dx && fabs(dz) < 1e-6 * dx);
 }
 
 static void test_tool_couple_and_bits(void **state)
@@ -1269,6 +1383,8 @@ int main(void)
         cmocka_unit_test(test_react_slot_hand_over),
         cmocka_unit_test(test_react_refused_when_off_or_busy_and_freed_when_ring_full),
         cmocka_unit_test(test_manual_jogging),
+        cmocka_unit_test(test_the_enabling_switch_gates_the_jog_and_a_release_brakes_on_the_ramp),
+        cmocka_unit_test(test_the_frame_button_switches_the_jog_to_the_base_frame),
         cmocka_unit_test(test_tool_couple_and_bits),
         cmocka_unit_test(test_dio_write),
         cmocka_unit_test(test_snapshot_under_a_concurrent_writer),

@@ -11,6 +11,7 @@
 #include "hal/hal_can.h"
 #include "hal/hal_clock.h"
 #include "hal/hal_dio.h"
+#include "hal/hal_manual.h"
 
 static void test_null_entries_are_unsupported(void **state)
 {
@@ -179,12 +180,59 @@ static void test_strerror_names_every_status(void **state)
     assert_string_equal(ls_err_name(-99), "LS_E?");
 }
 
+static int manual_read_fake(void *self, hal_manual_state_t *out)
+{
+    int *mode = self;
+    out->twist[2] = 0.5;
+    out->buttons = HAL_MANUAL_BTN_ENABLE;
+    out->present = true;
+    return *mode == 0 ? LS_OK : LS_EIO;
+}
+
+static void test_manual_read_passes_through_and_zeroes_on_error(void **state)
+{
+    (void)state;
+    int mode = 0;
+    hal_manual_t dev = { .read = manual_read_fake, .self = &mode, .stale_ms = 0, .name = "fake" };
+    hal_manual_state_t st;
+    assert_int_equal(hal_manual_read(&dev, &st), LS_OK);
+    assert_true(st.present);
+    assert_int_equal(st.buttons, HAL_MANUAL_BTN_ENABLE);
+    assert_true(st.twist[2] == 0.5);
+    mode = 1; /* an error leaves no half-read state behind */
+    assert_int_equal(hal_manual_read(&dev, &st), LS_EIO);
+    assert_false(st.present);
+    assert_int_equal(st.buttons, 0u);
+    assert_true(st.twist[2] == 0.0);
+    hal_manual_t none = { .read = NULL };
+    assert_int_equal(hal_manual_read(&none, &st), LS_EUNSUPPORTED);
+    assert_int_equal(hal_manual_read(NULL, &st), LS_EUNSUPPORTED);
+    assert_false(st.present);
+    assert_int_equal(hal_manual_read(&dev, NULL), LS_EINVAL);
+}
+
+static void test_manual_names_follow_the_bits_and_components(void **state)
+{
+    (void)state;
+    assert_string_equal(hal_manual_button_name(0), "enable");
+    assert_int_equal(HAL_MANUAL_BTN_PANIC, 1u << 1);
+    assert_string_equal(hal_manual_button_name(1), "panic");
+    assert_int_equal(HAL_MANUAL_BTN_JOINT, 1u << (HAL_MANUAL_BTN_COUNT - 1));
+    assert_string_equal(hal_manual_button_name(HAL_MANUAL_BTN_COUNT - 1), "joint");
+    assert_null(hal_manual_button_name(HAL_MANUAL_BTN_COUNT));
+    assert_string_equal(hal_manual_axis_name(0), "vx");
+    assert_string_equal(hal_manual_axis_name(5), "wz");
+    assert_null(hal_manual_axis_name(6));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_null_entries_are_unsupported),
         cmocka_unit_test(test_present_entries_pass_through),
         cmocka_unit_test(test_strerror_names_every_status),
+        cmocka_unit_test(test_manual_read_passes_through_and_zeroes_on_error),
+        cmocka_unit_test(test_manual_names_follow_the_bits_and_components),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

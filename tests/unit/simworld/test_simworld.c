@@ -778,29 +778,46 @@ static void test_dio_socket(void **state)
     assert_int_equal(hal_dio_drain_events(&dio), 1);
 
     /* manual device; a jog keeps a lockstep world running */
-    double twist[6];
-    uint32_t buttons = 7;
-    assert_int_equal(man.read(man.self, twist, &buttons), LS_OK);
-    assert_int_equal(buttons, 0);
+    hal_manual_state_t ms;
+    assert_int_equal(hal_manual_read(&man, &ms), LS_OK);
+    assert_true(ms.present);
+    assert_int_equal(ms.buttons, 0);
+    assert_int_equal(ms.generation, 1);
+    assert_string_equal(man.name, "sim");
     double zero[NJ] = { 0 };
     assert_int_equal(cycle(zero, zero), 0);
     send_str(cli, path, "jog 0.5 -2 0 +0 -0.25 1e-1");
-    send_str(cli, path, "buttons 0x3");
+    send_str(cli, path, "buttons 0x43");
     assert_int_equal(hal_dio_drain_events(&dio), 2);
-    assert_int_equal(man.read(man.self, twist, &buttons), LS_OK);
+    assert_int_equal(hal_manual_read(&man, &ms), LS_OK);
     const double want[6] = { 0.5, -1.0, 0.0, 0.0, -0.25, 0.1 };
     for (int k = 0; k < 6; k++) {
-        assert_true(fabs(twist[k] - want[k]) < 1e-15);
+        assert_true(fabs(ms.twist[k] - want[k]) < 1e-15);
     }
-    assert_int_equal(buttons, 3);
+    assert_int_equal(ms.buttons, 3); /* the functions of hal_manual.h only */
     assert_int_equal(cycle(zero, zero), 1);
     send_str(cli, path, "jog-stop");
     assert_int_equal(hal_dio_drain_events(&dio), 1);
-    assert_int_equal(man.read(man.self, twist, &buttons), LS_OK);
+    assert_int_equal(hal_manual_read(&man, &ms), LS_OK);
     for (int k = 0; k < 6; k++) {
-        assert_true(twist[k] == 0.0);
+        assert_true(ms.twist[k] == 0.0);
     }
     assert_int_equal(cycle(zero, zero), 0);
+    /* unplugged: not present, nothing held; plugged again: a new generation */
+    send_str(cli, path, "unplug");
+    send_str(cli, path, "unplug");
+    assert_int_equal(hal_dio_drain_events(&dio), 1);
+    assert_int_equal(hal_manual_read(&man, &ms), LS_OK);
+    assert_false(ms.present);
+    assert_int_equal(ms.buttons, 0);
+    send_str(cli, path, "plug");
+    assert_int_equal(hal_dio_drain_events(&dio), 1);
+    assert_int_equal(hal_manual_read(&man, &ms), LS_OK);
+    assert_true(ms.present);
+    assert_int_equal(ms.generation, 2);
+    send_str(cli, path, "plug now");
+    assert_int_equal(hal_dio_drain_events(&dio), 0);
+    assert_int_equal(hal_sim_world_malformed_messages(), (uint32_t)n_bad + 4);
 
     close(cli);
     hal_sim_world_close();
@@ -1008,8 +1025,9 @@ static void test_cycles_do_not_allocate(void **state)
     assert_int_equal(hal_arm_enable(&arm, true), LS_OK);
     /* press onto the obstacle (top z 0.20): moves, contacts, sensors, I/O */
     double pose[6] = { 0.60, 0.20, 0.30, LS_PI, 0.0, 0.0 };
-    double q[NJ], w[6], twist[6];
-    uint32_t bits, buttons;
+    double q[NJ], w[6];
+    uint32_t bits;
+    hal_manual_state_t ms;
     assert_true(ik(pose, q));
     move_to(q, 0.5);
     pose[2] = 0.195;
@@ -1035,7 +1053,7 @@ static void test_cycles_do_not_allocate(void **state)
         assert_int_equal(hal_dio_read(&dio, 0, &bits), LS_OK);
         assert_int_equal(hal_dio_write(&dio, 0, (uint32_t)(k & 1) << 16, (uint32_t)(~k & 1) << 16), LS_OK);
         assert_true(hal_dio_drain_events(&dio) >= 0);
-        assert_int_equal(man.read(man.self, twist, &buttons), LS_OK);
+        assert_int_equal(hal_manual_read(&man, &ms), LS_OK);
         assert_int_equal(tool.ops->get_bits(tool.self, &bits), LS_OK);
     }
     assert_int_equal(ode_allocs - before, 0);

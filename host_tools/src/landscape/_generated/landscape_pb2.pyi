@@ -94,7 +94,12 @@ dioSignal: EventId
 dioSignalRsvpTimeout: EventId
 dioSignalTimeout: EventId
 fault: EventId
+manualDeviceFound: EventId
+manualDeviceLost: EventId
+manualFrame: EventId
 manualLimit: EventId
+manualOverride: EventId
+manualSwitch: EventId
 moveAbsoluteAborted: EventId
 moveAbsoluteComplete: EventId
 moveAbsoluteFailed: EventId
