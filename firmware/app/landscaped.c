@@ -23,6 +23,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "hal_linux_evdev.h"
 #include "hal_linux_gpiod.h"
 #include "hal_linux_rt.h"
 #include "hal_linux_socketcan.h"
@@ -216,6 +217,7 @@ static hal_arm_t g_arm;
 static hal_dio_t g_dio;
 static hal_tool_t g_tool;
 static hal_manual_t g_manual_sim;
+static hal_manual_t g_manual_evdev[LS_MANUAL_KINDS];
 static bool g_world_open;
 static _Atomic bool g_loop_attached;
 
@@ -408,6 +410,34 @@ static void write_setpoint_trace(void)
     }
 }
 
+/* The manual devices: a configured [manual] path is an evdev device, else
+ * the simulated world's control socket stands in (arm = sim), else none. */
+static int compose_manual(const ls_config_t *o)
+{
+    for (int k = 0; k < LS_MANUAL_KINDS; k++) {
+        const char *kind = ls_manual_kind_name((ls_manual_kind_t)k);
+        ls_config_manual_gate(o, (ls_manual_kind_t)k, &g_core.manual_gate[k]);
+        g_core.manual[k] = g_world_open ? &g_manual_sim : NULL;
+        if (o->manual[k].path[0] == '\0') {
+            continue;
+        }
+        hal_evdev_config_t ec = { .path = o->manual[k].path, .stale_ms = o->manual[k].stale_ms };
+        ls_config_manual_map(o, (ls_manual_kind_t)k, &ec.map);
+        char msg[256];
+        if (hal_linux_evdev_open(&g_manual_evdev[k], &ec, msg, sizeof msg) != LS_OK) {
+            LOG_ERR("[manual] %s: %s", kind, msg);
+            return -1;
+        }
+        g_core.manual[k] = &g_manual_evdev[k];
+        char axes[192], buttons[192];
+        hal_evdev_format_axes(&ec.map, axes, sizeof axes);
+        hal_evdev_format_buttons(&ec.map, buttons, sizeof buttons);
+        LOG_INFO("manual %s: %s (axes %s; buttons %s%s)", kind, o->manual[k].path, axes, buttons,
+                 access(o->manual[k].path, R_OK) == 0 ? "" : "; not there yet: it is picked up when plugged in");
+    }
+    return 0;
+}
+
 static int compose(const ls_config_t *o)
 {
     char msg[256] = "";
@@ -442,9 +472,6 @@ static int compose(const ls_config_t *o)
         sensors = hal_sim_world_sensors(&n_sensors);
         arm = &g_arm;
         g_core.tool = &g_tool;
-        for (int k = 0; k < LS_MANUAL_KINDS; k++) {
-            g_core.manual[k] = &g_manual_sim; /* the control socket's jog, for both kinds */
-        }
         if (strcmp(o->dio, "sim") == 0) {
             hal_sim_world_get_dio(&g_dio);
             dio = &g_dio;
@@ -473,6 +500,9 @@ static int compose(const ls_config_t *o)
             return -1;
         }
         dio = &g_dio;
+    }
+    if (compose_manual(o) != 0) {
+        return -1;
     }
     g_core.model = &ls_robot_model_default;
     g_core.sensors = sensors;
@@ -685,6 +715,9 @@ int main(int argc, char **argv)
         (void)hal_arm_enable(&g_arm, false);
     }
     ls_drive_shutdown();
+    for (int k = 0; k < LS_MANUAL_KINDS; k++) {
+        hal_linux_evdev_close(&g_manual_evdev[k]);
+    }
     if (g_world_open) {
         write_setpoint_trace();
         hal_sim_world_close();

@@ -22,6 +22,7 @@
 
 #include "hal/hal_dio.h"
 #include "hal/hal_status.h"
+#include "hal_linux_evdev.h"
 #include "hal_linux_gpiod.h"
 #include "hal_linux_socketcan.h"
 #include "ls_drive_setup.h"
@@ -249,6 +250,33 @@ static void check_dio(report_t *r, const ls_config_t *cfg)
     }
 }
 
+/* ---- manual devices ----------------------------------------------------------- */
+
+/* Each kind: its evdev device (there, readable by this user, the map's axes
+ * and buttons found), or the simulated one, or none. A device that is not
+ * plugged in is a WARN: landscaped starts and picks it up when it appears. */
+static void check_manual(report_t *r, const ls_config_t *cfg)
+{
+    for (int k = 0; k < LS_MANUAL_KINDS; k++) {
+        const char *kind = ls_manual_kind_name((ls_manual_kind_t)k);
+        char what[48];
+        snprintf(what, sizeof what, "manual %s", kind);
+        const char *path = cfg->manual[k].path;
+        if (path[0] == '\0') {
+            report(r, LS_CHECK_PASS, what, "%s",
+                   strcmp(cfg->arm, "sim") == 0
+                       ? "the simulated device (the control socket's jog and buttons); set [manual] to use a real one"
+                       : "none configured: manualControl refuses it");
+            continue;
+        }
+        hal_evdev_map_t map;
+        ls_config_manual_map(cfg, (ls_manual_kind_t)k, &map);
+        char msg[768];
+        const int rc = hal_linux_evdev_probe(path, &map, msg, sizeof msg);
+        report(r, rc == LS_OK ? LS_CHECK_PASS : (rc == LS_ENODEV ? LS_CHECK_WARN : LS_CHECK_FAIL), what, "%s", msg);
+    }
+}
+
 /* ---- set-point trace (tests) ----------------------------------------------- */
 
 /* The simulated arm creates PATH.tmp at start and renames it to PATH at exit. */
@@ -391,6 +419,7 @@ int ls_check_run(const ls_config_t *cfg, FILE *out)
     check_links(&r, cfg);
     check_drives(&r, cfg, config_ok);
     check_dio(&r, cfg);
+    check_manual(&r, cfg);
     check_setpoint_trace(&r, cfg);
     check_realtime(&r, cfg);
     check_memlock(&r, cfg);

@@ -14,7 +14,11 @@
  * hal_linux_socketcan_probe; slcan:pty: /dev/ptmx and the symlink's
  * directory); the DIO backend (gpiod: the chip through hal_linux_gpiod_probe,
  * then the configured lines requested and released; dio_socket's
- * directory); setpoint_trace's directory, when set; SCHED_FIFO at
+ * directory); each manual device kind ([manual]: its evdev device through
+ * hal_linux_evdev_probe: there (WARN when not plugged in: it is picked up
+ * later), readable (FAIL: the udev rule / group), the map's axes and
+ * buttons found (FAIL naming the missing ones); or the simulated or no
+ * device); setpoint_trace's directory, when set; SCHED_FIFO at
  * rt_priority on a short-lived thread; rt_cpu in the allowed CPU set; memory
  * locking (RLIMIT_MEMLOCK and an mlockall trial, undone at once).
  *

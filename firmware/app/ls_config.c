@@ -536,6 +536,139 @@ static int set_joint_offset(ls_config_joint_t *j, const char *v, char *why, size
     return 0;
 }
 
+/* ---- [manual] ----------------------------------------------------------- */
+
+static int set_manual_path(ls_config_t *cfg, ls_manual_kind_t k, const char *v, char *why, size_t whylen)
+{
+    if ((v[0] != '\0' && v[0] != '/') || copy_str(cfg->manual[k].path, sizeof cfg->manual[k].path, v) != 0) {
+        cfg->manual[k].path[0] = '\0';
+        return EXPECT(
+            "an absolute device path of at most %zu characters (e.g. /dev/input/by-id/usb-...-event-joystick), "
+            "or nothing for none",
+            sizeof cfg->manual[k].path - 1);
+    }
+    return 0;
+}
+
+static int set_manual_map(ls_config_t *cfg, ls_manual_kind_t k, const char *v, char *why, size_t whylen)
+{
+    hal_evdev_map_t m;
+    if (hal_evdev_map_default(v, &m) != LS_OK) {
+        return EXPECT("%s (the default map to start from)", hal_evdev_map_names());
+    }
+    (void)copy_str(cfg->manual[k].map_name, sizeof cfg->manual[k].map_name, v);
+    return 0;
+}
+
+/* For axes, buttons and the dead band, nothing means the map's. */
+static int set_manual_axes(ls_config_t *cfg, ls_manual_kind_t k, const char *v, char *why, size_t whylen)
+{
+    cfg->manual[k].axes_set = false;
+    if (v[0] == '\0') {
+        return 0;
+    }
+    if (hal_evdev_parse_axes(&cfg->manual[k].given, v, why, whylen) != LS_OK) {
+        return -1;
+    }
+    cfg->manual[k].axes_set = true;
+    return 0;
+}
+
+static int set_manual_buttons(ls_config_t *cfg, ls_manual_kind_t k, const char *v, char *why, size_t whylen)
+{
+    cfg->manual[k].buttons_set = false;
+    if (v[0] == '\0') {
+        return 0;
+    }
+    if (hal_evdev_parse_buttons(&cfg->manual[k].given, v, why, whylen) != LS_OK) {
+        return -1;
+    }
+    cfg->manual[k].buttons_set = true;
+    return 0;
+}
+
+static int set_manual_deadband(ls_config_t *cfg, ls_manual_kind_t k, const char *v, char *why, size_t whylen)
+{
+    cfg->manual[k].deadband = -1.0;
+    if (v[0] == '\0') {
+        return 0;
+    }
+    char *end = NULL;
+    errno = 0;
+    double x = strtod(v, &end);
+    if (isspace((unsigned char)v[0]) || errno != 0 || *end != '\0' || !(x >= 0.0) || x > HAL_EVDEV_MAX_DEADBAND) {
+        return EXPECT("0..%g (the share of full deflection that counts as still), or nothing for the map's",
+                      HAL_EVDEV_MAX_DEADBAND);
+    }
+    cfg->manual[k].deadband = x;
+    return 0;
+}
+
+static int set_manual_stale(ls_config_t *cfg, ls_manual_kind_t k, const char *v, char *why, size_t whylen)
+{
+    if (parse_u32(v, 0, 60000, &cfg->manual[k].stale_ms) != 0) {
+        return EXPECT(
+            "milliseconds 0..60000 (> 0: the device reports continuously, and a longer silence stops the jog; "
+            "0: it reports changes only)");
+    }
+    return 0;
+}
+
+/* One setter per kind and key: the key table holds plain functions. */
+#define MANUAL_SETTERS(kind, tag)                                                                                      \
+    static int set_##tag(ls_config_t *cfg, const char *v, char *why, size_t whylen)                                    \
+    {                                                                                                                  \
+        return set_manual_path(cfg, kind, v, why, whylen);                                                             \
+    }                                                                                                                  \
+    static int set_##tag##_map(ls_config_t *cfg, const char *v, char *why, size_t whylen)                              \
+    {                                                                                                                  \
+        return set_manual_map(cfg, kind, v, why, whylen);                                                              \
+    }                                                                                                                  \
+    static int set_##tag##_axes(ls_config_t *cfg, const char *v, char *why, size_t whylen)                             \
+    {                                                                                                                  \
+        return set_manual_axes(cfg, kind, v, why, whylen);                                                             \
+    }                                                                                                                  \
+    static int set_##tag##_buttons(ls_config_t *cfg, const char *v, char *why, size_t whylen)                          \
+    {                                                                                                                  \
+        return set_manual_buttons(cfg, kind, v, why, whylen);                                                          \
+    }                                                                                                                  \
+    static int set_##tag##_deadband(ls_config_t *cfg, const char *v, char *why, size_t whylen)                         \
+    {                                                                                                                  \
+        return set_manual_deadband(cfg, kind, v, why, whylen);                                                         \
+    }                                                                                                                  \
+    static int set_##tag##_stale(ls_config_t *cfg, const char *v, char *why, size_t whylen)                            \
+    {                                                                                                                  \
+        return set_manual_stale(cfg, kind, v, why, whylen);                                                            \
+    }
+MANUAL_SETTERS(LS_MANUAL_TEACHPENDANT, pendant)
+MANUAL_SETTERS(LS_MANUAL_SPACEBALL, spaceball)
+#undef MANUAL_SETTERS
+
+static int set_speed_steps(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    unsigned offs[LS_CONFIG_MAX_LINES];
+    uint8_t n = 0;
+    char w[160];
+    if (parse_offsets(v, offs, &n, w, sizeof w) != 0 || n == 0 || n > LS_MANUAL_MAX_STEPS) {
+        n = 0;
+    }
+    for (uint8_t i = 0; i < n; i++) {
+        if (offs[i] < 1u || offs[i] > 100u || (i > 0 && offs[i] <= offs[i - 1])) {
+            n = 0;
+        }
+    }
+    if (n == 0) {
+        return EXPECT("1..%d ascending percentages 1..100, comma-separated (the jog's speed override steps), "
+                      "e.g. 10,25,50,100",
+                      LS_MANUAL_MAX_STEPS);
+    }
+    for (uint8_t i = 0; i < n; i++) {
+        cfg->speed_steps[i] = (uint8_t)offs[i];
+    }
+    cfg->n_speed_steps = n;
+    return 0;
+}
+
 #undef EXPECT
 
 typedef struct {
@@ -606,10 +739,22 @@ static const key_def_t KEYS[] = {
     { "drives", "budget_pct", NULL, false, set_drives_budget },
     { "drives", "abort_connection", NULL, false, set_drives_abort },
     { "drives", "velocity_feedforward", NULL, false, set_drives_feedforward },
+#define MANUAL_KEYS(name, tag)                                                                                         \
+    { "manual", name, NULL, false, set_##tag }, { "manual", name "_map", NULL, false, set_##tag##_map },               \
+        { "manual", name "_axes", NULL, false, set_##tag##_axes },                                                     \
+        { "manual", name "_buttons", NULL, false, set_##tag##_buttons },                                               \
+        { "manual", name "_deadband", NULL, false, set_##tag##_deadband },                                             \
+    {                                                                                                                  \
+        "manual", name "_stale_ms", NULL, false, set_##tag##_stale                                                     \
+    }
+    MANUAL_KEYS(LS_MANUAL_NAME_TEACHPENDANT, pendant),
+    MANUAL_KEYS(LS_MANUAL_NAME_SPACEBALL, spaceball),
+#undef MANUAL_KEYS
+    { "manual", "speed_steps", NULL, false, set_speed_steps },
 };
 #define N_KEYS (sizeof KEYS / sizeof KEYS[0])
 
-static const char *SECTIONS = "[device], [hal], [control], [dio], [drives] or [joint.1] .. [joint.6]";
+static const char *SECTIONS = "[device], [hal], [control], [dio], [manual], [drives] or [joint.1] .. [joint.6]";
 
 static bool known_section(const char *s)
 {
@@ -665,6 +810,39 @@ void ls_config_defaults(ls_config_t *cfg)
     for (int j = 0; j < LS_N_JOINTS; j++) {
         cfg->joint[j].sign = 1;
     }
+    for (int k = 0; k < LS_MANUAL_KINDS; k++) {
+        (void)copy_str(cfg->manual[k].map_name, sizeof cfg->manual[k].map_name,
+                       k == LS_MANUAL_TEACHPENDANT ? "gamepad" : "spacemouse");
+        cfg->manual[k].deadband = -1.0;
+    }
+    static const uint8_t steps[] = { 10, 25, 50, 100 };
+    memcpy(cfg->speed_steps, steps, sizeof steps);
+    cfg->n_speed_steps = (uint8_t)sizeof steps;
+}
+
+void ls_config_manual_map(const ls_config_t *cfg, ls_manual_kind_t kind, hal_evdev_map_t *out)
+{
+    const ls_config_manual_t *m = &cfg->manual[kind];
+    memset(out, 0, sizeof *out);
+    (void)hal_evdev_map_default(m->map_name, out);
+    if (m->axes_set) {
+        memcpy(out->axis, m->given.axis, sizeof out->axis);
+    }
+    if (m->buttons_set) {
+        memcpy(out->button, m->given.button, sizeof out->button);
+    }
+    if (m->deadband >= 0.0) {
+        out->deadband = m->deadband;
+    }
+}
+
+void ls_config_manual_gate(const ls_config_t *cfg, ls_manual_kind_t kind, ls_manual_config_t *out)
+{
+    memset(out, 0, sizeof *out);
+    out->stale_us = (uint64_t)cfg->manual[kind].stale_ms * 1000u;
+    out->n_steps = cfg->n_speed_steps;
+    memcpy(out->step_pct, cfg->speed_steps, sizeof out->step_pct);
+    out->start_step = cfg->n_speed_steps > 0 ? (uint8_t)(cfg->n_speed_steps - 1u) : 0u;
 }
 
 /* ---- INI file ---------------------------------------------------------- */
@@ -910,6 +1088,8 @@ void ls_config_usage(FILE *f)
             "  --rt-cpu N                [control] rt_cpu: pin the control thread, -1 = no (default -1)\n"
             "  --no-lock-memory          [control] lock_memory = false\n"
             "  --estop-input N           [dio] estop_input: input bit that stops everything, -1 = none\n"
+            "  (file only)               [manual] teachpendant, spaceball: the manualControl devices (evdev),\n"
+            "                            their maps and speed_steps (docs/deploy.md \"Manual devices\")\n"
             "  -h, --help                this text\n",
             LS_CONFIG_DEFAULT_PATH);
 }
@@ -1091,6 +1271,18 @@ int ls_config_validate(const ls_config_t *cfg, char *msg, size_t msglen)
         return opt_error(msg, msglen,
                          "[hal] dio = sim needs arm = sim: the simulated DIO lives in the simulated "
                          "world (use dio = gpiod:CHIP or none)");
+    }
+    const ls_config_manual_t *tp = &cfg->manual[LS_MANUAL_TEACHPENDANT];
+    if (tp->path[0] != '\0') {
+        hal_evdev_map_t map;
+        ls_config_manual_map(cfg, LS_MANUAL_TEACHPENDANT, &map);
+        if (map.button[HAL_MANUAL_FN_ENABLE] == 0) {
+            return opt_error(msg, msglen,
+                             "[manual] " LS_MANUAL_NAME_TEACHPENDANT " = %s has no enabling switch in its map: a teach "
+                             "pendant jogs only while one is held; add enable:KEY to " LS_MANUAL_NAME_TEACHPENDANT
+                             "_buttons (e.g. enable:BTN_TL)",
+                             tp->path);
+        }
     }
     if (cfg->estop_input >= 0) {
         if (strcmp(cfg->dio, "none") == 0) {

@@ -17,6 +17,8 @@
 #include <stdio.h>
 
 #include "ls_robot_model.h" /* LS_N_JOINTS: one [joint.N] section per joint */
+#include "hal_linux_evdev.h"
+#include "ls_manual.h"
 
 #define LS_CONFIG_MAX_LINKS 4
 #define LS_CONFIG_MAX_LINES 16
@@ -43,6 +45,20 @@ typedef struct {
     double vel_counts_per_rad_s; /* velocity_counts_per_rad_s = N (> 0; default counts_per_rad): units of
                                      0x60B1/0x606C per rad/s */
 } ls_config_joint_t;
+
+/* The [manual] keys of one manual device kind, named after it (KIND is
+ * teachpendant or spaceball; docs/deploy.md "Manual devices"); the map in
+ * effect is ls_config_manual_map's. */
+typedef struct {
+    char path[HAL_MANUAL_NAME_LEN]; /* KIND: /dev/input/by-id/... ("" = none: the simulated device with arm = sim) */
+    char map_name[16];              /* KIND_map: gamepad | spacemouse (default: gamepad for the teach pendant,
+                                       spacemouse for the spaceball) */
+    hal_evdev_map_t given;          /* the axes / buttons given, when axes_set / buttons_set */
+    bool axes_set, buttons_set;     /* KIND_axes, KIND_buttons ("" = the map's) */
+    double deadband;                /* KIND_deadband: 0..0.9 (< 0, "": the map's) */
+    uint32_t stale_ms;              /* KIND_stale_ms: 0..60000 (0; > 0: reports continuously) */
+} ls_config_manual_t;
+
 typedef struct {
     char config_path[256]; /* --config FILE ("" = none) */
     /* [device] */
@@ -87,6 +103,22 @@ typedef struct {
     uint8_t drives_abort;                 /* abort_connection = quick_stop (ls_drive_abort_t) */
     bool drives_feedforward;              /* velocity_feedforward = true (map 0x60B1 where the drive can) */
     ls_config_joint_t joint[LS_N_JOINTS];
+    /* [manual] */
+    ls_config_manual_t manual[LS_MANUAL_KINDS]; /* by ls_manual_kind_t, from these keys: */
+    /* teachpendant = (empty: none) */
+    /* teachpendant_map = gamepad */
+    /* teachpendant_axes = (empty: the map's) */
+    /* teachpendant_buttons = (empty: the map's) */
+    /* teachpendant_deadband = (empty: the map's) */
+    /* teachpendant_stale_ms = 0 */
+    /* spaceball = (empty: none) */
+    /* spaceball_map = spacemouse */
+    /* spaceball_axes = (empty: the map's) */
+    /* spaceball_buttons = (empty: the map's) */
+    /* spaceball_deadband = (empty: the map's) */
+    /* spaceball_stale_ms = 0 */
+    uint8_t n_speed_steps; /* speed_steps = 10,25,50,100 (percent, ascending, 1..100) */
+    uint8_t speed_steps[LS_MANUAL_MAX_STEPS];
     /* modes */
     bool check;   /* --check: self-check and exit */
     bool hal_sim; /* --hal sim: the skeleton's shorthand for arm=sim dio=sim clock=realtime */
@@ -117,8 +149,17 @@ int ls_config_load_file(ls_config_t *cfg, const char *path, char *msg, size_t ms
 /* Whole-configuration checks the single keys cannot make: at least one
  * link, telemetry_hz <= rate_hz, inputs and outputs disjoint, estop_input
  * within the configured inputs and a DIO backend present for it,
- * setpoint_trace only with arm = sim. 0 or -1 with msg. */
+ * setpoint_trace only with arm = sim, a teach pendant's map with an
+ * enabling switch (docs/conformance.md "manualControl"). 0 or -1 with msg. */
 int ls_config_validate(const ls_config_t *cfg, char *msg, size_t msglen);
+
+/* The map a manual device kind uses: its <kind>_map's default with the
+ * given axes, buttons and dead band over it. */
+void ls_config_manual_map(const ls_config_t *cfg, ls_manual_kind_t kind, hal_evdev_map_t *out);
+
+/* The gate configuration of a kind for the core (override steps starting
+ * at the highest, staleness; manualControl adds the enabling switch). */
+void ls_config_manual_gate(const ls_config_t *cfg, ls_manual_kind_t kind, ls_manual_config_t *out);
 
 /* The --help text. */
 void ls_config_usage(FILE *f);

@@ -189,8 +189,8 @@ static int plan_joint(const ls_config_t *cfg, int j, ls_drive_plan_t *p, char *m
     dj->product_code = dev.product_number;
     dj->has_revision = dev.has_revision_number;
     dj->revision = dev.revision_number;
-    dj->write_pdo_type = writable(LS_CO_OBJ_RPDO_COMM, LS_CO_PDO_SUB_TYPE) &&
-                         writable(LS_CO_OBJ_TPDO_COMM, LS_CO_PDO_SUB_TYPE);
+    dj->write_pdo_type =
+        writable(LS_CO_OBJ_RPDO_COMM, LS_CO_PDO_SUB_TYPE) && writable(LS_CO_OBJ_TPDO_COMM, LS_CO_PDO_SUB_TYPE);
     dj->write_tpdo_inhibit = writable(LS_CO_OBJ_TPDO_COMM, LS_CO_PDO_SUB_INHIBIT);
     dj->write_consumer_hb = writable(LS_CO_OBJ_CONSUMER_HB, 1);
     dj->write_abort_option = writable(LS_CO_OBJ_ABORT_CONNECTION, 0);

@@ -20,6 +20,7 @@ int ls_link_open(const char *spec, uint32_t bitrate, bool allow_tty, hal_can_lin
         return hal_linux_slcan_tty_open(out, spec + 10, bitrate, msg, msglen);
     }
     (void)snprintf(msg, msglen, "unknown link kind; expected %s",
-                   allow_tty ? "socketcan:IFNAME, slcan:tty:PATH or slcan:pty:PATH" : "slcan:pty:PATH or socketcan:IFNAME");
+                   allow_tty ? "socketcan:IFNAME, slcan:tty:PATH or slcan:pty:PATH"
+                             : "slcan:pty:PATH or socketcan:IFNAME");
     return LS_EINVAL;
 }

@@ -39,6 +39,7 @@ PACKAGED_FILES = {
     "/usr/lib/systemd/system/landscape-gateway.service",
     "/usr/lib/sysusers.d/landscape.conf",
     "/usr/lib/udev/rules.d/60-landscape-gpio.rules",
+    "/usr/lib/udev/rules.d/60-landscape-input.rules",
 } | {f"/usr/share/doc/landscape/{p.name}" for p in (ROOT / "docs").glob("*.md")}
 
 
@@ -92,7 +93,7 @@ def test_deb_control_fields(deb: Path) -> None:
     assert field("Version") == re.search(r"project\(landscape VERSION ([0-9.]+)",
                                          (ROOT / "CMakeLists.txt").read_text()).group(1)
     depends = [d.strip().split()[0] for d in field("Depends").split(",")]
-    for lib in ("libode8", "libgpiod2", "libinih1", "libc6"):
+    for lib in ("libode8", "libgpiod2", "libinih1", "libevdev2", "libc6"):
         assert lib in depends, field("Depends")
     assert re.fullmatch(r".+ <[^@ ]+@[^> ]+>", field("Maintainer")), field("Maintainer")
     conffiles = run("dpkg-deb", "-I", deb, "conffiles", check=True).stdout.split()
@@ -141,19 +142,22 @@ def test_unit_directives() -> None:
         "ProtectHome": ["yes"],
         "PrivateTmp": ["yes"],
         "StandardError": ["journal"],
-        "SupplementaryGroups": ["gpio"],
+        "SupplementaryGroups": ["gpio input"],
         "WantedBy": ["multi-user.target"],
     }
     for key, value in want.items():
         assert d.get(key) == value, key
     assert "char-gpiochip rw" in d["DeviceAllow"]
+    assert "char-input r" in d["DeviceAllow"]  # the manual devices, read only
     # RestrictRealtime=yes would forbid the SCHED_FIFO the control loop asks for
     assert d.get("RestrictRealtime", ["no"]) == ["no"]
     # the gpio group and the landscape user the unit names come from sysusers
     sysusers = (DEPLOY / "landscape.sysusers").read_text()
     assert re.search(r"^u landscape ", sysusers, re.M) and re.search(r"^g gpio ", sysusers, re.M)
     assert re.search(r"^m landscape gpio$", sysusers, re.M)
+    assert re.search(r"^g input ", sysusers, re.M) and re.search(r"^m landscape input$", sysusers, re.M)
     assert 'GROUP="gpio"' in (DEPLOY / "60-landscape-gpio.rules").read_text()
+    assert 'GROUP="input"' in (DEPLOY / "60-landscape-input.rules").read_text()
 
 
 def test_gateway_unit_directives() -> None:

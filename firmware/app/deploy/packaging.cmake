@@ -7,6 +7,7 @@
 #                                      X/lib/systemd/system/landscape-gateway.service,
 #                                      X/lib/sysusers.d/landscape.conf,
 #                                      X/lib/udev/rules.d/60-landscape-gpio.rules,
+#                                      X/lib/udev/rules.d/60-landscape-input.rules,
 #                                      X/share/doc/landscape/*.md
 #   cd build && cpack -G DEB           landscape-controller_<version>_<arch>.deb
 #
@@ -37,7 +38,8 @@ install(CODE "
 install(FILES ${LS_DEPLOY_DIR}/landscaped.service ${LS_DEPLOY_DIR}/landscape-gateway.service
         DESTINATION lib/systemd/system)
 install(FILES ${LS_DEPLOY_DIR}/landscape.sysusers DESTINATION lib/sysusers.d RENAME landscape.conf)
-install(FILES ${LS_DEPLOY_DIR}/60-landscape-gpio.rules DESTINATION lib/udev/rules.d)
+install(FILES ${LS_DEPLOY_DIR}/60-landscape-gpio.rules ${LS_DEPLOY_DIR}/60-landscape-input.rules
+        DESTINATION lib/udev/rules.d)
 file(GLOB LS_DOC_FILES CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/docs/*.md)
 install(FILES ${LS_DOC_FILES} DESTINATION share/doc/landscape)
 
@@ -51,7 +53,8 @@ set(CPACK_PACKAGE_DESCRIPTION_SUMMARY "LandScape robot controller daemon (landsc
 string(CONCAT CPACK_PACKAGE_DESCRIPTION
     "landscaped runs the LandScape command set over CAN (SocketCAN or SLCAN) with a fixed-rate\n"
     "control loop, digital I/O through libgpiod and a simulated 6-DOF arm. Includes the systemd\n"
-    "unit, the landscape user and a udev rule for /dev/gpiochip*, and the unit and configuration of\n"
+    "unit, the landscape user and udev rules for /dev/gpiochip* and /dev/input/event* (teach\n"
+    "pendants and 6-DOF mice through evdev), and the unit and configuration of\n"
     "the OPC UA gateway (landscape gateway, from the host tool).")
 # The package installs under /usr; DESTDIR staging lets the configuration
 # rule above place /etc/landscape (an absolute path) into the package.
@@ -65,7 +68,7 @@ set(CPACK_DEBIAN_PACKAGE_SECTION misc)
 set(CPACK_DEBIAN_PACKAGE_PRIORITY optional)
 # Named explicitly (the controller loads them, whatever the linker kept) and
 # completed by dpkg-shlibdeps (libc6, libstdc++6, ...).
-set(CPACK_DEBIAN_PACKAGE_DEPENDS "libode8, libgpiod2, libinih1")
+set(CPACK_DEBIAN_PACKAGE_DEPENDS "libode8, libgpiod2, libinih1, libevdev2")
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
 set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "can-utils, gpiod")
 set(CPACK_DEBIAN_PACKAGE_CONTROL_EXTRA

@@ -157,13 +157,47 @@ static void test_sim_configuration_passes(void **state)
     assert_string_equal(line_of(c, "real-time"),
                         "PASS  real-time: not requested (rt_priority = 0): the control loop is a normal thread");
     assert_string_equal(line_of(c, "memory locking"), "PASS  memory locking: not requested (lock_memory = false)");
+    assert_string_equal(line_of(c, "manual teachpendant"),
+                        "PASS  manual teachpendant: the simulated device (the control socket's jog and buttons); set "
+                        "[manual] to use a real one");
+    assert_starts(line_of(c, "manual spaceball"), "PASS  manual spaceball: the simulated device");
     if (!kernel_has_afcan()) {
         assert_starts(line_of(c, "AF_CAN"), "WARN  AF_CAN: ");
         assert_contains(c->line, "(not needed by this configuration: no socketcan link)");
-        assert_contains(c->buf, "landscaped can run with this configuration: 0 FAIL, 1 WARN, 5 PASS\n");
+        assert_contains(c->buf, "landscaped can run with this configuration: 0 FAIL, 1 WARN, 7 PASS\n");
     } else {
-        assert_contains(c->buf, "landscaped can run with this configuration: 0 FAIL, 0 WARN, 6 PASS\n");
+        assert_contains(c->buf, "landscaped can run with this configuration: 0 FAIL, 0 WARN, 8 PASS\n");
     }
+}
+
+/* A manual device not plugged in is a WARN (picked up later); a path that is
+ * no input device a FAIL; with arm = none and no device, none. The VM tier
+ * checks real devices (tests/vm/test_guest.py). */
+static void test_manual_devices_are_listed_with_what_they_lack(void **state)
+{
+    cx_t *c = *state;
+    char link[128];
+    snprintf(link, sizeof link, "slcan:pty:%s/ls0", c->dir);
+    add_link(c, link);
+    snprintf(c->cfg.manual[LS_MANUAL_TEACHPENDANT].path, sizeof c->cfg.manual[0].path, "/nonexistent/by-id/pad");
+    snprintf(c->cfg.manual[LS_MANUAL_SPACEBALL].path, sizeof c->cfg.manual[0].path, "/dev/null");
+    assert_int_equal(run(c), LS_EXIT_CHECK_FAILED);
+    assert_starts(line_of(c, "manual teachpendant"), "WARN  manual teachpendant: /nonexistent/by-id/pad: not there");
+    assert_contains(c->line, "landscaped picks it up when it appears");
+    assert_starts(line_of(c, "manual spaceball"), "FAIL  manual spaceball: /dev/null: not an input event device");
+    fclose(c->out);
+    free(c->buf);
+    c->buf = NULL;
+    c->out = open_memstream(&c->buf, &c->len);
+    ls_config_defaults(&c->cfg);
+    c->cfg.rt_priority = 0;
+    c->cfg.lock_memory = false;
+    add_link(c, link);
+    snprintf(c->cfg.arm, sizeof c->cfg.arm, "none");
+    snprintf(c->cfg.dio, sizeof c->cfg.dio, "none");
+    (void)run(c);
+    assert_string_equal(line_of(c, "manual spaceball"),
+                        "PASS  manual spaceball: none configured: manualControl refuses it");
 }
 
 static void test_invalid_configuration_fails(void **state)
@@ -263,6 +297,7 @@ int tc_run_check_tests(void)
         cmocka_unit_test_setup_teardown(test_socketcan_and_gpiod_on_this_machine, setup, teardown),
         cmocka_unit_test_setup_teardown(test_sim_configuration_passes, setup, teardown),
         cmocka_unit_test_setup_teardown(test_invalid_configuration_fails, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_manual_devices_are_listed_with_what_they_lack, setup, teardown),
         cmocka_unit_test_setup_teardown(test_unwritable_pty_directory_fails, setup, teardown),
         cmocka_unit_test_setup_teardown(test_pty_path_taken_by_a_file_fails, setup, teardown),
         cmocka_unit_test_setup_teardown(test_cpu_outside_the_allowed_set_fails, setup, teardown),

@@ -239,15 +239,16 @@ static void test_key_in_wrong_section(void **state)
 
 static void test_unknown_section(void **state)
 {
-    refused(
-        *state, "[device]\nnode = 3\n[motors]\n",
-        "3: unknown section [motors]; expected [device], [hal], [control], [dio], [drives] or [joint.1] .. [joint.6]");
+    refused(*state, "[device]\nnode = 3\n[motors]\n",
+            "3: unknown section [motors]; expected [device], [hal], [control], [dio], [manual], [drives] or [joint.1] "
+            ".. [joint.6]");
 }
 
 static void test_key_outside_section(void **state)
 {
     refused(*state, "# no section yet\nnode = 3\n",
-            "2: key 'node' outside any section: put it under [device], [hal], [control], [dio], [drives] or [joint.1] "
+            "2: key 'node' outside any section: put it under [device], [hal], [control], [dio], [manual], [drives] or "
+            "[joint.1] "
             ".. [joint.6]");
 }
 
@@ -397,9 +398,9 @@ static void test_line_too_long(void **state)
 static void test_byte_order_mark_and_nul(void **state)
 {
     fx_t *f = *state;
-    refused(
-        f, "\xEF\xBB\xBF[motors]\n",
-        "1: unknown section [motors]; expected [device], [hal], [control], [dio], [drives] or [joint.1] .. [joint.6]");
+    refused(f, "\xEF\xBB\xBF[motors]\n",
+            "1: unknown section [motors]; expected [device], [hal], [control], [dio], [manual], [drives] or [joint.1] "
+            ".. [joint.6]");
     unlink(f->path);
     assert_int_equal(load(f, "\xEF\xBB\xBF[device]\nnode = 7\n"), 0);
     assert_int_equal(f->cfg.node, 7);
@@ -587,6 +588,136 @@ static void invalid(fx_t *f, const char *want)
     assert_string_equal(f->msg, want);
 }
 
+/* ---- [manual] -------------------------------------------------------------- */
+
+static void test_manual_keys_set_the_maps_and_the_gates(void **state)
+{
+    fx_t *f = *state;
+    assert_int_equal(load(f, "[manual]\n"
+                             "teachpendant = /dev/input/by-id/usb-pad-event-joystick\n"
+                             "teachpendant_buttons = enable:BTN_TR, panic:BTN_TR2, frame:BTN_SELECT\n"
+                             "teachpendant_deadband = 0.2\n"
+                             "spaceball = /dev/input/by-id/usb-3Dconnexion-event-if00\n"
+                             "spaceball_map = gamepad\n"
+                             "spaceball_axes = vx:REL_X:0.5, wz:-ABS_RZ:2:0.05\n"
+                             "spaceball_stale_ms = 250\n"
+                             "speed_steps = 5, 20, 60\n"),
+                     0);
+    hal_evdev_map_t m;
+    ls_config_manual_map(&f->cfg, LS_MANUAL_TEACHPENDANT, &m);
+    assert_int_equal(m.axis[0].code, ABS_X); /* the gamepad's axes */
+    assert_int_equal(m.button[HAL_MANUAL_FN_ENABLE], BTN_TR);
+    assert_int_equal(m.button[HAL_MANUAL_FN_PANIC], BTN_TR2);
+    assert_int_equal(m.button[HAL_MANUAL_FN_SPEED_UP], 0); /* buttons given replace the map's */
+    assert_true(m.deadband == 0.2);
+    ls_config_manual_map(&f->cfg, LS_MANUAL_SPACEBALL, &m);
+    assert_int_equal(m.axis[0].type, EV_REL);
+    assert_true(m.axis[0].scale == 0.5 && m.axis[0].deadband < 0.0);
+    assert_int_equal(m.axis[1].type, 0); /* axes given replace the map's */
+    assert_true(m.axis[5].scale == -2.0 && m.axis[5].deadband == 0.05);
+    assert_int_equal(m.button[HAL_MANUAL_FN_ENABLE], BTN_TL); /* the gamepad's buttons */
+    ls_manual_config_t g;
+    ls_config_manual_gate(&f->cfg, LS_MANUAL_SPACEBALL, &g);
+    assert_true(g.stale_us == 250000u);
+    assert_int_equal(g.n_steps, 3);
+    assert_int_equal(g.step_pct[2], 60);
+    assert_int_equal(g.start_step, 2);
+    assert_false(g.enabling_switch); /* manualControl decides that */
+    assert_int_equal(ARGS(f, "--link", "socketcan:can0"), 0);
+    assert_int_equal(ls_config_validate(&f->cfg, f->msg, sizeof f->msg), 0);
+    /* nothing: the map's again */
+    assert_int_equal(load(f, "[manual]\nteachpendant_buttons =\nteachpendant_deadband =\nspaceball_axes =\n"), 0);
+    ls_config_manual_map(&f->cfg, LS_MANUAL_TEACHPENDANT, &m);
+    assert_int_equal(m.button[HAL_MANUAL_FN_ENABLE], BTN_TL);
+    assert_true(m.deadband == 0.15);
+    ls_config_manual_map(&f->cfg, LS_MANUAL_SPACEBALL, &m);
+    assert_int_equal(m.axis[1].code, ABS_Y);
+}
+
+static void test_manual_defaults_are_the_simulated_devices_and_four_steps(void **state)
+{
+    fx_t *f = *state;
+    assert_string_equal(f->cfg.manual[LS_MANUAL_TEACHPENDANT].path, "");
+    assert_string_equal(f->cfg.manual[LS_MANUAL_TEACHPENDANT].map_name, "gamepad");
+    assert_string_equal(f->cfg.manual[LS_MANUAL_SPACEBALL].map_name, "spacemouse");
+    ls_manual_config_t g;
+    ls_config_manual_gate(&f->cfg, LS_MANUAL_TEACHPENDANT, &g);
+    assert_int_equal(g.n_steps, 4);
+    assert_int_equal(g.step_pct[g.start_step], 100);
+    assert_true(g.stale_us == 0u);
+}
+
+/* [manual] KEY = each case's value is refused with a message holding both
+ * the case's text and `also`. */
+static void refused_each(fx_t *f, const char *key, const char *const (*cases)[2], size_t n, const char *also)
+{
+    for (size_t i = 0; i < n; i++) {
+        char text[128];
+        snprintf(text, sizeof text, "[manual]\n%s = %s\n", key, cases[i][0]);
+        assert_int_equal(load(f, text), -1);
+        if (strstr(f->msg, cases[i][1]) == NULL || strstr(f->msg, also) == NULL) {
+            fail_msg("%s = %s: %s", key, cases[i][0], f->msg);
+        }
+    }
+}
+
+static void test_manual_keys_refuse_bad_values(void **state)
+{
+    fx_t *f = *state;
+    refused(f, "[manual]\nteachpendant = dev/input/x\n",
+            "2: [manual] teachpendant: got 'dev/input/x', expected an absolute device path of at most 127 characters "
+            "(e.g. /dev/input/by-id/usb-...-event-joystick), or nothing for none");
+    refused(f, "[manual]\nspaceball_map = joystick\n",
+            "2: [manual] spaceball_map: got 'joystick', expected gamepad, spacemouse (the default map to start from)");
+    static const char *const bad_axes[][2] = {
+        { "vq:ABS_X", "unknown component 'vq'" },
+        { "vx:ABS_X, vx:ABS_Y", "vx is mapped twice" },
+        { "vx:BTN_TL", "vx: 'BTN_TL' is no ABS_* or REL_* axis" },
+        { "vx:ABS_NOPE", "vx: 'ABS_NOPE' is no ABS_* or REL_* axis" },
+        { "vx:ABS_X:0", "vx: scale '0' is not a number in (0, 100] or [-100, 0)" },
+        { "vx:ABS_X:1:0.95", "vx: dead band '0.95' is not a number in 0..0.9" },
+        { "vx:ABS_X:1:0.1:7", "item 1 has 5 fields" },
+        { "vx", "item 1 has 1 fields" },
+    };
+    refused_each(f, "spaceball_axes", bad_axes, sizeof bad_axes / sizeof bad_axes[0], "expected COMPONENT:[-]CODE");
+    static const char *const bad_buttons[][2] = {
+        { "enable:BTN_TL, frame:BTN_TL", "BTN_TL is both enable and frame" },
+        { "enable:BTN_TL, enable:BTN_TR", "enable is mapped twice" },
+        { "brake:BTN_TL", "unknown function 'brake'" },
+        { "enable:ABS_X", "enable: 'ABS_X' is no BTN_* or KEY_* code" },
+        { "enable", "item 'enable'" },
+    };
+    refused_each(f, "teachpendant_buttons", bad_buttons, sizeof bad_buttons / sizeof bad_buttons[0],
+                 "expected FUNCTION:KEY");
+    refused(f, "[manual]\nteachpendant_deadband = 1\n",
+            "2: [manual] teachpendant_deadband: got '1', expected 0..0.9 (the share of full deflection that counts as "
+            "still), or nothing for the map's");
+    refused(f, "[manual]\nspaceball_stale_ms = 70000\n",
+            "2: [manual] spaceball_stale_ms: got '70000', expected milliseconds 0..60000 (> 0: the device reports "
+            "continuously, and a longer silence stops the jog; 0: it reports changes only)");
+    static const char *const bad_steps[][2] = {
+        { "50,25", "" }, { "0,10", "" }, { "10,101", "" }, { "", "" }, { "1,2,3,4,5,6,7,8,9", "" }, { "10,10", "" }
+    };
+    refused_each(f, "speed_steps", bad_steps, sizeof bad_steps / sizeof bad_steps[0],
+                 "expected 1..8 ascending percentages 1..100");
+}
+
+static void test_a_teachpendant_without_an_enabling_switch_is_refused(void **state)
+{
+    fx_t *f = *state;
+    assert_int_equal(load(f, "[hal]\nlink = socketcan:can0\n[manual]\nteachpendant = /dev/input/event3\n"
+                             "teachpendant_buttons = frame:BTN_WEST\n"),
+                     0);
+    assert_int_equal(ls_config_validate(&f->cfg, f->msg, sizeof f->msg), -1);
+    assert_string_equal(f->msg, "[manual] teachpendant = /dev/input/event3 has no enabling switch in its map: a teach "
+                                "pendant jogs only while one is held; add enable:KEY to teachpendant_buttons (e.g. "
+                                "enable:BTN_TL)");
+    /* a spaceball needs none */
+    ls_config_defaults(&f->cfg);
+    assert_int_equal(load(f, "[hal]\nlink = socketcan:can0\n[manual]\nspaceball = /dev/input/event4\n"), 0);
+    assert_int_equal(ls_config_validate(&f->cfg, f->msg, sizeof f->msg), 0);
+}
+
 static void test_validate(void **state)
 {
     fx_t *f = *state;
@@ -691,9 +822,10 @@ static void test_drive_keys_refuse_bad_values_naming_what_is_allowed(void **stat
     refused(f, "[drives]\nabort_connection = stop\n",
             "2: [drives] abort_connection: got 'stop', expected quick_stop, fault, disable_voltage or none (what a "
             "drive does when the controller's heartbeat stops: CiA 402 0x6007)");
-    refused(f, "[joint.7]\nnode = 1\n",
-            "1: unknown section [joint.7]; expected [device], [hal], [control], [dio], [drives] or [joint.1] .. "
-            "[joint.6]");
+    refused(
+        f, "[joint.7]\nnode = 1\n",
+        "1: unknown section [joint.7]; expected [device], [hal], [control], [dio], [manual], [drives] or [joint.1] .. "
+        "[joint.6]");
     refused(f, "[joint.2]\nnode = 128\n",
             "2: [joint.2] node: got '128', expected 1..127 (the drive's CANopen node id)");
     refused(f, "[joint.2]\ncounts_per_rad = nan\n",
@@ -778,6 +910,10 @@ int tc_run_config_tests(void)
         cmocka_unit_test_setup_teardown(test_missing_config_through_args, setup, teardown),
         cmocka_unit_test_setup_teardown(test_help, setup, teardown),
         cmocka_unit_test_setup_teardown(test_validate, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_manual_keys_set_the_maps_and_the_gates, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_manual_defaults_are_the_simulated_devices_and_four_steps, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_manual_keys_refuse_bad_values, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_a_teachpendant_without_an_enabling_switch_is_refused, setup, teardown),
         cmocka_unit_test_setup_teardown(test_a_drive_configuration_sets_every_drive_key, setup, teardown),
         cmocka_unit_test_setup_teardown(test_drive_keys_refuse_bad_values_naming_what_is_allowed, setup, teardown),
         cmocka_unit_test_setup_teardown(test_validate_a_drive_configuration, setup, teardown),
