@@ -1,6 +1,6 @@
 #!/bin/bash
 # Runs inside the VM guest (as root, host root fs read-only): sets up a vcan
-# bus and a gpio-sim chip, then runs tests/vm/test_guest.py with the project
+# bus, a gpio-sim chip and uinput, then runs tests/vm/test_guest.py with the project
 # venv's pytest. Writes into OUT (a writable dir shared with the host):
 #   started       written first: the host measures the boot time by it
 #   setup_error   the set-up step that failed (then no pytest.rc)
@@ -40,6 +40,12 @@ echo 1 > "$cfs/live" || fail "gpio-sim: live"
 chip=$(cat "$cfs/bank0/chip_name") dev=$(cat "$cfs/dev_name")
 [ -e "/dev/$chip" ] || fail "gpio-sim: /dev/$chip did not appear"
 echo "guest: vcan0 up; gpio-sim $dev: /dev/$chip, 8 lines"
+
+# Input devices: evdev (the /dev/input/event* nodes) and uinput, through which
+# the tests make a virtual gamepad and a virtual 6-DOF device.
+run modprobe evdev
+run modprobe uinput
+[ -c /dev/uinput ] || fail "uinput: /dev/uinput did not appear"
 
 export LS_VM_CAN_IF=vcan0 LS_VM_GPIO_CHIP=$chip LS_VM_GPIO_SYSFS=/sys/devices/platform/$dev/$chip
 export LS_BUILD_DIR=$build LS_VM_OUT=$out PYTHONDONTWRITEBYTECODE=1 PATH=$venv/bin:$PATH

@@ -25,6 +25,7 @@ kver=${kimg#/boot/vmlinuz-}
 [ -d "/lib/modules/$kver" ] || die "no modules for $kver in /lib/modules: reinstall linux-image-$kver"
 command -v qemu-system-x86_64 >/dev/null || die "qemu-system-x86_64 missing: run tests/vm/setup.sh (Debian qemu-system-x86)"
 [ -x "$venv/bin/vng" ] || die "virtme-ng missing in $venv: run tests/vm/setup.sh"
+"$venv/bin/python" -c 'import evdev' 2>/dev/null || die "python evdev missing in $venv: run tests/vm/setup.sh"
 ko=$here/.cache/gpio-sim-$kver/gpio_sim_oot.ko
 [ -f "$ko" ] || die "no gpio-sim module for $kver at $ko: run tests/vm/setup.sh"
 [ -x "$build/bin/isotp_socketcan_echo" ] || die "$build/bin/isotp_socketcan_echo missing: build first (bash .ci/build)"

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # VM tier set-up (idempotent, root on Debian 12): QEMU, a Debian 6.1 kernel
 # with its modules and headers (the guest's kernel, never the host's), can-utils,
-# libgpiod tools, virtme-ng in the project venv, and the gpio-sim module built
+# libgpiod tools, virtme-ng and python evdev in the project venv, and the gpio-sim module built
 # out of tree (Debian's kernels lack CONFIG_GPIO_SIM) into tests/vm/.cache/.
 # Fast when already done. Prints the guest kernel image path on its last line.
 #
@@ -43,6 +43,12 @@ apt_install "linux-headers-$kver"
 if [ ! -x "$venv/bin/vng" ]; then
   log "installing virtme-ng into $venv"
   "$venv/bin/pip" install -q virtme-ng
+fi
+# python evdev: the guest's virtual gamepad and 6-DOF device (uinput). Pinned
+# in the [dev] extra; installed here too for a venv made before it was.
+if ! "$venv/bin/python" -c 'import evdev' 2>/dev/null; then
+  log "installing evdev into $venv"
+  "$venv/bin/pip" install -q -c "$repo/host_tools/constraints.txt" evdev
 fi
 
 # gpio-sim out of tree: gpio-sim.c + gpiolib.h + irq_sim.c as one module.

@@ -1,7 +1,8 @@
 """VM tier checks, run inside the QEMU guest by tests/vm/guest.sh.
 
 The guest has a real SocketCAN bus (vcan0 with the kernel's CAN_RAW and
-CAN_ISOTP) and a real GPIO chip (gpio-sim, 8 lines). guest.sh exports:
+CAN_ISOTP), a real GPIO chip (gpio-sim, 8 lines) and uinput (virtual input
+devices, made here with python evdev). guest.sh exports:
   LS_VM_CAN_IF      the CAN interface (vcan0)
   LS_VM_GPIO_CHIP   the gpio-sim chip (gpiochipN)
   LS_VM_GPIO_SYSFS  its sysfs dir (.../gpio-sim.N/gpiochipN with sim_gpioK/{value,pull})
@@ -11,6 +12,7 @@ the checks few and end to end.
 """
 from __future__ import annotations
 
+import math
 import os
 import re
 import socket
@@ -22,6 +24,8 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
+from evdev import AbsInfo, UInput
+from evdev import ecodes as e
 
 from landscape import BusSpec, Supervisor
 from landscape._generated import landscape_pb2 as pb
@@ -258,7 +262,7 @@ OUTPUT_LINES = [4, 5, 6, 7]   # gpio-sim lines driven as DIO outputs, bits 16..1
 
 
 
-def landscaped_args(tmp: Path, node: int, dio: str, rt_priority: int = 50) -> list[str]:
+def landscaped_args(tmp: Path, node: int, dio: str, rt_priority: int = 50, conf: str = "") -> list[str]:
     """Options for one controller on vcan0, by default with the real-time
     (SCHED_FIFO) control thread. Under TCG the simulated arm's loop takes most
     of a vCPU even at 100 Hz, and SCHED_FIFO leaves normal threads 5 %: two
@@ -267,27 +271,29 @@ def landscaped_args(tmp: Path, node: int, dio: str, rt_priority: int = 50) -> li
     frames each) the emulated host tool cannot keep up with the bus and
     misses its ISO-TP time-outs. The heartbeat time-out is 10 s: the emulated
     host tool's 200 ms heartbeats arrive more than 1 s apart at times. The DIO line offsets are the
-    [dio] keys of a --config file (docs/deploy.md)."""
+    [dio] keys of a --config file (docs/deploy.md), and `conf` more of that file (e.g. [manual])."""
     args = ["--link", f"socketcan:{CAN_IF}", "--arm", "sim", "--node", f"{node:#04x}",
             "--rt-priority", str(rt_priority), "--rate", "100", "--telemetry-hz", "2",
             "--heartbeat-timeout", "10000", "--name", f"vm-{node:02x}"]
     if dio.startswith("gpiod:"):
         ins, outs = ",".join(map(str, INPUT_LINES)), ",".join(map(str, OUTPUT_LINES))
-        conf = tmp / f"landscaped-{node:02x}.conf"
-        conf.write_text(f"[hal]\ndio = {dio}\n[dio]\ninputs = {ins}\noutputs = {outs}\n")
-        args = ["--config", str(conf), *args]
+        conf = f"[hal]\ndio = {dio}\n[dio]\ninputs = {ins}\noutputs = {outs}\n{conf}"
     else:
         args += ["--dio", dio]
+    if conf:
+        path = tmp / f"landscaped-{node:02x}.conf"
+        path.write_text(conf)
+        args = ["--config", str(path), *args]
     return args
 
 
 class Landscaped:
-    def __init__(self, tmp: Path, node: int, dio: str, rt_priority: int = 50) -> None:
+    def __init__(self, tmp: Path, node: int, dio: str, rt_priority: int = 50, conf: str = "") -> None:
         assert LANDSCAPED.exists(), f"{LANDSCAPED} missing: build first (bash .ci/build)"
         self.node = node
         self.log = tmp / f"landscaped-{node:02x}.log"
         with self.log.open("w") as f:
-            self.proc = subprocess.Popen([str(LANDSCAPED), *landscaped_args(tmp, node, dio, rt_priority)],
+            self.proc = subprocess.Popen([str(LANDSCAPED), *landscaped_args(tmp, node, dio, rt_priority, conf)],
                                          stdout=subprocess.DEVNULL, stderr=f)
         deadline = time.monotonic() + 60
         while f"ready: node 0x{node:02X}" not in self.log.read_text():
@@ -568,3 +574,232 @@ def test_simulated_drives_answer_python_canopen_over_vcan(tmp_path: Path) -> Non
             proc.terminate()
         rc = proc.wait(timeout=30)
     assert rc == 0, log.read_text()
+
+
+# ---------------------------------------------------------------- manual devices through evdev (uinput)
+#
+# python evdev's UInput makes a virtual gamepad and a virtual 6-DOF device in
+# the guest's kernel; landscaped reads their /dev/input/event* nodes like real
+# hardware ([manual], hal/linux/hal_linux_evdev.h). The guest runs no udev, so
+# the tests make the /dev/input/by-id-style link themselves and point it at the
+# new node when they re-plug a device, as udev would.
+
+# The jog of a teach pendant at full deflection and its stop (docs/conformance.md
+# "manualControl"): 10 % of the model's 1 m/s, braking at setAcceleration's
+# default 1 m/s^2 with the model's jerk for it (ls_robot_model_linear_jerk:
+# 40 m/s^3 * 1 / 4), so 0.1 / 1 + 1 / 10 = 0.2 s and 0.1 * 0.2 / 2 = 10 mm.
+PENDANT_SPEED_M_S = 0.1
+PENDANT_STOP_M = 0.010
+
+PAD_ABS = 32767
+MANUAL_NODE = 0x12  # its own node: its controller lives through these tests (a module fixture)
+
+
+def virtual_gamepad() -> UInput:
+    """A gamepad with the axes and buttons of the gamepad map."""
+    stick = AbsInfo(value=0, min=-PAD_ABS - 1, max=PAD_ABS, fuzz=16, flat=128, resolution=0)
+    hat = AbsInfo(value=0, min=-1, max=1, fuzz=0, flat=0, resolution=0)
+    cap = {e.EV_KEY: [e.BTN_TL, e.BTN_NORTH, e.BTN_SOUTH, e.BTN_WEST, e.BTN_EAST],
+           e.EV_ABS: [(e.ABS_X, stick), (e.ABS_Y, stick), (e.ABS_RX, stick), (e.ABS_RY, stick),
+                      (e.ABS_HAT0X, hat), (e.ABS_HAT0Y, hat)]}
+    return UInput(cap, name="ls-vm-pendant", vendor=0x045E, product=0x028E, bustype=e.BUS_USB)
+
+
+def virtual_spacemouse() -> UInput:
+    """A 6-DOF device like a SpaceMouse: six axes of -350..350, two buttons."""
+    ax = AbsInfo(value=0, min=-350, max=350, fuzz=0, flat=0, resolution=0)
+    cap = {e.EV_KEY: [e.BTN_0, e.BTN_1],
+           e.EV_ABS: [(c, ax) for c in (e.ABS_X, e.ABS_Y, e.ABS_Z, e.ABS_RX, e.ABS_RY, e.ABS_RZ)]}
+    return UInput(cap, name="ls-vm-spacemouse", vendor=0x256F, product=0xC635, bustype=e.BUS_USB)
+
+
+def event_node(ui: UInput) -> str:
+    node = str(ui.device.path)
+    assert node.startswith("/dev/input/event"), node
+    return node
+
+
+def link_to(link: Path, ui: UInput) -> None:
+    """Point the by-id-style link at the device's node (replacing it atomically)."""
+    tmp = link.with_suffix(".new")
+    tmp.unlink(missing_ok=True)
+    tmp.symlink_to(event_node(ui))
+    tmp.replace(link)
+
+
+def emit(ui: UInput, *events: tuple[int, int, int]) -> None:
+    for ev in events:
+        ui.write(*ev)
+    ui.syn()
+
+
+def tip(sup: Supervisor) -> list[float]:
+    return list(sup.get_robot_position().result["world_pose"][:3])
+
+
+def wait_notice(sup: Supervisor, event_id: str, timeout_s: float = 30.0, **data: str) -> pb.Notice:
+    for n in sup.notices(timeout_s=timeout_s):
+        if n.event_id == event_id and all(notice_data(n).get(k) == v for k, v in data.items()):
+            return n
+    raise AssertionError(f"no {event_id} {data} within {timeout_s} s")
+
+
+def still(sup: Supervisor, seconds: float = 1.0) -> list[float]:
+    """The tip, after checking it did not move for `seconds`."""
+    p0 = tip(sup)
+    time.sleep(seconds)
+    p1 = tip(sup)
+    assert math.dist(p0, p1) < 1e-4, f"the tip moved {1000 * math.dist(p0, p1):.2f} mm while it should rest"
+    return p1
+
+
+def dist(a: list[float], b: list[float]) -> float:
+    return math.dist(a, b)
+
+
+# A joint pose from which the tool points down over the table (tool x = base x,
+# tool y = -base y, tool z = -base z), away from the wrist singularity of the
+# zero pose (tests/integration/sensor_fixtures.py Q_OVER_TABLE).
+Q_TOOL_DOWN = [-0.2, 0.8, 0.45, 0.0, 0.3, 0.0]
+
+
+def ready(sup: Supervisor) -> None:
+    """Lock, activate and bring the arm to Q_TOOL_DOWN."""
+    sup.lock()
+    sup.activate()
+    done = sup.wait_complete(sup.move_absolute("tool_down", Q_TOOL_DOWN, speed_pct=50), timeout_s=120)
+    assert done.event_id == "moveAbsoluteComplete", done
+
+
+def press_enable(sup: Supervisor, ui: UInput) -> None:
+    emit(ui, (e.EV_KEY, e.BTN_TL, 0))
+    time.sleep(0.1)  # two reports the loop sees apart (100 Hz)
+    emit(ui, (e.EV_KEY, e.BTN_TL, 1))
+    wait_notice(sup, "manualSwitch", switch="enabled")
+
+
+@pytest.fixture(scope="module")
+def manual_rig(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[Landscaped, Path, Path, list[UInput]]]:
+    """Node MANUAL_NODE (no DIO) with a virtual gamepad as its teach pendant and a
+    virtual SpaceMouse as its spaceball, both through by-id-style links; the
+    list holds the devices alive (a test may replace one). One controller for
+    these tests: a start costs seconds under TCG."""
+    tmp = tmp_path_factory.mktemp("manual")
+    devices = [virtual_gamepad(), virtual_spacemouse()]
+    pad, mouse = tmp / "by-id-pad-event-joystick", tmp / "by-id-spacemouse-event-if00"
+    link_to(pad, devices[0])
+    link_to(mouse, devices[1])
+    conf = f"[manual]\nteachpendant = {pad}\nspaceball = {mouse}\n"
+    c = Landscaped(log_dir(tmp), MANUAL_NODE, "none", conf=conf)
+    try:
+        yield c, pad, mouse, devices
+    finally:
+        rc = c.stop()
+        for d in devices:
+            d.close()
+        assert rc == 0, f"landscaped exited with {rc}:\n{c.log.read_text()}"
+
+
+def test_a_virtual_pendant_jogs_only_while_its_enabling_switch_is_held(
+        manual_rig: tuple[Landscaped, Path, Path, list[UInput]]) -> None:
+    """The gamepad's stick jogs the simulated arm while LB (the enabling switch)
+    is held, not before it was pressed; its release stops the tip within the
+    jog's ramp (10 mm); the override button is reported."""
+    _, _, _, devices = manual_rig
+    pad = devices[0]
+    with supervisor(MANUAL_NODE, 0xF1, "vm-pendant") as sup:
+        ready(sup)
+        assert sup.manual_control("teachpendant").ok
+        emit(pad, (e.EV_ABS, e.ABS_X, PAD_ABS))  # full deflection, switch released
+        p0 = still(sup)
+        press_enable(sup, pad)
+        time.sleep(1.5)
+        p1 = tip(sup)
+        assert dist(p0, p1) > 0.5 * PENDANT_SPEED_M_S, f"moved {1000 * dist(p0, p1):.1f} mm in 1.5 s"
+        emit(pad, (e.EV_KEY, e.BTN_TL, 0))  # released: it brakes on the ramp
+        wait_notice(sup, "manualSwitch", switch="released")
+        p2 = tip(sup)
+        p3 = still(sup, 1.5)
+        print(f"\npendant: jogged {1000 * dist(p0, p1):.1f} mm; after the release notice {1000 * dist(p2, p3):.2f} mm "
+              f"(ramp bound {1000 * PENDANT_STOP_M:.0f} mm)")
+        assert dist(p2, p3) <= PENDANT_STOP_M * 1.05
+        emit(pad, (e.EV_KEY, e.BTN_SOUTH, 1))
+        wait_notice(sup, "manualOverride", device="teachpendant", percent="50")
+        emit(pad, (e.EV_KEY, e.BTN_SOUTH, 0), (e.EV_ABS, e.ABS_X, 0))
+        assert sup.manual_control("off").ok
+        sup.deactivate()
+        sup.release()
+
+
+def test_unplugging_the_pendant_stops_and_alarms_and_it_jogs_again_after_a_new_press(
+        manual_rig: tuple[Landscaped, Path, Path, list[UInput]]) -> None:
+    """Destroying the uinput device stops the jog with manualDeviceLost; a new
+    device at the same link is picked up (manualDeviceFound) without a restart,
+    and with its switch held through the re-plug it jogs only after the switch
+    was released and pressed again."""
+    _, link, _, devices = manual_rig
+    with supervisor(MANUAL_NODE, 0xF1, "vm-unplug") as sup:
+        ready(sup)
+        assert sup.manual_control("teachpendant").ok
+        press_enable(sup, devices[0])
+        p_start = tip(sup)
+        emit(devices[0], (e.EV_ABS, e.ABS_Y, -PAD_ABS - 1))  # stick up: +vy
+        time.sleep(1.0)
+        assert dist(p_start, tip(sup)) > 0.3 * PENDANT_SPEED_M_S
+        devices[0].close()  # unplugged: udev would remove its by-id link too (the kernel
+        link.unlink()       # reuses event node numbers: a new device could take the old one's)
+        alarm = wait_notice(sup, "manualDeviceLost", device="teachpendant", reason="unplugged")
+        assert alarm.kind == pb.ALARM
+        assert notice_data(alarm)["path"] == str(link)
+        time.sleep(0.5)  # the ramp down
+        p0 = still(sup)
+        devices[0] = virtual_gamepad()  # plugged in again, the switch held, the stick pushed,
+        emit(devices[0], (e.EV_KEY, e.BTN_TL, 1), (e.EV_ABS, e.ABS_Y, -PAD_ABS - 1))
+        link_to(link, devices[0])  # and only then its link appears
+        wait_notice(sup, "manualDeviceFound", device="teachpendant", path=str(link))
+        p1 = still(sup)
+        assert dist(p0, p1) < 1e-4  # held over the re-plug: nothing
+        press_enable(sup, devices[0])
+        time.sleep(1.0)
+        assert dist(p1, tip(sup)) > 0.3 * PENDANT_SPEED_M_S
+        emit(devices[0], (e.EV_KEY, e.BTN_TL, 0), (e.EV_ABS, e.ABS_Y, 0))
+        assert sup.manual_control("off").ok
+        sup.deactivate()
+        sup.release()
+
+
+def test_a_virtual_6dof_device_jogs_the_arm_and_check_reports_both_devices(
+        manual_rig: tuple[Landscaped, Path, Path, list[UInput]], tmp_path: Path) -> None:
+    """The SpaceMouse-like device, switched to the base frame by its first
+    button, jogs the tip up when pulled (ABS_Z < 0: the spacemouse map's +vz)
+    with no enabling switch; --check finds both devices with every mapped axis
+    and button."""
+    _, pad, mouse, devices = manual_rig
+    with supervisor(MANUAL_NODE, 0xF1, "vm-6dof") as sup:
+        ready(sup)
+        assert sup.manual_control("spaceball").ok
+        emit(devices[1], (e.EV_KEY, e.BTN_0, 1))
+        wait_notice(sup, "manualFrame", device="spaceball", frame="base")
+        emit(devices[1], (e.EV_KEY, e.BTN_0, 0))
+        p0 = tip(sup)
+        emit(devices[1], (e.EV_ABS, e.ABS_Z, -350))
+        time.sleep(0.6)
+        emit(devices[1], (e.EV_ABS, e.ABS_Z, 0))
+        time.sleep(0.5)
+        p1 = still(sup)
+        print(f"\nspaceball: the tip went from {p0} to {p1}")
+        assert p1[2] > p0[2] + 0.03, f"z went from {p0[2]:.4f} to {p1[2]:.4f} m"
+        assert abs(p1[0] - p0[0]) < 2e-3 and abs(p1[1] - p0[1]) < 2e-3
+        assert sup.manual_control("off").ok
+        sup.deactivate()
+        sup.release()
+    conf = tmp_path / "check-manual.conf"
+    conf.write_text(f"[hal]\nlink = socketcan:{CAN_IF}\ndio = none\n[manual]\nteachpendant = {pad}\n"
+                    f"spaceball = {mouse}\n")
+    r = subprocess.run([str(LANDSCAPED), "--config", str(conf), "--check"], capture_output=True, text=True,
+                       timeout=120)
+    lines = r.stdout.splitlines()
+    assert r.returncode == 0, r.stdout + r.stderr
+    for kind, name in (("teachpendant", "ls-vm-pendant"), ("spaceball", "ls-vm-spacemouse")):
+        row = [ln for ln in lines if ln.startswith(f"PASS  manual {kind}: ")]
+        assert row and f'"{name}" readable; has every mapped axis' in row[0], r.stdout
