@@ -563,6 +563,19 @@ int main(int argc, char **argv)
         LOG_ERR("%s", cmsg);
         return LS_EXIT_BAD_CONFIG;
     }
+    if (strcmp(opt.arm, "cia402") == 0) {
+        /* The drives' EDS files and the bus budget are configuration too:
+         * refused like a bad key, before anything opens (exit 2). */
+        static ls_drive_plan_t plan;
+        if (ls_drive_plan(&opt, &plan, cmsg, sizeof cmsg) != LS_OK) {
+            LOG_ERR("%s", cmsg);
+            return LS_EXIT_BAD_CONFIG;
+        }
+        if (!plan.budget_fits) {
+            LOG_ERR("%s", plan.budget);
+            return LS_EXIT_BAD_CONFIG;
+        }
+    }
     g_wake_fd = eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
     if (g_wake_fd < 0) {
         LOG_ERR("the comms thread's eventfd: %s", strerror(errno));

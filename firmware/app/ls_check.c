@@ -397,18 +397,19 @@ static void say_drive(void *ctx, int level, const char *what, const char *line)
     report((report_t *)ctx, (ls_check_level_t)level, what, "%s", line);
 }
 
-static void check_drives(report_t *r, const ls_config_t *cfg, bool config_ok)
+/* false when the drives' configuration is refused (exit 2, as at start) */
+static bool check_drives(report_t *r, const ls_config_t *cfg, bool config_ok)
 {
     if (strcmp(cfg->arm, "cia402") == 0) {
-        if (config_ok) {
-            ls_drive_check(cfg, say_drive, r);
-        }
-    } else if (strcmp(cfg->arm, "sim") == 0 && has_socketcan_link(cfg)) {
+        return !config_ok || ls_drive_check(cfg, say_drive, r);
+    }
+    if (strcmp(cfg->arm, "sim") == 0 && has_socketcan_link(cfg)) {
         report(r, LS_CHECK_WARN, "arm",
                "arm = sim on a controller with a real bus: supervisors would drive the simulated arm, nothing "
                "real moves; set arm = cia402 and describe the drives ([drives], [joint.N]: docs/deploy.md "
                "\"Drives\")");
     }
+    return true;
 }
 
 int ls_check_run(const ls_config_t *cfg, FILE *out)
@@ -417,7 +418,7 @@ int ls_check_run(const ls_config_t *cfg, FILE *out)
     bool config_ok = check_config(&r, cfg);
     check_afcan(&r, cfg);
     check_links(&r, cfg);
-    check_drives(&r, cfg, config_ok);
+    config_ok = check_drives(&r, cfg, config_ok) && config_ok;
     check_dio(&r, cfg);
     check_manual(&r, cfg);
     check_setpoint_trace(&r, cfg);

@@ -424,14 +424,14 @@ static int probe_read(ls_co_master_t *m, uint8_t node, uint16_t index, uint8_t s
     }
 }
 
-void ls_drive_check(const ls_config_t *cfg, ls_drive_say_fn say, void *ctx)
+bool ls_drive_check(const ls_config_t *cfg, ls_drive_say_fn say, void *ctx)
 {
     static ls_drive_plan_t plan;
     static ls_co_master_t master;
     char line[LS_DRIVE_SETUP_LINE + 64];
     if (ls_drive_plan(cfg, &plan, line, sizeof line) != LS_OK) {
         say(ctx, 2, "drives", line);
-        return;
+        return false;
     }
     (void)snprintf(line, sizeof line, "%d joints on %s: every EDS has what cyclic synchronous position needs",
                    LS_N_JOINTS, cfg->drives_link);
@@ -442,7 +442,7 @@ void ls_drive_check(const ls_config_t *cfg, ls_drive_say_fn say, void *ctx)
     say(ctx, plan.budget_fits ? 0 : 2, "drive bus budget", plan.budget);
     if (open_drive_link(cfg, line, sizeof line) != LS_OK) {
         say(ctx, 2, "drive bus", line);
-        return;
+        return plan.budget_fits;
     }
     ls_co_master_config_t mc;
     memset(&mc, 0, sizeof mc);
@@ -455,7 +455,7 @@ void ls_drive_check(const ls_config_t *cfg, ls_drive_say_fn say, void *ctx)
     if (ls_co_master_init(&master, &mc, check_send, &g_link) != LS_OK) {
         say(ctx, 2, "drive bus", ls_co_master_text(&master));
         hal_can_close(&g_link);
-        return;
+        return plan.budget_fits;
     }
     for (int j = 0; j < LS_N_JOINTS; j++) {
         const ls_drive_joint_t *dj = &plan.drives.joint[j];
@@ -492,4 +492,5 @@ void ls_drive_check(const ls_config_t *cfg, ls_drive_say_fn say, void *ctx)
         }
     }
     hal_can_close(&g_link);
+    return plan.budget_fits;
 }

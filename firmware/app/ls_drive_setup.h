@@ -79,6 +79,8 @@ void ls_drive_shutdown(void);
  * and 0x1018 against its EDS, within boot_timeout_ms. No NMT command and no
  * write: a check never moves or reconfigures a drive. */
 typedef void (*ls_drive_say_fn)(void *ctx, int level, const char *what, const char *line);
-void ls_drive_check(const ls_config_t *cfg, ls_drive_say_fn say, void *ctx);
+/* Returns false when the configuration itself is refused (an EDS, the
+ * budget: what makes landscaped exit 2 at start), true otherwise. */
+bool ls_drive_check(const ls_config_t *cfg, ls_drive_say_fn say, void *ctx);
 
 #endif

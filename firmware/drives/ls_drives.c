@@ -107,17 +107,17 @@ static bool build_script(ls_drives_t *d, int j, size_t *len)
     }
     const uint32_t rpdo1[] = { LS_CO_PDO_MAP_ENTRY(LS_CO_OBJ_CONTROLWORD, 0, 16),
                                LS_CO_PDO_MAP_ENTRY(LS_CO_OBJ_TARGET_POSITION, 0, 32) };
-    ok = ok && map_pdo(script, &n, jc, LS_CO_OBJ_RPDO_COMM, LS_CO_OBJ_RPDO_MAP, LS_CO_COB_RPDO(1, node), rpdo1, 2,
-                       false);
+    ok = ok &&
+         map_pdo(script, &n, jc, LS_CO_OBJ_RPDO_COMM, LS_CO_OBJ_RPDO_MAP, LS_CO_COB_RPDO(1, node), rpdo1, 2, false);
     if (jc->feedforward) {
         const uint32_t rpdo2[] = { LS_CO_PDO_MAP_ENTRY(LS_CO_OBJ_VELOCITY_OFFSET, 0, 32) };
-        ok = ok && map_pdo(script, &n, jc, LS_CO_OBJ_RPDO_COMM + 1u, LS_CO_OBJ_RPDO_MAP + 1u,
-                           LS_CO_COB_RPDO(2, node), rpdo2, 1, false);
+        ok = ok && map_pdo(script, &n, jc, LS_CO_OBJ_RPDO_COMM + 1u, LS_CO_OBJ_RPDO_MAP + 1u, LS_CO_COB_RPDO(2, node),
+                           rpdo2, 1, false);
     }
     const uint32_t tpdo1[] = { LS_CO_PDO_MAP_ENTRY(LS_CO_OBJ_STATUSWORD, 0, 16),
                                LS_CO_PDO_MAP_ENTRY(LS_CO_OBJ_POSITION_ACTUAL, 0, 32) };
-    ok = ok && map_pdo(script, &n, jc, LS_CO_OBJ_TPDO_COMM, LS_CO_OBJ_TPDO_MAP, LS_CO_COB_TPDO(1, node), tpdo1, 2,
-                       true);
+    ok =
+        ok && map_pdo(script, &n, jc, LS_CO_OBJ_TPDO_COMM, LS_CO_OBJ_TPDO_MAP, LS_CO_COB_TPDO(1, node), tpdo1, 2, true);
     if (jc->write_interp_period) {
         uint8_t value;
         int8_t index;
@@ -327,9 +327,8 @@ static void take_feedback(ls_drives_t *d, uint8_t j)
         return; /* no answer to the last SYNC: keep the last feedback, let it age */
     }
     const double q_old = a->q;
-    const uint32_t missed = a->fresh_seen && a->feedback_age > d->cfg.cycle_ticks
-                                ? a->feedback_age / d->cfg.cycle_ticks - 1u
-                                : 0u;
+    const uint32_t missed =
+        a->fresh_seen && a->feedback_age > d->cfg.cycle_ticks ? a->feedback_age / d->cfg.cycle_ticks - 1u : 0u;
     a->statusword = (uint16_t)((uint16_t)b[0] | (uint16_t)((uint16_t)b[1] << 8));
     a->pos_raw = le32(&b[2]);
     a->q = ls_402_pos_rad(&d->cfg.joint[j].scale, ls_402_unwrap(&a->unwrap, a->pos_raw));

@@ -53,8 +53,8 @@
 #include "ls_cia402.h"
 #include "ls_co_master.h"
 
-#define LS_DRIVES_SCRIPT_MAX 64u /* SDO steps of one drive's configuration */
-#define LS_DRIVES_PDO_SETS 4u    /* RPDO and TPDO parameter sets a drive may have disabled at start */
+#define LS_DRIVES_SCRIPT_MAX 64u   /* SDO steps of one drive's configuration */
+#define LS_DRIVES_PDO_SETS 4u      /* RPDO and TPDO parameter sets a drive may have disabled at start */
 #define LS_DRIVES_RX_PER_CYCLE 64u /* frames taken per update(): bounds a cycle's time under a flood */
 #define LS_DRIVES_STALE_CYCLES 5u  /* default stale_cycles */
 /* An enable's steps: a drive follows one within a few cycles (a brake's
@@ -65,19 +65,19 @@
 
 /* One joint's drive: what the configuration says and what its EDS offers. */
 typedef struct {
-    uint8_t node_id;          /* 1..127 */
-    ls_402_scale_t scale;     /* joint radians <-> drive counts (ls_402_scale_init) */
+    uint8_t node_id;      /* 1..127 */
+    ls_402_scale_t scale; /* joint radians <-> drive counts (ls_402_scale_init) */
     /* Identity to check (0x1018 :01 vendor, :02 product, :03 revision against
      * the EDS's DeviceInfo); a field is checked when its has_ flag is set.
      * The revision is checked as optional: a mismatch is recorded, not fatal. */
     bool has_vendor, has_product, has_revision;
     uint32_t vendor_id, product_code, revision;
-    bool write_consumer_hb;     /* 0x1016:01 writable: the drive watches our heartbeat */
-    bool write_abort_option;    /* 0x6007 writable */
-    bool write_interp_period;   /* 0x60C2:01/:02 writable */
-    bool write_pdo_type;        /* 0x1400:02 etc. writable (else the EDS's types must be synchronous) */
-    bool write_tpdo_inhibit;    /* 0x1800:03 writable: set 0 (a synchronous TPDO needs none) */
-    bool feedforward;           /* 0x60B1 mappable and wanted: RPDO2 carries it */
+    bool write_consumer_hb;                /* 0x1016:01 writable: the drive watches our heartbeat */
+    bool write_abort_option;               /* 0x6007 writable */
+    bool write_interp_period;              /* 0x60C2:01/:02 writable */
+    bool write_pdo_type;                   /* 0x1400:02 etc. writable (else the EDS's types must be synchronous) */
+    bool write_tpdo_inhibit;               /* 0x1800:03 writable: set 0 (a synchronous TPDO needs none) */
+    bool feedforward;                      /* 0x60B1 mappable and wanted: RPDO2 carries it */
     bool rpdo_present[LS_DRIVES_PDO_SETS]; /* 0x1400 + n in the EDS: disabled unless used */
     bool tpdo_present[LS_DRIVES_PDO_SETS]; /* 0x1800 + n */
 } ls_drive_joint_t;
@@ -101,9 +101,9 @@ typedef struct {
     ls_402_axis_t ax;
     ls_402_out_t out;
     ls_402_unwrap_t unwrap;
-    bool fresh_seen;     /* a TPDO arrived since the node became READY */
-    uint32_t last_age;   /* age of the TPDO, in SYNC periods */
-    uint32_t sw0, pos0;  /* the script's READ_INTO targets: statusword, position actual */
+    bool fresh_seen;    /* a TPDO arrived since the node became READY */
+    uint32_t last_age;  /* age of the TPDO, in SYNC periods */
+    uint32_t sw0, pos0; /* the script's READ_INTO targets: statusword, position actual */
     uint16_t statusword;
     int32_t pos_raw;
     int32_t hold_raw; /* the target while no set-point was given */
@@ -122,9 +122,9 @@ typedef struct {
     ls_co_step_t script[HAL_ARM_MAX_JOINTS][LS_DRIVES_SCRIPT_MAX];
     ls_drive_axis_t axis[HAL_ARM_MAX_JOINTS];
     bool want_enabled;
-    bool reset_allowed; /* an enable asked since the last disable: FAULTs may be reset */
+    bool reset_allowed;    /* an enable asked since the last disable: FAULTs may be reset */
     uint32_t enable_epoch; /* enable() calls: a joint is ENABLED only by a step taken since the last one */
-    uint32_t tick;      /* control cycles since boot, modulo cycle_ticks */
+    uint32_t tick;         /* control cycles since boot, modulo cycle_ticks */
     bool booted;
     char text[LS_CO_TEXT_LEN]; /* why init or boot failed */
 } ls_drives_t;
