@@ -116,8 +116,8 @@ static void test_heartbeats_abort_option_interpolation_and_csp(void **state)
     const ls_co_step_t *s = g_d.script[5];
     const size_t n = script_len(5);
     assert_true(find_write(s, n, 0, 0x1016, 1, (0x7Fu << 16) | 350u) >= 0); /* the drive watches node 0x7F */
-    assert_true(find_write(s, n, 0, 0x6007, 0, 3) >= 0);                   /* quick stop when we go silent */
-    assert_true(find_write(s, n, 0, 0x60C2, 1, 4) >= 0);                   /* 4 x 10^-3 s */
+    assert_true(find_write(s, n, 0, 0x6007, 0, 3) >= 0);                    /* quick stop when we go silent */
+    assert_true(find_write(s, n, 0, 0x60C2, 1, 4) >= 0);                    /* 4 x 10^-3 s */
     assert_true(find_write(s, n, 0, 0x60C2, 2, 0xFDu) >= 0);
     const int mode = find_write(s, n, 0, 0x6060, 0, 8);
     assert_true(mode >= 0);
