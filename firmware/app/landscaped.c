@@ -567,9 +567,10 @@ int main(int argc, char **argv)
         /* The drives' EDS files and the bus budget are configuration too:
          * refused like a bad key, before anything opens (exit 2). */
         static ls_drive_plan_t plan;
-        if (ls_drive_plan(&opt, &plan, cmsg, sizeof cmsg) != LS_OK) {
+        const int pr = ls_drive_plan(&opt, &plan, cmsg, sizeof cmsg);
+        if (pr != LS_OK) {
             LOG_ERR("%s", cmsg);
-            return LS_EXIT_BAD_CONFIG;
+            return pr == LS_EIO ? 1 : LS_EXIT_BAD_CONFIG; /* an unreadable EDS file is the machine's */
         }
         if (!plan.budget_fits) {
             LOG_ERR("%s", plan.budget);

@@ -469,6 +469,14 @@ static int set_drives_abort(ls_config_t *cfg, const char *v, char *why, size_t w
                   "heartbeat stops: CiA 402 0x6007)");
 }
 
+static int set_drives_stale(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    if (parse_u32(v, 2, 100, &cfg->drives_stale_cycles) != 0) {
+        return EXPECT("2..100 (drive cycles a drive's feedback (TPDO) may miss before the drive counts as lost)");
+    }
+    return 0;
+}
+
 static int set_drives_feedforward(ls_config_t *cfg, const char *v, char *why, size_t whylen)
 {
     if (parse_bool(v, &cfg->drives_feedforward) != 0) {
@@ -751,6 +759,7 @@ static const key_def_t KEYS[] = {
     MANUAL_KEYS(LS_MANUAL_NAME_SPACEBALL, spaceball),
 #undef MANUAL_KEYS
     { "manual", "speed_steps", NULL, false, set_speed_steps },
+    { "drives", "stale_cycles", NULL, false, set_drives_stale },
 };
 #define N_KEYS (sizeof KEYS / sizeof KEYS[0])
 
@@ -807,6 +816,7 @@ void ls_config_defaults(ls_config_t *cfg)
     cfg->drives_budget_pct = 70;
     cfg->drives_abort = (uint8_t)LS_DRIVE_ABORT_QUICK_STOP;
     cfg->drives_feedforward = true;
+    cfg->drives_stale_cycles = 5;
     for (int j = 0; j < LS_N_JOINTS; j++) {
         cfg->joint[j].sign = 1;
     }

@@ -102,6 +102,8 @@ typedef struct {
     uint32_t drives_budget_pct;           /* budget_pct = 70 (10..100: the bus load a drive cycle may take) */
     uint8_t drives_abort;                 /* abort_connection = quick_stop (ls_drive_abort_t) */
     bool drives_feedforward;              /* velocity_feedforward = true (map 0x60B1 where the drive can) */
+    uint32_t drives_stale_cycles;         /* stale_cycles = 5 (2..100: a drive whose TPDO misses this many drive cycles
+                                     is lost) */
     ls_config_joint_t joint[LS_N_JOINTS];
     /* [manual] */
     ls_config_manual_t manual[LS_MANUAL_KINDS]; /* by ls_manual_kind_t, from these keys: */

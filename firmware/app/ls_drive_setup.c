@@ -241,6 +241,7 @@ int ls_drive_plan(const ls_config_t *cfg, ls_drive_plan_t *p, char *msg, size_t 
     dc->heartbeat_timeout_ms = (uint16_t)cfg->drives_heartbeat_timeout_ms;
     dc->boot_timeout_ms = (uint16_t)cfg->drives_boot_timeout_ms;
     dc->abort_option = (int16_t)cfg->drives_abort;
+    dc->stale_cycles = (uint8_t)cfg->drives_stale_cycles;
     ls_drive_budget_axis_t axes[LS_N_JOINTS];
     memset(axes, 0, sizeof axes);
     for (int j = 0; j < LS_N_JOINTS; j++) {
@@ -429,9 +430,10 @@ bool ls_drive_check(const ls_config_t *cfg, ls_drive_say_fn say, void *ctx)
     static ls_drive_plan_t plan;
     static ls_co_master_t master;
     char line[LS_DRIVE_SETUP_LINE + 64];
-    if (ls_drive_plan(cfg, &plan, line, sizeof line) != LS_OK) {
+    const int pr = ls_drive_plan(cfg, &plan, line, sizeof line);
+    if (pr != LS_OK) {
         say(ctx, 2, "drives", line);
-        return false;
+        return pr == LS_EIO; /* a file this machine lacks fails the check; a refused one the configuration */
     }
     (void)snprintf(line, sizeof line, "%d joints on %s: every EDS has what cyclic synchronous position needs",
                    LS_N_JOINTS, cfg->drives_link);

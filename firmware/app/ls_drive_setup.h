@@ -79,8 +79,9 @@ void ls_drive_shutdown(void);
  * and 0x1018 against its EDS, within boot_timeout_ms. No NMT command and no
  * write: a check never moves or reconfigures a drive. */
 typedef void (*ls_drive_say_fn)(void *ctx, int level, const char *what, const char *line);
-/* Returns false when the configuration itself is refused (an EDS, the
- * budget: what makes landscaped exit 2 at start), true otherwise. */
+/* Returns false when the configuration itself is refused (an EDS's
+ * content, the budget: what makes landscaped exit 2 at start), true
+ * otherwise (an EDS file this machine lacks is a failed check). */
 bool ls_drive_check(const ls_config_t *cfg, ls_drive_say_fn say, void *ctx);
 
 #endif

@@ -102,6 +102,10 @@ def start_simdrives(path: Path, *extra: str) -> tuple[subprocess.Popen[bytes], P
 def drive_config(path: Path, drive_pty: Path, **drives: str) -> Path:
     """A landscaped.conf for arm = cia402 on `drive_pty`: six joints of ls-simdrives;
     `drives` sets more [drives] keys."""
+    # ls-simdrives is an ordinary process on a machine the test shares with builds: it may
+    # answer a SYNC tens of ms late where a drive would not, so the suites allow 100 ms of
+    # missing feedback (the drive-fault tests hold the default's 5 cycles).
+    drives = {"stale_cycles": "25", **drives}
     lines = ["[hal]", "arm = cia402", "dio = none", "[drives]", f"link = slcan:tty:{drive_pty}",
              *(f"{k} = {v}" for k, v in drives.items())]
     for j, node in enumerate(DRIVE_NODES):

@@ -35,6 +35,8 @@ PACKAGED_FILES = {
     "/etc/landscape/landscaped.conf",
     "/etc/landscape/gateway.toml",
     "/usr/bin/landscaped",
+    "/usr/bin/ls-simdrives",
+    "/usr/share/landscape/ls-simdrive.eds",
     "/usr/lib/systemd/system/landscaped.service",
     "/usr/lib/systemd/system/landscape-gateway.service",
     "/usr/lib/sysusers.d/landscape.conf",
@@ -142,13 +144,14 @@ def test_unit_directives() -> None:
         "ProtectHome": ["yes"],
         "PrivateTmp": ["yes"],
         "StandardError": ["journal"],
-        "SupplementaryGroups": ["gpio input"],
+        "SupplementaryGroups": ["gpio input dialout"],
         "WantedBy": ["multi-user.target"],
     }
     for key, value in want.items():
         assert d.get(key) == value, key
     assert "char-gpiochip rw" in d["DeviceAllow"]
     assert "char-input r" in d["DeviceAllow"]  # the manual devices, read only
+    assert "char-ttyACM rw" in d["DeviceAllow"]  # a serial SLCAN adapter on the drive bus
     # RestrictRealtime=yes would forbid the SCHED_FIFO the control loop asks for
     assert d.get("RestrictRealtime", ["no"]) == ["no"]
     # the gpio group and the landscape user the unit names come from sysusers

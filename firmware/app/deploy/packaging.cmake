@@ -22,6 +22,12 @@ if(NOT TARGET landscaped)
 endif()
 
 install(TARGETS landscaped RUNTIME DESTINATION bin)
+# The simulated drives, and their EDS, which the shipped configuration names
+# until the user's drives replace it (docs/deploy.md "Drives").
+if(TARGET ls-simdrives)
+  install(TARGETS ls-simdrives RUNTIME DESTINATION bin)
+endif()
+install(FILES ${PROJECT_SOURCE_DIR}/hal/sim/drives/ls-simdrive.eds DESTINATION share/landscape)
 
 install(CODE "
   if(CMAKE_INSTALL_PREFIX STREQUAL \"/usr\")
@@ -52,7 +58,8 @@ set(CPACK_PACKAGE_CONTACT "${LS_DEB_MAINTAINER}")
 set(CPACK_PACKAGE_DESCRIPTION_SUMMARY "LandScape robot controller daemon (landscaped) over CAN")
 string(CONCAT CPACK_PACKAGE_DESCRIPTION
     "landscaped runs the LandScape command set over CAN (SocketCAN or SLCAN) with a fixed-rate\n"
-    "control loop, digital I/O through libgpiod and a simulated 6-DOF arm. Includes the systemd\n"
+    "control loop, CiA 402 servo drives on a CANopen bus of their own, digital I/O through libgpiod\n"
+    "and a simulated 6-DOF arm (also behind simulated drives: ls-simdrives). Includes the systemd\n"
     "unit, the landscape user and udev rules for /dev/gpiochip* and /dev/input/event* (teach\n"
     "pendants and 6-DOF mice through evdev), and the unit and configuration of\n"
     "the OPC UA gateway (landscape gateway, from the host tool).")
