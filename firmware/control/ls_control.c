@@ -491,6 +491,12 @@ static void check_joints(ls_control_t *c)
     if (!c->enabling && !c->enabled) {
         return;
     }
+    /* A late answer is compared with the set-points of its own time. */
+    uint32_t oldest = 0;
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        oldest = c->joints[j].feedback_age > oldest ? c->joints[j].feedback_age : oldest;
+    }
+    ls_motion_feedback_late(&c->motion, (uint16_t)(oldest < UINT16_MAX ? oldest : UINT16_MAX));
     int bad = -1, waiting = -1;
     for (int j = 0; j < LS_N_JOINTS; j++) {
         const hal_joint_state_t s = c->joints[j].state;

@@ -273,6 +273,7 @@ static void booted(ls_drives_t *d)
         a->qd = 0.0;
         a->fresh_seen = false;
         a->last_age = 0;
+        a->ready_sync = d->master.sync_count;
     }
 }
 
@@ -311,6 +312,9 @@ int ls_drives_service(ls_drives_t *d, uint64_t now_us)
 
 /* ---- the drive cycle ------------------------------------------------------- */
 
+/* The drive's answer to the latest SYNC, taken in the control cycle it
+ * arrives in (not at the next drive cycle: a drive cycle sooner). Its age
+ * in SYNC periods says how stale the feedback is when it does not come. */
 static void take_feedback(ls_drives_t *d, uint8_t j)
 {
     ls_drive_axis_t *a = &d->axis[j];
@@ -318,23 +322,24 @@ static void take_feedback(ls_drives_t *d, uint8_t j)
     uint8_t b[8];
     size_t len = 0;
     uint32_t age = 0;
+    const uint32_t syncs = d->master.sync_count;
     if (ls_co_master_tpdo_get(&d->master, node, 0, b, &len, &age) != LS_OK) {
-        a->last_age++;
+        a->last_age = syncs - a->ready_sync; /* none since the drive became READY */
         return;
     }
     a->last_age = age;
-    if (age != 0u || len < 6u) {
-        return; /* no answer to the last SYNC: keep the last feedback, let it age */
+    if (age != 0u || len < 6u || (a->fresh_seen && a->taken_sync == syncs)) {
+        return; /* the answer to the latest SYNC is not there yet, or already taken */
     }
     const double q_old = a->q;
-    const uint32_t missed =
-        a->fresh_seen && a->feedback_age > d->cfg.cycle_ticks ? a->feedback_age / d->cfg.cycle_ticks - 1u : 0u;
+    const uint32_t periods = a->fresh_seen && syncs > a->taken_sync ? syncs - a->taken_sync : 1u;
     a->statusword = (uint16_t)((uint16_t)b[0] | (uint16_t)((uint16_t)b[1] << 8));
     a->pos_raw = le32(&b[2]);
     a->q = ls_402_pos_rad(&d->cfg.joint[j].scale, ls_402_unwrap(&a->unwrap, a->pos_raw));
-    const double dt = (double)d->cfg.control_period_us * 1e-6 * (double)d->cfg.cycle_ticks * (double)(1u + missed);
+    const double dt = (double)d->cfg.control_period_us * 1e-6 * (double)d->cfg.cycle_ticks * (double)periods;
     a->qd = a->fresh_seen ? (a->q - q_old) / dt : 0.0;
     a->fresh_seen = true;
+    a->taken_sync = syncs;
     a->feedback_age = 0;
 }
 
@@ -347,7 +352,6 @@ static void drive_cycle(ls_drives_t *d, uint64_t now_us)
         if (ls_co_master_node_phase(&d->master, jc->node_id) != LS_CO_PHASE_READY) {
             continue;
         }
-        take_feedback(d, j);
         (void)ls_402_step(&a->ax, a->statusword, want, d->reset_allowed, &a->out);
         a->step_epoch = d->enable_epoch;
         /* Target = actual until the drive is under control, then held
@@ -398,9 +402,11 @@ static int drives_info(void *self, hal_arm_info_t *out)
     memset(out, 0, sizeof *out);
     out->n_joints = d->cfg.n_joints;
     /* A set-point waits up to a drive cycle for its RPDO, takes effect at
-     * the SYNC and is interpolated over the next drive cycle; the position
-     * is reported at the SYNC after and read in the next control cycle. */
-    out->feedback_lag_cycles = (uint16_t)(2u * d->cfg.cycle_ticks + 2u);
+     * that SYNC and is interpolated over the next drive cycle; the position
+     * is sampled at the SYNC after, taken in the control cycle its TPDO
+     * arrives in, and stands for a whole drive cycle until the next one:
+     * three drive cycles, and two control cycles for the frames' way. */
+    out->feedback_lag_cycles = (uint16_t)(3u * d->cfg.cycle_ticks + 2u);
     return LS_OK;
 }
 
@@ -453,6 +459,9 @@ static int drives_update(void *self, uint64_t now_us)
         }
         if (a->feedback_age < UINT32_MAX) {
             a->feedback_age++;
+        }
+        if (r >= 0 && ls_co_master_node_phase(&d->master, d->cfg.joint[j].node_id) == LS_CO_PHASE_READY) {
+            take_feedback(d, j);
         }
     }
     if (r < 0) {

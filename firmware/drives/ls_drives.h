@@ -114,6 +114,8 @@ typedef struct {
     const char *emcy_name; /* its name */
     uint32_t feedback_age; /* control cycles since the last fresh TPDO */
     uint32_t step_epoch;   /* the enable_epoch of the last 402 step: `out` answers that enable() */
+    uint32_t taken_sync;   /* the master's SYNC count when the last TPDO was taken */
+    uint32_t ready_sync;   /* its SYNC count when the drives became READY */
 } ls_drive_axis_t;
 
 typedef struct {

@@ -69,6 +69,11 @@ void ls_motion_set_feedback_lag(ls_motion_t *m, uint16_t cycles)
     }
 }
 
+void ls_motion_feedback_late(ls_motion_t *m, uint16_t extra)
+{
+    m->late_cycles_ = extra;
+}
+
 void ls_motion_hold(ls_motion_t *m, const double q[LS_N_JOINTS])
 {
     memcpy(m->q_cmd, q, sizeof m->q_cmd);
@@ -1442,7 +1447,9 @@ static void check_following(ls_motion_t *m, const double q_meas[LS_N_JOINTS], ls
     if (m->phase != LS_MOTION_IDLE && m->phase != LS_MOTION_PAUSED && q_meas != NULL) {
         for (int j = 0; j < LS_N_JOINTS; j++) {
             double e = q_meas[j] - m->q_cmd[j];
-            for (unsigned k = 1; k <= m->lag_cycles_ && fabs(e) > m->following_error_max_rad; k++) {
+            unsigned window = m->lag_cycles_ > 0u ? (unsigned)m->lag_cycles_ + m->late_cycles_ : 0u;
+            window = window < LS_MOTION_LAG_MAX ? window : LS_MOTION_LAG_MAX - 1u;
+            for (unsigned k = 1; k <= window && fabs(e) > m->following_error_max_rad; k++) {
                 const unsigned i = (m->hist_head_ + LS_MOTION_LAG_MAX - k) % LS_MOTION_LAG_MAX;
                 const double ek = q_meas[j] - m->q_hist_[i][j];
                 e = fabs(ek) < fabs(e) ? ek : e;

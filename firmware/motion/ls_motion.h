@@ -171,7 +171,7 @@ typedef struct {
      * lagging by up to lag_cycles_ cycles is compared with the nearest of
      * them (ls_motion_set_feedback_lag). */
     double q_hist_[LS_MOTION_LAG_MAX][LS_N_JOINTS];
-    uint16_t hist_head_, lag_cycles_;
+    uint16_t hist_head_, lag_cycles_, late_cycles_;
     /* private to ls_motion.c */
     uint16_t seg_i_;
     int32_t cycle_;
@@ -347,6 +347,12 @@ void ls_motion_aux_done(ls_motion_t *m);
  * default): the current set-point only. Clamped to LS_MOTION_LAG_MAX - 1.
  * Init time. */
 void ls_motion_set_feedback_lag(ls_motion_t *m, uint16_t cycles);
+
+/* This cycle's measurement is `extra` cycles older than the arm's usual
+ * lag (a drive's answer came late): the following check widens its window
+ * by that much for this cycle (the set-points of the time it was measured).
+ * Control loop, before ls_motion_step; O(1). */
+void ls_motion_feedback_late(ls_motion_t *m, uint16_t extra);
 
 /* One control cycle: produce the set-point from the plan; check following
  * error against q_meas; append events (ev may be NULL). When idle or paused,

@@ -222,6 +222,7 @@ def test_disconnect_during_a_path_leaves_nothing_behind(rig: Rig) -> None:
     assert done.event_id == "moveAbsoluteComplete" and done.session_epoch == new.epoch
 
 
+@pytest.mark.sim_world
 def test_path_load_checks_aux_io(rig: Rig) -> None:
     pts = [{"joints": HOME, "aux_commands": ["dio 0 0x1 0"]}]  # bit 0 of the simulated unit is an input
     with pytest.raises(errors.ParamError, match="not outputs"):
