@@ -115,9 +115,9 @@ def hal_groups() -> list[dict[str, bool]]:
 
 def test_linux_hal_socketcan_and_gpiod_tests_with_real_kernel_support(hal_groups: list[dict[str, bool]]) -> None:
     """The Linux HAL's CMocka tests, here on a kernel with AF_CAN and GPIO."""
-    socketcan, gpiod, _ = hal_groups
-    assert len(socketcan) == 10 and len(gpiod) == 4, hal_groups
-    failed = [name for g in (socketcan, gpiod) for name, ok in g.items() if not ok]
+    socketcan, gpiod, _, slcan_tty = hal_groups
+    assert len(socketcan) == 10 and len(gpiod) == 4 and len(slcan_tty) == 4, hal_groups
+    failed = [name for g in (socketcan, gpiod, slcan_tty) for name, ok in g.items() if not ok]
     assert failed == []
 
 
