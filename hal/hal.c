@@ -128,6 +128,13 @@ int hal_arm_status(hal_arm_t *arm, bool enabled, uint8_t n_joints, hal_joint_sta
     }
     return LS_OK;
 }
+int hal_arm_next_event(hal_arm_t *arm, hal_arm_event_t *out)
+{
+    if (arm != NULL && arm->ops != NULL && arm->ops->next_event != NULL) {
+        return arm->ops->next_event(arm->self, out);
+    }
+    return 0;
+}
 int hal_arm_update(hal_arm_t *arm, uint64_t now_us)
 {
     if (arm != NULL && arm->ops != NULL && arm->ops->update != NULL) {

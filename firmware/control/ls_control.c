@@ -445,6 +445,8 @@ static void enable_drives(ls_control_t *c, uint32_t ref_seq)
         return;
     }
     c->enabling = true;
+    c->failed_joints = 0u;
+    ls_motion_ignore_joints(&c->motion, 0u);
     const uint32_t ms = c->cfg.enable_timeout_ms != 0u ? c->cfg.enable_timeout_ms : LS_CTL_ENABLE_TIMEOUT_MS;
     c->enable_deadline_us = c->now_us + (uint64_t)ms * 1000u;
 }
@@ -469,6 +471,34 @@ static const char *joint_state_name(hal_joint_state_t s)
     case HAL_JOINT_LOST: return "LOST";
     }
     return "?";
+}
+
+/* A joint under control faulted or was lost: the category-1 stop. The
+ * healthy joints come to rest along the path at the model's maximum
+ * deceleration, then every drive goes off (as the e-stop input does); the
+ * failed ones no longer follow, so the following check leaves them out. A
+ * stop under way takes further failures into that set; when no joint is
+ * left to stop with, or nothing moves, the drives go off at once. */
+static void drive_fault(ls_control_t *c, uint32_t bad_mask, const char *line)
+{
+    const uint32_t all = (1u << LS_N_JOINTS) - 1u;
+    const bool first = c->failed_joints == 0u;
+    c->failed_joints |= bad_mask;
+    ls_motion_ignore_joints(&c->motion, c->failed_joints);
+    const bool moving =
+        c->motion.phase == LS_MOTION_RUNNING || c->motion.phase == LS_MOTION_STOPPING || ls_react_moving(&c->react);
+    if (!moving || (c->failed_joints & all) == all) {
+        fault(c, line);
+        return;
+    }
+    if (first) {
+        stop_then_disable(c, true);
+        ls_ctl_event_t ev;
+        memset(&ev, 0, sizeof ev);
+        ev.kind = LS_CEV_FAULT;
+        ls_fmt_print(ev.text, sizeof ev.text, "%s", line);
+        ev_push(c, &ev);
+    }
 }
 
 /* The drives' states, once per cycle: finish an enable, and fault when a
@@ -498,10 +528,12 @@ static void check_joints(ls_control_t *c)
     }
     ls_motion_feedback_late(&c->motion, (uint16_t)(oldest < UINT16_MAX ? oldest : UINT16_MAX));
     int bad = -1, waiting = -1;
+    uint32_t bad_mask = 0;
     for (int j = 0; j < LS_N_JOINTS; j++) {
         const hal_joint_state_t s = c->joints[j].state;
-        if ((s == HAL_JOINT_FAULT || s == HAL_JOINT_LOST || (c->enabled && s != HAL_JOINT_ENABLED)) && bad < 0) {
-            bad = j;
+        if (s == HAL_JOINT_FAULT || s == HAL_JOINT_LOST || (c->enabled && s != HAL_JOINT_ENABLED)) {
+            bad_mask |= 1u << j;
+            bad = bad < 0 ? j : bad;
         } else if (s != HAL_JOINT_ENABLED && waiting < 0) {
             waiting = j;
         }
@@ -518,7 +550,7 @@ static void check_joints(ls_control_t *c)
         if (c->enabling) {
             enable_failed(c, line);
         } else {
-            fault(c, line);
+            drive_fault(c, bad_mask, line);
         }
         return;
     }
@@ -730,7 +762,20 @@ void ls_control_cycle(ls_control_t *c, uint64_t now_us)
         c->disable_pending = false;
     }
     if (c->cfg.arm != NULL && hal_arm_update(c->cfg.arm, now_us) < 0 && (c->enabled || c->enabling)) {
-        fault(c, "the arm backend's bus failed");
+        /* Every joint is gone with the bus: what the arm says of it, at once. */
+        hal_joint_status_t *st = &c->joints[0];
+        (void)hal_arm_status(c->cfg.arm, true, LS_N_JOINTS, c->joints);
+        fault(c, st->text[0] != '\0' ? st->text : "the arm backend's bus failed");
+    }
+    /* What the drives reported, a few per cycle (a burst waits in the arm's own queue). */
+    for (int k = 0; k < LS_CTL_ARM_EVENTS_PER_CYCLE && c->cfg.arm != NULL; k++) {
+        ls_ctl_event_t ev;
+        memset(&ev, 0, sizeof ev);
+        if (hal_arm_next_event(c->cfg.arm, &ev.arm) != 1) {
+            break;
+        }
+        ev.kind = LS_CEV_ARM_EVENT;
+        ev_push(c, &ev);
     }
     if (c->cfg.world_step != NULL) {
         (void)c->cfg.world_step(c->cfg.world_ctx, c->dt_s); /* physics advances with the drives off too (brakes) */

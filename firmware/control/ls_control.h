@@ -54,6 +54,8 @@
  * three confirmed steps of one drive cycle each (a few ms to tens of ms);
  * within the host's time-out of activate (the schema's host_timeout_ms). */
 #define LS_CTL_ENABLE_TIMEOUT_MS 2000u
+/* Events of the arm (hal_arm_next_event) taken per cycle into the event ring. */
+#define LS_CTL_ARM_EVENTS_PER_CYCLE 2
 
 typedef enum {
     LS_CTL_ENABLE = 1, /* drives on, then hold the measured position: LS_CEV_ENABLED or LS_CEV_ENABLE_FAILED */
@@ -105,6 +107,7 @@ typedef enum {
     LS_CEV_ENABLE_FAILED, /* ref_seq, text: LS_CTL_ENABLE ended with the drives off: which joint, its node and
                              what its drive said, or that no arm is composed, or that it was cancelled */
     LS_CEV_MANUAL,        /* manual: what the operator's device did (ls_manual.h), while manual control is on */
+    LS_CEV_ARM_EVENT,     /* arm: what a joint's drive reported (an EMCY, its error code read back) */
 } ls_cev_kind_t;
 
 /* An event's text: one line naming a joint, its drive's node and what the
@@ -122,6 +125,7 @@ typedef struct {
     } dio;
     ls_react_report_t react; /* LS_MEV_REACT_END: the reading and the force statistics */
     ls_manual_event_t manual;
+    hal_arm_event_t arm; /* LS_CEV_ARM_EVENT */
 } ls_ctl_event_t;
 
 /* What the comms thread may read at any time (copied under a seqlock). */
@@ -219,6 +223,7 @@ typedef struct ls_control {
     uint64_t now_us;                        /* the current cycle's time */
     bool disable_pending;                   /* DISABLE while moving: stop along the path first */
     hal_joint_status_t joints[LS_N_JOINTS]; /* this cycle's status of each joint's drive */
+    uint32_t failed_joints;                 /* joints whose drive failed while under control (drive_fault) */
     double q[LS_N_JOINTS], qd[LS_N_JOINTS], q_cmd[LS_N_JOINTS], qd_cmd[LS_N_JOINTS];
     uint32_t dio_levels[LS_CTL_MAX_DIO_UNITS];
     uint16_t estop_unit;

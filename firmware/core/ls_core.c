@@ -618,6 +618,28 @@ int32_t ls_core_rsvp(ls_core_t *core, int sup, uint32_t ref_seq, ls_NoticeKind k
     return (int32_t)id;
 }
 
+/* What a joint's drive reported (an EMCY, its error code read back): in
+ * the fault log, and to every supervisor (docs/protocol.md "Drives"). */
+static void on_arm_event(ls_core_t *core, const hal_arm_event_t *e, uint64_t now_us)
+{
+    ls_core_log_fault(core, now_us, "joint %u (node 0x%02X): %s", (unsigned)e->joint + 1u, (unsigned)e->node, e->text);
+    char joint[16], node[16], code[16], meaning[72], reg[16], vendor[24];
+    ls_fmt_print(joint, sizeof joint, "joint=%u", (unsigned)e->joint + 1u);
+    ls_fmt_print(node, sizeof node, "node=0x%02X", (unsigned)e->node);
+    ls_fmt_print(code, sizeof code, "code=0x%04X", (unsigned)e->code);
+    ls_fmt_print(meaning, sizeof meaning, "meaning=%s", e->meaning);
+    if (e->is_emcy) {
+        ls_fmt_print(reg, sizeof reg, "register=0x%02X", (unsigned)e->reg);
+        ls_fmt_print(vendor, sizeof vendor, "vendor=%02X%02X%02X%02X%02X", (unsigned)e->vendor[0],
+                     (unsigned)e->vendor[1], (unsigned)e->vendor[2], (unsigned)e->vendor[3], (unsigned)e->vendor[4]);
+        const char *data[] = { joint, node, code, meaning, reg, vendor };
+        ls_core_notify(core, -1, ls_NoticeKind_ALARM, ls_EventId_driveEmcy, 0, false, data, 6);
+    } else {
+        const char *data[] = { joint, node, code, meaning };
+        ls_core_notify(core, -1, ls_NoticeKind_EVENT, ls_EventId_driveErrorCode, 0, false, data, 4);
+    }
+}
+
 /* The one route of the control loop's events into the core. The moves,
  * jogs and tool changes that cmd_sensor.c and cmd_tool.c started take
  * their own events first; the rest go to the motion executor's side
@@ -631,6 +653,7 @@ static void on_loop_event(ls_core_t *core, const ls_ctl_event_t *ev, uint64_t no
     case LS_CEV_MOTION: ls_core_on_motion_event(core, &ev->motion); break;
     case LS_CEV_FAULT: ls_core_fault(core, ev->text, now_us); break; /* its halt ends the motion */
     case LS_CEV_DIO_CHANGED: ls_core_on_dio_event(core, ev->dio.unit, ev->dio.on, ev->dio.off, now_us); break;
+    case LS_CEV_ARM_EVENT: on_arm_event(core, &ev->arm, now_us); break;
     case LS_CEV_ENABLED: ls_core_on_enable_result(core, NULL, now_us); break;
     case LS_CEV_ENABLE_FAILED: ls_core_on_enable_result(core, ev->text, now_us); break;
     case LS_CEV_MANUAL: break; /* cmd_sensor.c takes them all */

@@ -260,25 +260,46 @@ static void put_le32(uint8_t *b, int32_t v)
 }
 
 /* Every drive READY for the first time: take what the scripts read. */
+/* A drive READY after its boot (or a reboot): take what its script read. */
+static void axis_ready(ls_drives_t *d, uint8_t j)
+{
+    ls_drive_axis_t *a = &d->axis[j];
+    a->statusword = (uint16_t)a->sw0;
+    a->pos_raw = (int32_t)a->pos0;
+    a->hold_raw = a->pos_raw;
+    ls_402_unwrap_reset(&a->unwrap);
+    a->q = ls_402_pos_rad(&d->cfg.joint[j].scale, ls_402_unwrap(&a->unwrap, a->pos_raw));
+    a->qd = 0.0;
+    a->fresh_seen = false;
+    a->last_age = 0;
+    a->ready_sync = d->master.sync_count;
+    a->rebooting = false;
+}
+
+/* Every drive READY for the first time. */
 static void booted(ls_drives_t *d)
 {
     d->booted = true;
     for (uint8_t j = 0; j < d->cfg.n_joints; j++) {
-        ls_drive_axis_t *a = &d->axis[j];
-        a->statusword = (uint16_t)a->sw0;
-        a->pos_raw = (int32_t)a->pos0;
-        a->hold_raw = a->pos_raw;
-        ls_402_unwrap_reset(&a->unwrap);
-        a->q = ls_402_pos_rad(&d->cfg.joint[j].scale, ls_402_unwrap(&a->unwrap, a->pos_raw));
-        a->qd = 0.0;
-        a->fresh_seen = false;
-        a->last_age = 0;
-        a->ready_sync = d->master.sync_count;
+        axis_ready(d, j);
     }
+}
+
+/* The link failed: every drive is lost until an enable finds the bus back. */
+static int link_failed(ls_drives_t *d, const char *why)
+{
+    if (!d->link_failed) {
+        ls_fmt_print(d->text, sizeof d->text, "the drive bus %s %s: every drive is lost", d->cfg.link->name, why);
+    }
+    d->link_failed = true;
+    return LS_EIO;
 }
 
 int ls_drives_service(ls_drives_t *d, uint64_t now_us)
 {
+    if (d->link_failed) {
+        return LS_EIO;
+    }
     for (unsigned i = 0; i < LS_DRIVES_RX_PER_CYCLE; i++) {
         hal_can_frame_t f;
         const int r = hal_can_recv(d->cfg.link, &f);
@@ -287,8 +308,17 @@ int ls_drives_service(ls_drives_t *d, uint64_t now_us)
         } else if (r == LS_EAGAIN) {
             break;
         } else {
-            ls_fmt_print(d->text, sizeof d->text, "the drive bus %s failed (%s)", d->cfg.link->name, ls_err_name(r));
-            return LS_EIO;
+            char why[48];
+            ls_fmt_print(why, sizeof why, "failed (%s)", ls_err_name(r));
+            return link_failed(d, why);
+        }
+    }
+    /* Bus-off is a state of the controller, not an error of a call: looked
+     * at now and then (hal_can_status may read sysfs). */
+    if ((++d->status_tick % LS_DRIVES_BUS_CHECK_CYCLES) == 0u) {
+        hal_can_status_t st;
+        if (hal_can_status(d->cfg.link, &st) == LS_OK && st.state == HAL_CAN_STATE_BUS_OFF) {
+            return link_failed(d, "is bus-off");
         }
     }
     ls_co_master_poll(&d->master, now_us);
@@ -394,6 +424,84 @@ static void drive_cycle(ls_drives_t *d, uint64_t now_us)
     (void)ls_co_master_sync(&d->master, now_us);
 }
 
+/* ---- events -------------------------------------------------------------- */
+
+static hal_arm_event_t *push_event(ls_drives_t *d, uint8_t j)
+{
+    if (d->ev_count >= LS_DRIVES_EVENTS) {
+        d->events_lost++; /* the first ones name the cause: keep them */
+        return NULL;
+    }
+    hal_arm_event_t *e = &d->events[(d->ev_head + d->ev_count++) % LS_DRIVES_EVENTS];
+    memset(e, 0, sizeof *e);
+    e->joint = j;
+    e->node = d->cfg.joint[j].node_id;
+    return e;
+}
+
+static void take_emcys(ls_drives_t *d, uint8_t j)
+{
+    ls_drive_axis_t *a = &d->axis[j];
+    ls_co_emcy_t em;
+    while (ls_co_master_next_emcy(&d->master, d->cfg.joint[j].node_id, &em) == 1) {
+        a->emcy_code = em.code;
+        a->emcy_name = em.name;
+        a->read_error_code = a->read_error_code || em.code != LS_CO_EMCY_NO_ERROR;
+        hal_arm_event_t *e = push_event(d, j);
+        if (e == NULL) {
+            continue;
+        }
+        e->is_emcy = true;
+        e->code = em.code;
+        ls_fmt_print(e->meaning, sizeof e->meaning, "%s", em.name);
+        e->reg = em.reg;
+        memcpy(e->vendor, em.vendor, sizeof e->vendor);
+        ls_fmt_print(e->text, sizeof e->text, "EMCY 0x%04X %s (error register 0x%02X, vendor %02X %02X %02X %02X %02X)",
+                     (unsigned)em.code, em.name, (unsigned)em.reg, (unsigned)em.vendor[0], (unsigned)em.vendor[1],
+                     (unsigned)em.vendor[2], (unsigned)em.vendor[3], (unsigned)em.vendor[4]);
+    }
+}
+
+/* After an EMCY, once every drive is off (no SDO while they are in
+ * operation): the drive's own error code, 0x603F, one node at a time. */
+static void read_error_codes(ls_drives_t *d, uint64_t now_us)
+{
+    if (d->want_enabled) {
+        return;
+    }
+    for (uint8_t j = 0; j < d->cfg.n_joints; j++) {
+        ls_drive_axis_t *a = &d->axis[j];
+        const uint8_t node = d->cfg.joint[j].node_id;
+        if (a->reading) {
+            uint8_t b[8];
+            size_t len = 0;
+            const int r = ls_co_master_sdo_result(&d->master, node, b, sizeof b, &len);
+            if (r == LS_EBUSY) {
+                return;
+            }
+            a->reading = false;
+            hal_arm_event_t *e = push_event(d, j);
+            if (e != NULL && r == LS_OK && len >= 2u) {
+                e->code = (uint16_t)(b[0] | (uint16_t)(b[1] << 8));
+                ls_fmt_print(e->meaning, sizeof e->meaning, "%s", ls_co_emcy_name(e->code));
+                ls_fmt_print(e->text, sizeof e->text, "its error code 0x603F reads 0x%04X %s", (unsigned)e->code,
+                             ls_co_emcy_name(e->code));
+            } else if (e != NULL) {
+                ls_fmt_print(e->text, sizeof e->text, "its error code 0x603F could not be read (%s)",
+                             ls_co_master_node_text(&d->master, node));
+            }
+            continue;
+        }
+        if (a->read_error_code && ls_co_master_node_phase(&d->master, node) == LS_CO_PHASE_READY) {
+            a->read_error_code = false;
+            if (ls_co_master_sdo_read(&d->master, node, LS_CO_OBJ_ERROR_CODE, 0, now_us) == LS_OK) {
+                a->reading = true;
+                return; /* one at a time */
+            }
+        }
+    }
+}
+
 /* ---- the HAL arm operations ------------------------------------------------ */
 
 static int drives_info(void *self, hal_arm_info_t *out)
@@ -413,11 +521,27 @@ static int drives_info(void *self, hal_arm_info_t *out)
 static int drives_enable(void *self, bool on)
 {
     ls_drives_t *d = self;
+    if (on && d->link_failed) {
+        d->link_failed = false; /* an enable looks again: the drives are lost, and booted again below */
+        for (uint8_t j = 0; j < d->cfg.n_joints; j++) {
+            (void)ls_co_master_reboot_node(&d->master, d->cfg.joint[j].node_id, d->now_us);
+            d->axis[j].rebooting = true;
+        }
+    }
     d->want_enabled = on;
     d->reset_allowed = on;
     d->enable_epoch++; /* what the axes said before this call no longer answers it */
     for (uint8_t j = 0; j < d->cfg.n_joints; j++) {
-        d->axis[j].cmd_valid = false;
+        ls_drive_axis_t *a = &d->axis[j];
+        a->cmd_valid = false;
+        /* A lost drive is configured again only when an enable asks for it:
+         * nothing comes back by itself. */
+        const uint8_t node = d->cfg.joint[j].node_id;
+        const ls_co_phase_t phase = ls_co_master_node_phase(&d->master, node);
+        if (on && (phase == LS_CO_PHASE_LOST || phase == LS_CO_PHASE_FAILED) &&
+            ls_co_master_reboot_node(&d->master, node, d->now_us) == LS_OK) {
+            a->rebooting = true;
+        }
     }
     return LS_OK;
 }
@@ -449,24 +573,25 @@ static int drives_read(void *self, double *q_rad, double *qd_rad_s)
 static int drives_update(void *self, uint64_t now_us)
 {
     ls_drives_t *d = self;
+    d->now_us = now_us;
     const int r = ls_drives_service(d, now_us);
     for (uint8_t j = 0; j < d->cfg.n_joints; j++) {
         ls_drive_axis_t *a = &d->axis[j];
-        ls_co_emcy_t e;
-        while (ls_co_master_next_emcy(&d->master, d->cfg.joint[j].node_id, &e) == 1) {
-            a->emcy_code = e.code;
-            a->emcy_name = e.name;
-        }
+        take_emcys(d, j);
         if (a->feedback_age < UINT32_MAX) {
             a->feedback_age++;
         }
         if (r >= 0 && ls_co_master_node_phase(&d->master, d->cfg.joint[j].node_id) == LS_CO_PHASE_READY) {
+            if (a->rebooting) {
+                axis_ready(d, j); /* configured again: its position read anew */
+            }
             take_feedback(d, j);
         }
     }
     if (r < 0) {
         return r;
     }
+    read_error_codes(d, now_us);
     if (++d->tick >= d->cfg.cycle_ticks) {
         d->tick = 0;
         drive_cycle(d, now_us);
@@ -485,7 +610,13 @@ static int drives_status(void *self, hal_joint_status_t *out)
         s->node = node;
         s->feedback_age = a->feedback_age;
         const ls_co_phase_t phase = ls_co_master_node_phase(&d->master, node);
-        if (phase != LS_CO_PHASE_READY) {
+        if (d->link_failed) {
+            s->state = HAL_JOINT_LOST;
+            ls_fmt_print(s->text, sizeof s->text, "%s", d->text);
+        } else if (phase != LS_CO_PHASE_READY && a->rebooting && d->want_enabled && phase != LS_CO_PHASE_FAILED) {
+            s->state = HAL_JOINT_ENABLING;
+            ls_fmt_print(s->text, sizeof s->text, "the drive is configured again (%s)", ls_co_phase_name(phase));
+        } else if (phase != LS_CO_PHASE_READY) {
             s->state = HAL_JOINT_LOST;
             const char *why = ls_co_master_node_text(&d->master, node);
             if (why[0] != '\0') {
@@ -527,6 +658,18 @@ static int drives_status(void *self, hal_joint_status_t *out)
     return LS_OK;
 }
 
+static int drives_next_event(void *self, hal_arm_event_t *out)
+{
+    ls_drives_t *d = self;
+    if (d->ev_count == 0u) {
+        return 0;
+    }
+    *out = d->events[d->ev_head];
+    d->ev_head = (d->ev_head + 1u) % LS_DRIVES_EVENTS;
+    d->ev_count--;
+    return 1;
+}
+
 static void drives_close(void *self)
 {
     (void)self; /* the link is the caller's */
@@ -540,6 +683,7 @@ static const hal_arm_ops_t k_ops = {
     .close = drives_close,
     .status = drives_status,
     .update = drives_update,
+    .next_event = drives_next_event,
 };
 
 void ls_drives_arm(ls_drives_t *d, hal_arm_t *out)

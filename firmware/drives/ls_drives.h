@@ -29,6 +29,10 @@
  *    step and then held there until command() gives set-points, so no axis
  *    jumps. Disable: shutdown (READY TO SWITCH ON: no torque, brake on).
  *
+ * Events (next_event): every EMCY of a drive (code, register, vendor bytes,
+ * the code's name), and after one, once the drives are disabled (no SDO
+ * while they are in operation), the drive's error code 0x603F read back.
+ *
  * Joint status (hal_joint_status_t): ENABLED when its drive confirmed
  * OPERATION ENABLED and follows the target (statusword bit 12); FAULT with
  * the drive's EMCY code and its name (or the 402 stepper's words: a drive
@@ -62,6 +66,8 @@
  * keep an enable within the control loop's LS_CTL_ENABLE_TIMEOUT_MS. */
 #define LS_DRIVES_STEP_TIMEOUT_MS 500u
 #define LS_DRIVES_RESET_EDGES 2u
+#define LS_DRIVES_EVENTS 16u           /* reported events (EMCY, error codes read back) kept until taken */
+#define LS_DRIVES_BUS_CHECK_CYCLES 64u /* the link's state (bus-off) is looked at every this many updates */
 
 /* One joint's drive: what the configuration says and what its EDS offers. */
 typedef struct {
@@ -115,6 +121,9 @@ typedef struct {
     uint32_t feedback_age; /* control cycles since the last fresh TPDO */
     uint32_t step_epoch;   /* the enable_epoch of the last 402 step: `out` answers that enable() */
     uint32_t taken_sync;   /* the master's SYNC count when the last TPDO was taken */
+    bool read_error_code;  /* an EMCY came: read 0x603F once the drives are disabled */
+    bool reading;          /* that SDO read runs */
+    bool rebooting;        /* an enable asked the lost drive to be configured again */
     uint32_t ready_sync;   /* its SYNC count when the drives became READY */
 } ls_drive_axis_t;
 
@@ -126,7 +135,13 @@ typedef struct {
     bool want_enabled;
     bool reset_allowed;    /* an enable asked since the last disable: FAULTs may be reset */
     uint32_t enable_epoch; /* enable() calls: a joint is ENABLED only by a step taken since the last one */
-    uint32_t tick;         /* control cycles since boot, modulo cycle_ticks */
+    uint64_t now_us;       /* the last update()'s time (enable() has none of its own) */
+    bool link_failed;      /* the link failed or is bus-off: every drive lost until an enable */
+    uint32_t status_tick;
+    hal_arm_event_t events[LS_DRIVES_EVENTS]; /* reported, not yet taken (next_event) */
+    unsigned ev_head, ev_count;
+    uint32_t events_lost;
+    uint32_t tick; /* control cycles since boot, modulo cycle_ticks */
     bool booted;
     char text[LS_CO_TEXT_LEN]; /* why init or boot failed */
 } ls_drives_t;

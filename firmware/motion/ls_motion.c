@@ -74,6 +74,11 @@ void ls_motion_feedback_late(ls_motion_t *m, uint16_t extra)
     m->late_cycles_ = extra;
 }
 
+void ls_motion_ignore_joints(ls_motion_t *m, uint32_t joints)
+{
+    m->ignored_joints_ = joints;
+}
+
 void ls_motion_hold(ls_motion_t *m, const double q[LS_N_JOINTS])
 {
     memcpy(m->q_cmd, q, sizeof m->q_cmd);
@@ -1446,6 +1451,9 @@ static void check_following(ls_motion_t *m, const double q_meas[LS_N_JOINTS], ls
 {
     if (m->phase != LS_MOTION_IDLE && m->phase != LS_MOTION_PAUSED && q_meas != NULL) {
         for (int j = 0; j < LS_N_JOINTS; j++) {
+            if ((m->ignored_joints_ & (1u << j)) != 0u) {
+                continue;
+            }
             double e = q_meas[j] - m->q_cmd[j];
             unsigned window = m->lag_cycles_ > 0u ? (unsigned)m->lag_cycles_ + m->late_cycles_ : 0u;
             window = window < LS_MOTION_LAG_MAX ? window : LS_MOTION_LAG_MAX - 1u;

@@ -172,6 +172,7 @@ typedef struct {
      * them (ls_motion_set_feedback_lag). */
     double q_hist_[LS_MOTION_LAG_MAX][LS_N_JOINTS];
     uint16_t hist_head_, lag_cycles_, late_cycles_;
+    uint32_t ignored_joints_; /* ls_motion_ignore_joints */
     /* private to ls_motion.c */
     uint16_t seg_i_;
     int32_t cycle_;
@@ -353,6 +354,11 @@ void ls_motion_set_feedback_lag(ls_motion_t *m, uint16_t cycles);
  * by that much for this cycle (the set-points of the time it was measured).
  * Control loop, before ls_motion_step; O(1). */
 void ls_motion_feedback_late(ls_motion_t *m, uint16_t extra);
+
+/* Joints (bit j: joint j + 1) whose drive failed and no longer follows: the
+ * following check leaves them out while the others stop along the path.
+ * 0 checks every joint again (a new enable). Control loop; O(1). */
+void ls_motion_ignore_joints(ls_motion_t *m, uint32_t joints);
 
 /* One control cycle: produce the set-point from the plan; check following
  * error against q_meas; append events (ev may be NULL). When idle or paused,

@@ -55,6 +55,21 @@ typedef struct {
     char text[HAL_JOINT_TEXT_LEN];
 } hal_joint_status_t;
 
+/* Something a joint's drive reported that the supervisors should hear of:
+ * an emergency message (CiA 301 EMCY) or the drive's error register read
+ * back after a fault. One line of text names it all; the numbers are there
+ * for the fault log and the alarm's data. */
+typedef struct {
+    uint8_t joint;                 /* 0-based */
+    uint16_t node;                 /* the drive's bus address */
+    uint16_t code;                 /* EMCY error code (CiA 301/402), or the 0x603F error code */
+    uint8_t reg;                   /* EMCY error register (0x1001) */
+    uint8_t vendor[5];             /* EMCY manufacturer-specific bytes */
+    bool is_emcy;                  /* an EMCY frame; false: the error code read back (0x603F) */
+    char meaning[48];              /* the code's name: "following error" */
+    char text[HAL_JOINT_TEXT_LEN]; /* "EMCY 0x8611 following error (register 0x21)" */
+} hal_arm_event_t;
+
 typedef struct {
     int (*info)(void *self, hal_arm_info_t *out);
     /* Ask the drives to enable (on) or disable. Returns at once: a drive
@@ -77,6 +92,9 @@ typedef struct {
      * bus sends the cycle's set-points and its SYNC, takes the drives'
      * answers). `now_us` is the cycle's time. NULL: nothing to do. */
     int (*update)(void *self, uint64_t now_us);
+    /* Optional: the oldest event the drives reported and nobody took yet;
+     * 1 when *out was written, 0 when none. NULL: an arm without events. */
+    int (*next_event)(void *self, hal_arm_event_t *out);
 } hal_arm_ops_t;
 
 typedef struct {
@@ -126,5 +144,7 @@ void hal_arm_close(hal_arm_t *arm);
  * and returns LS_OK; update() without one returns LS_OK. */
 int hal_arm_status(hal_arm_t *arm, bool enabled, uint8_t n_joints, hal_joint_status_t *out);
 int hal_arm_update(hal_arm_t *arm, uint64_t now_us);
+/* next_event without a backend operation: 0 (none). */
+int hal_arm_next_event(hal_arm_t *arm, hal_arm_event_t *out);
 
 #endif

@@ -98,6 +98,7 @@ typedef struct {
     int progress; /* update() calls since */
     uint64_t last_update_us;
     int updates;
+    hal_arm_event_t pending; /* reported by next_event once, when pending.node != 0 */
 } fake_drives_t;
 
 static int drives_enable(void *self, bool on)
@@ -146,11 +147,23 @@ static int drives_status(void *self, hal_joint_status_t *out)
     return LS_OK;
 }
 
+static int drives_next_event(void *self, hal_arm_event_t *out)
+{
+    fake_drives_t *d = self;
+    if (d->pending.node == 0u) {
+        return 0;
+    }
+    *out = d->pending;
+    d->pending.node = 0;
+    return 1;
+}
+
 static const hal_arm_ops_t DRIVES_OPS = { .enable = drives_enable,
                                           .command = drives_command,
                                           .read = drives_read,
                                           .status = drives_status,
-                                          .update = drives_update };
+                                          .update = drives_update,
+                                          .next_event = drives_next_event };
 
 /* ---------------------------------------------------------------- fake DIO */
 
@@ -694,6 +707,66 @@ static void test_a_joint_that_faults_under_control_faults_the_arm(void **state)
     assert_false(snap(f).enabled);
     assert_false(g_drives.wanted);
     assert_int_equal(snap(f).joint_state[5], HAL_JOINT_FAULT);
+}
+
+/* A drive that faults during a motion: the others come to rest along the
+ * path at the model's maximum deceleration (the category-1 stop), then every
+ * drive goes off; the failed joint is left out of the following check. */
+static void test_a_drive_fault_while_moving_stops_the_others_along_the_path_then_disables(void **state)
+{
+    (void)state;
+    fx_t *f = fx_drives(1, 0);
+    post(f, LS_CTL_ENABLE, 18);
+    cycle(f);
+    cycle(f);
+    (void)next(f, LS_CEV_ENABLED);
+    fill_plan(f, 0.6, 19);
+    assert_true(ls_control_start_plan(&f->ctl, 19));
+    for (int i = 0; i < 300; i++) {
+        cycle(f);
+    }
+    assert_int_equal(snap(f).phase, LS_MOTION_RUNNING);
+    double before[LS_N_JOINTS];
+    memcpy(before, snap(f).q_cmd_rad, sizeof before);
+    g_drives.fault_joint = 2;
+    g_drives.arm.q[1] += 0.2; /* the failed joint drops away from its set-point */
+    cycle(f);
+    ls_ctl_event_t ev = next(f, LS_CEV_FAULT);
+    assert_string_equal(ev.text, "joint 2 (node 0x22): FAULT, EMCY 0x8611 following error");
+    ls_ctl_snapshot_t s = snap(f);
+    assert_true(s.enabled); /* still under control: stopping */
+    assert_int_equal(s.phase, LS_MOTION_STOPPING);
+    int cycles = 0;
+    double last = s.q_cmd_rad[0];
+    while (snap(f).enabled && cycles < 2000) {
+        cycle(f);
+        cycles++;
+        const double q = snap(f).q_cmd_rad[0];
+        assert_true(q >= last - 1e-12); /* joint 1 goes on the same way until it rests */
+        last = q;
+    }
+    assert_false(snap(f).enabled);
+    assert_false(g_drives.wanted);
+    assert_true(cycles > 20);      /* it came to rest on a ramp, not at once */
+    assert_true(last > before[0]); /* further along its path than at the fault */
+    ls_ctl_event_t e;
+    while (ls_control_next_event(&f->ctl, &e)) {
+        assert_int_not_equal(e.kind, LS_CEV_FAULT); /* one fault: the following check left joint 2 out */
+    }
+}
+
+static void test_the_drives_reports_reach_the_comms_thread(void **state)
+{
+    (void)state;
+    fx_t *f = fx_drives(1, 0);
+    g_drives.pending = (hal_arm_event_t){ .joint = 3, .node = 0x24, .code = 0x2310, .reg = 0x03, .is_emcy = true };
+    strcpy(g_drives.pending.text, "EMCY 0x2310 continuous over-current");
+    cycle(f);
+    ls_ctl_event_t ev = next(f, LS_CEV_ARM_EVENT);
+    assert_int_equal(ev.arm.node, 0x24);
+    assert_int_equal(ev.arm.code, 0x2310);
+    assert_string_equal(ev.arm.text, "EMCY 0x2310 continuous over-current");
+    assert_no_event(f);
 }
 
 static void test_enable_and_disable(void **state)
@@ -1373,6 +1446,8 @@ int main(void)
         cmocka_unit_test(test_enable_times_out_naming_a_joint_still_enabling),
         cmocka_unit_test(test_disable_cancels_an_enable_in_progress),
         cmocka_unit_test(test_a_joint_that_faults_under_control_faults_the_arm),
+        cmocka_unit_test(test_a_drive_fault_while_moving_stops_the_others_along_the_path_then_disables),
+        cmocka_unit_test(test_the_drives_reports_reach_the_comms_thread),
         cmocka_unit_test(test_world_steps_every_cycle),
         cmocka_unit_test(test_enable_without_arm_fails),
         cmocka_unit_test(test_disable_while_moving_stops_along_the_path_first),

@@ -93,6 +93,8 @@ complyTimeout: EventId
 dioSignal: EventId
 dioSignalRsvpTimeout: EventId
 dioSignalTimeout: EventId
+driveEmcy: EventId
+driveErrorCode: EventId
 fault: EventId
 manualDeviceFound: EventId
 manualDeviceLost: EventId
