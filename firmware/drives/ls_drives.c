@@ -535,11 +535,11 @@ static int drives_enable(void *self, bool on)
         ls_drive_axis_t *a = &d->axis[j];
         a->cmd_valid = false;
         /* A lost drive is configured again only when an enable asks for it:
-         * nothing comes back by itself. */
+         * nothing comes back by itself. Any phase but READY starts over (a
+         * boot an earlier enable began may have reset the drive unheard). */
         const uint8_t node = d->cfg.joint[j].node_id;
         const ls_co_phase_t phase = ls_co_master_node_phase(&d->master, node);
-        if (on && (phase == LS_CO_PHASE_LOST || phase == LS_CO_PHASE_FAILED) &&
-            ls_co_master_reboot_node(&d->master, node, d->now_us) == LS_OK) {
+        if (on && phase != LS_CO_PHASE_READY && ls_co_master_reboot_node(&d->master, node, d->now_us) == LS_OK) {
             a->rebooting = true;
         }
     }

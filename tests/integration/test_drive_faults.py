@@ -1,0 +1,202 @@
+"""When drives fail (docs/deploy.md "Drives", docs/protocol.md "Drives"): landscaped as
+the CiA 402 master of ls-simdrives, whose drives misbehave on command through its
+control socket (docs/simulated-drives.md). One test per defect class: an EMCY during a
+motion, a drive that stops answering, a frozen feedback, a fault a reset does not clear;
+each asserts the final notice, the alarm, the state, that the healthy joints stopped
+along the path, that nothing resumes by itself, and that activate recovers the arm."""
+from __future__ import annotations
+
+import contextlib
+import socket
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import can
+import pytest
+
+from conftest import Controller, start_controller
+from landscape import errors
+from landscape._generated import landscape_pb2 as pb
+from landscape.supervisor import Supervisor, notice_data
+
+START = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+TARGET = [1.0, -0.6, 0.8, 1.2, 1.0, -1.5]  # every joint moves: a stop shows on each
+
+
+def _send(ctl: Path, command: str) -> None:
+    with socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM) as s:
+        s.sendto(command.encode(), str(ctl))
+
+
+@pytest.fixture
+def rig(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[tuple[Controller, Supervisor]]:
+    monkeypatch.setattr("conftest.ARM", "cia402")
+    c = start_controller(tmp_path / "ls0")
+    bus = can.Bus(interface="slcan", channel=c.pty, bitrate=1000000, sleep_after_open=0)
+    try:
+        with Supervisor(bus, client_name="faults") as sup:
+            sup.lock()
+            sup.activate()
+            yield c, sup
+    finally:
+        bus.shutdown()
+        code = c.stop()
+        assert code == 0, c.log.read_text()[-4000:]
+
+
+def _joints(sup: Supervisor) -> list[float]:
+    return list(sup.get_robot_position().result["joints"])
+
+
+def _final(sup: Supervisor, seq: int, seen: list[pb.Notice], timeout_s: float = 10) -> pb.Notice:
+    """The final notice of `seq`; every notice until then goes to `seen`."""
+    for n in sup.notices(timeout_s=timeout_s):
+        seen.append(n)
+        if n.ref_seq == seq and n.final:
+            return n
+    raise AssertionError(f"no final notice for seq {seq} within {timeout_s} s")
+
+
+def _moving(sup: Supervisor) -> int:
+    rv = sup.move_absolute("far", TARGET, speed_pct=30)
+    time.sleep(0.6)
+    assert sup.get_motion_control_state().result["state"] == "MOVING"
+    return rv.seq
+
+
+def _healthy_stopped_along_the_path(sup: Supervisor, failed: int) -> None:
+    q = _joints(sup)
+    fr = [(qi - s) / (t - s) for j, (qi, s, t) in enumerate(zip(q, START, TARGET, strict=True)) if j != failed]
+    assert 0.0 < min(fr) and max(fr) < 1.0, fr  # stopped on the way, not at either end
+    assert max(fr) - min(fr) < 0.03, fr  # on the joint-space line: a synchronised stop
+    time.sleep(0.3)
+    assert _joints(sup) == pytest.approx(q, abs=1e-3)  # and nothing moves by itself
+
+
+def test_an_emcy_during_a_move_fails_it_naming_joint_node_and_code(rig: tuple[Controller, Supervisor]) -> None:
+    c, sup = rig
+    list(sup.notices(timeout_s=0.1))
+    seq = _moving(sup)
+    assert c.drives_control is not None
+    _send(c.drives_control, "emcy 0x23 0x8611")
+    seen: list[pb.Notice] = []
+    final = _final(sup, seq, seen)
+    assert final.event_id == "moveAbsoluteFailed" and final.kind == pb.ALARM
+    d = notice_data(final)
+    assert d["reason"] == "fault"
+    assert d["fault"] == "joint 3 (node 0x23): FAULT, EMCY 0x8611 following error", d
+    st = sup.get_motion_control_state().result
+    assert st["state"] == "LOCKED" and st["motion_control_state"] == "robot_stopped_on_error", st
+    _healthy_stopped_along_the_path(sup, failed=2)
+    # the EMCY itself, to every supervisor, and the drive's error code read back once the drives are off
+    seen += list(sup.notices(timeout_s=2.0))
+    emcy = [n for n in seen if n.event_id == "driveEmcy"]
+    assert emcy and emcy[0].kind == pb.ALARM
+    e = notice_data(emcy[0])
+    assert (e["joint"], e["node"], e["code"], e["meaning"]) == ("3", "0x23", "0x8611", "following error"), e
+    read_back = [notice_data(n) for n in seen if n.event_id == "driveErrorCode"]
+    assert read_back and read_back[0]["code"] == "0x8611", seen
+    faults = str(sup.send_command("faults").result["result"])
+    assert "joint 3 (node 0x23): EMCY 0x8611 following error" in faults, faults
+    # recovery: activate resets the drive and the arm moves again, without a restart
+    sup.activate()
+    rv = sup.move_absolute("back", START, speed_pct=50)
+    sup.wait_complete(rv, timeout_s=20)
+    assert _joints(sup) == pytest.approx(START, abs=2e-3)
+
+
+def test_a_drive_that_stops_answering_is_lost_and_stays_lost(rig: tuple[Controller, Supervisor]) -> None:
+    c, sup = rig
+    list(sup.notices(timeout_s=0.1))
+    seq = _moving(sup)
+    assert c.drives_control is not None
+    t0 = time.monotonic()
+    _send(c.drives_control, "silence 0x24")
+    final = _final(sup, seq, [])
+    took = time.monotonic() - t0
+    d = notice_data(final)
+    assert final.event_id == "moveAbsoluteFailed" and d["reason"] == "fault"
+    assert d["fault"].startswith("joint 4 (node 0x24): "), d
+    assert "heartbeat" in d["fault"] or "no feedback" in d["fault"], d
+    assert took < 2.0, f"a silent drive was noticed after {took:.2f} s"
+    _healthy_stopped_along_the_path(sup, failed=3)
+    # it does not come back by itself: while silent, activate says which drive and why
+    rv = sup.activate(check=False)
+    assert rv.ret_code != pb.CMD_EXEC_OK
+    assert "joint 4 (node 0x24)" in rv.ret_msg, rv.ret_msg
+    # once it answers again, activate configures it anew and the arm moves
+    _send(c.drives_control, "reset")
+    time.sleep(0.2)
+    sup.activate()
+    rv = sup.move_absolute("back", START, speed_pct=50)
+    sup.wait_complete(rv, timeout_s=20)
+
+
+def test_a_frozen_feedback_is_a_lost_drive(rig: tuple[Controller, Supervisor]) -> None:
+    c, sup = rig
+    list(sup.notices(timeout_s=0.1))
+    seq = _moving(sup)
+    assert c.drives_control is not None
+    _send(c.drives_control, "freeze-tpdo 0x25")
+    final = _final(sup, seq, [])
+    d = notice_data(final)
+    assert d["fault"].startswith("joint 5 (node 0x25): no feedback (TPDO1) for "), d
+    _healthy_stopped_along_the_path(sup, failed=4)
+
+
+def test_a_drive_that_stays_in_fault_refuses_activate_with_what_it_says(rig: tuple[Controller, Supervisor]) -> None:
+    c, sup = rig
+    assert c.drives_control is not None
+    _send(c.drives_control, "sticky-fault 0x22 5")
+    _send(c.drives_control, "emcy 0x22 0x2310")
+    time.sleep(0.3)
+    st = sup.get_motion_control_state().result
+    assert st["state"] == "LOCKED", st  # at rest: the drives went off at once
+    rv = sup.activate(check=False)
+    assert rv.ret_code == pb.CMD_ERR, rv.ret_msg
+    assert rv.ret_msg.startswith("activate failed, the drives are off: joint 2 (node 0x22): "), rv.ret_msg
+    assert "EMCY 0x2310 continuous over-current" in rv.ret_msg and "stays in FAULT" in rv.ret_msg, rv.ret_msg
+    with pytest.raises(errors.WrongStateError):
+        sup.move_absolute("no", TARGET)
+    _send(c.drives_control, "reset")
+    sup.activate()
+
+
+def test_drives_stop_by_themselves_when_landscaped_dies(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """SIGKILL: no stop, no shutdown; each drive sees the controller's heartbeat stop and
+    reacts per 0x6007 (quick stop) within [drives] heartbeat_timeout_ms: its EMCY 0x8130."""
+    monkeypatch.setattr("conftest.ARM", "cia402")
+    c = start_controller(tmp_path / "ls0")
+    drv = tmp_path / "ls0-drives"
+    try:
+        bus = can.Bus(interface="slcan", channel=c.pty, bitrate=1000000, sleep_after_open=0)
+        sup = Supervisor(bus, client_name="kill")
+        sup.open()
+        sup.lock()
+        sup.activate()
+        sup.move_absolute("far", TARGET, speed_pct=20)
+        time.sleep(0.4)
+        c.proc.kill()
+        t_kill = time.monotonic()
+        c.proc.wait(timeout=5)
+        with contextlib.suppress(can.CanError, errors.LandscapeError):
+            sup.close()  # its pty went with landscaped
+        with contextlib.suppress(can.CanError):
+            bus.shutdown()
+        # listen on the drive bus as landscaped did (the pty stays the simulator's)
+        listener = can.Bus(interface="slcan", channel=str(drv), bitrate=1000000, sleep_after_open=0)
+        try:
+            seen: dict[int, float] = {}
+            deadline = t_kill + 3.0
+            while time.monotonic() < deadline and len(seen) < 6:
+                m = listener.recv(timeout=0.1)
+                if m is not None and 0x81 <= m.arbitration_id <= 0xFF and m.data[:2] == b"\x30\x81":
+                    seen.setdefault(m.arbitration_id - 0x80, time.monotonic() - t_kill)
+        finally:
+            listener.shutdown()
+        assert sorted(seen) == [0x21, 0x22, 0x23, 0x24, 0x25, 0x26], seen
+        print(f"EMCY 0x8130 after SIGKILL: {', '.join(f'{n:#x} {t * 1e3:.0f} ms' for n, t in sorted(seen.items()))}")
+        assert max(seen.values()) < 0.35 + 0.25, seen  # heartbeat_timeout_ms 350, and the simulator's own pace
+    finally:
+        c.stop()
