@@ -24,9 +24,47 @@ START = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
 TARGET = [1.0, -0.6, 0.8, 1.2, 1.0, -1.5]  # every joint moves: a stop shows on each
 
 
-def _send(ctl: Path, command: str) -> None:
+def _send(ctl: Path, command: str) -> float:
+    """Send a misbehaviour command; its CLOCK_MONOTONIC time (the device's clock too)."""
     with socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM) as s:
         s.sendto(command.encode(), str(ctl))
+    return time.monotonic()
+
+
+class Joint1:
+    """Joint 1's measured angle from every JOINTS_12 broadcast, with its arrival time."""
+
+    def __init__(self, sup: Supervisor) -> None:
+        self.samples: list[tuple[float, float]] = []
+        sup.on_telemetry(self._on)
+
+    def _on(self, b: object) -> None:
+        if getattr(b, "name", "") == "JOINTS_12":
+            self.samples.append((time.monotonic(), float(b.signals["j1"])))  # type: ignore[attr-defined]
+
+    def stop_after(self, t0: float) -> tuple[float, float, float]:
+        """(speed at t0, distance travelled after t0, time until it rests: within 2e-4 rad for 0.1 s)."""
+        s = self.samples
+        i0 = next(i for i, (t, _) in enumerate(s) if t >= t0)
+        v0 = (s[i0][1] - s[i0 - 2][1]) / (s[i0][0] - s[i0 - 2][0])
+        q_end = s[-1][1]
+        rest = next(i for i in range(i0, len(s)) if all(abs(q - s[i][1]) < 2e-4 for t, q in s[i:] if t < s[i][0] + 0.1))
+        return v0, abs(q_end - s[i0 - 1][1]), s[rest][0] - t0
+
+
+def _detected(sup: Supervisor, t0: float, needle: str) -> float:
+    """How long after t0 the device logged the fault whose text starts with `needle`."""
+    for line in str(sup.send_command("faults").result["result"]).splitlines():
+        at, _, text = line.partition(" ")
+        if text.startswith(needle):
+            return float(at) - t0
+    raise AssertionError(f"no fault log entry {needle!r}")
+
+
+def _report(what: str, sup: Supervisor, watch: Joint1, t0: float, needle: str) -> None:
+    v0, dist, took = watch.stop_after(t0)
+    print(f"\nFIGURE drive fault | {what} | detected after {_detected(sup, t0, needle) * 1e3:.0f} ms | joint 1 at "
+          f"{v0:.2f} rad/s stopped in {dist:.3f} rad, {took:.2f} s")
 
 
 @pytest.fixture
@@ -76,10 +114,11 @@ def _healthy_stopped_along_the_path(sup: Supervisor, failed: int) -> None:
 
 def test_an_emcy_during_a_move_fails_it_naming_joint_node_and_code(rig: tuple[Controller, Supervisor]) -> None:
     c, sup = rig
+    watch = Joint1(sup)
     list(sup.notices(timeout_s=0.1))
     seq = _moving(sup)
     assert c.drives_control is not None
-    _send(c.drives_control, "emcy 0x23 0x8611")
+    t0 = _send(c.drives_control, "emcy 0x23 0x8611")
     seen: list[pb.Notice] = []
     final = _final(sup, seq, seen)
     assert final.event_id == "moveAbsoluteFailed" and final.kind == pb.ALARM
@@ -99,6 +138,7 @@ def test_an_emcy_during_a_move_fails_it_naming_joint_node_and_code(rig: tuple[Co
     assert read_back and read_back[0]["code"] == "0x8611", seen
     faults = str(sup.send_command("faults").result["result"])
     assert "joint 3 (node 0x23): EMCY 0x8611 following error" in faults, faults
+    _report("EMCY 0x8611 (following error) of joint 3 during a move", sup, watch, t0, "joint 3 (node 0x23): FAULT")
     # recovery: activate resets the drive and the arm moves again, without a restart
     sup.activate()
     rv = sup.move_absolute("back", START, speed_pct=50)
@@ -108,11 +148,11 @@ def test_an_emcy_during_a_move_fails_it_naming_joint_node_and_code(rig: tuple[Co
 
 def test_a_drive_that_stops_answering_is_lost_and_stays_lost(rig: tuple[Controller, Supervisor]) -> None:
     c, sup = rig
+    watch = Joint1(sup)
     list(sup.notices(timeout_s=0.1))
     seq = _moving(sup)
     assert c.drives_control is not None
-    t0 = time.monotonic()
-    _send(c.drives_control, "silence 0x24")
+    t0 = _send(c.drives_control, "silence 0x24")
     final = _final(sup, seq, [])
     took = time.monotonic() - t0
     d = notice_data(final)
@@ -121,6 +161,7 @@ def test_a_drive_that_stops_answering_is_lost_and_stays_lost(rig: tuple[Controll
     assert "heartbeat" in d["fault"] or "no feedback" in d["fault"], d
     assert took < 2.0, f"a silent drive was noticed after {took:.2f} s"
     _healthy_stopped_along_the_path(sup, failed=3)
+    _report("joint 4's drive goes silent (heartbeat lost) during a move", sup, watch, t0, "joint 4 (node 0x24)")
     # it does not come back by itself: while silent, activate says which drive and why
     rv = sup.activate(check=False)
     assert rv.ret_code != pb.CMD_EXEC_OK
@@ -135,14 +176,16 @@ def test_a_drive_that_stops_answering_is_lost_and_stays_lost(rig: tuple[Controll
 
 def test_a_frozen_feedback_is_a_lost_drive(rig: tuple[Controller, Supervisor]) -> None:
     c, sup = rig
+    watch = Joint1(sup)
     list(sup.notices(timeout_s=0.1))
     seq = _moving(sup)
     assert c.drives_control is not None
-    _send(c.drives_control, "freeze-tpdo 0x25")
+    t0 = _send(c.drives_control, "freeze-tpdo 0x25")
     final = _final(sup, seq, [])
     d = notice_data(final)
     assert d["fault"].startswith("joint 5 (node 0x25): no feedback (TPDO1) for "), d
     _healthy_stopped_along_the_path(sup, failed=4)
+    _report("joint 5's feedback (TPDO) freezes during a move", sup, watch, t0, "joint 5 (node 0x25)")
 
 
 def test_a_drive_that_stays_in_fault_refuses_activate_with_what_it_says(rig: tuple[Controller, Supervisor]) -> None:
