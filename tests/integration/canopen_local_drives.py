@@ -21,6 +21,7 @@ drives back independently.
 """
 from __future__ import annotations
 
+import os
 import struct
 import threading
 import time
@@ -32,9 +33,11 @@ import canopen
 from canopen.objectdictionary import ODVariable
 from canopen.sdo import SdoAbortedError
 
-SHARED_EDS = Path(__file__).resolve().parents[3] / "shared" / "eds"
-EPOS4_DCF = SHARED_EDS / "epos4_50_15_can_ec90flat_gp52c_mile800_node1.dcf"
-ROS2_EDS = SHARED_EDS / "ros2_canopen_cia402_slave.eds"
+# The vendor files: tests/CMakeLists.txt's LS_VENDOR_EDS_DIR, which ctest passes on;
+# run by hand, the same default (beside the clone: third-party files stay outside it).
+VENDOR_EDS = Path(os.environ.get("LS_VENDOR_EDS_DIR") or Path(__file__).resolve().parents[3] / "shared" / "eds")
+EPOS4_DCF = VENDOR_EDS / "epos4_50_15_can_ec90flat_gp52c_mile800_node1.dcf"
+ROS2_EDS = VENDOR_EDS / "ros2_canopen_cia402_slave.eds"
 
 # CiA 301 / 402 (the values common/ls_canopen.h names; this side is the independent one).
 ABORT_STATE = 0x08000022  # data cannot be transferred in the present device state

@@ -1,6 +1,6 @@
 """landscaped's CiA 402 drive master against drives it did not write: python-canopen's
 LocalNode holding two vendors' device descriptions (a maxon EPOS4 DCF, ros2_canopen's
-CiA 402 test drive EDS; ../shared/eds), with the glue of canopen_local_drives.py.
+CiA 402 test drive EDS; LS_VENDOR_EDS_DIR), with the glue of canopen_local_drives.py.
 
 The master must boot them, remap their PDOs in CiA 301's order (the drives refuse
 anything else), set CSP and the interpolation period, enable them through the 402 state

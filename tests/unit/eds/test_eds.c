@@ -1,4 +1,4 @@
-/* ls_eds: the two vendor files of LS_SHARED_DIR/eds (a maxon EPOS4 DCF and
+/* ls_eds: the two vendor files of LS_VENDOR_EDS_DIR (a maxon EPOS4 DCF and
  * ros2_canopen's CiA 402 test drive EDS; read in place, never copied here)
  * with every quirk their README lists, then hand-written files for the
  * syntax, the values and each refusal's one line. */
@@ -27,11 +27,11 @@ static char g_msg[LS_EDS_MSG_MAX];
 static void load_shared(const char *file)
 {
     char path[512];
-    snprintf(path, sizeof path, "%s/eds/%s", LS_SHARED_DIR, file);
+    snprintf(path, sizeof path, "%s/%s", LS_VENDOR_EDS_DIR, file);
     if (access(path, R_OK) != 0) {
-        fail_msg("%s is missing: the vendor EDS/DCF files live in LS_SHARED_DIR/eds (now %s); configure with "
-                 "-DLS_SHARED_DIR=DIR where DIR/eds holds them",
-                 path, LS_SHARED_DIR);
+        fail_msg("%s is missing: the vendor EDS/DCF files live in LS_VENDOR_EDS_DIR (now %s); configure with "
+                 "-DLS_VENDOR_EDS_DIR=DIR where DIR holds them",
+                 path, LS_VENDOR_EDS_DIR);
     }
     if (ls_eds_load(&g_eds, path, g_msg, sizeof g_msg) != LS_OK) {
         fail_msg("%s", g_msg);
@@ -718,7 +718,7 @@ static void test_loading_and_looking_up_allocate_nothing(void **state)
 {
     (void)state;
     char path[512];
-    snprintf(path, sizeof path, "%s/eds/%s", LS_SHARED_DIR, EPOS4_DCF);
+    snprintf(path, sizeof path, "%s/%s", LS_VENDOR_EDS_DIR, EPOS4_DCF);
     alloc_counter_reset();
     alloc_counter_arm();
     const int r = ls_eds_load(&g_eds, path, g_msg, sizeof g_msg);

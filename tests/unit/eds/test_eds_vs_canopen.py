@@ -1,5 +1,5 @@
 """ls_eds against an independent reader: every object of the two vendor files
-of LS_SHARED_DIR/eds, as the ls_eds_dump tool prints it, compared with
+of LS_VENDOR_EDS_DIR, as the ls_eds_dump tool prints it, compared with
 python-canopen's ``canopen.import_od(path, node_id)`` for several node ids.
 
 Compared per object and sub-object: that both readers list it, its name, its
@@ -12,8 +12,8 @@ python-canopen keeps a signed DefaultValue written in hex as the unsigned
 number (0xFD in an INTEGER8 is 253 there, -3 here): signed integers are
 compared modulo 2^bits.
 
-Run through ctest (which sets LS_EDS_DUMP and LS_SHARED_DIR), or by hand:
-    LS_EDS_DUMP=build/bin/ls_eds_dump LS_SHARED_DIR=../shared \\
+Run through ctest (which sets LS_EDS_DUMP and LS_VENDOR_EDS_DIR), or by hand:
+    LS_EDS_DUMP=build/bin/ls_eds_dump LS_VENDOR_EDS_DIR=../shared/eds \\
         .venv/bin/python -m pytest tests/unit/eds/test_eds_vs_canopen.py
 """
 
@@ -55,13 +55,11 @@ def dump_tool() -> Path:
 
 @pytest.fixture(scope="module")
 def eds_dir() -> Path:
-    shared = _env_path("LS_SHARED_DIR", "the shared directory whose eds/ holds the vendor files")
-    eds = shared / "eds"
+    eds = _env_path("LS_VENDOR_EDS_DIR", "the directory that holds the vendor EDS/DCF files")
     for name in FILES:
         if not (eds / name).is_file():
-            pytest.fail(
-                f"{eds / name} is missing: configure with -DLS_SHARED_DIR=DIR where DIR/eds has the vendor files"
-            )
+            pytest.fail(f"{eds / name} is missing: configure with -DLS_VENDOR_EDS_DIR=DIR where DIR has the vendor "
+                        "files")
     return eds
 
 
