@@ -552,6 +552,49 @@ int ls_fmt_print(char *buf, size_t cap, const char *fmt, ...)
     return n;
 }
 
+/* A text of more than cap - 1 bytes, its first cap - 1 in buf: end it after
+ * its last whole word with " \u2026" (a word ends before a space), or be
+ * the mark alone when not even the first word fits. */
+static void cut_after_word(char *buf, size_t cap)
+{
+    static const char mark[] = " \xE2\x80\xA6";
+    const size_t mark_len = sizeof mark - 1;
+    if (cap < mark_len) {
+        buf[0] = '\0';
+        return;
+    }
+    size_t k = cap > mark_len + 1 ? cap - 1 - mark_len : 0; /* text kept: [0, k) */
+    while (k > 0 && buf[k] != ' ') {
+        k--;
+    }
+    while (k > 0 && buf[k - 1] == ' ') {
+        k--;
+    }
+    if (k == 0) {
+        memcpy(buf, mark + 1, mark_len); /* the ellipsis and the NUL */
+        return;
+    }
+    memcpy(buf + k, mark, mark_len + 1);
+}
+
+int ls_fmt_vtext(char *buf, size_t cap, const char *fmt, va_list ap)
+{
+    const int n = ls_fmt_vprint(buf, cap, fmt, ap);
+    if (n >= 0 && cap > 0 && (size_t)n >= cap) {
+        cut_after_word(buf, cap);
+    }
+    return n;
+}
+
+int ls_fmt_text(char *buf, size_t cap, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    const int n = ls_fmt_vtext(buf, cap, fmt, ap);
+    va_end(ap);
+    return n;
+}
+
 /* ------------------------------------------------------------------ parser */
 
 /* Significant digits kept exactly; any further nonzero digit only makes the

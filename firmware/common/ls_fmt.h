@@ -32,6 +32,16 @@
 int ls_fmt_print(char *buf, size_t cap, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 int ls_fmt_vprint(char *buf, size_t cap, const char *fmt, va_list ap) __attribute__((format(printf, 3, 0)));
 
+/* The same for a text a reader gets (an answer, a notice datum): a text
+ * that does not fit ends after its last whole word, with a space and an
+ * ellipsis (U+2026, 3 bytes of UTF-8) saying so, never inside a word or a
+ * character (docs/protocol.md "Limits": the answer text's published
+ * limit); the ellipsis alone when not even the first word fits, nothing
+ * when the buffer is shorter than that (cap < 4). Returns what ls_fmt_vprint returns (the length the whole text
+ * has). Cost and contract otherwise as ls_fmt_vprint; no allocation. */
+int ls_fmt_text(char *buf, size_t cap, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+int ls_fmt_vtext(char *buf, size_t cap, const char *fmt, va_list ap) __attribute__((format(printf, 3, 0)));
+
 /* strtod's contract for decimal text: skips leading white space (isspace
  * in the C locale), takes an optional sign, then "inf", "infinity", "nan"
  * or "nan(chars)" (any case), or decimal digits with an optional '.' and

@@ -2,7 +2,8 @@
  * strtod (same bits, same end) on any text, and the formatter against
  * snprintf (same text, same length, same cut into a small buffer) on any
  * double, integer or string with any flags, width and precision built from
- * the input. A difference traps.
+ * the input; a string also through ls_fmt_text, whose cut ends after whole
+ * words with a mark. A difference traps.
  *
  * Input: byte 0 picks the mode; the rest is the text (parser), or the value
  * and the conversion's parts (formatter). Two differences are on purpose
@@ -167,6 +168,22 @@ static void format_string(const uint8_t *in, const uint8_t *text, size_t len)
     spec_t sp;
     build_spec(&sp, in, "-", "", 's');
     COMPARE(&sp, s);
+    /* For a reader (ls_fmt_text): the whole text when it fits; else whole
+     * words of it and " \u2026", the mark alone, or nothing (cap < 4). */
+    char cut[80];
+    if (sp.cap > 0 && ls_fmt_text(cut, sp.cap, "%s", s) != (int)len) {
+        __builtin_trap();
+    }
+    if (sp.cap > len && strcmp(cut, s) != 0) {
+        __builtin_trap();
+    }
+    const size_t n = sp.cap > 0 ? strlen(cut) : 0;
+    const bool words = n > 3 && n < sp.cap && memcmp(cut + n - 4, " \xE2\x80\xA6", 4) == 0 &&
+                       memcmp(cut, s, n - 4) == 0 && s[n - 4] == ' ';
+    const bool mark_only = strcmp(cut, "\xE2\x80\xA6") == 0 && sp.cap >= 4;
+    if (sp.cap > 0 && sp.cap <= len && !words && !mark_only && !(n == 0 && sp.cap < 4)) {
+        __builtin_trap();
+    }
 }
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)

@@ -250,6 +250,43 @@ static void test_unsupported_conversion_is_an_error(void **state)
     assert_string_equal(buf, "ab"); /* cut where it stopped, terminated */
 }
 
+/* A text for a reader that does not fit ends after a whole word with " ...";
+ * one that fits is the plain output. */
+static void test_a_cut_text_ends_after_a_whole_word(void **state)
+{
+    (void)state;
+    char buf[30];
+    const char *msg = "lower the speed or use a joint move";
+    assert_int_equal(ls_fmt_text(buf, sizeof buf, "%s", msg), (int)strlen(msg));
+    assert_string_equal(buf, "lower the speed or use a \xE2\x80\xA6");
+    for (size_t cap = 1; cap <= strlen(msg) + 1; cap++) {
+        char b[64];
+        memset(b, 'Z', sizeof b);
+        (void)ls_fmt_text(b, cap, "%s", msg);
+        const size_t n = strlen(b);
+        assert_true(n < cap);
+        assert_int_equal(b[cap], 'Z'); /* nothing written past the end */
+        if (cap > strlen(msg)) {
+            assert_string_equal(b, msg);
+        } else if (cap >= 4) {
+            /* whole words, then the mark; or the mark alone */
+            if (n > 3) {
+                assert_true(memcmp(b + n - 4, " \xE2\x80\xA6", 4) == 0);
+                assert_memory_equal(b, msg, n - 4);
+                assert_true(msg[n - 4] == ' ');
+            } else {
+                assert_string_equal(b, "\xE2\x80\xA6");
+            }
+        } else {
+            assert_string_equal(b, "");
+        }
+    }
+    /* One long first word (of two-byte characters): the mark alone. */
+    char s2[12];
+    (void)ls_fmt_text(s2, sizeof s2, "%s", "\xC3\xA9\xC3\xA9\xC3\xA9\xC3\xA9\xC3\xA9\xC3\xA9 x");
+    assert_string_equal(s2, "\xE2\x80\xA6");
+}
+
 /* vprint through a va_list, as ls_reply does. */
 static int via_va_list(char *buf, size_t cap, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 static int via_va_list(char *buf, size_t cap, const char *fmt, ...)
@@ -451,6 +488,7 @@ int main(void)
         cmocka_unit_test(test_truncation_always_terminated),
         cmocka_unit_test(test_unsupported_conversion_is_an_error),
         cmocka_unit_test(test_vprint),
+        cmocka_unit_test(test_a_cut_text_ends_after_a_whole_word),
         cmocka_unit_test(test_parse_hard_cases),
         cmocka_unit_test(test_parse_long_mantissas),
         cmocka_unit_test(test_parse_round_trips),
