@@ -113,7 +113,7 @@ int32_t ls_reply(ls_call_t *call, int32_t code, const char *fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
-    ls_fmt_vprint(call->res->ret_msg, sizeof call->res->ret_msg, fmt, ap);
+    ls_fmt_vtext(call->res->ret_msg, sizeof call->res->ret_msg, fmt, ap);
     va_end(ap);
     return code;
 }
@@ -181,7 +181,7 @@ void ls_core_notify(ls_core_t *core, int sup, ls_NoticeKind kind, ls_EventId id,
         n->session_epoch = ref_seq != 0u ? s->epoch : 0u;
         size_t cap = sizeof n->data / sizeof n->data[0];
         for (size_t k = 0; k < n_data && k < cap; k++) {
-            ls_fmt_print(n->data[k], sizeof n->data[k], "%s", data[k]);
+            ls_fmt_text(n->data[k], sizeof n->data[k], "%s", data[k]);
             n->data_count++;
         }
         size_t len = encode_msg(&core->note, core->note_enc, sizeof core->note_enc);
@@ -214,7 +214,7 @@ void ls_core_notify_named_to(ls_core_t *core, uint8_t addr, uint32_t epoch, ls_N
     n->notice_seq = i >= 0 ? ++core->sessions[i].notice_seq : 0u;
     size_t cap = sizeof n->data / sizeof n->data[0];
     for (size_t k = 0; k < n_data && k < cap; k++) {
-        ls_fmt_print(n->data[k], sizeof n->data[k], "%s", data[k]);
+        ls_fmt_text(n->data[k], sizeof n->data[k], "%s", data[k]);
         n->data_count++;
     }
     size_t len = encode_msg(&core->note, core->note_enc, sizeof core->note_enc);
@@ -503,7 +503,7 @@ static void send_rsvp_ack(ls_core_t *core, uint8_t addr, uint32_t id, int32_t co
     ls_fmt_print(a->action, sizeof a->action, "%s", action);
     va_list ap;
     va_start(ap, fmt);
-    ls_fmt_vprint(a->ret_msg, sizeof a->ret_msg, fmt, ap);
+    ls_fmt_vtext(a->ret_msg, sizeof a->ret_msg, fmt, ap);
     va_end(ap);
     size_t len = encode_msg(&core->note, core->note_enc, sizeof core->note_enc);
     if (len > 0) {
@@ -597,7 +597,7 @@ int32_t ls_core_rsvp(ls_core_t *core, int sup, uint32_t ref_seq, ls_NoticeKind k
     n->notice_seq = ++s->notice_seq;
     size_t cap = sizeof n->data / sizeof n->data[0];
     for (size_t k = 0; k < n_data && k < cap; k++) {
-        ls_fmt_print(n->data[k], sizeof n->data[k], "%s", data[k]);
+        ls_fmt_text(n->data[k], sizeof n->data[k], "%s", data[k]);
         n->data_count++;
     }
     size_t len = encode_msg(&core->note, core->note_enc, sizeof core->note_enc);
@@ -1109,8 +1109,8 @@ static void on_request(ls_core_t *core, uint8_t addr, ls_Request *rq, const uint
         busy->seq = rq->seq;
         busy->session_epoch = s->epoch;
         busy->ret_code = ls_RetCode_CMD_BUSY_ERR;
-        ls_fmt_print(busy->ret_msg, sizeof busy->ret_msg, "%s (seq %u) is still running: wait for its answer",
-                     pd != NULL ? pd->name : "a blocking command", (unsigned)s->last_seq);
+        ls_fmt_text(busy->ret_msg, sizeof busy->ret_msg, "%s (seq %u) is still running: wait for its answer",
+                    pd != NULL ? pd->name : "a blocking command", (unsigned)s->last_seq);
         size_t len = encode_downlink(core);
         if (len > 0) {
             send_bytes(core, addr, core->enc, len);
@@ -1165,7 +1165,7 @@ void ls_core_finish_deferred(ls_core_t *core, int sup, int32_t code, const char 
     res->session_epoch = s->epoch;
     res->ret_code = code;
     res->which_result = code >= 0 ? s->pending_tag : 0;
-    ls_fmt_print(res->ret_msg, sizeof res->ret_msg, "%s", msg);
+    ls_fmt_text(res->ret_msg, sizeof res->ret_msg, "%s", msg);
     send_response(core, s, s->addr);
 }
 
@@ -1228,7 +1228,7 @@ static void answer_bad_request(ls_core_t *core, uint8_t addr, int32_t code, uint
     res->session_epoch = sup >= 0 ? core->sessions[sup].epoch : 0u;
     va_list ap;
     va_start(ap, fmt);
-    ls_fmt_vprint(res->ret_msg, sizeof res->ret_msg, fmt, ap);
+    ls_fmt_vtext(res->ret_msg, sizeof res->ret_msg, fmt, ap);
     va_end(ap);
     send_response(core, NULL, addr);
 }

@@ -13,6 +13,7 @@ LOAD = ls.Request.DESCRIPTOR.fields_by_name["path_load"].number
 def description() -> DeviceDescription:
     r = ls.DescribeRes(max_sessions=4, max_paths=8, max_points_per_path=256, max_dio_watches=8, max_cycles=1000000,
                        min_rate_pct=0.1, frame_angle_max_rad=6.28, reach_m=1.3, robot_model="ls-sim6",
+                       max_answer_bytes=335, max_notice_datum_bytes=95,
                        tools=["gripper", "probe"], workspace_min_m=[-1, -1, 0], workspace_max_m=[1, 1, 1.2])
     r.field_limits.add(path=[1, LOAD, 1], max_bytes=63)
     r.field_limits.add(path=[1, LOAD, 6], max_count=32)
@@ -75,7 +76,8 @@ def test_text_names_every_part() -> None:
     text = "\n".join(description().lines())
     for part in ("8 paths of 256 points", "dio unit 0: inputs 0x0000FFFF outputs 0xFFFF0000",
                  "sensor force_sensor: Fx[N] Tz[Nm]", "tools: gripper, probe", "joint 1: [-3, 3] rad",
-                 "limit pathLoad.tags: 32 items", "limit rsvpReply.data: 4 items, 63 bytes"):
+                 "limit pathLoad.tags: 32 items", "limit rsvpReply.data: 4 items, 63 bytes",
+                 "answers up to 335 bytes, notice data up to 95 bytes each"):
         assert part in text, part
 
 

@@ -179,6 +179,9 @@ class DeviceDescription:
                f"{r.max_dio_watches} DIO watches, pathMove up to {r.max_cycles} cycles")
         yield (f"rates: {r.min_rate_pct:g} % to 100 % of the maximum; frame angles within "
                f"+-{r.frame_angle_max_rad:g} rad; translations within {r.reach_m:g} m")
+        if r.max_answer_bytes:
+            yield (f"texts: answers up to {r.max_answer_bytes} bytes, notice data up to "
+                   f"{r.max_notice_datum_bytes} bytes each (longer ones end after a word with ' \u2026')")
         for u in r.dio_units:
             yield f"dio unit {u.unit_id}: inputs 0x{u.input_mask:08X} outputs 0x{u.output_mask:08X}"
         for s in r.sensors:

@@ -274,17 +274,19 @@ class DescribeReq(_message.Message):
     def __init__(self) -> None: ...
 
 class DescribeRes(_message.Message):
-    __slots__ = ["dio_units", "field_limits", "frame_angle_max_rad", "joints", "max_angular_accel_rad_s2", "max_angular_speed_rad_s", "max_cycles", "max_dio_watches", "max_linear_accel_m_s2", "max_linear_speed_m_s", "max_paths", "max_points_per_path", "max_sessions", "min_rate_pct", "reach_m", "robot_model", "sensors", "tools", "workspace_max_m", "workspace_min_m"]
+    __slots__ = ["dio_units", "field_limits", "frame_angle_max_rad", "joints", "max_angular_accel_rad_s2", "max_angular_speed_rad_s", "max_answer_bytes", "max_cycles", "max_dio_watches", "max_linear_accel_m_s2", "max_linear_speed_m_s", "max_notice_datum_bytes", "max_paths", "max_points_per_path", "max_sessions", "min_rate_pct", "reach_m", "robot_model", "sensors", "tools", "workspace_max_m", "workspace_min_m"]
     DIO_UNITS_FIELD_NUMBER: _ClassVar[int]
     FIELD_LIMITS_FIELD_NUMBER: _ClassVar[int]
     FRAME_ANGLE_MAX_RAD_FIELD_NUMBER: _ClassVar[int]
     JOINTS_FIELD_NUMBER: _ClassVar[int]
     MAX_ANGULAR_ACCEL_RAD_S2_FIELD_NUMBER: _ClassVar[int]
     MAX_ANGULAR_SPEED_RAD_S_FIELD_NUMBER: _ClassVar[int]
+    MAX_ANSWER_BYTES_FIELD_NUMBER: _ClassVar[int]
     MAX_CYCLES_FIELD_NUMBER: _ClassVar[int]
     MAX_DIO_WATCHES_FIELD_NUMBER: _ClassVar[int]
     MAX_LINEAR_ACCEL_M_S2_FIELD_NUMBER: _ClassVar[int]
     MAX_LINEAR_SPEED_M_S_FIELD_NUMBER: _ClassVar[int]
+    MAX_NOTICE_DATUM_BYTES_FIELD_NUMBER: _ClassVar[int]
     MAX_PATHS_FIELD_NUMBER: _ClassVar[int]
     MAX_POINTS_PER_PATH_FIELD_NUMBER: _ClassVar[int]
     MAX_SESSIONS_FIELD_NUMBER: _ClassVar[int]
@@ -301,10 +303,12 @@ class DescribeRes(_message.Message):
     joints: _containers.RepeatedCompositeFieldContainer[JointLimit]
     max_angular_accel_rad_s2: float
     max_angular_speed_rad_s: float
+    max_answer_bytes: int
     max_cycles: int
     max_dio_watches: int
     max_linear_accel_m_s2: float
     max_linear_speed_m_s: float
+    max_notice_datum_bytes: int
     max_paths: int
     max_points_per_path: int
     max_sessions: int
@@ -315,7 +319,7 @@ class DescribeRes(_message.Message):
     tools: _containers.RepeatedScalarFieldContainer[str]
     workspace_max_m: _containers.RepeatedScalarFieldContainer[float]
     workspace_min_m: _containers.RepeatedScalarFieldContainer[float]
-    def __init__(self, max_sessions: _Optional[int] = ..., max_paths: _Optional[int] = ..., max_points_per_path: _Optional[int] = ..., max_dio_watches: _Optional[int] = ..., max_cycles: _Optional[int] = ..., min_rate_pct: _Optional[float] = ..., frame_angle_max_rad: _Optional[float] = ..., field_limits: _Optional[_Iterable[_Union[FieldLimit, _Mapping]]] = ..., dio_units: _Optional[_Iterable[_Union[DioUnitInfo, _Mapping]]] = ..., sensors: _Optional[_Iterable[_Union[SensorInfo, _Mapping]]] = ..., tools: _Optional[_Iterable[str]] = ..., robot_model: _Optional[str] = ..., joints: _Optional[_Iterable[_Union[JointLimit, _Mapping]]] = ..., max_linear_speed_m_s: _Optional[float] = ..., max_angular_speed_rad_s: _Optional[float] = ..., max_linear_accel_m_s2: _Optional[float] = ..., max_angular_accel_rad_s2: _Optional[float] = ..., workspace_min_m: _Optional[_Iterable[float]] = ..., workspace_max_m: _Optional[_Iterable[float]] = ..., reach_m: _Optional[float] = ...) -> None: ...
+    def __init__(self, max_sessions: _Optional[int] = ..., max_paths: _Optional[int] = ..., max_points_per_path: _Optional[int] = ..., max_dio_watches: _Optional[int] = ..., max_cycles: _Optional[int] = ..., min_rate_pct: _Optional[float] = ..., frame_angle_max_rad: _Optional[float] = ..., field_limits: _Optional[_Iterable[_Union[FieldLimit, _Mapping]]] = ..., dio_units: _Optional[_Iterable[_Union[DioUnitInfo, _Mapping]]] = ..., sensors: _Optional[_Iterable[_Union[SensorInfo, _Mapping]]] = ..., tools: _Optional[_Iterable[str]] = ..., robot_model: _Optional[str] = ..., joints: _Optional[_Iterable[_Union[JointLimit, _Mapping]]] = ..., max_linear_speed_m_s: _Optional[float] = ..., max_angular_speed_rad_s: _Optional[float] = ..., max_linear_accel_m_s2: _Optional[float] = ..., max_angular_accel_rad_s2: _Optional[float] = ..., workspace_min_m: _Optional[_Iterable[float]] = ..., workspace_max_m: _Optional[_Iterable[float]] = ..., reach_m: _Optional[float] = ..., max_answer_bytes: _Optional[int] = ..., max_notice_datum_bytes: _Optional[int] = ...) -> None: ...
 
 class DioUnitInfo(_message.Message):
     __slots__ = ["input_mask", "output_mask", "unit_id"]
