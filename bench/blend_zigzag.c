@@ -171,7 +171,7 @@ int main(int argc, char **argv)
         for (int jn = 0; jn < LS_N_JOINTS; jn++) {
             qd_ratio = fmax(qd_ratio, fabs(qh[0][jn] - qh[1][jn]) / DT_S / m->qd_max_rad_s[jn]);
         }
-        const bool braking = motion.seg_i_ == n - 1 && motion.t_s > prog.seg[n - 1].traj.duration_s / 2;
+        const bool braking = motion.seg_i_ == n - 1 && motion.t_s > ls_motion_seg_duration_s(&prog.seg[n - 1]) / 2;
         if (tags > 0 && !braking && !done) {
             min_speed = fmin(min_speed, dist3(v, zero));
         }

@@ -27,8 +27,16 @@ FITS(ls_TagPoint, aux_commands[0], LS_MOTION_AUX_LEN);
 _Static_assert(sizeof(((ls_GetTagIdRes *)0)->path_name) >= LS_MOTION_NAME_LEN, "getTagId must hold a path name");
 _Static_assert(sizeof(((ls_GetTagIdRes *)0)->tag_id) >= LS_MOTION_NAME_LEN, "getTagId must hold a tag");
 
+/* A planner's refusal reaches the user whole (docs/protocol.md "Limits"):
+ * the answer holds the longest command name, "refused, nothing moved: ",
+ * the path builder's point prefix and the planner's text. */
+#define REFUSED_PREFIX_LEN (sizeof "moveRelative refused, nothing moved: " - 1)
+_Static_assert(sizeof(((ls_Response *)0)->ret_msg) >= REFUSED_PREFIX_LEN + LS_MCMD_WHY_LEN,
+               "landscape.options: ls.Response.ret_msg must hold a planner's refusal whole");
+
 int32_t ls_mcmd_refused(ls_call_t *call, int status, const char *what, const char *why)
 {
+    /* what is one of the motion commands' names, none longer than moveRelative */
     int32_t code = status == LS_ERANGE ? ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR : ls_RetCode_CMD_PARAM_ERR;
     return ls_reply(call, code, "%s refused, nothing moved: %s", what, why);
 }
@@ -150,7 +158,7 @@ void ls_mcmd_offset_in_frame(const double F[16], const double P[16], const doubl
 
 /* Hand the plan in the slot over and enter MOVING. */
 int32_t ls_mcmd_start_plan(ls_core_t *core, ls_call_t *call, ls_motion_plan_t *slot, const char *seed_name,
-                           const char *point, int path)
+                           const char *point, int path, const char *note)
 {
     slot->ref_seq = call->req->seq;
     ls_fmt_print(slot->name, sizeof slot->name, "%s", point);
@@ -159,7 +167,8 @@ int32_t ls_mcmd_start_plan(ls_core_t *core, ls_call_t *call, ls_motion_plan_t *s
                         seed_name);
     }
     ls_run_begin(core, call, false, seed_name, point, path);
-    return ls_reply(call, ls_RetCode_CMD_STARTED_OK, "%s started: expect %sComplete or an alarm", seed_name, seed_name);
+    return ls_reply(call, ls_RetCode_CMD_STARTED_OK, "%s started: expect %sComplete or an alarm%s%s", seed_name,
+                    seed_name, note != NULL ? "; " : "", note != NULL ? note : "");
 }
 
 int32_t ls_mcmd_no_arm(ls_call_t *call, const char *what)

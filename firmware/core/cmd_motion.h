@@ -20,8 +20,14 @@
 
 /* ------------------------------------------------------------- cmd_motion.c */
 
+/* The longest text the path builder puts before a planner's own (the
+ * point and its kind): what it passes to ls_mcmd_refused holds both. */
+#define LS_MCMD_POINT_PREFIX_LEN 48
+#define LS_MCMD_WHY_LEN (LS_MCMD_POINT_PREFIX_LEN + LS_MOTION_WHY_LEN)
+
 /* Answer a planner's refusal: CMD_PARAM_OUT_OF_RANGE_ERR for LS_ERANGE,
- * CMD_PARAM_ERR otherwise; "nothing moved". */
+ * CMD_PARAM_ERR otherwise; "nothing moved". `why` (at most
+ * LS_MCMD_WHY_LEN bytes with its NUL) fits the answer whole. */
 int32_t ls_mcmd_refused(ls_call_t *call, int status, const char *what, const char *why);
 /* The control loop's snapshot; false (and *snap untouched) without a loop. */
 bool ls_mcmd_snapshot(ls_core_t *core, ls_ctl_snapshot_t *snap);
@@ -45,9 +51,10 @@ bool ls_mcmd_all_finite(const double *v, size_t n);
 int32_t ls_mcmd_no_arm(ls_call_t *call, const char *what);
 /* The plan slot, or NULL after answering CMD_BUSY_ERR in *code. */
 ls_motion_plan_t *ls_mcmd_take_slot(ls_core_t *core, ls_call_t *call, const char *what, int32_t *code);
-/* Hand the plan in the slot over and enter MOVING (the answer: STARTED_OK). */
+/* Hand the plan in the slot over and enter MOVING (the answer: STARTED_OK,
+ * with `note` after it when not NULL: why the move runs slower, say). */
 int32_t ls_mcmd_start_plan(ls_core_t *core, ls_call_t *call, ls_motion_plan_t *slot, const char *seed_name,
-                           const char *point, int path);
+                           const char *point, int path, const char *note);
 /* Post a command without arguments to the loop; false when its queue is full. */
 bool ls_mcmd_post(ls_core_t *core, ls_ctl_kind_t kind, uint32_t ref_seq);
 

@@ -102,6 +102,28 @@ void ls_core_on_motion_event(ls_core_t *core, const ls_motion_event_t *ev)
                           false, data, core->run.dry_run ? 5u : 4u);
         return;
     }
+    case LS_MEV_SLOW: {
+        /* The program is the core's and unchanged while it runs. */
+        ls_motion_slowdown_t d;
+        if (!core->run.active || core->run.react || ev->ref_seq != core->run.ref_seq || ev->index < 0 ||
+            ev->index >= LS_MOTION_MAX_SEGS || !ls_motion_seg_slowdown(&core->motion.prog.seg[ev->index], &d)) {
+            return;
+        }
+        char d1[8 + LS_MOTION_NAME_LEN], d2[24], d3[32], d4[32], d5[32], d6[16], d7[24], d8[32], d9[32];
+        ls_fmt_print(d1, sizeof d1, "path=%s", ev->name);
+        ls_fmt_print(d2, sizeof d2, "point=%d", (int)core->motion.prog.seg[ev->index].point);
+        ls_fmt_print(d3, sizeof d3, "speed_pct=%.3g", 100.0 * d.speed_frac);
+        ls_fmt_print(d4, sizeof d4, "from_pct=%.3g", 100.0 * d.from);
+        ls_fmt_print(d5, sizeof d5, "to_pct=%.3g", 100.0 * d.to);
+        ls_fmt_print(d6, sizeof d6, "joint=%d", d.joint);
+        ls_fmt_print(d7, sizeof d7, "limit=%s", d.velocity ? "velocity" : "acceleration");
+        ls_fmt_print(d8, sizeof d8, "duration_s=%.4g", d.duration_s);
+        ls_fmt_print(d9, sizeof d9, "requested_s=%.4g", d.requested_s);
+        const char *data[] = { d1, d2, d3, d4, d5, d6, d7, d8, d9 };
+        ls_core_notify_to(core, core->run.addr, core->run.epoch, ls_NoticeKind_EVENT, ls_EventId_slowedDown,
+                          core->run.ref_seq, false, data, sizeof data / sizeof data[0]);
+        return;
+    }
     case LS_MEV_AUX:
         if (core->run.active && !core->run.react && !core->halt.active) {
             ls_aux_run(core, ev);

@@ -61,7 +61,7 @@ static int32_t do_move(ls_core_t *core, ls_call_t *call, bool relative)
     if (slot == NULL) {
         return code;
     }
-    char why[128];
+    char why[LS_MOTION_WHY_LEN];
     int st;
     const ls_settings_t *set = &core->settings;
     const ls_units_t un = ls_core_units(core, call->sup);
@@ -113,7 +113,10 @@ static int32_t do_move(ls_core_t *core, ls_call_t *call, bool relative)
     if (st < 0) {
         return ls_mcmd_refused(call, st, what, why);
     }
-    return ls_mcmd_start_plan(core, call, slot, what, point, -1);
+    ls_motion_slowdown_t slow;
+    const bool slowed =
+        ls_motion_seg_slowdown(&slot->one, &slow) && ls_motion_slowdown_text(&slow, why, sizeof why) >= 0;
+    return ls_mcmd_start_plan(core, call, slot, what, point, -1, slowed ? why : NULL);
 }
 
 int32_t ls_h_move_absolute(struct ls_core *core, struct ls_call *call)
@@ -182,12 +185,15 @@ int32_t ls_h_move_arc(struct ls_core *core, struct ls_call *call)
     ls_mcmd_cart_limits(core, 0.0, 0.0, &lim);
     double tool[16];
     ls_mcmd_tool_pose(core, tool);
-    char why[128];
+    char why[LS_MOTION_WHY_LEN];
     int st = ls_motion_plan_arc(slot, core->model, q0, tool, via, goal, &lim, why, sizeof why);
     if (st < 0) {
         return ls_mcmd_refused(call, st, "moveArc", why);
     }
-    return ls_mcmd_start_plan(core, call, slot, "moveArc", r->point_name, -1);
+    ls_motion_slowdown_t slow;
+    const bool slowed =
+        ls_motion_seg_slowdown(&slot->one, &slow) && ls_motion_slowdown_text(&slow, why, sizeof why) >= 0;
+    return ls_mcmd_start_plan(core, call, slot, "moveArc", r->point_name, -1, slowed ? why : NULL);
 }
 
 int32_t ls_h_stop_motion(struct ls_core *core, struct ls_call *call)

@@ -178,7 +178,7 @@ static int build_program(ls_core_t *core, const ls_path_t *p, const double q_sta
     double q_prev[LS_N_JOINTS], P_prev[16], q_first[LS_N_JOINTS], P_first[16];
     memcpy(q_prev, q_start, sizeof q_prev);
     ls_mcmd_tip_of(core, q_prev, P_prev);
-    char w[112];
+    char w[LS_MOTION_WHY_LEN];
     for (int k = 0; k < p->n; k++) {
         ls_motion_seg_t *s = &core->motion.prog.seg[k];
         copy_point_attrs(s, &p->pt[k], k);
@@ -285,21 +285,32 @@ int32_t ls_h_path_move(struct ls_core *core, struct ls_call *call)
     }
     const bool dry = r->number_of_cycles == 0;
     const int32_t cycles = dry ? 1 : r->number_of_cycles;
-    char why[160];
+    char why[LS_MCMD_WHY_LEN];
     int st = build_program(core, &core->motion.paths[i], snap.q_cmd_rad, cycles, why, sizeof why);
     if (st < 0) {
         return ls_mcmd_refused(call, st, "pathMove", why);
     }
+    /* Segments the joints slow down: the answer counts them, a slowedDown
+     * notice says where as each begins (cmd_motion_events.c). */
+    const int n_segs = core->motion.prog.n + (cycles > 1 ? 1 : 0);
+    int slowed = 0;
+    for (int k = 0; k < n_segs; k++) {
+        slowed += ls_motion_seg_slowdown(&core->motion.prog.seg[k], NULL) ? 1 : 0;
+    }
+    char note[96];
+    ls_fmt_print(note, sizeof note, "%d of %d segments run slower where the joints need it (slowedDown notices)",
+                 slowed, n_segs);
     (void)ls_motion_plan_path(slot, &core->motion.prog, cycles, dry, r->path_name);
     ls_fmt_print(core->motion.tag_path, sizeof core->motion.tag_path, "%s", r->path_name);
     core->motion.tag_last[0] = '\0';
-    int32_t started = ls_mcmd_start_plan(core, call, slot, "pathMove", r->path_name, i);
+    int32_t started = ls_mcmd_start_plan(core, call, slot, "pathMove", r->path_name, i, slowed > 0 ? note : NULL);
     if (started == ls_RetCode_CMD_STARTED_OK && dry) {
         /* Every notice of a dry run says so (its tag events and its final notice). */
         core->run.dry_run = true;
         return ls_reply(call, ls_RetCode_CMD_STARTED_OK,
                         "pathMove started as a dry run (number_of_cycles 0): one cycle without auxiliary "
-                        "commands; expect pathMoveComplete with dry_run=true, or an alarm");
+                        "commands; expect pathMoveComplete with dry_run=true, or an alarm%s%s",
+                        slowed > 0 ? "; " : "", slowed > 0 ? note : "");
     }
     return started;
 }

@@ -112,7 +112,8 @@ static int32_t refuse_if_manual(ls_core_t *core, ls_call_t *call, const char *wh
 }
 
 /* Check that the tip can go in a straight line from its pose at q0 to
- * `tip1` (workspace, IK, joint limits): 0, or an answer. */
+ * `tip1` (workspace, IK, joint limits) at v_m_s all along (the move keeps
+ * its speed): 0, or an answer. */
 static int32_t check_line(ls_core_t *core, ls_call_t *call, const char *what, const double q0[LS_N_JOINTS],
                           const double tip1[16], double v_m_s)
 {
@@ -128,8 +129,11 @@ static int32_t check_line(ls_core_t *core, ls_call_t *call, const char *what, co
     };
     double tool[16];
     ls_mcmd_tool_pose(core, tool);
-    char why[128];
+    char why[LS_MOTION_WHY_LEN];
     int st = ls_motion_seg_line(&core->sensor.check, m, q0, tool, tip1, &lim, why, sizeof why);
+    if (st == 0) {
+        st = ls_motion_seg_check_speed(&core->sensor.check, why, sizeof why);
+    }
     if (st < 0) {
         return ls_reply(call, st == LS_ERANGE ? ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR : ls_RetCode_CMD_PARAM_ERR,
                         "%s refused, nothing moved: %s", what, why);

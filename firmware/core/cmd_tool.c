@@ -115,7 +115,7 @@ static int plan_step(ls_core_t *core, const double q0[LS_N_JOINTS], char *why, s
         return -1;
     }
     const ls_robot_model_t *m = core->model;
-    char w[128] = "";
+    char w[LS_MOTION_WHY_LEN] = "";
     int st;
     if (core->tool_cmds.op.step == STEP_APPROACH) {
         double q1[LS_N_JOINTS];
@@ -142,7 +142,7 @@ static int plan_step(ls_core_t *core, const double q0[LS_N_JOINTS], char *why, s
         st = ls_motion_plan_line(slot, m, q0, flange_tool, goal, &lim, w, sizeof w);
     }
     if (st < 0) {
-        ls_fmt_print(why, whylen, "%.100s", w);
+        ls_fmt_print(why, whylen, "%s", w);
         return -1;
     }
     slot->ref_seq = core->tool_cmds.op.ref_seq;
@@ -156,10 +156,8 @@ static int plan_step(ls_core_t *core, const double q0[LS_N_JOINTS], char *why, s
 
 static void step_failed(ls_core_t *core, const char *why)
 {
-    char msg[256];
-    /* why: at most 100 characters, so the whole text fits msg with a 63-byte tool id
-     * (-Wformat-truncation at -O3). */
-    ls_fmt_print(msg, sizeof msg, "%s %s stopped at step %d: %.100s; the arm holds where it is", op_name(core),
+    char msg[LS_MOTION_WHY_LEN + 128]; /* why (a planner's text) whole, with a 63-byte tool id */
+    ls_fmt_print(msg, sizeof msg, "%s %s stopped at step %d: %s; the arm holds where it is", op_name(core),
                  core->tool_cmds.op.id, core->tool_cmds.op.step, why);
     op_end(core, ls_RetCode_CMD_ERR, msg, true);
 }
@@ -216,7 +214,7 @@ static int32_t change(ls_core_t *core, ls_call_t *call, const char *id, bool att
     ls_ctl_snapshot_t snap;
     ls_control_snapshot(core->ctl, &snap);
     core->tool_cmds.op = op;
-    char why[128];
+    char why[LS_MOTION_WHY_LEN];
     if (plan_step(core, snap.q_cmd_rad, why, sizeof why) != 0) {
         core->tool_cmds.op.active = false;
         return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR, "%s %s refused, nothing moved: %s", what, id, why);
@@ -327,7 +325,7 @@ static void coupled(ls_core_t *core, const ls_ctl_event_t *ev)
     }
     core->tool_cmds.bits = ev->dio.on;
     core->tool_cmds.op.step = STEP_OUT;
-    char why[128];
+    char why[LS_MOTION_WHY_LEN];
     if (plan_step(core, core->tool_cmds.q_hold, why, sizeof why) != 0) {
         step_failed(core, why);
     }
@@ -362,7 +360,7 @@ bool ls_core_tool_on_event(ls_core_t *core, const ls_ctl_event_t *ev)
     }
     switch (ev->motion.kind) {
     case LS_MEV_DONE: {
-        char why[128];
+        char why[LS_MOTION_WHY_LEN];
         memcpy(core->tool_cmds.q_hold, ev->motion.q_rad, sizeof core->tool_cmds.q_hold);
         if (core->tool_cmds.op.step == STEP_APPROACH) {
             core->tool_cmds.op.step = STEP_IN;
@@ -404,7 +402,8 @@ bool ls_core_tool_on_event(ls_core_t *core, const ls_ctl_event_t *ev)
     case LS_MEV_AUX:
     case LS_MEV_REACT_END:
     case LS_MEV_JOG:
-    case LS_MEV_TOOL: return true;
+    case LS_MEV_TOOL:
+    case LS_MEV_SLOW: return true;
     }
     return false;
 }

@@ -30,7 +30,7 @@ static int refuse(char *why, unsigned whylen, int code, const char *fmt, ...)
     if (why != NULL && whylen > 0) {
         va_list ap;
         va_start(ap, fmt);
-        ls_fmt_vprint(why, whylen, fmt, ap);
+        ls_fmt_vtext(why, whylen, fmt, ap);
         va_end(ap);
     }
     return code;
@@ -114,6 +114,8 @@ static void seg_clear_motion(ls_motion_seg_t *s, ls_seg_kind_t kind)
     /* Point attributes (tag, aux, delay) belong to the caller: keep them. */
     s->kind = kind;
     memset(&s->traj, 0, sizeof s->traj);
+    memset(&s->curve, 0, sizeof s->curve);
+    memset(&s->path, 0, sizeof s->path);
     s->radius_m = s->angle_rad = s->length_m = s->turn_rad = 0.0;
     s->overlap_s = 0.0;
     memset(s->lim_, 0, sizeof s->lim_);
@@ -379,30 +381,253 @@ static bool cart_still(const ls_motion_seg_t *s)
     return !(s->length_m > 1e-9 || s->turn_rad > 1e-9);
 }
 
-/* The profile of Cartesian segment s over its path parameter from x0 to 1
- * at its stored limits of s (lim_[0..2]) and jerk scale (the plan: from 0;
- * a resume: from where a stop left it). */
-static int cart_profile_from(const ls_motion_seg_t *s, double x0, ls_traj_t *out)
+/* The time law of Cartesian segment s from x0 to 1 under its curve at its
+ * jerk scale (the plan: from 0; a resume: from where a stop left it). A
+ * segment that does not move has nothing to run. */
+static int cart_profile_from(const ls_motion_seg_t *s, double x0, ls_pathspeed_t *out)
 {
-    const bool still = cart_still(s);
-    ls_traj_limits_t tl;
-    memset(&tl, 0, sizeof tl);
-    tl.v_max[0] = still ? 1.0 : s->lim_[0];
-    tl.a_max[0] = still ? 1.0 : s->lim_[1];
-    tl.j_max[0] = still ? 1.0 : s->lim_[2] * s->jerk_scale_[0];
-    const double p1 = still ? 0.0 : 1.0;
-    return ls_traj_plan(out, 1, &x0, &p1, &tl) == LS_OK ? 0 : -1;
+    return ls_pathspeed_plan(out, &s->curve, cart_still(s) ? 1.0 : x0, s->jerk_scale_[0]) == LS_OK ? 0 : -1;
 }
 
-/* Plan the profile of a Cartesian segment over s in [0, 1]. */
+/* Plan the time law of a Cartesian segment over s in [0, 1]. */
 static int cart_profile(ls_motion_seg_t *s)
 {
-    return cart_profile_from(s, 0.0, &s->traj);
+    return cart_profile_from(s, 0.0, &s->path);
+}
+
+/* ---- path speed under joint limits (docs/architecture.md "Path speed
+ * under joint limits") ----
+ *
+ * The planner samples the path (every 1 mm, 0.5 deg and 10 ms of the
+ * requested profile) and halves a step until no joint turns more than
+ * STEP_JOINT_MAX_RAD in it; a joint that still does after STEP_SPLITS_MAX
+ * halvings (1/4096 of the step) runs away: the path goes through a
+ * singularity, where no finite speed helps. Between two samples the joints'
+ * dq/ds is their chord; its bound over the stretch adds the stretch's length
+ * times the bound of d2q/ds2 (the larger second difference at its ends plus
+ * their change), and both get BOUND_MARGIN. ls_pathspeed turns the bounds
+ * into the speed-limit curve and the time law. */
+#define STEP_JOINT_MAX_RAD 0.01
+#define STEP_SPLITS_MAX 12
+#define STEP_AIM 0.7 /* a step aims at this share of STEP_JOINT_MAX_RAD */
+#define MAX_PATH_SAMPLES (2 * MAX_SAMPLES)
+#define BOUND_MARGIN 1.05
+#define SLOWED_SHARE 1e-3
+#define WRIST_ONLY 0.2 /* joints 1-3 below this share of the motion the arm cannot make: the wrist's */
+
+/* The stretches of one path as they are sampled: the last one waits for
+ * the second derivative at its end (the next sample's chord). */
+typedef struct {
+    ls_pathspeed_curve_t *curve;
+    bool pending;
+    bool have_d2a;
+    double x_end, h;
+    double m[LS_N_JOINTS];   /* the pending stretch's chord, dq/ds */
+    double d2a[LS_N_JOINTS]; /* d2q/ds2 at its start */
+} speed_track_t;
+
+/* The bounds of the pending stretch, d2b the second derivative at its end
+ * (NULL: none, the end of the path), into the curve. */
+static int track_close(speed_track_t *t, const double *d2b)
+{
+    ls_pathspeed_stretch_t st = { .s_end = t->x_end };
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        const double zero = 0.0;
+        const double *a = t->have_d2a ? &t->d2a[j] : d2b != NULL ? &d2b[j] : &zero;
+        const double *b = d2b != NULL ? &d2b[j] : a;
+        const double change = fabs(*b - *a), d2 = (fmax(fabs(*a), fabs(*b)) + change) * BOUND_MARGIN;
+        st.b1[j] = (fabs(t->m[j]) + t->h * d2) * BOUND_MARGIN;
+        /* The curvature split by the way the joint goes, when it goes one
+         * way all along the stretch (|dq/ds| stays above 0). */
+        if (fabs(t->m[j]) > t->h * d2) {
+            const double sg = t->m[j] > 0.0 ? 1.0 : -1.0;
+            st.b2u[j] = fmax(0.0, fmax(sg * *a, sg * *b) + change) * BOUND_MARGIN;
+            st.b2d[j] = fmax(0.0, fmax(-sg * *a, -sg * *b) + change) * BOUND_MARGIN;
+        } else {
+            st.b2u[j] = st.b2d[j] = d2;
+        }
+    }
+    t->pending = false;
+    return ls_pathspeed_curve_add(t->curve, &st);
+}
+
+/* A new sample at x (the previous at x - h): the stretch before it waits,
+ * the one before that closes. */
+static int track_add(speed_track_t *t, double x, double h, const double q_prev[LS_N_JOINTS],
+                     const double q[LS_N_JOINTS])
+{
+    double m[LS_N_JOINTS], d2[LS_N_JOINTS];
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        m[j] = (q[j] - q_prev[j]) / h;
+    }
+    const bool had = t->pending;
+    if (had) {
+        for (int j = 0; j < LS_N_JOINTS; j++) {
+            d2[j] = 2.0 * (m[j] - t->m[j]) / (t->h + h);
+        }
+        const int r = track_close(t, d2);
+        if (r < 0) {
+            return r;
+        }
+        memcpy(t->d2a, d2, sizeof d2);
+    }
+    t->have_d2a = had;
+    t->pending = true;
+    t->x_end = x;
+    t->h = h;
+    memcpy(t->m, m, sizeof m);
+    return LS_OK;
+}
+
+/* x = A^-1 b for a 6x6 A (column-major, as ls_kin's Jacobian), Gaussian
+ * elimination with partial pivoting; false when A is singular to working
+ * precision. */
+static bool solve6(const double A[36], const double b[6], double x[6])
+{
+    double M[6][7];
+    for (int r = 0; r < 6; r++) {
+        for (int c = 0; c < 6; c++) {
+            M[r][c] = A[c * 6 + r];
+        }
+        M[r][6] = b[r];
+    }
+    for (int c = 0; c < 6; c++) {
+        int piv = c;
+        for (int r = c + 1; r < 6; r++) {
+            piv = fabs(M[r][c]) > fabs(M[piv][c]) ? r : piv;
+        }
+        if (!(fabs(M[piv][c]) > 0.0)) {
+            return false;
+        }
+        for (int k = 0; k < 7; k++) {
+            const double t = M[c][k];
+            M[c][k] = M[piv][k];
+            M[piv][k] = t;
+        }
+        for (int r = c + 1; r < 6; r++) {
+            const double f = M[r][c] / M[c][c];
+            for (int k = c; k < 7; k++) {
+                M[r][k] -= f * M[c][k];
+            }
+        }
+    }
+    for (int r = 5; r >= 0; r--) {
+        double t = M[r][6];
+        for (int k = r + 1; k < 6; k++) {
+            t -= M[r][k] * x[k];
+        }
+        x[r] = t / M[r][r];
+    }
+    return true;
+}
+
+/* The joint motion the arm at q cannot turn into tool motion: the direction
+ * of J's smallest singular value, by inverse iteration on J^T J (plus a
+ * tiny ridge so that an exact singularity still solves). */
+static void null_direction(const ls_robot_model_t *model, const double q[LS_N_JOINTS], double v[LS_N_JOINTS])
+{
+    double J[36], A[36], tr = 0.0;
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        v[j] = 1.0;
+    }
+    if (ls_kin_jacobian(model, q, J) != LS_OK) {
+        return;
+    }
+    for (int c = 0; c < 6; c++) {
+        for (int r = 0; r < 6; r++) {
+            double d = 0.0;
+            for (int k = 0; k < 6; k++) {
+                d += J[r * 6 + k] * J[c * 6 + k];
+            }
+            A[c * 6 + r] = d;
+        }
+        tr += A[c * 6 + c];
+    }
+    for (int c = 0; c < 6; c++) {
+        A[c * 6 + c] += 1e-12 * tr;
+    }
+    for (int it = 0; it < 8; it++) {
+        double x[6], n = 0.0;
+        if (!solve6(A, v, x)) {
+            return;
+        }
+        for (int j = 0; j < 6; j++) {
+            n += x[j] * x[j];
+        }
+        for (int j = 0; j < 6; j++) {
+            v[j] = x[j] / sqrt(n);
+        }
+    }
+}
+
+/* The path runs through a singularity between x_a and x_b (q_a: the last
+ * joints before it; the joint that runs away: jr): where, what kind and
+ * what to do instead. The kind is read from the motion the arm cannot make
+ * there (null_direction): only the wrist's joints: the wrist (joints 4 and
+ * 6 in line); else joint 1 more than joints 2 and 3: the shoulder (the
+ * wrist centre on the joint 1 axis); else the elbow (stretched or folded). */
+static int refuse_singular(const ls_robot_model_t *model, const ls_motion_seg_t *s, double x_a, double x_b,
+                           const double q_a[LS_N_JOINTS], int jr, char *why, unsigned whylen)
+{
+    double v[LS_N_JOINTS];
+    null_direction(model, q_a, v);
+    const double arm = fmax(fabs(v[1]), fabs(v[2]));
+    const char *kind = "elbow", *what = "the arm stretched out or folded", *hint = "keeps the elbow bent";
+    if (fmax(fabs(v[0]), arm) < WRIST_ONLY) {
+        kind = "wrist";
+        what = "joints 4 and 6 in line";
+        hint = "tilts the tool";
+    } else if (fabs(v[0]) >= arm) {
+        kind = "shoulder";
+        what = "the wrist centre on the joint 1 axis";
+        hint = "passes beside that axis";
+    }
+    double T[16];
+    seg_tip_pose(s, 0.5 * (x_a + x_b), T);
+    return refuse(why, whylen, LS_ERANGE,
+                  "joint %d runs away at %.0f %% of the path near tip (%.4g, %.4g, %.4g) m: %s singularity (%s) that "
+                  "no speed avoids: use a joint move, or a slight detour that %s",
+                  jr + 1, 100.0 * x_b, T[12], T[13], T[14], kind, what, hint);
+}
+
+/* A joint runs away between x_a and x_b (q_a: the joints before; jr: the
+ * one that jumps). Either the arm's configuration ends at a joint's limit
+ * (the solution that goes on without a jump lies beyond it: the arm would
+ * have to flip), or the path goes through a singularity. Neither is helped
+ * by a lower speed. */
+static int refuse_runaway(const ls_robot_model_t *model, const ls_motion_seg_t *s, double x_a, double x_b,
+                          const double q_a[LS_N_JOINTS], int jr, char *why, unsigned whylen)
+{
+    ls_robot_model_t wide = *model;
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        wide.q_min_rad[j] = -4.0 * LS_PI;
+        wide.q_max_rad[j] = 4.0 * LS_PI;
+    }
+    double T[16], F[16], q[LS_N_JOINTS];
+    seg_tip_pose(s, x_b, T);
+    ls_pose_mul(T, s->tool_inv, F);
+    bool smooth = ls_kin_ik_nearest(&wide, F, q_a, q) == LS_OK;
+    for (int j = 0; smooth && j < LS_N_JOINTS; j++) {
+        smooth = fabs(q[j] - q_a[j]) <= STEP_JOINT_MAX_RAD;
+    }
+    for (int j = 0; smooth && j < LS_N_JOINTS; j++) {
+        const bool over = q[j] > model->q_max_rad[j], under = q[j] < model->q_min_rad[j];
+        if (over || under) {
+            return refuse(why, whylen, LS_ERANGE,
+                          "joint %d reaches its limit %.4g rad at %.0f %% of the path near tip (%.4g, %.4g, %.4g) m; "
+                          "going on needs another arm configuration, a jump no speed allows: use a joint move, or "
+                          "start with joint %d turned the other way",
+                          j + 1, over ? model->q_max_rad[j] : model->q_min_rad[j], 100.0 * x_b, T[12], T[13], T[14],
+                          j + 1);
+        }
+    }
+    return refuse_singular(model, s, x_a, x_b, q_a, jr, why, whylen);
 }
 
 /* Time the segment over s in [0, 1] with the slower of the linear and the
- * angular limits, then sample it: workspace box, IK, joint limits and joint
- * velocities. Fills traj and q1. */
+ * angular limits, then sample it: workspace box, IK, joint limits, and the
+ * joints' speed-limit curve (above), a singularity refused. Fills curve,
+ * path and q1. */
 static int cart_time_and_check(ls_motion_seg_t *s, const ls_robot_model_t *model, const ls_motion_cart_limits_t *lim,
                                char *why, unsigned whylen)
 {
@@ -418,17 +643,26 @@ static int cart_time_and_check(ls_motion_seg_t *s, const ls_robot_model_t *model
         a = fmin(a, lim->a_ang_rad_s2 / A);
         j = fmin(j, lim->j_ang_rad_s3 / A);
     }
-    const bool still = !(L > 1e-9 || A > 1e-9);
+    const bool still = cart_still(s);
+    if (still) {
+        v = a = j = 1.0;
+    }
     s->lim_[0] = v;
     s->lim_[1] = a;
     s->lim_[2] = j;
     s->lim_[3] = lim->joint_speed_frac;
-    if (cart_profile(s) != 0) {
+    double vel[LS_N_JOINTS];
+    for (int jn = 0; jn < LS_N_JOINTS; jn++) {
+        vel[jn] = model->qd_max_rad_s[jn] * lim->joint_speed_frac;
+    }
+    ls_traj_axis_t plain;
+    if (ls_traj_plan_axis(&plain, 0.0, 1.0, v, a, j) != LS_OK ||
+        ls_pathspeed_curve_begin(&s->curve, v, a, j, vel, model->qdd_max_rad_s2) != LS_OK) {
         return refuse(why, whylen, LS_EINVAL, "Cartesian move: the profile could not be planned");
     }
 
     /* The target first, so an unreachable goal is reported as such rather
-     * than as the velocity blow-up on the way to the edge of the reach. */
+     * than as the joints running away on the way to the edge of the reach. */
     {
         double F[16], sols[LS_KIN_MAX_BRANCHES][LS_N_JOINTS];
         int n_sol = 0;
@@ -441,44 +675,69 @@ static int cart_time_and_check(ls_motion_seg_t *s, const ls_robot_model_t *model
             return explain_ik(model, s, 1.0, s->q0, ks, why, whylen);
         }
     }
-    /* Sample densely enough for 1 mm, 0.5 deg and 10 ms. */
-    double n_d = fmax(fmax(L / SAMPLE_STEP_M, A / SAMPLE_STEP_RAD), s->traj.duration_s / SAMPLE_STEP_S);
-    int n = (int)fmin(ceil(n_d), (double)MAX_SAMPLES);
-    if (n < 1) {
-        n = 1;
-    }
-    const double sd_peak = still ? 0.0 : v; /* |ds/dt| never exceeds the profile's v_max */
-    double q_prev[LS_N_JOINTS];
+    /* Sample densely enough for 1 mm, 0.5 deg and 10 ms of the requested
+     * profile, and halve a step where a joint turns fast. */
+    const double n_d = fmax(fmax(L / SAMPLE_STEP_M, A / SAMPLE_STEP_RAD), plain.T / SAMPLE_STEP_S);
+    const double h0 = 1.0 / fmax(1.0, fmin(ceil(n_d), (double)MAX_SAMPLES));
+    const double h_min = ldexp(h0, -STEP_SPLITS_MAX);
+    speed_track_t tr = { .curve = &s->curve };
+    double q_prev[LS_N_JOINTS], T[16], x = 0.0, h = h0;
     memcpy(q_prev, s->q0, sizeof q_prev);
-    for (int k = 0; k <= n; k++) {
-        const double x = (double)k / (double)n;
-        double T[16];
-        seg_tip_pose(s, x, T);
+    seg_tip_pose(s, 0.0, T);
+    if (check_box(model, T, why, whylen) < 0) {
+        return LS_ERANGE;
+    }
+    for (int n = 0; x < 1.0; n++) {
+        if (n > MAX_PATH_SAMPLES) {
+            return refuse(why, whylen, LS_ERANGE, "the path needs more than %d samples: split it into shorter moves",
+                          MAX_PATH_SAMPLES);
+        }
+        const double xn = 1.0 - (x + h) < 0.5 * h ? 1.0 : x + h; /* no sliver of a step at the end */
+        seg_tip_pose(s, xn, T);
         int r = check_box(model, T, why, whylen);
         if (r < 0) {
             return r;
         }
         double q[LS_N_JOINTS];
-        int ks = seg_ik(model, s, x, q_prev, q);
+        const int ks = seg_ik(model, s, xn, q_prev, q);
+        if (ks == LS_ESINGULAR) {
+            return refuse_singular(model, s, x, xn, q_prev, 0, why, whylen);
+        }
         if (ks != LS_OK) {
-            return explain_ik(model, s, x, q_prev, ks, why, whylen);
+            return explain_ik(model, s, xn, q_prev, ks, why, whylen);
         }
-        if (k > 0 && sd_peak > 0.0) {
-            const double ds = 1.0 / (double)n;
-            for (int jn = 0; jn < LS_N_JOINTS; jn++) {
-                const double qd = fabs(q[jn] - q_prev[jn]) / ds * sd_peak;
-                const double qd_lim = model->qd_max_rad_s[jn] * lim->joint_speed_frac;
-                if (qd > qd_lim) {
-                    return refuse(why, whylen, LS_ERANGE,
-                                  "joint %d: velocity %.4g rad/s beyond its limit %.4g rad/s near tip (%.4g, %.4g, "
-                                  "%.4g) m: lower the speed or use a joint move",
-                                  jn + 1, qd, qd_lim, T[12], T[13], T[14]);
-                }
+        int fastest = 0;
+        for (int jn = 1; jn < LS_N_JOINTS; jn++) {
+            fastest = fabs(q[jn] - q_prev[jn]) > fabs(q[fastest] - q_prev[fastest]) ? jn : fastest;
+        }
+        if (!still && fabs(q[fastest] - q_prev[fastest]) > STEP_JOINT_MAX_RAD) {
+            if (h > h_min) {
+                h *= 0.5;
+                continue;
             }
+            return refuse_runaway(model, s, x, xn, q_prev, fastest, why, whylen);
         }
+        if (!still && track_add(&tr, xn, xn - x, q_prev, q) != LS_OK) {
+            return refuse(why, whylen, LS_EINVAL, "Cartesian move: its speed limits could not be planned");
+        }
+        /* the next step where the fastest joint, as fast as in this one,
+         * turns STEP_AIM of the most (fewer steps halved and tried again) */
+        const double dq = fabs(q[fastest] - q_prev[fastest]);
+        h = fmin(h0, dq > 0.0 ? STEP_AIM * STEP_JOINT_MAX_RAD * (xn - x) / dq : 2.0 * (xn - x));
+        h = fmax(h, h_min);
         memcpy(q_prev, q, sizeof q_prev);
+        x = xn;
+    }
+    if (still) {
+        const ls_pathspeed_stretch_t st = { .s_end = 1.0 };
+        (void)ls_pathspeed_curve_add(&s->curve, &st);
+    } else if (track_close(&tr, NULL) != LS_OK || ls_pathspeed_curve_finish(&s->curve) != LS_OK) {
+        return refuse(why, whylen, LS_EINVAL, "Cartesian move: its speed limits could not be planned");
     }
     memcpy(s->q1, q_prev, sizeof s->q1);
+    if (cart_profile(s) != 0) {
+        return refuse(why, whylen, LS_EINVAL, "Cartesian move: the profile could not be planned");
+    }
     return LS_OK;
 }
 
@@ -613,6 +872,72 @@ int ls_motion_seg_arc(ls_motion_seg_t *s, const ls_robot_model_t *model, const d
     return cart_time_and_check(s, model, lim, why, whylen);
 }
 
+/* A Cartesian segment that its joints slow down: a capped zone it cruises
+ * at, or ramps below the requested acceleration, and a duration that shows
+ * it (longer than requested by more than SLOWED_SHARE). O(zones). */
+bool ls_motion_seg_slowdown(const ls_motion_seg_t *s, ls_motion_slowdown_t *out)
+{
+    ls_pathspeed_why_t w;
+    ls_traj_axis_t plain;
+    if (s == NULL || s->kind == LS_SEG_JOINT || cart_still(s) || !ls_pathspeed_slowed(&s->curve, &s->path, &w) ||
+        ls_traj_plan_axis(&plain, 0.0, 1.0, s->lim_[0], s->lim_[1], s->lim_[2] * s->jerk_scale_[0]) != LS_OK ||
+        !(s->path.duration_s > plain.T * (1.0 + SLOWED_SHARE))) {
+        return false;
+    }
+    if (out != NULL) {
+        out->speed_frac = w.frac;
+        out->from = w.s_from;
+        out->to = w.s_to;
+        out->accel_frac = w.a_frac;
+        out->joint = (w.frac < 1.0 ? w.joint : w.a_joint) + 1;
+        out->velocity = w.frac < 1.0 && w.limit == LS_PATHSPEED_VELOCITY;
+        out->duration_s = s->path.duration_s;
+        out->requested_s = plain.T;
+    }
+    return true;
+}
+
+int ls_motion_seg_check_speed(const ls_motion_seg_t *s, char *why, unsigned whylen)
+{
+    if (s == NULL || s->kind == LS_SEG_JOINT || cart_still(s)) {
+        return LS_OK;
+    }
+    int worst = -1;
+    for (int k = 0; k < s->curve.n; k++) {
+        if (s->curve.zone[k].v_max < s->curve.v_req * (1.0 - 1e-9) &&
+            (worst < 0 || s->curve.zone[k].v_max < s->curve.zone[worst].v_max)) {
+            worst = k;
+        }
+    }
+    if (worst < 0) {
+        return LS_OK;
+    }
+    const ls_pathspeed_zone_t *z = &s->curve.zone[worst];
+    return refuse(why, whylen, LS_ERANGE,
+                  "joint %d would pass its %s limit at %.0f %% of the line; this move keeps its speed: give at most "
+                  "%.3g %% of it",
+                  z->joint + 1, z->limit == LS_PATHSPEED_VELOCITY ? "velocity" : "acceleration",
+                  100.0 * (worst > 0 ? s->curve.zone[worst - 1].s_end : 0.0), 100.0 * z->v_max / s->curve.v_req);
+}
+
+int ls_motion_slowdown_text(const ls_motion_slowdown_t *d, char *text, unsigned len)
+{
+    if (d == NULL) {
+        return refuse(text, len, 0, "%s", "");
+    }
+    if (d->speed_frac < 1.0) {
+        return ls_fmt_print(text, len,
+                            "running at %.3g %% of the requested speed between %.0f %% and %.0f %% of the path: "
+                            "joint %d at its %s limit (%.3g s instead of %.3g s)",
+                            100.0 * d->speed_frac, 100.0 * d->from, 100.0 * d->to, d->joint,
+                            d->velocity ? "velocity" : "acceleration", d->duration_s, d->requested_s);
+    }
+    return ls_fmt_print(text, len,
+                        "accelerating at %.3g %% of the requested rate: joint %d at its acceleration limit (%.3g s "
+                        "instead of %.3g s)",
+                        100.0 * d->accel_frac, d->joint, d->duration_s, d->requested_s);
+}
+
 int ls_motion_plan_line(ls_motion_plan_t *p, const ls_robot_model_t *model, const double q0[LS_N_JOINTS],
                         const double tool[16], const double tip1[16], const ls_motion_cart_limits_t *lim, char *why,
                         unsigned whylen)
@@ -663,6 +988,9 @@ int ls_motion_plan_path(ls_motion_plan_t *p, const ls_motion_program_t *prog, in
 
 static bool seg_moves(const ls_motion_seg_t *s)
 {
+    if (s->kind != LS_SEG_JOINT) {
+        return !cart_still(s);
+    }
     for (int j = 0; j < s->traj.n; j++) {
         if (s->traj.axis[j].dist != 0.0) {
             return true;
@@ -687,6 +1015,9 @@ static bool blend_applies(const ls_motion_seg_t *a, const ls_motion_seg_t *b, do
  * axes: inside it each motion has one constant jerk. */
 static double blend_window_s(const ls_motion_seg_t *a, const ls_motion_seg_t *b)
 {
+    if (a->kind != LS_SEG_JOINT) {
+        return fmin(ls_pathspeed_last_jerk_s(&a->path), ls_pathspeed_first_jerk_s(&b->path));
+    }
     double w = INFINITY;
     for (int j = 0; j < a->traj.n; j++) {
         if (a->traj.axis[j].dist != 0.0) {
@@ -716,7 +1047,7 @@ void ls_motion_seg_blend(ls_motion_seg_t *a, const ls_motion_seg_t *b, double fr
 /* Linear jerk of a line segment's profile (m/s^3). */
 static double line_jerk(const ls_motion_seg_t *s)
 {
-    return fabs(s->traj.axis[0].j) * s->length_m;
+    return s->path.j * s->length_m;
 }
 
 double ls_motion_seg_blend_dev_m(const ls_motion_seg_t *a, const ls_motion_seg_t *b)
@@ -773,7 +1104,7 @@ static void blend_cap_rotation(ls_motion_seg_t *a, const ls_motion_seg_t *b)
     if (!(a->turn_rad > 1e-9 && b->turn_rad > 1e-9)) {
         return;
     }
-    const double ja = fabs(a->traj.axis[0].j) * a->turn_rad, jb = fabs(b->traj.axis[0].j) * b->turn_rad;
+    const double ja = a->path.j * a->turn_rad, jb = b->path.j * b->turn_rad;
     const double a_lim = fmax(a->lim_[1] * a->turn_rad, b->lim_[1] * b->turn_rad);
     const double j_lim = fmax(a->lim_[2] * a->turn_rad, b->lim_[2] * b->turn_rad);
     double t = a->overlap_s;
@@ -834,15 +1165,15 @@ static void blend_pose(const ls_motion_seg_t *a, double xa, const ls_motion_seg_
 static int blend_check(const ls_robot_model_t *model, const ls_motion_seg_t *a, const ls_motion_seg_t *b, char *why,
                        unsigned whylen)
 {
-    const double t0 = a->traj.duration_s - a->overlap_s;
+    const double t0 = a->path.duration_s - a->overlap_s;
     const int n = (int)fmax(1.0, ceil(a->overlap_s / BLEND_SAMPLE_S));
     const double dt = a->overlap_s / n, jsf = fmax(a->lim_[3], b->lim_[3]);
     double q_prev[LS_N_JOINTS];
     memcpy(q_prev, a->q1, sizeof q_prev);
     for (int k = 0; k <= n; k++) {
         double xa, xb, T[16], F[16], q[LS_N_JOINTS];
-        ls_traj_sample_axis(&a->traj.axis[0], t0 + dt * k, &xa, NULL, NULL);
-        ls_traj_sample_axis(&b->traj.axis[0], dt * k, &xb, NULL, NULL);
+        ls_pathspeed_sample(&a->path, t0 + dt * k, &xa, NULL, NULL);
+        ls_pathspeed_sample(&b->path, dt * k, &xb, NULL, NULL);
         blend_pose(a, xa, b, xb, T);
         char tmp[112];
         if (check_box(model, T, tmp, sizeof tmp) < 0) {
@@ -1005,6 +1336,7 @@ int ls_motion_start(ls_motion_t *m, const ls_motion_plan_t *p)
     m->aux_wait_ = false;
     m->ramping_ = false;
     m->off_plan_[0] = m->off_plan_[1] = false;
+    m->slow_told_ = false;
     m->stop_at_end_ = STOP_NONE;
     m->phase = LS_MOTION_RUNNING;
     return 0;
@@ -1033,10 +1365,30 @@ static int moving_segs(const ls_motion_t *m, const ls_motion_seg_t *seg[2])
     return seg[1] != NULL ? 2 : 1;
 }
 
-/* The profile segment k runs: its planned one, or the one a resume made. */
+/* The profile joint segment k runs: its planned one, or the one a resume
+ * made; a Cartesian segment's time law the same way. */
 static const ls_traj_t *seg_traj(const ls_motion_t *m, int k, const ls_motion_seg_t *s)
 {
     return m->off_plan_[k] ? &m->rtraj_[k] : &s->traj;
+}
+
+static const ls_pathspeed_t *seg_path(const ls_motion_t *m, int k, const ls_motion_seg_t *s)
+{
+    return m->off_plan_[k] ? &m->rpath_[k] : &s->path;
+}
+
+/* How long segment k's profile runs (from its clock's 0). */
+static double run_duration_s(const ls_motion_t *m, int k, const ls_motion_seg_t *s)
+{
+    return s->kind == LS_SEG_JOINT ? seg_traj(m, k, s)->duration_s : seg_path(m, k, s)->duration_s;
+}
+
+double ls_motion_seg_duration_s(const ls_motion_seg_t *s)
+{
+    if (s == NULL) {
+        return 0.0;
+    }
+    return s->kind == LS_SEG_JOINT ? s->traj.duration_s : s->path.duration_s;
 }
 
 /* The joint that moves furthest in a phase-synchronised profile (-1: none). */
@@ -1083,8 +1435,12 @@ static void seg_state(const ls_motion_t *m, int k, const ls_motion_seg_t *s, dou
     const ls_traj_t *tr = seg_traj(m, k, s);
     for (int i = 0; i < seg_axes(s); i++) {
         double p, v, a;
-        if (m->ramping_) {
+        if (m->ramping_ && s->kind != LS_SEG_JOINT) {
+            ls_pathspeed_stop_sample(&m->pstop_[k], m->ramp_t_s_, &p, &v, &a);
+        } else if (m->ramping_) {
             ls_ramp_sample(&m->ramp_[k][i], m->ramp_t_s_, &p, &v, &a);
+        } else if (s->kind != LS_SEG_JOINT) {
+            ls_pathspeed_sample(seg_path(m, k, s), t, &p, &v, &a);
         } else {
             profile_axis(tr, seg_phased(s), i, t, &p, &v, &a);
         }
@@ -1139,7 +1495,7 @@ static double stop_jerk_share(const ls_motion_seg_t *s, int i, bool blend)
  * with, nor (alone) its jerk: the ramp then stops no further than the
  * planned profile would, short of the segment's end. */
 static void stop_limits(const ls_robot_model_t *model, const ls_motion_seg_t *s, const ls_traj_t *tr, int i, bool fast,
-                        bool blend, double *a, double *j)
+                        bool blend, double x, double xd, double *a, double *j)
 {
     if (s->kind == LS_SEG_JOINT) {
         const double f = fast ? 1.0 : s->lim_[1];
@@ -1157,8 +1513,11 @@ static void stop_limits(const ls_robot_model_t *model, const ls_motion_seg_t *s,
             *j = model->qddd_max_rad_s3[i] * f * stop_jerk_share(s, i, blend);
         }
     } else {
-        *a = s->lim_[1];
-        *j = s->lim_[2];
+        /* the zone's acceleration for its speed now (a single ramp: a fast
+         * stop, a stop inside a blend; ls_pathspeed_plan_stop otherwise) */
+        const int z = ls_pathspeed_zone_of(&s->curve, x);
+        *a = z >= 0 ? ls_pathspeed_zone_accel(&s->curve, z, xd, false, NULL) : 0.0;
+        *j = s->curve.j;
         if (fast && !cart_still(s)) {
             double af = INFINITY, jf = INFINITY;
             if (s->length_m > 1e-9) {
@@ -1179,14 +1538,36 @@ static void stop_limits(const ls_robot_model_t *model, const ls_motion_seg_t *s,
     }
 }
 
-/* Whether ramp r of axis i of a segment running profile tr (phased: its
- * phase, from 0 to 1) comes to rest beyond the profile's end. */
-static bool ramp_passes_end(const ls_ramp_t *r, const ls_traj_t *tr, bool phased, int i)
+/* Whether ramp r of axis i of segment s running profile tr (a phased joint
+ * segment: its phase, from 0 to 1; a Cartesian one: its path parameter)
+ * comes to rest beyond the profile's end. */
+static bool ramp_passes_end(const ls_ramp_t *r, const ls_motion_seg_t *s, const ls_traj_t *tr, int i)
 {
-    const double p0 = phased ? 0.0 : tr->axis[i].p0, p1 = phased ? 1.0 : tr->axis[i].p1;
+    const bool unit = seg_phased(s) || s->kind != LS_SEG_JOINT;
+    const double p0 = unit ? 0.0 : tr->axis[i].p0, p1 = unit ? 1.0 : tr->axis[i].p1;
     double p;
     ls_ramp_sample(r, r->duration_s, &p, NULL, NULL);
     return (p1 > p0 && p > p1 + 1e-12) || (p1 < p0 && p < p1 - 1e-12);
+}
+
+/* Whether the ramp r of Cartesian segment s, begun at a blend's shared jerk
+ * (slower to turn than the time law), outruns the cap of the zone it is in
+ * or leaves that zone before it rests (then it may meet a lower cap too
+ * fast). On its own at the full jerk a stop keeps every cap (ls_pathspeed.h). */
+static bool ramp_outruns_cap(const ls_ramp_t *r, const ls_motion_seg_t *s)
+{
+    if (s->kind == LS_SEG_JOINT) {
+        return false;
+    }
+    const int z = ls_pathspeed_zone_of(&s->curve, r->p_[0]);
+    if (z < 0) {
+        return false;
+    }
+    const double cap = s->curve.zone[z].v_max, s_end = s->curve.zone[z].s_end;
+    double p_rest;
+    ls_ramp_sample(r, r->duration_s, &p_rest, NULL, NULL);
+    const double peak = r->a_[0] > 0.0 ? r->v_[0] + r->a_[0] * r->a_[0] / (2.0 * fabs(r->j[0])) : r->v_[0];
+    return peak > cap * (1.0 + 1e-9) || p_rest > s_end;
 }
 
 /* Start (or, for a fast stop during a stop, re-plan) the ramps that bring
@@ -1211,11 +1592,12 @@ static void begin_ramps(ls_motion_t *m, bool fast)
         const ls_traj_t *tr = seg_traj(m, k, seg[k]);
         for (int i = 0; i < seg_axes(seg[k]); i++) {
             double a, j;
-            stop_limits(m->model, seg[k], tr, i, fast, n == 2, &a, &j);
+            stop_limits(m->model, seg[k], tr, i, fast, n == 2, x[k][i], xd[k][i], &a, &j);
             if (ls_ramp_plan(&r[k][i], x[k][i], xd[k][i], xdd[k][i], 0.0, a, j) != LS_OK) {
                 (void)ls_ramp_plan(&r[k][i], x[k][i], 0.0, 0.0, 0.0, 1.0, 1.0); /* not finite: hold */
             }
-            passes = passes || ramp_passes_end(&r[k][i], tr, seg_phased(seg[k]), i);
+            passes =
+                passes || ramp_passes_end(&r[k][i], seg[k], tr, i) || (n == 2 && ramp_outruns_cap(&r[k][i], seg[k]));
             T = fmax(T, r[k][i].duration_s);
         }
     }
@@ -1224,6 +1606,19 @@ static void begin_ramps(ls_motion_t *m, bool fast)
         return;
     }
     memcpy(m->ramp_, r, sizeof r);
+    for (int k = 0; k < n; k++) {
+        /* A Cartesian segment alone stops zone by zone at its joints'
+         * limits (ls_pathspeed.h); a fast stop and a stop inside a blend on
+         * the one ramp planned above. */
+        if (seg[k]->kind != LS_SEG_JOINT && (fast || n == 2 ||
+                                             ls_pathspeed_plan_stop(&m->pstop_[k], &seg[k]->curve, x[k][0], xd[k][0],
+                                                                    xdd[k][0], seg[k]->curve.j) != LS_OK)) {
+            ls_pathspeed_stop_one(&m->pstop_[k], &r[k][0]);
+        }
+        if (seg[k]->kind != LS_SEG_JOINT) {
+            T = fmax(T, m->pstop_[k].duration_s);
+        }
+    }
     m->stop_at_end_ = STOP_NONE;
     m->ramping_ = true;
     m->ramp_t_s_ = 0.0;
@@ -1282,6 +1677,8 @@ static int plan_from_ramps(ls_motion_t *m)
     const ls_motion_seg_t *seg[2];
     const int n = moving_segs(m, seg);
     ls_traj_t tr[2];
+    ls_pathspeed_t path[2];
+    double T[2];
     for (int k = 0; k < n; k++) {
         double x[LS_N_JOINTS], q[LS_N_JOINTS];
         seg_state(m, k, seg[k], x, NULL, NULL);
@@ -1289,20 +1686,26 @@ static int plan_from_ramps(ls_motion_t *m)
         if (seg[k]->kind == LS_SEG_JOINT) {
             seg_joints(m, k, seg[k], x, NULL, q, NULL);
             r = joint_profile_from(seg[k], m->model, q, &tr[k]);
+            T[k] = tr[k].duration_s;
         } else {
-            r = cart_profile_from(seg[k], x[0], &tr[k]);
+            r = cart_profile_from(seg[k], fmin(1.0, fmax(0.0, x[0])), &path[k]);
+            T[k] = path[k].duration_s;
         }
         if (r != 0) {
             return -1;
         }
     }
     for (int k = 0; k < n; k++) {
-        m->rtraj_[k] = tr[k];
+        if (seg[k]->kind == LS_SEG_JOINT) {
+            m->rtraj_[k] = tr[k];
+        } else {
+            m->rpath_[k] = path[k];
+        }
         m->off_plan_[k] = true;
     }
     m->ramping_ = false;
     m->t_s = 0.0;
-    m->t_next_s_ = n == 2 ? -tr[0].duration_s : 0.0;
+    m->t_next_s_ = n == 2 ? -T[0] : 0.0;
     return 0;
 }
 
@@ -1408,6 +1811,7 @@ static void advance(ls_motion_t *m, ls_motion_events_t *ev, bool at_rest)
     m->t_s = 0.0;
     m->sub_ = SUB_MOVE;
     m->off_plan_[0] = m->off_plan_[1] = false;
+    m->slow_told_ = false;
     if (at_rest && m->phase == LS_MOTION_STOPPING) {
         pause_now(m, ev);
     }
@@ -1486,6 +1890,7 @@ static void end_of_segment(ls_motion_t *m, const ls_motion_seg_t *s, double qd[L
         m->t_s = t_next;
         if (off) {
             m->rtraj_[0] = m->rtraj_[1];
+            m->rpath_[0] = m->rpath_[1];
             m->off_plan_[0] = true;
         }
         if (m->stop_at_end_ != STOP_NONE && m->phase == LS_MOTION_STOPPING) {
@@ -1509,9 +1914,27 @@ static void end_of_segment(ls_motion_t *m, const ls_motion_seg_t *s, double qd[L
  * of a stop's ramps: the set-point and its velocity qd, arrival at the
  * segment's end, and the pause that ends a stop. A segment blends into the
  * next only on its planned profile (after a resume it arrives at rest). */
+/* A path's segment that its joints slow down says so as it begins, in the
+ * first cycle that runs it (the program's closing segment: in the second). */
+static void tell_slow(ls_motion_t *m, const ls_motion_seg_t *s, ls_motion_events_t *ev)
+{
+    if (m->slow_told_) {
+        return;
+    }
+    m->slow_told_ = true;
+    const bool closing = m->seg_i_ == 0 && m->cycle_ == 2;
+    if (m->plan.kind == LS_PLAN_PATH && (m->cycle_ == 1 || closing) && ls_motion_seg_slowdown(s, NULL)) {
+        ls_motion_event_t *e = push_event(m, ev, LS_MEV_SLOW);
+        if (e != NULL) {
+            e->index = closing ? m->plan.prog->n : m->seg_i_;
+        }
+    }
+}
+
 static void move_step(ls_motion_t *m, const ls_motion_seg_t *s, double dt_s, double qd[LS_N_JOINTS],
                       ls_motion_events_t *ev)
 {
+    tell_slow(m, s, ev);
     const ls_motion_seg_t *nx = NULL;
     if (m->ramping_) {
         m->ramp_t_s_ += dt_s;
@@ -1521,11 +1944,11 @@ static void move_step(ls_motion_t *m, const ls_motion_seg_t *s, double dt_s, dou
         if (m->blending_) {
             m->t_next_s_ += dt_s;
             nx = next_seg(m);
-        } else if (s->overlap_s > 0.0 && !m->off_plan_[0] && m->t_s >= s->traj.duration_s - s->overlap_s) {
+        } else if (s->overlap_s > 0.0 && !m->off_plan_[0] && m->t_s >= ls_motion_seg_duration_s(s) - s->overlap_s) {
             nx = next_seg(m);
             if (nx != NULL) {
                 m->blending_ = true;
-                m->t_next_s_ = m->t_s - (s->traj.duration_s - s->overlap_s);
+                m->t_next_s_ = m->t_s - (ls_motion_seg_duration_s(s) - s->overlap_s);
             }
         }
     }
@@ -1536,7 +1959,7 @@ static void move_step(ls_motion_t *m, const ls_motion_seg_t *s, double dt_s, dou
     }
     /* The clock sums dt_s: within END_TOL_S of the end counts as there (the
      * profile is at rest then, a jerk phase's cube away from q1). */
-    const bool at_end = !m->ramping_ && m->t_s >= seg_traj(m, 0, s)->duration_s - END_TOL_S;
+    const bool at_end = !m->ramping_ && m->t_s >= run_duration_s(m, 0, s) - END_TOL_S;
     double q[LS_N_JOINTS];
     const int ks = setpoint(m, s, xa, xda, nx, xb, xdb, at_end, dt_s, q, qd);
     if (ks != LS_OK) {

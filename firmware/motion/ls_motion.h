@@ -24,6 +24,7 @@
 #include <stdint.h>
 
 #include "ls_err.h"
+#include "ls_pathspeed.h"
 #include "ls_ramp.h"
 #include "ls_robot_model.h"
 #include "ls_traj.h"
@@ -54,11 +55,17 @@
 #else
 #define LS_MOTION_LAG_MAX 64u
 #endif
+/* The longest text a planner writes into `why` (including the NUL): every
+ * refusal fits (tests/unit/motion checks the longest ones), so callers size
+ * their buffers with it and the core's answers hold it whole
+ * (firmware/core/cmd_motion.c). */
+#define LS_MOTION_WHY_LEN 240
 
 /* Planner statuses (ls_err.h; negative = refused, `why` says which joint/axis
  * and limit): LS_OK; LS_EINVAL (NULL, non-finite value, fraction outside
- * (0, 1]), LS_ERANGE (a joint/velocity/workspace limit, or unreachable),
- * LS_EGEOM (degenerate geometry: collinear arc points). */
+ * (0, 1]), LS_ERANGE (a joint/workspace limit, unreachable, or a path
+ * through a singularity), LS_EGEOM (degenerate geometry: collinear arc
+ * points). */
 
 typedef enum {
     LS_MOTION_IDLE = 0,
@@ -80,6 +87,8 @@ typedef enum {
     LS_MEV_REACT_END, /* a guarded or compliant move ended: index = ls_react_end_t, q_rad = measured */
     LS_MEV_JOG,       /* jogging: stopped at a limit (text), or became possible (drives on) */
     LS_MEV_TOOL,      /* a tool command ran in the loop: name = tool, index = HAL status */
+    LS_MEV_SLOW,      /* a path's segment that its joints slow down (ls_motion_seg_slowdown) begins, the
+                         first time it runs: index = the segment in the program, cycle */
 } ls_motion_event_kind_t;
 
 typedef struct {
@@ -104,7 +113,13 @@ typedef enum { LS_SEG_JOINT = 1, LS_SEG_LINE, LS_SEG_ARC } ls_seg_kind_t;
  * the caller). */
 typedef struct {
     ls_seg_kind_t kind;
-    ls_traj_t traj; /* JOINT: 6 joints; LINE/ARC: 1 axis, the path parameter s from 0 to 1 */
+    union {             /* by kind: a joint segment has no path parameter, a Cartesian one no joint profile */
+        ls_traj_t traj; /* JOINT: the 6 joints */
+        struct {
+            ls_pathspeed_curve_t curve; /* LINE/ARC: the path parameter s's speed limits from the joints' */
+            ls_pathspeed_t path;        /* LINE/ARC: s's time law from 0 to 1 under them */
+        };
+    };
     double q0[LS_N_JOINTS], q1[LS_N_JOINTS];
     double P0[16], P1[16];                               /* LINE/ARC: tool-tip poses at s = 0 and 1, base frame */
     double tool_inv[16];                                 /* LINE/ARC: flange = tip * tool_inv */
@@ -122,7 +137,7 @@ typedef struct {
     /* private to ls_motion.c: what the profile was planned with, so that a
      * blend can re-plan it with a lower jerk (ls_motion_prog_blend) and a
      * stop and a resume plan within the same limits */
-    double lim_[4]; /* JOINT: speed_frac, accel_frac; LINE/ARC: v, a, j of s, joint_speed_frac */
+    double lim_[4]; /* JOINT: speed_frac, accel_frac; LINE/ARC: requested v, a, j of s, joint_speed_frac */
     double jerk_scale_[LS_N_JOINTS];
     bool slew_;
 } ls_motion_seg_t;
@@ -152,8 +167,10 @@ typedef struct {
 
 /* Limits of a Cartesian move, SI, all > 0. The tool tip moves at most at
  * v_lin (m/s) and turns at most at v_ang (rad/s); the slower of the two
- * sets the time. Joint velocities are checked against joint_speed_frac of
- * the model's limits. */
+ * sets the time. Where the joints need it, the move runs slower: within
+ * joint_speed_frac of the model's joint velocity limits and within its
+ * joint acceleration limits (docs/architecture.md "Path speed under joint
+ * limits"). */
 typedef struct {
     double v_lin_m_s, a_lin_m_s2, j_lin_m_s3;
     double v_ang_rad_s, a_ang_rad_s2, j_ang_rad_s3;
@@ -188,13 +205,16 @@ typedef struct {
      * parameter. A stop drives every axis to rest on its own jerk-limited
      * ramp (ramp_, from where it was); a resume re-plans each segment from
      * where its ramps left it to its end (rtraj_). */
-    bool ramping_;    /* the ramps drive the axes (STOPPING), or left them at rest (PAUSED) */
-    double ramp_t_s_; /* time since the ramps began */
-    double ramp_T_s_; /* when the last of them ends */
-    ls_ramp_t ramp_[2][LS_N_JOINTS];
-    bool off_plan_[2];    /* segment k runs rtraj_[k], not its planned profile */
-    uint8_t stop_at_end_; /* a stop that waits for the blend to end: 0 none, 1 normal, 2 fast */
-    ls_traj_t rtraj_[2];
+    bool ramping_;                   /* the ramps drive the axes (STOPPING), or left them at rest (PAUSED) */
+    double ramp_t_s_;                /* time since the ramps began */
+    double ramp_T_s_;                /* when the last of them ends */
+    ls_ramp_t ramp_[2][LS_N_JOINTS]; /* a joint segment's */
+    ls_pathspeed_stop_t pstop_[2];   /* a Cartesian segment's */
+    bool slow_told_;                 /* this segment's LS_MEV_SLOW is out (or not due) */
+    bool off_plan_[2];               /* segment k runs rtraj_[k] / rpath_[k], not its planned profile */
+    uint8_t stop_at_end_;            /* a stop that waits for the blend to end: 0 none, 1 normal, 2 fast */
+    ls_traj_t rtraj_[2];             /* a joint segment's */
+    ls_pathspeed_t rpath_[2];        /* a Cartesian segment's */
 } ls_motion_t;
 
 /* Init-time: idle, holding q = 0 until ls_motion_hold. */
@@ -212,9 +232,12 @@ int ls_motion_plan_joint(ls_motion_plan_t *p, const ls_robot_model_t *model, con
 
 /* A straight line of the tool tip from its pose at q0 (FK(q0) * tool) to
  * `tip1` (base frame): position linear, orientation slerped. `tool` is the
- * flange -> tip transform. Refused when a sampled point leaves the model's
- * workspace box, has no IK solution, or needs a joint beyond its position or
- * velocity limit. */
+ * flange -> tip transform. Its speed follows the joints' limits along the
+ * path (slower where they need it: ls_motion_seg_slowdown says where).
+ * Refused when a sampled point leaves the model's workspace box, has no IK
+ * solution or needs a joint beyond its position limit, or when the path
+ * runs through a singularity (a joint's speed grows without bound: `why`
+ * names the joint, where, the kind and what to do instead). */
 int ls_motion_plan_line(ls_motion_plan_t *p, const ls_robot_model_t *model, const double q0[LS_N_JOINTS],
                         const double tool[16], const double tip1[16], const ls_motion_cart_limits_t *lim, char *why,
                         unsigned whylen);
@@ -241,6 +264,42 @@ int ls_motion_seg_line(ls_motion_seg_t *s, const ls_robot_model_t *model, const 
 int ls_motion_seg_arc(ls_motion_seg_t *s, const ls_robot_model_t *model, const double q0[LS_N_JOINTS],
                       const double tool[16], const double tip_via[16], const double tip1[16],
                       const ls_motion_cart_limits_t *lim, char *why, unsigned whylen);
+
+/* The duration of segment s as planned (s): its joints' or its path
+ * parameter's profile. O(1). */
+double ls_motion_seg_duration_s(const ls_motion_seg_t *s);
+
+/* Why and where a Cartesian segment runs slower than requested: its joints
+ * (docs/architecture.md "Path speed under joint limits"). */
+typedef struct {
+    double speed_frac;  /* the lowest speed it cruises at over the requested (1: only its ramps are slower) */
+    double from, to;    /* where it runs that slow: fractions of the segment (0, 0 when only the ramps) */
+    double accel_frac;  /* the lowest acceleration of its ramps over the requested */
+    int joint;          /* the joint (1-based) whose limit sets the lowest speed (else the ramps') */
+    bool velocity;      /* that joint's velocity limit (else its acceleration limit) */
+    double duration_s;  /* as planned */
+    double requested_s; /* at the requested speed and acceleration alone */
+} ls_motion_slowdown_t;
+
+/* When Cartesian segment s runs slower than requested because of its
+ * joints (longer than requested by more than 0.1 %): true and *out (may be
+ * NULL). false for a segment that runs as requested and for a joint
+ * segment. Comms thread; O(zones). */
+bool ls_motion_seg_slowdown(const ls_motion_seg_t *s, ls_motion_slowdown_t *out);
+
+/* For a move that keeps one speed along line s (a guarded move,
+ * ls_react.h): LS_OK when the joints allow the requested speed all along,
+ * else LS_ERANGE with `why` naming the joint, its limit, where, and the
+ * highest share of the speed they allow. O(zones). */
+int ls_motion_seg_check_speed(const ls_motion_seg_t *s, char *why, unsigned whylen);
+
+/* The slowdown as a sentence for an answer (LS_MOTION_WHY_LEN holds it):
+ * "running at 64 % of the requested speed between 20 % and 55 % of the
+ * path: joint 3 at its velocity limit (0.52 s instead of 0.41 s)", or for
+ * a segment slowed only in its ramps "accelerating at 40 % of the
+ * requested rate: joint 2 at its acceleration limit (...)". Returns what
+ * ls_fmt_print returns. */
+int ls_motion_slowdown_text(const ls_motion_slowdown_t *d, char *text, unsigned len);
 
 /* A slew (seed section 6, SLEW_MOTION): the fastest joint-space motion from
  * q0 to q1, each joint on its own minimum-time profile at speed_frac /

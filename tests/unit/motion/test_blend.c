@@ -152,7 +152,7 @@ static run_t run_zigzag(int n)
         r.a = fmax(r.a, dist3(a, zero));
         r.j = fmax(r.j, dist3(j, zero));
         /* the last segment's second half brakes to the last point */
-        const bool braking_to_last = g_m.seg_i_ == n - 1 && g_m.t_s > g_prog.seg[n - 1].traj.duration_s / 2;
+        const bool braking_to_last = g_m.seg_i_ == n - 1 && g_m.t_s > ls_motion_seg_duration_s(&g_prog.seg[n - 1]) / 2;
         for (int e = before; e < log.n; e++) {
             if (log.ev[e].kind == LS_MEV_TAG) {
                 char want[16];
@@ -194,7 +194,7 @@ static void test_blend_maths_of_a_corner(void **state)
     make_zigzag(3, 0.6, -1, 1.0);
     for (int k = 0; k < 3; k++) {
         const ls_motion_seg_t *s = &g_prog.seg[k];
-        const double J = fabs(s->traj.axis[0].j) * s->length_m;
+        const double J = s->path.j * s->length_m;
         double want = lim.j_lin_m_s3;
         for (int c = (k == 0 ? 0 : k - 1); c <= (k < 2 ? k : 1); c++) {
             /* corner c joins segment c and c + 1 */
@@ -208,14 +208,15 @@ static void test_blend_maths_of_a_corner(void **state)
             want = fmin(want, lim.j_lin_m_s3 / fmax(1.0, 2.0 * cos(acos(cth) / 2.0)));
         }
         assert_true(fabs(J - want) <= 1e-9 * want);
-        assert_true(fabs(s->traj.axis[0].t[0] - s->traj.axis[0].t[6]) < 1e-12); /* symmetric */
+        assert_true(fabs(ls_pathspeed_first_jerk_s(&s->path) - ls_pathspeed_last_jerk_s(&s->path)) <
+                    1e-12); /* symmetric */
     }
     for (int k = 0; k < 2; k++) {
         const ls_motion_seg_t *a = &g_prog.seg[k], *b = &g_prog.seg[k + 1];
-        const double win = fmin(a->traj.axis[0].t[6], b->traj.axis[0].t[0]);
+        const double win = fmin(ls_pathspeed_last_jerk_s(&a->path), ls_pathspeed_first_jerk_s(&b->path));
         assert_true(win > 0.05);
         assert_true(fabs(a->overlap_s - 0.6 * win) < 1e-12);
-        const double Jmax = fmax(fabs(a->traj.axis[0].j) * a->length_m, fabs(b->traj.axis[0].j) * b->length_m);
+        const double Jmax = fmax(a->path.j * a->length_m, b->path.j * b->length_m);
         const double t = a->overlap_s;
         assert_true(fabs(ls_motion_seg_blend_dev_m(a, b) - Jmax * t * t * t / 6.0) < 1e-15);
     }
@@ -240,7 +241,7 @@ static void test_blend_maths_of_a_corner(void **state)
             ls_motion_seg_line(&g_prog.seg[1], M, g_prog.seg[0].q1, tool, rev ? P0 : P2, &lim, why, sizeof why), 0);
         g_prog.n = 2;
         assert_int_equal(ls_motion_prog_blend(&g_prog, M, 1, why, sizeof why), 0);
-        const double J = fabs(g_prog.seg[0].traj.axis[0].j) * g_prog.seg[0].length_m;
+        const double J = g_prog.seg[0].path.j * g_prog.seg[0].length_m;
         assert_true(fabs(J - lim.j_lin_m_s3 * (rev ? 1.0 : 0.5)) < 1e-9);
         assert_true(g_prog.seg[0].overlap_s > 0.0);
     }
@@ -286,9 +287,9 @@ static void test_line_accel_changes_its_duration(void **state)
 {
     (void)state;
     make_zigzag(2, 0.0, 1, 0.25);
-    const double slow = g_prog.seg[1].traj.duration_s;
+    const double slow = ls_motion_seg_duration_s(&g_prog.seg[1]);
     make_zigzag(2, 0.0, 1, 1.0);
-    const double fast = g_prog.seg[1].traj.duration_s;
+    const double fast = ls_motion_seg_duration_s(&g_prog.seg[1]);
     assert_true(slow > fast + 0.05);
     make_zigzag(2, 1.0, 1, 0.25);
     const run_t r = run_zigzag(2);
@@ -510,7 +511,7 @@ static void test_joint_blend_within_joint_limits(void **state)
         for (int e = before; e < log.n; e++) {
             tags += log.ev[e].kind == LS_MEV_TAG;
         }
-        if (tags >= 1 && !(g_m.seg_i_ == 2 && g_m.t_s > g_prog.seg[2].traj.duration_s / 2) && log.n < 4) {
+        if (tags >= 1 && !(g_m.seg_i_ == 2 && g_m.t_s > ls_motion_seg_duration_s(&g_prog.seg[2]) / 2) && log.n < 4) {
             min_speed = fmin(min_speed, fabs(qd[0]));
         }
     }

@@ -123,6 +123,7 @@ pathMoveAborted: EventId
 pathMoveComplete: EventId
 pathMoveFailed: EventId
 required: _descriptor.FieldDescriptor
+slowedDown: EventId
 tag: EventId
 
 class AbortMotionReq(_message.Message):
