@@ -34,6 +34,7 @@ import b_heartbeat
 import b_isotp
 import b_jitter
 import b_otg
+import b_pathspeed
 import b_traj
 import b_wire
 
@@ -66,6 +67,7 @@ BENCHES = [
     Bench(9, "Blended paths", b_blend.bench_blend, ("bench_blend",)),
     Bench(10, "State-to-state trajectories vs ruckig", b_otg.bench_otg, ("bench_otg",)),
     Bench(11, "Heartbeat period", b_heartbeat.bench_heartbeat, ("landscaped",)),
+    Bench(12, "Path speed vs toppra", b_pathspeed.bench_pathspeed, ("bench_pathspeed",)),
 ]
 
 
