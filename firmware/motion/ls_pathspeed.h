@@ -53,7 +53,7 @@
  * curve has more. */
 #ifndef LS_PATHSPEED_MAX_ZONES
 #if LS_PROFILE_MCU
-#define LS_PATHSPEED_MAX_ZONES 6
+#define LS_PATHSPEED_MAX_ZONES 4
 #else
 #define LS_PATHSPEED_MAX_ZONES 12
 #endif
