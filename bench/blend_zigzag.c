@@ -26,6 +26,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cart_limits.h"
 #include "ls_kin.h"
 #include "ls_motion.h"
 
@@ -109,13 +110,7 @@ int main(int argc, char **argv)
         return 2;
     }
     const ls_robot_model_t *m = &ls_robot_model_default;
-    const ls_motion_cart_limits_t lim = { .v_lin_m_s = m->max_linear_speed_m_s * sp,
-                                          .a_lin_m_s2 = m->max_linear_accel_m_s2 * ap,
-                                          .j_lin_m_s3 = m->max_linear_jerk_m_s3 * ap,
-                                          .v_ang_rad_s = m->max_angular_speed_rad_s * sp,
-                                          .a_ang_rad_s2 = m->max_angular_accel_rad_s2 * ap,
-                                          .j_ang_rad_s3 = m->max_angular_jerk_rad_s3 * ap,
-                                          .joint_speed_frac = 1.0 };
+    const ls_motion_cart_limits_t lim = bench_cart_limits(m, sp, ap);
     const double q_home[LS_N_JOINTS] = { 0.0, 0.3, 0.3, 0.0, 0.9, 0.0 };
     if (plan_zigzag(m, n, step, zig, &lim, frac, q_home) != 0) {
         return 1;

@@ -24,6 +24,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "cart_limits.h"
 #include "ls_kin.h"
 #include "ls_motion.h"
 
@@ -131,13 +132,7 @@ int main(int argc, char **argv)
         return 2;
     }
     const ls_robot_model_t *m = &ls_robot_model_default;
-    const ls_motion_cart_limits_t lim = { .v_lin_m_s = m->max_linear_speed_m_s * sp,
-                                          .a_lin_m_s2 = m->max_linear_accel_m_s2 * ap,
-                                          .j_lin_m_s3 = m->max_linear_jerk_m_s3 * ap,
-                                          .v_ang_rad_s = m->max_angular_speed_rad_s * sp,
-                                          .a_ang_rad_s2 = m->max_angular_accel_rad_s2 * ap,
-                                          .j_ang_rad_s3 = m->max_angular_jerk_rad_s3 * ap,
-                                          .joint_speed_frac = 1.0 };
+    const ls_motion_cart_limits_t lim = bench_cart_limits(m, sp, ap);
     static const double tool[16] = { 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1 };
     double P0[16], P1[16], Pv[16];
     ls_kin_fk(m, q0, P0);

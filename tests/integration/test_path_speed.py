@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from setpoint_trace import Trace, derivatives, read_trace, traced
-from test_motion import fk
+from test_motion import _finals, fk
 from test_setpoint_trace import moving_stretches
 
 from landscape import errors
@@ -206,12 +206,7 @@ def test_a_path_says_which_segment_runs_slower(tmp_path: Path) -> None:
         list(sup.notices(timeout_s=0.1))
         rv = sup.path_move("swing")
         assert "1 of 2 segments run slower where the joints need it (slowedDown notices)" in rv.ret_msg, rv.ret_msg
-        got = []
-        for n in sup.notices(timeout_s=60):
-            if n.ref_seq == rv.seq:
-                got.append(n)
-                if n.final:
-                    break
+        got = _finals(sup, rv.seq, 60)
     events = [n.event_id for n in got]
     assert events == ["tag", "slowedDown", "tag", "pathMoveComplete"], events
     d = notice_data(got[1])

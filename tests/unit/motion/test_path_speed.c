@@ -135,15 +135,22 @@ static run_t run(const double q0[LS_N_JOINTS], const long *stops, int n_stops, c
     return r;
 }
 
-static void a_line_whose_joint_speed_peaks_mid_way_slows_there_within_every_limit(void **state)
+/* Plan into g_plan the line from g_near_wrist that swings joint 4 past the
+ * wrist singularity, at 50 % speed; P0, P1: the flange at its ends. */
+static void plan_swing(double P0[16], double P1[16])
 {
-    (void)state;
-    double P0[16], P1[16];
     ls_kin_fk(M, g_near_wrist, P0);
     moved(g_near_wrist, 0.0, 0.11, -0.1, P1);
     const ls_motion_cart_limits_t lim = limits_at(50.0);
     char why[LS_MOTION_WHY_LEN];
     assert_int_equal(ls_motion_plan_line(&g_plan, M, g_near_wrist, g_flange, P1, &lim, why, sizeof why), LS_OK);
+}
+
+static void a_line_whose_joint_speed_peaks_mid_way_slows_there_within_every_limit(void **state)
+{
+    (void)state;
+    double P0[16], P1[16];
+    plan_swing(P0, P1);
     ls_motion_slowdown_t d;
     assert_true(ls_motion_seg_slowdown(&g_plan.one, &d));
     assert_int_equal(d.joint, 4);
@@ -208,11 +215,7 @@ static void a_stop_anywhere_on_a_slowed_line_keeps_the_limits_and_resumes_on_it(
 {
     (void)state;
     double P0[16], P1[16];
-    ls_kin_fk(M, g_near_wrist, P0);
-    moved(g_near_wrist, 0.0, 0.11, -0.1, P1);
-    const ls_motion_cart_limits_t lim = limits_at(50.0);
-    char why[LS_MOTION_WHY_LEN];
-    assert_int_equal(ls_motion_plan_line(&g_plan, M, g_near_wrist, g_flange, P1, &lim, why, sizeof why), LS_OK);
+    plan_swing(P0, P1);
     const long T = (long)(ls_motion_seg_duration_s(&g_plan.one) / DT_S);
     for (int i = 1; i < 24; i++) {
         const long at = T * i / 24;
