@@ -370,11 +370,13 @@ int ls_motion_start(ls_motion_t *m, const ls_motion_plan_t *p);
  * jerk-limited ramp (ls_ramp.h) from its current position, velocity and
  * acceleration, within the segment's own acceleration and jerk limits (a
  * joint segment: on its phase, so the joints stay on their straight line; a
- * Cartesian segment: on its path parameter; a slew: each joint on its own).
- * While two segments blend each gets at most half its jerk limit, so that
- * the sum stays within it; when that cannot bring the segment that has just
- * started to rest before its end, the stop waits for the blend to end (at
- * most the overlap) and then stops that segment alone. */
+ * Cartesian segment: on its path parameter, ramping down zone by zone at
+ * its joints' limits, ls_pathspeed_plan_stop; a slew: each joint on its
+ * own). While two segments blend each gets at most half its jerk limit, so
+ * that the sum stays within it; when that cannot bring the segment that has
+ * just started to rest before its end, or would take a Cartesian one past
+ * its zone's cap, the stop waits for the blend to end (at most the overlap)
+ * and then stops that segment alone. Control-loop safe: O(zones) ramps. */
 void ls_motion_stop(ls_motion_t *m);
 /* The same within the model's maximum acceleration and jerk (faults,
  * emergency, shutdown): also shortens a stop already under way. */
@@ -392,7 +394,8 @@ int ls_motion_fast_stop_bound(const ls_robot_model_t *model, int j, double *time
  * limits; two that were blending run one after the other. The segment
  * then arrives at rest instead of blending into the next. -2 (still
  * paused) when a profile cannot be planned. Control-loop safe: closed-form
- * planning, about 3.5 KB of stack. */
+ * planning (a Cartesian segment: ls_pathspeed_plan, O(zones)), about 5 KB
+ * of stack. */
 int ls_motion_resume(ls_motion_t *m);
 void ls_motion_abort(ls_motion_t *m); /* drop the motion at once: hold the current set-point */
 /* The auxiliary command announced by LS_MEV_AUX finished: go on. */

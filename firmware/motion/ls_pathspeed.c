@@ -10,12 +10,12 @@
  * Zone k (of m, counted from the one that holds s0) has length L_k, speed
  * u_k where it starts and u_{k+1} where it ends; u_0 = u_m = 0 (rest). Its
  * ramps run at its accelerations for the fastest speed in it, a_up(x) and
- * a_down(x), which fall as x grows. A zone whose entry speed is above its exit speed must
- * be long enough for the ramp down between them (backward pass: lower the
- * entry), one whose exit is above its entry for the ramp up (forward pass:
- * lower the exit); lowering an entry or an exit only shortens the
- * neighbour's ramps. Then each zone cruises at the highest c under its cap
- * whose ramps, at a_k(c), fit L_k. Each distance grows with the speed it
+ * a_down(x), which fall as x grows. A zone whose entry speed is above its
+ * exit speed must be long enough for the ramp down between them (backward
+ * pass: lower the entry), one whose exit is above its entry for the ramp up
+ * (forward pass: lower the exit); lowering an entry or an exit only
+ * shortens the neighbour's ramps. Then each zone cruises at the highest c
+ * under its cap whose ramps, at a_up(c) and a_down(c), fit L_k. Each distance grows with the speed it
  * solves for (a higher speed, a lower acceleration), so bisection finds it. */
 #include "ls_pathspeed.h"
 
