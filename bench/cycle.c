@@ -225,7 +225,7 @@ static int arm_read(void *self, double *q, double *qd)
     }
     return 0;
 }
-static const hal_arm_ops_t arm_ops = { NULL, arm_enable, arm_command, arm_read, NULL };
+static const hal_arm_ops_t arm_ops = { .enable = arm_enable, .command = arm_command, .read = arm_read };
 static hal_arm_t arm = { &arm_ops, NULL, "ideal" };
 static ls_control_t ctl;
 

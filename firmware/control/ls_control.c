@@ -195,7 +195,7 @@ static void fault(ls_control_t *c, const char *text)
     ls_ctl_event_t ev;
     memset(&ev, 0, sizeof ev);
     ev.kind = LS_CEV_FAULT;
-    strncpy(ev.text, text, sizeof ev.text - 1u);
+    ls_fmt_print(ev.text, sizeof ev.text, "%s", text);
     ev_push(c, &ev);
 }
 
@@ -211,7 +211,7 @@ static void enable_failed(ls_control_t *c, const char *text)
     memset(&ev, 0, sizeof ev);
     ev.kind = LS_CEV_ENABLE_FAILED;
     ev.ref_seq = c->enable_ref_seq;
-    strncpy(ev.text, text, sizeof ev.text - 1u);
+    ls_fmt_print(ev.text, sizeof ev.text, "%s", text);
     ev_push(c, &ev);
 }
 
@@ -221,7 +221,7 @@ static void cmd_failed(ls_control_t *c, uint32_t ref_seq, const char *text)
     memset(&ev, 0, sizeof ev);
     ev.kind = LS_CEV_CMD_FAILED;
     ev.ref_seq = ref_seq;
-    strncpy(ev.text, text, sizeof ev.text - 1u);
+    ls_fmt_print(ev.text, sizeof ev.text, "%s", text);
     ev_push(c, &ev);
 }
 
