@@ -1369,12 +1369,12 @@ static int moving_segs(const ls_motion_t *m, const ls_motion_seg_t *seg[2])
  * made; a Cartesian segment's time law the same way. */
 static const ls_traj_t *seg_traj(const ls_motion_t *m, int k, const ls_motion_seg_t *s)
 {
-    return m->off_plan_[k] ? &m->rtraj_[k] : &s->traj;
+    return m->off_plan_[k] ? &m->resumed_[k].traj : &s->traj;
 }
 
 static const ls_pathspeed_t *seg_path(const ls_motion_t *m, int k, const ls_motion_seg_t *s)
 {
-    return m->off_plan_[k] ? &m->rpath_[k] : &s->path;
+    return m->off_plan_[k] ? &m->resumed_[k].path : &s->path;
 }
 
 /* How long segment k's profile runs (from its clock's 0). */
@@ -1436,9 +1436,9 @@ static void seg_state(const ls_motion_t *m, int k, const ls_motion_seg_t *s, dou
     for (int i = 0; i < seg_axes(s); i++) {
         double p, v, a;
         if (m->ramping_ && s->kind != LS_SEG_JOINT) {
-            ls_pathspeed_stop_sample(&m->pstop_[k], m->ramp_t_s_, &p, &v, &a);
+            ls_pathspeed_stop_sample(&m->halt_[k].stop, m->ramp_t_s_, &p, &v, &a);
         } else if (m->ramping_) {
-            ls_ramp_sample(&m->ramp_[k][i], m->ramp_t_s_, &p, &v, &a);
+            ls_ramp_sample(&m->halt_[k].ramp[i], m->ramp_t_s_, &p, &v, &a);
         } else if (s->kind != LS_SEG_JOINT) {
             ls_pathspeed_sample(seg_path(m, k, s), t, &p, &v, &a);
         } else {
@@ -1605,19 +1605,24 @@ static void begin_ramps(ls_motion_t *m, bool fast)
         m->stop_at_end_ = fast ? STOP_FAST : (m->stop_at_end_ == STOP_FAST ? STOP_FAST : STOP_NORMAL);
         return;
     }
-    memcpy(m->ramp_, r, sizeof r);
+    /* Take them: a joint segment's as planned; a Cartesian segment alone
+     * stops zone by zone at its joints' limits (ls_pathspeed.h), a fast stop
+     * and a stop inside a blend on the one ramp planned above. */
+    T = 0.0;
     for (int k = 0; k < n; k++) {
-        /* A Cartesian segment alone stops zone by zone at its joints'
-         * limits (ls_pathspeed.h); a fast stop and a stop inside a blend on
-         * the one ramp planned above. */
-        if (seg[k]->kind != LS_SEG_JOINT && (fast || n == 2 ||
-                                             ls_pathspeed_plan_stop(&m->pstop_[k], &seg[k]->curve, x[k][0], xd[k][0],
-                                                                    xdd[k][0], seg[k]->curve.j) != LS_OK)) {
-            ls_pathspeed_stop_one(&m->pstop_[k], &r[k][0]);
+        if (seg[k]->kind == LS_SEG_JOINT) {
+            memcpy(m->halt_[k].ramp, r[k], sizeof r[k]);
+            for (int i = 0; i < seg_axes(seg[k]); i++) {
+                T = fmax(T, r[k][i].duration_s);
+            }
+            continue;
         }
-        if (seg[k]->kind != LS_SEG_JOINT) {
-            T = fmax(T, m->pstop_[k].duration_s);
+        ls_pathspeed_stop_t *st = &m->halt_[k].stop;
+        if (fast || n == 2 ||
+            ls_pathspeed_plan_stop(st, &seg[k]->curve, x[k][0], xd[k][0], xdd[k][0], seg[k]->curve.j) != LS_OK) {
+            ls_pathspeed_stop_one(st, &r[k][0]);
         }
+        T = fmax(T, st->duration_s);
     }
     m->stop_at_end_ = STOP_NONE;
     m->ramping_ = true;
@@ -1697,9 +1702,9 @@ static int plan_from_ramps(ls_motion_t *m)
     }
     for (int k = 0; k < n; k++) {
         if (seg[k]->kind == LS_SEG_JOINT) {
-            m->rtraj_[k] = tr[k];
+            m->resumed_[k].traj = tr[k];
         } else {
-            m->rpath_[k] = path[k];
+            m->resumed_[k].path = path[k];
         }
         m->off_plan_[k] = true;
     }
@@ -1889,8 +1894,7 @@ static void end_of_segment(ls_motion_t *m, const ls_motion_seg_t *s, double qd[L
         advance(m, ev, false);
         m->t_s = t_next;
         if (off) {
-            m->rtraj_[0] = m->rtraj_[1];
-            m->rpath_[0] = m->rpath_[1];
+            m->resumed_[0] = m->resumed_[1];
             m->off_plan_[0] = true;
         }
         if (m->stop_at_end_ != STOP_NONE && m->phase == LS_MOTION_STOPPING) {

@@ -203,18 +203,22 @@ typedef struct {
      * The moving segment [0] and the one it blends into [1] each have their
      * own axes: a joint segment its joints, a Cartesian one its path
      * parameter. A stop drives every axis to rest on its own jerk-limited
-     * ramp (ramp_, from where it was); a resume re-plans each segment from
-     * where its ramps left it to its end (rtraj_). */
+     * ramp (halt_, from where it was); a resume re-plans each segment from
+     * where its ramps left it to its end (resumed_). */
     bool ramping_;                   /* the ramps drive the axes (STOPPING), or left them at rest (PAUSED) */
     double ramp_t_s_;                /* time since the ramps began */
     double ramp_T_s_;                /* when the last of them ends */
-    ls_ramp_t ramp_[2][LS_N_JOINTS]; /* a joint segment's */
-    ls_pathspeed_stop_t pstop_[2];   /* a Cartesian segment's */
-    bool slow_told_;                 /* this segment's LS_MEV_SLOW is out (or not due) */
-    bool off_plan_[2];               /* segment k runs rtraj_[k] / rpath_[k], not its planned profile */
-    uint8_t stop_at_end_;            /* a stop that waits for the blend to end: 0 none, 1 normal, 2 fast */
-    ls_traj_t rtraj_[2];             /* a joint segment's */
-    ls_pathspeed_t rpath_[2];        /* a Cartesian segment's */
+    union {                          /* by the kind of segment k */
+        ls_ramp_t ramp[LS_N_JOINTS]; /* a joint segment's, one per axis */
+        ls_pathspeed_stop_t stop;    /* a Cartesian segment's path parameter */
+    } halt_[2];
+    bool slow_told_;         /* this segment's LS_MEV_SLOW is out (or not due) */
+    bool off_plan_[2];       /* segment k runs resumed_[k], not its planned profile */
+    uint8_t stop_at_end_;    /* a stop that waits for the blend to end: 0 none, 1 normal, 2 fast */
+    union {                  /* by the kind of segment k */
+        ls_traj_t traj;      /* a joint segment's */
+        ls_pathspeed_t path; /* a Cartesian segment's */
+    } resumed_[2];
 } ls_motion_t;
 
 /* Init-time: idle, holding q = 0 until ls_motion_hold. */
