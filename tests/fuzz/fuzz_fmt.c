@@ -171,6 +171,7 @@ static void format_string(const uint8_t *in, const uint8_t *text, size_t len)
     /* For a reader (ls_fmt_text): the whole text when it fits; else whole
      * words of it and " \u2026", the mark alone, or nothing (cap < 4). */
     char cut[80];
+    len = strlen(s); /* the text ends at its first NUL */
     if (sp.cap > 0 && ls_fmt_text(cut, sp.cap, "%s", s) != (int)len) {
         __builtin_trap();
     }
