@@ -117,15 +117,21 @@ typedef enum {
 typedef struct {
     ls_cev_kind_t kind;
     uint32_t ref_seq;
-    ls_motion_event_t motion;
     char text[LS_CTL_TEXT_LEN];
     struct {
         uint16_t unit;
         uint32_t on, off;
     } dio;
-    ls_react_report_t react; /* LS_MEV_REACT_END: the reading and the force statistics */
-    ls_manual_event_t manual;
-    hal_arm_event_t arm; /* LS_CEV_ARM_EVENT */
+    /* What one kind carries and the others do not: one of them at a time
+     * (the ring holds LS_CTL_QUEUE_LEN events: their size is static RAM). */
+    union {
+        struct {
+            ls_motion_event_t motion; /* LS_CEV_MOTION */
+            ls_react_report_t react;  /* LS_MEV_REACT_END: the reading and the force statistics */
+        };
+        ls_manual_event_t manual; /* LS_CEV_MANUAL */
+        hal_arm_event_t arm;      /* LS_CEV_ARM_EVENT */
+    };
 } ls_ctl_event_t;
 
 /* What the comms thread may read at any time (copied under a seqlock). */
