@@ -81,7 +81,7 @@ static bool describe_devices(const ls_core_t *core, ls_DescribeRes *r)
 
 static void describe_model(const ls_robot_model_t *m, ls_DescribeRes *r)
 {
-    ls_fmt_print(r->robot_model, sizeof r->robot_model, "%s", m->name != NULL ? m->name : "");
+    ls_fmt_print(r->robot_model, sizeof r->robot_model, "%s", m->name);
     for (int j = 0; j < LS_N_JOINTS; j++) {
         ls_JointLimit *l = &r->joints[r->joints_count++];
         l->min_rad = m->q_min_rad[j];

@@ -1,9 +1,13 @@
 // Kinematics of the 6-DOF arm: standard DH forward kinematics, closed-form
-// inverse kinematics for a spherical wrist, geometric Jacobian, pose helpers.
+// inverse kinematics for a spherical wrist and for a UR-style offset wrist,
+// geometric Jacobian, pose helpers.
 // Only fixed-size Eigen types: nothing here allocates or throws, so every
 // entry point may run in the control loop (see ls_kin.h for costs).
 #include "ls_kin.h"
 #include "ls_math.h"
+extern "C" {
+#include "ls_fmt.h" // C, without its own extern "C"
+}
 
 #include <Eigen/Dense>
 #include <cmath>
@@ -26,6 +30,10 @@ constexpr double kTwoPi = 2.0 * kPi;
 constexpr double kWristSingularSin = 1e-6;  // |sin q5| below: wrist singular
 constexpr double kShoulderSingularM = 1e-9; // wrist centre this near the joint 1 axis
 constexpr double kReachSlack = 1e-10;       // rounding slack on cos(elbow) and sin(shoulder)
+// |cos(elbow)|, |sin(shoulder)| this close to 1 are 1: the two branches meet
+// there, and rounding would otherwise split them by sqrt(2e-16) ~ 1e-8 rad.
+// The pose moves only to second order (below 1e-12 m).
+constexpr double kBranchesMeet = 1e-12;
 constexpr double kLimitSlackRad = 1e-10;    // a wrap this far past a limit is clamped onto it
 constexpr double kSameBranchRad = 1e-9;     // branches closer than this are one branch
 constexpr double kStructTol = 1e-12;        // DH structure checks
@@ -92,25 +100,132 @@ double rotation_angle(const Matrix3d &R) noexcept
     return std::atan2(0.5 * v.norm(), 0.5 * (R.trace() - 1.0));
 }
 
-// The IK needs: a4 = a5 = a6 = d5 = 0 (joints 4-6 meet in the wrist centre),
-// alpha4, alpha5 = +-pi/2, alpha2 = 0 (joints 2 and 3 parallel), sin(alpha1)
-// != 0, and a non-degenerate upper arm / forearm.
-bool ik_structure_ok(const ls_robot_model_t &m) noexcept
+// ---- geometry classes (ls_kin_classify) ---------------------------------
+
+bool is_zero(double v) noexcept
 {
-    const ls_dh_t *d = m.dh;
+    return std::fabs(v) < kStructTol;
+}
+
+bool is_right_angle(double alpha) noexcept
+{
+    return std::fabs(std::cos(alpha)) < kStructTol;
+}
+
+bool is_parallel(double alpha) noexcept // alpha = 0: the next axis points the same way
+{
+    return std::fabs(std::sin(alpha)) < kStructTol && std::cos(alpha) > 0.0;
+}
+
+double deg(double rad) noexcept
+{
+    return rad * 180.0 / kPi;
+}
+
+// Finite parameters and ordered limits: what every class needs.
+bool model_finite(const ls_robot_model_t &m, char *why, size_t whylen) noexcept
+{
     for (int i = 0; i < LS_N_JOINTS; ++i) {
-        if (!std::isfinite(d[i].a_m) || !std::isfinite(d[i].d_m) || !std::isfinite(d[i].alpha_rad) ||
-            !std::isfinite(d[i].theta_offset_rad) || !std::isfinite(m.q_min_rad[i]) || !std::isfinite(m.q_max_rad[i]) ||
-            m.q_min_rad[i] > m.q_max_rad[i]) {
+        const ls_dh_t &d = m.dh[i];
+        if (!std::isfinite(d.a_m) || !std::isfinite(d.d_m) || !std::isfinite(d.alpha_rad) ||
+            !std::isfinite(d.theta_offset_rad) || !std::isfinite(m.q_min_rad[i]) || !std::isfinite(m.q_max_rad[i])) {
+            ls_fmt_print(why, whylen, "joint %d has a non-finite DH parameter or limit", i + 1);
+            return false;
+        }
+        if (m.q_min_rad[i] > m.q_max_rad[i]) {
+            ls_fmt_print(why, whylen, "joint %d: q_min %.6g rad is above q_max %.6g rad", i + 1, m.q_min_rad[i],
+                         m.q_max_rad[i]);
             return false;
         }
     }
-    const double forearm = std::hypot(d[2].a_m, d[3].d_m);
-    return std::fabs(d[3].a_m) < kStructTol && std::fabs(d[4].a_m) < kStructTol && std::fabs(d[5].a_m) < kStructTol &&
-           std::fabs(d[4].d_m) < kStructTol && std::fabs(std::cos(d[3].alpha_rad)) < kStructTol &&
-           std::fabs(std::cos(d[4].alpha_rad)) < kStructTol && std::fabs(std::sin(d[1].alpha_rad)) < kStructTol &&
-           std::cos(d[1].alpha_rad) > 0.0 && std::fabs(std::sin(d[0].alpha_rad)) > 1e-9 && std::fabs(d[1].a_m) > 1e-9 &&
-           forearm > 1e-9;
+    return true;
+}
+
+// Each check names the first condition of its class that m breaks. They
+// are written as "<the value>; <the rule>" for the classify message.
+bool spherical_fits(const ls_robot_model_t &m, char *why, size_t whylen) noexcept
+{
+    const ls_dh_t *d = m.dh;
+    const double wrist[4] = { d[3].a_m, d[4].a_m, d[5].a_m, d[4].d_m };
+    static const char *const names[4] = { "a4", "a5", "a6", "d5" };
+    for (int i = 0; i < 4; ++i) {
+        if (!is_zero(wrist[i])) {
+            ls_fmt_print(why, whylen, "%s = %.6g m; a4, a5, a6 and d5 must be 0 so that joints 4-6 meet", names[i],
+                         wrist[i]);
+            return false;
+        }
+    }
+    if (!is_right_angle(d[3].alpha_rad) || !is_right_angle(d[4].alpha_rad)) {
+        const int j = is_right_angle(d[3].alpha_rad) ? 5 : 4;
+        ls_fmt_print(why, whylen, "alpha%d = %.6g deg; alpha4 and alpha5 must be +-90 deg", j,
+                     deg(d[j - 1].alpha_rad));
+        return false;
+    }
+    if (!is_parallel(d[1].alpha_rad)) {
+        ls_fmt_print(why, whylen, "alpha2 = %.6g deg; it must be 0 so that joints 2 and 3 are parallel",
+                     deg(d[1].alpha_rad));
+        return false;
+    }
+    if (std::fabs(std::sin(d[0].alpha_rad)) <= 1e-9) {
+        ls_fmt_print(why, whylen, "alpha1 = %.6g deg; joint 1 must not be parallel to joint 2",
+                     deg(d[0].alpha_rad));
+        return false;
+    }
+    if (std::fabs(d[1].a_m) <= 1e-9 || std::hypot(d[2].a_m, d[3].d_m) <= 1e-9) {
+        ls_fmt_print(why, whylen, "%s; the upper arm (a2) and the forearm (a3, d4) must not be 0",
+                     std::fabs(d[1].a_m) <= 1e-9 ? "a2 = 0 m" : "a3 = d4 = 0 m");
+        return false;
+    }
+    return true;
+}
+
+bool offset_fits(const ls_robot_model_t &m, char *why, size_t whylen) noexcept
+{
+    const ls_dh_t *d = m.dh;
+    for (int i = 3; i < 6; ++i) {
+        if (!is_zero(d[i].a_m)) {
+            ls_fmt_print(why, whylen, "a%d = %.6g m; a4, a5 and a6 must be 0", i + 1, d[i].a_m);
+            return false;
+        }
+    }
+    if (!is_parallel(d[1].alpha_rad) || !is_parallel(d[2].alpha_rad)) {
+        const int j = is_parallel(d[1].alpha_rad) ? 3 : 2;
+        ls_fmt_print(why, whylen, "alpha%d = %.6g deg; alpha2 and alpha3 must be 0 so that joints 2-4 are parallel",
+                     j, deg(d[j - 1].alpha_rad));
+        return false;
+    }
+    if (!is_right_angle(d[3].alpha_rad) || !is_right_angle(d[4].alpha_rad)) {
+        const int j = is_right_angle(d[3].alpha_rad) ? 5 : 4;
+        ls_fmt_print(why, whylen, "alpha%d = %.6g deg; alpha4 and alpha5 must be +-90 deg", j,
+                     deg(d[j - 1].alpha_rad));
+        return false;
+    }
+    if (std::fabs(std::sin(d[0].alpha_rad)) <= 1e-9) {
+        ls_fmt_print(why, whylen, "alpha1 = %.6g deg; joint 1 must not be parallel to joint 2",
+                     deg(d[0].alpha_rad));
+        return false;
+    }
+    if (std::fabs(d[1].a_m) <= 1e-9 || std::fabs(d[2].a_m) <= 1e-9) {
+        ls_fmt_print(why, whylen, "a%d = 0 m; the upper arm (a2) and the forearm (a3) must not be 0",
+                     std::fabs(d[1].a_m) <= 1e-9 ? 2 : 3);
+        return false;
+    }
+    return true;
+}
+
+// Does m's geometry fit the class it claims? (Every IK call asks: a model
+// edited after its classification is refused, never solved wrongly.)
+bool class_fits(const ls_robot_model_t &m) noexcept
+{
+    if (!model_finite(m, nullptr, 0)) {
+        return false;
+    }
+    switch (m.ik_class) {
+    case LS_IK_CLASS_SPHERICAL_WRIST: return spherical_fits(m, nullptr, 0);
+    case LS_IK_CLASS_OFFSET_WRIST: return offset_fits(m, nullptr, 0);
+    case LS_IK_CLASS_NONE: break;
+    }
+    return false;
 }
 
 bool pose_ok(const Matrix4d &T) noexcept
@@ -150,86 +265,151 @@ bool wrap_into(double q, double lo, double hi, double ref, double *out) noexcept
     return found;
 }
 
+double clamp_into(double q, double lo, double hi) noexcept
+{
+    return q < lo ? lo : (q > hi ? hi : q);
+}
+
 enum IkStatus { kIkOk, kIkUnreachable, kIkSingular, kIkLimits };
 
-// Every branch, each joint wrapped into its limits nearest ref[j]. At a wrist
-// singularity q4 is taken as ref[3] (clamped into the limits) and q6 solved.
-// Branch order: bit 2 shoulder (0 front, 1 back), bit 1 elbow, bit 0 wrist
-// (0: sin(theta5) >= 0). Branches that coincide are returned once.
-IkStatus ik_branches(const ls_robot_model_t &m, const Matrix4d &T, const double ref[LS_N_JOINTS],
-                     double q_out[LS_KIN_MAX_BRANCHES][LS_N_JOINTS], int *n_out) noexcept
+// The branches found so far: DH angles in, joint angles wrapped into the
+// limits nearest ref out, coincident branches once.
+struct Branches {
+    const ls_robot_model_t &m;
+    const double *ref;
+    double (*q_out)[LS_N_JOINTS];
+    int *n_out;
+
+    void add(const double theta[LS_N_JOINTS]) const noexcept
+    {
+        double q[LS_N_JOINTS];
+        for (int j = 0; j < LS_N_JOINTS; ++j) {
+            if (!wrap_into(theta[j] - m.dh[j].theta_offset_rad, m.q_min_rad[j], m.q_max_rad[j], ref[j], &q[j])) {
+                return;
+            }
+        }
+        for (int b = 0; b < *n_out; ++b) {
+            double diff = 0.0;
+            for (int j = 0; j < LS_N_JOINTS; ++j) {
+                diff = std::fmax(diff, std::fabs(q_out[b][j] - q[j]));
+            }
+            if (diff < kSameBranchRad) {
+                return;
+            }
+        }
+        for (int j = 0; j < LS_N_JOINTS; ++j) {
+            q_out[*n_out][j] = q[j];
+        }
+        ++*n_out;
+    }
+};
+
+// The planar two-link problem of joints 2-3 in frame 1: the upper arm a2
+// (signed) and the virtual forearm of length L at angle gamma from x3 reach
+// (px, py). cos(psi) of the elbow, false when out of reach.
+struct Planar {
+    double a2, L, gamma;
+
+    bool elbow_cos(double px, double py, double *c) const noexcept
+    {
+        const double v = (px * px + py * py - a2 * a2 - L * L) / (2.0 * a2 * L);
+        if (std::fabs(v) > 1.0 + kReachSlack) {
+            return false;
+        }
+        *c = std::fabs(v) > 1.0 - kBranchesMeet ? std::copysign(1.0, v) : v;
+        return true;
+    }
+
+    // DH angles of joints 2 and 3 for elbow branch el (0: sin(psi) >= 0).
+    void solve(double px, double py, double c, int el, double *t2, double *t3) const noexcept
+    {
+        const double s_abs = std::sqrt(1.0 - c * c);
+        const double s = el == 0 ? s_abs : -s_abs;
+        *t3 = std::atan2(s, c) - gamma;
+        *t2 = std::atan2(py, px) - std::atan2(L * s, a2 + L * c);
+    }
+};
+
+// Joint 1 for both classes: the wrist centre w (where joint 5's axis meets
+// frame 5) must lie at height h along z1 from frame 1's origin. Fills
+// theta1[2] (front, back); *singular when w is on the joint 1 axis.
+IkStatus shoulder(const ls_robot_model_t &m, const Vector3d &w, double h, double theta1[2], bool *singular) noexcept
 {
     const ls_dh_t *d = m.dh;
-    *n_out = 0;
-
-    const Matrix3d R = T.topLeftCorner<3, 3>();
-    const Vector3d p = T.topRightCorner<3, 1>();
-    const double sa6 = std::sin(d[5].alpha_rad), ca6 = std::cos(d[5].alpha_rad);
-    // z5 = R Rx(-alpha6) e_z; the flange sits d6 along z5 from the wrist centre.
-    const Vector3d w = p - d[5].d_m * (R * Vector3d(0.0, sa6, ca6));
-
-    // Joint 1: the wrist centre, seen in frame 1, must lie in the plane of
-    // joints 2-3, at height h = d2 + d3 + cos(alpha3) d4 along z1.
     const double sa1 = std::sin(d[0].alpha_rad), ca1 = std::cos(d[0].alpha_rad);
-    const double h = d[1].d_m + d[2].d_m + std::cos(d[2].alpha_rad) * d[3].d_m;
     const double k = (ca1 * (w.z() - d[0].d_m) - h) / sa1; // = r sin(phi - theta1)
     const double r = std::hypot(w.x(), w.y());
     // On the joint 1 axis (only possible when k = 0) every q1 places the
     // centre equally well: q1 is undetermined. Reachability is still checked
     // (with q1 = 0, pi) so that a far-away pose reports unreachable.
-    const bool shoulder_singular = r < kShoulderSingularM;
-    double theta1[2] = { 0.0, kPi };
-    if (shoulder_singular) {
-        if (std::fabs(k) >= kShoulderSingularM) {
-            return kIkUnreachable;
-        }
-    } else {
-        double sk = k / r;
-        if (std::fabs(sk) > 1.0 + kReachSlack) {
-            return kIkUnreachable;
-        }
-        sk = sk > 1.0 ? 1.0 : (sk < -1.0 ? -1.0 : sk);
-        const double phi = std::atan2(w.y(), w.x());
-        const double as = std::asin(sk);
-        theta1[0] = phi - as;
-        theta1[1] = phi - kPi + as;
+    *singular = r < kShoulderSingularM;
+    theta1[0] = 0.0;
+    theta1[1] = kPi;
+    if (*singular) {
+        return std::fabs(k) >= kShoulderSingularM ? kIkUnreachable : kIkOk;
+    }
+    double sk = k / r;
+    if (std::fabs(sk) > 1.0 + kReachSlack) {
+        return kIkUnreachable;
+    }
+    sk = std::fabs(sk) > 1.0 - kBranchesMeet ? std::copysign(1.0, sk) : sk;
+    const double phi = std::atan2(w.y(), w.x());
+    const double as = std::asin(sk);
+    theta1[0] = phi - as;
+    theta1[1] = phi - kPi + as;
+    return kIkOk;
+}
+
+// p1 = A1(t1)^-1 p: a base-frame point in frame 1 (x, y in the plane of the
+// parallel joints, z along them).
+Vector3d in_frame1(const ls_dh_t &d1, double t1, const Vector3d &p) noexcept
+{
+    const double c1 = std::cos(t1), s1 = std::sin(t1);
+    const double sa1 = std::sin(d1.alpha_rad), ca1 = std::cos(d1.alpha_rad);
+    const double X = c1 * p.x() + s1 * p.y() - d1.a_m;
+    const double Y = -s1 * p.x() + c1 * p.y();
+    const double Z = p.z() - d1.d_m;
+    return Vector3d(X, ca1 * Y + sa1 * Z, -sa1 * Y + ca1 * Z);
+}
+
+// Spherical wrist (ls_kin_classify): joints 2-3 place the wrist centre,
+// joints 4-6 the orientation.
+IkStatus ik_spherical(const ls_robot_model_t &m, const Matrix4d &T, const Branches &out) noexcept
+{
+    const ls_dh_t *d = m.dh;
+    const Matrix3d R = T.topLeftCorner<3, 3>();
+    const Vector3d p = T.topRightCorner<3, 1>();
+    const double sa6 = std::sin(d[5].alpha_rad), ca6 = std::cos(d[5].alpha_rad);
+    // z5 = R Rx(-alpha6) e_z; the flange sits d6 along z5 from the wrist centre.
+    const Vector3d w = p - d[5].d_m * (R * Vector3d(0.0, sa6, ca6));
+    const double h = d[1].d_m + d[2].d_m + std::cos(d[2].alpha_rad) * d[3].d_m;
+    double theta1[2];
+    bool shoulder_singular = false;
+    if (shoulder(m, w, h, theta1, &shoulder_singular) == kIkUnreachable) {
+        return kIkUnreachable;
     }
 
-    // Joints 2-3: planar two-link problem, upper arm a2, virtual forearm
-    // (a3, -sin(alpha3) d4) of length L at angle gamma from x3.
-    const double a2 = d[1].a_m;
+    // Upper arm a2, virtual forearm (a3, -sin(alpha3) d4) at angle gamma from x3.
     const double b3x = d[2].a_m, b3y = -std::sin(d[2].alpha_rad) * d[3].d_m;
-    const double L = std::hypot(b3x, b3y);
-    const double gamma = std::atan2(b3y, b3x);
+    const Planar arm = { d[1].a_m, std::hypot(b3x, b3y), std::atan2(b3y, b3x) };
     const double s4 = std::sin(d[3].alpha_rad) > 0.0 ? 1.0 : -1.0;
     const double s5 = std::sin(d[4].alpha_rad) > 0.0 ? 1.0 : -1.0;
 
     bool any_reachable = false;
     for (int sh = 0; sh < 2; ++sh) {
         const double t1 = theta1[sh];
-        const double c1 = std::cos(t1), st1 = std::sin(t1);
-        // p1 = Rx(-alpha1) (Rz(-theta1) w - (a1, 0, d1))
-        const double X = c1 * w.x() + st1 * w.y() - d[0].a_m;
-        const double Y = -st1 * w.x() + c1 * w.y();
-        const double Z = w.z() - d[0].d_m;
-        const double px = X, py = ca1 * Y + sa1 * Z;
-        const double c = (px * px + py * py - a2 * a2 - L * L) / (2.0 * a2 * L);
-        if (std::fabs(c) > 1.0 + kReachSlack) {
+        const Vector3d p1 = in_frame1(d[0], t1, w);
+        double c;
+        if (!arm.elbow_cos(p1.x(), p1.y(), &c)) {
             continue;
         }
         any_reachable = true;
         if (shoulder_singular) {
             continue;
         }
-        const double cc = c > 1.0 ? 1.0 : (c < -1.0 ? -1.0 : c);
-        const double spsi_abs = std::sqrt(1.0 - cc * cc);
-
         for (int el = 0; el < 2; ++el) {
-            const double spsi = el == 0 ? spsi_abs : -spsi_abs;
-            const double psi = std::atan2(spsi, cc);
-            const double t3 = psi - gamma;
-            const double t2 = std::atan2(py, px) - std::atan2(L * spsi, a2 + L * cc);
-
+            double t2, t3;
+            arm.solve(p1.x(), p1.y(), c, el, &t2, &t3);
             const Matrix3d R03 = dh_transform(d[0], t1).topLeftCorner<3, 3>() *
                                  dh_transform(d[1], t2).topLeftCorner<3, 3>() *
                                  dh_transform(d[2], t3).topLeftCorner<3, 3>();
@@ -239,16 +419,13 @@ IkStatus ik_branches(const ls_robot_model_t &m, const Matrix4d &T, const double 
             const Matrix3d M = R03.transpose() * R * rot_x(-d[5].alpha_rad);
             const double c5 = -s4 * s5 * M(2, 2);
             const double sn = std::hypot(M(0, 2), M(1, 2));
-
             for (int wr = 0; wr < 2; ++wr) {
                 const double f = wr == 0 ? 1.0 : -1.0;
                 const double t5 = std::atan2(f * sn, c5);
                 double t4, t6;
                 if (std::fabs(std::sin(t5)) < kWristSingularSin) {
                     // Only t4 + t6 (or t4 - t6) is defined: take q4 from ref.
-                    double q4 = ref[3];
-                    q4 = q4 < m.q_min_rad[3] ? m.q_min_rad[3] : (q4 > m.q_max_rad[3] ? m.q_max_rad[3] : q4);
-                    t4 = q4 + d[3].theta_offset_rad;
+                    t4 = clamp_into(out.ref[3], m.q_min_rad[3], m.q_max_rad[3]) + d[3].theta_offset_rad;
                     const Matrix3d N =
                         (rot_z(t4) * rot_x(d[3].alpha_rad) * rot_z(t5) * rot_x(d[4].alpha_rad)).transpose() * M;
                     t6 = std::atan2(N(1, 0), N(0, 0));
@@ -256,32 +433,8 @@ IkStatus ik_branches(const ls_robot_model_t &m, const Matrix4d &T, const double 
                     t4 = std::atan2(f * s5 * M(1, 2), f * s5 * M(0, 2));
                     t6 = std::atan2(-f * s4 * M(2, 1), f * s4 * M(2, 0));
                 }
-
                 const double theta[LS_N_JOINTS] = { t1, t2, t3, t4, t5, t6 };
-                double q[LS_N_JOINTS];
-                bool in_limits = true;
-                for (int j = 0; j < LS_N_JOINTS && in_limits; ++j) {
-                    in_limits =
-                        wrap_into(theta[j] - d[j].theta_offset_rad, m.q_min_rad[j], m.q_max_rad[j], ref[j], &q[j]);
-                }
-                if (!in_limits) {
-                    continue;
-                }
-                bool duplicate = false;
-                for (int b = 0; b < *n_out && !duplicate; ++b) {
-                    double diff = 0.0;
-                    for (int j = 0; j < LS_N_JOINTS; ++j) {
-                        diff = std::fmax(diff, std::fabs(q_out[b][j] - q[j]));
-                    }
-                    duplicate = diff < kSameBranchRad;
-                }
-                if (duplicate) {
-                    continue;
-                }
-                for (int j = 0; j < LS_N_JOINTS; ++j) {
-                    q_out[*n_out][j] = q[j];
-                }
-                ++*n_out;
+                out.add(theta);
             }
         }
     }
@@ -291,7 +444,93 @@ IkStatus ik_branches(const ls_robot_model_t &m, const Matrix4d &T, const double 
     if (shoulder_singular) {
         return kIkSingular;
     }
-    return *n_out > 0 ? kIkOk : kIkLimits;
+    return *out.n_out > 0 ? kIkOk : kIkLimits;
+}
+
+// Offset wrist (ls_kin_classify). In frame 1 the rotation is
+// M = Rz(t234) Rx(alpha4) Rz(t5) Rx(alpha5) Rz(t6) (t234 = t2 + t3 + t4): the
+// same product as a spherical wrist's joints 4-6 with t234 for t4, so t5,
+// t6 and t234 come from the same entries. Then joint 4's axis, d5 back from
+// the wrist centre along z4 = Rz(t234) Rx(alpha4) e_z, is the point the
+// planar arm a2, a3 reaches, and t4 = t234 - t2 - t3.
+IkStatus ik_offset(const ls_robot_model_t &m, const Matrix4d &T, const Branches &out) noexcept
+{
+    const ls_dh_t *d = m.dh;
+    const Matrix3d R = T.topLeftCorner<3, 3>();
+    const Vector3d p = T.topRightCorner<3, 1>();
+    const double sa6 = std::sin(d[5].alpha_rad), ca6 = std::cos(d[5].alpha_rad);
+    const Vector3d w = p - d[5].d_m * (R * Vector3d(0.0, sa6, ca6));
+    const double h = d[1].d_m + d[2].d_m + d[3].d_m;
+    double theta1[2];
+    bool shoulder_singular = false;
+    if (shoulder(m, w, h, theta1, &shoulder_singular) == kIkUnreachable) {
+        return kIkUnreachable;
+    }
+    const Planar arm = { d[1].a_m, std::fabs(d[2].a_m), std::atan2(0.0, d[2].a_m) };
+    const double s4 = std::sin(d[3].alpha_rad) > 0.0 ? 1.0 : -1.0;
+    const double s5 = std::sin(d[4].alpha_rad) > 0.0 ? 1.0 : -1.0;
+
+    bool any_reachable = false;
+    for (int sh = 0; sh < 2; ++sh) {
+        const double t1 = theta1[sh];
+        const Vector3d p1 = in_frame1(d[0], t1, w);
+        const Matrix3d M = dh_transform(d[0], t1).topLeftCorner<3, 3>().transpose() * R * rot_x(-d[5].alpha_rad);
+        const double c5 = -s4 * s5 * M(2, 2);
+        const double sn = std::hypot(M(0, 2), M(1, 2));
+        // Per wrist branch: t5, t6, t234 and the point the planar arm reaches.
+        double t5[2], t6[2], t234[2], px[2], py[2], c[2];
+        bool reach[2];
+        for (int wr = 0; wr < 2; ++wr) {
+            const double f = wr == 0 ? 1.0 : -1.0;
+            t5[wr] = std::atan2(f * sn, c5);
+            if (std::fabs(std::sin(t5[wr])) < kWristSingularSin) {
+                // Only t234 + t6 (or t234 - t6) is defined: take q6 from ref.
+                t6[wr] = clamp_into(out.ref[5], m.q_min_rad[5], m.q_max_rad[5]) + d[5].theta_offset_rad;
+                const Matrix3d N =
+                    M * (rot_x(d[3].alpha_rad) * rot_z(t5[wr]) * rot_x(d[4].alpha_rad) * rot_z(t6[wr])).transpose();
+                t234[wr] = std::atan2(N(1, 0), N(0, 0));
+            } else {
+                t234[wr] = std::atan2(f * s5 * M(1, 2), f * s5 * M(0, 2));
+                t6[wr] = std::atan2(-f * s4 * M(2, 1), f * s4 * M(2, 0));
+            }
+            // z4 in frame 1 is (s4 sin t234, -s4 cos t234, 0).
+            px[wr] = p1.x() - d[4].d_m * s4 * std::sin(t234[wr]);
+            py[wr] = p1.y() + d[4].d_m * s4 * std::cos(t234[wr]);
+            reach[wr] = arm.elbow_cos(px[wr], py[wr], &c[wr]);
+            any_reachable = any_reachable || reach[wr];
+        }
+        if (shoulder_singular) {
+            continue;
+        }
+        for (int el = 0; el < 2; ++el) {
+            for (int wr = 0; wr < 2; ++wr) {
+                if (!reach[wr]) {
+                    continue;
+                }
+                double t2, t3;
+                arm.solve(px[wr], py[wr], c[wr], el, &t2, &t3);
+                const double theta[LS_N_JOINTS] = { t1, t2, t3, t234[wr] - t2 - t3, t5[wr], t6[wr] };
+                out.add(theta);
+            }
+        }
+    }
+    if (!any_reachable) {
+        return kIkUnreachable;
+    }
+    if (shoulder_singular) {
+        return kIkSingular;
+    }
+    return *out.n_out > 0 ? kIkOk : kIkLimits;
+}
+
+// Every branch of the model's class, each joint wrapped into its limits
+// nearest ref[j] (ls_kin.h: order, conventions).
+IkStatus ik_branches(const ls_robot_model_t &m, const Matrix4d &T, const double ref[LS_N_JOINTS],
+                     double q_out[LS_KIN_MAX_BRANCHES][LS_N_JOINTS], int *n_out) noexcept
+{
+    *n_out = 0;
+    const Branches out = { m, ref, q_out, n_out };
+    return m.ik_class == LS_IK_CLASS_OFFSET_WRIST ? ik_offset(m, T, out) : ik_spherical(m, T, out);
 }
 
 int ik_status_code(IkStatus s) noexcept
@@ -331,13 +570,38 @@ int ls_kin_fk(const ls_robot_model_t *m, const double q[LS_N_JOINTS], double T_b
     return LS_OK;
 }
 
+int ls_kin_classify(const ls_robot_model_t *m, ls_ik_class_t *cls, char *why, size_t whylen) noexcept
+{
+    if (why != nullptr && whylen > 0) {
+        why[0] = '\0';
+    }
+    if (m == nullptr || cls == nullptr) {
+        ls_fmt_print(why, whylen, "no model");
+        return LS_EINVAL;
+    }
+    if (!model_finite(*m, why, whylen)) {
+        return LS_EINVAL;
+    }
+    char sph[160], off[160];
+    if (spherical_fits(*m, sph, sizeof sph)) {
+        *cls = LS_IK_CLASS_SPHERICAL_WRIST;
+        return LS_OK;
+    }
+    if (offset_fits(*m, off, sizeof off)) {
+        *cls = LS_IK_CLASS_OFFSET_WRIST;
+        return LS_OK;
+    }
+    ls_fmt_print(why, whylen, "not a spherical wrist (%s) and not an offset wrist (%s)", sph, off);
+    return LS_EINVAL;
+}
+
 int ls_kin_ik_all(const ls_robot_model_t *m, const double T_base_flange[16],
                   double q_out[LS_KIN_MAX_BRANCHES][LS_N_JOINTS], int *n_out) noexcept
 {
     if (n_out != nullptr) {
         *n_out = 0;
     }
-    if (m == nullptr || T_base_flange == nullptr || q_out == nullptr || n_out == nullptr || !ik_structure_ok(*m)) {
+    if (m == nullptr || T_base_flange == nullptr || q_out == nullptr || n_out == nullptr || !class_fits(*m)) {
         return LS_EINVAL;
     }
     const Matrix4d T = Map<const Matrix4d>(T_base_flange);
@@ -352,7 +616,7 @@ int ls_kin_ik_nearest(const ls_robot_model_t *m, const double T_base_flange[16],
                       double q_out[LS_N_JOINTS]) noexcept
 {
     if (m == nullptr || T_base_flange == nullptr || q_near == nullptr || q_out == nullptr ||
-        !finite_n(q_near, LS_N_JOINTS) || !ik_structure_ok(*m)) {
+        !finite_n(q_near, LS_N_JOINTS) || !class_fits(*m)) {
         return LS_EINVAL;
     }
     const Matrix4d T = Map<const Matrix4d>(T_base_flange);

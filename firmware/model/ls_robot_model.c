@@ -6,8 +6,11 @@
 
 #define DEG (LS_PI / 180.0)
 
+/* Shipped as firmware/model/robots/ls-sim6.ini too, which the loader reads
+ * into exactly these doubles (tests/unit/modelfile): change both together. */
 const ls_robot_model_t ls_robot_model_default = {
     .name = "ls-sim6",
+    .ik_class = LS_IK_CLASS_SPHERICAL_WRIST,
     .dh = {
         { .a_m = 0.050, .alpha_rad = -LS_PI / 2, .d_m = 0.400, .theta_offset_rad = 0.0 },
         { .a_m = 0.400, .alpha_rad = 0.0, .d_m = 0.0, .theta_offset_rad = -LS_PI / 2 },
@@ -33,6 +36,16 @@ const ls_robot_model_t ls_robot_model_default = {
     .workspace_min_m = { -0.95, -0.95, 0.02 },
     .workspace_max_m = { 0.95, 0.95, 1.40 },
 };
+
+const char *ls_ik_class_name(ls_ik_class_t c)
+{
+    switch (c) {
+    case LS_IK_CLASS_SPHERICAL_WRIST: return "spherical_wrist";
+    case LS_IK_CLASS_OFFSET_WRIST: return "offset_wrist";
+    case LS_IK_CLASS_NONE: break;
+    }
+    return "none";
+}
 
 double ls_robot_model_linear_jerk(const ls_robot_model_t *m, double a_m_s2)
 {

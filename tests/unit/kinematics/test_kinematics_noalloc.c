@@ -18,15 +18,39 @@
 #include "ls_kin.h"
 #include "ls_robot_model.h"
 
+/* The default arm (spherical wrist) and a UR5e's geometry (offset wrist):
+ * both IK classes. */
+static ls_robot_model_t offset_wrist_arm(void)
+{
+    ls_robot_model_t m = ls_robot_model_default;
+    const ls_dh_t dh[LS_N_JOINTS] = {
+        { 0.0, LS_PI / 2, 0.1625, 0.0 }, { -0.425, 0.0, 0.0, 0.0 },       { -0.3922, 0.0, 0.0, 0.0 },
+        { 0.0, LS_PI / 2, 0.1333, 0.0 }, { 0.0, -LS_PI / 2, 0.0997, 0.0 }, { 0.0, 0.0, 0.0996, 0.0 },
+    };
+    for (int j = 0; j < LS_N_JOINTS; ++j) {
+        m.dh[j] = dh[j];
+    }
+    m.ik_class = LS_IK_CLASS_OFFSET_WRIST;
+    return m;
+}
+
 static void test_no_allocation_in_kinematics(void **state)
 {
     (void)state;
-    const ls_robot_model_t *m = &ls_robot_model_default;
+    const ls_robot_model_t ur = offset_wrist_arm();
+    ls_ik_class_t cls = LS_IK_CLASS_NONE;
+    char why[200];
+    alloc_counter_reset();
+    alloc_counter_arm();
+    const int rc_cls = ls_kin_classify(&ur, &cls, why, sizeof why);
+    alloc_counter_disarm();
+    assert_int_equal(rc_cls, LS_OK);
+    assert_int_equal(cls, LS_IK_CLASS_OFFSET_WRIST);
     kt_rng_t rng = { 2024 };
     long calls = 0;
     int failures = 0;
-    alloc_counter_reset();
-    for (int i = 0; i < 1000; ++i) {
+    for (int i = 0; i < 2000; ++i) {
+        const ls_robot_model_t *m = i % 2 == 0 ? &ls_robot_model_default : &ur;
         double q[6], T[16], J[36], qs[LS_KIN_MAX_BRANCHES][LS_N_JOINTS], qn[6], rpy[6], T2[16], T3[16];
         int n = 0;
         kt_random_q(&rng, m, 0.0, q);
