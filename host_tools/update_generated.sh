@@ -1,7 +1,8 @@
 #!/bin/sh
 # Regenerate the host package's copies of the protocol artefacts from protocol/.
-# Run after every change of protocol/landscape.proto, .dbc or .options, or of the
-# robot model (firmware/model/ls_robot_model.c, the URDF's source);
+# Run after every change of protocol/landscape.proto, .dbc or .options, of the
+# robot model (firmware/model/ls_robot_model.c, the URDF's source) or of the
+# model file's keys (firmware/model/ls_robot_model_file.c);
 # tests/host/test_generated.py fails while the committed copies are stale.
 set -eu
 here=$(cd "$(dirname "$0")" && pwd)
@@ -15,4 +16,6 @@ cp "$root/protocol/landscape.options" "$out/landscape.options"
 ls_urdf="${LS_BUILD_DIR:-$root/build}/bin/ls_urdf"
 [ -x "$ls_urdf" ] || { echo "update_generated.sh: $ls_urdf is missing: build first (bash .ci/build)" >&2; exit 1; }
 "$ls_urdf" -o "$out/ls-sim6.urdf"
-echo "updated $out/landscape_pb2.py(i), landscape.desc, landscape.dbc, landscape.options and ls-sim6.urdf"
+# The robot model file's keys, units and ranges (`landscape model check`).
+"${LS_BUILD_DIR:-$root/build}/bin/ls_robot_model" keys > "$out/robot-model-keys.json"
+echo "updated $out/landscape_pb2.py(i), landscape.desc, landscape.dbc, landscape.options, ls-sim6.urdf and robot-model-keys.json"
