@@ -41,6 +41,7 @@
 #include "ls_link_open.h"
 #include "faulty_link.h"
 #include "ls_net.h"
+#include "ls_robot_config.h"
 #include "ls_robot_model_sim.h"
 #include "ls_telemetry.h"
 #include "slcan_pty.h"
@@ -209,6 +210,7 @@ static void send_heartbeat(ls_net_t *net, const ls_core_t *core, uint8_t counter
     }
 }
 
+static ls_robot_model_t g_model; /* [robot] model, filled once before the threads start */
 static ls_core_t g_core;
 static ls_net_t g_net;
 static ls_control_t g_ctl;
@@ -268,11 +270,12 @@ static void describe_config(void *ctx, char *buf, size_t cap)
     const ls_config_t *o = g_cfg_running;
     int n = snprintf(buf, cap,
                      "config=%s\nname=%s\nnode=0x%02X\nheartbeat_timeout_ms=%u\ndisconnect_action=%s\narm=%s\n"
-                     "dio=%s\nclock=%s\nrate_hz=%u\ntelemetry_hz=%u\nrt_priority=%d\nestop_input=%d\n",
+                     "dio=%s\nclock=%s\nrate_hz=%u\ntelemetry_hz=%u\nrt_priority=%d\nestop_input=%d\nmodel=%s\n",
                      o->config_path[0] != '\0' ? o->config_path : "(options only)", o->name, (unsigned)o->node,
                      (unsigned)o->heartbeat_timeout_ms,
                      ls_core_disconnect_action_name((ls_DisconnectAction)o->disconnect_action), o->arm, o->dio,
-                     o->clock, (unsigned)o->rate_hz, (unsigned)o->telemetry_hz, o->rt_priority, o->estop_input);
+                     o->clock, (unsigned)o->rate_hz, (unsigned)o->telemetry_hz, o->rt_priority, o->estop_input,
+                     o->model[0] != '\0' ? o->model : "(compiled in ls-sim6)");
     for (size_t i = 0; i < o->n_links && n > 0 && (size_t)n < cap; i++) {
         n += snprintf(buf + n, cap - (size_t)n, "link=%s\n", o->links[i]);
     }
@@ -447,7 +450,7 @@ static int compose(const ls_config_t *o)
     size_t n_sensors = 0;
     if (strcmp(o->arm, "sim") == 0) {
         hal_sim_arm_model_t sim_arm;
-        ls_robot_model_to_sim(&ls_robot_model_default, &sim_arm);
+        ls_robot_model_to_sim(&g_model, &sim_arm);
         hal_sim_world_config_t wc = {
             .arm = &sim_arm,
             .dio_socket_path = o->dio_socket[0] != '\0' ? o->dio_socket : NULL,
@@ -504,7 +507,7 @@ static int compose(const ls_config_t *o)
     if (compose_manual(o) != 0) {
         return -1;
     }
-    g_core.model = &ls_robot_model_default;
+    g_core.model = &g_model;
     g_core.sensors = sensors;
     g_core.n_sensors = n_sensors;
     int units = dio != NULL ? hal_dio_unit_count(dio) : 0;
@@ -512,7 +515,7 @@ static int compose(const ls_config_t *o)
         (void)hal_dio_describe(dio, (uint16_t)u, &g_core.dio_info[u]);
         g_core.dio_units = (uint16_t)(u + 1);
     }
-    ls_control_config_t cc = { .model = &ls_robot_model_default,
+    ls_control_config_t cc = { .model = &g_model,
                                .arm = arm,
                                .dio = dio,
                                .sensors = sensors,
@@ -535,8 +538,9 @@ static int compose(const ls_config_t *o)
         LOG_ERR("control thread: %s", msg);
         return -1;
     }
-    LOG_INFO("control loop at %u Hz (%s clock), arm %s, dio %s, %zu sensors", (unsigned)o->rate_hz, o->clock, o->arm,
-             o->dio, n_sensors);
+    LOG_INFO("control loop at %u Hz (%s clock), arm %s (robot model %s, %s inverse kinematics), dio %s, %zu sensors",
+             (unsigned)o->rate_hz, o->clock, o->arm, g_model.name, ls_ik_class_name(g_model.ik_class), o->dio,
+             n_sensors);
     return 0;
 }
 
@@ -559,7 +563,8 @@ int main(int argc, char **argv)
     if (opt.check) {
         return ls_check_run(&opt, stdout);
     }
-    if (ls_config_validate(&opt, cmsg, sizeof cmsg) != 0) {
+    if (ls_config_validate(&opt, cmsg, sizeof cmsg) != 0 ||
+        ls_robot_config_load(&opt, &g_model, cmsg, sizeof cmsg) != 0) {
         LOG_ERR("%s", cmsg);
         return LS_EXIT_BAD_CONFIG;
     }

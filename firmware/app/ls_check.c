@@ -26,6 +26,8 @@
 #include "hal_linux_gpiod.h"
 #include "hal_linux_socketcan.h"
 #include "ls_drive_setup.h"
+#include "ls_err.h"
+#include "ls_robot_config.h"
 
 typedef struct {
     FILE *out;
@@ -70,6 +72,22 @@ static bool check_config(report_t *r, const ls_config_t *cfg)
     }
     report(r, LS_CHECK_PASS, "configuration", "%s: node 0x%02X, %zu link(s), arm %s, dio %s, clock %s, %u Hz", src,
            (unsigned)cfg->node, cfg->n_links, cfg->arm, cfg->dio, cfg->clock, (unsigned)cfg->rate_hz);
+    return true;
+}
+
+/* ---- robot model ---------------------------------------------------------- */
+
+/* false when the model is refused: a refused configuration (exit 2). */
+static bool check_model(report_t *r, const ls_config_t *cfg)
+{
+    static ls_robot_model_t m;
+    char msg[512];
+    if (ls_robot_config_load(cfg, &m, msg, sizeof msg) != LS_OK) {
+        report(r, LS_CHECK_FAIL, "robot model", "%s", msg);
+        return false;
+    }
+    report(r, LS_CHECK_PASS, "robot model", "%s: %s, %s inverse kinematics",
+           cfg->model[0] != '\0' ? cfg->model : "(compiled in)", m.name, ls_ik_class_name(m.ik_class));
     return true;
 }
 
@@ -416,6 +434,7 @@ int ls_check_run(const ls_config_t *cfg, FILE *out)
 {
     report_t r = { .out = out, .n = { 0, 0, 0 } };
     bool config_ok = check_config(&r, cfg);
+    config_ok = check_model(&r, cfg) && config_ok;
     check_afcan(&r, cfg);
     check_links(&r, cfg);
     config_ok = check_drives(&r, cfg, config_ok) && config_ok;

@@ -308,6 +308,20 @@ static int set_clock(ls_config_t *cfg, const char *v, char *why, size_t whylen)
     return 0;
 }
 
+/* The robot model file ("" = the compiled-in ls-sim6); its contents are
+ * checked when landscaped loads it (ls_robot_config.h). */
+static int set_model(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    size_t n = strlen(v);
+    if ((n > 0 && v[n - 1] == '/') || copy_str(cfg->model, sizeof cfg->model, v) != 0) {
+        cfg->model[0] = '\0';
+        return EXPECT("the path of a robot model file, of at most %zu characters, or nothing for the compiled-in "
+                      "ls-sim6",
+                      sizeof cfg->model - 1);
+    }
+    return 0;
+}
+
 static int set_rate(ls_config_t *cfg, const char *v, char *why, size_t whylen)
 {
     if (parse_u32(v, 100, 10000, &cfg->rate_hz) != 0) {
@@ -760,10 +774,12 @@ static const key_def_t KEYS[] = {
 #undef MANUAL_KEYS
     { "manual", "speed_steps", NULL, false, set_speed_steps },
     { "drives", "stale_cycles", NULL, false, set_drives_stale },
+    { "robot", "model", "model", false, set_model },
 };
 #define N_KEYS (sizeof KEYS / sizeof KEYS[0])
 
-static const char *SECTIONS = "[device], [hal], [control], [dio], [manual], [drives] or [joint.1] .. [joint.6]";
+static const char *SECTIONS =
+    "[device], [hal], [control], [dio], [manual], [drives], [joint.1] .. [joint.6] or [robot]";
 
 static bool known_section(const char *s)
 {
@@ -1100,6 +1116,8 @@ void ls_config_usage(FILE *f)
             "  --estop-input N           [dio] estop_input: input bit that stops everything, -1 = none\n"
             "  (file only)               [manual] teachpendant, spaceball: the manualControl devices (evdev),\n"
             "                            their maps and speed_steps (docs/deploy.md \"Manual devices\")\n"
+            "  --model FILE              [robot] model: the arm's robot model file (docs/deploy.md \"Describe\n"
+            "                            your arm\"; default: the compiled-in ls-sim6)\n"
             "  -h, --help                this text\n",
             LS_CONFIG_DEFAULT_PATH);
 }

@@ -121,6 +121,8 @@ typedef struct {
     /* spaceball_stale_ms = 0 */
     uint8_t n_speed_steps; /* speed_steps = 10,25,50,100 (percent, ascending, 1..100) */
     uint8_t speed_steps[LS_MANUAL_MAX_STEPS];
+    /* [robot] */
+    char model[256]; /* model = PATH of a robot model file (default "": the compiled-in ls-sim6) */
     /* modes */
     bool check;   /* --check: self-check and exit */
     bool hal_sim; /* --hal sim: the skeleton's shorthand for arm=sim dio=sim clock=realtime */

@@ -322,6 +322,15 @@ static int check_model(const hal_sim_arm_model_t *m, char *msg, size_t msglen)
     return LS_OK;
 }
 
+int hal_sim_world_check_arm(const hal_sim_arm_model_t *arm, char *msg, size_t msglen)
+{
+    if (arm == NULL) {
+        set_msg(msg, msglen, "arm model: none given");
+        return LS_EINVAL;
+    }
+    return check_model(arm, msg, msglen);
+}
+
 static void build_arm(void)
 {
     const hal_sim_arm_model_t *m = W.m;

@@ -235,6 +235,11 @@ typedef struct {
     hal_sim_trace_config_t trace;   /* all zero: no set-point trace */
 } hal_sim_world_config_t;
 
+/* Whether open() can build this arm (the needs listed above
+ * hal_sim_arm_model_t), without building anything: LS_OK, or LS_EINVAL with
+ * the reason in msg (msglen may be 0). Init-time; no allocation, no state. */
+int hal_sim_world_check_arm(const hal_sim_arm_model_t *arm, char *msg, size_t msglen);
+
 /* Build the world. Init only; allocates. Returns LS_OK, or LS_EINVAL (bad
  * config, world already open, socket path too long or taken by a non-socket,
  * trace path too long or a directory) or LS_EIO (socket/ODE failure, trace

@@ -57,6 +57,15 @@ static int run(cx_t *c)
 }
 
 /* The line "LEVEL  what...", or fail. */
+/* A fresh report for the next run. */
+static void clear(cx_t *c)
+{
+    fclose(c->out);
+    free(c->buf);
+    c->buf = NULL;
+    c->out = open_memstream(&c->buf, &c->len);
+}
+
 static const char *line_of(cx_t *c, const char *what)
 {
     size_t wl = strlen(what);
@@ -154,6 +163,8 @@ static void test_sim_configuration_passes(void **state)
     snprintf(want, sizeof want, "PASS  link %s: pseudo-terminals available, %s writable", link, c->dir);
     assert_string_equal(line_of(c, "link slcan"), want);
     assert_string_equal(line_of(c, "dio"), "PASS  dio: sim backend, no GPIO chip needed");
+    assert_string_equal(line_of(c, "robot model"),
+                        "PASS  robot model: (compiled in): ls-sim6, spherical_wrist inverse kinematics");
     assert_string_equal(line_of(c, "real-time"),
                         "PASS  real-time: not requested (rt_priority = 0): the control loop is a normal thread");
     assert_string_equal(line_of(c, "memory locking"), "PASS  memory locking: not requested (lock_memory = false)");
@@ -164,9 +175,9 @@ static void test_sim_configuration_passes(void **state)
     if (!kernel_has_afcan()) {
         assert_starts(line_of(c, "AF_CAN"), "WARN  AF_CAN: ");
         assert_contains(c->line, "(not needed by this configuration: no socketcan link)");
-        assert_contains(c->buf, "landscaped can run with this configuration: 0 FAIL, 1 WARN, 7 PASS\n");
+        assert_contains(c->buf, "landscaped can run with this configuration: 0 FAIL, 1 WARN, 8 PASS\n");
     } else {
-        assert_contains(c->buf, "landscaped can run with this configuration: 0 FAIL, 0 WARN, 8 PASS\n");
+        assert_contains(c->buf, "landscaped can run with this configuration: 0 FAIL, 0 WARN, 9 PASS\n");
     }
 }
 
@@ -209,6 +220,33 @@ static void test_invalid_configuration_fails(void **state)
     assert_string_equal(line_of(c, "configuration"),
                         "FAIL  configuration: (command line only): no link configured: give --link SPEC or "
                         "'link = SPEC' under [hal] (e.g. slcan:pty:/tmp/landscape0 or socketcan:can0)");
+}
+
+/* A model file that is refused is a refused configuration (exit 2), as
+ * when landscaped starts with it; so is one the simulator cannot build. */
+static void test_a_refused_robot_model_is_a_bad_configuration(void **state)
+{
+    cx_t *c = *state;
+    char link[128];
+    snprintf(link, sizeof link, "slcan:pty:%s/ls0", c->dir);
+    add_link(c, link);
+    snprintf(c->cfg.model, sizeof c->cfg.model, "%s/no-such-arm.ini", c->dir);
+    assert_int_equal(run(c), LS_EXIT_BAD_CONFIG);
+    char want[512];
+    snprintf(want, sizeof want,
+             "FAIL  robot model: %s/no-such-arm.ini: cannot read the robot model file: No such file or directory "
+             "(name an existing file in [robot] model or --model)",
+             c->dir);
+    assert_string_equal(line_of(c, "robot model"), want);
+    snprintf(c->cfg.model, sizeof c->cfg.model, "%s/puma560.ini", LS_ROBOTS_DIR);
+    clear(c);
+    assert_int_equal(run(c), LS_EXIT_BAD_CONFIG);
+    assert_contains(line_of(c, "robot model"), "FAIL  robot model: [hal] arm = sim cannot simulate robot model "
+                                               "puma560 (");
+    snprintf(c->cfg.model, sizeof c->cfg.model, "%s/ur5e.ini", LS_ROBOTS_DIR);
+    clear(c);
+    assert_int_equal(run(c), LS_EXIT_OK);
+    assert_contains(line_of(c, "robot model"), "/ur5e.ini: ur5e, offset_wrist inverse kinematics");
 }
 
 static void test_unwritable_pty_directory_fails(void **state)
@@ -298,6 +336,7 @@ int tc_run_check_tests(void)
         cmocka_unit_test_setup_teardown(test_sim_configuration_passes, setup, teardown),
         cmocka_unit_test_setup_teardown(test_invalid_configuration_fails, setup, teardown),
         cmocka_unit_test_setup_teardown(test_manual_devices_are_listed_with_what_they_lack, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_a_refused_robot_model_is_a_bad_configuration, setup, teardown),
         cmocka_unit_test_setup_teardown(test_unwritable_pty_directory_fails, setup, teardown),
         cmocka_unit_test_setup_teardown(test_pty_path_taken_by_a_file_fails, setup, teardown),
         cmocka_unit_test_setup_teardown(test_cpu_outside_the_allowed_set_fails, setup, teardown),

@@ -240,16 +240,25 @@ static void test_key_in_wrong_section(void **state)
 static void test_unknown_section(void **state)
 {
     refused(*state, "[device]\nnode = 3\n[motors]\n",
-            "3: unknown section [motors]; expected [device], [hal], [control], [dio], [manual], [drives] or [joint.1] "
-            ".. [joint.6]");
+            "3: unknown section [motors]; expected [device], [hal], [control], [dio], [manual], [drives], "
+            "[joint.1] .. [joint.6] or [robot]");
+}
+
+static void test_robot_model_key(void **state)
+{
+    fx_t *f = *state;
+    assert_int_equal(load(f, "[robot]\nmodel = /usr/share/landscape/robots/ur5e.ini\n"), 0);
+    assert_string_equal(f->cfg.model, "/usr/share/landscape/robots/ur5e.ini");
+    refused(f, "[robot]\nmodel = /etc/landscape/\n",
+            "2: [robot] model: got '/etc/landscape/', expected the path of a robot model file, of at most 255 "
+            "characters, or nothing for the compiled-in ls-sim6");
 }
 
 static void test_key_outside_section(void **state)
 {
     refused(*state, "# no section yet\nnode = 3\n",
-            "2: key 'node' outside any section: put it under [device], [hal], [control], [dio], [manual], [drives] or "
-            "[joint.1] "
-            ".. [joint.6]");
+            "2: key 'node' outside any section: put it under [device], [hal], [control], [dio], [manual], [drives], "
+            "[joint.1] .. [joint.6] or [robot]");
 }
 
 static void test_wrong_type(void **state)
@@ -399,8 +408,8 @@ static void test_byte_order_mark_and_nul(void **state)
 {
     fx_t *f = *state;
     refused(f, "\xEF\xBB\xBF[motors]\n",
-            "1: unknown section [motors]; expected [device], [hal], [control], [dio], [manual], [drives] or [joint.1] "
-            ".. [joint.6]");
+            "1: unknown section [motors]; expected [device], [hal], [control], [dio], [manual], [drives], [joint.1] "
+            ".. [joint.6] or [robot]");
     unlink(f->path);
     assert_int_equal(load(f, "\xEF\xBB\xBF[device]\nnode = 7\n"), 0);
     assert_int_equal(f->cfg.node, 7);
@@ -444,7 +453,8 @@ static void test_every_option(void **state)
     fx_t *f = *state;
     assert_int_equal(ARGS(f, "--link", "socketcan:vcan0", "--arm", "none", "--dio", "gpiod:0", "--dio-socket",
                           "/run/x.sock", "--clock", "lockstep", "--rate", "500", "--telemetry-hz", "25",
-                          "--rt-priority", "0", "--rt-cpu", "0", "--no-lock-memory", "--estop-input", "2", "--check"),
+                          "--rt-priority", "0", "--rt-cpu", "0", "--no-lock-memory", "--estop-input", "2", "--model",
+                          "/etc/landscape/arm.ini", "--check"),
                      0);
     const ls_config_t *c = &f->cfg;
     assert_false(c->hal_sim);
@@ -460,6 +470,7 @@ static void test_every_option(void **state)
     assert_int_equal(c->rt_cpu, 0);
     assert_false(c->lock_memory);
     assert_int_equal(c->estop_input, 2);
+    assert_string_equal(c->model, "/etc/landscape/arm.ini");
     assert_true(c->check);
 }
 
@@ -903,6 +914,7 @@ int tc_run_config_tests(void)
         cmocka_unit_test_setup_teardown(test_byte_order_mark_and_nul, setup, teardown),
         cmocka_unit_test_setup_teardown(test_skeleton_options_keep_working, setup, teardown),
         cmocka_unit_test_setup_teardown(test_every_option, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_robot_model_key, setup, teardown),
         cmocka_unit_test_setup_teardown(test_options_override_the_file, setup, teardown),
         cmocka_unit_test_setup_teardown(test_later_option_wins, setup, teardown),
         cmocka_unit_test_setup_teardown(test_option_errors, setup, teardown),
