@@ -10,6 +10,7 @@
 #include "cmd_sensor.h"
 #include "ls_core.h"
 #include "ls_fmt.h"
+#include "ls_robot_urdf.h"
 
 _Static_assert(LS_FIELD_LIMIT_COUNT <= pb_arraysize(ls_DescribeRes, field_limits),
                "landscape.options: raise ls.DescribeRes.field_limits max_count to hold every bounded uplink field");
@@ -18,6 +19,9 @@ _Static_assert(pb_arraysize(ls_FieldLimit, path) >= sizeof(((ls_field_limit_t *)
 _Static_assert(LS_CORE_MAX_DIO_UNITS <= pb_arraysize(ls_DescribeRes, dio_units),
                "landscape.options: ls.DescribeRes.dio_units must hold LS_CORE_MAX_DIO_UNITS");
 _Static_assert(LS_N_JOINTS <= pb_arraysize(ls_DescribeRes, joints), "ls.DescribeRes.joints must hold every joint");
+_Static_assert(sizeof(((ls_DescribeRes *)0)->robot_model) >= LS_ROBOT_MODEL_NAME_MAX &&
+                   sizeof(((ls_DescribeRobotRes *)0)->robot_model) >= LS_ROBOT_MODEL_NAME_MAX,
+               "landscape.options: robot_model must hold LS_ROBOT_MODEL_NAME_MAX bytes");
 
 static void describe_limits(ls_DescribeRes *r)
 {
@@ -124,4 +128,29 @@ int32_t ls_h_describe(struct ls_core *core, struct ls_call *call)
     }
     return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "%s",
                     core->model != NULL ? "described (SI units)" : "described (SI units); no arm is composed");
+}
+
+/* describeRobot (ours): the URDF of the model, one window of it per answer
+ * (docs/protocol.md "Robot description"). The text is formatted afresh for
+ * every piece: no buffer holds all of it. */
+int32_t ls_h_describe_robot(struct ls_core *core, struct ls_call *call)
+{
+    const ls_DescribeRobotReq *rq = &call->req->cmd.describe_robot;
+    ls_DescribeRobotRes *r = &call->res->result.describe_robot;
+    if (core->model == NULL) {
+        return ls_reply(call, ls_RetCode_CMD_UNSUPPORTED_ERR, "no arm is composed: there is no robot to describe");
+    }
+    size_t total = 0;
+    const int n = ls_robot_urdf_window(core->model, rq->offset, r->urdf, sizeof r->urdf, &total);
+    if (n < 0 || rq->offset > total) {
+        return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR,
+                        "offset %u is past the end of the URDF (%u bytes): ask from 0 to %u",
+                        (unsigned)rq->offset, (unsigned)total, (unsigned)total);
+    }
+    r->offset = rq->offset;
+    r->total_bytes = (uint32_t)total;
+    ls_fmt_print(r->robot_model, sizeof r->robot_model, "%s", core->model->name);
+    ls_fmt_print(r->ik_class, sizeof r->ik_class, "%s", ls_ik_class_name(core->model->ik_class));
+    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "URDF bytes %u..%u of %u", (unsigned)rq->offset,
+                    (unsigned)(rq->offset + (uint32_t)n), (unsigned)total);
 }

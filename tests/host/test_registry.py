@@ -16,7 +16,7 @@ REQUEST_FIELDS = [f.name for f in ls.Request.DESCRIPTOR.oneofs_by_name["cmd"].fi
 
 def test_registry_covers_every_request_field_in_schema_order() -> None:
     assert list(COMMANDS) == REQUEST_FIELDS
-    assert len(COMMANDS) == 43
+    assert len(COMMANDS) == 44
     for f in ls.Request.DESCRIPTOR.oneofs_by_name["cmd"].fields:
         c = COMMANDS[f.name]
         spec = f.message_type.GetOptions().Extensions[ls.cmd]

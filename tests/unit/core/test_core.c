@@ -18,6 +18,7 @@
 
 #include "ls_control.h"
 #include "ls_core.h"
+#include "ls_robot_urdf.h"
 #include "cmd_sensor.h"
 #include "ls_core_events.h"
 #include "ls_kin.h"
@@ -2619,6 +2620,44 @@ static void test_describe_publishes_the_limits_from_their_homes(void **state)
     assert_true(d->reach_m == ls_robot_model_reach_m(mdl));
 }
 
+/* describeRobot: the URDF of the running model in pieces that join into
+ * ls_robot_urdf_window's text; an offset past its end is refused. */
+static void test_describe_robot_sends_the_urdf_of_the_model_in_pieces(void **state)
+{
+    (void)state;
+    static char whole[16384], joined[16384];
+    size_t total = 0;
+    assert_true(ls_robot_urdf_window(g_core.model, 0, whole, sizeof whole, &total) > 0);
+    uint32_t offset = 0;
+    int pieces = 0;
+    do {
+        req(ls_Request_describe_robot_tag)->cmd.describe_robot.offset = offset;
+        const ls_Response *r = must(HOST_B); /* any session, not only the owner */
+        assert_int_equal(r->ret_code, ls_RetCode_CMD_EXEC_OK);
+        assert_int_equal(r->which_result, ls_Response_describe_robot_tag);
+        const ls_DescribeRobotRes *d = &r->result.describe_robot;
+        assert_int_equal(d->total_bytes, total);
+        assert_int_equal(d->offset, offset);
+        assert_string_equal(d->robot_model, "ls-sim6");
+        assert_string_equal(d->ik_class, "spherical_wrist");
+        const size_t n = strlen(d->urdf);
+        assert_true(n > 0 && n < sizeof d->urdf);
+        memcpy(joined + offset, d->urdf, n);
+        offset += (uint32_t)n;
+        pieces++;
+    } while (offset < total);
+    assert_memory_equal(joined, whole, total);
+    assert_true(pieces > 1); /* longer than one answer */
+    req(ls_Request_describe_robot_tag)->cmd.describe_robot.offset = (uint32_t)total;
+    const ls_Response *end = must(HOST_B);
+    assert_int_equal(end->ret_code, ls_RetCode_CMD_EXEC_OK);
+    assert_string_equal(end->result.describe_robot.urdf, "");
+    req(ls_Request_describe_robot_tag)->cmd.describe_robot.offset = (uint32_t)total + 1;
+    const ls_Response *past = must(HOST_B);
+    assert_int_equal(past->ret_code, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    assert_non_null(strstr(past->ret_msg, "is past the end of the URDF"));
+}
+
 /* Every final notice the core composes (<command><suffix>) is declared in the
  * schema: each ending of every non-blocking command, and each ending of the
  * sensor-guided moves. */
@@ -2711,6 +2750,7 @@ int main(void)
         cmocka_unit_test(test_path_move_cycles_absent_is_one_zero_is_a_dry_run_that_says_so),
         cmocka_unit_test(test_final_notice_writes_a_joint_at_rest_as_0),
         cmocka_unit_test_setup(test_describe_publishes_the_limits_from_their_homes, setup_locked),
+        cmocka_unit_test_setup(test_describe_robot_sends_the_urdf_of_the_model_in_pieces, setup_locked),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
