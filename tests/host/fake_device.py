@@ -9,7 +9,8 @@ time-out; an owner's lock goes with it), lock,
 release, activate, deactivate, get-motion-control-state, seq caching (a
 retransmitted seq is answered from the cache, never executed twice), pathLoad
 and pathClearPath (named paths, at most 32 points per message as the firmware),
-describe (the limits of the committed landscape.options, no devices) and two
+describe (the limits of the committed landscape.options, no devices), describeRobot
+(the packaged URDF of the default arm, in pieces of the size landscape.options gives) and two
 non-blocking commands: moveAbsolute, which sends a tag event, an RSVP named
 as a path's own `rsvp confirmMove` would be, and then its final event or alarm
 (moveAbsoluteComplete, moveAbsoluteFailed, moveAbsoluteAborted), and pathMove,
@@ -38,6 +39,7 @@ from landscape.bus import ISOTP_PARAMS
 from landscape.limits import max_count, max_string_bytes
 from landscape.notices import undeclared
 from landscape.registry import PROTOCOL_VERSION, SCHEMA_HASH
+from landscape.urdf import urdf_text
 
 #: HEARTBEAT hb_role of a device and of a supervisor (the DBC's value table)
 DEVICE_ROLE = tm.choice_value("HEARTBEAT", "hb_role", "device")
@@ -285,6 +287,16 @@ class FakeDevice:
             r.field_limits.add(path=[1, n_load, 1], max_bytes=name)
             r.field_limits.add(path=[1, n_load, 6], max_count=tags)
             r.field_limits.add(path=[1, n_load, 6, 3], max_bytes=tag)
+            return answer(pb.CMD_EXEC_OK)
+        if which == "describe_robot":
+            text, at = urdf_text().encode(), req.describe_robot.offset
+            if at > len(text):
+                return answer(pb.CMD_PARAM_OUT_OF_RANGE_ERR, f"offset {at} is past the end of the URDF")
+            piece = max_string_bytes("DescribeRobotRes", "urdf")
+            assert piece is not None
+            rr = resp.describe_robot
+            rr.urdf, rr.offset, rr.total_bytes = text[at:at + piece].decode(), at, len(text)
+            rr.robot_model, rr.ik_class = "ls-sim6", "spherical_wrist"
             return answer(pb.CMD_EXEC_OK)
         if which == "get_motion_control_state":
             r = resp.get_motion_control_state

@@ -11,7 +11,9 @@ from click.testing import CliRunner, Result
 from fake_device import FakeDevice
 from landscape import cli_tools, ls
 from landscape.cli import cli
+from landscape.mcap_log import URDF_ATTACHMENT
 from landscape.paths import build_path_load_requests, load_path_file
+from landscape.urdf import urdf_text
 
 CORNERS = ("x,y,z,roll,pitch,yaw,tag_name,tag_index\n"
            "0.03,0,0,0,0,0,c1,1\n0.03,0.06,0,0,0,0,c2,2\n-0.03,0.06,0,0,0,0,,\n-0.03,0,0,0,0,0,c4,4\n")
@@ -160,6 +162,29 @@ def test_record_writes_rows(channel: str, device: FakeDevice, tmp_path: Path, su
     assert names == {"JOINTS_12", "JOINTS_34", "JOINTS_56", "TOOL_POS", "TOOL_RPY", "STATUS", "DIO"}
     assert len(j12) >= 5 and dev == sorted(dev) and len(set(dev)) == len(dev)
     assert t == sorted(t) and 0 <= t[0] and t[-1] < 1.0
+
+
+def test_urdf_is_the_devices_own_joined_from_its_pieces(channel: str, device: FakeDevice, tmp_path: Path) -> None:
+    """`landscape urdf` asks the device (describeRobot) from offset 0 until it has the whole text; --packaged
+    prints the default arm's copy without a bus."""
+    r = run(channel, "urdf", "-o", str(tmp_path / "arm.urdf"))
+    assert r.exit_code == 0, r.stderr
+    assert (tmp_path / "arm.urdf").read_text() == urdf_text()
+    offsets = [q.describe_robot.offset for q in device.requests if q.WhichOneof("cmd") == "describe_robot"]
+    assert len(offsets) > 1 and offsets[0] == 0 and offsets == sorted(offsets)
+    r = CliRunner().invoke(cli, ["urdf", "--packaged"])
+    assert r.exit_code == 0 and r.stdout == urdf_text()
+
+
+def test_an_mcap_recording_carries_the_devices_urdf(channel: str, device: FakeDevice, tmp_path: Path) -> None:
+    from mcap.reader import make_reader
+
+    out = tmp_path / "rec.mcap"
+    assert run(channel, "record", str(out), "--duration", "0.3").exit_code == 0
+    with out.open("rb") as f:
+        attachments = list(make_reader(f).iter_attachments())
+    assert [(a.name, a.media_type) for a in attachments] == [(URDF_ATTACHMENT, "application/xml")]
+    assert attachments[0].data.decode() == urdf_text()
 
 
 def test_record_unknown_suffix_exit_2(channel: str, tmp_path: Path) -> None:

@@ -55,7 +55,7 @@ from .recording import Recorder, record_format
 from .registry import lookup, message_to_dict
 from .session import SessionClient, SessionError, SessionServer
 from .supervisor import RetVal, Supervisor
-from .urdf import urdf_text, write_urdf
+from .urdf import robot_urdf, urdf_text, write_urdf
 
 
 def _stdout_is_tty() -> bool:
@@ -207,10 +207,19 @@ class Follow:
                     f"the session at {watcher.path} went away ({exc}): check `landscape session status`")
 
 
+def device_urdf(backend: Supervisor | SessionClient) -> str:
+    """The URDF of the arm the device runs (describeRobot), through our own session or the background one."""
+    cmd = lookup("describe_robot")
+    return robot_urdf(lambda offset: send(backend, cmd, {"offset": offset}, wait_s=None))
+
+
 def start_recording(st: CliState, rec: Recorder | ChannelWriter) -> Follow:
     """Feed `rec` from the background session (a watch connection of its own) or from the
     invocation's own session; returns the Follow that stops it. Raw CAN frames (MCAP) come
-    from the own session only: the background session forwards broadcasts and notices."""
+    from the own session only: the background session forwards broadcasts and notices. An
+    MCAP recording or a live view draws the device's own URDF (ChannelWriter.use_robot)."""
+    if isinstance(rec, ChannelWriter):
+        rec.use_robot(device_urdf(st.backend()))
     client = st.background()
     if client is None:
         sup = st.session()
@@ -382,12 +391,16 @@ def _follow_notices(st: CliState, client: SessionClient | None,
 @cli.command("urdf")
 @click.option("-o", "--output", "out", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="file to write (default: stdout)")
-def urdf_cmd(out: Path | None) -> None:
-    """The URDF of the simulated arm (generated from the firmware's robot model), for a 3D viewer."""
+@click.option("--packaged", is_flag=True,
+              help="the URDF of the default arm (ls-sim6) shipped with this package, without a device")
+@click.pass_context
+def urdf_cmd(ctx: click.Context, out: Path | None, packaged: bool) -> None:
+    """The URDF of the arm the device runs (written from its robot model, describeRobot), for a 3D viewer."""
+    text = urdf_text() if packaged else device_urdf(state_of(ctx).backend())
     if out is None:
-        click.echo(urdf_text(), nl=False)
+        click.echo(text, nl=False)
     else:
-        write_urdf(out)
+        write_urdf(out, text)
         click.echo(f"urdf: wrote {out}")
 
 

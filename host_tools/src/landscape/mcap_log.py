@@ -12,7 +12,7 @@ topic               schema                    what
                                               error (commanded minus measured) [rad], null from a device that
                                               does not send JOINTS_CMD
 /tf                 foxglove.FrameTransforms  one transform per URDF joint at those positions (a 3D panel with
-                                              the URDF of `landscape urdf` draws the arm)
+                                              the device's URDF, `landscape urdf`, draws the arm)
 /tool_pose          foxglove.PoseInFrame      the tool tip (TOOL_POS + TOOL_RPY) in frame base_link
 /status             landscape.Status          the STATUS broadcast
 /dio                landscape.DigitalIO       the DIO broadcast (input and output bit masks)
@@ -20,7 +20,8 @@ topic               schema                    what
 /can                landscape.CanFrame        every CAN frame received (id, flags, data as hex)
 ==================  ========================  ===============================================================
 
-Log times are the host's wall clock (ns since the epoch) of arrival.
+Log times are the host's wall clock (ns since the epoch) of arrival. A recording of a device that sent
+its URDF (describeRobot) carries it as the attachment `robot.urdf` (URDF_ATTACHMENT).
 """
 from __future__ import annotations
 
@@ -46,6 +47,7 @@ JOINT_SIGNALS: dict[str, tuple[str, ...]] = {"JOINTS_12": ("j1", "j2"), "JOINTS_
 COMMAND_SIGNALS: dict[str, tuple[str, ...]] = {"JOINTS_CMD_12": ("j1_cmd", "j2_cmd"),
                                                "JOINTS_CMD_34": ("j3_cmd", "j4_cmd"),
                                                "JOINTS_CMD_56": ("j5_cmd", "j6_cmd")}
+URDF_ATTACHMENT = "robot.urdf"
 LOG_LEVEL = {pb.EVENT: 2, pb.EVENT_RSVP: 2, pb.ALARM: 3, pb.ALARM_RSVP: 3}  # foxglove.Log: INFO, WARNING
 
 _TIME = {"type": "object", "title": "time", "properties": {"sec": {"type": "integer", "minimum": 0},
@@ -129,6 +131,7 @@ class ChannelWriter(abc.ABC):
         self.start_s = time.monotonic() if start_s is None else start_s
         self._epoch_offset_s = time.time() - time.monotonic()
         self.chain = chain or ArmChain()
+        self.urdf: str | None = None  # the device's, once use_robot() had it
         self.counts: dict[str, int] = dict.fromkeys(CHANNELS, 0)
         self.broadcasts = 0
         self.notices = 0
@@ -141,6 +144,12 @@ class ChannelWriter(abc.ABC):
         self._dev_wraps = 0
         self._tool_pos: dict[str, float] | None = None
         self._closed = False
+
+    def use_robot(self, urdf: str) -> None:
+        """Publish the transforms of this URDF's chain (the device's, Supervisor.robot_urdf) from now on.
+        UrdfError when it is not a serial arm; call it before feeding anything."""
+        self.chain = ArmChain(urdf)
+        self.urdf = urdf
 
     def __enter__(self) -> ChannelWriter:
         return self
@@ -286,6 +295,12 @@ class McapRecorder(ChannelWriter):
 
     def __enter__(self) -> McapRecorder:
         return self
+
+    def use_robot(self, urdf: str) -> None:
+        super().use_robot(urdf)
+        ns = time.time_ns()
+        self._w.add_attachment(create_time=ns, log_time=ns, name=URDF_ATTACHMENT, media_type="application/xml",
+                               data=urdf.encode("utf-8"))
 
     def _write(self, topic: str, ns: int, data: bytes, sequence: int) -> None:
         self._w.add_message(channel_id=self._chan[topic], log_time=ns, publish_time=ns, data=data, sequence=sequence)

@@ -29,6 +29,7 @@ from google.protobuf import message_factory
 from google.protobuf.message import DecodeError, Message
 
 from . import telemetry as tm
+from . import urdf
 from ._generated import landscape_pb2 as pb
 from .bus import (
     ADDRESS_LISTEN_S,
@@ -1280,6 +1281,14 @@ class Supervisor:
         """Read the device's description (limits, DIO map, sensors, tools, joints, workspace; SI).
         connect() already read it once for this session: see ``description``."""
         return self.request("describe", **opts)
+
+    def describe_robot(self, *, offset: int = 0, **opts: Unpack[CallOptions]) -> RetVal:
+        """One piece of the arm's URDF, from byte `offset` (describeRobot); robot_urdf() joins them all."""
+        return self.request("describe_robot", offset=offset, **opts)
+
+    def robot_urdf(self) -> str:
+        """The URDF of the robot model the device runs (docs/protocol.md "Robot description")."""
+        return urdf.robot_urdf(lambda offset: self.describe_robot(offset=offset, check=False))
 
 
 @dataclass

@@ -3,8 +3,9 @@
 `LiveView` is a mcap_log.ChannelWriter whose sink is a Foxglove WebSocket server (PyPI `foxglove-sdk`):
 the same topics, schemas (byte for byte, `channel_schemas`) and JSON messages as `landscape record
 FILE.mcap` writes, published as they arrive. It also serves the arm's URDF as an asset at URDF_URI, so a
-3D panel of a live connection loads it without a file; `data/foxglove-layout.json` (LAYOUT_NAME) is a
-Foxglove layout of the 3D arm, joint plots and the notices that names only these topics.
+3D panel of a live connection loads it without a file (the device's own, see `use_robot`);
+`data/foxglove-layout.json` (LAYOUT_NAME) is a Foxglove layout of the 3D arm, joint plots and the notices
+that names only these topics.
 
 The server listens on 127.0.0.1 by default: only this machine's programs connect. It carries what the
 bus carries; it takes no commands (no client publishing, no services).
@@ -18,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 from .errors import LandscapeError
 from .mcap_log import ChannelWriter, channel_schemas
-from .urdf import URDF_NAME, ArmChain, urdf_text
+from .urdf import ArmChain, urdf_text
 
 if TYPE_CHECKING:
     import foxglove
@@ -26,7 +27,7 @@ if TYPE_CHECKING:
 
 DEFAULT_HOST = "127.0.0.1"
 DEFAULT_PORT = 8765  # Foxglove's own default for its WebSocket connections
-URDF_URI = f"package://landscape/{URDF_NAME}"
+URDF_URI = "package://landscape/robot.urdf"  # the device's URDF (use_robot), the layout's 3D panel loads it
 LAYOUT_NAME = "foxglove-layout.json"
 SUBPROTOCOL = "foxglove.sdk.v1"  # what foxglove-sdk's server speaks (the app and the test client ask for it)
 
@@ -126,6 +127,10 @@ class LiveView(ChannelWriter):
     def clients(self) -> int:
         """Clients subscribed to at least one channel now."""
         return self.listener.clients
+
+    def use_robot(self, urdf: str) -> None:
+        super().use_robot(urdf)
+        self._urdf = urdf.encode()
 
     def _asset(self, uri: str) -> bytes | None:
         return self._urdf if uri == URDF_URI else None
