@@ -50,6 +50,15 @@ def test_urdf_copy_matches_the_robot_model() -> None:
     assert (GEN / "ls-sim6.urdf").read_bytes() == fresh, f"ls-sim6.urdf is stale: {FIX}"
 
 
+def test_model_keys_copy_matches_the_firmwares_key_table() -> None:
+    """The packaged robot-model keys are what the built ls_robot_model prints from
+    firmware/model/ls_robot_model_file.c (`landscape model check` reads them)."""
+    tool = Path(os.environ.get("LS_BUILD_DIR", ROOT / "build")) / "bin" / "ls_robot_model"
+    assert tool.exists(), f"{tool} is missing: build first (bash .ci/build)"
+    fresh = subprocess.run([str(tool), "keys"], capture_output=True, check=True).stdout
+    assert (GEN / "robot-model-keys.json").read_bytes() == fresh, f"robot-model-keys.json is stale: {FIX}"
+
+
 def test_options_copy_matches_protocol() -> None:
     assert (GEN / "landscape.options").read_bytes() == (ROOT / "protocol" / "landscape.options").read_bytes(), \
         f"landscape.options is stale: {FIX}"

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from conftest import ROOT, open_slcan, start_controller
+from landscape.model import load_model
 from landscape.supervisor import Supervisor
 
 FIRST_LINE = re.compile(r"# landscaped setpoint trace: rate_hz=(\d+) samples=(\d+) dropped=(\d+)")
@@ -38,13 +39,14 @@ class Derivatives:
     jerk: np.ndarray          # (n-3, 6) rad/s^3: third difference / dt^3
 
 
-def model_source_values(field: str) -> list[float]:
-    """The numbers of `.field = ...` in the model source, firmware/model/ls_robot_model.c
-    (a braced list or one number): the limits the device does not publish, such as jerk."""
-    text = (ROOT / "firmware" / "model" / "ls_robot_model.c").read_text()
-    m = re.search(rf"\.{field} = (\{{[^}}]*\}}|[^,\n]+),", text)
-    assert m is not None, f"ls_robot_model.c has no .{field} = ...: update this parser"
-    return [float(v) for v in m[1].strip("{} ").split(",")]
+def model_values(key: str) -> list[float]:
+    """A key of the default arm's model file, firmware/model/robots/ls-sim6.ini (the compiled-in
+    model, tests/unit/modelfile), in SI: per joint for a [jointN] key, else one value. The limits
+    the device does not publish, such as jerk."""
+    m = load_model(ROOT / "firmware" / "model" / "robots" / "ls-sim6.ini")
+    if key in m.joints[0]:
+        return [j[key] for j in m.joints]
+    return [m.cartesian[key]]
 
 
 @contextmanager

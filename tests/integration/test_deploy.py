@@ -42,7 +42,8 @@ PACKAGED_FILES = {
     "/usr/lib/sysusers.d/landscape.conf",
     "/usr/lib/udev/rules.d/60-landscape-gpio.rules",
     "/usr/lib/udev/rules.d/60-landscape-input.rules",
-} | {f"/usr/share/doc/landscape/{p.name}" for p in (ROOT / "docs").glob("*.md")}
+} | {f"/usr/share/doc/landscape/{p.name}" for p in (ROOT / "docs").glob("*.md")} \
+  | {f"/usr/share/landscape/robots/{p.name}" for p in (ROOT / "firmware" / "model" / "robots").glob("*.ini")}
 
 
 def run(*args: str | Path, timeout: float = 120, check: bool = False) -> subprocess.CompletedProcess[str]:

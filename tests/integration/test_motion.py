@@ -2,13 +2,14 @@
 straight lines, arcs, paths with tags and cycles, stop/resume/abort,
 refusals. Positions are checked with FK of the joints the controller reports
 (getRobotPosition when the firmware has it, else the JOINTS_* telemetry
-broadcasts), computed here from the DH table of the one model source,
-firmware/model/ls_robot_model.c. Paths during motion come from the
-telemetry (every broadcast set of six joints)."""
+broadcasts), computed here from the DH table of the default arm's model file,
+firmware/model/robots/ls-sim6.ini (the compiled-in model to the bit,
+tests/unit/modelfile). Paths during motion come from the telemetry (every
+broadcast set of six joints). test_model_file runs moves like these on a
+UR5e built from its model file."""
 from __future__ import annotations
 
 import math
-import re
 import threading
 import time
 from collections.abc import Callable, Iterator
@@ -21,23 +22,12 @@ import pytest
 from conftest import Controller
 from landscape import errors
 from landscape._generated import landscape_pb2 as pb
+from landscape.model import load_model
 from landscape.supervisor import RetVal, Supervisor, notice_data
 
 ROOT = Path(__file__).resolve().parents[2]
 HOME = [0.0, 0.3, 0.3, 0.0, 0.9, 0.0]  # rad, a pose well inside the reach
-
-
-def _dh_table() -> list[tuple[float, float, float, float]]:
-    """(a, alpha, d, theta_offset) per joint, parsed from the model source."""
-    text = (ROOT / "firmware" / "model" / "ls_robot_model.c").read_text()
-    env = {"LS_PI": math.pi}  # common/ls_math.h
-    rows = re.findall(r"\{ \.a_m = ([^,]+), \.alpha_rad = ([^,]+), \.d_m = ([^,]+), \.theta_offset_rad = ([^}]+?) \}",
-                      text)
-    assert len(rows) == 6, "the DH table of ls_robot_model.c changed shape: update this parser"
-    return [tuple(float(eval(x, {}, env)) for x in r) for r in rows]  # type: ignore[misc]
-
-
-DH = _dh_table()
+DH = load_model(ROOT / "firmware" / "model" / "robots" / "ls-sim6.ini").dh()
 
 
 def fk(q: list[float]) -> np.ndarray:

@@ -4,7 +4,8 @@ clean shutdown. Rest-to-rest joint moves at 100 % speed and acceleration stay wi
 model's joint limits cycle by cycle: velocity, acceleration and jerk from the first, second
 and third differences of the recorded set-points, within 5 %. Velocity and acceleration
 limits are the device's (describe); it does not publish the jerk limits, so they are read
-from the model source, firmware/model/ls_robot_model.c, as test_motion reads its DH table."""
+from the default arm's model file, firmware/model/robots/ls-sim6.ini, as test_motion reads
+its DH table."""
 from __future__ import annotations
 
 import re
@@ -12,7 +13,7 @@ import subprocess
 from pathlib import Path
 
 import numpy as np
-from setpoint_trace import Trace, derivatives, model_source_values, read_trace, traced
+from setpoint_trace import Trace, derivatives, model_values, read_trace, traced
 
 from conftest import LANDSCAPED
 from landscape.supervisor import Supervisor
@@ -25,8 +26,8 @@ MARGIN = 1.05  # finite differences of a jerk-limited profile stay within its li
 
 
 def model_jerk_limits() -> np.ndarray:
-    """qddd_max_rad_s3 of the model source (rad/s^3 per joint)."""
-    limits = np.array(model_source_values("qddd_max_rad_s3"))
+    """max_jerk of the model file (rad/s^3 per joint)."""
+    limits = np.array(model_values("max_jerk"))
     assert limits.shape == (6,), f"qddd_max_rad_s3 has {limits.size} values, not 6"
     return limits
 

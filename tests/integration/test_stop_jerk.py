@@ -11,7 +11,7 @@ above its peak), including the cycles where a stop and a resume begin.
   tip's jerk within the model's Cartesian jerk limit.
 
 The device publishes velocity and acceleration limits, not jerk limits; those are read from the
-model source, as test_setpoint_trace does."""
+default arm's model file, as test_setpoint_trace does."""
 from __future__ import annotations
 
 import math
@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from setpoint_trace import Trace, derivatives, model_source_values, read_trace, traced
+from setpoint_trace import Trace, derivatives, model_values, read_trace, traced
 from test_motion import fk
 from test_setpoint_trace import model_jerk_limits
 
@@ -40,8 +40,8 @@ AIMS_S = (0.05, 0.09, 0.03, 0.12, 0.07, 0.02, 0.15, 0.04)
 
 
 def model_linear_jerk_limit() -> float:
-    """max_linear_jerk_m_s3 of the model source (m/s^3)."""
-    return model_source_values("max_linear_jerk_m_s3")[0]
+    """max_linear_jerk of the model file (m/s^3)."""
+    return model_values("max_linear_jerk")[0]
 
 
 @contextmanager

@@ -8,7 +8,8 @@
 #                                      X/lib/sysusers.d/landscape.conf,
 #                                      X/lib/udev/rules.d/60-landscape-gpio.rules,
 #                                      X/lib/udev/rules.d/60-landscape-input.rules,
-#                                      X/share/doc/landscape/*.md
+#                                      X/share/doc/landscape/*.md,
+#                                      X/share/landscape/robots/*.ini (the robot model files)
 #   cd build && cpack -G DEB           landscape-controller_<version>_<arch>.deb
 #
 # With the prefix /usr (the package, or a system install) the configuration
@@ -46,6 +47,9 @@ install(FILES ${LS_DEPLOY_DIR}/landscaped.service ${LS_DEPLOY_DIR}/landscape-gat
 install(FILES ${LS_DEPLOY_DIR}/landscape.sysusers DESTINATION lib/sysusers.d RENAME landscape.conf)
 install(FILES ${LS_DEPLOY_DIR}/60-landscape-gpio.rules ${LS_DEPLOY_DIR}/60-landscape-input.rules
         DESTINATION lib/udev/rules.d)
+# The shipped robot model files ([robot] model = /usr/share/landscape/robots/ur5e.ini).
+file(GLOB LS_ROBOT_FILES CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/firmware/model/robots/*.ini)
+install(FILES ${LS_ROBOT_FILES} DESTINATION share/landscape/robots)
 file(GLOB LS_DOC_FILES CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/docs/*.md)
 install(FILES ${LS_DOC_FILES} DESTINATION share/doc/landscape)
 
