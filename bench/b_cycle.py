@@ -30,12 +30,13 @@ CASE_TEXT = {
 }
 
 
-def callgrind_ir(exe: Path, case: str, n: int, tmp: Path) -> int:
-    out = tmp / f"cg.{case}.{n}"
-    run = subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", str(exe), case, str(n)],
-                         capture_output=True, text=True, timeout=600)
+def callgrind_ir(exe: Path, case: str, n: int, tmp: Path, *extra: str) -> int:
+    """callgrind's instruction total of `exe case [extra...] n`."""
+    out = tmp / f"cg.{case}.{abs(hash(extra))}.{n}"
+    run = subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", str(exe), case, *extra,
+                          str(n)], capture_output=True, text=True, timeout=600)
     if run.returncode != 0:
-        raise BenchError(f"bench_cycle {case} {n} under callgrind failed: {run.stderr.strip()[-300:]}")
+        raise BenchError(f"{exe.name} {case} {n} under callgrind failed: {run.stderr.strip()[-300:]}")
     for line in out.read_text().splitlines():
         if line.startswith(("totals:", "summary:")):
             return int(line.split()[1])

@@ -31,6 +31,7 @@ import b_cmd
 import b_cycle
 import b_footprint
 import b_heartbeat
+import b_ik
 import b_isotp
 import b_jitter
 import b_otg
@@ -68,6 +69,7 @@ BENCHES = [
     Bench(10, "State-to-state trajectories vs ruckig", b_otg.bench_otg, ("bench_otg",)),
     Bench(11, "Heartbeat period", b_heartbeat.bench_heartbeat, ("landscaped",)),
     Bench(12, "Path speed vs toppra", b_pathspeed.bench_pathspeed, ("bench_pathspeed",)),
+    Bench(13, "Inverse kinematics per IK class", b_ik.bench_ik, ("bench_ik",)),
 ]
 
 
