@@ -3,6 +3,7 @@
 #include "ls_config.h"
 
 #include "faulty_link.h"
+#include "ls_ini_line.h"
 #include "landscape.pb.h"
 
 #include <ctype.h>
@@ -914,35 +915,18 @@ static char *trim(char *s)
     return s;
 }
 
-/* fgets for inih that counts lines, catches what inih would silently take
- * apart (over-long lines, unknown [sections]) and stops at the first error.
- * Leading blanks are dropped so that inih never reads an indented line as a
- * continuation of the previous value: every key is on its own line. */
+/* inih's line source (ls_ini_next_line: counted lines, over-long lines and
+ * NUL bytes refused, leading blanks dropped), which also refuses unknown
+ * [sections] and stops at the first error. */
 static char *ini_reader_fn(char *str, int num, void *stream)
 {
     ini_ctx_t *c = stream;
-    if (c->error_line != 0 || fgets(str, num, c->f) == NULL) {
-        return NULL;
-    }
-    c->line++;
-    size_t n = strlen(str);
-    if ((n == 0 || str[n - 1] != '\n') && !feof(c->f)) {
-        if (n + 1 < (size_t)num) {
-            ctx_error(c, "a NUL byte in the line: this is not a text file");
-        } else {
-            ctx_error(c, "line longer than %d characters", num - 3);
+    char why[64];
+    if (c->error_line != 0 || ls_ini_next_line(str, num, c->f, &c->line, why, sizeof why) == NULL) {
+        if (c->error_line == 0 && why[0] != '\0') {
+            ctx_error(c, "%s", why);
         }
         return NULL;
-    }
-    char *start = str;
-    if (c->line == 1 && strncmp(start, "\xEF\xBB\xBF", 3) == 0) {
-        start += 3; /* UTF-8 byte order mark */
-    }
-    while (*start == ' ' || *start == '\t') {
-        start++;
-    }
-    if (start != str) {
-        memmove(str, start, strlen(start) + 1);
     }
     if (str[0] == '[') {
         char tmp[256];

@@ -13,6 +13,7 @@
 #include <string.h>
 
 #include "ls_err.h"
+#include "ls_ini_line.h"
 #include "ls_kin.h"
 #include "ls_math.h"
 
@@ -65,7 +66,8 @@ typedef struct {
  * value in the wrong unit. Lengths and the workspace within 10 m; joint
  * limits within three turns (the IK wraps angles that far, ls_kin.cpp). */
 static const key_place_t KEYS[] = {
-    { { "robot", "name", LS_MQ_NAME, 0, 0, false, "1..31 printable ASCII characters", "the arm's name (describe, URDF)" },
+    { { "robot", "name", LS_MQ_NAME, 0, 0, false, "1..31 printable ASCII characters",
+        "the arm's name (describe, URDF)" },
       ONE(name) },
     { { "robot", "link_radius", LS_MQ_LENGTH, 0.001, 0.5, false, "0.001..0.5 m",
         "capsule radius of the simulated links and of the URDF's visuals" },
@@ -103,8 +105,7 @@ static const key_place_t KEYS[] = {
     { { "cartesian", "max_angular_acceleration", LS_MQ_ANG_ACC, 0, 10000, true, "above 0 up to 10000 rad/s^2",
         "tool angular acceleration" },
       ONE(max_angular_accel_rad_s2) },
-    { { "cartesian", "max_linear_jerk", LS_MQ_LIN_JERK, 0, 1e5, true, "above 0 up to 1e+05 m/s^3",
-        "tool tip jerk" },
+    { { "cartesian", "max_linear_jerk", LS_MQ_LIN_JERK, 0, 1e5, true, "above 0 up to 1e+05 m/s^3", "tool tip jerk" },
       ONE(max_linear_jerk_m_s3) },
     { { "cartesian", "max_angular_jerk", LS_MQ_ANG_JERK, 0, 1e6, true, "above 0 up to 1e+06 rad/s^3",
         "tool angular jerk" },
@@ -276,7 +277,7 @@ typedef struct {
     int error_line; /* 0: no error yet */
     char *msg;
     size_t msglen;
-    int seen[N_SECTIONS][N_KEYS]; /* the line of each key, 0: not given */
+    int seen[N_SECTIONS][N_KEYS];                              /* the line of each key, 0: not given */
     char min_text[LS_N_JOINTS][64], max_text[LS_N_JOINTS][64]; /* as written, for the refusals */
     char ws_min_text[64], ws_max_text[64];
 } load_t;
@@ -288,8 +289,8 @@ static void fail(load_t *c, int line, const char *fmt, ...)
         return;
     }
     c->error_line = line > 0 ? line : -1;
-    int w = line > 0 ? snprintf(c->msg, c->msglen, "%s:%d: ", c->path, line)
-                     : snprintf(c->msg, c->msglen, "%s: ", c->path);
+    int w =
+        line > 0 ? snprintf(c->msg, c->msglen, "%s:%d: ", c->path, line) : snprintf(c->msg, c->msglen, "%s: ", c->path);
     if (w >= 0 && (size_t)w < c->msglen) {
         va_list ap;
         va_start(ap, fmt);
@@ -327,29 +328,18 @@ static void section_name(int s, char *out, size_t outlen)
     }
 }
 
-/* inih's line source: counts lines, stops at the first error, refuses what
- * inih would take apart silently (a NUL byte, a line longer than its
- * buffer) and drops leading blanks, so that an indented line is never a
- * continuation of the previous value. */
+/* inih's line source (ls_ini_next_line: counted lines, over-long lines and
+ * NUL bytes refused, leading blanks dropped), which also stops at the first
+ * error. */
 static char *reader(char *str, int num, void *stream)
 {
     load_t *c = stream;
-    if (c->error_line != 0 || fgets(str, num, c->f) == NULL) {
-        return NULL;
-    }
-    c->line++;
-    size_t n = strlen(str);
-    if ((n == 0 || str[n - 1] != '\n') && !feof(c->f)) {
-        if (n + 1 < (size_t)num) {
-            fail(c, c->line, "a NUL byte in the line: this is not a text file");
-        } else {
-            fail(c, c->line, "line longer than %d characters", num - 3);
+    char why[64];
+    if (c->error_line != 0 || ls_ini_next_line(str, num, c->f, &c->line, why, sizeof why) == NULL) {
+        if (c->error_line == 0 && why[0] != '\0') {
+            fail(c, c->line, "%s", why);
         }
         return NULL;
-    }
-    size_t lead = strspn(str, " \t");
-    if (lead > 0) {
-        memmove(str, str + lead, n - lead + 1);
     }
     /* A section header is checked on its own line (inih names it only with
      * its first key, and not at all when it has none). */
@@ -492,8 +482,9 @@ int ls_robot_model_load(const char *path, ls_robot_model_t *model, char *msg, si
     c->msglen = msglen;
     c->f = fopen(path, "r");
     if (c->f == NULL) {
-        snprintf(msg, msglen, "%s: cannot read the robot model file: %s (name an existing file in [robot] model or --model)",
-                 path, strerror(errno));
+        snprintf(msg, msglen,
+                 "%s: cannot read the robot model file: %s (name an existing file in [robot] model or --model)", path,
+                 strerror(errno));
         return LS_EINVAL;
     }
     int r = ini_parse_stream(reader, c, handler, c);
