@@ -34,10 +34,10 @@ constexpr double kReachSlack = 1e-10;       // rounding slack on cos(elbow) and 
 // there, and rounding would otherwise split them by sqrt(2e-16) ~ 1e-8 rad.
 // The pose moves only to second order (below 1e-12 m).
 constexpr double kBranchesMeet = 1e-12;
-constexpr double kLimitSlackRad = 1e-10;    // a wrap this far past a limit is clamped onto it
-constexpr double kSameBranchRad = 1e-9;     // branches closer than this are one branch
-constexpr double kStructTol = 1e-12;        // DH structure checks
-constexpr double kRotationTol = 1e-6;       // orthonormality of an input rotation
+constexpr double kLimitSlackRad = 1e-10; // a wrap this far past a limit is clamped onto it
+constexpr double kSameBranchRad = 1e-9;  // branches closer than this are one branch
+constexpr double kStructTol = 1e-12;     // DH structure checks
+constexpr double kRotationTol = 1e-6;    // orthonormality of an input rotation
 
 bool finite_n(const double *v, int n) noexcept
 {
@@ -141,8 +141,25 @@ bool model_finite(const ls_robot_model_t &m, char *why, size_t whylen) noexcept
     return true;
 }
 
-// Each check names the first condition of its class that m breaks. They
-// are written as "<the value>; <the rule>" for the classify message.
+// Each check names the first condition of its class that m breaks, written
+// as "<the value>; <the rule>" for the classify message.
+
+// What both classes need of the wrist axes and the shoulder: alpha4 and
+// alpha5 +-90 deg, joint 1 not parallel to joint 2.
+bool wrist_and_shoulder_fit(const ls_dh_t *d, char *why, size_t whylen) noexcept
+{
+    if (!is_right_angle(d[3].alpha_rad) || !is_right_angle(d[4].alpha_rad)) {
+        const int j = is_right_angle(d[3].alpha_rad) ? 5 : 4;
+        ls_fmt_print(why, whylen, "alpha%d = %.6g deg; alpha4 and alpha5 must be +-90 deg", j, deg(d[j - 1].alpha_rad));
+        return false;
+    }
+    if (std::fabs(std::sin(d[0].alpha_rad)) <= 1e-9) {
+        ls_fmt_print(why, whylen, "alpha1 = %.6g deg; joint 1 must not be parallel to joint 2", deg(d[0].alpha_rad));
+        return false;
+    }
+    return true;
+}
+
 bool spherical_fits(const ls_robot_model_t &m, char *why, size_t whylen) noexcept
 {
     const ls_dh_t *d = m.dh;
@@ -155,20 +172,12 @@ bool spherical_fits(const ls_robot_model_t &m, char *why, size_t whylen) noexcep
             return false;
         }
     }
-    if (!is_right_angle(d[3].alpha_rad) || !is_right_angle(d[4].alpha_rad)) {
-        const int j = is_right_angle(d[3].alpha_rad) ? 5 : 4;
-        ls_fmt_print(why, whylen, "alpha%d = %.6g deg; alpha4 and alpha5 must be +-90 deg", j,
-                     deg(d[j - 1].alpha_rad));
-        return false;
-    }
     if (!is_parallel(d[1].alpha_rad)) {
         ls_fmt_print(why, whylen, "alpha2 = %.6g deg; it must be 0 so that joints 2 and 3 are parallel",
                      deg(d[1].alpha_rad));
         return false;
     }
-    if (std::fabs(std::sin(d[0].alpha_rad)) <= 1e-9) {
-        ls_fmt_print(why, whylen, "alpha1 = %.6g deg; joint 1 must not be parallel to joint 2",
-                     deg(d[0].alpha_rad));
+    if (!wrist_and_shoulder_fit(d, why, whylen)) {
         return false;
     }
     if (std::fabs(d[1].a_m) <= 1e-9 || std::hypot(d[2].a_m, d[3].d_m) <= 1e-9) {
@@ -190,19 +199,11 @@ bool offset_fits(const ls_robot_model_t &m, char *why, size_t whylen) noexcept
     }
     if (!is_parallel(d[1].alpha_rad) || !is_parallel(d[2].alpha_rad)) {
         const int j = is_parallel(d[1].alpha_rad) ? 3 : 2;
-        ls_fmt_print(why, whylen, "alpha%d = %.6g deg; alpha2 and alpha3 must be 0 so that joints 2-4 are parallel",
-                     j, deg(d[j - 1].alpha_rad));
-        return false;
-    }
-    if (!is_right_angle(d[3].alpha_rad) || !is_right_angle(d[4].alpha_rad)) {
-        const int j = is_right_angle(d[3].alpha_rad) ? 5 : 4;
-        ls_fmt_print(why, whylen, "alpha%d = %.6g deg; alpha4 and alpha5 must be +-90 deg", j,
+        ls_fmt_print(why, whylen, "alpha%d = %.6g deg; alpha2 and alpha3 must be 0 so that joints 2-4 are parallel", j,
                      deg(d[j - 1].alpha_rad));
         return false;
     }
-    if (std::fabs(std::sin(d[0].alpha_rad)) <= 1e-9) {
-        ls_fmt_print(why, whylen, "alpha1 = %.6g deg; joint 1 must not be parallel to joint 2",
-                     deg(d[0].alpha_rad));
+    if (!wrist_and_shoulder_fit(d, why, whylen)) {
         return false;
     }
     if (std::fabs(d[1].a_m) <= 1e-9 || std::fabs(d[2].a_m) <= 1e-9) {
@@ -372,28 +373,77 @@ Vector3d in_frame1(const ls_dh_t &d1, double t1, const Vector3d &p) noexcept
     return Vector3d(X, ca1 * Y + sa1 * Z, -sa1 * Y + ca1 * Z);
 }
 
+// The wrist centre: where joint 5's axis meets frame 5. The flange sits d6
+// along z5 = R Rx(-alpha6) e_z from it.
+Vector3d wrist_centre(const ls_dh_t &d6, const Matrix4d &T) noexcept
+{
+    const Matrix3d R = T.topLeftCorner<3, 3>();
+    const Vector3d p = T.topRightCorner<3, 1>();
+    return p - d6.d_m * (R * Vector3d(0.0, std::sin(d6.alpha_rad), std::cos(d6.alpha_rad)));
+}
+
+// The wrist product M = Rz(ta) Rx(alpha4) Rz(t5) Rx(alpha5) Rz(t6), with ta
+// = t4 for a spherical wrist and t2 + t3 + t4 for an offset wrist, solved for
+// the wrist branch f (+1: sin t5 >= 0). Its third column is
+// (s5 cos ta sin t5, s5 sin ta sin t5, -s4 s5 cos t5) and its third row
+// (s4 sin t5 cos t6, -s4 sin t5 sin t6, .). At sin t5 = 0 only ta +- t6 is
+// defined: the class keeps one of them (keep_ta, else t6) at `kept` and the
+// other is solved.
+struct Wrist {
+    double ta, t5, t6;
+};
+
+Wrist solve_wrist(const ls_robot_model_t &m, const Matrix3d &M, double f, bool keep_ta, double kept) noexcept
+{
+    const ls_dh_t *d = m.dh;
+    const double s4 = std::sin(d[3].alpha_rad) > 0.0 ? 1.0 : -1.0;
+    const double s5 = std::sin(d[4].alpha_rad) > 0.0 ? 1.0 : -1.0;
+    Wrist w{};
+    w.t5 = std::atan2(f * std::hypot(M(0, 2), M(1, 2)), -s4 * s5 * M(2, 2));
+    if (std::fabs(std::sin(w.t5)) >= kWristSingularSin) {
+        w.ta = std::atan2(f * s5 * M(1, 2), f * s5 * M(0, 2));
+        w.t6 = std::atan2(-f * s4 * M(2, 1), f * s4 * M(2, 0));
+    } else if (keep_ta) {
+        w.ta = kept;
+        const Matrix3d N = (rot_z(w.ta) * rot_x(d[3].alpha_rad) * rot_z(w.t5) * rot_x(d[4].alpha_rad)).transpose() * M;
+        w.t6 = std::atan2(N(1, 0), N(0, 0));
+    } else {
+        w.t6 = kept;
+        const Matrix3d N = M * (rot_x(d[3].alpha_rad) * rot_z(w.t5) * rot_x(d[4].alpha_rad) * rot_z(w.t6)).transpose();
+        w.ta = std::atan2(N(1, 0), N(0, 0));
+    }
+    return w;
+}
+
+// What the branches found add up to.
+IkStatus outcome(bool any_reachable, bool shoulder_singular, int n) noexcept
+{
+    if (!any_reachable) {
+        return kIkUnreachable;
+    }
+    if (shoulder_singular) {
+        return kIkSingular;
+    }
+    return n > 0 ? kIkOk : kIkLimits;
+}
+
 // Spherical wrist (ls_kin_classify): joints 2-3 place the wrist centre,
 // joints 4-6 the orientation.
 IkStatus ik_spherical(const ls_robot_model_t &m, const Matrix4d &T, const Branches &out) noexcept
 {
     const ls_dh_t *d = m.dh;
-    const Matrix3d R = T.topLeftCorner<3, 3>();
-    const Vector3d p = T.topRightCorner<3, 1>();
-    const double sa6 = std::sin(d[5].alpha_rad), ca6 = std::cos(d[5].alpha_rad);
-    // z5 = R Rx(-alpha6) e_z; the flange sits d6 along z5 from the wrist centre.
-    const Vector3d w = p - d[5].d_m * (R * Vector3d(0.0, sa6, ca6));
-    const double h = d[1].d_m + d[2].d_m + std::cos(d[2].alpha_rad) * d[3].d_m;
+    const Vector3d w = wrist_centre(d[5], T);
     double theta1[2];
     bool shoulder_singular = false;
-    if (shoulder(m, w, h, theta1, &shoulder_singular) == kIkUnreachable) {
+    if (shoulder(m, w, d[1].d_m + d[2].d_m + std::cos(d[2].alpha_rad) * d[3].d_m, theta1, &shoulder_singular) ==
+        kIkUnreachable) {
         return kIkUnreachable;
     }
-
     // Upper arm a2, virtual forearm (a3, -sin(alpha3) d4) at angle gamma from x3.
     const double b3x = d[2].a_m, b3y = -std::sin(d[2].alpha_rad) * d[3].d_m;
     const Planar arm = { d[1].a_m, std::hypot(b3x, b3y), std::atan2(b3y, b3x) };
-    const double s4 = std::sin(d[3].alpha_rad) > 0.0 ? 1.0 : -1.0;
-    const double s5 = std::sin(d[4].alpha_rad) > 0.0 ? 1.0 : -1.0;
+    // q4 kept at a wrist singularity: the caller's, within the limits.
+    const double t4_kept = clamp_into(out.ref[3], m.q_min_rad[3], m.q_max_rad[3]) + d[3].theta_offset_rad;
 
     bool any_reachable = false;
     for (int sh = 0; sh < 2; ++sh) {
@@ -413,89 +463,49 @@ IkStatus ik_spherical(const ls_robot_model_t &m, const Matrix4d &T, const Branch
             const Matrix3d R03 = dh_transform(d[0], t1).topLeftCorner<3, 3>() *
                                  dh_transform(d[1], t2).topLeftCorner<3, 3>() *
                                  dh_transform(d[2], t3).topLeftCorner<3, 3>();
-            // M = Rz(t4) Rx(alpha4) Rz(t5) Rx(alpha5) Rz(t6); its third column
-            // is (s5 cos t4 sin t5, s5 sin t4 sin t5, -s4 s5 cos t5) and its
-            // third row (s4 sin t5 cos t6, -s4 sin t5 sin t6, .).
-            const Matrix3d M = R03.transpose() * R * rot_x(-d[5].alpha_rad);
-            const double c5 = -s4 * s5 * M(2, 2);
-            const double sn = std::hypot(M(0, 2), M(1, 2));
+            const Matrix3d M = R03.transpose() * T.topLeftCorner<3, 3>() * rot_x(-d[5].alpha_rad);
             for (int wr = 0; wr < 2; ++wr) {
-                const double f = wr == 0 ? 1.0 : -1.0;
-                const double t5 = std::atan2(f * sn, c5);
-                double t4, t6;
-                if (std::fabs(std::sin(t5)) < kWristSingularSin) {
-                    // Only t4 + t6 (or t4 - t6) is defined: take q4 from ref.
-                    t4 = clamp_into(out.ref[3], m.q_min_rad[3], m.q_max_rad[3]) + d[3].theta_offset_rad;
-                    const Matrix3d N =
-                        (rot_z(t4) * rot_x(d[3].alpha_rad) * rot_z(t5) * rot_x(d[4].alpha_rad)).transpose() * M;
-                    t6 = std::atan2(N(1, 0), N(0, 0));
-                } else {
-                    t4 = std::atan2(f * s5 * M(1, 2), f * s5 * M(0, 2));
-                    t6 = std::atan2(-f * s4 * M(2, 1), f * s4 * M(2, 0));
-                }
-                const double theta[LS_N_JOINTS] = { t1, t2, t3, t4, t5, t6 };
+                const Wrist wrist = solve_wrist(m, M, wr == 0 ? 1.0 : -1.0, true, t4_kept);
+                const double theta[LS_N_JOINTS] = { t1, t2, t3, wrist.ta, wrist.t5, wrist.t6 };
                 out.add(theta);
             }
         }
     }
-    if (!any_reachable) {
-        return kIkUnreachable;
-    }
-    if (shoulder_singular) {
-        return kIkSingular;
-    }
-    return *out.n_out > 0 ? kIkOk : kIkLimits;
+    return outcome(any_reachable, shoulder_singular, *out.n_out);
 }
 
-// Offset wrist (ls_kin_classify). In frame 1 the rotation is
-// M = Rz(t234) Rx(alpha4) Rz(t5) Rx(alpha5) Rz(t6) (t234 = t2 + t3 + t4): the
-// same product as a spherical wrist's joints 4-6 with t234 for t4, so t5,
-// t6 and t234 come from the same entries. Then joint 4's axis, d5 back from
-// the wrist centre along z4 = Rz(t234) Rx(alpha4) e_z, is the point the
-// planar arm a2, a3 reaches, and t4 = t234 - t2 - t3.
+// Offset wrist (ls_kin_classify). In frame 1 the rotation is the wrist
+// product with ta = t2 + t3 + t4 (solve_wrist), so t5, t6 and that sum come
+// from the orientation. Joint 4's axis, d5 back from the wrist centre along
+// z4 = Rz(ta) Rx(alpha4) e_z = (s4 sin ta, -s4 cos ta, 0), is the point the
+// planar arm a2, a3 reaches, and t4 = ta - t2 - t3.
 IkStatus ik_offset(const ls_robot_model_t &m, const Matrix4d &T, const Branches &out) noexcept
 {
     const ls_dh_t *d = m.dh;
-    const Matrix3d R = T.topLeftCorner<3, 3>();
-    const Vector3d p = T.topRightCorner<3, 1>();
-    const double sa6 = std::sin(d[5].alpha_rad), ca6 = std::cos(d[5].alpha_rad);
-    const Vector3d w = p - d[5].d_m * (R * Vector3d(0.0, sa6, ca6));
-    const double h = d[1].d_m + d[2].d_m + d[3].d_m;
+    const Vector3d w = wrist_centre(d[5], T);
     double theta1[2];
     bool shoulder_singular = false;
-    if (shoulder(m, w, h, theta1, &shoulder_singular) == kIkUnreachable) {
+    if (shoulder(m, w, d[1].d_m + d[2].d_m + d[3].d_m, theta1, &shoulder_singular) == kIkUnreachable) {
         return kIkUnreachable;
     }
     const Planar arm = { d[1].a_m, std::fabs(d[2].a_m), std::atan2(0.0, d[2].a_m) };
     const double s4 = std::sin(d[3].alpha_rad) > 0.0 ? 1.0 : -1.0;
-    const double s5 = std::sin(d[4].alpha_rad) > 0.0 ? 1.0 : -1.0;
+    // q6 kept at a wrist singularity: the caller's, within the limits.
+    const double t6_kept = clamp_into(out.ref[5], m.q_min_rad[5], m.q_max_rad[5]) + d[5].theta_offset_rad;
 
     bool any_reachable = false;
     for (int sh = 0; sh < 2; ++sh) {
         const double t1 = theta1[sh];
         const Vector3d p1 = in_frame1(d[0], t1, w);
-        const Matrix3d M = dh_transform(d[0], t1).topLeftCorner<3, 3>().transpose() * R * rot_x(-d[5].alpha_rad);
-        const double c5 = -s4 * s5 * M(2, 2);
-        const double sn = std::hypot(M(0, 2), M(1, 2));
-        // Per wrist branch: t5, t6, t234 and the point the planar arm reaches.
-        double t5[2], t6[2], t234[2], px[2], py[2], c[2];
+        const Matrix3d M =
+            dh_transform(d[0], t1).topLeftCorner<3, 3>().transpose() * T.topLeftCorner<3, 3>() * rot_x(-d[5].alpha_rad);
+        Wrist wrist[2];
+        double px[2], py[2], c[2];
         bool reach[2];
         for (int wr = 0; wr < 2; ++wr) {
-            const double f = wr == 0 ? 1.0 : -1.0;
-            t5[wr] = std::atan2(f * sn, c5);
-            if (std::fabs(std::sin(t5[wr])) < kWristSingularSin) {
-                // Only t234 + t6 (or t234 - t6) is defined: take q6 from ref.
-                t6[wr] = clamp_into(out.ref[5], m.q_min_rad[5], m.q_max_rad[5]) + d[5].theta_offset_rad;
-                const Matrix3d N =
-                    M * (rot_x(d[3].alpha_rad) * rot_z(t5[wr]) * rot_x(d[4].alpha_rad) * rot_z(t6[wr])).transpose();
-                t234[wr] = std::atan2(N(1, 0), N(0, 0));
-            } else {
-                t234[wr] = std::atan2(f * s5 * M(1, 2), f * s5 * M(0, 2));
-                t6[wr] = std::atan2(-f * s4 * M(2, 1), f * s4 * M(2, 0));
-            }
-            // z4 in frame 1 is (s4 sin t234, -s4 cos t234, 0).
-            px[wr] = p1.x() - d[4].d_m * s4 * std::sin(t234[wr]);
-            py[wr] = p1.y() + d[4].d_m * s4 * std::cos(t234[wr]);
+            wrist[wr] = solve_wrist(m, M, wr == 0 ? 1.0 : -1.0, false, t6_kept);
+            px[wr] = p1.x() - d[4].d_m * s4 * std::sin(wrist[wr].ta);
+            py[wr] = p1.y() + d[4].d_m * s4 * std::cos(wrist[wr].ta);
             reach[wr] = arm.elbow_cos(px[wr], py[wr], &c[wr]);
             any_reachable = any_reachable || reach[wr];
         }
@@ -509,18 +519,12 @@ IkStatus ik_offset(const ls_robot_model_t &m, const Matrix4d &T, const Branches 
                 }
                 double t2, t3;
                 arm.solve(px[wr], py[wr], c[wr], el, &t2, &t3);
-                const double theta[LS_N_JOINTS] = { t1, t2, t3, t234[wr] - t2 - t3, t5[wr], t6[wr] };
+                const double theta[LS_N_JOINTS] = { t1, t2, t3, wrist[wr].ta - t2 - t3, wrist[wr].t5, wrist[wr].t6 };
                 out.add(theta);
             }
         }
     }
-    if (!any_reachable) {
-        return kIkUnreachable;
-    }
-    if (shoulder_singular) {
-        return kIkSingular;
-    }
-    return *out.n_out > 0 ? kIkOk : kIkLimits;
+    return outcome(any_reachable, shoulder_singular, *out.n_out);
 }
 
 // Every branch of the model's class, each joint wrapped into its limits

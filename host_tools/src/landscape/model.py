@@ -294,18 +294,25 @@ def _parallel(alpha: float) -> bool:
     return abs(math.sin(alpha)) < _STRUCT_TOL and math.cos(alpha) > 0.0
 
 
+def _wrist_and_shoulder_misfit(alpha1: float, alpha4: float, alpha5: float) -> str | None:
+    if not _right_angle(alpha4) or not _right_angle(alpha5):
+        j, al = (5, alpha5) if _right_angle(alpha4) else (4, alpha4)
+        return f"alpha{j} = {_deg(al):.6g} deg; alpha4 and alpha5 must be +-90 deg"
+    if abs(math.sin(alpha1)) <= 1e-9:
+        return f"alpha1 = {_deg(alpha1):.6g} deg; joint 1 must not be parallel to joint 2"
+    return None
+
+
 def _spherical_misfit(dh: list[tuple[float, float, float, float]]) -> str | None:
     (_, a1, _, _), (a2l, al2, _, _), (a3l, _, _, _), (a4l, al4, d4, _), (a5l, al5, d5, _), (a6l, _, _, _) = dh
     for name, v in (("a4", a4l), ("a5", a5l), ("a6", a6l), ("d5", d5)):
         if not abs(v) < _STRUCT_TOL:
             return f"{name} = {v:.6g} m; a4, a5, a6 and d5 must be 0 so that joints 4-6 meet"
-    if not _right_angle(al4) or not _right_angle(al5):
-        j, al = (5, al5) if _right_angle(al4) else (4, al4)
-        return f"alpha{j} = {_deg(al):.6g} deg; alpha4 and alpha5 must be +-90 deg"
     if not _parallel(al2):
         return f"alpha2 = {_deg(al2):.6g} deg; it must be 0 so that joints 2 and 3 are parallel"
-    if abs(math.sin(a1)) <= 1e-9:
-        return f"alpha1 = {_deg(a1):.6g} deg; joint 1 must not be parallel to joint 2"
+    common = _wrist_and_shoulder_misfit(a1, al4, al5)
+    if common is not None:
+        return common
     if abs(a2l) <= 1e-9 or math.hypot(a3l, d4) <= 1e-9:
         what = "a2 = 0 m" if abs(a2l) <= 1e-9 else "a3 = d4 = 0 m"
         return f"{what}; the upper arm (a2) and the forearm (a3, d4) must not be 0"
@@ -320,11 +327,9 @@ def _offset_misfit(dh: list[tuple[float, float, float, float]]) -> str | None:
     if not _parallel(al2) or not _parallel(al3):
         j, al = (3, al3) if _parallel(al2) else (2, al2)
         return f"alpha{j} = {_deg(al):.6g} deg; alpha2 and alpha3 must be 0 so that joints 2-4 are parallel"
-    if not _right_angle(al4) or not _right_angle(al5):
-        j, al = (5, al5) if _right_angle(al4) else (4, al4)
-        return f"alpha{j} = {_deg(al):.6g} deg; alpha4 and alpha5 must be +-90 deg"
-    if abs(math.sin(a1)) <= 1e-9:
-        return f"alpha1 = {_deg(a1):.6g} deg; joint 1 must not be parallel to joint 2"
+    common = _wrist_and_shoulder_misfit(a1, al4, al5)
+    if common is not None:
+        return common
     if abs(a2l) <= 1e-9 or abs(a3l) <= 1e-9:
         return f"a{2 if abs(a2l) <= 1e-9 else 3} = 0 m; the upper arm (a2) and the forearm (a3) must not be 0"
     return None
