@@ -7,9 +7,8 @@
 #include <stdint.h>
 #include <stdio.h>
 #include <string.h>
-#include <sys/mman.h>
-#include <unistd.h>
 
+#include "fuzz_file.h"
 #include "ls_config.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
@@ -23,25 +22,7 @@ static void check_terminated(const char *s, size_t cap)
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    static int fd = -1;
-    static char path[64];
-    if (fd < 0) {
-        fd = memfd_create("ls-config-fuzz", 0);
-        if (fd < 0) {
-            __builtin_trap();
-        }
-        snprintf(path, sizeof path, "/proc/self/fd/%d", fd);
-    }
-    if (ftruncate(fd, 0) != 0 || lseek(fd, 0, SEEK_SET) != 0) {
-        __builtin_trap();
-    }
-    for (size_t done = 0; done < size;) {
-        ssize_t w = write(fd, data + done, size - done);
-        if (w <= 0) {
-            __builtin_trap();
-        }
-        done += (size_t)w;
-    }
+    const char *path = fuzz_input_file(data, size);
     ls_config_t cfg;
     ls_config_defaults(&cfg);
     char msg[512] = "";

@@ -9,9 +9,8 @@
 #include <stdint.h>
 #include <stdio.h>
 #include <string.h>
-#include <sys/mman.h>
-#include <unistd.h>
 
+#include "fuzz_file.h"
 #include "ls_kin.h"
 #include "ls_robot_model_file.h"
 #include "ls_robot_urdf.h"
@@ -20,25 +19,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    static int fd = -1;
-    static char path[64];
-    if (fd < 0) {
-        fd = memfd_create("ls-model-fuzz", 0);
-        if (fd < 0) {
-            __builtin_trap();
-        }
-        snprintf(path, sizeof path, "/proc/self/fd/%d", fd);
-    }
-    if (ftruncate(fd, 0) != 0 || lseek(fd, 0, SEEK_SET) != 0) {
-        __builtin_trap();
-    }
-    for (size_t done = 0; done < size;) {
-        ssize_t w = write(fd, data + done, size - done);
-        if (w <= 0) {
-            __builtin_trap();
-        }
-        done += (size_t)w;
-    }
+    const char *path = fuzz_input_file(data, size);
     ls_robot_model_t m;
     char msg[512] = "";
     if (ls_robot_model_load(path, &m, msg, sizeof msg) != LS_OK) {
