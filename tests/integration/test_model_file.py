@@ -25,6 +25,7 @@ import numpy as np
 import pytest
 import yourdfpy
 from pytransform3d.urdf import UrdfTransformManager
+from test_motion import _rpy, assert_on_segment
 
 from conftest import BUILD, LANDSCAPED, Controller, run_cli, start_controller
 from landscape._generated import landscape_pb2 as pb
@@ -135,12 +136,6 @@ class Arm:
         return [self.model.fk(q)[:3, 3] for q in self.sets[mark:]]
 
 
-def _rpy(T: np.ndarray) -> list[float]:
-    R = T[:3, :3]
-    return [math.atan2(R[2, 1], R[2, 2]), math.atan2(-R[2, 0], math.hypot(R[0, 0], R[1, 0])),
-            math.atan2(R[1, 0], R[0, 0])]
-
-
 @pytest.fixture(scope="module", params=["ls-sim6.ini", "ur5e.ini"])
 def arm(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> Iterator[Arm]:
     file = ROBOTS / request.param
@@ -176,12 +171,7 @@ def test_a_straight_line_stays_within_1mm(arm: Arm) -> None:
     goal[:3, 3] += [0.1, 0.12, 0.08]
     pts = arm.tips_during(lambda: arm.sup.move_absolute("line", [*goal[:3, 3], *_rpy(goal)],
                                                         frame=pb.BASE_CARTESIAN_FRAME, speed_pct=50))
-    assert len(pts) > 10
-    a, b = start[:3, 3], goal[:3, 3]
-    for p in pts:
-        t = np.clip(np.dot(p - a, b - a) / np.dot(b - a, b - a), 0, 1)
-        assert np.linalg.norm(p - (a + t * (b - a))) < 1e-3
-    assert np.linalg.norm(pts[-1] - b) < 1e-3
+    assert_on_segment(pts, start[:3, 3], goal[:3, 3], 1e-3)
 
 
 def test_an_arc_stays_on_its_circle(arm: Arm) -> None:

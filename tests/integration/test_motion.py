@@ -150,12 +150,16 @@ def test_straight_line_stays_within_1mm(sup: Supervisor) -> None:
     goal[:3, 3] += [-0.15, 0.2, 0.1]
     xyzrpy = [*goal[:3, 3], *_rpy(goal)]
     pts = _tips_during(sup, lambda: sup.move_absolute("line", xyzrpy, frame=pb.BASE_CARTESIAN_FRAME, speed_pct=50))
+    assert_on_segment(pts, start[:3, 3], goal[:3, 3], 1e-3)
+
+
+def assert_on_segment(pts: list[np.ndarray], a: np.ndarray, b: np.ndarray, tol_m: float) -> None:
+    """More than 10 tip positions, each within tol_m of the segment a-b, the last within tol_m of b."""
     assert len(pts) > 10
-    a, b = start[:3, 3], goal[:3, 3]
     for p in pts:
         t = np.clip(np.dot(p - a, b - a) / np.dot(b - a, b - a), 0, 1)
-        assert np.linalg.norm(p - (a + t * (b - a))) < 1e-3
-    assert np.linalg.norm(pts[-1] - b) < 1e-3
+        assert np.linalg.norm(p - (a + t * (b - a))) < tol_m
+    assert np.linalg.norm(pts[-1] - b) < tol_m
 
 
 def test_arc_stays_on_its_circle(sup: Supervisor) -> None:
