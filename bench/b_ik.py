@@ -10,6 +10,7 @@ import tempfile
 from pathlib import Path
 
 from b_cycle import callgrind_ir
+
 from common import BIN, ROOT, BenchError, Row, Section, need
 
 ARMS = (("spherical wrist", "ls-sim6", "-"), ("offset wrist", "UR5e", str(ROOT / "firmware/model/robots/ur5e.ini")))

@@ -28,8 +28,8 @@ static double uniform(double lo, double hi)
 
 int main(int argc, char **argv)
 {
-    if (argc != 4 || (strcmp(argv[1], "fk") != 0 && strcmp(argv[1], "ik_all") != 0 &&
-                      strcmp(argv[1], "ik_nearest") != 0)) {
+    if (argc != 4 ||
+        (strcmp(argv[1], "fk") != 0 && strcmp(argv[1], "ik_all") != 0 && strcmp(argv[1], "ik_nearest") != 0)) {
         fprintf(stderr, "usage: bench_ik fk|ik_all|ik_nearest MODEL_FILE|- N\n");
         return 2;
     }

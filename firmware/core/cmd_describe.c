@@ -144,8 +144,8 @@ int32_t ls_h_describe_robot(struct ls_core *core, struct ls_call *call)
     const int n = ls_robot_urdf_window(core->model, rq->offset, r->urdf, sizeof r->urdf, &total);
     if (n < 0 || rq->offset > total) {
         return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR,
-                        "offset %u is past the end of the URDF (%u bytes): ask from 0 to %u",
-                        (unsigned)rq->offset, (unsigned)total, (unsigned)total);
+                        "offset %u is past the end of the URDF (%u bytes): ask from 0 to %u", (unsigned)rq->offset,
+                        (unsigned)total, (unsigned)total);
     }
     r->offset = rq->offset;
     r->total_bytes = (uint32_t)total;

@@ -71,13 +71,13 @@ typedef struct {
 } ls_model_unit_t;
 
 typedef struct {
-    const char *section;        /* "robot", "joint" (joint1..joint6) or "cartesian" */
-    const char *key;            /* "max_velocity" */
+    const char *section; /* "robot", "joint" (joint1..joint6) or "cartesian" */
+    const char *key;     /* "max_velocity" */
     ls_model_quantity_t quantity;
-    double min_si, max_si;      /* the allowed range in SI units */
-    bool min_open;              /* the value must be above min_si, not equal */
-    const char *expected;       /* the range as refusals state it ("above 0 up to 100 rad/s") */
-    const char *what;           /* one line for docs and --help ("velocity limit") */
+    double min_si, max_si; /* the allowed range in SI units */
+    bool min_open;         /* the value must be above min_si, not equal */
+    const char *expected;  /* the range as refusals state it ("above 0 up to 100 rad/s") */
+    const char *what;      /* one line for docs and --help ("velocity limit") */
 } ls_model_key_t;
 
 /* The key table, in file order (every [jointN] section has the "joint"

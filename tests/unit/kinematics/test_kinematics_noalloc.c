@@ -24,7 +24,7 @@ static ls_robot_model_t offset_wrist_arm(void)
 {
     ls_robot_model_t m = ls_robot_model_default;
     const ls_dh_t dh[LS_N_JOINTS] = {
-        { 0.0, LS_PI / 2, 0.1625, 0.0 }, { -0.425, 0.0, 0.0, 0.0 },       { -0.3922, 0.0, 0.0, 0.0 },
+        { 0.0, LS_PI / 2, 0.1625, 0.0 }, { -0.425, 0.0, 0.0, 0.0 },        { -0.3922, 0.0, 0.0, 0.0 },
         { 0.0, LS_PI / 2, 0.1333, 0.0 }, { 0.0, -LS_PI / 2, 0.0997, 0.0 }, { 0.0, 0.0, 0.0996, 0.0 },
     };
     for (int j = 0; j < LS_N_JOINTS; ++j) {

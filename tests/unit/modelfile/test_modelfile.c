@@ -165,8 +165,8 @@ static void an_inverted_joint_limit_names_both_lines(void **state)
 static void a_value_that_is_not_a_finite_number_with_its_unit_is_refused(void **state)
 {
     (void)state;
-    static const char *bad[] = { "nan deg", "inf deg", "1e999 deg", "0x10 deg", "90", "90 m", "90deg",
-                                 "90 deg extra", "", "- 90 deg", "9.0.1 deg" };
+    static const char *bad[] = { "nan deg", "inf deg",      "1e999 deg", "0x10 deg", "90",       "90 m",
+                                 "90deg",   "90 deg extra", "",          "- 90 deg", "9.0.1 deg" };
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         char line[64];
         snprintf(line, sizeof line, "alpha = %s", bad[i]);
