@@ -11,6 +11,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "ls_err.h"
 #include "ls_ini_line.h"
@@ -481,6 +482,12 @@ int ls_robot_model_load(const char *path, ls_robot_model_t *model, char *msg, si
     c->msg = msg;
     c->msglen = msglen;
     c->f = fopen(path, "r");
+    struct stat st;
+    if (c->f != NULL && fstat(fileno(c->f), &st) == 0 && S_ISDIR(st.st_mode)) {
+        fclose(c->f); /* fopen takes a directory; reading it would fail with less to say */
+        c->f = NULL;
+        errno = EISDIR;
+    }
     if (c->f == NULL) {
         snprintf(msg, msglen,
                  "%s: cannot read the robot model file: %s (name an existing file in [robot] model or --model)", path,

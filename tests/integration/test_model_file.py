@@ -301,6 +301,17 @@ def test_the_refusals_name_what_was_wrong(tmp_path: Path) -> None:
            "be 0)" in refusal("no-ik-class")
 
 
+def test_a_directory_or_a_missing_file_is_refused_alike(tmp_path: Path) -> None:
+    for path in (tmp_path, tmp_path / "missing.ini"):
+        run = subprocess.run([str(LANDSCAPED), "--hal", "sim", "--link", f"slcan:pty:{tmp_path}/ls0", "--model",
+                              str(path)], capture_output=True, text=True, timeout=10)
+        assert run.returncode == 2
+        host = run_cli("model", "check", str(path))
+        assert host.returncode == 2
+        assert host.stderr == "landscape: " + run.stderr.removeprefix("<3>landscaped: error: ")
+        assert "cannot read the robot model file: " in host.stderr
+
+
 def test_an_arm_the_simulator_cannot_build_is_a_refused_configuration(tmp_path: Path) -> None:
     run = subprocess.run([str(LANDSCAPED), "--hal", "sim", "--link", f"slcan:pty:{tmp_path}/ls0", "--model",
                           str(ROBOTS / "puma560.ini")], capture_output=True, text=True, timeout=10)

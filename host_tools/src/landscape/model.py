@@ -16,7 +16,6 @@ refuses what a model file cannot represent, with the reason.
 """
 from __future__ import annotations
 
-import errno
 import json
 import math
 import os
@@ -272,8 +271,6 @@ def load_model(path: str | Path) -> RobotModel:
         data = Path(p).read_bytes()
     except OSError as exc:
         why = os.strerror(exc.errno) if exc.errno is not None else str(exc)
-        if exc.errno == errno.EISDIR:
-            why = os.strerror(errno.EISDIR)
         raise ModelError(f"{p}: cannot read the robot model file: {why} (name an existing file in [robot] model "
                          "or --model)") from None
     return parse_model(data, p)
