@@ -393,11 +393,22 @@ struct Wrist {
     double ta, t5, t6;
 };
 
-Wrist solve_wrist(const ls_robot_model_t &m, const Matrix3d &M, double f, bool keep_ta, double kept) noexcept
+// The signs of sin(alpha4) and sin(alpha5) (both +-1: the classes need
+// alpha4, alpha5 = +-90 deg), taken once per IK call.
+struct WristSigns {
+    double s4, s5;
+};
+
+WristSigns wrist_signs(const ls_dh_t *d) noexcept
+{
+    return { std::sin(d[3].alpha_rad) > 0.0 ? 1.0 : -1.0, std::sin(d[4].alpha_rad) > 0.0 ? 1.0 : -1.0 };
+}
+
+Wrist solve_wrist(const ls_robot_model_t &m, WristSigns sg, const Matrix3d &M, double f, bool keep_ta,
+                  double kept) noexcept
 {
     const ls_dh_t *d = m.dh;
-    const double s4 = std::sin(d[3].alpha_rad) > 0.0 ? 1.0 : -1.0;
-    const double s5 = std::sin(d[4].alpha_rad) > 0.0 ? 1.0 : -1.0;
+    const double s4 = sg.s4, s5 = sg.s5;
     Wrist w{};
     w.t5 = std::atan2(f * std::hypot(M(0, 2), M(1, 2)), -s4 * s5 * M(2, 2));
     if (std::fabs(std::sin(w.t5)) >= kWristSingularSin) {
@@ -442,6 +453,7 @@ IkStatus ik_spherical(const ls_robot_model_t &m, const Matrix4d &T, const Branch
     // Upper arm a2, virtual forearm (a3, -sin(alpha3) d4) at angle gamma from x3.
     const double b3x = d[2].a_m, b3y = -std::sin(d[2].alpha_rad) * d[3].d_m;
     const Planar arm = { d[1].a_m, std::hypot(b3x, b3y), std::atan2(b3y, b3x) };
+    const WristSigns sg = wrist_signs(d);
     // q4 kept at a wrist singularity: the caller's, within the limits.
     const double t4_kept = clamp_into(out.ref[3], m.q_min_rad[3], m.q_max_rad[3]) + d[3].theta_offset_rad;
 
@@ -465,7 +477,7 @@ IkStatus ik_spherical(const ls_robot_model_t &m, const Matrix4d &T, const Branch
                                  dh_transform(d[2], t3).topLeftCorner<3, 3>();
             const Matrix3d M = R03.transpose() * T.topLeftCorner<3, 3>() * rot_x(-d[5].alpha_rad);
             for (int wr = 0; wr < 2; ++wr) {
-                const Wrist wrist = solve_wrist(m, M, wr == 0 ? 1.0 : -1.0, true, t4_kept);
+                const Wrist wrist = solve_wrist(m, sg, M, wr == 0 ? 1.0 : -1.0, true, t4_kept);
                 const double theta[LS_N_JOINTS] = { t1, t2, t3, wrist.ta, wrist.t5, wrist.t6 };
                 out.add(theta);
             }
@@ -489,7 +501,7 @@ IkStatus ik_offset(const ls_robot_model_t &m, const Matrix4d &T, const Branches 
         return kIkUnreachable;
     }
     const Planar arm = { d[1].a_m, std::fabs(d[2].a_m), std::atan2(0.0, d[2].a_m) };
-    const double s4 = std::sin(d[3].alpha_rad) > 0.0 ? 1.0 : -1.0;
+    const WristSigns sg = wrist_signs(d);
     // q6 kept at a wrist singularity: the caller's, within the limits.
     const double t6_kept = clamp_into(out.ref[5], m.q_min_rad[5], m.q_max_rad[5]) + d[5].theta_offset_rad;
 
@@ -503,9 +515,9 @@ IkStatus ik_offset(const ls_robot_model_t &m, const Matrix4d &T, const Branches 
         double px[2], py[2], c[2];
         bool reach[2];
         for (int wr = 0; wr < 2; ++wr) {
-            wrist[wr] = solve_wrist(m, M, wr == 0 ? 1.0 : -1.0, false, t6_kept);
-            px[wr] = p1.x() - d[4].d_m * s4 * std::sin(wrist[wr].ta);
-            py[wr] = p1.y() + d[4].d_m * s4 * std::cos(wrist[wr].ta);
+            wrist[wr] = solve_wrist(m, sg, M, wr == 0 ? 1.0 : -1.0, false, t6_kept);
+            px[wr] = p1.x() - d[4].d_m * sg.s4 * std::sin(wrist[wr].ta);
+            py[wr] = p1.y() + d[4].d_m * sg.s4 * std::cos(wrist[wr].ta);
             reach[wr] = arm.elbow_cos(px[wr], py[wr], &c[wr]);
             any_reachable = any_reachable || reach[wr];
         }
