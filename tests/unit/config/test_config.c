@@ -833,10 +833,9 @@ static void test_drive_keys_refuse_bad_values_naming_what_is_allowed(void **stat
     refused(f, "[drives]\nabort_connection = stop\n",
             "2: [drives] abort_connection: got 'stop', expected quick_stop, fault, disable_voltage or none (what a "
             "drive does when the controller's heartbeat stops: CiA 402 0x6007)");
-    refused(
-        f, "[joint.7]\nnode = 1\n",
-        "1: unknown section [joint.7]; expected [device], [hal], [control], [dio], [manual], [drives] or [joint.1] .. "
-        "[joint.6]");
+    refused(f, "[joint.7]\nnode = 1\n",
+            "1: unknown section [joint.7]; expected [device], [hal], [control], [dio], [manual], [drives], [joint.1] "
+            ".. [joint.6] or [robot]");
     refused(f, "[joint.2]\nnode = 128\n",
             "2: [joint.2] node: got '128', expected 1..127 (the drive's CANopen node id)");
     refused(f, "[joint.2]\ncounts_per_rad = nan\n",
