@@ -123,9 +123,10 @@ static const key_place_t KEYS[] = {
 enum { KEY_NAME = 0, KEY_MIN = 6, KEY_MAX = 7, KEY_WS_MIN = 19, KEY_WS_MAX = 20 };
 _Static_assert(N_KEYS == 21, "KEY_* indexes follow the table");
 
-/* Sections in file order: [robot], [joint1]..[joint6], [cartesian]. */
+/* Sections in file order: [robot], [joint.1] .. [joint.6], [cartesian]
+ * (landscaped.conf names its drive joints so too). */
 #define N_SECTIONS (2 + LS_N_JOINTS)
-static const char SECTIONS_TEXT[] = "[robot], [joint1] to [joint6] or [cartesian]";
+static const char SECTIONS_TEXT[] = "[robot], [joint.1] .. [joint.6] or [cartesian]";
 
 size_t ls_robot_model_key_count(void)
 {
@@ -300,7 +301,7 @@ static void fail(load_t *c, int line, const char *fmt, ...)
     }
 }
 
-/* 0 = [robot], 1..6 = [jointN], 7 = [cartesian]; -1 for anything else. */
+/* 0 = [robot], 1..6 = [joint.N], 7 = [cartesian]; -1 for anything else. */
 static int section_index(const char *s)
 {
     if (strcmp(s, "robot") == 0) {
@@ -309,8 +310,8 @@ static int section_index(const char *s)
     if (strcmp(s, "cartesian") == 0) {
         return N_SECTIONS - 1;
     }
-    if (strncmp(s, "joint", 5) == 0 && s[5] >= '1' && s[5] < '1' + LS_N_JOINTS && s[6] == '\0') {
-        return s[5] - '0';
+    if (strncmp(s, "joint.", 6) == 0 && s[6] >= '1' && s[6] < '1' + LS_N_JOINTS && s[7] == '\0') {
+        return s[6] - '0';
     }
     return -1;
 }
@@ -323,7 +324,7 @@ static const char *section_kind(int s)
 static void section_name(int s, char *out, size_t outlen)
 {
     if (s > 0 && s < N_SECTIONS - 1) {
-        snprintf(out, outlen, "joint%d", s);
+        snprintf(out, outlen, "joint.%d", s);
     } else {
         snprintf(out, outlen, "%s", section_kind(s));
     }
@@ -441,7 +442,7 @@ static void check_whole(load_t *c)
     }
     for (int j = 0; j < LS_N_JOINTS && c->error_line == 0; j++) {
         if (!(c->m.q_max_rad[j] > c->m.q_min_rad[j])) {
-            fail(c, c->seen[j + 1][KEY_MAX], "[joint%d] max: got '%s', expected above min = %s (line %d)", j + 1,
+            fail(c, c->seen[j + 1][KEY_MAX], "[joint.%d] max: got '%s', expected above min = %s (line %d)", j + 1,
                  c->max_text[j], c->min_text[j], c->seen[j + 1][KEY_MIN]);
         }
     }

@@ -5,7 +5,8 @@
  * firmware/model/robots/ls-sim6.ini, as the worked example):
  *
  *   [robot]      name, link_radius
- *   [joint1..6]  a, alpha, d, theta_offset, min, max, max_velocity,
+ *   [joint.1] .. [joint.6]
+ *                a, alpha, d, theta_offset, min, max, max_velocity,
  *                max_acceleration, max_jerk, max_torque, mass
  *   [cartesian]  max_linear_speed, max_angular_speed, max_linear_acceleration,
  *                max_angular_acceleration, max_linear_jerk, max_angular_jerk,
@@ -37,7 +38,7 @@
  *   - a value without its unit or with a unit of another quantity, a number
  *     that is not finite decimal text, a value out of its range, a name that
  *     is not 1..31 printable ASCII characters;
- *   - a missing key ("FILE: [joint3] max_jerk: missing; ...");
+ *   - a missing key ("FILE: [joint.3] max_jerk: missing; ...");
  *   - a joint's max not above its min, a workspace_max not above
  *     workspace_min on some axis;
  *   - a geometry no closed-form IK class fits (ls_kin_classify's reason).
@@ -71,7 +72,7 @@ typedef struct {
 } ls_model_unit_t;
 
 typedef struct {
-    const char *section; /* "robot", "joint" (joint1..joint6) or "cartesian" */
+    const char *section; /* "robot", "joint" ([joint.1] .. [joint.6]) or "cartesian" */
     const char *key;     /* "max_velocity" */
     ls_model_quantity_t quantity;
     double min_si, max_si; /* the allowed range in SI units */
@@ -80,7 +81,7 @@ typedef struct {
     const char *what;      /* one line for docs and --help ("velocity limit") */
 } ls_model_key_t;
 
-/* The key table, in file order (every [jointN] section has the "joint"
+/* The key table, in file order (every [joint.N] section has the "joint"
  * keys), and the units of a quantity (a NULL name ends the list). Static
  * storage; callable anywhere. */
 size_t ls_robot_model_key_count(void);

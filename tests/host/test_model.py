@@ -37,7 +37,7 @@ def test_a_refusal_names_the_file_line_and_key() -> None:
     text = (ROBOTS / "ls-sim6.ini").read_bytes()
     with pytest.raises(ModelError) as e:
         parse_model(text.replace(b"max = 150 deg", b"max = 150"), "arm.ini")
-    assert str(e.value) == ("arm.ini:49: [joint3] max: got '150', expected an angle: a number and its unit (deg or "
+    assert str(e.value) == ("arm.ini:49: [joint.3] max: got '150', expected an angle: a number and its unit (deg or "
                             "rad), -540..540 deg")
     with pytest.raises(ModelError, match=r"^arm\.ini: \[cartesian\] max_linear_jerk: missing; every key"):
         parse_model(text.replace(b"max_linear_jerk = 40 m/s^3\n", b""), "arm.ini")

@@ -258,7 +258,7 @@ BAD = [
     ("out-of-range", "link_radius = 0.04 m", "link_radius = 4 m"),
     ("unknown-key", "mass = 3 kg", "weight = 3 kg"),
     ("given-twice", "mass = 3 kg", "mass = 3 kg\nmass = 3 kg"),
-    ("unknown-section", "[joint3]", "[elbow]"),
+    ("unknown-section", "[joint.3]", "[elbow]"),
     ("outside-section", "[robot]", "name = x\n[robot]"),
     ("syntax", "mass = 3 kg", "mass 3 kg"),
     ("bad-name", "name = ls-sim6", "name = an arm whose name is far too long to be kept"),
@@ -292,9 +292,9 @@ def test_the_refusals_name_what_was_wrong(tmp_path: Path) -> None:
         r = run_cli("model", "check", str(_variant(tmp_path, f"{name}.ini", old, new)))
         assert r.returncode == 2
         return r.stderr
-    assert "[joint3] max_jerk: missing; every key is required" in refusal("missing-key")
-    assert "[joint2] max: got '-120 deg', expected above min = -110 deg (line 35)" in refusal("inverted-limit")
-    assert ":19: [joint1] alpha: got 'nan deg', expected an angle: a number and its unit (deg or rad), " \
+    assert "[joint.3] max_jerk: missing; every key is required" in refusal("missing-key")
+    assert "[joint.2] max: got '-120 deg', expected above min = -110 deg (line 35)" in refusal("inverted-limit")
+    assert ":19: [joint.1] alpha: got 'nan deg', expected an angle: a number and its unit (deg or rad), " \
            "-360..360 deg" in refusal("not-finite")
     assert "no closed-form inverse kinematics fits this arm: not a spherical wrist (a4 = 0.02 m; a4, a5, a6 " \
            "and d5 must be 0 so that joints 4-6 meet) and not an offset wrist (a4 = 0.02 m; a4, a5 and a6 must " \

@@ -36,8 +36,8 @@ from .urdf import rpy_matrix
 N_JOINTS = 6
 # inih's line buffer (INI_MAX_LINE of Debian's libinih): landscaped refuses longer lines.
 INI_MAX_LINE = 200
-SECTIONS_TEXT = "[robot], [joint1] to [joint6] or [cartesian]"
-SECTION_NAMES = ("robot", *(f"joint{j}" for j in range(1, N_JOINTS + 1)), "cartesian")
+SECTIONS_TEXT = "[robot], [joint.1] .. [joint.6] or [cartesian]"
+SECTION_NAMES = ("robot", *(f"joint.{j}" for j in range(1, N_JOINTS + 1)), "cartesian")
 DOCS = 'docs/deploy.md "Describe your arm"'
 _NUMBER = re.compile(r"[+-]?([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][+-]?[0-9]+)?")
 _STRUCT_TOL = 1e-12  # ls_kin.cpp kStructTol
@@ -192,7 +192,7 @@ class _Reader:
         if section == "robot":
             self.m.link_radius_m = v[0]
         elif kind == "joint":
-            self.m.joints[int(section[5:]) - 1][name] = v[0]
+            self.m.joints[int(section[6:]) - 1][name] = v[0]
         elif name == "workspace_min":
             self.m.workspace_min_m = (v[0], v[1], v[2])
         elif name == "workspace_max":
@@ -239,7 +239,7 @@ class _Reader:
                 if k.section == kind and (section, k.key) not in self.seen:
                     raise self.fail(0, f"[{section}] {k.key}: missing; every key is required ({DOCS})")
         for j, joint in enumerate(self.m.joints, 1):
-            s = f"joint{j}"
+            s = f"joint.{j}"
             if not joint["max"] > joint["min"]:
                 raise self.fail(self.seen[s, "max"], f"[{s}] max: got '{self.text[s, 'max']}', expected above min = "
                                                       f"{self.text[s, 'min']} (line {self.seen[s, 'min']})")
@@ -593,7 +593,7 @@ def from_urdf(text: str, where: str, *, name: str | None = None, base: str | Non
         m = mass[i - 1]
         lines += ["", f"# URDF joint {j.name}" + (" (continuous: limited to +-360 deg here)" if j.type == "continuous"
                                                  else ""),
-                  f"[joint{i}]", f"a = {_number(a, 'm')}", f"alpha = {_angle_text(al)}", f"d = {_number(d, 'm')}",
+                  f"[joint.{i}]", f"a = {_number(a, 'm')}", f"alpha = {_angle_text(al)}", f"d = {_number(d, 'm')}",
                   f"theta_offset = {_angle_text(off)}", f"min = {lo!r} rad", f"max = {hi!r} rad",
                   f"max_velocity = {vel!r} rad/s",
                   "# CHOSEN: full speed in 0.25 s, full acceleration in 0.1 s",
@@ -603,7 +603,7 @@ def from_urdf(text: str, where: str, *, name: str | None = None, base: str | Non
             lines.append(f"mass = {m!r} kg")
         else:
             lines += ["# CHOSEN: no <inertial> mass in the URDF for the links this joint moves", "mass = 1 kg"]
-            chosen.append(f"joint{i} mass")
+            chosen.append(f"joint.{i} mass")
     chosen += ["max_acceleration", "max_jerk", "[cartesian]"]
     reach = min(9.99, sum(math.hypot(a, d) for a, _, d, _ in dh))
     lines += ["", "# CHOSEN: the tool tip's Cartesian limits, and a workspace box of the arm's reach: narrow it to",

@@ -145,7 +145,7 @@ static void a_missing_key_is_named(void **state)
 {
     (void)state;
     assert_string_equal(refusal("max_jerk = 80 rad/s^3", ""),
-                        " [joint3] max_jerk: missing; every key is required (docs/deploy.md \"Describe your arm\")");
+                        " [joint.3] max_jerk: missing; every key is required (docs/deploy.md \"Describe your arm\")");
     assert_string_equal(refusal("name = ls-sim6", ""),
                         " [robot] name: missing; every key is required (docs/deploy.md \"Describe your arm\")");
 }
@@ -153,9 +153,9 @@ static void a_missing_key_is_named(void **state)
 static void an_inverted_joint_limit_names_both_lines(void **state)
 {
     (void)state;
-    /* [joint2] min is on line 32 of ls-sim6.ini, max on line 33. */
+    /* [joint.2] min is on line 32 of ls-sim6.ini, max on line 33. */
     assert_string_equal(refusal("max = 110 deg", "max = -120 deg"),
-                        "36: [joint2] max: got '-120 deg', expected above min = -110 deg (line 35)");
+                        "36: [joint.2] max: got '-120 deg', expected above min = -110 deg (line 35)");
     const char *ws = refusal("workspace_max = 0.95 0.95 1.40 m", "workspace_max = 0.95 0.95 0.01 m");
     assert_non_null(strstr(ws, "[cartesian] workspace_max: got '0.95 0.95 0.01 m', expected above workspace_min = "
                                "-0.95 -0.95 0.02 m"));
@@ -173,13 +173,13 @@ static void a_value_that_is_not_a_finite_number_with_its_unit_is_refused(void **
         const char *msg = refusal("alpha = -90 deg", line);
         char want[256];
         snprintf(want, sizeof want,
-                 "19: [joint1] alpha: got '%s', expected an angle: a number and its unit (deg or rad), -360..360 deg",
+                 "19: [joint.1] alpha: got '%s', expected an angle: a number and its unit (deg or rad), -360..360 deg",
                  bad[i]);
         assert_string_equal(msg, want);
     }
     assert_string_equal(
         refusal("mass = 5 kg", "mass = 0 kg"),
-        "28: [joint1] mass: got '0 kg', expected a mass: a number and its unit (kg), above 0 up to 1e+04 kg");
+        "28: [joint.1] mass: got '0 kg', expected a mass: a number and its unit (kg), above 0 up to 1e+04 kg");
     assert_string_equal(refusal("workspace_min = -0.95 -0.95 0.02 m", "workspace_min = -0.95 0.02 m"),
                         "103: [cartesian] workspace_min: got '-0.95 0.02 m', expected a point: three numbers (x y z) "
                         "and one unit (m or mm), each -10..10 m");
@@ -198,15 +198,15 @@ static void a_geometry_no_ik_class_fits_is_refused_with_the_reason(void **state)
 static void syntax_sections_and_keys_are_checked(void **state)
 {
     (void)state;
-    assert_string_equal(refusal("[joint3]", "[joint7]"),
-                        "43: unknown section [joint7]; expected [robot], [joint1] to [joint6] or [cartesian]");
+    assert_string_equal(refusal("[joint.3]", "[joint.7]"),
+                        "43: unknown section [joint.7]; expected [robot], [joint.1] .. [joint.6] or [cartesian]");
     assert_string_equal(refusal("mass = 3 kg", "weight = 3 kg"),
-                        "54: [joint3] weight: unknown key; expected one of a, alpha, d, theta_offset, min, max, "
+                        "54: [joint.3] weight: unknown key; expected one of a, alpha, d, theta_offset, min, max, "
                         "max_velocity, max_acceleration, max_jerk, max_torque, mass");
     assert_string_equal(refusal("mass = 3 kg", "mass = 3 kg\nmass = 4 kg"),
-                        "55: [joint3] mass: given twice (first on line 54); keep one");
+                        "55: [joint.3] mass: given twice (first on line 54); keep one");
     assert_string_equal(refusal("[robot]", "link_radius = 0.04 m\n[robot]"),
-                        "9: key 'link_radius' outside any section: put it under [robot], [joint1] to [joint6] or "
+                        "9: key 'link_radius' outside any section: put it under [robot], [joint.1] .. [joint.6] or "
                         "[cartesian]");
     assert_string_equal(refusal("mass = 3 kg", "mass 3 kg"),
                         "54: syntax error: expected '[section]', 'key = value' or a ; or # comment");
