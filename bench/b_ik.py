@@ -1,4 +1,4 @@
-"""Benchmark 12: inverse kinematics per call, for each IK class (ls_kin.h): instructions per call under
+"""Benchmark 13: inverse kinematics per call, for each IK class (ls_kin.h): instructions per call under
 callgrind of ls_kin_ik_all and ls_kin_ik_nearest on random poses of a spherical-wrist arm (ls-sim6, the
 compiled-in model) and of an offset-wrist arm (the UR5e of firmware/model/robots/ur5e.ini), against
 ls_kin_fk of the same joint vectors."""
@@ -35,7 +35,7 @@ def bench_ik(quick: bool) -> Section:
             fk, _, _ = per_call("fk", model)
             for case, text in CALLS.items():
                 per, total, base = per_call(case, model)
-                sec.rows.append(Row(f"12. IK, {cls} ({name}): {text}", f"{per:,.0f} instructions/call",
+                sec.rows.append(Row(f"13. IK, {cls} ({name}): {text}", f"{per:,.0f} instructions/call",
                                     "ls_kin_fk of the same joints", f"{fk:,.0f} instructions/call",
                                     f"{per / fk:.1f}", f"({total:,} - {base:,}) / {n}; closed form, no iteration"))
     sec.details.append(

@@ -1,4 +1,4 @@
-/* Benchmark 12: the cost of one inverse kinematics call per IK class, for
+/* Benchmark 13: the cost of one inverse kinematics call per IK class, for
  * callgrind. `bench_ik CASE MODEL N`: set-up (load MODEL, "-" for the
  * compiled-in ls-sim6, and 256 random poses from FK of joint vectors inside
  * the limits), then N calls of CASE cycling through the poses:
