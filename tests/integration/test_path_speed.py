@@ -64,7 +64,10 @@ def toppra_duration(q: np.ndarray, tip: np.ndarray, qd_max: np.ndarray, qdd_max:
     """TOPP-RA's time-optimal duration along the joint path q (rows: set-points) under the joints'
     velocity and acceleration limits and the tool tip's linear ones (tip: its positions), with
     the path parameter the tip's arc length over the whole."""
-    ta = pytest.importorskip("toppra", reason="toppra is the oracle of the dev extra: bash .ci/setup")
+    try:
+        import toppra as ta
+    except ImportError:
+        pytest.fail("toppra, this test's oracle, is missing from the venv: run bash .ci/setup (the dev extra)")
     import toppra.algorithm as algo
     import toppra.constraint as tc
     arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(tip, axis=0), axis=1))])
