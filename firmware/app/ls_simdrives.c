@@ -11,6 +11,7 @@
 #include <errno.h>
 #include <inttypes.h>
 #include <poll.h>
+#include <sched.h>
 #include <signal.h>
 #include <stdio.h>
 #include <string.h>
@@ -22,6 +23,8 @@
 #include "hal_sim_world.h"
 #include "ls_app_log.h"
 #include "ls_check.h"
+#include "ls_config.h"
+#include "ls_robot_config.h"
 #include "ls_robot_model_sim.h"
 #include "ls_simdrives_opts.h"
 #include "slcan_pty.h"
@@ -112,6 +115,16 @@ int main(int argc, char **argv)
         LOG_ERR("%s", msg);
         return LS_EXIT_BAD_CONFIG;
     }
+    if (o.rt_priority > 0) {
+        /* Hardware answers each SYNC within the cycle; a simulator on a busy
+         * machine does so only when it runs before the builds. Not granted:
+         * it runs on, said once. */
+        const struct sched_param sp = { .sched_priority = o.rt_priority };
+        if (sched_setscheduler(0, SCHED_FIFO, &sp) != 0) {
+            LOG_WARN("--rt-priority %d: SCHED_FIFO refused (%s): running as a normal process", o.rt_priority,
+                     strerror(errno));
+        }
+    }
     /* Stop signals are blocked but inside ppoll: no race between the flag's
      * test and the sleep. */
     sigset_t stop_set, unblocked;
@@ -129,8 +142,18 @@ int main(int argc, char **argv)
     (void)sigaction(SIGINT, &sa, NULL);
     signal(SIGPIPE, SIG_IGN);
 
+    /* The arm landscaped drives: its model file, as landscaped reads it and
+     * with what the simulator can build checked (ls_robot_config.h). */
+    static ls_config_t robot_cfg;  /* large: not on the stack */
+    static ls_robot_model_t model; /* the world keeps a pointer to its name */
+    ls_config_defaults(&robot_cfg);
+    (void)snprintf(robot_cfg.model, sizeof robot_cfg.model, "%s", o.model);
+    if (ls_robot_config_load(&robot_cfg, &model, msg, sizeof msg) != LS_OK) {
+        LOG_ERR("--model: %s", msg);
+        return LS_EXIT_BAD_CONFIG;
+    }
     hal_sim_arm_model_t arm;
-    ls_robot_model_to_sim(&ls_robot_model_default, &arm);
+    ls_robot_model_to_sim(&model, &arm);
     hal_sim_world_config_t wc = { .arm = &arm, .dio_socket_path = NULL, .lockstep = false, .with_obstacle = true };
     if (hal_sim_world_open(&wc, msg, sizeof msg) < 0) {
         LOG_ERR("the simulated world: %s", msg);

@@ -14,27 +14,33 @@
 #include "ls_err.h"
 #include "ls_math.h"
 
-const char ls_simdrives_usage[] = "usage: ls-simdrives --link slcan:pty:PATH|socketcan:IFNAME [options]\n"
-                                  "\n"
-                                  "The simulated arm behind CiA 402 drives, one CANopen node per joint\n"
-                                  "(hal/sim/drives/hal_sim_drives.h; the drive's EDS: ls-simdrive.eds).\n"
-                                  "\n"
-                                  "  --link SPEC              the drive bus: slcan:pty:PATH (a pty a master opens as\n"
-                                  "                           an SLCAN device) or socketcan:IFNAME\n"
-                                  "  --nodes ID,ID,...        node ids for joints 1, 2, ... (default 0x21 to 0x26)\n"
-                                  "  --first-node ID          with --count: nodes ID, ID+1, ... for joints 1, 2, ...\n"
-                                  "  --count N                number of drives, 1 to 6 (default 6)\n"
-                                  "  --counts-per-rad N       position unit (default 2^17 x 100 / 2 pi: a 17-bit\n"
-                                  "                           encoder behind a 100:1 gear)\n"
-                                  "  --position-offset-counts V | ID=V,...\n"
-                                  "                           the encoder count at the joint's zero, for every node\n"
-                                  "                           or per node (e.g. 2147483000: the int32 counter wraps);\n"
-                                  "                           repeatable, a node's own value wins\n"
-                                  "  --control PATH           the misbehaviour socket (Unix datagrams: emcy, silence,\n"
-                                  "                           freeze-tpdo, sticky-fault, no-boot, identity, sto,\n"
-                                  "                           bus-off, reset)\n"
-                                  "  --link-faults SPEC       inject faults on the link (tests; as landscaped's)\n"
-                                  "  --help                   this text\n";
+const char ls_simdrives_usage[] =
+    "usage: ls-simdrives --link slcan:pty:PATH|socketcan:IFNAME [options]\n"
+    "\n"
+    "The simulated arm behind CiA 402 drives, one CANopen node per joint\n"
+    "(hal/sim/drives/hal_sim_drives.h; the drive's EDS: ls-simdrive.eds).\n"
+    "\n"
+    "  --link SPEC              the drive bus: slcan:pty:PATH (a pty a master opens as\n"
+    "                           an SLCAN device) or socketcan:IFNAME\n"
+    "  --nodes ID,ID,...        node ids for joints 1, 2, ... (default 0x21 to 0x26)\n"
+    "  --first-node ID          with --count: nodes ID, ID+1, ... for joints 1, 2, ...\n"
+    "  --count N                number of drives, 1 to 6 (default 6)\n"
+    "  --counts-per-rad N       position unit (default 2^17 x 100 / 2 pi: a 17-bit\n"
+    "                           encoder behind a 100:1 gear)\n"
+    "  --position-offset-counts V | ID=V,...\n"
+    "                           the encoder count at the joint's zero, for every node\n"
+    "                           or per node (e.g. 2147483000: the int32 counter wraps);\n"
+    "                           repeatable, a node's own value wins\n"
+    "  --control PATH           the misbehaviour socket (Unix datagrams: emcy, silence,\n"
+    "                           freeze-tpdo, sticky-fault, no-boot, identity, sto,\n"
+    "                           bus-off, reset)\n"
+    "  --link-faults SPEC       inject faults on the link (tests; as landscaped's)\n"
+    "  --rt-priority N          run at SCHED_FIFO priority N (1..99): drives answer each\n"
+    "                           SYNC in time on a busy machine, as hardware does\n"
+    "                           (default 0: a normal process)\n"
+    "  --model FILE             the arm behind the drives: a robot model file, as\n"
+    "                           landscaped's [robot] model (default: ls-sim6)\n"
+    "  --help                   this text\n";
 
 static int fail(char *msg, size_t msglen, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 static int fail(char *msg, size_t msglen, const char *fmt, ...)
@@ -176,7 +182,18 @@ static int copy(char *dst, size_t cap, const char *src, const char *opt, char *m
     return LS_OK;
 }
 
-enum { OPT_LINK = 256, OPT_NODES, OPT_FIRST, OPT_COUNT, OPT_CPR, OPT_OFFSET, OPT_CONTROL, OPT_FAULTS };
+enum {
+    OPT_LINK = 256,
+    OPT_NODES,
+    OPT_FIRST,
+    OPT_COUNT,
+    OPT_CPR,
+    OPT_OFFSET,
+    OPT_CONTROL,
+    OPT_FAULTS,
+    OPT_MODEL,
+    OPT_RT
+};
 
 int ls_simdrives_parse(int argc, char **argv, ls_simdrives_opts_t *o, char *msg, size_t msglen)
 {
@@ -189,6 +206,8 @@ int ls_simdrives_parse(int argc, char **argv, ls_simdrives_opts_t *o, char *msg,
         { "position-offset-counts", required_argument, NULL, OPT_OFFSET },
         { "control", required_argument, NULL, OPT_CONTROL },
         { "link-faults", required_argument, NULL, OPT_FAULTS },
+        { "model", required_argument, NULL, OPT_MODEL },
+        { "rt-priority", required_argument, NULL, OPT_RT },
         { "help", no_argument, NULL, 'h' },
         { NULL, 0, NULL, 0 },
     };
@@ -245,6 +264,17 @@ int ls_simdrives_parse(int argc, char **argv, ls_simdrives_opts_t *o, char *msg,
         }
         case OPT_OFFSET: rc = parse_offsets(optarg, &off, msg, msglen); break;
         case OPT_CONTROL: rc = copy(o->control, sizeof o->control, optarg, "--control", msg, msglen); break;
+        case OPT_MODEL: rc = copy(o->model, sizeof o->model, optarg, "--model", msg, msglen); break;
+        case OPT_RT: {
+            char *e = NULL;
+            errno = 0;
+            const long v = strtol(optarg, &e, 10);
+            if (optarg[0] < '0' || optarg[0] > '9' || *e != '\0' || errno != 0 || v > 99) {
+                return fail(msg, msglen, "--rt-priority %s: expected 0..99 (0: a normal process)", optarg);
+            }
+            o->rt_priority = (int)v;
+            break;
+        }
         case OPT_FAULTS: {
             hal_sim_fault_config_t fc;
             char why[200];

@@ -17,10 +17,12 @@ typedef struct {
     char link[256];        /* slcan:pty:PATH or socketcan:IFNAME */
     char control[108];     /* "" = no control socket */
     char link_faults[256]; /* "" = none (hal/sim/faulty_link.h SPEC) */
+    char model[256];       /* "" = the compiled-in ls-sim6; else a robot model file (ls_robot_model_file.h) */
     size_t n_nodes;        /* drive i drives joint i + 1 */
     uint8_t nodes[HAL_SIM_DRIVES_MAX];
     int32_t offsets[HAL_SIM_DRIVES_MAX]; /* position offset per node, counts */
     double counts_per_rad;
+    int rt_priority; /* 0: a normal process; 1..99: SCHED_FIFO at that priority (drives answer in time) */
 } ls_simdrives_opts_t;
 
 /* The --help text (stdout). */

@@ -1858,6 +1858,9 @@ static void arrive(ls_motion_t *m, const ls_motion_seg_t *s, ls_motion_events_t 
 /* A planned joint that the measured one does not follow faults the motion. */
 static void check_following(ls_motion_t *m, const double q_meas[LS_N_JOINTS], ls_motion_events_t *ev)
 {
+    if (m->lag_cycles_ > 0u && (unsigned)m->lag_cycles_ + m->late_cycles_ >= LS_MOTION_LAG_MAX - 1u) {
+        return; /* a measurement older than the set-points kept: the arm's staleness rule judges it */
+    }
     if (m->phase != LS_MOTION_IDLE && m->phase != LS_MOTION_PAUSED && q_meas != NULL) {
         for (int j = 0; j < LS_N_JOINTS; j++) {
             if ((m->ignored_joints_ & (1u << j)) != 0u) {

@@ -417,7 +417,9 @@ void ls_motion_set_feedback_lag(ls_motion_t *m, uint16_t cycles);
 
 /* This cycle's measurement is `extra` cycles older than the arm's usual
  * lag (a drive's answer came late): the following check widens its window
- * by that much for this cycle (the set-points of the time it was measured).
+ * by that much for this cycle (the set-points of the time it was measured);
+ * a measurement older than the set-points kept (LS_MOTION_LAG_MAX) is not
+ * judged at all: the arm's own staleness rule (a lost drive) does that.
  * Control loop, before ls_motion_step; O(1). */
 void ls_motion_feedback_late(ls_motion_t *m, uint16_t extra);
 

@@ -70,7 +70,8 @@ def _report(what: str, sup: Supervisor, watch: Joint1, t0: float, needle: str) -
 @pytest.fixture
 def rig(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[tuple[Controller, Supervisor]]:
     monkeypatch.setattr("conftest.ARM", "cia402")
-    c = start_controller(tmp_path / "ls0")
+    # the defaults of docs/deploy.md: a drive whose feedback misses 5 drive cycles is lost
+    c = start_controller(tmp_path / "ls0", drive_keys={"stale_cycles": "5"})
     bus = can.Bus(interface="slcan", channel=c.pty, bitrate=1000000, sleep_after_open=0)
     try:
         with Supervisor(bus, client_name="faults") as sup:
