@@ -442,7 +442,7 @@ int hal_sim_drives_poll(uint64_t now_us)
     if (S.bus_off && now_us >= S.bus_off_until_us) {
         set_bus_off(false, now_us);
     }
-    for (;;) {
+    for (unsigned k = 0; k < HAL_SIM_DRIVES_RX_PER_POLL; k++) {
         hal_can_frame_t f;
         int r = hal_can_recv(S.link, &f);
         if (r == LS_EAGAIN) {

@@ -150,6 +150,8 @@
 #define SD_SUB_BRAKE_ENGAGED 1u  /*   u8 ro, mappable: 1 while the holding brake holds */
 #define SD_SUB_STO_ACTIVE 2u     /*   u8 ro, mappable: 1 while safe torque off is active */
 
+#define HAL_SIM_DRIVES_RX_PER_POLL 64u /* frames taken from the link per poll() */
+
 typedef struct {
     uint8_t node_id;                /* 1..127, distinct */
     uint8_t joint;                  /* 0..5, distinct */
@@ -182,9 +184,12 @@ int hal_sim_drives_open(const hal_sim_drives_config_t *cfg, uint64_t now_us, cha
 /* Close the control socket (unlinking its file). Safe when not open. */
 void hal_sim_drives_close(void);
 
-/* Everything due: the link's received frames (a SYNC steps the world), the
- * control socket's commands (at most 64 per call), timers, then the frames
- * the nodes sent, out to the link. LS_OK, LS_ENODEV when not open, or the
+/* Everything due: the link's received frames (at most
+ * HAL_SIM_DRIVES_RX_PER_POLL: a SYNC steps the world, and a machine too slow
+ * for the bus must still run the timers, as a drive's heartbeat runs
+ * whatever the bus carries), the control socket's commands (at most 64 per
+ * call), timers, then the frames the nodes sent, out to the link; the
+ * frames left wait for the next call. LS_OK, LS_ENODEV when not open, or the
  * link's negative status when it failed (the caller stops). */
 int hal_sim_drives_poll(uint64_t now_us);
 
