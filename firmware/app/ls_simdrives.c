@@ -167,6 +167,7 @@ int main(int argc, char **argv)
     hal_sim_drives_config_t dc = { .link = &link,
                                    .n_drives = o.n_nodes,
                                    .counts_per_rad = o.counts_per_rad,
+                                   .substep_s = o.substep_s,
                                    .control_socket_path = o.control[0] != '\0' ? o.control : NULL };
     for (size_t i = 0; i < o.n_nodes; i++) {
         dc.drives[i] = (hal_sim_drive_config_t){ .node_id = o.nodes[i],

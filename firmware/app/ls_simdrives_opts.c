@@ -40,6 +40,9 @@ const char ls_simdrives_usage[] =
     "                           (default 0: a normal process)\n"
     "  --model FILE             the arm behind the drives: a robot model file, as\n"
     "                           landscaped's [robot] model (default: ls-sim6)\n"
+    "  --substep-ms MS          the physics' sub-step, about (default 1; up to 100):\n"
+    "                           longer for a machine too slow to step the arm every\n"
+    "                           millisecond in real time (an emulated guest)\n"
     "  --help                   this text\n";
 
 static int fail(char *msg, size_t msglen, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
@@ -192,7 +195,8 @@ enum {
     OPT_CONTROL,
     OPT_FAULTS,
     OPT_MODEL,
-    OPT_RT
+    OPT_RT,
+    OPT_SUBSTEP
 };
 
 int ls_simdrives_parse(int argc, char **argv, ls_simdrives_opts_t *o, char *msg, size_t msglen)
@@ -208,11 +212,13 @@ int ls_simdrives_parse(int argc, char **argv, ls_simdrives_opts_t *o, char *msg,
         { "link-faults", required_argument, NULL, OPT_FAULTS },
         { "model", required_argument, NULL, OPT_MODEL },
         { "rt-priority", required_argument, NULL, OPT_RT },
+        { "substep-ms", required_argument, NULL, OPT_SUBSTEP },
         { "help", no_argument, NULL, 'h' },
         { NULL, 0, NULL, 0 },
     };
     memset(o, 0, sizeof *o);
     o->counts_per_rad = LS_SIMDRIVES_COUNTS_PER_REV / (2.0 * LS_PI);
+    o->substep_s = HAL_SIM_DRIVES_SUBSTEP_S;
     offsets_t off;
     memset(&off, 0, sizeof off);
     bool have_nodes = false, have_first = false, have_count = false;
@@ -282,6 +288,18 @@ int ls_simdrives_parse(int argc, char **argv, ls_simdrives_opts_t *o, char *msg,
                 return fail(msg, msglen, "--link-faults %s: %s", optarg, why);
             }
             rc = copy(o->link_faults, sizeof o->link_faults, optarg, "--link-faults", msg, msglen);
+            break;
+        }
+        case OPT_SUBSTEP: {
+            char *e = NULL;
+            errno = 0;
+            double v = strtod(optarg, &e);
+            if (optarg[0] < '0' || optarg[0] > '9' || *e != '\0' || errno != 0 ||
+                !(v > 0.0 && v <= HAL_SIM_DRIVES_SUBSTEP_MAX_S * 1000.0)) {
+                return fail(msg, msglen, "--substep-ms %s: expected milliseconds above 0, at most %g", optarg,
+                            HAL_SIM_DRIVES_SUBSTEP_MAX_S * 1000.0);
+            }
+            o->substep_s = v / 1000.0;
             break;
         }
         case ':': return fail(msg, msglen, "%s: missing value (see --help)", argv[optind - 1]);

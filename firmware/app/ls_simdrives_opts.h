@@ -22,7 +22,8 @@ typedef struct {
     uint8_t nodes[HAL_SIM_DRIVES_MAX];
     int32_t offsets[HAL_SIM_DRIVES_MAX]; /* position offset per node, counts */
     double counts_per_rad;
-    int rt_priority; /* 0: a normal process; 1..99: SCHED_FIFO at that priority (drives answer in time) */
+    int rt_priority;  /* 0: a normal process; 1..99: SCHED_FIFO at that priority (drives answer in time) */
+    double substep_s; /* --substep-ms: the physics' sub-step (hal_sim_drives_config_t.substep_s) */
 } ls_simdrives_opts_t;
 
 /* The --help text (stdout). */

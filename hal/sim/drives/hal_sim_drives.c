@@ -15,7 +15,6 @@
 #include "sd_ctl.h"
 #include "sd_node.h"
 
-#define SUBSTEP_S 0.001 /* the physics' sub-step, about */
 #define TX_RING 512u    /* frames waiting for the link */
 #define LOCAL_RING 64u  /* frames the nodes sent, to be heard by the other nodes */
 #define CTL_PER_POLL 64 /* datagrams per poll, so a flood cannot stretch a cycle */
@@ -34,6 +33,7 @@ static struct {
     sd_node_t nodes[HAL_SIM_DRIVES_MAX];
     uint8_t joint[HAL_SIM_DRIVES_MAX];
     hal_arm_t arm;
+    double substep_s; /* the physics' sub-step, about */
     double torque_max_Nm[NJ];
     hal_can_frame_t tx[TX_RING];
     size_t tx_head, tx_len;
@@ -110,8 +110,8 @@ static void feed_all(double dt_s, uint64_t now_us)
 }
 
 /* A SYNC: the nodes that take it sample and set their set-points, then the
- * world advances by the longest of their interpolation periods in about
- * 1 ms sub-steps, every drive commanding its joint in each. Joints without
+ * world advances by the longest of their interpolation periods in sub-steps
+ * of about substep_s, every drive commanding its joint in each. Joints without
  * a drive stay braked where they are. */
 static void on_sync(const hal_can_frame_t *f, uint64_t now_us)
 {
@@ -125,7 +125,7 @@ static void on_sync(const hal_can_frame_t *f, uint64_t now_us)
     if (period_s <= 0.0) {
         return;
     }
-    long steps = lround(period_s / SUBSTEP_S);
+    long steps = lround(period_s / S.substep_s);
     steps = steps < 1 ? 1 : steps;
     double dt_s = period_s / (double)steps;
     for (long s = 0; s < steps; s++) {
@@ -353,6 +353,11 @@ static int check_config(const hal_sim_drives_config_t *cfg, char *msg, size_t ms
         snprintf(msg, msglen, "counts per radian %g: must be above 0 and at most 1e9", cfg->counts_per_rad);
         return LS_EINVAL;
     }
+    if (!(cfg->substep_s >= 0.0 && cfg->substep_s <= HAL_SIM_DRIVES_SUBSTEP_MAX_S)) {
+        snprintf(msg, msglen, "physics sub-step %g s: must be above 0 and at most %g s (0: %g s)", cfg->substep_s,
+                 HAL_SIM_DRIVES_SUBSTEP_MAX_S, HAL_SIM_DRIVES_SUBSTEP_S);
+        return LS_EINVAL;
+    }
     for (size_t i = 0; i < cfg->n_drives; i++) {
         const hal_sim_drive_config_t *d = &cfg->drives[i];
         if (d->node_id < LS_CO_NODE_MIN || d->node_id > LS_CO_NODE_MAX || d->joint >= NJ) {
@@ -400,6 +405,7 @@ int hal_sim_drives_open(const hal_sim_drives_config_t *cfg, uint64_t now_us, cha
     }
     S.arm = arm;
     S.link = cfg->link;
+    S.substep_s = cfg->substep_s > 0.0 ? cfg->substep_s : HAL_SIM_DRIVES_SUBSTEP_S;
     S.n = cfg->n_drives;
     double q[NJ], qd[NJ], tau[NJ];
     (void)read_world(q, qd, tau);

@@ -10,11 +10,11 @@
  * is the caller's, opened before and closed after.
  *
  * Costs: a frame is O(nodes x objects it maps) (an SDO request O(log
- * objects)); a SYNC adds one world step per millisecond of the
- * interpolation period (ODE, about 7 us each here) with every drive's
- * command; timers are O(nodes). Memory is static (about 2.5 KiB a node, 8 KiB
- * of output queue); nothing allocates after open (tests/unit/simdrives proves
- * it, the world included).
+ * objects)); a SYNC adds one world step per sub-step (1 ms unless
+ * configured) of the interpolation period (ODE, about 7 us each here) with
+ * every drive's command; timers are O(nodes). Memory is static (about 2.5
+ * KiB a node, 8 KiB of output queue); nothing allocates after open
+ * (tests/unit/simdrives proves it, the world included).
  *
  * ---------------------------------------------------------------------------
  * The object dictionary: ls-simdrive.eds
@@ -84,10 +84,10 @@
  * max, statusword bit 11) and 0x60B1 (the velocity feed-forward: without it
  * the joint lags v / 200 rad); the physics then advances by the
  * interpolation period 0x60C2 (the largest of the nodes', at most 100 ms)
- * in sub-steps of about 1 ms, the command moving linearly from where it was
- * to the target. No SYNC, no motion. Following error: |command - actual|
- * above 0x6065 counts for 0x6066 ms -> FAULT, EMCY 0x8611, statusword bit
- * 13 (0x6065 = 0xFFFFFFFF: off); 0x60F4 reports it.
+ * in sub-steps of about 1 ms (or substep_s), the command moving linearly
+ * from where it was to the target. No SYNC, no motion. Following error:
+ * |command - actual| above 0x6065 counts for 0x6066 ms -> FAULT, EMCY
+ * 0x8611, statusword bit 13 (0x6065 = 0xFFFFFFFF: off); 0x60F4 reports it.
  * Entering OPERATION ENABLED holds the joint where it is; the first SYNC
  * takes 0x607A as it stands (a target far from the actual position is a
  * jump, as on a real drive, and ends in a following error).
@@ -150,6 +150,8 @@
 #define SD_SUB_BRAKE_ENGAGED 1u  /*   u8 ro, mappable: 1 while the holding brake holds */
 #define SD_SUB_STO_ACTIVE 2u     /*   u8 ro, mappable: 1 while safe torque off is active */
 
+#define HAL_SIM_DRIVES_SUBSTEP_S 0.001 /* the physics' default sub-step */
+#define HAL_SIM_DRIVES_SUBSTEP_MAX_S 0.1
 #define HAL_SIM_DRIVES_RX_PER_POLL 64u /* frames taken from the link per poll() */
 
 typedef struct {
@@ -164,6 +166,11 @@ typedef struct {
     hal_sim_drive_config_t drives[HAL_SIM_DRIVES_MAX];
     double counts_per_rad;           /* > 0, at most 1e9 */
     const char *control_socket_path; /* NULL: no control socket */
+    /* The physics' sub-step, about (a period is cut into whole steps): 0
+     * means HAL_SIM_DRIVES_SUBSTEP_S. Longer steps for a machine that cannot
+     * step the world every millisecond in real time (the VM tier's emulated
+     * guest, about 4 ms of CPU per step); at most 0.1 s. */
+    double substep_s;
 } hal_sim_drives_config_t;
 
 typedef struct {

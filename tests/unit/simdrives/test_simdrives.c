@@ -91,11 +91,15 @@ static void open_world(void)
     }
 }
 
+static double g_substep_s; /* the next open's physics sub-step (0: the default) */
+
 /* Drives for nodes ids[0..n) on joints 1..n, with the given offsets (NULL: 0). */
 static void open_drives_at(size_t n, const uint8_t *ids, const int32_t *offsets, const char *ctl)
 {
     open_world();
-    hal_sim_drives_config_t dc = { .link = &g_link, .n_drives = n, .counts_per_rad = CPR, .control_socket_path = ctl };
+    hal_sim_drives_config_t dc = {
+        .link = &g_link, .n_drives = n, .counts_per_rad = CPR, .control_socket_path = ctl, .substep_s = g_substep_s
+    };
     for (size_t i = 0; i < n; i++) {
         dc.drives[i] = (hal_sim_drive_config_t){ ids[i], (uint8_t)i, offsets != NULL ? offsets[i] : 0 };
     }
@@ -921,6 +925,31 @@ static void test_csp_moves_the_joint_only_on_sync_over_the_interpolation_period(
     expect_state(LS_CO_SW_OMS12 | LS_CO_SW_OMS13, LS_CO_SW_OMS12);
 }
 
+static void test_a_longer_sub_step_cuts_the_period_into_fewer_steps_to_the_same_place(void **state)
+{
+    (void)state;
+    g_substep_s = 0.010;
+    open_drives(1);
+    g_substep_s = 0.0;
+    assert_int_equal(sdo_write(N1, LS_CO_OBJ_INTERP_PERIOD, 1, 20, 1), 0); /* 20 ms */
+    enable_csp(N1);
+    double q0 = joint_q(0);
+    int32_t p0 = sdo_read_i32(N1, LS_CO_OBJ_POSITION_ACTUAL, 0);
+    hal_sim_drives_stats_t st0, st1;
+    hal_sim_drives_stats(&st0);
+    for (int k = 1; k <= 50; k++) { /* 0.1 rad in 1 s */
+        int32_t t = p0 + (int32_t)lround(k * 0.002 * CPR);
+        assert_int_equal(sdo_write(N1, LS_CO_OBJ_TARGET_POSITION, 0, (uint32_t)t, 4), 0);
+        sync_frame();
+    }
+    for (int k = 0; k < 50; k++) {
+        sync_frame();
+    }
+    hal_sim_drives_stats(&st1);
+    assert_int_equal(st1.substeps - st0.substeps, 200); /* 20 ms in 10 ms sub-steps */
+    assert_true(fabs(joint_q(0) - q0 - 0.1) < 2e-4);
+}
+
 static void test_the_velocity_offset_feeds_forward(void **state)
 {
     (void)state;
@@ -1322,6 +1351,12 @@ static void test_open_refuses_a_bad_configuration(void **state)
     dc.counts_per_rad = 0.0;
     assert_int_equal(hal_sim_drives_open(&dc, 0, msg, sizeof msg), LS_EINVAL);
     dc.counts_per_rad = CPR;
+    dc.substep_s = 0.2;
+    assert_int_equal(hal_sim_drives_open(&dc, 0, msg, sizeof msg), LS_EINVAL);
+    assert_non_null(strstr(msg, "sub-step"));
+    dc.substep_s = -0.001;
+    assert_int_equal(hal_sim_drives_open(&dc, 0, msg, sizeof msg), LS_EINVAL);
+    dc.substep_s = 0.0;
     dc.control_socket_path = "/nonexistent-dir/x.sock";
     assert_int_equal(hal_sim_drives_open(&dc, 0, msg, sizeof msg), LS_EIO);
     dc.control_socket_path = NULL;
@@ -1380,6 +1415,7 @@ int main(void)
         cmocka_unit_test_teardown(test_fault_reset_acts_on_the_rising_edge_of_bit_7_only, teardown),
         cmocka_unit_test_teardown(test_modes_are_checked_and_the_display_follows, teardown),
         cmocka_unit_test_teardown(test_csp_moves_the_joint_only_on_sync_over_the_interpolation_period, teardown),
+        cmocka_unit_test_teardown(test_a_longer_sub_step_cuts_the_period_into_fewer_steps_to_the_same_place, teardown),
         cmocka_unit_test_teardown(test_the_velocity_offset_feeds_forward, teardown),
         cmocka_unit_test_teardown(test_a_following_error_faults_with_emcy_8611, teardown),
         cmocka_unit_test_teardown(test_positions_wrap_around_the_int32_counter, teardown),

@@ -39,6 +39,7 @@ static void test_the_defaults_are_six_drives_on_a_17_bit_encoder_behind_100_to_1
     }
     assert_true(fabs(o.counts_per_rad - 131072.0 * 100.0 / (2.0 * LS_PI)) < 1e-6);
     assert_string_equal(o.control, "");
+    assert_true(fabs(o.substep_s - 0.001) < 1e-12);
     assert_int_equal(PARSE(&o, msg, "--help"), 1);
 }
 
@@ -69,6 +70,17 @@ static void test_offsets_are_for_all_nodes_or_per_node(void **state)
     assert_int_equal(o.offsets[5], -2);
 }
 
+static void test_the_physics_sub_step_is_given_in_milliseconds(void **state)
+{
+    (void)state;
+    ls_simdrives_opts_t o;
+    char msg[256] = "";
+    assert_int_equal(PARSE(&o, msg, "--link", "socketcan:vcan1", "--substep-ms", "10"), 0);
+    assert_true(fabs(o.substep_s - 0.010) < 1e-12);
+    assert_int_equal(PARSE(&o, msg, "--link", "socketcan:vcan1", "--substep-ms", "0.5"), 0);
+    assert_true(fabs(o.substep_s - 0.0005) < 1e-12);
+}
+
 static void test_every_bad_option_is_refused_with_one_line_naming_it(void **state)
 {
     (void)state;
@@ -91,6 +103,9 @@ static void test_every_bad_option_is_refused_with_one_line_naming_it(void **stat
         { { "--link", "slcan:pty:/x", "--position-offset-counts", "2147483648" }, 4, "--position-offset-counts" },
         { { "--link", "slcan:pty:/x", "--position-offset-counts", "0x30=1" }, 4, "0x30" },
         { { "--link", "slcan:pty:/x", "--link-faults", "drop=2" }, 4, "--link-faults" },
+        { { "--link", "slcan:pty:/x", "--substep-ms", "0" }, 4, "--substep-ms" },
+        { { "--link", "slcan:pty:/x", "--substep-ms", "101" }, 4, "--substep-ms" },
+        { { "--link", "slcan:pty:/x", "--substep-ms", "4ms" }, 4, "--substep-ms" },
         { { "--link", "slcan:pty:/x", "--frobnicate" }, 3, "--frobnicate" },
         { { "--link", "slcan:pty:/x", "extra" }, 3, "extra" },
         { { "--link" }, 1, "--link" },
@@ -117,6 +132,7 @@ int main(void)
         cmocka_unit_test(test_the_defaults_are_six_drives_on_a_17_bit_encoder_behind_100_to_1),
         cmocka_unit_test(test_nodes_come_as_a_list_or_a_first_id_and_a_count),
         cmocka_unit_test(test_offsets_are_for_all_nodes_or_per_node),
+        cmocka_unit_test(test_the_physics_sub_step_is_given_in_milliseconds),
         cmocka_unit_test(test_every_bad_option_is_refused_with_one_line_naming_it),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
