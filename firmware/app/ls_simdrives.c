@@ -27,6 +27,7 @@
 #include "ls_robot_config.h"
 #include "ls_robot_model_sim.h"
 #include "ls_simdrives_opts.h"
+#include "ls_simdrives_sync.h"
 #include "slcan_pty.h"
 
 static volatile sig_atomic_t g_stop;
@@ -76,6 +77,80 @@ static int open_link(const ls_simdrives_opts_t *o, hal_can_link_t *link)
         LOG_WARN("link %s: injecting faults %s", link->name, o->link_faults);
     }
     return LS_OK;
+}
+
+/* --sync-stats: the link seen through a tap that notes each SYNC's arrival
+ * as the drives read it; every operation goes to the link beneath. */
+typedef struct {
+    hal_can_link_t inner;
+    ls_sync_watch_t *watch;
+} sync_tap_t;
+
+static int tap_send(void *self, const hal_can_frame_t *f)
+{
+    return hal_can_send(&((sync_tap_t *)self)->inner, f);
+}
+
+static int tap_recv(void *self, hal_can_frame_t *f)
+{
+    sync_tap_t *t = self;
+    const int r = hal_can_recv(&t->inner, f);
+    if (r == 1 && ls_sync_watch_is_sync(f)) {
+        ls_sync_watch_note(t->watch, mono_us());
+    }
+    return r;
+}
+
+static int tap_poll_fd(void *self)
+{
+    return hal_can_poll_fd(&((sync_tap_t *)self)->inner);
+}
+
+static int tap_status(void *self, hal_can_status_t *out)
+{
+    return hal_can_status(&((sync_tap_t *)self)->inner, out);
+}
+
+static void tap_close(void *self)
+{
+    hal_can_close(&((sync_tap_t *)self)->inner);
+}
+
+static int tap_hold_open(void *self, bool hold)
+{
+    return hal_can_hold_open(&((sync_tap_t *)self)->inner, hold);
+}
+
+static bool tap_tx_pending(void *self)
+{
+    return hal_can_tx_pending(&((sync_tap_t *)self)->inner);
+}
+
+static uint64_t tap_next_due_us(void *self)
+{
+    return hal_can_next_due_us(&((sync_tap_t *)self)->inner);
+}
+
+static const hal_can_ops_t k_tap_ops = { .send = tap_send,
+                                         .recv = tap_recv,
+                                         .poll_fd = tap_poll_fd,
+                                         .status = tap_status,
+                                         .close = tap_close,
+                                         .hold_open = tap_hold_open,
+                                         .tx_pending = tap_tx_pending,
+                                         .next_due_us = tap_next_due_us };
+
+static sync_tap_t g_tap;
+static ls_sync_watch_t g_sync_watch; /* large: static */
+
+/* Put the tap between the drives and *link. */
+static void tap_syncs(hal_can_link_t *link)
+{
+    ls_sync_watch_init(&g_sync_watch);
+    g_tap = (sync_tap_t){ .inner = *link, .watch = &g_sync_watch };
+    hal_can_link_t tapped = { .ops = &k_tap_ops, .self = &g_tap };
+    (void)snprintf(tapped.name, sizeof tapped.name, "%s", link->name);
+    *link = tapped;
 }
 
 /* Sleep until a frame, a command, room for pending output or `due`; a
@@ -164,6 +239,9 @@ int main(int argc, char **argv)
         hal_sim_world_close();
         return 1;
     }
+    if (o.sync_stats) {
+        tap_syncs(&link);
+    }
     hal_sim_drives_config_t dc = { .link = &link,
                                    .n_drives = o.n_nodes,
                                    .counts_per_rad = o.counts_per_rad,
@@ -213,8 +291,13 @@ int main(int argc, char **argv)
     LOG_INFO("%" PRIu64 " SYNCs stepped the physics (%" PRIu64 " sub-steps); frames: %" PRIu64 " in, %" PRIu64
              " out, %" PRIu64 " lost",
              st.syncs, st.substeps, st.rx_frames, st.tx_frames, st.tx_dropped);
+    if (o.sync_stats) {
+        char line[256];
+        (void)ls_sync_watch_format(&g_sync_watch, line, sizeof line);
+        LOG_INFO("%s", line);
+    }
     char faults[512];
-    if (hal_sim_faulty_format(&link, faults, sizeof faults) >= 0) {
+    if (hal_sim_faulty_format(o.sync_stats ? &g_tap.inner : &link, faults, sizeof faults) >= 0) {
         LOG_INFO("link %s faults: %s", link.name, faults);
     }
     hal_sim_drives_close();

@@ -43,6 +43,8 @@ const char ls_simdrives_usage[] =
     "  --substep-ms MS          the physics' sub-step, about (default 1; up to 100):\n"
     "                           longer for a machine too slow to step the arm every\n"
     "                           millisecond in real time (an emulated guest)\n"
+    "  --sync-stats             at exit, log the SYNC period as received: median,\n"
+    "                           p99, min, max (tests and benchmarks)\n"
     "  --help                   this text\n";
 
 static int fail(char *msg, size_t msglen, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
@@ -196,7 +198,8 @@ enum {
     OPT_FAULTS,
     OPT_MODEL,
     OPT_RT,
-    OPT_SUBSTEP
+    OPT_SUBSTEP,
+    OPT_SYNC_STATS
 };
 
 int ls_simdrives_parse(int argc, char **argv, ls_simdrives_opts_t *o, char *msg, size_t msglen)
@@ -213,6 +216,7 @@ int ls_simdrives_parse(int argc, char **argv, ls_simdrives_opts_t *o, char *msg,
         { "model", required_argument, NULL, OPT_MODEL },
         { "rt-priority", required_argument, NULL, OPT_RT },
         { "substep-ms", required_argument, NULL, OPT_SUBSTEP },
+        { "sync-stats", no_argument, NULL, OPT_SYNC_STATS },
         { "help", no_argument, NULL, 'h' },
         { NULL, 0, NULL, 0 },
     };
@@ -302,6 +306,7 @@ int ls_simdrives_parse(int argc, char **argv, ls_simdrives_opts_t *o, char *msg,
             o->substep_s = v / 1000.0;
             break;
         }
+        case OPT_SYNC_STATS: o->sync_stats = true; break;
         case ':': return fail(msg, msglen, "%s: missing value (see --help)", argv[optind - 1]);
         default: return fail(msg, msglen, "unknown option '%s' (see --help)", argv[optind - 1]);
         }

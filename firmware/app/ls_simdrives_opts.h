@@ -4,6 +4,7 @@
 #ifndef LS_SIMDRIVES_OPTS_H
 #define LS_SIMDRIVES_OPTS_H
 
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -24,6 +25,7 @@ typedef struct {
     double counts_per_rad;
     int rt_priority;  /* 0: a normal process; 1..99: SCHED_FIFO at that priority (drives answer in time) */
     double substep_s; /* --substep-ms: the physics' sub-step (hal_sim_drives_config_t.substep_s) */
+    bool sync_stats;  /* --sync-stats: SYNC intervals as received, one line at exit (ls_simdrives_sync.h) */
 } ls_simdrives_opts_t;
 
 /* The --help text (stdout). */

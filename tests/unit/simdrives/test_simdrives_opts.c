@@ -39,6 +39,7 @@ static void test_the_defaults_are_six_drives_on_a_17_bit_encoder_behind_100_to_1
     }
     assert_true(fabs(o.counts_per_rad - 131072.0 * 100.0 / (2.0 * LS_PI)) < 1e-6);
     assert_string_equal(o.control, "");
+    assert_false(o.sync_stats);
     assert_true(fabs(o.substep_s - 0.001) < 1e-12);
     assert_int_equal(PARSE(&o, msg, "--help"), 1);
 }
@@ -79,6 +80,18 @@ static void test_the_physics_sub_step_is_given_in_milliseconds(void **state)
     assert_true(fabs(o.substep_s - 0.010) < 1e-12);
     assert_int_equal(PARSE(&o, msg, "--link", "socketcan:vcan1", "--substep-ms", "0.5"), 0);
     assert_true(fabs(o.substep_s - 0.0005) < 1e-12);
+}
+
+static void test_sync_stats_is_a_switch_that_takes_no_value(void **state)
+{
+    (void)state;
+    ls_simdrives_opts_t o;
+    char msg[256] = "";
+    assert_int_equal(PARSE(&o, msg, "--link", "slcan:pty:/tmp/x", "--sync-stats"), 0);
+    assert_true(o.sync_stats);
+    assert_int_equal(PARSE(&o, msg, "--link", "slcan:pty:/tmp/x", "--sync-stats=1"), LS_EINVAL);
+    assert_non_null(strstr(msg, "--sync-stats"));
+    assert_null(strchr(msg, '\n'));
 }
 
 static void test_every_bad_option_is_refused_with_one_line_naming_it(void **state)
@@ -133,6 +146,7 @@ int main(void)
         cmocka_unit_test(test_nodes_come_as_a_list_or_a_first_id_and_a_count),
         cmocka_unit_test(test_offsets_are_for_all_nodes_or_per_node),
         cmocka_unit_test(test_the_physics_sub_step_is_given_in_milliseconds),
+        cmocka_unit_test(test_sync_stats_is_a_switch_that_takes_no_value),
         cmocka_unit_test(test_every_bad_option_is_refused_with_one_line_naming_it),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
