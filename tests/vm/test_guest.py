@@ -95,7 +95,7 @@ def test_gpio_sim_lines_follow_gpioset_and_pulls() -> None:
 
 def linux_hal_groups() -> list[dict[str, bool]]:
     """Runs the Linux HAL's CMocka tests (test_linux_hal); returns per group
-    (socketcan, gpiod, rt: the order of test_linux_main.c) each test's outcome."""
+    (socketcan, gpiod, rt, slcan tty: the order of test_linux_main.c) each test's outcome."""
     exe = BUILD / "bin" / "test_linux_hal"
     assert exe.exists(), f"{exe} missing: build first"
     r = subprocess.run([str(exe)], capture_output=True, text=True, timeout=240)
@@ -103,7 +103,7 @@ def linux_hal_groups() -> list[dict[str, bool]]:
     for chunk in r.stdout.split("[==========] Running")[1:]:
         outcome = {m[1]: m[0] == "OK" for m in re.findall(r"^\[ +(OK|FAILED) +\] (\w+)$", chunk, re.M)}
         groups.append(outcome)
-    assert len(groups) == 3, f"expected 3 test groups (socketcan, gpiod, rt):\n{r.stdout}{r.stderr}"
+    assert len(groups) == 4, f"expected 4 test groups (socketcan, gpiod, rt, slcan tty):\n{r.stdout}{r.stderr}"
     assert (r.returncode == 0) == all(all(g.values()) for g in groups), r.stdout + r.stderr
     return groups
 
