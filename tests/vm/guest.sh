@@ -1,7 +1,8 @@
 #!/bin/bash
-# Runs inside the VM guest (as root, host root fs read-only): sets up a vcan
-# bus, a gpio-sim chip and uinput, then runs tests/vm/test_guest.py with the project
-# venv's pytest. Writes into OUT (a writable dir shared with the host):
+# Runs inside the VM guest (as root, host root fs read-only): sets up two vcan
+# buses (vcan0 for the supervisors, vcan1 for the CiA 402 drives), a gpio-sim
+# chip and uinput, then runs tests/vm/test_guest.py with the project venv's
+# pytest. Writes into OUT (a writable dir shared with the host):
 #   started       written first: the host measures the boot time by it
 #   setup_error   the set-up step that failed (then no pytest.rc)
 #   pytest.log    pytest's output;  pytest.rc  its exit status
@@ -19,12 +20,16 @@ run() { "$@" || fail "$* (exit $?)"; }
 
 echo "guest: kernel $(uname -r), $(nproc) CPUs, up $(cut -d' ' -f1 /proc/uptime) s"
 
-# Real SocketCAN: a virtual CAN bus with the kernel's CAN_RAW and CAN_ISOTP.
+# Real SocketCAN: virtual CAN buses with the kernel's CAN_RAW and CAN_ISOTP:
+# vcan0 for the supervisors, vcan1 the drive bus (docs/deploy.md "Drives": the
+# drives on a bus of their own).
 run modprobe vcan
 run modprobe can-raw
 run modprobe can-isotp
-run ip link add dev vcan0 type vcan
-run ip link set vcan0 up
+for ifname in vcan0 vcan1; do
+  run ip link add dev "$ifname" type vcan
+  run ip link set "$ifname" up
+done
 
 # Real GPIO: one gpio-sim chip, one bank of 8 lines (the out-of-tree module).
 run modprobe configfs
@@ -39,7 +44,7 @@ echo ls-vm-bank0 > "$cfs/bank0/label" || fail "gpio-sim: label"
 echo 1 > "$cfs/live" || fail "gpio-sim: live"
 chip=$(cat "$cfs/bank0/chip_name") dev=$(cat "$cfs/dev_name")
 [ -e "/dev/$chip" ] || fail "gpio-sim: /dev/$chip did not appear"
-echo "guest: vcan0 up; gpio-sim $dev: /dev/$chip, 8 lines"
+echo "guest: vcan0 and vcan1 up; gpio-sim $dev: /dev/$chip, 8 lines"
 
 # Input devices: evdev (the /dev/input/event* nodes) and uinput, through which
 # the tests make a virtual gamepad and a virtual 6-DOF device.
@@ -47,7 +52,7 @@ run modprobe evdev
 run modprobe uinput
 [ -c /dev/uinput ] || fail "uinput: /dev/uinput did not appear"
 
-export LS_VM_CAN_IF=vcan0 LS_VM_GPIO_CHIP=$chip LS_VM_GPIO_SYSFS=/sys/devices/platform/$dev/$chip
+export LS_VM_CAN_IF=vcan0 LS_VM_DRIVE_IF=vcan1 LS_VM_GPIO_CHIP=$chip LS_VM_GPIO_SYSFS=/sys/devices/platform/$dev/$chip
 export LS_BUILD_DIR=$build LS_VM_OUT=$out PYTHONDONTWRITEBYTECODE=1 PATH=$venv/bin:$PATH
 cd "$repo" || fail "cd $repo"
 echo "guest: running pytest at $(cut -d' ' -f1 /proc/uptime) s"
