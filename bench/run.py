@@ -29,6 +29,7 @@ from pathlib import Path
 import b_blend
 import b_cmd
 import b_cycle
+import b_drives
 import b_footprint
 import b_heartbeat
 import b_ik
@@ -70,6 +71,9 @@ BENCHES = [
     Bench(11, "Heartbeat period", b_heartbeat.bench_heartbeat, ("landscaped",)),
     Bench(12, "Path speed vs toppra", b_pathspeed.bench_pathspeed, ("bench_pathspeed",)),
     Bench(13, "Inverse kinematics per IK class", b_ik.bench_ik, ("bench_ik",)),
+    Bench(14, "Drive bus load per cycle", b_drives.bench_budget, ("bench_drive_budget",)),
+    Bench(15, "SYNC period at the drives", b_drives.bench_sync, ("landscaped", "ls-simdrives")),
+    Bench(16, "Tracking behind the drives", b_drives.bench_tracking, ("landscaped", "ls-simdrives")),
 ]
 
 
