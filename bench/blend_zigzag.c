@@ -81,7 +81,7 @@ static int plan_zigzag(const ls_robot_model_t *m, int n, double step, double zig
         s->blend_frac = k + 1 < n ? frac : 0.0;
         if (ls_motion_seg_line(s, m, q_prev, tool, T, lim, why, sizeof why) != 0) {
             printf("ERR point %d: %s\n", k, why);
-            return -1;
+            return LS_EINVAL;
         }
         memcpy(q_prev, s->q1, sizeof q_prev);
         memcpy(corner[k + 1], T + 12, sizeof corner[k + 1]);
@@ -90,7 +90,7 @@ static int plan_zigzag(const ls_robot_model_t *m, int n, double step, double zig
     if (ls_motion_prog_blend(&prog, m, 1, why, sizeof why) != 0 ||
         ls_motion_plan_path(&plan, &prog, 1, false, "zigzag") != 0) {
         printf("ERR %s\n", why);
-        return -1;
+        return LS_EINVAL;
     }
     return 0;
 }

@@ -24,6 +24,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "ls_err.h"
 #include "ls_kin.h"
 #include "ls_robot_model.h"
 #include "ls_traj.h"
@@ -67,7 +68,7 @@ static int run_traj(long n)
     ls_traj_limits_t lim = slow_limits(m);
     ls_traj_t tr;
     if (ls_traj_plan(&tr, LS_N_JOINTS, q_home, q_goal, &lim) != LS_OK) {
-        return -1;
+        return LS_EINVAL;
     }
     double q[LS_N_JOINTS], qd[LS_N_JOINTS], qdd[LS_N_JOINTS];
     for (long k = 0; k < n; k++) {
@@ -85,7 +86,7 @@ static int run_fk(long n)
     for (long k = 0; k < n; k++) {
         q[0] = q_home[0] + 1e-6 * (double)k;
         if (ls_kin_fk(m, q, T) != LS_OK) {
-            return -1;
+            return LS_EINVAL;
         }
         checksum += T[12];
     }
@@ -97,7 +98,7 @@ static int run_cart_ik(long n)
     const ls_robot_model_t *m = &ls_robot_model_default;
     double A[16], B[16], T[16], q[LS_N_JOINTS];
     if (ls_kin_fk(m, q_home, A) != LS_OK) {
-        return -1;
+        return LS_EINVAL;
     }
     memcpy(B, A, sizeof B);
     B[12] += 0.10; /* 10 cm along x */
@@ -105,7 +106,7 @@ static int run_cart_ik(long n)
     /* The path parameter 0 -> 1 lasts longer than the N cycles, so that every cycle lies on the line. */
     ls_traj_axis_t s;
     if (ls_traj_plan_axis_duration(&s, 0.0, 1.0, 2.0, 4.0, 40.0, (double)n * DT_S + 2.0) != LS_OK) {
-        return -1;
+        return LS_EINVAL;
     }
     memcpy(q, q_home, sizeof q);
     for (long k = 0; k < n; k++) {
@@ -113,7 +114,7 @@ static int run_cart_ik(long n)
         ls_traj_sample_axis(&s, (double)k * DT_S, &u, NULL, NULL);
         ls_pose_interp(A, B, u, T);
         if (ls_kin_ik_nearest(m, T, q, q) != LS_OK) {
-            return -1;
+            return LS_EINVAL;
         }
         absorb(q);
     }
@@ -150,7 +151,7 @@ static int run_motion(const char *which, long n)
     if (strcmp(which, "motion_hold") == 0) {
         return step_motion(n, 0);
     }
-    int rc = -1;
+    int rc = LS_EINVAL; /* no such motion case */
     if (strcmp(which, "motion_joint") == 0) {
         rc = ls_motion_plan_joint(&plan, m, q_home, q_goal, 0.2, 0.2, why, sizeof why);
     }
@@ -189,11 +190,11 @@ static int run_motion(const char *which, long n)
 #endif
     if (rc != 0) {
         fprintf(stderr, "bench_cycle: %s: planning failed (%d): %s\n", which, rc, why);
-        return -1;
+        return rc;
     }
     if (ls_motion_start(&motion, &plan) != 0) {
         fprintf(stderr, "bench_cycle: %s: ls_motion_start refused the plan\n", which);
-        return -1;
+        return LS_EINVAL;
     }
     return step_motion(n, 1);
 }
@@ -237,7 +238,7 @@ static int run_control(const char *which, long n)
     ls_control_init(&ctl, &cfg);
     ls_ctl_cmd_t en = { .kind = LS_CTL_ENABLE };
     if (!ls_control_post(&ctl, &en)) {
-        return -1;
+        return LS_EAGAIN;
     }
     uint64_t t_us = 0;
     ls_control_cycle(&ctl, t_us += 1000u);
@@ -245,7 +246,7 @@ static int run_control(const char *which, long n)
     if (moving) {
         char why[128] = "";
         ls_motion_plan_t *slot = ls_control_plan_slot(&ctl);
-        int rc = slot == NULL ? -1 : ls_motion_plan_joint(slot, m, q_home, q_goal, 0.2, 0.2, why, sizeof why);
+        int rc = slot == NULL ? LS_EAGAIN : ls_motion_plan_joint(slot, m, q_home, q_goal, 0.2, 0.2, why, sizeof why);
 #if BENCH_HAVE_MOTION_CART
         if (slot != NULL && strcmp(which, "control_line") == 0) {
             static const double tool[16] = { 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0.05, 1 };
@@ -260,7 +261,7 @@ static int run_control(const char *which, long n)
 #endif
         if (rc != 0 || !ls_control_start_plan(&ctl, 1)) {
             fprintf(stderr, "bench_cycle: %s: planning failed: %s\n", which, why);
-            return -1;
+            return LS_EINVAL;
         }
         ls_control_cycle(&ctl, t_us += 1000u);
     }
@@ -273,7 +274,7 @@ static int run_control(const char *which, long n)
     }
     if (!ctl.enabled) {
         fprintf(stderr, "bench_cycle: %s: the loop disabled the drives\n", which);
-        return -1;
+        return LS_EIO;
     }
     return moving && n > 0 && ctl.motion.phase != LS_MOTION_RUNNING ? 1 : 0;
 }
@@ -322,7 +323,7 @@ static int run_react(const char *which, long n)
     memcpy(q_cmd, q_react, sizeof q_cmd);
     if (ls_react_start(&react, &p, q_cmd, 6) != 0) {
         fprintf(stderr, "bench_cycle: %s: ls_react_start refused the plan\n", which);
-        return -1;
+        return LS_EINVAL;
     }
     ls_motion_events_t ev;
     for (long k = 0; k < n; k++) {
@@ -334,7 +335,7 @@ static int run_react(const char *which, long n)
     if (n > 0 && !ls_react_moving(&react)) {
         fprintf(stderr, "bench_cycle: %s: the move ended before the last cycle (%s)\n", which,
                 ls_react_end_name(react.report.end));
-        return -1;
+        return LS_EIO;
     }
     return 0;
 }
@@ -369,12 +370,12 @@ int main(int argc, char **argv)
         return 0;
     }
     char *end = NULL;
-    long n = argc == 3 ? strtol(argv[2], &end, 10) : -1;
+    long n = argc == 3 ? strtol(argv[2], &end, 10) : 0;
     if (argc != 3 || end == argv[2] || *end != '\0' || n < 0) {
         fprintf(stderr, "usage: %s CASE N | %s cases\n", argv[0], argv[0]);
         return 2;
     }
-    int rc = -1;
+    int rc = LS_EINVAL; /* every case sets it */
     if (strcmp(argv[1], "traj") == 0) {
         rc = run_traj(n);
     } else if (strcmp(argv[1], "fk") == 0) {

@@ -39,7 +39,7 @@ static int bus_send(void *ctx, uint32_t can_id, const uint8_t *data, uint8_t len
 {
     (void)ctx;
     if (q_tail - q_head >= QUEUE_LEN) {
-        return -1;
+        return LS_EAGAIN;
     }
     frame_t *f = &queue_[q_tail++ % QUEUE_LEN];
     f->id = can_id;
@@ -49,7 +49,8 @@ static int bus_send(void *ctx, uint32_t can_id, const uint8_t *data, uint8_t len
     return 0;
 }
 
-/* One transfer of `len` bytes; returns the frame count or -1 on failure. */
+/* One transfer of `len` bytes; returns the frame count, or LS_EIO when it
+ * failed or delivered other bytes. */
 static long transfer(size_t len)
 {
     for (size_t i = 0; i < len; i++) {
@@ -58,8 +59,9 @@ static long transfer(size_t len)
     frames_on_bus = 0;
     q_head = q_tail = 0;
     uint64_t now_us = 1;
-    if (ls_isotp_send(&link_a, payload, len, now_us) != LS_OK) {
-        return -1;
+    const int rc = ls_isotp_send(&link_a, payload, len, now_us);
+    if (rc != LS_OK) {
+        return rc;
     }
     for (unsigned turn = 0; turn < 100000u; turn++) {
         while (q_head != q_tail) {
@@ -69,13 +71,13 @@ static long transfer(size_t len)
         size_t n = ls_isotp_take_rx(&link_b, got, sizeof got);
         if (n > 0) {
             return (n == len && memcmp(got, payload, len) == 0 && !ls_isotp_tx_busy(&link_a)) ? (long)frames_on_bus
-                                                                                              : -1;
+                                                                                              : LS_EIO;
         }
         now_us += 10;
         ls_isotp_poll(&link_a, now_us);
         ls_isotp_poll(&link_b, now_us);
     }
-    return -1;
+    return LS_EIO;
 }
 
 int main(int argc, char **argv)

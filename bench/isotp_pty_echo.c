@@ -52,7 +52,7 @@ static int can_send(void *ctx, uint32_t can_id, const uint8_t *data, uint8_t len
     (void)ctx;
     hal_can_frame_t f = { .id = can_id, .flags = HAL_CAN_F_EXT, .len = len };
     memcpy(f.data, data, len);
-    return hal_can_send(&can_, &f) == LS_OK ? 0 : -1;
+    return hal_can_send(&can_, &f);
 }
 
 int main(int argc, char **argv)

@@ -23,6 +23,8 @@ const char *ls_err_name(int status)
     case LS_ETIMEDOUT: return "LS_ETIMEDOUT";
     case LS_EABORTED: return "LS_EABORTED";
     case LS_EPROTO: return "LS_EPROTO";
+    case LS_ESTATE: return "LS_ESTATE";
+    case LS_ENOSPC: return "LS_ENOSPC";
     default: return status >= 0 ? "LS_OK" : "LS_E?";
     }
 }
@@ -49,6 +51,8 @@ const char *ls_err_text(int status)
     case LS_ETIMEDOUT: return "no answer within the time-out";
     case LS_EABORTED: return "the peer refused the transfer";
     case LS_EPROTO: return "the peer broke the protocol";
+    case LS_ESTATE: return "not valid in the present state";
+    case LS_ENOSPC: return "a fixed-size table is full";
     default: return status >= 0 ? "ok" : "unknown error";
     }
 }

@@ -33,6 +33,9 @@ extern "C" {
 #define LS_ETIMEDOUT (-17) /* the peer did not answer within its time-out (SDO, boot-up, heartbeat) */
 #define LS_EABORTED (-18)  /* the peer refused the transfer (an SDO abort code says why) */
 #define LS_EPROTO (-19)    /* the peer broke the protocol (a frame that does not fit the exchange) */
+/* Any module. */
+#define LS_ESTATE (-20) /* not valid in the module's present state (started twice, resumed while not paused) */
+#define LS_ENOSPC (-21) /* a fixed-size table is full (links, RSVPs, queues): nothing was added */
 
 /* The code's name ("LS_EAGAIN"), "LS_OK" for zero or positive, "LS_E?" for a
  * negative value that is none of the above. Never NULL; O(1); any context. */

@@ -15,6 +15,8 @@
 #define HAL_CALL0(obj, op)                                                                                             \
     (((obj) != NULL && (obj)->ops != NULL && (obj)->ops->op != NULL) ? (obj)->ops->op((obj)->self) : LS_EUNSUPPORTED)
 
+#define NO_FD (-1) /* poll_fd: no descriptor to wait on (hal_can.h, hal_dio.h) */
+
 int hal_can_send(hal_can_link_t *link, const hal_can_frame_t *frame)
 {
     return HAL_CALL(link, send, frame);
@@ -26,7 +28,7 @@ int hal_can_recv(hal_can_link_t *link, hal_can_frame_t *frame)
 int hal_can_poll_fd(hal_can_link_t *link)
 {
     int fd = HAL_CALL0(link, poll_fd);
-    return fd == LS_EUNSUPPORTED ? -1 : fd;
+    return fd == LS_EUNSUPPORTED ? NO_FD : fd;
 }
 int hal_can_status(hal_can_link_t *link, hal_can_status_t *out)
 {
@@ -76,7 +78,7 @@ int hal_dio_write(hal_dio_t *dio, uint16_t unit, uint32_t on, uint32_t off)
 int hal_dio_poll_fd(hal_dio_t *dio)
 {
     int fd = HAL_CALL0(dio, poll_fd);
-    return fd == LS_EUNSUPPORTED ? -1 : fd;
+    return fd == LS_EUNSUPPORTED ? NO_FD : fd;
 }
 int hal_dio_drain_events(hal_dio_t *dio)
 {

@@ -71,7 +71,7 @@ static int can_recv(void *self, hal_can_frame_t *f)
 static int can_poll_fd(void *self)
 {
     (void)self;
-    return -1;
+    return LS_EUNSUPPORTED; /* no descriptor: the wrapper answers "none" */
 }
 
 static int can_status(void *self, hal_can_status_t *out)

@@ -157,11 +157,12 @@ static uint64_t mono_us(void)
 static int open_link(const char *spec, hal_can_link_t *out)
 {
     char msg[256] = "";
-    if (ls_link_open(spec, 0, false, out, msg, sizeof msg) < 0) {
+    const int r = ls_link_open(spec, 0, false, out, msg, sizeof msg);
+    if (r < 0) {
         LOG_ERR("--link %s: %s", spec, msg);
-        return -1;
+        return r;
     }
-    return 0;
+    return LS_OK;
 }
 
 static uint64_t fault_now_us(void *self)
@@ -175,19 +176,21 @@ static int wrap_faults(const char *spec, hal_can_link_t *link)
 {
     hal_sim_fault_config_t fc;
     char msg[256];
-    if (hal_sim_fault_parse(spec, &fc, msg, sizeof msg) != LS_OK) {
+    int r = hal_sim_fault_parse(spec, &fc, msg, sizeof msg);
+    if (r != LS_OK) {
         LOG_ERR("--link-faults %s: %s", spec, msg);
-        return -1;
+        return r;
     }
     fc.clock = (hal_clock_t){ .now_us = fault_now_us, .self = NULL };
     hal_can_link_t faulty;
-    if (hal_sim_faulty_wrap(&faulty, link, &fc) != LS_OK) {
+    r = hal_sim_faulty_wrap(&faulty, link, &fc);
+    if (r != LS_OK) {
         LOG_ERR("--link-faults: at most %d links can carry faults", HAL_SIM_FAULTY_MAX_LINKS);
-        return -1;
+        return r;
     }
     *link = faulty;
     LOG_WARN("link %s: injecting faults %s", link->name, spec);
-    return 0;
+    return LS_OK;
 }
 
 static void send_heartbeat(ls_net_t *net, const ls_core_t *core, uint8_t counter)
@@ -427,9 +430,10 @@ static int compose_manual(const ls_config_t *o)
         hal_evdev_config_t ec = { .path = o->manual[k].path, .stale_ms = o->manual[k].stale_ms };
         ls_config_manual_map(o, (ls_manual_kind_t)k, &ec.map);
         char msg[256];
-        if (hal_linux_evdev_open(&g_manual_evdev[k], &ec, msg, sizeof msg) != LS_OK) {
+        const int r = hal_linux_evdev_open(&g_manual_evdev[k], &ec, msg, sizeof msg);
+        if (r != LS_OK) {
             LOG_ERR("[manual] %s: %s", kind, msg);
-            return -1;
+            return r;
         }
         g_core.manual[k] = &g_manual_evdev[k];
         char axes[192], buttons[192];
@@ -460,9 +464,10 @@ static int compose(const ls_config_t *o)
                        .rate_hz = o->rate_hz,
                        .capacity = (size_t)SETPOINT_TRACE_S * o->rate_hz },
         };
-        if (hal_sim_world_open(&wc, msg, sizeof msg) < 0) {
+        const int r = hal_sim_world_open(&wc, msg, sizeof msg);
+        if (r < 0) {
             LOG_ERR("--arm sim: %s", msg);
-            return -1;
+            return r;
         }
         g_world_open = true;
         if (o->setpoint_trace[0] != '\0') {
@@ -483,9 +488,10 @@ static int compose(const ls_config_t *o)
         /* The drives boot and are configured here, within their deadline,
          * before the control loop reads the arm (docs/deploy.md "Drives"). */
         char dmsg[512];
-        if (ls_drive_compose(o, &g_arm, stderr, dmsg, sizeof dmsg) != LS_OK) {
+        const int r = ls_drive_compose(o, &g_arm, stderr, dmsg, sizeof dmsg);
+        if (r != LS_OK) {
             LOG_ERR("%s", dmsg);
-            return -1;
+            return r;
         }
         arm = &g_arm;
         LOG_INFO("drives: %u joints ready on %s", (unsigned)LS_N_JOINTS, o->drives_link);
@@ -498,14 +504,16 @@ static int compose(const ls_config_t *o)
         gc.n_outputs = o->n_outputs;
         memcpy(gc.input_offsets, o->input_offsets, sizeof o->input_offsets);
         memcpy(gc.output_offsets, o->output_offsets, sizeof o->output_offsets);
-        if (hal_linux_gpiod_open(&g_dio, &gc, msg, sizeof msg) < 0) {
+        const int r = hal_linux_gpiod_open(&g_dio, &gc, msg, sizeof msg);
+        if (r < 0) {
             LOG_ERR("--dio %s: %s", o->dio, msg);
-            return -1;
+            return r;
         }
         dio = &g_dio;
     }
-    if (compose_manual(o) != 0) {
-        return -1;
+    const int mr = compose_manual(o);
+    if (mr != LS_OK) {
+        return mr;
     }
     g_core.model = &g_model;
     g_core.sensors = sensors;
@@ -534,14 +542,15 @@ static int compose(const ls_config_t *o)
                            .cpu = o->rt_cpu,
                            .lock_memory = o->lock_memory,
                            .lockstep = strcmp(o->clock, "lockstep") == 0 };
-    if (hal_linux_rt_start(&g_rt, &rc, control_cycle, &g_ctl, msg, sizeof msg) < 0) {
+    const int r = hal_linux_rt_start(&g_rt, &rc, control_cycle, &g_ctl, msg, sizeof msg);
+    if (r < 0) {
         LOG_ERR("control thread: %s", msg);
-        return -1;
+        return r;
     }
     LOG_INFO("control loop at %u Hz (%s clock), arm %s (robot model %s, %s inverse kinematics), dio %s, %zu sensors",
              (unsigned)o->rate_hz, o->clock, o->arm, g_model.name, ls_ik_class_name(g_model.ik_class), o->dio,
              n_sensors);
-    return 0;
+    return LS_OK;
 }
 
 int main(int argc, char **argv)

@@ -5,6 +5,7 @@
 #include "faulty_link.h"
 #include "ls_ini_line.h"
 #include "landscape.pb.h"
+#include "ls_err.h"
 
 #include <ctype.h>
 #include <errno.h>
@@ -18,13 +19,13 @@
 #include <string.h>
 #include <strings.h>
 
-/* ---- value parsers: 0 or -1; `why` gets the "expected ..." text ------- */
+/* ---- value parsers: LS_OK or LS_EINVAL; `why` gets the "expected ..." text */
 
 static int copy_str(char *dst, size_t size, const char *src)
 {
     size_t n = strlen(src);
     if (n >= size) {
-        return -1;
+        return LS_EINVAL;
     }
     memcpy(dst, src, n + 1);
     return 0;
@@ -34,13 +35,13 @@ static int copy_str(char *dst, size_t size, const char *src)
 static int parse_u32(const char *s, uint32_t lo, uint32_t hi, uint32_t *out)
 {
     if (!isdigit((unsigned char)s[0])) {
-        return -1;
+        return LS_EINVAL;
     }
     char *end = NULL;
     errno = 0;
     unsigned long long v = strtoull(s, &end, 0);
     if (errno != 0 || *end != '\0' || v < lo || v > hi) {
-        return -1;
+        return LS_EINVAL;
     }
     *out = (uint32_t)v;
     return 0;
@@ -50,13 +51,13 @@ static int parse_int(const char *s, long lo, long hi, int *out)
 {
     const char *p = s[0] == '-' ? s + 1 : s;
     if (!isdigit((unsigned char)p[0])) {
-        return -1;
+        return LS_EINVAL;
     }
     char *end = NULL;
     errno = 0;
     long v = strtol(s, &end, 10);
     if (errno != 0 || *end != '\0' || v < lo || v > hi) {
-        return -1;
+        return LS_EINVAL;
     }
     *out = (int)v;
     return 0;
@@ -66,13 +67,13 @@ static int parse_int(const char *s, long lo, long hi, int *out)
 static int parse_double(const char *s, double lo, double hi, double *out)
 {
     if (s[0] == '\0' || isspace((unsigned char)s[0])) {
-        return -1;
+        return LS_EINVAL;
     }
     char *end = NULL;
     errno = 0;
     const double v = strtod(s, &end);
     if (errno != 0 || *end != '\0' || !isfinite(v) || v < lo || v > hi) {
-        return -1;
+        return LS_EINVAL;
     }
     *out = v;
     return 0;
@@ -92,7 +93,7 @@ static int parse_bool(const char *s, bool *out)
             return 0;
         }
     }
-    return -1;
+    return LS_EINVAL;
 }
 
 /* "0,1, 2" -> offsets; "" -> none. */
@@ -107,19 +108,19 @@ static int parse_offsets(const char *s, unsigned *offs, uint8_t *n_out, char *wh
     while (*p != '\0') {
         if (!isdigit((unsigned char)*p)) {
             snprintf(why, whylen, "%s", expected);
-            return -1;
+            return LS_EINVAL;
         }
         char *end = NULL;
         errno = 0;
         unsigned long v = strtoul(p, &end, 10);
         if (errno != 0 || v > LS_CONFIG_MAX_OFFSET || n >= LS_CONFIG_MAX_LINES) {
             snprintf(why, whylen, "%s", expected);
-            return -1;
+            return LS_EINVAL;
         }
         for (uint8_t i = 0; i < n; i++) {
             if (offs[i] == v) {
                 snprintf(why, whylen, "%s (%lu is listed twice)", expected, v);
-                return -1;
+                return LS_EINVAL;
             }
         }
         offs[n++] = (unsigned)v;
@@ -134,11 +135,11 @@ static int parse_offsets(const char *s, unsigned *offs, uint8_t *n_out, char *wh
             }
             if (*p == '\0') {
                 snprintf(why, whylen, "%s", expected);
-                return -1;
+                return LS_EINVAL;
             }
         } else if (*p != '\0') {
             snprintf(why, whylen, "%s", expected);
-            return -1;
+            return LS_EINVAL;
         }
     }
     *n_out = n;
@@ -591,7 +592,7 @@ static int set_manual_axes(ls_config_t *cfg, ls_manual_kind_t k, const char *v, 
         return 0;
     }
     if (hal_evdev_parse_axes(&cfg->manual[k].given, v, why, whylen) != LS_OK) {
-        return -1;
+        return LS_EINVAL;
     }
     cfg->manual[k].axes_set = true;
     return 0;
@@ -604,7 +605,7 @@ static int set_manual_buttons(ls_config_t *cfg, ls_manual_kind_t k, const char *
         return 0;
     }
     if (hal_evdev_parse_buttons(&cfg->manual[k].given, v, why, whylen) != LS_OK) {
-        return -1;
+        return LS_EINVAL;
     }
     cfg->manual[k].buttons_set = true;
     return 0;
@@ -710,14 +711,16 @@ static const joint_key_def_t JOINT_KEYS[] = {
 };
 #define N_JOINT_KEYS (sizeof JOINT_KEYS / sizeof JOINT_KEYS[0])
 
-/* "joint.3" -> 2; -1 when `section` is no [joint.N] of this arm. */
+#define NO_JOINT (-1) /* joint_section: not a [joint.N] of this arm */
+
+/* "joint.3" -> 2; NO_JOINT when `section` is no [joint.N] of this arm. */
 static int joint_section(const char *section)
 {
     if (strncmp(section, "joint.", 6) != 0 || section[6] < '1' || section[6] > '9' || section[7] != '\0') {
-        return -1;
+        return NO_JOINT;
     }
     const int n = section[6] - '0';
-    return n <= LS_N_JOINTS ? n - 1 : -1;
+    return n <= LS_N_JOINTS ? n - 1 : NO_JOINT;
 }
 
 /* ---- the key table ----------------------------------------------------- */
@@ -1025,7 +1028,7 @@ int ls_config_load_file(ls_config_t *cfg, const char *path, char *msg, size_t ms
     if (c.f == NULL) {
         snprintf(msg, msglen, "%s: cannot read the configuration file: %s (give an existing file with --config FILE)",
                  path, strerror(errno));
-        return -1;
+        return LS_EINVAL;
     }
     int r = ini_parse_stream(ini_reader_fn, &c, ini_handler_fn, &c);
     int read_error = ferror(c.f);
@@ -1036,19 +1039,19 @@ int ls_config_load_file(ls_config_t *cfg, const char *path, char *msg, size_t ms
             snprintf(msg, msglen, "%s:%d: syntax error: expected '[section]', 'key = value' or a ; or # comment", path,
                      r);
         }
-        return -1;
+        return LS_EINVAL;
     }
     if (read_error) {
         snprintf(msg, msglen, "%s: read error after line %d", path, c.line);
-        return -1;
+        return LS_EINVAL;
     }
     if (r > 0) {
         snprintf(msg, msglen, "%s:%d: syntax error: expected '[section]', 'key = value' or a ; or # comment", path, r);
-        return -1;
+        return LS_EINVAL;
     }
     if (r < 0) {
         snprintf(msg, msglen, "%s: the INI parser failed (%d)", path, r);
-        return -1;
+        return LS_EINVAL;
     }
     return 0;
 }
@@ -1113,7 +1116,7 @@ static int opt_error(char *msg, size_t msglen, const char *fmt, ...)
     va_start(ap, fmt);
     vsnprintf(msg, msglen, fmt, ap);
     va_end(ap);
-    return -1;
+    return LS_EINVAL;
 }
 
 int ls_config_from_args(ls_config_t *cfg, int argc, char **argv, char *msg, size_t msglen)
@@ -1166,7 +1169,7 @@ int ls_config_from_args(ls_config_t *cfg, int argc, char **argv, char *msg, size
             return opt_error(msg, msglen, "--config: path longer than %zu characters", sizeof cfg->config_path - 1);
         }
         if (ls_config_load_file(cfg, config, msg, msglen) != 0) {
-            return -1;
+            return LS_EINVAL;
         }
     }
 

@@ -16,6 +16,7 @@
 #include <stdint.h>
 #include <stdio.h>
 
+#include "ls_err.h"
 #include "ls_robot_model.h" /* LS_N_JOINTS: one [joint.N] section per joint */
 #include "hal_linux_evdev.h"
 #include "ls_manual.h"
@@ -136,7 +137,7 @@ void ls_config_defaults(ls_config_t *cfg);
  * in argv order (a --link on the command line replaces the file's links).
  * --check and --config are recorded even when a later step fails, so the
  * caller can tell a failed --check apart. Returns 0; 1 when --help was
- * printed to stdout (exit 0); -1 with `msg` (one line, no newline) naming
+ * printed to stdout (exit 0); LS_EINVAL with `msg` (one line, no newline) naming
  * the option or FILE:LINE: [section] key, the value and what is allowed.
  * Does not call ls_config_validate. Uses getopt_long (resets optind). */
 int ls_config_from_args(ls_config_t *cfg, int argc, char **argv, char *msg, size_t msglen);
@@ -147,14 +148,15 @@ int ls_config_from_args(ls_config_t *cfg, int argc, char **argv, char *msg, size
  * or unreadable file (no line), a syntax error, an unknown section or key, a
  * key outside any section, a value of the wrong type or out of range, a
  * non-repeatable key given twice, a line longer than the parser takes.
- * Returns 0 or -1; on -1 cfg may hold the keys read before the error. */
+ * Returns LS_OK or LS_EINVAL; on error cfg may hold the keys read before it. */
 int ls_config_load_file(ls_config_t *cfg, const char *path, char *msg, size_t msglen);
 
 /* Whole-configuration checks the single keys cannot make: at least one
  * link, telemetry_hz <= rate_hz, inputs and outputs disjoint, estop_input
  * within the configured inputs and a DIO backend present for it,
  * setpoint_trace only with arm = sim, a teach pendant's map with an
- * enabling switch (docs/conformance.md "manualControl"). 0 or -1 with msg. */
+ * enabling switch (docs/conformance.md "manualControl"). LS_OK, or
+ * LS_EINVAL with msg. */
 int ls_config_validate(const ls_config_t *cfg, char *msg, size_t msglen);
 
 /* The map a manual device kind uses: its <kind>_map's default with the

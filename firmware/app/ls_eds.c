@@ -362,7 +362,7 @@ static int64_t as_signed(uint64_t bits)
     if (bits <= (uint64_t)INT64_MAX) {
         return (int64_t)bits;
     }
-    return -(int64_t)(~bits) - 1;
+    return (int64_t)(bits - ((uint64_t)INT64_MAX + 1u)) + INT64_MIN; /* bits - 2^64, without overflow */
 }
 
 /* An integer value, maybe "$NODEID+N", "N+$NODEID" or "$NODEID". */
@@ -820,14 +820,16 @@ static bool begin_section(ctx_t *c, const char *name)
 
 /* ---- Lines ---------------------------------------------------------------- */
 
-/* One byte of the source; -1 at its end (or after a read error). */
+#define END_OF_SOURCE (-1) /* next_byte: no byte left */
+
+/* One byte of the source; END_OF_SOURCE at its end (or after a read error). */
 static int next_byte(ctx_t *c)
 {
     if (c->buf_pos < c->buf_len) {
         return (unsigned char)c->buf[c->buf_pos++];
     }
     if (c->fd < 0) {
-        return -1;
+        return END_OF_SOURCE;
     }
     ssize_t n;
     do {
@@ -839,7 +841,7 @@ static int next_byte(ctx_t *c)
             c->read_errno = errno;
         }
         c->fd = -1;
-        return -1;
+        return END_OF_SOURCE;
     }
     c->buf = c->chunk;
     c->buf_len = (size_t)n;

@@ -9,6 +9,8 @@
  * compared as big integers. */
 #include "ls_fmt.h"
 
+#include "ls_err.h"
+
 #include <limits.h>
 #include <math.h>
 #include <stdbool.h>
@@ -16,6 +18,8 @@
 #include <string.h>
 
 /* ------------------------------------------------------------ output sink */
+
+#define NO_PRECISION (-1L) /* spec_t.prec: the format gave none */
 
 typedef struct {
     char *buf;
@@ -50,7 +54,7 @@ enum { F_MINUS = 1, F_PLUS = 2, F_SPACE = 4, F_ALT = 8, F_ZERO = 16 };
 typedef struct {
     unsigned flags;
     long width;
-    long prec; /* -1: none given */
+    long prec; /* NO_PRECISION: none given */
 } spec_t;
 
 /* Width padding around a body of `len` characters after a `pl`-character
@@ -424,7 +428,7 @@ static int format(sink_t *o, const char *fmt, va_list *ap)
             continue;
         }
         f++;
-        spec_t sp = { 0, 0, -1 };
+        spec_t sp = { 0, 0, NO_PRECISION };
         for (;; f++) {
             if (*f == '-') {
                 sp.flags |= F_MINUS;
@@ -457,7 +461,7 @@ static int format(sink_t *o, const char *fmt, va_list *ap)
             if (*f == '*') {
                 f++;
                 const int pr = va_arg(*ap, int);
-                sp.prec = pr < 0 ? -1 : pr;
+                sp.prec = pr < 0 ? NO_PRECISION : pr; /* a negative one counts as none (C11 7.21.6.1) */
             } else {
                 sp.prec = read_num(&f);
             }
@@ -520,7 +524,7 @@ static int format(sink_t *o, const char *fmt, va_list *ap)
         case 'F':
         case 'g':
         case 'G': fmt_fp(o, &sp, va_arg(*ap, double), conv); break;
-        default: return -1; /* not supported (L, a, n, p, ...) or a '%' at the end */
+        default: return LS_EINVAL; /* not supported (L, a, n, p, ...) or a '%' at the end */
         }
         f++;
     }
@@ -538,7 +542,7 @@ int ls_fmt_vprint(char *buf, size_t cap, const char *fmt, va_list ap)
         buf[o.n < cap ? o.n : cap - 1] = '\0';
     }
     if (rc < 0) {
-        return -1;
+        return rc;
     }
     return o.n > (size_t)INT_MAX ? INT_MAX : (int)o.n;
 }
@@ -674,11 +678,11 @@ static void big_shl(big_t *b, long bits)
 static int big_cmp(const big_t *x, const big_t *y)
 {
     if (x->n != y->n) {
-        return x->n < y->n ? -1 : 1;
+        return (x->n > y->n) - (x->n < y->n);
     }
     for (int i = x->n - 1; i >= 0; i--) {
         if (x->w[i] != y->w[i]) {
-            return x->w[i] < y->w[i] ? -1 : 1;
+            return (x->w[i] > y->w[i]) - (x->w[i] < y->w[i]);
         }
     }
     return 0;

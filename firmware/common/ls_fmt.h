@@ -19,9 +19,9 @@
 
 /* snprintf's contract: writes at most cap - 1 characters and a NUL into
  * buf (nothing when cap is 0; buf may then be NULL), returns the length the
- * whole output has (so a result >= cap means it was cut), or a negative
- * value when `fmt` holds a conversion this formatter does not support (the
- * output then stops there, NUL-terminated).
+ * whole output has (so a result >= cap means it was cut), or LS_EINVAL
+ * when `fmt` holds a conversion this formatter does not support (the output
+ * then stops there, NUL-terminated).
  *
  * Conversions: d i u o x X c s % e E f F g G; flags - + space # 0; width
  * and precision as numbers or *; length modifiers hh h l ll z j t (L, a/A,

@@ -241,7 +241,9 @@ static void read_sensors(ls_control_t *c)
     }
 }
 
-/* Index of the sensor called `name`, or -1. */
+#define NO_SENSOR (-1) /* sensor_index: no sensor has the name */
+
+/* Index of the sensor called `name`, or NO_SENSOR. */
 static int sensor_index(const ls_control_t *c, const char *name)
 {
     for (size_t i = 0; i < c->cfg.n_sensors && i < (size_t)HAL_MAX_SENSORS; i++) {
@@ -249,7 +251,7 @@ static int sensor_index(const ls_control_t *c, const char *name)
             return (int)i;
         }
     }
-    return -1;
+    return NO_SENSOR;
 }
 
 static void tool_event(ls_control_t *c, const ls_ctl_cmd_t *cmd, int status, uint32_t bits)
@@ -623,8 +625,8 @@ static void handle_command(ls_control_t *c, const ls_ctl_cmd_t *cmd)
             const int r = ls_motion_resume(&c->motion);
             if (r != 0) {
                 cmd_failed(c, cmd->ref_seq,
-                           r == -2 ? "the motion could not be re-planned from where it stopped: abort it"
-                                   : "no paused motion to resume");
+                           r == LS_ESTATE ? "no paused motion to resume"
+                                          : "the motion could not be re-planned from where it stopped: abort it");
             }
         }
         return;

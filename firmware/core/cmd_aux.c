@@ -77,37 +77,37 @@ int ls_aux_parse(const char *text, ls_aux_t *a, char *why, size_t whylen)
         if (parse_u32(tok[1], 10, &unit) && unit < LS_CTL_MAX_DIO_UNITS && parse_u32(tok[2], 16, &a->on) &&
             parse_u32(tok[3], 16, &a->off)) {
             a->unit = (uint16_t)unit;
-            return 0;
+            return LS_OK;
         }
         ls_fmt_print(why, whylen, "expected 'dio UNIT ON OFF' with UNIT 0..%d and hex masks", LS_CTL_MAX_DIO_UNITS - 1);
-        return -1;
+        return LS_EINVAL;
     }
     if (n == 4 && strcmp(tok[0], "wait") == 0) {
         a->kind = LS_AUX_WAIT;
         if (parse_u32(tok[1], 10, &unit) && unit < LS_CTL_MAX_DIO_UNITS && parse_u32(tok[2], 16, &a->on) &&
             a->on != 0 && parse_timeout(tok[3], &a->timeout_s)) {
             a->unit = (uint16_t)unit;
-            return 0;
+            return LS_OK;
         }
         ls_fmt_print(why, whylen, "expected 'wait UNIT MASK TIMEOUT_S', MASK hex != 0, TIMEOUT_S in (0, 3600]");
-        return -1;
+        return LS_EINVAL;
     }
     if (n == 2 && strcmp(tok[0], "event") == 0) {
         a->kind = LS_AUX_EVENT;
         ls_fmt_print(a->name, sizeof a->name, "%s", tok[1]);
-        return 0;
+        return LS_OK;
     }
     if (n == 3 && strcmp(tok[0], "rsvp") == 0) {
         a->kind = LS_AUX_RSVP;
         ls_fmt_print(a->name, sizeof a->name, "%s", tok[1]);
         if (parse_timeout(tok[2], &a->timeout_s)) {
-            return 0;
+            return LS_OK;
         }
         ls_fmt_print(why, whylen, "expected 'rsvp NAME TIMEOUT_S', TIMEOUT_S in (0, 3600]");
-        return -1;
+        return LS_EINVAL;
     }
     ls_fmt_print(why, whylen, "unknown auxiliary command: use dio, wait, event or rsvp");
-    return -1;
+    return LS_EINVAL;
 }
 
 /* The I/O an auxiliary command names exists on this controller: a `dio`
@@ -115,7 +115,7 @@ int ls_aux_parse(const char *text, ls_aux_t *a, char *why, size_t whylen)
 int ls_aux_check_io(const ls_core_t *core, const ls_aux_t *a, char *why, size_t whylen)
 {
     if (a->kind != LS_AUX_DIO && a->kind != LS_AUX_WAIT) {
-        return 0;
+        return LS_OK;
     }
     if (a->unit >= core->dio_units) {
         if (core->dio_units == 0) {
@@ -124,7 +124,7 @@ int ls_aux_check_io(const ls_core_t *core, const ls_aux_t *a, char *why, size_t 
             ls_fmt_print(why, whylen, "DIO unit %u does not exist: units 0..%u", (unsigned)a->unit,
                          (unsigned)core->dio_units - 1u);
         }
-        return -1;
+        return LS_EINVAL;
     }
     const hal_dio_unit_info_t *u = &core->dio_info[a->unit];
     if (a->kind == LS_AUX_DIO) {
@@ -132,21 +132,21 @@ int ls_aux_check_io(const ls_core_t *core, const ls_aux_t *a, char *why, size_t 
         if (bad != 0u) {
             ls_fmt_print(why, whylen, "bits 0x%X of unit %u are not outputs (outputs: 0x%X)", (unsigned)bad,
                          (unsigned)a->unit, (unsigned)u->output_mask);
-            return -1;
+            return LS_EINVAL;
         }
         if ((a->on & a->off) != 0u) {
             ls_fmt_print(why, whylen, "bits 0x%X are both set and cleared", (unsigned)(a->on & a->off));
-            return -1;
+            return LS_EINVAL;
         }
-        return 0;
+        return LS_OK;
     }
     const uint32_t bad = a->on & ~u->input_mask;
     if (bad != 0u) {
         ls_fmt_print(why, whylen, "bits 0x%X of unit %u are not inputs (inputs: 0x%X)", (unsigned)bad,
                      (unsigned)a->unit, (unsigned)u->input_mask);
-        return -1;
+        return LS_EINVAL;
     }
-    return 0;
+    return LS_OK;
 }
 
 static void aux_done(ls_core_t *core)
@@ -211,7 +211,7 @@ void ls_aux_run(ls_core_t *core, const ls_motion_event_t *ev)
 {
     ls_aux_t a;
     char why[96];
-    if (ls_aux_parse(ev->text, &a, why, sizeof why) != 0) {
+    if (ls_aux_parse(ev->text, &a, why, sizeof why) != LS_OK) {
         /* pathLoad checked it: only a corrupted program gets here. */
         char t[96];
         ls_fmt_print(t, sizeof t, "bad auxiliary command '%.40s'", ev->text);

@@ -60,7 +60,7 @@ bool ls_mcmd_post(ls_core_t *core, ls_ctl_kind_t kind, uint32_t ref_seq);
 
 /* ------------------------------------------------------------- cmd_path.c */
 
-/* Index of the path queue named `name`, or -1. */
+/* Index of the path queue named `name`, or LS_PATH_NONE. */
 int ls_path_find(const ls_core_t *core, const char *name);
 /* Empty path queue i (no-op outside 0..LS_PATH_MAX-1). */
 void ls_path_delete(ls_core_t *core, int i);
@@ -77,9 +77,9 @@ typedef struct {
     char name[LS_MOTION_NAME_LEN];
 } ls_aux_t;
 
-/* Parse one auxiliary command; 0, or -1 with `why` saying what is expected. */
+/* Parse one auxiliary command; LS_OK, or LS_EINVAL with `why` saying what is expected. */
 int ls_aux_parse(const char *text, ls_aux_t *a, char *why, size_t whylen);
-/* The DIO unit and bits a `dio` or `wait` names exist here; 0 or -1 with `why`. */
+/* The DIO unit and bits a `dio` or `wait` names exist here; LS_OK or LS_EINVAL with `why`. */
 int ls_aux_check_io(const ls_core_t *core, const ls_aux_t *a, char *why, size_t whylen);
 /* The executor reached a point's auxiliary command (LS_MEV_AUX): run it. */
 void ls_aux_run(ls_core_t *core, const ls_motion_event_t *ev);

@@ -116,7 +116,7 @@ static int32_t do_move(ls_core_t *core, ls_call_t *call, bool relative)
     ls_motion_slowdown_t slow;
     const bool slowed =
         ls_motion_seg_slowdown(&slot->one, &slow) && ls_motion_slowdown_text(&slow, why, sizeof why) >= 0;
-    return ls_mcmd_start_plan(core, call, slot, what, point, -1, slowed ? why : NULL);
+    return ls_mcmd_start_plan(core, call, slot, what, point, LS_PATH_NONE, slowed ? why : NULL);
 }
 
 int32_t ls_h_move_absolute(struct ls_core *core, struct ls_call *call)
@@ -193,7 +193,7 @@ int32_t ls_h_move_arc(struct ls_core *core, struct ls_call *call)
     ls_motion_slowdown_t slow;
     const bool slowed =
         ls_motion_seg_slowdown(&slot->one, &slow) && ls_motion_slowdown_text(&slow, why, sizeof why) >= 0;
-    return ls_mcmd_start_plan(core, call, slot, "moveArc", r->point_name, -1, slowed ? why : NULL);
+    return ls_mcmd_start_plan(core, call, slot, "moveArc", r->point_name, LS_PATH_NONE, slowed ? why : NULL);
 }
 
 int32_t ls_h_stop_motion(struct ls_core *core, struct ls_call *call)

@@ -18,7 +18,7 @@ int ls_path_find(const ls_core_t *core, const char *name)
             return i;
         }
     }
-    return -1;
+    return LS_PATH_NONE;
 }
 
 static bool path_running(const ls_core_t *core, int i)
@@ -154,8 +154,8 @@ static int32_t load_point(ls_core_t *core, ls_call_t *call, const ls_PathLoadReq
     for (int a = 0; a < pt->n_aux; a++) {
         ls_aux_t ax;
         char why[96];
-        if (ls_aux_parse(tp->aux_commands[a], &ax, why, sizeof why) != 0 ||
-            ls_aux_check_io(core, &ax, why, sizeof why) != 0) {
+        if (ls_aux_parse(tp->aux_commands[a], &ax, why, sizeof why) != LS_OK ||
+            ls_aux_check_io(core, &ax, why, sizeof why) != LS_OK) {
             return ls_reply(call, ls_RetCode_CMD_PARAM_ERR, "pathLoad point %d: aux command '%s': %s", k,
                             tp->aux_commands[a], why);
         }

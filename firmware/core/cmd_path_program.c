@@ -126,8 +126,8 @@ static int plan_arc_pair(ls_core_t *core, const ls_path_point_t *via, const ls_p
 }
 
 /* CIRCULAR_MOTION points pair up as (via, goal) in load order within each
- * run of consecutive circular points: -1 when every run has an even count,
- * else the index of the via point left without a goal. */
+ * run of consecutive circular points: LS_PATH_NONE when every run has an
+ * even count, else the index of the via point left without a goal. */
 static int unpaired_circular(const ls_path_t *p)
 {
     int run = 0;
@@ -140,7 +140,7 @@ static int unpaired_circular(const ls_path_t *p)
             run = 0;
         }
     }
-    return run % 2 != 0 ? p->n - 1 : -1;
+    return run % 2 != 0 ? p->n - 1 : LS_PATH_NONE;
 }
 
 static void copy_point_attrs(ls_motion_seg_t *s, const ls_path_point_t *pt, int k)

@@ -179,7 +179,7 @@ static int32_t start_react(ls_core_t *core, ls_call_t *call, ls_react_plan_t *sl
         return ls_reply(call, ls_RetCode_CMD_BUSY_ERR, "%s: the control loop's command queue is full; try again",
                         run->seed_name);
     }
-    ls_run_begin(core, call, true, run->seed_name, run->seed_name, -1);
+    ls_run_begin(core, call, true, run->seed_name, run->seed_name, LS_PATH_NONE);
     core->run.comply = run->comply;
     core->run.sensor = run->sensor;
     core->run.length = run->length;
@@ -555,7 +555,7 @@ int32_t ls_h_manual_control(struct ls_core *core, struct ls_call *call)
                         "manualControl: the control loop's command queue is full; try again");
     }
     ls_fmt_print(core->sensor.mode, sizeof core->sensor.mode, "%s", type);
-    core->sensor.sup = kind >= 0 ? call->sup : -1;
+    core->sensor.sup = kind >= 0 ? call->sup : LS_NO_SESSION;
     core->sensor.kind = kind;
     if (frac > 0.0) {
         ls_fmt_print(core->motion_state, sizeof core->motion_state, "manual_%s", type);
@@ -581,7 +581,7 @@ void ls_core_manual_off(ls_core_t *core)
         (void)ls_control_set_manual(core->ctl, NULL, NULL, NULL, 0);
     }
     ls_fmt_print(core->sensor.mode, sizeof core->sensor.mode, "off");
-    core->sensor.sup = -1;
+    core->sensor.sup = LS_NO_SESSION;
     core->sensor.kind = -1;
     if (strncmp(core->motion_state, "manual_", 7) == 0) {
         ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_at_rest");
@@ -685,7 +685,7 @@ static void jog_event(ls_core_t *core, const ls_ctl_event_t *ev)
         if (core->sensor.sup < 0 || core->owner != core->sensor.sup) {
             (void)ls_control_set_manual(core->ctl, NULL, NULL, NULL, 0);
             ls_fmt_print(core->sensor.mode, sizeof core->sensor.mode, "off");
-            core->sensor.sup = -1;
+            core->sensor.sup = LS_NO_SESSION;
             core->sensor.kind = -1;
             return;
         }

@@ -15,7 +15,7 @@ int32_t ls_h_lock(struct ls_core *core, struct ls_call *call)
 int32_t ls_h_release(struct ls_core *core, struct ls_call *call)
 {
     ls_core_manual_off(core);
-    core->owner = -1;
+    core->owner = LS_NO_SESSION;
     core->state = ls_State_UNLOCKED;
     return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "released: the device is under local control");
 }
@@ -67,7 +67,7 @@ int32_t ls_h_deactivate(struct ls_core *core, struct ls_call *call)
 void ls_core_on_enable_result(ls_core_t *core, const char *failure, uint64_t now_us)
 {
     const int sup = core->activating;
-    core->activating = -1;
+    core->activating = LS_NO_SESSION;
     if (failure != NULL) {
         ls_core_log_fault(core, now_us, "activate: the drives are off: %s", failure);
         if (sup >= 0) {

@@ -106,13 +106,15 @@ static const char *op_name(const ls_core_t *core)
     return core->tool_cmds.op.attach ? "getTool" : "putTool";
 }
 
-/* Plan the next motion step into the plan slot and start it. 0, or -1 with why. */
+/* Plan the next motion step into the plan slot and start it. LS_OK, or with
+ * why: LS_EAGAIN (the loop has not taken the previous plan, or its queue is
+ * full), LS_EUNREACHABLE (the approach point), the planner's status. */
 static int plan_step(ls_core_t *core, const double q0[LS_N_JOINTS], char *why, size_t whylen)
 {
     ls_motion_plan_t *slot = ls_control_plan_slot(core->ctl);
     if (slot == NULL) {
         ls_fmt_print(why, whylen, "the control loop has not taken the previous motion");
-        return -1;
+        return LS_EAGAIN;
     }
     const ls_robot_model_t *m = core->model;
     char w[LS_MOTION_WHY_LEN] = "";
@@ -121,7 +123,7 @@ static int plan_step(ls_core_t *core, const double q0[LS_N_JOINTS], char *why, s
         double q1[LS_N_JOINTS];
         if (ls_kin_ik_nearest(m, core->tool_cmds.op.approach, q0, q1) != LS_OK) {
             ls_fmt_print(why, whylen, "the approach point above the rack is out of reach");
-            return -1;
+            return LS_EUNREACHABLE;
         }
         const ls_settings_t *set = &core->settings;
         st = ls_motion_plan_joint(slot, m, q0, q1, set->speed_pct / 100.0, set->accel_pct / 100.0, w, sizeof w);
@@ -143,15 +145,15 @@ static int plan_step(ls_core_t *core, const double q0[LS_N_JOINTS], char *why, s
     }
     if (st < 0) {
         ls_fmt_print(why, whylen, "%s", w);
-        return -1;
+        return st;
     }
     slot->ref_seq = core->tool_cmds.op.ref_seq;
     ls_fmt_print(slot->name, sizeof slot->name, "%s", core->tool_cmds.op.id);
     if (!ls_control_start_plan(core->ctl, core->tool_cmds.op.ref_seq)) {
         ls_fmt_print(why, whylen, "the control loop's command queue is full");
-        return -1;
+        return LS_EAGAIN;
     }
-    return 0;
+    return LS_OK;
 }
 
 static void step_failed(ls_core_t *core, const char *why)
@@ -215,7 +217,7 @@ static int32_t change(ls_core_t *core, ls_call_t *call, const char *id, bool att
     ls_control_snapshot(core->ctl, &snap);
     core->tool_cmds.op = op;
     char why[LS_MOTION_WHY_LEN];
-    if (plan_step(core, snap.q_cmd_rad, why, sizeof why) != 0) {
+    if (plan_step(core, snap.q_cmd_rad, why, sizeof why) != LS_OK) {
         core->tool_cmds.op.active = false;
         return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR, "%s %s refused, nothing moved: %s", what, id, why);
     }
@@ -326,7 +328,7 @@ static void coupled(ls_core_t *core, const ls_ctl_event_t *ev)
     core->tool_cmds.bits = ev->dio.on;
     core->tool_cmds.op.step = STEP_OUT;
     char why[LS_MOTION_WHY_LEN];
-    if (plan_step(core, core->tool_cmds.q_hold, why, sizeof why) != 0) {
+    if (plan_step(core, core->tool_cmds.q_hold, why, sizeof why) != LS_OK) {
         step_failed(core, why);
     }
 }
@@ -364,7 +366,7 @@ bool ls_core_tool_on_event(ls_core_t *core, const ls_ctl_event_t *ev)
         memcpy(core->tool_cmds.q_hold, ev->motion.q_rad, sizeof core->tool_cmds.q_hold);
         if (core->tool_cmds.op.step == STEP_APPROACH) {
             core->tool_cmds.op.step = STEP_IN;
-            if (plan_step(core, core->tool_cmds.q_hold, why, sizeof why) != 0) {
+            if (plan_step(core, core->tool_cmds.q_hold, why, sizeof why) != LS_OK) {
                 step_failed(core, why);
             }
         } else if (core->tool_cmds.op.step == STEP_IN) {

@@ -85,8 +85,8 @@ void ls_core_init(ls_core_t *core, const ls_core_config_t *cfg, const ls_core_io
         core->act = *act;
     }
     core->state = ls_State_IDLE;
-    core->owner = -1;
-    core->activating = -1;
+    core->owner = LS_NO_SESSION;
+    core->activating = LS_NO_SESSION;
     ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_at_rest");
     core->settings.speed_pct = 25.0;
     core->settings.accel_pct = 50.0;
@@ -96,10 +96,10 @@ void ls_core_init(ls_core_t *core, const ls_core_config_t *cfg, const ls_core_io
     core->settings.angular_accel_rad_s2 = 4.0;
     core->rsvp_next_id = 1;
     core->epoch_next = 1;
-    core->run.path = -1;
-    core->halt.answer_sup = -1;
+    core->run.path = LS_PATH_NONE;
+    core->halt.answer_sup = LS_NO_SESSION;
     ls_fmt_print(core->sensor.mode, sizeof core->sensor.mode, "off");
-    core->sensor.sup = -1;
+    core->sensor.sup = LS_NO_SESSION;
     core->sensor.kind = -1;
     ls_fmt_print(core->tool_cmds.held, sizeof core->tool_cmds.held, "none");
 }
@@ -125,7 +125,7 @@ static int find_session(const ls_core_t *core, uint8_t addr)
             return i;
         }
     }
-    return -1;
+    return LS_NO_SESSION;
 }
 
 static int connected_count(const ls_core_t *core)
@@ -270,7 +270,7 @@ static void alarm_window_report(ls_core_t *core, uint64_t now_us)
     ls_fmt_print(d3, sizeof d3, "fault=%s", w->text);
     const char *data[] = { d1, d2, d3 };
     ls_core_log_fault(core, now_us, "%u repeats suppressed: %.60s", (unsigned)w->suppressed, w->text);
-    ls_core_notify(core, -1, ls_NoticeKind_ALARM, ls_EventId_alarmsSuppressed, 0, false, data, 3);
+    ls_core_notify(core, LS_ALL_SESSIONS, ls_NoticeKind_ALARM, ls_EventId_alarmsSuppressed, 0, false, data, 3);
     w->suppressed = 0;
     w->since_us = now_us;
 }
@@ -317,7 +317,7 @@ static void fault_as(ls_core_t *core, ls_run_end_t why, const char *text, uint64
     if (core->state == ls_State_MOVING || core->state == ls_State_PAUSED || core->halt.active) {
         /* Stop along the path at the model's maximum deceleration, then drives
          * off; ls_run_tick changes the state and sends the motion's notice. */
-        ls_run_halt(core, why, text, true, -1, now_us);
+        ls_run_halt(core, why, text, true, LS_NO_SESSION, now_us);
     } else {
         if (core->state == ls_State_RESTING) {
             if (core->act.enable_drives != NULL) {
@@ -334,7 +334,7 @@ static void fault_as(ls_core_t *core, ls_run_end_t why, const char *text, uint64
     char d[80];
     ls_fmt_print(d, sizeof d, "fault=%s", text);
     const char *data[] = { d };
-    ls_core_notify(core, -1, ls_NoticeKind_ALARM, ls_EventId_fault, 0, false, data, 1);
+    ls_core_notify(core, LS_ALL_SESSIONS, ls_NoticeKind_ALARM, ls_EventId_fault, 0, false, data, 1);
 }
 
 void ls_core_fault(ls_core_t *core, const char *text, uint64_t now_us)
@@ -357,7 +357,7 @@ void ls_core_owner_lost_alarm(ls_core_t *core, uint8_t addr, const char *why, ls
     ls_fmt_print(d2, sizeof d2, "reason=%s", why);
     ls_fmt_print(d3, sizeof d3, "action=%s", name != NULL ? name : "?");
     const char *data[] = { d1, d2, d3 };
-    ls_core_notify(core, -1, ls_NoticeKind_ALARM, ls_EventId_ownerLost, 0, false, data, 3);
+    ls_core_notify(core, LS_ALL_SESSIONS, ls_NoticeKind_ALARM, ls_EventId_ownerLost, 0, false, data, 3);
     ls_core_log_fault(core, now_us, "owner 0x%02X lost (%s): action %s", addr, why, name != NULL ? name : "?");
 }
 
@@ -372,13 +372,13 @@ static void drop_session(ls_core_t *core, int i, const char *why, uint64_t now_u
     uint8_t addr = s->addr;
     s->connected = false;
     if (core->halt.answer_sup == i) {
-        core->halt.answer_sup = -1; /* nobody to answer any more */
+        core->halt.answer_sup = LS_NO_SESSION; /* nobody to answer any more */
     }
     if (was_owner) {
         const ls_DisconnectAction action = s->disconnect_action;
         const bool release = action == ls_DisconnectAction_DISCONNECT_STOP_DEACTIVATE_RELEASE;
         ls_core_manual_off(core);
-        core->owner = -1;
+        core->owner = LS_NO_SESSION;
         if (!release) {
             core->held = true;
             core->held_addr = addr;
@@ -567,7 +567,7 @@ int32_t ls_core_rsvp(ls_core_t *core, int sup, uint32_t ref_seq, ls_NoticeKind k
                      ls_rsvp_done_fn done, void *ctx, uint64_t now_us)
 {
     if (sup < 0 || sup >= LS_MAX_SUPERVISORS || !core->sessions[sup].connected || done == NULL) {
-        return -1;
+        return LS_EINVAL;
     }
     ls_rsvp_t *slot = NULL;
     for (int i = 0; i < LS_MAX_RSVP; i++) {
@@ -577,7 +577,7 @@ int32_t ls_core_rsvp(ls_core_t *core, int sup, uint32_t ref_seq, ls_NoticeKind k
         }
     }
     if (slot == NULL) {
-        return -1;
+        return LS_ENOSPC;
     }
     uint32_t id = core->rsvp_next_id++;
     if (core->rsvp_next_id == 0) {
@@ -602,7 +602,7 @@ int32_t ls_core_rsvp(ls_core_t *core, int sup, uint32_t ref_seq, ls_NoticeKind k
     }
     size_t len = encode_msg(&core->note, core->note_enc, sizeof core->note_enc);
     if (len == 0) {
-        return -1;
+        return LS_EINVAL;
     }
     *slot = (ls_rsvp_t){ .used = true,
                          .id = id,
@@ -792,7 +792,7 @@ static int32_t do_connect(ls_core_t *core, uint8_t addr, ls_call_t *call)
          * session's answers and ownership (docs/protocol.md "Identity"). Nothing
          * of that session changes, its cache included. */
         const ls_session_t *live = &core->sessions[i];
-        call->sup = -1;
+        call->sup = LS_NO_SESSION;
         call->res->session_epoch = 0u;
         core->connects_refused++;
         return ls_reply(call, ls_RetCode_CMD_NOT_OWNER_ERR,
@@ -820,7 +820,7 @@ static int32_t do_connect(ls_core_t *core, uint8_t addr, ls_call_t *call)
          * answer (or swallow) the new session's requests; ownership stays. */
         ls_session_t *old = &core->sessions[i];
         if (old->last_pending && core->halt.answer_sup == i) {
-            core->halt.answer_sup = -1;
+            core->halt.answer_sup = LS_NO_SESSION;
         }
         old->have_last = false;
         old->last_pending = false;

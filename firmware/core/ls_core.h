@@ -34,6 +34,8 @@ struct ls_control;
 #define LS_DOWNLINK_MAX ls_Downlink_size
 #define LS_UPLINK_MAX 4095u
 #define LS_CALL_DEFERRED INT32_MIN /* a handler will answer later */
+#define LS_NO_SESSION (-1)         /* an index of ls_core_t.sessions that names none (owner: unlocked) */
+#define LS_ALL_SESSIONS (-2)       /* ls_core_notify: to every session */
 /* The fault log keeps its first LS_FAULT_LOG_FIRST entries (the start of a
  * cascade) and a ring of the latest LS_FAULT_LOG_LATEST; the entries in
  * between are dropped and counted (sendCommand faults). */
@@ -70,8 +72,9 @@ struct ls_control;
 
 /* How the core talks to the bus: implemented by the network layer (or a test). */
 typedef struct {
-    /* Queue one encoded ls.Downlink for the supervisor at `addr`. Returns 0,
-     * or negative when its queue is full (the message is then lost and counted). */
+    /* Queue one encoded ls.Downlink for the supervisor at `addr`. Returns
+     * LS_OK, or a negative ls_err.h status (a full queue: LS_EAGAIN) when the
+     * message is lost (the core counts it, tx_lost). */
     int (*send_downlink)(void *ctx, uint8_t addr, const uint8_t *buf, size_t len);
     /* Optional: the transport's counters as key=value lines (sendCommand status). */
     void (*describe)(void *ctx, char *buf, size_t cap);
@@ -284,8 +287,8 @@ typedef struct ls_core {
     char held_name[sizeof(((ls_ConnectReq *)0)->client_name)]; /* the session name, whole */
     ls_DisconnectAction held_action;
     ls_State state;
-    int owner;      /* index in sessions[], -1 when unlocked */
-    int activating; /* the session whose activate waits for the drives (LS_CEV_ENABLED), -1: none */
+    int owner;      /* index in sessions[], LS_NO_SESSION when unlocked */
+    int activating; /* the session whose activate waits for the drives (LS_CEV_ENABLED), LS_NO_SESSION: none */
     ls_session_t sessions[LS_MAX_SUPERVISORS];
     char fault[96];                               /* latched fault, empty when none */
     char motion_state[32];                        /* seed 3.3.1 motionControlState (docs/state-machine.md) */
@@ -372,7 +375,8 @@ void ls_core_take_loop_events(ls_core_t *core, uint64_t now_us);
  * read, no allocation. */
 uint64_t ls_core_next_deadline_us(const ls_core_t *core, uint64_t now_us);
 
-/* Send a notice (event, alarm) to one session (sup >= 0) or to all (sup < 0).
+/* Send a notice (event, alarm) to one session (sup >= 0) or to all (sup < 0:
+ * LS_ALL_SESSIONS).
  * Its event id is one the schema declares (enum ls.EventId, sent by name), its
  * data "key=value" strings with the keys the schema lists for it. */
 void ls_core_notify(ls_core_t *core, int sup, ls_NoticeKind kind, ls_EventId id, uint32_t ref_seq, bool final,
@@ -443,12 +447,13 @@ void ls_core_finish_deferred(ls_core_t *core, int sup, int32_t code, const char 
  * after timeout_ms with timed_out = true (then the caller takes
  * `default_action`, which the notice announces). The reply is answered with
  * an RsvpAck naming the action `done` returned, and logged with its data.
- * Returns the rsvp id (> 0), or -1 when the table is full. */
+ * Returns the rsvp id (> 0), LS_EINVAL (`sup` has no session, `done` is NULL,
+ * the notice does not encode) or LS_ENOSPC (LS_MAX_RSVP are waiting). */
 int32_t ls_core_rsvp(ls_core_t *core, int sup, uint32_t ref_seq, ls_NoticeKind kind, const char *event_id,
                      const char *const *data, size_t n_data, uint32_t timeout_ms, const char *default_action,
                      ls_rsvp_done_fn done, void *ctx, uint64_t now_us);
 
-/* Index of the connected session of `addr`, or -1. */
+/* Index of the connected session of `addr`, or LS_NO_SESSION. */
 int ls_core_session_of(const ls_core_t *core, uint8_t addr);
 
 /* Fill call->res->ret_msg (printf-style) and return `code`: handlers end with

@@ -64,6 +64,8 @@ typedef struct {
     ls_path_point_t pt[LS_PATH_MAX_POINTS];
 } ls_path_t;
 
+#define LS_PATH_NONE (-1) /* an index of ls_motion_cmds_t.paths that names none */
+
 /* Seed 3.4-3.6: the path queues, the program of the path being run, the
  * last tag reached (getTagId). */
 typedef struct {
@@ -78,7 +80,7 @@ typedef struct {
 /* Seed 3.7.2-3.7.4: manual control. */
 typedef struct {
     char mode[16];         /* "off", or the manualControl mode that is on */
-    int sup;               /* the session that switched it on, -1 when off */
+    int sup;               /* the session that switched it on, LS_NO_SESSION when off */
     int kind;              /* its ls_manual_kind_t, -1 when off */
     ls_motion_seg_t check; /* scratch for the reachability check of a move's line */
 } ls_sensor_cmds_t;

@@ -62,7 +62,7 @@ void ls_run_begin(ls_core_t *core, const ls_call_t *call, bool react, const char
     r->epoch = s->epoch;
     r->ref_seq = call->req->seq;
     r->path = path;
-    r->stop_sup = -1;
+    r->stop_sup = LS_NO_SESSION;
     ls_fmt_print(r->seed_name, sizeof r->seed_name, "%s", seed_name);
     ls_fmt_print(r->point, sizeof r->point, "%s", point);
     core->state = ls_State_MOVING;
@@ -165,14 +165,14 @@ void ls_run_halt(ls_core_t *core, ls_run_end_t why, const char *text, bool fast,
 void ls_run_halt_owner_lost(ls_core_t *core, ls_run_end_t why, bool keep_drives, uint64_t now_us)
 {
     if (core->halt.active || !keep_drives || core->act.stop_motion == NULL) {
-        ls_run_halt(core, why, "", false, -1, now_us);
+        ls_run_halt(core, why, "", false, LS_NO_SESSION, now_us);
         return;
     }
     ls_halt_t *h = &core->halt;
     memset(h, 0, sizeof *h);
     h->active = true;
     h->why = why;
-    h->answer_sup = -1;
+    h->answer_sup = LS_NO_SESSION;
     h->since_us = now_us;
     h->keep_drives = true;
     halt_enter(core);
@@ -275,7 +275,7 @@ void ls_run_tick(ls_core_t *core, uint64_t now_us)
 bool ls_run_shutdown(ls_core_t *core, uint64_t now_us)
 {
     if (core->state == ls_State_MOVING || core->state == ls_State_PAUSED || core->halt.active) {
-        ls_run_halt(core, LS_RUN_END_SHUTDOWN, "", true, -1, now_us);
+        ls_run_halt(core, LS_RUN_END_SHUTDOWN, "", true, LS_NO_SESSION, now_us);
     }
     return core->halt.active;
 }

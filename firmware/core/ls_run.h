@@ -49,7 +49,7 @@ typedef struct {
     uint32_t ref_seq;
     char seed_name[24]; /* "moveAbsolute", "pathMove", "comply", ... */
     char point[LS_MOTION_NAME_LEN];
-    int path;          /* index of the path queue it runs, -1 for single moves */
+    int path;          /* index of the path queue it runs, LS_PATH_NONE for single moves */
     bool dry_run;      /* pathMove with number_of_cycles 0: its notices carry dry_run=true */
     bool stop_pending; /* stopMotion waits for the pause */
     int stop_sup;
@@ -79,7 +79,7 @@ typedef struct {
     bool active;
     ls_run_end_t why;
     char text[72];    /* the fault, or "" */
-    int answer_sup;   /* deferred deactivate to answer at the end, -1: none */
+    int answer_sup;   /* deferred deactivate to answer at the end, LS_NO_SESSION: none */
     bool keep_drives; /* owner lost with the action `stop`: pause, drop the motion, drives stay on (RESTING) */
     bool fast;        /* the stop at the model's maximum deceleration is posted: repeats post nothing more */
     bool owner_lost;  /* the disconnect handler runs it: the alarm ownerLost at the end */
@@ -114,7 +114,7 @@ void ls_run_finish(struct ls_core *core, ls_run_end_t why, const char *const *ex
 
 /* Start a halt: post the stop (fast: the model's maximum deceleration, else
  * the configured one), keep the state until the loop reports the arm at rest
- * with the drives off. answer_sup: a deactivate to answer then (-1: none).
+ * with the drives off. answer_sup: a deactivate to answer then (LS_NO_SESSION: none).
  * A second halt while one runs can only make it faster and change the
  * reason to a fault. */
 void ls_run_halt(struct ls_core *core, ls_run_end_t why, const char *text, bool fast, int answer_sup, uint64_t now_us);

@@ -284,13 +284,15 @@ typedef struct {
     char ws_min_text[64], ws_max_text[64];
 } load_t;
 
+#define ERROR_WITHOUT_LINE (-1) /* load_t.error_line: an error that no line of the file holds */
+
 static void fail(load_t *c, int line, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 static void fail(load_t *c, int line, const char *fmt, ...)
 {
     if (c->error_line != 0) {
         return;
     }
-    c->error_line = line > 0 ? line : -1;
+    c->error_line = line > 0 ? line : ERROR_WITHOUT_LINE;
     int w =
         line > 0 ? snprintf(c->msg, c->msglen, "%s:%d: ", c->path, line) : snprintf(c->msg, c->msglen, "%s: ", c->path);
     if (w >= 0 && (size_t)w < c->msglen) {
@@ -301,7 +303,9 @@ static void fail(load_t *c, int line, const char *fmt, ...)
     }
 }
 
-/* 0 = [robot], 1..6 = [joint.N], 7 = [cartesian]; -1 for anything else. */
+#define NO_SECTION (-1) /* section_index: not a section of a robot model file */
+
+/* 0 = [robot], 1..6 = [joint.N], 7 = [cartesian]; NO_SECTION for anything else. */
 static int section_index(const char *s)
 {
     if (strcmp(s, "robot") == 0) {
@@ -313,7 +317,7 @@ static int section_index(const char *s)
     if (strncmp(s, "joint.", 6) == 0 && s[6] >= '1' && s[6] < '1' + LS_N_JOINTS && s[7] == '\0') {
         return s[6] - '0';
     }
-    return -1;
+    return NO_SECTION;
 }
 
 static const char *section_kind(int s)

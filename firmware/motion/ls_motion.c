@@ -155,11 +155,12 @@ static int phase_profile(const double x0[LS_N_JOINTS], const double q1[LS_N_JOIN
         }
     }
     if (!isfinite(vs)) { /* nothing moves */
-        return ls_traj_plan(tr, LS_N_JOINTS, x0, q1, lim) == LS_OK ? 0 : -1;
+        return ls_traj_plan(tr, LS_N_JOINTS, x0, q1, lim);
     }
     ls_traj_axis_t sig;
-    if (ls_traj_plan_axis(&sig, 0.0, 1.0, vs, as, js) != LS_OK) {
-        return -1;
+    const int rc = ls_traj_plan_axis(&sig, 0.0, 1.0, vs, as, js);
+    if (rc != LS_OK) {
+        return rc;
     }
     memset(tr, 0, sizeof *tr);
     tr->n = LS_N_JOINTS;
@@ -172,40 +173,49 @@ static int phase_profile(const double x0[LS_N_JOINTS], const double q1[LS_N_JOIN
         ax->dist = q1[j] - x0[j];
         ax->j = sig.j * ax->dist;
     }
-    return 0;
+    return LS_OK;
 }
 
 /* The profile of joint segment s from the joints at x0 to q1 at its stored
  * fractions and jerk scale: phase-synchronised (a straight line in joint
  * space, so that a stop and a resume keep to it), or each joint on its own
  * (slew). The plan itself starts at q0; a resume starts where a stop left
- * the joints. */
+ * the joints. The planner's status on error, and in *failed (when not
+ * NULL) the 0-based joint a slew could not plan (-1: the phase). */
 static int joint_profile_from(const ls_motion_seg_t *s, const ls_robot_model_t *model, const double x0[LS_N_JOINTS],
-                              ls_traj_t *out)
+                              ls_traj_t *out, int *failed)
 {
     ls_traj_limits_t lim;
     joint_limits(model, s->lim_[0], s->lim_[1], s->jerk_scale_, &lim);
     ls_traj_t tr;
-    if (phase_profile(x0, s->q1, &lim, &tr) != 0) {
-        return -1;
+    int rc = phase_profile(x0, s->q1, &lim, &tr);
+    if (rc != LS_OK) {
+        if (failed != NULL) {
+            *failed = -1;
+        }
+        return rc;
     }
     if (s->slew_) {
         tr.duration_s = 0.0;
         for (int j = 0; j < LS_N_JOINTS; j++) {
-            if (ls_traj_plan_axis(&tr.axis[j], x0[j], s->q1[j], lim.v_max[j], lim.a_max[j], lim.j_max[j]) != LS_OK) {
-                return -(j + 2);
+            rc = ls_traj_plan_axis(&tr.axis[j], x0[j], s->q1[j], lim.v_max[j], lim.a_max[j], lim.j_max[j]);
+            if (rc != LS_OK) {
+                if (failed != NULL) {
+                    *failed = j;
+                }
+                return rc;
             }
             tr.duration_s = fmax(tr.duration_s, tr.axis[j].T);
         }
     }
     *out = tr;
-    return 0;
+    return LS_OK;
 }
 
-/* Plan the profile of joint segment s (q0, q1 set). */
-static int joint_profile(ls_motion_seg_t *s, const ls_robot_model_t *model)
+/* Plan the profile of joint segment s (q0, q1 set); see joint_profile_from. */
+static int joint_profile(ls_motion_seg_t *s, const ls_robot_model_t *model, int *failed)
 {
-    return joint_profile_from(s, model, s->q0, &s->traj);
+    return joint_profile_from(s, model, s->q0, &s->traj, failed);
 }
 
 int ls_motion_seg_joint(ls_motion_seg_t *s, const ls_robot_model_t *model, const double q0[LS_N_JOINTS],
@@ -228,7 +238,7 @@ int ls_motion_seg_joint(ls_motion_seg_t *s, const ls_robot_model_t *model, const
     memcpy(s->q1, q1, sizeof s->q1);
     s->lim_[0] = speed_frac;
     s->lim_[1] = accel_frac;
-    if (joint_profile(s, model) != 0) {
+    if (joint_profile(s, model, NULL) != LS_OK) {
         return refuse(why, whylen, LS_EINVAL, "joint move: the trajectory could not be planned");
     }
     return LS_OK;
@@ -245,9 +255,9 @@ int ls_motion_seg_slew(ls_motion_seg_t *s, const ls_robot_model_t *model, const 
         return r;
     }
     s->slew_ = true;
-    r = joint_profile(s, model);
-    if (r < 0) {
-        return refuse(why, whylen, LS_EINVAL, "slew: joint %d could not be planned", -r - 1);
+    int failed = -1;
+    if (joint_profile(s, model, &failed) != LS_OK) {
+        return refuse(why, whylen, LS_EINVAL, "slew: joint %d could not be planned", failed + 1);
     }
     return LS_OK;
 }
@@ -386,7 +396,7 @@ static bool cart_still(const ls_motion_seg_t *s)
  * segment that does not move has nothing to run. */
 static int cart_profile_from(const ls_motion_seg_t *s, double x0, ls_pathspeed_t *out)
 {
-    return ls_pathspeed_plan(out, &s->curve, cart_still(s) ? 1.0 : x0, s->jerk_scale_[0]) == LS_OK ? 0 : -1;
+    return ls_pathspeed_plan(out, &s->curve, cart_still(s) ? 1.0 : x0, s->jerk_scale_[0]);
 }
 
 /* Plan the time law of a Cartesian segment over s in [0, 1]. */
@@ -735,7 +745,7 @@ static int cart_time_and_check(ls_motion_seg_t *s, const ls_robot_model_t *model
         return refuse(why, whylen, LS_EINVAL, "Cartesian move: its speed limits could not be planned");
     }
     memcpy(s->q1, q_prev, sizeof s->q1);
-    if (cart_profile(s) != 0) {
+    if (cart_profile(s) != LS_OK) {
         return refuse(why, whylen, LS_EINVAL, "Cartesian move: the profile could not be planned");
     }
     return LS_OK;
@@ -1124,12 +1134,14 @@ static void blend_cap_rotation(ls_motion_seg_t *a, const ls_motion_seg_t *b)
 static int seg_replan(ls_motion_seg_t *s, const ls_robot_model_t *model)
 {
     if (s->kind == LS_SEG_JOINT) {
-        return joint_profile(s, model);
+        return joint_profile(s, model, NULL);
     }
-    return s->kind == LS_SEG_LINE ? cart_profile(s) : 0;
+    return s->kind == LS_SEG_LINE ? cart_profile(s) : LS_OK;
 }
 
-/* The segment b that a = seg[i] blends into (ls_motion_prog_blend), or -1. */
+#define NO_SEGMENT (-1) /* blend_next: a blends into nothing */
+
+/* The segment b that a = seg[i] blends into (ls_motion_prog_blend), or NO_SEGMENT. */
 static int blend_next(const ls_motion_program_t *prog, int32_t cycles, int i)
 {
     const int n = prog->n;
@@ -1142,7 +1154,7 @@ static int blend_next(const ls_motion_program_t *prog, int32_t cycles, int i)
     if (cycles > 1 && i == n) {
         return n > 1 ? 1 : n;
     }
-    return -1;
+    return NO_SEGMENT;
 }
 
 /* The tool-tip pose of a at xa blended with b at xb: positions added (b's
@@ -1315,15 +1327,15 @@ static void fault(ls_motion_t *m, ls_motion_events_t *ev, const char *fmt, ...)
 int ls_motion_start(ls_motion_t *m, const ls_motion_plan_t *p)
 {
     if (m->phase != LS_MOTION_IDLE) {
-        return -1;
+        return LS_ESTATE;
     }
     if (p == NULL || p->kind == LS_PLAN_NONE || (p->kind == LS_PLAN_PATH && (p->prog == NULL || p->cycles < 1))) {
-        return -2;
+        return LS_EINVAL;
     }
     const ls_motion_seg_t *first = plan_seg(p, 0, 1);
     for (int j = 0; j < LS_N_JOINTS; j++) {
         if (fabs(first->q0[j] - m->q_cmd[j]) > START_TOL_RAD) {
-            return -2;
+            return LS_EINVAL;
         }
     }
     m->plan = *p;
@@ -1657,26 +1669,27 @@ void ls_motion_stop_fast(ls_motion_t *m)
 int ls_motion_fast_stop_bound(const ls_robot_model_t *model, int j, double *time_s, double *dist_rad)
 {
     if (model == NULL || j < 0 || j >= LS_N_JOINTS || time_s == NULL || dist_rad == NULL) {
-        return -1;
+        return LS_EINVAL;
     }
     /* The fast stop's ramp from (v_max, +a_max): more speed or more
      * acceleration only lengthens a ramp, and no plan has both at once. */
     const double a = model->qdd_max_rad_s2[j];
     ls_ramp_t r;
-    if (ls_ramp_plan(&r, 0.0, model->qd_max_rad_s[j], a, 0.0, a, model->qddd_max_rad_s3[j]) != LS_OK) {
-        return -1;
+    const int rc = ls_ramp_plan(&r, 0.0, model->qd_max_rad_s[j], a, 0.0, a, model->qddd_max_rad_s3[j]);
+    if (rc != LS_OK) {
+        return rc;
     }
     *time_s = r.duration_s;
     ls_ramp_sample(&r, r.duration_s, dist_rad, NULL, NULL);
-    return 0;
+    return LS_OK;
 }
 
 /* Re-plan each moving segment from where the stop's ramps left its axes to
  * its end, from rest, within its limits. Two that were blending run one
  * after the other: the one blending in waits (its clock below 0) until the
- * other has arrived, so each has its whole limits. -1, changing nothing,
- * when a profile cannot be planned (its limits planned it once, so only a
- * corrupted plan gets there). */
+ * other has arrived, so each has its whole limits. The planner's status,
+ * changing nothing, when a profile cannot be planned (its limits planned it
+ * once, so only a corrupted plan gets there). */
 static int plan_from_ramps(ls_motion_t *m)
 {
     const ls_motion_seg_t *seg[2];
@@ -1690,14 +1703,14 @@ static int plan_from_ramps(ls_motion_t *m)
         int r;
         if (seg[k]->kind == LS_SEG_JOINT) {
             seg_joints(m, k, seg[k], x, NULL, q, NULL);
-            r = joint_profile_from(seg[k], m->model, q, &tr[k]);
+            r = joint_profile_from(seg[k], m->model, q, &tr[k], NULL);
             T[k] = tr[k].duration_s;
         } else {
             r = cart_profile_from(seg[k], fmin(1.0, fmax(0.0, x[0])), &path[k]);
             T[k] = path[k].duration_s;
         }
-        if (r != 0) {
-            return -1;
+        if (r != LS_OK) {
+            return r;
         }
     }
     for (int k = 0; k < n; k++) {
@@ -1711,19 +1724,22 @@ static int plan_from_ramps(ls_motion_t *m)
     m->ramping_ = false;
     m->t_s = 0.0;
     m->t_next_s_ = n == 2 ? -T[0] : 0.0;
-    return 0;
+    return LS_OK;
 }
 
 int ls_motion_resume(ls_motion_t *m)
 {
     if (m->phase != LS_MOTION_PAUSED) {
-        return -1;
+        return LS_ESTATE;
     }
-    if (m->ramping_ && plan_from_ramps(m) != 0) {
-        return -2;
+    if (m->ramping_) {
+        const int rc = plan_from_ramps(m);
+        if (rc != LS_OK) {
+            return rc;
+        }
     }
     m->phase = LS_MOTION_RUNNING;
-    return 0;
+    return LS_OK;
 }
 
 void ls_motion_abort(ls_motion_t *m)

@@ -364,9 +364,10 @@ int ls_motion_prog_blend(ls_motion_program_t *prog, const ls_robot_model_t *mode
 
 /* ---- executor (control loop) ---- */
 
-/* Start a plan from the current commanded position. Returns 0, -1 when a
- * motion is already running, -2 when the plan does not start within 1e-3 rad
- * of the held set-point (nothing changes). Copies the plan (not a program). */
+/* Start a plan from the current commanded position. Returns LS_OK,
+ * LS_ESTATE when a motion is already running, LS_EINVAL when there is no
+ * plan or it does not start within 1e-3 rad of the held set-point (nothing
+ * changes). Copies the plan (not a program). */
 int ls_motion_start(ls_motion_t *m, const ls_motion_plan_t *p);
 /* Stop, then LS_MEV_PAUSED: every axis of the moving segment (a joint
  * segment's joints, a Cartesian segment's path parameter, and those of the
@@ -391,13 +392,15 @@ void ls_motion_stop_fast(ls_motion_t *m);
  * acceleration limit, a state no plan reaches, so every stop the loop takes
  * ends within *time_s and *dist_rad (a stop that waits for a blend to end:
  * measured within it, tests/unit/motion/test_blend.c, not proved). The
- * user's settings can only make it shorter. Returns 0, -1 on a bad argument (nothing written). */
+ * user's settings can only make it shorter. Returns LS_OK, LS_EINVAL on a
+ * bad argument, or the ramp planner's status (nothing written on error). */
 int ls_motion_fast_stop_bound(const ls_robot_model_t *model, int j, double *time_s, double *dist_rad);
-/* From PAUSED; -1 otherwise. After a stop inside a segment each segment is
- * re-planned from rest where its ramps left it to its end, within its own
- * limits; two that were blending run one after the other. The segment
- * then arrives at rest instead of blending into the next. -2 (still
- * paused) when a profile cannot be planned. Control-loop safe: closed-form
+/* From PAUSED; LS_ESTATE otherwise. After a stop inside a segment each
+ * segment is re-planned from rest where its ramps left it to its end, within
+ * its own limits; two that were blending run one after the other. The
+ * segment then arrives at rest instead of blending into the next. The
+ * planner's status (still paused) when a profile cannot be planned.
+ * Control-loop safe: closed-form
  * planning (a Cartesian segment: ls_pathspeed_plan, O(zones)), about 5 KB
  * of stack. */
 int ls_motion_resume(ls_motion_t *m);

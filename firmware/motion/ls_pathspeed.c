@@ -197,7 +197,7 @@ double ls_pathspeed_zone_accel(const ls_pathspeed_curve_t *c, int k, double v, b
 int ls_pathspeed_zone_of(const ls_pathspeed_curve_t *c, double s)
 {
     if (c == NULL || c->n == 0) {
-        return -1;
+        return LS_PATHSPEED_NO_ZONE;
     }
     int k = 0;
     while (k + 1 < c->n && s >= c->zone[k].s_end) {

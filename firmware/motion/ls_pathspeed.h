@@ -178,8 +178,10 @@ void ls_pathspeed_sample(const ls_pathspeed_t *p, double t_s, double *s, double 
  * a_req does). O(joints). */
 double ls_pathspeed_zone_accel(const ls_pathspeed_curve_t *c, int k, double v, bool up, uint8_t *joint);
 
-/* The zone of curve c that holds s (s >= 1: the last zone), -1 for a NULL
- * or empty curve. O(zones). */
+#define LS_PATHSPEED_NO_ZONE (-1) /* ls_pathspeed_zone_of: the curve has no zones */
+
+/* The zone of curve c that holds s (s >= 1: the last zone),
+ * LS_PATHSPEED_NO_ZONE for a NULL or empty curve. O(zones). */
 int ls_pathspeed_zone_of(const ls_pathspeed_curve_t *c, double s);
 
 /* A stop from (s0, v0 >= 0, a0) at jerk j: in each zone it crosses, a ramp

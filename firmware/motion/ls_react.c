@@ -97,7 +97,7 @@ static void rot_of_vector(const double w[3], double R[16])
 }
 
 /* The joint set-point of a tip pose, nearest q_prev, within the joint,
- * speed and workspace limits. 0, or -1 with why. */
+ * speed and workspace limits. LS_OK, or LS_ERANGE with why. */
 static int solve(const ls_robot_model_t *m, const double P[16], const double tool_inv[16],
                  const double q_prev[LS_N_JOINTS], double dt_s, double q_out[LS_N_JOINTS], char *why, size_t len)
 {
@@ -105,7 +105,7 @@ static int solve(const ls_robot_model_t *m, const double P[16], const double too
         if (P[12 + i] < m->workspace_min_m[i] || P[12 + i] > m->workspace_max_m[i]) {
             ls_fmt_print(why, len, "workspace: tip %c %.4g m outside [%.4g, %.4g]", "xyz"[i], P[12 + i],
                          m -> workspace_min_m[i], m -> workspace_max_m[i]);
-            return -1;
+            return LS_ERANGE;
         }
     }
     double F[16];
@@ -116,15 +116,15 @@ static int solve(const ls_robot_model_t *m, const double P[16], const double too
                      st == LS_ELIMITS     ? "a joint limit"
                      : st == LS_ESINGULAR ? "the shoulder singularity"
                                           : "the edge of the reachable space");
-        return -1;
+        return LS_ERANGE;
     }
     for (int j = 0; j < LS_N_JOINTS; j++) {
         if (fabs(q_out[j] - q_prev[j]) > m->qd_max_rad_s[j] * dt_s) {
             ls_fmt_print(why, len, "joint %d would jump: a joint limit or singularity ahead", j + 1);
-            return -1;
+            return LS_ERANGE;
         }
     }
-    return 0;
+    return LS_OK;
 }
 
 /* ------------------------------------------------------------- plans */
@@ -141,7 +141,7 @@ static int refuse(char *why, size_t len, const char *text)
     if (why != NULL && len > 0) {
         ls_fmt_print(why, len, "%s", text);
     }
-    return -1;
+    return LS_EINVAL;
 }
 
 /* The travel from rest at `from` to `to`: a rest-to-rest profile at speed
@@ -214,7 +214,7 @@ int ls_react_check_plan(const ls_react_plan_t *p, char *why, size_t whylen)
         if (p->component >= LS_REACT_MAX_VALUES) {
             return refuse(why, whylen, "sensor component out of range");
         }
-        return 0;
+        return LS_OK;
     }
     if (!finite_n(p->n_tool, 3) || !isfinite(p->c_max_m) || !isfinite(p->f_target_N) || !isfinite(p->kp_m_s_N) ||
         !isfinite(p->kd_m_N) || !isfinite(p->vc_max_m_s) || !isfinite(p->timeout_s) || !isfinite(p->panic_N)) {
@@ -229,16 +229,16 @@ int ls_react_check_plan(const ls_react_plan_t *p, char *why, size_t whylen)
                       "comply needs a non-zero target, kp > 0, kd >= 0, a correction speed, "
                       "time-out and panic level > 0");
     }
-    return 0;
+    return LS_OK;
 }
 
 int ls_react_start(ls_react_t *r, const ls_react_plan_t *p, const double q_cmd[LS_N_JOINTS], uint8_t n_values)
 {
     if (r->active) {
-        return -1;
+        return LS_ESTATE;
     }
-    if (ls_react_check_plan(p, NULL, 0) != 0) {
-        return -2;
+    if (ls_react_check_plan(p, NULL, 0) != LS_OK) {
+        return LS_EINVAL;
     }
     r->plan = *p;
     memset(&r->report, 0, sizeof r->report);
@@ -265,7 +265,7 @@ int ls_react_start(ls_react_t *r, const ls_react_plan_t *p, const double q_cmd[L
     r->phase_ = p->kind == LS_REACT_COMPLY ? PH_SEEK : PH_RUN;
     plan_travel(r, 0.0, p->kind == LS_REACT_COMPLY ? 0.0 : p->dist_m, p->v_m_s);
     r->active = true;
-    return 0;
+    return LS_OK;
 }
 
 void ls_react_stop(ls_react_t *r)
@@ -278,7 +278,7 @@ void ls_react_stop(ls_react_t *r)
 int ls_react_resume(ls_react_t *r)
 {
     if (!r->active || !r->paused) {
-        return -1;
+        return LS_ESTATE;
     }
     r->paused = false;
     r->stop_req_ = false;
@@ -290,7 +290,7 @@ int ls_react_resume(ls_react_t *r)
     } else if (r->phase_ == PH_BRAKE) {
         plan_brake(r); /* at rest already: an empty brake, then the phase goes on */
     }
-    return 0;
+    return LS_OK;
 }
 
 bool ls_react_moving(const ls_react_t *r)
@@ -507,7 +507,7 @@ static void advance_tip(ls_react_t *r, double dt_s, bool comply, const double q_
     }
     double q_new[LS_N_JOINTS];
     char why[64];
-    if (solve(r->model, P, r->tool_inv_, r->q_cmd_, dt_s, q_new, why, sizeof why) != 0) {
+    if (solve(r->model, P, r->tool_inv_, r->q_cmd_, dt_s, q_new, why, sizeof why) != LS_OK) {
         r->v_ = r->a_ = r->vc_ = 0.0;
         finish(r, LS_REACT_END_UNREACHABLE, q_meas, ev);
         return;
@@ -841,7 +841,7 @@ bool ls_react_jog_step(ls_react_t *r, double dt_s, const double *twist, double q
     double tool_inv[16], q_new[LS_N_JOINTS];
     ls_pose_inv(c->tool, tool_inv);
     char why[64];
-    if (solve(r->model, P1, tool_inv, q_cmd, dt_s, q_new, why, sizeof why) != 0) {
+    if (solve(r->model, P1, tool_inv, q_cmd, dt_s, q_new, why, sizeof why) != LS_OK) {
         ls_react_jog_halt(r);
         if (!r->jog_limited_) {
             r->jog_limited_ = true;

@@ -171,18 +171,18 @@ typedef struct {
 /* Init-time. */
 void ls_react_init(ls_react_t *r, const ls_robot_model_t *model);
 
-/* Check a plan's numbers (any thread): 0, or -1 with `why`. */
+/* Check a plan's numbers (any thread): LS_OK, or LS_EINVAL with `why`. */
 int ls_react_check_plan(const ls_react_plan_t *p, char *why, size_t whylen);
 
 /* Start a guarded or compliant move from the set-point q_cmd. `n_values` is
- * the number of values of the plan's sensor. 0, -1 when one runs already, -2
- * for a plan that ls_react_check_plan refuses. */
+ * the number of values of the plan's sensor. LS_OK, LS_ESTATE when one runs
+ * already, LS_EINVAL for a plan that ls_react_check_plan refuses. */
 int ls_react_start(ls_react_t *r, const ls_react_plan_t *p, const double q_cmd[LS_N_JOINTS], uint8_t n_values);
 
 /* Brake at the plan's stop limits and pause (LS_MEV_PAUSED); resume plans
  * the rest of the travel (or the return) again from rest. */
 void ls_react_stop(ls_react_t *r);
-int ls_react_resume(ls_react_t *r); /* -1 when not paused */
+int ls_react_resume(ls_react_t *r); /* LS_OK, or LS_ESTATE when not paused */
 /* End at once, holding the current set-point: LS_MEV_REACT_END (ABORTED)
  * into ev (may be NULL); nothing when idle. */
 void ls_react_abort(ls_react_t *r, const double q_meas[LS_N_JOINTS], ls_motion_events_t *ev);

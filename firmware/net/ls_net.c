@@ -59,10 +59,10 @@ void ls_net_init(ls_net_t *net, uint8_t node, ls_core_t *core)
 int ls_net_add_link(ls_net_t *net, const hal_can_link_t *link)
 {
     if (net->n_links >= LS_NET_MAX_LINKS) {
-        return -1;
+        return LS_ENOSPC;
     }
     net->links[net->n_links++] = *link;
-    return 0;
+    return LS_OK;
 }
 
 int ls_net_send_frame(ls_net_t *net, const hal_can_frame_t *frame)
@@ -77,10 +77,10 @@ int ls_net_send_frame(ls_net_t *net, const hal_can_frame_t *frame)
     }
     if (ok > 0 || net->n_links == 0) {
         net->frames_out++;
-        return 0;
+        return LS_OK;
     }
     net->tx_blocked = true;
-    return -1;
+    return LS_EAGAIN;
 }
 
 static ls_net_peer_t *find_peer(ls_net_t *net, uint8_t addr)
@@ -185,11 +185,11 @@ int ls_net_send_downlink(void *ctx, uint8_t addr, const uint8_t *buf, size_t len
 {
     ls_net_t *net = ctx;
     if (len == 0 || len > LS_DOWNLINK_MAX) {
-        return -1; /* ISO-TP carries 1..LS_ISOTP_MAX_PAYLOAD bytes: it would stay queued */
+        return LS_ELEN; /* ISO-TP carries 1..LS_ISOTP_MAX_PAYLOAD bytes: it would stay queued */
     }
     ls_net_peer_t *p = get_peer(net, addr);
     if (p == NULL) {
-        return -1;
+        return LS_ENOSPC;
     }
     if (already_pending(p, buf, len)) {
         net->tx_deduplicated++;
@@ -200,18 +200,18 @@ int ls_net_send_downlink(void *ctx, uint8_t addr, const uint8_t *buf, size_t len
         if (p->tx_tries > 0 && p->isotp.tx_len == len && memcmp(p->isotp.tx_buf, buf, len) == 0) {
             p->tx_asked_again = true;
         }
-        return 0;
+        return LS_OK;
     }
     if (p->q_count >= LS_NET_OUTQ) {
         p->q_dropped++;
-        return -1;
+        return LS_EAGAIN;
     }
     ls_net_msg_t *m = &p->q[(p->q_head + p->q_count) % LS_NET_OUTQ];
     memcpy(m->buf, buf, len);
     m->len = (uint16_t)len;
     p->q_count++;
     p->last_used_us = net->now_us;
-    return 0;
+    return LS_OK;
 }
 
 /* The downlink in the peer's ISO-TP link has finished its transfer: done

@@ -131,16 +131,20 @@ typedef struct ls_net {
 } ls_net_t;
 
 void ls_net_init(ls_net_t *net, uint8_t node, ls_core_t *core);
-/* Add an opened link (copied). Returns 0, or -1 when the table is full. */
+/* Add an opened link (copied). Returns LS_OK, or LS_ENOSPC when the table is full. */
 int ls_net_add_link(ls_net_t *net, const hal_can_link_t *link);
 /* Receive and route every pending frame, run ISO-TP timers, deliver complete
  * messages to the core and start queued transmissions. Tells each link
  * whether sessions live on it (hal_can_hold_open: a peer whose last frame
  * came on it has a session in the core, or downlinks still to send). */
 void ls_net_poll(ls_net_t *net, uint64_t now_us);
-/* Send one frame on every link (broadcasts). Returns 0 when at least one link took it. */
+/* Send one frame on every link (broadcasts). Returns LS_OK when at least one
+ * link took it (or there is none), else LS_EAGAIN. */
 int ls_net_send_frame(ls_net_t *net, const hal_can_frame_t *frame);
-/* The ls_core_io_t.send_downlink implementation. */
+/* The ls_core_io_t.send_downlink implementation: LS_OK (queued, or the same
+ * message is already pending), LS_ELEN (empty or longer than a downlink),
+ * LS_ENOSPC (no ISO-TP peer is free for `addr`), LS_EAGAIN (its queue is
+ * full: the message is dropped and counted). */
 int ls_net_send_downlink(void *net, uint8_t addr, const uint8_t *buf, size_t len);
 /* When ls_net_poll next has work, for an event-driven caller's sleep
  * (frames arriving wake it otherwise): the earliest ISO-TP timer (STmin

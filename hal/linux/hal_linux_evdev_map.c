@@ -122,10 +122,12 @@ static bool number(const char *s, double lo, double hi, double *out)
     return true;
 }
 
+#define NO_CODE (-1) /* libevdev's answer for a name it does not know */
+
 static int code_of(const char *name, int type)
 {
     if (libevdev_event_type_from_code_name(name) != type) {
-        return -1;
+        return NO_CODE;
     }
     return libevdev_event_code_from_code_name(name);
 }
@@ -184,7 +186,7 @@ int hal_evdev_parse_axes(hal_evdev_map_t *map, const char *text, char *why, size
             cname++;
         }
         int type = libevdev_event_type_from_code_name(cname);
-        int code = type == EV_ABS || type == EV_REL ? libevdev_event_code_from_code_name(cname) : -1;
+        int code = type == EV_ABS || type == EV_REL ? libevdev_event_code_from_code_name(cname) : NO_CODE;
         if (code < 0) {
             return why_(why, whylen, "%s (%s: '%s' is no ABS_* or REL_* axis)", form, f[0], cname);
         }

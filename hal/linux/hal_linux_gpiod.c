@@ -92,10 +92,12 @@ static int gd_write(void *self, uint16_t unit, uint32_t on, uint32_t off)
     return LS_OK;
 }
 
+#define NO_FD (-1) /* poll_fd: no inputs, nothing to wait on (hal_dio.h) */
+
 static int gd_poll_fd(void *self)
 {
     const gd_unit_t *u = self;
-    return u->n_in > 0u ? u->epfd : -1;
+    return u->n_in > 0u ? u->epfd : NO_FD;
 }
 
 static int gd_drain_events(void *self)
@@ -271,7 +273,7 @@ static int setup_inputs(gd_unit_t *u, const char *chip, char *msg, size_t msglen
             return request_failed(u->in[i], chip, off, "an input with edge events", msg, msglen);
         }
         int fd = gpiod_line_event_get_fd(u->in[i]);
-        int fl = fd < 0 ? -1 : fcntl(fd, F_GETFL);
+        int fl = fd < 0 ? fd : fcntl(fd, F_GETFL);
         if (fl < 0 || fcntl(fd, F_SETFL, fl | O_NONBLOCK) < 0) {
             return hal_linux_msg(LS_EIO, msg, msglen, "cannot make the event fd of GPIO line %u non-blocking: %s", off,
                                  strerror(errno));

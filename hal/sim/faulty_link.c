@@ -95,7 +95,9 @@ static void hold_remove(dir_t *d, size_t i)
     d->n_hold--;
 }
 
-/* The first due entry in arrival order, or -1. */
+#define NO_HOLD (-1) /* hold_due: nothing is due */
+
+/* The first due entry in arrival order, or NO_HOLD. */
 static int hold_due(const dir_t *d, uint64_t now)
 {
     for (size_t i = 0; i < d->n_hold; i++) {
@@ -103,7 +105,7 @@ static int hold_due(const dir_t *d, uint64_t now)
             return (int)i;
         }
     }
-    return -1;
+    return NO_HOLD;
 }
 
 /* A frame has passed: frames held for reordering are due right after it. */

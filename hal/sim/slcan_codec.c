@@ -13,7 +13,7 @@ static int hexval(char c)
     if (c >= 'a' && c <= 'f') {
         return c - 'a' + 10;
     }
-    return -1;
+    return LS_EINVAL;
 }
 
 static int parse_hex(const char *s, size_t n, uint32_t *out)
@@ -22,7 +22,7 @@ static int parse_hex(const char *s, size_t n, uint32_t *out)
     for (size_t i = 0; i < n; i++) {
         int h = hexval(s[i]);
         if (h < 0) {
-            return -1;
+            return LS_EINVAL;
         }
         v = (v << 4) | (uint32_t)h;
     }
@@ -34,20 +34,20 @@ static int parse_frame(const char *line, size_t len, bool ext, bool rtr, hal_can
 {
     size_t id_digits = ext ? 8u : 3u;
     if (len < 1u + id_digits + 1u) {
-        return -1;
+        return LS_EINVAL;
     }
     uint32_t id = 0;
     uint32_t dlc = 0;
     if (parse_hex(line + 1, id_digits, &id) != 0 || parse_hex(line + 1 + id_digits, 1, &dlc) != 0) {
-        return -1;
+        return LS_EINVAL;
     }
     if ((ext && id > 0x1FFFFFFFu) || (!ext && id > 0x7FFu) || dlc > 8u) {
-        return -1;
+        return LS_EINVAL;
     }
     size_t data_at = 1u + id_digits + 1u;
     size_t want = rtr ? data_at : data_at + 2u * dlc;
     if (len != want) {
-        return -1;
+        return LS_EINVAL;
     }
     memset(f, 0, sizeof *f);
     f->id = id;
@@ -57,7 +57,7 @@ static int parse_frame(const char *line, size_t len, bool ext, bool rtr, hal_can
         for (uint32_t i = 0; i < dlc; i++) {
             uint32_t b = 0;
             if (parse_hex(line + data_at + 2u * i, 2, &b) != 0) {
-                return -1;
+                return LS_EINVAL;
             }
             f->data[i] = (uint8_t)b;
         }
@@ -78,20 +78,20 @@ int ls_slcan_parse(const char *line, size_t len, ls_slcan_msg_t *out)
     case 'T': return parse_frame(line, len, true, false, &out->frame);
     case 'r': return parse_frame(line, len, false, true, &out->frame);
     case 'R': return parse_frame(line, len, true, true, &out->frame);
-    case 'O': out->kind = LS_SLCAN_OPEN; return len == 1 ? 0 : -1;
-    case 'C': out->kind = LS_SLCAN_CLOSE; return len == 1 ? 0 : -1;
-    case 'V': out->kind = LS_SLCAN_VERSION; return len == 1 ? 0 : -1;
-    case 'N': out->kind = LS_SLCAN_SERIAL; return len == 1 ? 0 : -1;
-    case 'F': out->kind = LS_SLCAN_FLAGS; return len == 1 ? 0 : -1;
-    case 'Z': out->kind = LS_SLCAN_TIMESTAMP; return len == 2 && (line[1] == '0' || line[1] == '1') ? 0 : -1;
+    case 'O': out->kind = LS_SLCAN_OPEN; return len == 1 ? LS_OK : LS_EINVAL;
+    case 'C': out->kind = LS_SLCAN_CLOSE; return len == 1 ? LS_OK : LS_EINVAL;
+    case 'V': out->kind = LS_SLCAN_VERSION; return len == 1 ? LS_OK : LS_EINVAL;
+    case 'N': out->kind = LS_SLCAN_SERIAL; return len == 1 ? LS_OK : LS_EINVAL;
+    case 'F': out->kind = LS_SLCAN_FLAGS; return len == 1 ? LS_OK : LS_EINVAL;
+    case 'Z': out->kind = LS_SLCAN_TIMESTAMP; return len == 2 && (line[1] == '0' || line[1] == '1') ? LS_OK : LS_EINVAL;
     case 'S':
         if (len != 2 || line[1] < '0' || line[1] > '8') {
-            return -1;
+            return LS_EINVAL;
         }
         out->kind = LS_SLCAN_BITRATE;
         out->bitrate = rates[line[1] - '0'];
         return 0;
-    default: return -1;
+    default: return LS_EINVAL;
     }
 }
 

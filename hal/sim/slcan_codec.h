@@ -33,7 +33,7 @@ typedef struct {
     uint32_t bitrate;
 } ls_slcan_msg_t;
 
-/* Parse one line (without its CR). Returns 0 on success, -1 when the line is
+/* Parse one line (without its CR). Returns LS_OK, or LS_EINVAL when the line is
  * malformed (unknown command, bad hex, wrong length, id out of range, DLC > 8). */
 int ls_slcan_parse(const char *line, size_t len, ls_slcan_msg_t *out);
 

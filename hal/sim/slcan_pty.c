@@ -229,14 +229,14 @@ static const hal_can_ops_t g_ops = {
     .next_due_us = pty_next_due_us,
 };
 
-/* flock `lock_path` for this process: the fd, or -1 with msg set. */
+/* flock `lock_path` for this process: the fd, or LS_EIO with msg set. */
 static int take_lock(const char *lock_path, const char *path, char *msg, size_t msglen)
 {
     for (int attempt = 0; attempt < 3; attempt++) {
         int fd = open(lock_path, O_RDWR | O_CREAT | O_CLOEXEC, 0644);
         if (fd < 0) {
             snprintf(msg, msglen, "cannot open the lock file %s: %s", lock_path, strerror(errno));
-            return -1;
+            return LS_EIO;
         }
         if (flock(fd, LOCK_EX | LOCK_NB) != 0) {
             const int e = errno;
@@ -245,14 +245,14 @@ static int take_lock(const char *lock_path, const char *path, char *msg, size_t 
             close(fd);
             if (e != EWOULDBLOCK) {
                 snprintf(msg, msglen, "cannot lock %s: %s", lock_path, strerror(e));
-                return -1;
+                return LS_EIO;
             }
             pid[n > 0 ? n : 0] = '\0';
             pid[strcspn(pid, "\r\n")] = '\0';
             snprintf(msg, msglen,
                      "%s is in use by landscaped PID %s (lock %s): stop that controller or choose another path", path,
                      pid[0] != '\0' ? pid : "(unknown)", lock_path);
-            return -1;
+            return LS_EIO;
         }
         /* The holder we waited for may have removed the file as it exited:
          * a lock on a file no longer at lock_path guards nothing. */
@@ -263,7 +263,7 @@ static int take_lock(const char *lock_path, const char *path, char *msg, size_t 
             if (ftruncate(fd, 0) != 0 || pwrite(fd, pid, (size_t)len, 0) != (ssize_t)len) {
                 snprintf(msg, msglen, "cannot write the lock file %s: %s", lock_path, strerror(errno));
                 close(fd);
-                return -1;
+                return LS_EIO;
             }
             return fd;
         }
@@ -271,7 +271,7 @@ static int take_lock(const char *lock_path, const char *path, char *msg, size_t 
     }
     snprintf(msg, msglen, "the lock file %s keeps being replaced: is another landscaped starting on %s?", lock_path,
              path);
-    return -1;
+    return LS_EIO;
 }
 
 int hal_sim_slcan_pty_open(hal_can_link_t *out, const char *path, char *msg, size_t msglen)
@@ -300,7 +300,7 @@ int hal_sim_slcan_pty_open(hal_can_link_t *out, const char *path, char *msg, siz
     }
     int lock_fd = take_lock(lock_path, path, msg, msglen);
     if (lock_fd < 0) {
-        return LS_EIO;
+        return lock_fd;
     }
     if (lstat(path, &sb) == 0) {
         unlink(path); /* a stale link from a controller that did not exit cleanly (its lock is free) */
@@ -316,7 +316,7 @@ int hal_sim_slcan_pty_open(hal_can_link_t *out, const char *path, char *msg, siz
         return LS_EIO;
     }
     const char *slave_name = ptsname(master);
-    int slave = slave_name != NULL ? open(slave_name, O_RDWR | O_NOCTTY | O_NONBLOCK) : -1;
+    int slave = slave_name != NULL ? open(slave_name, O_RDWR | O_NOCTTY | O_NONBLOCK) : LS_ENODEV;
     if (slave < 0) {
         snprintf(msg, msglen, "cannot open the pty slave: %s", strerror(errno));
         close(master);

@@ -16,6 +16,8 @@ typedef struct {
     size_t n;
 } tok_t;
 
+#define NOT_HEX (-1) /* a character that is no hexadecimal digit */
+
 static bool is_blank(char c)
 {
     return c == ' ' || c == '\t';
@@ -40,8 +42,8 @@ static bool parse_num(tok_t t, uint32_t max, uint32_t *out)
             int d = c >= '0' && c <= '9'   ? c - '0'
                     : c >= 'a' && c <= 'f' ? c - 'a' + 10
                     : c >= 'A' && c <= 'F' ? c - 'A' + 10
-                                           : -1;
-            if (d < 0) {
+                                           : NOT_HEX;
+            if (d == NOT_HEX) {
                 return false;
             }
             v = v << 4 | (uint64_t)d;

@@ -14,9 +14,9 @@ static const sd_od_entry_t *E(int entry)
 static int compare(uint16_t index, uint8_t sub, const sd_od_entry_t *e)
 {
     if (index != e->index) {
-        return index < e->index ? -1 : 1;
+        return (index > e->index) - (index < e->index);
     }
-    return sub == e->sub ? 0 : (sub < e->sub ? -1 : 1);
+    return (sub > e->sub) - (sub < e->sub);
 }
 
 int sd_od_find(uint16_t index, uint8_t sub, uint32_t *abort)

@@ -52,6 +52,10 @@ typedef struct {
     double p[3];
 } frame_t;
 
+/* A tool index (find_tool, W.tool) besides an index in k_tools. */
+#define NO_TOOL (-1)      /* "none": the flange holds nothing */
+#define UNKNOWN_TOOL (-2) /* no tool has this id */
+
 static struct {
     bool open;
     hal_sim_arm_model_t m_data;
@@ -74,7 +78,7 @@ static struct {
     dGeomID env[3];
     int n_env;
 
-    int tool; /* index in k_tools, -1: none */
+    int tool; /* index in k_tools, NO_TOOL: none */
     uint32_t tool_bits;
 
     bool joint_on[NJ]; /* false: the joint's brake holds it */
@@ -397,7 +401,7 @@ static void build_arm(void)
     W.sensor_joint = dJointCreateFixed(W.world, 0);
     dJointAttach(W.sensor_joint, W.tool_body, W.link[NJ - 1]);
     dJointSetFeedback(W.sensor_joint, &W.fb);
-    W.tool = -1;
+    W.tool = NO_TOOL;
     tool_rebuild();
 }
 
@@ -876,14 +880,14 @@ const hal_sensor_t *hal_sim_world_sensors(size_t *count)
 static int find_tool(const char *id)
 {
     if (id == NULL) {
-        return -2;
+        return UNKNOWN_TOOL;
     }
     for (int i = 0; i < N_TOOLS; i++) {
         if (strcmp(id, k_tools[i].id) == 0) {
             return i;
         }
     }
-    return strcmp(id, "none") == 0 ? -1 : -2;
+    return strcmp(id, "none") == 0 ? NO_TOOL : UNKNOWN_TOOL;
 }
 
 static const char *tool_name(void *self, int index)
@@ -913,7 +917,7 @@ static int tool_offset(void *self, const char *tool_id, double xyzrpy[6])
         return LS_ENODEV;
     }
     int t = find_tool(tool_id);
-    if (t < -1 || xyzrpy == NULL) {
+    if (t == UNKNOWN_TOOL || xyzrpy == NULL) {
         return LS_EINVAL;
     }
     memcpy(xyzrpy, tool_offset_of(t), 6 * sizeof(double));
@@ -944,10 +948,10 @@ static int tool_couple(void *self, const char *tool_id, bool attach)
         return LS_ENODEV;
     }
     int t = find_tool(tool_id);
-    if (t < 0 || (attach ? W.tool != -1 : W.tool != t) || !flange_at_rack(t)) {
+    if (t < 0 || (attach ? W.tool != NO_TOOL : W.tool != t) || !flange_at_rack(t)) {
         return LS_EINVAL;
     }
-    W.tool = attach ? t : -1;
+    W.tool = attach ? t : NO_TOOL;
     W.tool_bits = 0;
     tool_rebuild();
     return LS_OK;

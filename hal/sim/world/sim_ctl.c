@@ -109,7 +109,7 @@ static int hex_digit(char c)
     if (c >= 'A' && c <= 'F') {
         return c - 'A' + 10;
     }
-    return -1;
+    return LS_EINVAL;
 }
 
 /* 1..8 hex digits with an optional 0x. */
@@ -222,15 +222,15 @@ static int tokenize(const char *text, size_t len, tok_t *toks, int max_toks)
             continue;
         }
         if (c < 0x21 || c > 0x7e) {
-            return -1;
+            return LS_EINVAL;
         }
         if (n == max_toks) {
-            return -1;
+            return LS_EINVAL;
         }
         size_t start = i;
         while (i < len && text[i] != ' ' && text[i] != '\t') {
             if (text[i] < 0x21 || text[i] > 0x7e) {
-                return -1;
+                return LS_EINVAL;
             }
             i++;
         }

@@ -48,7 +48,7 @@ static int load(fx_t *f, const char *text)
 /* Expect a refusal of `text` with "PATH:<tail>". */
 static void refused(fx_t *f, const char *text, const char *tail)
 {
-    assert_int_equal(load(f, text), -1);
+    assert_int_equal(load(f, text), LS_EINVAL);
     snprintf(f->want, sizeof f->want, "%s:%s", f->path, tail);
     assert_string_equal(f->msg, f->want);
 }
@@ -89,7 +89,7 @@ static void test_defaults(void **state)
     assert_false(c->check);
     assert_false(c->hal_sim);
     /* defaults alone lack a link */
-    assert_int_equal(ls_config_validate(c, f->msg, sizeof f->msg), -1);
+    assert_int_equal(ls_config_validate(c, f->msg, sizeof f->msg), LS_EINVAL);
     assert_string_equal(f->msg, "no link configured: give --link SPEC or 'link = SPEC' under [hal] "
                                 "(e.g. slcan:pty:/tmp/landscape0 or socketcan:can0)");
 }
@@ -377,7 +377,7 @@ static void test_links_repeat_up_to_four(void **state)
 static void test_missing_file(void **state)
 {
     fx_t *f = *state;
-    assert_int_equal(ls_config_load_file(&f->cfg, "/nonexistent/landscaped.conf", f->msg, sizeof f->msg), -1);
+    assert_int_equal(ls_config_load_file(&f->cfg, "/nonexistent/landscaped.conf", f->msg, sizeof f->msg), LS_EINVAL);
     assert_string_equal(f->msg, "/nonexistent/landscaped.conf: cannot read the configuration file: No such file or "
                                 "directory (give an existing file with --config FILE)");
 }
@@ -420,7 +420,7 @@ static void test_byte_order_mark_and_nul(void **state)
     assert_non_null(fp);
     assert_int_equal(fwrite(bin, 1, sizeof bin - 1, fp), sizeof bin - 1);
     fclose(fp);
-    assert_int_equal(ls_config_load_file(&f->cfg, f->path, f->msg, sizeof f->msg), -1);
+    assert_int_equal(ls_config_load_file(&f->cfg, f->path, f->msg, sizeof f->msg), LS_EINVAL);
     snprintf(f->want, sizeof f->want, "%s:2: a NUL byte in the line: this is not a text file", f->path);
     assert_string_equal(f->msg, f->want);
 }
@@ -508,25 +508,25 @@ static void test_later_option_wins(void **state)
 static void test_option_errors(void **state)
 {
     fx_t *f = *state;
-    assert_int_equal(ARGS(f, "--hal", "sim", "--link", "slcan:pty:/tmp/x", "--node", "0x1FF"), -1);
+    assert_int_equal(ARGS(f, "--hal", "sim", "--link", "slcan:pty:/tmp/x", "--node", "0x1FF"), LS_EINVAL);
     assert_string_equal(f->msg, "--node: got '0x1FF', expected 1..0xFE (node address; 0xFF is the broadcast address)");
-    assert_int_equal(ARGS(f, "--hal", "real", "--link", "slcan:pty:/tmp/x"), -1);
+    assert_int_equal(ARGS(f, "--hal", "real", "--link", "slcan:pty:/tmp/x"), LS_EINVAL);
     assert_string_equal(f->msg, "--hal: got 'real', expected sim (or set --arm, --dio, --clock)");
-    assert_int_equal(ARGS(f, "--hal", "sim", "--link", "bogus:x"), -1);
+    assert_int_equal(ARGS(f, "--hal", "sim", "--link", "bogus:x"), LS_EINVAL);
     assert_string_equal(f->msg,
                         "--link: got 'bogus:x', expected slcan:pty:PATH or socketcan:IFNAME (unknown link kind)");
-    assert_int_equal(ARGS(f, "--rate", "5"), -1);
+    assert_int_equal(ARGS(f, "--rate", "5"), LS_EINVAL);
     assert_string_equal(f->msg, "--rate: got '5', expected 100..10000 (control cycles per second)");
-    assert_int_equal(ARGS(f, "--heartbeat-timeout", "10"), -1);
+    assert_int_equal(ARGS(f, "--heartbeat-timeout", "10"), LS_EINVAL);
     assert_string_equal(f->msg, "--heartbeat-timeout: got '10', expected milliseconds 50..600000 (drop a supervisor "
                                 "after this long without heartbeat)");
-    assert_int_equal(ARGS(f, "--frobnicate"), -1);
+    assert_int_equal(ARGS(f, "--frobnicate"), LS_EINVAL);
     assert_string_equal(f->msg, "unknown option '--frobnicate' (see --help)");
-    assert_int_equal(ARGS(f, "--rate"), -1);
+    assert_int_equal(ARGS(f, "--rate"), LS_EINVAL);
     assert_string_equal(f->msg, "--rate: missing value (see --help)");
-    assert_int_equal(ARGS(f, "--rate", "100", "extra"), -1);
+    assert_int_equal(ARGS(f, "--rate", "100", "extra"), LS_EINVAL);
     assert_string_equal(f->msg, "unexpected argument 'extra' (see --help)");
-    assert_int_equal(ARGS(f, "--config", "/a", "--config", "/b"), -1);
+    assert_int_equal(ARGS(f, "--config", "/a", "--config", "/b"), LS_EINVAL);
     assert_string_equal(f->msg, "--config given twice ('/a' and '/b'): give one file");
 }
 
@@ -534,7 +534,7 @@ static void test_config_error_through_args_keeps_check(void **state)
 {
     fx_t *f = *state;
     tc_write_file(f->path, sizeof f->path, "[control]\nrate_hz = 5\n");
-    assert_int_equal(ARGS(f, "--check", "--config", f->path), -1);
+    assert_int_equal(ARGS(f, "--check", "--config", f->path), LS_EINVAL);
     snprintf(f->want, sizeof f->want,
              "%s:2: [control] rate_hz: got '5', expected 100..10000 (control cycles per "
              "second)",
@@ -547,7 +547,7 @@ static void test_config_error_through_args_keeps_check(void **state)
 static void test_missing_config_through_args(void **state)
 {
     fx_t *f = *state;
-    assert_int_equal(ARGS(f, "--config", "/nonexistent/x.conf", "--hal", "sim"), -1);
+    assert_int_equal(ARGS(f, "--config", "/nonexistent/x.conf", "--hal", "sim"), LS_EINVAL);
     assert_string_equal(f->msg, "/nonexistent/x.conf: cannot read the configuration file: No such file or directory "
                                 "(give an existing file with --config FILE)");
 }
@@ -595,7 +595,7 @@ static void test_help(void **state)
 
 static void invalid(fx_t *f, const char *want)
 {
-    assert_int_equal(ls_config_validate(&f->cfg, f->msg, sizeof f->msg), -1);
+    assert_int_equal(ls_config_validate(&f->cfg, f->msg, sizeof f->msg), LS_EINVAL);
     assert_string_equal(f->msg, want);
 }
 
@@ -665,7 +665,7 @@ static void refused_each(fx_t *f, const char *key, const char *const (*cases)[2]
     for (size_t i = 0; i < n; i++) {
         char text[128];
         snprintf(text, sizeof text, "[manual]\n%s = %s\n", key, cases[i][0]);
-        assert_int_equal(load(f, text), -1);
+        assert_int_equal(load(f, text), LS_EINVAL);
         if (strstr(f->msg, cases[i][1]) == NULL || strstr(f->msg, also) == NULL) {
             fail_msg("%s = %s: %s", key, cases[i][0], f->msg);
         }
@@ -719,7 +719,7 @@ static void test_a_teachpendant_without_an_enabling_switch_is_refused(void **sta
     assert_int_equal(load(f, "[hal]\nlink = socketcan:can0\n[manual]\nteachpendant = /dev/input/event3\n"
                              "teachpendant_buttons = frame:BTN_WEST\n"),
                      0);
-    assert_int_equal(ls_config_validate(&f->cfg, f->msg, sizeof f->msg), -1);
+    assert_int_equal(ls_config_validate(&f->cfg, f->msg, sizeof f->msg), LS_EINVAL);
     assert_string_equal(f->msg, "[manual] teachpendant = /dev/input/event3 has no enabling switch in its map: a teach "
                                 "pendant jogs only while one is held; add enable:KEY to teachpendant_buttons (e.g. "
                                 "enable:BTN_TL)");

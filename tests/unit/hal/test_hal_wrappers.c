@@ -161,10 +161,10 @@ static void test_strerror_names_every_status(void **state)
     assert_string_equal(ls_err_text(LS_ENOAFCAN), "kernel has no AF_CAN support");
     assert_string_equal(ls_err_text(-99), "unknown error");
     /* one error space: every code has its own value and name (ls_err.h) */
-    const int codes[] = { LS_EUNSUPPORTED, LS_EAGAIN,       LS_EIO,       LS_EINVAL,  LS_ENODEV,
-                          LS_EPERM,        LS_EBUSOFF,      LS_ENOAFCAN,  LS_EBUSY,   LS_ELEN,
-                          LS_ETIME,        LS_EUNREACHABLE, LS_ESINGULAR, LS_ELIMITS, LS_ERANGE,
-                          LS_EGEOM,        LS_ETIMEDOUT,    LS_EABORTED,  LS_EPROTO };
+    const int codes[] = { LS_EUNSUPPORTED, LS_EAGAIN,   LS_EIO,    LS_EINVAL, LS_ENODEV,    LS_EPERM,
+                          LS_EBUSOFF,      LS_ENOAFCAN, LS_EBUSY,  LS_ELEN,   LS_ETIME,     LS_EUNREACHABLE,
+                          LS_ESINGULAR,    LS_ELIMITS,  LS_ERANGE, LS_EGEOM,  LS_ETIMEDOUT, LS_EABORTED,
+                          LS_EPROTO,       LS_ESTATE,   LS_ENOSPC };
     const size_t n = sizeof codes / sizeof codes[0];
     for (size_t i = 0; i < n; i++) {
         assert_true(codes[i] < 0);

@@ -155,11 +155,11 @@ static void test_start_refuses_wrong_start_and_double_start(void **state)
     assert_int_equal(ls_motion_plan_joint(&g_plan, M, q1, mt_q_home, 0.5, 0.5, why, sizeof why), 0);
     ls_motion_init(&g_m, M);
     ls_motion_hold(&g_m, mt_q_home);
-    assert_int_equal(ls_motion_start(&g_m, &g_plan), -2); /* the plan starts at q1, the arm is at home */
+    assert_int_equal(ls_motion_start(&g_m, &g_plan), LS_EINVAL); /* the plan starts at q1, the arm is at home */
     assert_int_equal(g_m.phase, LS_MOTION_IDLE);
     assert_int_equal(ls_motion_plan_joint(&g_plan, M, mt_q_home, q1, 0.5, 0.5, why, sizeof why), 0);
     assert_int_equal(ls_motion_start(&g_m, &g_plan), 0);
-    assert_int_equal(ls_motion_start(&g_m, &g_plan), -1);
+    assert_int_equal(ls_motion_start(&g_m, &g_plan), LS_ESTATE);
 }
 
 /* ---- stop, resume, abort ---- */
@@ -223,7 +223,7 @@ static void test_stop_stays_on_path_pauses_and_resume_reaches_target(void **stat
     }
     assert_int_equal(log.n, 1);
     assert_int_equal(ls_motion_resume(&g_m), 0);
-    assert_int_equal(ls_motion_resume(&g_m), -1);
+    assert_int_equal(ls_motion_resume(&g_m), LS_ESTATE);
     assert_true(mt_run_until(&g_m, LS_MEV_DONE, 100000, &log) > 0);
     for (int j = 0; j < LS_N_JOINTS; j++) {
         assert_double_equal(g_m.q_cmd[j], q1[j], 0.0);
@@ -258,7 +258,7 @@ static void test_abort_holds_the_set_point(void **state)
         }
     }
     assert_int_equal(count_kind(&log, LS_MEV_DONE), 0);
-    assert_int_equal(ls_motion_resume(&g_m), -1);
+    assert_int_equal(ls_motion_resume(&g_m), LS_ESTATE);
 }
 
 static void test_following_error_faults(void **state)

@@ -453,11 +453,11 @@ static void test_downlink_queue_is_bounded(void **state)
         assert_int_equal(ls_net_send_downlink(&g_net, SUP_A, msg, sizeof msg), 0);
     }
     msg[1] = 0xEE;
-    assert_int_equal(ls_net_send_downlink(&g_net, SUP_A, msg, sizeof msg), -1);
+    assert_int_equal(ls_net_send_downlink(&g_net, SUP_A, msg, sizeof msg), LS_EAGAIN);
     /* Too long for a downlink: refused. */
     static uint8_t big[LS_DOWNLINK_MAX + 1];
-    assert_int_equal(ls_net_send_downlink(&g_net, SUP_B, big, sizeof big), -1);
-    assert_int_equal(ls_net_send_downlink(&g_net, SUP_B, big, 0), -1); /* empty: ISO-TP carries none */
+    assert_int_equal(ls_net_send_downlink(&g_net, SUP_B, big, sizeof big), LS_ELEN);
+    assert_int_equal(ls_net_send_downlink(&g_net, SUP_B, big, 0), LS_ELEN); /* empty: ISO-TP carries none */
     /* Waiting for a flow control: the poll deadline is N_Bs away. */
     uint64_t d = ls_net_next_deadline_us(&g_net);
     assert_true(d > 100 && d <= 100 + 1000000u);
@@ -747,7 +747,7 @@ static void test_busy_links_are_not_evicted(void **state)
     ping(0x43, 9300);
     assert_int_equal(g_ncalls, before);
     assert_false(peer_used(0x43));
-    assert_int_equal(ls_net_send_downlink(&g_net, 0x43, ans, sizeof ans), -1);
+    assert_int_equal(ls_net_send_downlink(&g_net, 0x43, ans, sizeof ans), LS_ENOSPC);
 }
 
 /* ---------------------------------------------------------------- budgets under floods (issue 17) */
@@ -983,7 +983,7 @@ static void test_send_frame_on_every_link_and_full_queues(void **state)
     assert_int_equal(describe_value("tx_full"), 1);
     /* Both full: refused. */
     g_link[1].refuse_send = 1;
-    assert_int_equal(ls_net_send_frame(&g_net, &f), -1);
+    assert_int_equal(ls_net_send_frame(&g_net, &f), LS_EAGAIN);
     assert_int_equal(describe_value("tx_full"), 3);
     assert_int_equal(describe_value("frames_out"), 2);
     /* The links' own counters are summed. */
@@ -1019,7 +1019,7 @@ static void test_link_table_is_bounded(void **state)
     for (int i = 0; i < LS_NET_MAX_LINKS; i++) {
         assert_int_equal(ls_net_add_link(&g_net, &l), 0);
     }
-    assert_int_equal(ls_net_add_link(&g_net, &l), -1);
+    assert_int_equal(ls_net_add_link(&g_net, &l), LS_ENOSPC);
 }
 
 int main(void)

@@ -301,7 +301,7 @@ static void test_stop_pauses_resume_continues_abort_ends(void **state)
     tip(q, p.tool, w.P0);
     base_z_of_tool(q, p.tool, w.u);
     assert_int_equal(ls_react_start(&r, &p, q, 6), 0);
-    assert_int_equal(ls_react_start(&r, &p, q, 6), -1);
+    assert_int_equal(ls_react_start(&r, &p, q, 6), LS_ESTATE);
     log_t log = { 0 };
     run(&r, &w, q, &log, 200, NULL);
     ls_react_stop(&r);
@@ -314,7 +314,7 @@ static void test_stop_pauses_resume_continues_abort_ends(void **state)
     tip(q, p.tool, P);
     assert_double_equal(ls_pose_dist(P, Pp), 0.0, 0.0); /* holds while paused */
     assert_int_equal(ls_react_resume(&r), 0);
-    assert_int_equal(ls_react_resume(&r), -1);
+    assert_int_equal(ls_react_resume(&r), LS_ESTATE);
     run(&r, &w, q, &log, 100, NULL);
     tip(q, p.tool, P);
     assert_true(along(w.P0, P, w.u) > along(w.P0, Pp, w.u) + 1e-3);
@@ -354,19 +354,19 @@ static void test_plan_checks(void **state)
     guarded_plan(&p, 0.1, 0.1, 5.0);
     assert_int_equal(ls_react_check_plan(&p, why, sizeof why), 0);
     p.dir_tool[2] = 2.0;
-    assert_int_equal(ls_react_check_plan(&p, why, sizeof why), -1);
+    assert_int_equal(ls_react_check_plan(&p, why, sizeof why), LS_EINVAL);
     assert_non_null(strstr(why, "unit vector"));
     guarded_plan(&p, 0.1, 0.1, 5.0);
     p.v_m_s = NAN;
-    assert_int_equal(ls_react_check_plan(&p, why, sizeof why), -1);
+    assert_int_equal(ls_react_check_plan(&p, why, sizeof why), LS_EINVAL);
     guarded_plan(&p, 0.1, 0.0, 5.0);
-    assert_int_equal(ls_react_check_plan(&p, why, sizeof why), -1);
+    assert_int_equal(ls_react_check_plan(&p, why, sizeof why), LS_EINVAL);
     guarded_plan(&p, 0.1, 0.1, 5.0);
     p.kind = LS_REACT_COMPLY; /* comply fields left at 0 */
-    assert_int_equal(ls_react_check_plan(&p, why, sizeof why), -1);
+    assert_int_equal(ls_react_check_plan(&p, why, sizeof why), LS_EINVAL);
     ls_react_t r;
     ls_react_init(&r, M);
-    assert_int_equal(ls_react_start(&r, &p, Q0, 6), -2);
+    assert_int_equal(ls_react_start(&r, &p, Q0, 6), LS_EINVAL);
     assert_false(r.active);
 }
 
