@@ -24,6 +24,12 @@ FITS(ls_MoveAbsoluteReq, point_name, LS_MOTION_NAME_LEN);
 FITS(ls_MoveRelativeReq, point_name, LS_MOTION_NAME_LEN);
 FITS(ls_MoveArcReq, point_name, LS_MOTION_NAME_LEN);
 FITS(ls_TagPoint, aux_commands[0], LS_MOTION_AUX_LEN);
+/* A path point keeps every auxiliary command the schema lets through, and
+ * its storage is the motion library's (cmd_path_program.c copies it whole):
+ * the two counts must agree, or a larger max_count would overflow pt->aux. */
+_Static_assert(pb_arraysize(ls_TagPoint, aux_commands) == LS_MOTION_AUX_PER_POINT,
+               "ls.TagPoint.aux_commands max_count (protocol/landscape.options) must equal "
+               "LS_MOTION_AUX_PER_POINT (firmware/motion/ls_motion.h)");
 _Static_assert(sizeof(((ls_GetTagIdRes *)0)->path_name) >= LS_MOTION_NAME_LEN, "getTagId must hold a path name");
 _Static_assert(sizeof(((ls_GetTagIdRes *)0)->tag_id) >= LS_MOTION_NAME_LEN, "getTagId must hold a tag");
 

@@ -31,6 +31,9 @@ struct ls_control;
 #else
 #define LS_MAX_SUPERVISORS 4
 #endif
+/* The size nanopb gives `field` of message type `msg` (protocol/landscape.options):
+ * the core's copies of a wire string are sized by it, never by a second number. */
+#define LS_PB_FIELD_SIZE(msg, field) sizeof(((msg *)0)->field)
 #define LS_DOWNLINK_MAX ls_Downlink_size
 #define LS_UPLINK_MAX 4095u
 #define LS_CALL_DEFERRED INT32_MIN /* a handler will answer later */
@@ -84,7 +87,7 @@ typedef struct {
 typedef struct {
     bool connected;
     uint8_t addr;
-    char name[sizeof(((ls_ConnectReq *)0)->client_name)];
+    char name[LS_PB_FIELD_SIZE(ls_ConnectReq, client_name)];
     uint64_t last_heard_us; /* the last HEARTBEAT carrying hb_token (or the connect) */
     uint64_t nonce;         /* ConnectReq.client_nonce: who this session is */
     uint32_t hb_token;      /* ConnectRes.heartbeat_token: what its heartbeats carry */
@@ -154,8 +157,8 @@ typedef struct {
     uint64_t deadline_us;
     ls_rsvp_done_fn done;
     void *ctx;
-    char event_id[32];
-    char default_action[24];
+    char event_id[LS_PB_FIELD_SIZE(ls_Notice, event_id)];
+    char default_action[LS_PB_FIELD_SIZE(ls_RsvpAck, action)]; /* what the ack names when it times out */
 } ls_rsvp_t;
 
 /* An RSVP that ended (answered or timed out): a reply that comes later is
@@ -165,7 +168,7 @@ typedef struct {
     uint8_t addr;
     bool timed_out;
     uint32_t ref_seq, epoch;
-    char action[24];
+    char action[LS_PB_FIELD_SIZE(ls_RsvpAck, action)];
 } ls_rsvp_ended_t;
 
 typedef struct {
@@ -284,14 +287,15 @@ typedef struct ls_core {
      * until it connects again and is the owner once more. */
     bool held;
     uint8_t held_addr;
-    char held_name[sizeof(((ls_ConnectReq *)0)->client_name)]; /* the session name, whole */
+    char held_name[LS_PB_FIELD_SIZE(ls_ConnectReq, client_name)]; /* the session name, whole */
     ls_DisconnectAction held_action;
     ls_State state;
     int owner;      /* index in sessions[], LS_NO_SESSION when unlocked */
     int activating; /* the session whose activate waits for the drives (LS_CEV_ENABLED), LS_NO_SESSION: none */
     ls_session_t sessions[LS_MAX_SUPERVISORS];
-    char fault[96];                               /* latched fault, empty when none */
-    char motion_state[32];                        /* seed 3.3.1 motionControlState (docs/state-machine.md) */
+    char fault[LS_PB_FIELD_SIZE(ls_GetMotionControlStateRes, fault)]; /* latched fault, empty when none */
+    /* seed 3.3.1 motionControlState (docs/state-machine.md) */
+    char motion_state[LS_PB_FIELD_SIZE(ls_GetMotionControlStateRes, motion_control_state)];
     ls_run_t run;                                 /* the started motion (ls_run.h) */
     ls_halt_t halt;                               /* a stop that ends with the drives off (ls_run.h) */
     uint32_t epoch_next;                          /* the next session epoch */
