@@ -35,10 +35,10 @@ struct ls_control;
  * the core's copies of a wire string are sized by it, never by a second number. */
 #define LS_PB_FIELD_SIZE(msg, field) sizeof(((msg *)0)->field)
 #define LS_DOWNLINK_MAX ls_Downlink_size
-#define LS_UPLINK_MAX 4095u
-#define LS_CALL_DEFERRED INT32_MIN /* a handler will answer later */
-#define LS_NO_SESSION (-1)         /* an index of ls_core_t.sessions that names none (owner: unlocked) */
-#define LS_ALL_SESSIONS (-2)       /* ls_core_notify: to every session */
+#define LS_UPLINK_MAX ((size_t)ls_IsotpParam_ISOTP_MAX_MESSAGE_BYTES) /* one ISO-TP message */
+#define LS_CALL_DEFERRED INT32_MIN                                    /* a handler will answer later */
+#define LS_NO_SESSION (-1)   /* an index of ls_core_t.sessions that names none (owner: unlocked) */
+#define LS_ALL_SESSIONS (-2) /* ls_core_notify: to every session */
 /* The fault log keeps its first LS_FAULT_LOG_FIRST entries (the start of a
  * cascade) and a ring of the latest LS_FAULT_LOG_LATEST; the entries in
  * between are dropped and counted (sendCommand faults). */

@@ -107,12 +107,12 @@ void ls_isotp_default_config(ls_isotp_config_t *cfg)
     if (cfg == NULL) {
         return;
     }
-    cfg->block_size = 8;
-    cfg->st_min = 0;
+    cfg->block_size = LS_ISOTP_DEFAULT_BS;
+    cfg->st_min = LS_ISOTP_DEFAULT_ST_MIN;
     cfg->tx_padding = true;
-    cfg->padding_byte = 0xCC;
-    cfg->n_bs_timeout_us = 1000000u;
-    cfg->n_cr_timeout_us = 1000000u;
+    cfg->padding_byte = LS_ISOTP_DEFAULT_PADDING_BYTE;
+    cfg->n_bs_timeout_us = LS_ISOTP_DEFAULT_N_TIMEOUT_US;
+    cfg->n_cr_timeout_us = LS_ISOTP_DEFAULT_N_TIMEOUT_US;
     cfg->wft_max = 10;
 }
 

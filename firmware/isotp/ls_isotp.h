@@ -23,6 +23,13 @@
 #include "ls_err.h"
 
 #define LS_ISOTP_MAX_PAYLOAD 4095u /* classic ISO-TP without the 32-bit escape */
+/* ls_isotp_default_config's protocol parameters. The module knows no schema:
+ * these are the protocol's (protocol/landscape.proto enum IsotpParam), and
+ * firmware/net/ls_net.c asserts at compile time that they agree. */
+#define LS_ISOTP_DEFAULT_BS 8u
+#define LS_ISOTP_DEFAULT_ST_MIN 0u
+#define LS_ISOTP_DEFAULT_PADDING_BYTE 0xCCu
+#define LS_ISOTP_DEFAULT_N_TIMEOUT_US 1000000u /* N_Bs and N_Cr */
 /* A reception's whole time is bounded by its announced length: at most
  * N_Cr x (1 + its blocks of consecutive frames), a block being the BS we ask
  * for (LS_ISOTP_RX_CAP_BLOCK when we ask BS 0). N_Cr alone restarts at every
@@ -65,7 +72,8 @@ typedef struct {
     uint8_t wft_max;          /* FC.WAIT frames tolerated in a row; default 10 */
 } ls_isotp_config_t;
 
-/* Fills `cfg` with the defaults above (BS 8, STmin 0, padding on with 0xCC). */
+/* Fills `cfg` with the defaults above (LS_ISOTP_DEFAULT_*: BS 8, STmin 0,
+ * padding on with 0xCC, N_Bs and N_Cr 1 s) and wft_max 10. */
 void ls_isotp_default_config(ls_isotp_config_t *cfg);
 
 typedef enum { LS_ISOTP_RX_IDLE = 0, LS_ISOTP_RX_RECEIVING, LS_ISOTP_RX_DONE } ls_isotp_rx_state_t;

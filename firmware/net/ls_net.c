@@ -7,6 +7,14 @@
 /* Every downlink is one ISO-TP message: the largest the schema allows must fit
  * (protocol/landscape.options bounds it; describe is the largest answer). */
 _Static_assert(LS_DOWNLINK_MAX <= LS_ISOTP_MAX_PAYLOAD, "ls.Downlink can exceed one ISO-TP message");
+/* The ISO-TP module's defaults are the protocol's parameters, whose home is
+ * the schema (enum IsotpParam; the host configures can-isotp from it). */
+#define SAME_AS_SCHEMA(ours, param) _Static_assert((ours) == (unsigned)(param), #ours " differs from ls." #param)
+SAME_AS_SCHEMA(LS_ISOTP_MAX_PAYLOAD, ls_IsotpParam_ISOTP_MAX_MESSAGE_BYTES);
+SAME_AS_SCHEMA(LS_ISOTP_DEFAULT_BS, ls_IsotpParam_ISOTP_BLOCK_SIZE);
+SAME_AS_SCHEMA(LS_ISOTP_DEFAULT_ST_MIN, ls_IsotpParam_ISOTP_ST_MIN);
+SAME_AS_SCHEMA(LS_ISOTP_DEFAULT_PADDING_BYTE, ls_IsotpParam_ISOTP_PADDING_BYTE);
+SAME_AS_SCHEMA(LS_ISOTP_DEFAULT_N_TIMEOUT_US, ls_IsotpParam_ISOTP_N_TIMEOUT_MS * 1000u);
 /* Every session keeps its link and sources without one still find some. */
 _Static_assert(LS_NET_MAX_PEERS >= LS_MAX_SUPERVISORS + 2, "too few ISO-TP links for the sessions");
 _Static_assert(LS_NET_MAX_LINKS <= 127, "ls_net_peer_t.link is an int8_t");

@@ -43,13 +43,16 @@ FUNCTIONAL_ALL: int = pb.FUNCTIONAL_ALL_DEVICES
 PHYSICAL_BASE: int = pb.ISOTP_PHYSICAL_BASE
 FUNCTIONAL_BASE: int = pb.ISOTP_FUNCTIONAL_BASE
 SLCAN_DEFAULT_BITRATE = 1_000_000
-MAX_MESSAGE_BYTES = 4095
+MAX_MESSAGE_BYTES: int = pb.ISOTP_MAX_MESSAGE_BYTES
 
-#: ISO-TP parameters shared with the firmware (docs/protocol.md).
+#: ISO-TP parameters shared with the firmware: the schema's enum IsotpParam (docs/protocol.md
+#: "ISO-TP parameters"); every frame is padded to a whole classic CAN frame (8 bytes).
 ISOTP_PARAMS: dict[str, Any] = {
-    "tx_padding": 0xCC,
-    "blocksize": 8,
-    "stmin": 0,
+    "tx_padding": pb.ISOTP_PADDING_BYTE,
+    "blocksize": pb.ISOTP_BLOCK_SIZE,
+    "stmin": pb.ISOTP_ST_MIN,
+    "rx_flowcontrol_timeout": pb.ISOTP_N_TIMEOUT_MS,
+    "rx_consecutive_frame_timeout": pb.ISOTP_N_TIMEOUT_MS,
     "tx_data_min_length": 8,
     "max_frame_size": MAX_MESSAGE_BYTES,
 }

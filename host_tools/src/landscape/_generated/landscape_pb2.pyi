@@ -52,9 +52,14 @@ FUNCTIONAL_ALL_DEVICES: NodeAddress
 HOST_ADDRESS_POOL_LAST: NodeAddress
 IDLE: State
 INCHES: LinearUnit
+ISOTP_BLOCK_SIZE: IsotpParam
 ISOTP_FUNCTIONAL_BASE: IsotpId
 ISOTP_ID_NONE: IsotpId
+ISOTP_MAX_MESSAGE_BYTES: IsotpParam
+ISOTP_N_TIMEOUT_MS: IsotpParam
+ISOTP_PADDING_BYTE: IsotpParam
 ISOTP_PHYSICAL_BASE: IsotpId
+ISOTP_ST_MIN: IsotpParam
 JOINT_FRAME: ReferenceFrame
 JOINT_MOTION: MotionType
 LINEAR_ACCEL: AccelType
@@ -1138,6 +1143,9 @@ class Protocol(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
     __slots__ = []
 
 class IsotpId(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
+    __slots__ = []
+
+class IsotpParam(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
     __slots__ = []
 
 class NodeAddress(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
