@@ -11,7 +11,10 @@ wrote beside it (landscape.desc, the schema hash's input). Output:
                                     the names of string and message fields
                                     (ls_field_name) for errors naming a field,
                                     and the event ids' data keys
-                                    (ls_event_find, ls_event_key_declared).
+                                    (ls_event_find, ls_event_key_declared),
+                                    and the text the schema gives enum values
+                                    (ls_linear_unit, ls_angular_unit,
+                                    ls_motion_end_text, ls_motion_end_suffix).
 
 The host reads the same options from the same descriptors at import time
 (host_tools/src/landscape/registry.py), so there is no second list.
@@ -179,6 +182,28 @@ def events(pb2, cmds):
     return out
 
 
+def enum_texts(pb2, enum_name: str, options: tuple[str, ...]):
+    """[(C enum constant, {option: value})] of every value of `enum_name`; each one must
+    carry every option in `options` (the schema is their one home)."""
+    enum = pb2.DESCRIPTOR.enum_types_by_name[enum_name]
+    out = []
+    for v in enum.values:
+        opts = {}
+        for o in options:
+            ext_field = getattr(pb2, o)
+            if not v.GetOptions().HasExtension(ext_field):
+                raise SystemExit(f"gen_registry: {enum_name}.{v.name} has no ({o}) option")
+            opts[o] = v.GetOptions().Extensions[ext_field]
+        out.append((f"ls_{enum_name}_{v.name}", opts))
+    return out
+
+
+def c_string(text: str) -> str:
+    if any(c in text for c in '"\\\n'):
+        raise SystemExit(f"gen_registry: {text!r}: quotes, backslashes and line breaks are not written to C")
+    return f'"{text}"'
+
+
 def main() -> int:
     if len(sys.argv) != 3:
         print(__doc__, file=sys.stderr)
@@ -190,6 +215,12 @@ def main() -> int:
     rules = presence_rules(pb2, cmds)
     limits = uplink_limits(pb2)
     evs = events(pb2, cmds)
+    linear = enum_texts(pb2, "LinearUnit", ("text", "symbol", "si_per_unit"))
+    angular = enum_texts(pb2, "AngularUnit", ("text", "symbol", "si_per_unit"))
+    ends = enum_texts(pb2, "MotionEnd", ("text", "final_suffix"))
+    for _c, o in ends:
+        if o["final_suffix"] not in ("Complete", "Failed", "Aborted"):
+            raise SystemExit(f"gen_registry: MotionEnd final_suffix {o['final_suffix']!r}: Complete, Failed or Aborted")
     h = schema_hash((Path(sys.argv[1]) / "landscape.desc").read_bytes())
 
     hdr = [
@@ -263,6 +294,24 @@ def main() -> int:
         "/* True when the schema lets the notices of `id` carry data key `key` (the",
         " * first `len` bytes): its (ls.notice_keys). Any context; O(keys). */",
         "bool ls_event_key_declared(ls_EventId id, const char *key, size_t len);",
+        "",
+        "/* A unit of setUnits (enum LinearUnit, AngularUnit): its (ls.text), the name",
+        " * getUnits answers, its (ls.symbol) and its (ls.si_per_unit), metres or",
+        " * radians per unit. NULL for a value outside the enum. Any context; O(1). */",
+        "typedef struct {",
+        "    const char *text;",
+        "    const char *symbol;",
+        "    double si_per_unit;",
+        "} ls_unit_desc_t;",
+        "const ls_unit_desc_t *ls_linear_unit(ls_LinearUnit u);",
+        "const ls_unit_desc_t *ls_angular_unit(ls_AngularUnit u);",
+        "",
+        "/* A motion's ending (enum MotionEnd): its (ls.text), the final notice's",
+        " * reason=, and its (ls.final_suffix), how that notice's event id ends",
+        " * (\"Complete\", \"Failed\", \"Aborted\"). \"unknown\" and \"Failed\" outside the",
+        " * enum. Any context; O(1). */",
+        "const char *ls_motion_end_text(ls_MotionEnd e);",
+        "const char *ls_motion_end_suffix(ls_MotionEnd e);",
         "",
         "#endif /* LS_CMD_TABLE_H */",
         "",
@@ -425,6 +474,18 @@ def main() -> int:
         "}",
         "",
     ]
+    for fn, kind, units in (("ls_linear_unit", "ls_LinearUnit", linear), ("ls_angular_unit", "ls_AngularUnit", angular)):
+        src += [f"const ls_unit_desc_t *{fn}({kind} u)", "{", "    static const ls_unit_desc_t k[] = {"]
+        for const, o in units:
+            src.append(f"        [{const}] = {{ {c_string(o['text'])}, {c_string(o['symbol'])}, {o['si_per_unit']!r} }},")
+        src += ["    };",
+                "    return (unsigned)u < sizeof k / sizeof k[0] && k[u].text != NULL ? &k[u] : NULL;",
+                "}", ""]
+    for fn, opt, none in (("ls_motion_end_text", "text", "unknown"), ("ls_motion_end_suffix", "final_suffix", "Failed")):
+        src += [f"const char *{fn}(ls_MotionEnd e)", "{", "    switch (e) {"]
+        for const, o in ends:
+            src.append(f"    case {const}: return {c_string(o[opt])};")
+        src += ["    }", f"    return \"{none}\";", "}", ""]
     nums = [c[0] for c in cmds]
     if nums != list(range(lo, hi + 1)):
         raise SystemExit("gen_registry: command ids must be contiguous so that ls_cmd_find is O(1)")

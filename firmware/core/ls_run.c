@@ -6,6 +6,7 @@
 
 #include "cmd_sensor.h"
 #include "landscape.h"
+#include "ls_cmd_table.h"
 #include "ls_control.h"
 #include "ls_core.h"
 #include "ls_fmt.h"
@@ -18,17 +19,9 @@
 /* Drives off and the arm still coasting: wait at most this long for rest. */
 #define COAST_MAX_US 500000u
 
-static const char *const k_end_names[LS_RUN_END_COUNT] = {
-    [LS_RUN_END_COMPLETE] = "complete",          [LS_RUN_END_ABORT] = "abortMotion",
-    [LS_RUN_END_DEACTIVATE] = "deactivate",      [LS_RUN_END_FAULT] = "fault",
-    [LS_RUN_END_EMERGENCY] = "emergency",        [LS_RUN_END_OWNER_LOST] = "ownerLost",
-    [LS_RUN_END_DISCONNECT] = "disconnect",      [LS_RUN_END_AUX_FAILED] = "auxFailed",
-    [LS_RUN_END_RSVP_DECLINED] = "rsvpDeclined", [LS_RUN_END_SHUTDOWN] = "shutdown",
-};
-
 const char *ls_run_end_name(ls_run_end_t why)
 {
-    return (unsigned)why < LS_RUN_END_COUNT ? k_end_names[why] : "unknown";
+    return ls_motion_end_text((ls_MotionEnd)why);
 }
 
 ls_EventId ls_run_end_event(const char *seed_name, const char *suffix)
@@ -40,13 +33,7 @@ ls_EventId ls_run_end_event(const char *seed_name, const char *suffix)
 
 const char *ls_run_end_suffix(ls_run_end_t why)
 {
-    switch (why) {
-    case LS_RUN_END_COMPLETE: return "Complete";
-    case LS_RUN_END_FAULT:
-    case LS_RUN_END_EMERGENCY:
-    case LS_RUN_END_AUX_FAILED: return "Failed";
-    default: return "Aborted";
-    }
+    return ls_motion_end_suffix((ls_MotionEnd)why);
 }
 
 void ls_run_begin(ls_core_t *core, const ls_call_t *call, bool react, const char *seed_name, const char *point,

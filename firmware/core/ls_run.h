@@ -25,19 +25,21 @@
 struct ls_core;
 struct ls_call;
 
-/* Why a run ended: the `reason=` of its final notice (docs/protocol.md). */
+/* Why a run ended: the schema's enum MotionEnd, whose (ls.text) is the
+ * `reason=` of its final notice and whose (ls.final_suffix) ends the
+ * notice's event id (docs/protocol.md "Motion lifecycle"). */
 typedef enum {
-    LS_RUN_END_COMPLETE = 0,  /* <cmd>Complete (EVENT) */
-    LS_RUN_END_ABORT,         /* abortMotion: <cmd>Aborted */
-    LS_RUN_END_DEACTIVATE,    /* deactivate: <cmd>Aborted */
-    LS_RUN_END_FAULT,         /* a fault (following error, IK, HAL, e-stop input, wait time-out): <cmd>Failed */
-    LS_RUN_END_EMERGENCY,     /* an EMERGENCY frame on the bus: <cmd>Failed */
-    LS_RUN_END_OWNER_LOST,    /* the owner's heartbeat stopped: <cmd>Aborted */
-    LS_RUN_END_DISCONNECT,    /* the owner sent disconnect: <cmd>Aborted */
-    LS_RUN_END_AUX_FAILED,    /* a path auxiliary command failed: <cmd>Failed */
-    LS_RUN_END_RSVP_DECLINED, /* the owner answered a path RSVP with an error: <cmd>Aborted */
-    LS_RUN_END_SHUTDOWN,      /* landscaped stops (SIGTERM/SIGINT): <cmd>Aborted */
-    LS_RUN_END_COUNT
+    LS_RUN_END_COMPLETE = ls_MotionEnd_END_COMPLETE,     /* <cmd>Complete (EVENT) */
+    LS_RUN_END_ABORT = ls_MotionEnd_END_ABORT,           /* abortMotion */
+    LS_RUN_END_DEACTIVATE = ls_MotionEnd_END_DEACTIVATE, /* deactivate */
+    LS_RUN_END_FAULT = ls_MotionEnd_END_FAULT,           /* following error, IK, HAL, e-stop input, wait time-out */
+    LS_RUN_END_EMERGENCY = ls_MotionEnd_END_EMERGENCY,   /* an EMERGENCY frame on the bus */
+    LS_RUN_END_OWNER_LOST = ls_MotionEnd_END_OWNER_LOST, /* the owner's heartbeat stopped */
+    LS_RUN_END_DISCONNECT = ls_MotionEnd_END_DISCONNECT, /* the owner sent disconnect */
+    LS_RUN_END_AUX_FAILED = ls_MotionEnd_END_AUX_FAILED, /* a path auxiliary command failed */
+    LS_RUN_END_RSVP_DECLINED = ls_MotionEnd_END_RSVP_DECLINED, /* the owner declined a path RSVP */
+    LS_RUN_END_SHUTDOWN = ls_MotionEnd_END_SHUTDOWN,           /* landscaped stops (SIGTERM/SIGINT) */
+    LS_RUN_END_COUNT = _ls_MotionEnd_ARRAYSIZE                 /* endings 0..LS_RUN_END_COUNT-1 */
 } ls_run_end_t;
 
 typedef struct {
@@ -92,10 +94,9 @@ typedef struct {
     uint64_t off_since_us; /* first turn the loop reported the drives off, 0: not yet */
 } ls_halt_t;
 
+/* The ending's reason= text and its final notice's suffix ("Complete",
+ * "Failed" or "Aborted"): the schema's, generated (ls_cmd_table.h). */
 const char *ls_run_end_name(ls_run_end_t why);
-
-/* The suffix of the final notice's event id of an ending: "Complete",
- * "Failed" or "Aborted" (docs/protocol.md "Motion lifecycle"). */
 const char *ls_run_end_suffix(ls_run_end_t why);
 
 /* The schema's event id <seed_name><suffix> (enum ls.EventId), or

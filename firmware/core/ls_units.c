@@ -1,31 +1,24 @@
-/* Conversion factors of setUnits. Exact by definition (inch = 25.4 mm,
- * foot = 12 inches, degree = pi/180). */
+/* Conversions of setUnits. The names, symbols and factors are the schema's
+ * (protocol/landscape.proto enum LinearUnit, AngularUnit; ls_cmd_table.c
+ * has them as generated tables). */
 #include "ls_units.h"
 
 #include <math.h>
 
-#include "ls_math.h"
+#include "ls_cmd_table.h"
 
-/* Metres per unit; NaN for a value outside the schema. */
+/* Metres (radians) per unit, the schema's (ls.si_per_unit); NaN for a value
+ * outside the schema. */
 static double linear_factor(ls_LinearUnit u)
 {
-    switch (u) {
-    case ls_LinearUnit_METERS: return 1.0;
-    case ls_LinearUnit_MILLIMETERS: return 0.001;
-    case ls_LinearUnit_CENTIMETERS: return 0.01;
-    case ls_LinearUnit_INCHES: return 0.0254;
-    case ls_LinearUnit_FEET: return 0.3048;
-    }
-    return NAN;
+    const ls_unit_desc_t *d = ls_linear_unit(u);
+    return d != NULL ? d->si_per_unit : NAN;
 }
 
 static double angular_factor(ls_AngularUnit u)
 {
-    switch (u) {
-    case ls_AngularUnit_RADIANS: return 1.0;
-    case ls_AngularUnit_DEGREES: return LS_PI / 180.0;
-    }
-    return NAN;
+    const ls_unit_desc_t *d = ls_angular_unit(u);
+    return d != NULL ? d->si_per_unit : NAN;
 }
 
 double ls_units_to_si_linear(ls_LinearUnit u, double v)
@@ -50,44 +43,26 @@ double ls_units_from_si_angular(ls_AngularUnit u, double v)
 
 const char *ls_units_linear_name(ls_LinearUnit u)
 {
-    switch (u) {
-    case ls_LinearUnit_METERS: return "meters";
-    case ls_LinearUnit_MILLIMETERS: return "millimeters";
-    case ls_LinearUnit_CENTIMETERS: return "centimeters";
-    case ls_LinearUnit_INCHES: return "inches";
-    case ls_LinearUnit_FEET: return "feet";
-    }
-    return "unknown";
+    const ls_unit_desc_t *d = ls_linear_unit(u);
+    return d != NULL ? d->text : "unknown";
 }
 
 const char *ls_units_angular_name(ls_AngularUnit u)
 {
-    switch (u) {
-    case ls_AngularUnit_RADIANS: return "radians";
-    case ls_AngularUnit_DEGREES: return "degrees";
-    }
-    return "unknown";
+    const ls_unit_desc_t *d = ls_angular_unit(u);
+    return d != NULL ? d->text : "unknown";
 }
 
 const char *ls_units_linear_symbol(ls_LinearUnit u)
 {
-    switch (u) {
-    case ls_LinearUnit_METERS: return "m";
-    case ls_LinearUnit_MILLIMETERS: return "mm";
-    case ls_LinearUnit_CENTIMETERS: return "cm";
-    case ls_LinearUnit_INCHES: return "in";
-    case ls_LinearUnit_FEET: return "ft";
-    }
-    return "?";
+    const ls_unit_desc_t *d = ls_linear_unit(u);
+    return d != NULL ? d->symbol : "?";
 }
 
 const char *ls_units_angular_symbol(ls_AngularUnit u)
 {
-    switch (u) {
-    case ls_AngularUnit_RADIANS: return "rad";
-    case ls_AngularUnit_DEGREES: return "deg";
-    }
-    return "?";
+    const ls_unit_desc_t *d = ls_angular_unit(u);
+    return d != NULL ? d->symbol : "?";
 }
 
 bool ls_units_linear_valid(ls_LinearUnit u)

@@ -36,3 +36,11 @@ def test_named_subclasses(code: int, cls: type) -> None:
 def test_unknown_code_keeps_base_class_and_a_name() -> None:
     e = error_for_code("lock", -99, "")
     assert type(e) is CommandError and ret_name(-99) == "RET_-99" and str(e) == "lock: RET_-99"
+
+
+def test_every_way_a_motion_ends_has_its_advice() -> None:
+    """The advice after a final alarm covers exactly the endings the schema declares (enum MotionEnd)."""
+    from landscape.errors import ADVICE
+    from landscape.notices import MOTION_END_REASONS
+
+    assert set(ADVICE) == set(MOTION_END_REASONS) - {"complete"}

@@ -54,8 +54,9 @@ class AlarmError(LandscapeError):
             f"{what} alarm {notice.event_id}" + (f" ({data})" if data else "") + ": " + alarm_advice(reason))
 
 
-#: What to do after a motion's final alarm, by its `reason=` (docs/protocol.md, "Motion lifecycle").
-_ADVICE = {
+#: What to do after a motion's final alarm, by its `reason=` (docs/protocol.md, "Motion lifecycle"): one
+#: entry per ending of the schema's enum MotionEnd but "complete" (tests/host/test_errors.py checks).
+ADVICE: dict[str, str] = {
     "fault": "the drives are off: read get-motion-control-state for the fault, fix it, then activate again",
     "emergency": "an emergency stop frame stopped the arm and the drives are off: clear the emergency, "
                  "then activate again",
@@ -75,7 +76,7 @@ _ADVICE = {
 
 def alarm_advice(reason: str) -> str:
     """The advice for a motion alarm with data `reason=<reason>`."""
-    return _ADVICE.get(reason, "read get-motion-control-state for the device's state and fault")
+    return ADVICE.get(reason, "read get-motion-control-state for the device's state and fault")
 
 
 class CommandError(LandscapeError):

@@ -3,13 +3,12 @@ session log and `landscape events`, and the units a session speaks in.
 
 Units: the device answers and reports every position in the units its session chose
 with setUnits (getUnits names them: "meters", "millimeters", ..., "radians",
-"degrees"); the DBC broadcasts (telemetry) are always SI (rad, m). The factors below
-are the exact definitions the firmware uses too (firmware/core/ls_units.c: inch =
-25.4 mm, foot = 12 inches, degree = pi/180).
+"degrees"); the DBC broadcasts (telemetry) are always SI (rad, m). Names, symbols and
+factors are the schema's (enum LinearUnit, AngularUnit: (ls.text), (ls.symbol),
+(ls.si_per_unit)), the same the firmware's conversions are generated from.
 """
 from __future__ import annotations
 
-import math
 from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, cast
@@ -17,18 +16,35 @@ from typing import TYPE_CHECKING, Any, cast
 from ._generated import landscape_pb2 as pb
 
 if TYPE_CHECKING:
+    from google.protobuf.descriptor import EnumDescriptor
     from google.protobuf.descriptor_pb2 import EnumValueOptions
     from google.protobuf.internal.extension_dict import _ExtensionFieldDescriptor
 
-# protoc's .pyi declares the extension as a plain FieldDescriptor (see registry.py).
+# protoc's .pyi declares the extensions as plain FieldDescriptors (see registry.py).
 _NOTICE_KEYS_OPTION = cast("_ExtensionFieldDescriptor[EnumValueOptions, str]", pb.notice_keys)
+_TEXT_OPTION = cast("_ExtensionFieldDescriptor[EnumValueOptions, str]", pb.text)
+_SYMBOL_OPTION = cast("_ExtensionFieldDescriptor[EnumValueOptions, str]", pb.symbol)
+_SI_PER_UNIT_OPTION = cast("_ExtensionFieldDescriptor[EnumValueOptions, float]", pb.si_per_unit)
+
+
+def _units(enum: EnumDescriptor) -> dict[str, float]:
+    """SI per unit by the name getUnits answers (the values' (ls.text) and (ls.si_per_unit))."""
+    return {v.GetOptions().Extensions[_TEXT_OPTION]: v.GetOptions().Extensions[_SI_PER_UNIT_OPTION]
+            for v in enum.values}
+
+
+def _symbols(*enums: EnumDescriptor) -> dict[str, str]:
+    return {v.GetOptions().Extensions[_TEXT_OPTION]: v.GetOptions().Extensions[_SYMBOL_OPTION]
+            for enum in enums for v in enum.values}
+
 
 #: Metres per linear unit and radians per angular unit, by the names getUnits answers.
-METERS_PER: dict[str, float] = {"meters": 1.0, "millimeters": 0.001, "centimeters": 0.01, "inches": 0.0254,
-                                "feet": 0.3048}
-RADIANS_PER: dict[str, float] = {"radians": 1.0, "degrees": math.pi / 180.0}
-SYMBOL: dict[str, str] = {"meters": "m", "millimeters": "mm", "centimeters": "cm", "inches": "in", "feet": "ft",
-                          "radians": "rad", "degrees": "deg"}
+METERS_PER: dict[str, float] = _units(pb.LinearUnit.DESCRIPTOR)
+RADIANS_PER: dict[str, float] = _units(pb.AngularUnit.DESCRIPTOR)
+SYMBOL: dict[str, str] = _symbols(pb.LinearUnit.DESCRIPTOR, pb.AngularUnit.DESCRIPTOR)
+#: The reason= of each way a started motion can end (enum MotionEnd's (ls.text)).
+MOTION_END_REASONS: tuple[str, ...] = tuple(v.GetOptions().Extensions[_TEXT_OPTION]
+                                            for v in pb.MotionEnd.DESCRIPTOR.values)
 
 
 @dataclass(frozen=True)

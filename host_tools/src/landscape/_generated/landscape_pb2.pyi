@@ -44,10 +44,21 @@ DISCONNECT_CONFIGURED: DisconnectAction
 DISCONNECT_STOP: DisconnectAction
 DISCONNECT_STOP_DEACTIVATE: DisconnectAction
 DISCONNECT_STOP_DEACTIVATE_RELEASE: DisconnectAction
+END_ABORT: MotionEnd
+END_AUX_FAILED: MotionEnd
+END_COMPLETE: MotionEnd
+END_DEACTIVATE: MotionEnd
+END_DISCONNECT: MotionEnd
+END_EMERGENCY: MotionEnd
+END_FAULT: MotionEnd
+END_OWNER_LOST: MotionEnd
+END_RSVP_DECLINED: MotionEnd
+END_SHUTDOWN: MotionEnd
 EVENT: NoticeKind
 EVENT_ID_NONE: EventId
 EVENT_RSVP: NoticeKind
 FEET: LinearUnit
+FINAL_SUFFIX_FIELD_NUMBER: _ClassVar[int]
 FUNCTIONAL_ALL_DEVICES: NodeAddress
 HOST_ADDRESS_POOL_LAST: NodeAddress
 IDLE: State
@@ -79,9 +90,12 @@ RADIANS: AngularUnit
 RELATIVE_DATA: OffsetType
 REQUIRED_FIELD_NUMBER: _ClassVar[int]
 RESTING: State
+SI_PER_UNIT_FIELD_NUMBER: _ClassVar[int]
 SLEW_MOTION: MotionType
 STATE_NONE: State
 STRAIGHT_MOTION: MotionType
+SYMBOL_FIELD_NUMBER: _ClassVar[int]
+TEXT_FIELD_NUMBER: _ClassVar[int]
 TOOL_FRAME: ReferenceFrame
 UNLOCKED: State
 WORLD_CARTESIAN_FRAME: ReferenceFrame
@@ -101,6 +115,7 @@ dioSignalTimeout: EventId
 driveEmcy: EventId
 driveErrorCode: EventId
 fault: EventId
+final_suffix: _descriptor.FieldDescriptor
 manualDeviceFound: EventId
 manualDeviceLost: EventId
 manualFrame: EventId
@@ -128,8 +143,11 @@ pathMoveAborted: EventId
 pathMoveComplete: EventId
 pathMoveFailed: EventId
 required: _descriptor.FieldDescriptor
+si_per_unit: _descriptor.FieldDescriptor
 slowedDown: EventId
+symbol: _descriptor.FieldDescriptor
 tag: EventId
+text: _descriptor.FieldDescriptor
 
 class AbortMotionReq(_message.Message):
     __slots__ = []
@@ -1176,6 +1194,9 @@ class LinearUnit(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
     __slots__ = []
 
 class AngularUnit(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
+    __slots__ = []
+
+class MotionEnd(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
     __slots__ = []
 
 class CallbackType(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
