@@ -64,8 +64,8 @@ struct ls_control;
  * carrying its heartbeat token may take the network layer's transfers of a
  * downlink (ls_net.h, LS_NET_TX_TRIES x N_Bs of 1 s) to get through. */
 #define LS_CONNECT_ANSWER_GRACE_US 3000000u
-#define LS_HB_PERIOD_MIN_MS 10u
-#define LS_HB_PERIOD_MAX_MS 2000u
+#define LS_HB_PERIOD_MIN_MS ((uint32_t)ls_HeartbeatPeriod_HEARTBEAT_PERIOD_MIN_MS) /* the schema's */
+#define LS_HB_PERIOD_MAX_MS ((uint32_t)ls_HeartbeatPeriod_HEARTBEAT_PERIOD_MAX_MS)
 /* Identity (docs/protocol.md "Identity"): a session's heartbeat token is
  * nonzero and fits the DBC's 24-bit HEARTBEAT.hb_token (protocol/landscape.dbc). */
 #define LS_HB_TOKEN_MASK 0xFFFFFFu

@@ -26,6 +26,7 @@ import isotp
 from . import link
 from ._generated import landscape_pb2 as pb
 from .errors import BusError
+from .telemetry import cycle_time_s
 
 log = logging.getLogger("landscape.bus")
 
@@ -33,10 +34,14 @@ DEFAULT_DEVICE: int = pb.DEFAULT_DEVICE_ADDRESS
 DEFAULT_HOST: int = pb.DEFAULT_HOST_ADDRESS
 #: The addresses a supervisor picks a free one from when none is pinned (docs/protocol.md "Addresses").
 HOST_POOL: tuple[int, ...] = tuple(range(pb.DEFAULT_HOST_ADDRESS, pb.HOST_ADDRESS_POOL_LAST + 1))
+#: A supervisor's heartbeat period unless it is given one: the device's own, the HEARTBEAT message's
+#: GenMsgCycleTime in protocol/landscape.dbc (200 ms). The device takes HEARTBEAT_PERIOD_MIN_MS ..
+#: HEARTBEAT_PERIOD_MAX_MS of the schema (docs/protocol.md "Liveness").
+DEFAULT_HEARTBEAT_PERIOD_MS: int = round(cycle_time_s("HEARTBEAT") * 1000)
 #: How long a supervisor without a pinned address listens for other supervisors' heartbeats before it
-#: picks one: 1.5 periods of the library's default heartbeat (200 ms). A supervisor beating slower may
-#: go unheard; the device then refuses the connect (address in use) and the next address is tried.
-ADDRESS_LISTEN_S = 0.3
+#: picks one: 1.5 periods of the library's default heartbeat. A supervisor beating slower may go
+#: unheard; the device then refuses the connect (address in use) and the next address is tried.
+ADDRESS_LISTEN_S = 1.5 * DEFAULT_HEARTBEAT_PERIOD_MS / 1000
 #: How many addresses a supervisor tries when the device refuses its connect as "in use".
 ADDRESS_TRIES = 4
 FUNCTIONAL_ALL: int = pb.FUNCTIONAL_ALL_DEVICES

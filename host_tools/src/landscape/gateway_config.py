@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from ._generated import landscape_pb2 as pb
+from .bus import DEFAULT_HEARTBEAT_PERIOD_MS
 from .errors import ArgumentError
 
 DEFAULT_HOST = "127.0.0.1"
@@ -52,7 +53,7 @@ class GatewayConfig:
     channel: str | None = None
     bitrate: int | None = None
     pool: tuple[int, ...] = DEFAULT_POOL
-    heartbeat_period_ms: int = 200
+    heartbeat_period_ms: int = DEFAULT_HEARTBEAT_PERIOD_MS
     users: dict[str, str] = field(default_factory=dict)  # name -> PBKDF2 hash
     certificate_users: list[CertificateUser] = field(default_factory=list)
     source: str = "defaults"
@@ -205,8 +206,9 @@ def parse_config(text: str, source: str = "<text>", *, base: Path | None = None)
         cfg.pool = _pool(f"{source}: [supervisors] pool", sups["pool"])
     if "heartbeat_period_ms" in sups:
         hb = _typed(f"{source}: [supervisors] heartbeat_period_ms", sups["heartbeat_period_ms"], int, "milliseconds")
-        if not 10 <= hb <= 2000:
-            raise GatewayConfigError(f"{source}: [supervisors] heartbeat_period_ms: {hb} is outside 10..2000 "
+        if not pb.HEARTBEAT_PERIOD_MIN_MS <= hb <= pb.HEARTBEAT_PERIOD_MAX_MS:
+            raise GatewayConfigError(f"{source}: [supervisors] heartbeat_period_ms: {hb} is outside "
+                                     f"{pb.HEARTBEAT_PERIOD_MIN_MS}..{pb.HEARTBEAT_PERIOD_MAX_MS} "
                                      f"(docs/protocol.md \"Liveness\")")
         cfg.heartbeat_period_ms = hb
 

@@ -35,6 +35,7 @@ from .bus import (
     ADDRESS_LISTEN_S,
     ADDRESS_TRIES,
     DEFAULT_DEVICE,
+    DEFAULT_HEARTBEAT_PERIOD_MS,
     DEFAULT_HOST,
     HOST_POOL,
     ISOTP_PARAMS,
@@ -283,8 +284,8 @@ class Supervisor:
 
     def __init__(self, bus: can.BusABC, *, device: int = DEFAULT_DEVICE,
                  source_address: int | None = None, notifier: can.Notifier | None = None,
-                 client_name: str = "landscape", heartbeat_period_ms: int = 200, retries: int = 2,
-                 timeout_s: float | None = None, channel_name: str | None = None,
+                 client_name: str = "landscape", heartbeat_period_ms: int = DEFAULT_HEARTBEAT_PERIOD_MS,
+                 retries: int = 2, timeout_s: float | None = None, channel_name: str | None = None,
                  owns_bus: bool = False, disconnect_action: Enum | None = None,
                  description: DeviceDescription | None = None) -> None:
         if retries < 0:

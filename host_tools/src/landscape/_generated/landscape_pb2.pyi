@@ -60,6 +60,9 @@ EVENT_RSVP: NoticeKind
 FEET: LinearUnit
 FINAL_SUFFIX_FIELD_NUMBER: _ClassVar[int]
 FUNCTIONAL_ALL_DEVICES: NodeAddress
+HEARTBEAT_PERIOD_MAX_MS: HeartbeatPeriod
+HEARTBEAT_PERIOD_MIN_MS: HeartbeatPeriod
+HEARTBEAT_PERIOD_NONE: HeartbeatPeriod
 HOST_ADDRESS_POOL_LAST: NodeAddress
 IDLE: State
 INCHES: LinearUnit
@@ -1164,6 +1167,9 @@ class IsotpId(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
     __slots__ = []
 
 class IsotpParam(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
+    __slots__ = []
+
+class HeartbeatPeriod(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
     __slots__ = []
 
 class NodeAddress(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
