@@ -648,13 +648,10 @@ int main(int argc, char **argv)
     uint8_t hb_counter = 0;
     /* SIGTERM/SIGINT/SIGHUP/SIGQUIT: a motion stops along its path at the
      * model's maximum deceleration, the drives go off, its final notice
-     * (reason=shutdown) goes out, then the process exits. The stop itself is
-     * bounded by the slowest joint's category-1 stop (sendCommand stopping,
-     * under 1 s) and by the halt's own limit (ls_run.c, 5 s); shutdown_max_us
-     * caps it, then up to 1 s lets the links carry the notices out. The
-     * systemd unit's TimeoutStopSec (landscaped.service) is their sum plus a
-     * margin: docs/reliability.md "Signals". */
-    const uint64_t shutdown_max_us = 6000000u;
+     * (reason=shutdown) goes out, then the process exits, within the
+     * shutdown's budget (ls_run.h LS_RUN_SHUTDOWN_*, which the systemd unit's
+     * TimeoutStopSec follows: docs/reliability.md "Signals"). */
+    const uint64_t shutdown_max_us = LS_RUN_SHUTDOWN_STOP_MAX_US;
     uint64_t now = mono_us();
     uint64_t shutdown_at = 0;
     uint64_t flushed_at = 0;
@@ -682,7 +679,7 @@ int main(int argc, char **argv)
                 LOG_INFO("shutting down: the motion stopped at %llu.%06llu s, control loop behind by %llu us",
                          (unsigned long long)(t / 1000000u), (unsigned long long)(t % 1000000u),
                          (unsigned long long)rt_behind_us());
-                flushed_at = t + 1000000u; /* let the links carry the final notices out (ISO-TP flow control) */
+                flushed_at = t + LS_RUN_SHUTDOWN_FLUSH_US; /* the final notices leave (ISO-TP flow control) */
             }
             if (flushed_at != 0 && t >= flushed_at) {
                 break;

@@ -11,9 +11,6 @@
 #include "ls_core.h"
 #include "ls_fmt.h"
 
-/* A halt that has not reached rest with the drives off after this long ends
- * anyway (the notices must not wait for ever on a broken loop). */
-#define HALT_MAX_US 5000000u
 /* "At rest": every measured joint speed below this. */
 #define REST_SPEED_RAD_S 1e-3
 /* Drives off and the arm still coasting: wait at most this long for rest. */
@@ -176,7 +173,7 @@ static bool halted(ls_core_t *core, uint64_t now_us)
     }
     ls_ctl_snapshot_t snap;
     ls_control_snapshot(core->ctl, &snap);
-    if (now_us - h->since_us > HALT_MAX_US) {
+    if (now_us - h->since_us > LS_RUN_HALT_MAX_US) {
         return true;
     }
     /* two cycles: the one that took the command and one that published after it */

@@ -131,6 +131,20 @@ void ls_run_halt_owner_lost(struct ls_core *core, ls_run_end_t why, bool keep_dr
  * drives off (with keep_drives: at rest, paused). */
 void ls_run_tick(struct ls_core *core, uint64_t now_us);
 
+/* A halt that has not reached rest with the drives off after this long ends
+ * anyway (the notices must not wait for ever on a broken loop). */
+#define LS_RUN_HALT_MAX_US 5000000u
+/* The shutdown's budget, in one place (docs/reliability.md "Signals"):
+ * landscaped waits at most LS_RUN_SHUTDOWN_STOP_MAX_US for the halt (its own
+ * bound and a second of slack; in practice the slowest joint's category-1
+ * stop, under 1 s), then keeps the links up LS_RUN_SHUTDOWN_FLUSH_US for the
+ * final notices. The systemd unit's TimeoutStopSec
+ * (firmware/app/deploy/landscaped.service) is LS_RUN_SHUTDOWN_BUDGET_S, their
+ * sum and a second of margin; tests/unit/core/test_shutdown_budget.c checks it. */
+#define LS_RUN_SHUTDOWN_STOP_MAX_US (LS_RUN_HALT_MAX_US + 1000000u)
+#define LS_RUN_SHUTDOWN_FLUSH_US 1000000u
+#define LS_RUN_SHUTDOWN_BUDGET_S ((LS_RUN_SHUTDOWN_STOP_MAX_US + LS_RUN_SHUTDOWN_FLUSH_US) / 1000000u + 1u)
+
 /* landscaped stops: halt whatever moves at the model's maximum deceleration
  * (call once). Returns true when a halt runs: call ls_run_tick until
  * core->halt.active is false. */
