@@ -1,11 +1,12 @@
 /* Storage of the command handlers (firmware/core/cmd_*.c), owned by
  * ls_core_t like every other piece of the core's state: the path queues and
  * the program being run (cmd_path.c, cmd_path_program.c), the last tag
- * reached (cmd_motion_events.c), manual control (cmd_sensor.c) and the end
- * effector (cmd_tool.c). ls_core_init gives every field its start value.
+ * reached (cmd_motion_events.c), manual control (cmd_sensor.c), the end
+ * effector (cmd_tool.c) and the DIO watches and writes (cmd_dio.c).
+ * ls_core_init gives every field its start value.
  *
- * Only types here, no functions: the core's header includes it, the
- * handlers' private headers include the core's. */
+ * Types layer of firmware/core (docs/architecture.md "Core layers"): only
+ * types here, no functions; ls_core_types.h includes it. */
 #ifndef LS_CORE_STATE_H
 #define LS_CORE_STATE_H
 
@@ -14,6 +15,7 @@
 
 #include "landscape.pb.h"
 #include "ls_control.h"
+#include "ls_core_limits.h"
 #include "ls_motion.h"
 
 /* Path queues: LS_PATH_MAX names of LS_PATH_MAX_POINTS points (ls_motion.h).
@@ -115,5 +117,42 @@ typedef struct {
     double q_hold[LS_N_JOINTS]; /* set-point where the last step ended */
     ls_bits_op_t bits_op;
 } ls_tool_cmds_t;
+
+/* signalDigitalIO watches and setDigitalIO writes in flight (firmware/core/cmd_dio.c). */
+typedef enum { LS_WATCH_FREE = 0, LS_WATCH_ARMED, LS_WATCH_AWAIT_RSVP } ls_watch_phase_t;
+
+typedef struct {
+    ls_watch_phase_t phase;
+    uint32_t id;
+    int sup; /* the session that asked; the watch ends with it */
+    uint8_t addr;
+    uint32_t ref_seq; /* seq of the signalDigitalIO request */
+    uint16_t unit;
+    uint32_t bits;
+    ls_CallbackType cb;
+    uint64_t deadline_us; /* 0: no time-out */
+    uint64_t timeout_us;  /* pollingTimeOut (0: none): a re-armed watch gets it again */
+    uint64_t period_us;   /* 0: checked on every DIO change */
+    uint64_t next_check_us;
+    bool check_now;   /* first check at the next ls_dio_tick (after the answer went out) */
+    bool await_clear; /* re-armed by an accepted RSVP: fires again only after the bits were not all set */
+    uint32_t fired;   /* how often it fired */
+} ls_dio_watch_t;
+
+typedef struct {
+    bool pending;
+    uint64_t cycle0; /* control-loop cycle when the write was posted */
+    uint64_t deadline_us;
+    uint16_t unit;
+    uint32_t on, off;
+} ls_dio_write_wait_t;
+
+typedef struct {
+    ls_dio_watch_t watch[LS_MAX_DIO_WATCHES];
+    uint32_t next_id;
+    ls_dio_write_wait_t write_wait[LS_MAX_SUPERVISORS];
+    uint32_t rsvp_replied, rsvp_timed_out;
+    int32_t rsvp_last_code;
+} ls_dio_state_t;
 
 #endif

@@ -20,79 +20,10 @@
 #include <stdint.h>
 
 #include "landscape.pb.h"
-#include "ls_motion.h"
+#include "ls_core_types.h"
 
 struct ls_core;
 struct ls_call;
-
-/* Why a run ended: the schema's enum MotionEnd, whose (ls.text) is the
- * `reason=` of its final notice and whose (ls.final_suffix) ends the
- * notice's event id (docs/protocol.md "Motion lifecycle"). */
-typedef enum {
-    LS_RUN_END_COMPLETE = ls_MotionEnd_END_COMPLETE,     /* <cmd>Complete (EVENT) */
-    LS_RUN_END_ABORT = ls_MotionEnd_END_ABORT,           /* abortMotion */
-    LS_RUN_END_DEACTIVATE = ls_MotionEnd_END_DEACTIVATE, /* deactivate */
-    LS_RUN_END_FAULT = ls_MotionEnd_END_FAULT,           /* following error, IK, HAL, e-stop input, wait time-out */
-    LS_RUN_END_EMERGENCY = ls_MotionEnd_END_EMERGENCY,   /* an EMERGENCY frame on the bus */
-    LS_RUN_END_OWNER_LOST = ls_MotionEnd_END_OWNER_LOST, /* the owner's heartbeat stopped */
-    LS_RUN_END_DISCONNECT = ls_MotionEnd_END_DISCONNECT, /* the owner sent disconnect */
-    LS_RUN_END_AUX_FAILED = ls_MotionEnd_END_AUX_FAILED, /* a path auxiliary command failed */
-    LS_RUN_END_RSVP_DECLINED = ls_MotionEnd_END_RSVP_DECLINED, /* the owner declined a path RSVP */
-    LS_RUN_END_SHUTDOWN = ls_MotionEnd_END_SHUTDOWN,           /* landscaped stops (SIGTERM/SIGINT) */
-    LS_RUN_END_COUNT = _ls_MotionEnd_ARRAYSIZE                 /* endings 0..LS_RUN_END_COUNT-1 */
-} ls_run_end_t;
-
-typedef struct {
-    bool active;    /* started and its final notice not sent yet */
-    bool react;     /* moveReact / comply (cmd_sensor.c), else a planned motion (cmd_move.c, cmd_path_program.c) */
-    int sup;        /* session that started it */
-    uint8_t addr;   /* its address: the final notice goes there */
-    uint32_t epoch; /* its session epoch */
-    uint32_t ref_seq;
-    char seed_name[24]; /* "moveAbsolute", "pathMove", "comply", ... */
-    char point[LS_MOTION_NAME_LEN];
-    int path;          /* index of the path queue it runs, LS_PATH_NONE for single moves */
-    bool dry_run;      /* pathMove with number_of_cycles 0: its notices carry dry_run=true */
-    bool stop_pending; /* stopMotion waits for the pause */
-    int stop_sup;
-    /* path auxiliary `wait` in progress */
-    bool wait_active;
-    uint16_t wait_unit;
-    uint32_t wait_mask;
-    uint64_t wait_deadline_us;
-    char wait_text[LS_MOTION_AUX_LEN];
-    int wait_point;
-    /* path auxiliary `dio` posted, waiting for the loop to carry it out */
-    bool dio_pending;
-    bool dio_seen;
-    int dio_point;
-    uint64_t dio_cycle;
-    /* moveReact / comply */
-    bool comply;
-    size_t sensor;
-    bool length;
-    uint8_t component;
-    int32_t panic_code;
-} ls_run_t;
-
-/* A stop in progress that ends with the drives off (deactivate, fault, owner
- * loss, disconnect, shutdown). */
-typedef struct {
-    bool active;
-    ls_run_end_t why;
-    char text[72];    /* the fault, or "" */
-    int answer_sup;   /* deferred deactivate to answer at the end, LS_NO_SESSION: none */
-    bool keep_drives; /* owner lost with the action `stop`: pause, drop the motion, drives stay on (RESTING) */
-    bool fast;        /* the stop at the model's maximum deceleration is posted: repeats post nothing more */
-    bool owner_lost;  /* the disconnect handler runs it: the alarm ownerLost at the end */
-    bool release;     /* owner lost: UNLOCKED at the end (else LOCKED, or RESTING with keep_drives) */
-    ls_DisconnectAction lost_action;
-    uint8_t lost_addr; /* owner lost: whose */
-    char lost_why[24];
-    uint64_t since_us;
-    uint64_t start_cycle;  /* the loop's cycle when the stop was posted */
-    uint64_t off_since_us; /* first turn the loop reported the drives off, 0: not yet */
-} ls_halt_t;
 
 /* The ending's reason= text and its final notice's suffix ("Complete",
  * "Failed" or "Aborted"): the schema's, generated (ls_cmd_table.h). */
