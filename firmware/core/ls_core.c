@@ -19,61 +19,12 @@
 #include <pb_decode.h>
 #include <pb_encode.h>
 
-static int find_session(const ls_core_t *core, uint8_t addr);
-
-void ls_core_set_motion_state(ls_core_t *core, uint32_t choice)
-{
-    const char *name = landscape_status_st_motion_choice_name(choice);
-    ls_fmt_print(core->motion_state, sizeof core->motion_state, "%s", name != NULL ? name : "unknown");
-}
-
-const char *ls_core_disconnect_action_name(ls_DisconnectAction a)
-{
-    switch (a) {
-    case ls_DisconnectAction_DISCONNECT_CONFIGURED: return "configured";
-    case ls_DisconnectAction_DISCONNECT_STOP: return "stop";
-    case ls_DisconnectAction_DISCONNECT_STOP_DEACTIVATE: return "stop_deactivate";
-    case ls_DisconnectAction_DISCONNECT_STOP_DEACTIVATE_RELEASE: return "stop_deactivate_release";
-    }
-    return NULL;
-}
-
 /* The configured action, 0 meaning the seed's default. */
 static ls_DisconnectAction configured_action(const ls_core_t *core)
 {
     return core->cfg.disconnect_action == ls_DisconnectAction_DISCONNECT_CONFIGURED
                ? ls_DisconnectAction_DISCONNECT_STOP_DEACTIVATE_RELEASE
                : core->cfg.disconnect_action;
-}
-
-void ls_core_log_event(ls_core_t *core, uint64_t now_us, const char *fmt, ...)
-{
-    ls_event_entry_t *e = &core->event_log[core->event_log_count % LS_EVENT_LOG_LEN];
-    e->at_us = now_us;
-    va_list ap;
-    va_start(ap, fmt);
-    ls_fmt_vprint(e->text, sizeof e->text, fmt, ap);
-    va_end(ap);
-    core->event_log_count++;
-}
-
-ls_units_t ls_core_units(const ls_core_t *core, int sup)
-{
-    if (sup < 0 || sup >= LS_MAX_SUPERVISORS || !core->sessions[sup].connected) {
-        return LS_UNITS_SI;
-    }
-    return core->sessions[sup].units;
-}
-
-ls_units_t ls_core_run_units(const ls_core_t *core)
-{
-    for (int i = 0; i < LS_MAX_SUPERVISORS; i++) {
-        const ls_session_t *s = &core->sessions[i];
-        if (s->connected && s->addr == core->run.addr && s->epoch == core->run.epoch) {
-            return s->units;
-        }
-    }
-    return LS_UNITS_SI;
 }
 
 void ls_core_init(ls_core_t *core, const ls_core_config_t *cfg, const ls_core_io_t *io, const ls_core_actions_t *act)
@@ -104,30 +55,6 @@ void ls_core_init(ls_core_t *core, const ls_core_config_t *cfg, const ls_core_io
     ls_fmt_print(core->tool_cmds.held, sizeof core->tool_cmds.held, "none");
 }
 
-int ls_core_session_of(const ls_core_t *core, uint8_t addr)
-{
-    return find_session(core, addr);
-}
-
-int32_t ls_reply(ls_call_t *call, int32_t code, const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    ls_fmt_vtext(call->res->ret_msg, sizeof call->res->ret_msg, fmt, ap);
-    va_end(ap);
-    return code;
-}
-
-static int find_session(const ls_core_t *core, uint8_t addr)
-{
-    for (int i = 0; i < LS_MAX_SUPERVISORS; i++) {
-        if (core->sessions[i].connected && core->sessions[i].addr == addr) {
-            return i;
-        }
-    }
-    return LS_NO_SESSION;
-}
-
 static int connected_count(const ls_core_t *core)
 {
     int n = 0;
@@ -135,230 +62,6 @@ static int connected_count(const ls_core_t *core)
         n += core->sessions[i].connected ? 1 : 0;
     }
     return n;
-}
-
-static size_t encode_msg(ls_Downlink *msg, uint8_t *buf, size_t cap)
-{
-    /* Only valid UTF-8 leaves the device: a string cut by a truncation loses
-     * the cut character whole (docs/protocol.md "Strings"). */
-    ls_utf8_repair_msg(ls_Downlink_fields, msg);
-    pb_ostream_t os = pb_ostream_from_buffer(buf, cap);
-    if (!pb_encode(&os, ls_Downlink_fields, msg)) {
-        return 0;
-    }
-    return os.bytes_written;
-}
-
-static size_t encode_downlink(ls_core_t *core)
-{
-    return encode_msg(&core->down, core->enc, sizeof core->enc);
-}
-
-static void send_bytes(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t len)
-{
-    if (core->io.send_downlink == NULL || core->io.send_downlink(core->io.ctx, addr, buf, len) != 0) {
-        core->tx_lost++;
-    }
-}
-
-void ls_core_notify(ls_core_t *core, int sup, ls_NoticeKind kind, ls_EventId id, uint32_t ref_seq, bool final,
-                    const char *const *data, size_t n_data)
-{
-    const char *event_id = ls_EventId_name(id);
-    for (int i = 0; i < LS_MAX_SUPERVISORS; i++) {
-        ls_session_t *s = &core->sessions[i];
-        if (!s->connected || (sup >= 0 && i != sup)) {
-            continue;
-        }
-        memset(&core->note, 0, sizeof core->note);
-        core->note.which_msg = ls_Downlink_notice_tag;
-        ls_Notice *n = &core->note.msg.notice;
-        n->kind = kind;
-        ls_fmt_print(n->event_id, sizeof n->event_id, "%s", event_id);
-        n->ref_seq = ref_seq;
-        n->final = final;
-        n->notice_seq = ++s->notice_seq;
-        n->session_epoch = ref_seq != 0u ? s->epoch : 0u;
-        size_t cap = sizeof n->data / sizeof n->data[0];
-        for (size_t k = 0; k < n_data && k < cap; k++) {
-            ls_fmt_text(n->data[k], sizeof n->data[k], "%s", data[k]);
-            n->data_count++;
-        }
-        size_t len = encode_msg(&core->note, core->note_enc, sizeof core->note_enc);
-        if (len > 0) {
-            send_bytes(core, s->addr, core->note_enc, len);
-        }
-    }
-}
-
-void ls_core_notify_to(ls_core_t *core, uint8_t addr, uint32_t epoch, ls_NoticeKind kind, ls_EventId id,
-                       uint32_t ref_seq, bool final, const char *const *data, size_t n_data)
-{
-    ls_core_notify_named_to(core, addr, epoch, kind, ls_EventId_name(id), ref_seq, final, data, n_data);
-}
-
-void ls_core_notify_named_to(ls_core_t *core, uint8_t addr, uint32_t epoch, ls_NoticeKind kind, const char *event_id,
-                             uint32_t ref_seq, bool final, const char *const *data, size_t n_data)
-{
-    int i = find_session(core, addr);
-    memset(&core->note, 0, sizeof core->note);
-    core->note.which_msg = ls_Downlink_notice_tag;
-    ls_Notice *n = &core->note.msg.notice;
-    n->kind = kind;
-    ls_fmt_print(n->event_id, sizeof n->event_id, "%s", event_id);
-    n->ref_seq = ref_seq;
-    n->final = final;
-    n->session_epoch = epoch;
-    /* The session that started it may be gone (disconnect, heartbeat): the
-     * address still gets the notice, outside any session's numbering. */
-    n->notice_seq = i >= 0 ? ++core->sessions[i].notice_seq : 0u;
-    size_t cap = sizeof n->data / sizeof n->data[0];
-    for (size_t k = 0; k < n_data && k < cap; k++) {
-        ls_fmt_text(n->data[k], sizeof n->data[k], "%s", data[k]);
-        n->data_count++;
-    }
-    size_t len = encode_msg(&core->note, core->note_enc, sizeof core->note_enc);
-    if (len > 0) {
-        send_bytes(core, addr, core->note_enc, len);
-    }
-}
-
-void ls_core_log_fault(ls_core_t *core, uint64_t now_us, const char *fmt, ...)
-{
-    const uint32_t k = core->fault_log_count;
-    const uint32_t slot =
-        k < LS_FAULT_LOG_FIRST ? k : LS_FAULT_LOG_FIRST + (k - LS_FAULT_LOG_FIRST) % LS_FAULT_LOG_LATEST;
-    ls_fault_entry_t *e = &core->fault_log[slot];
-    e->at_us = now_us;
-    va_list ap;
-    va_start(ap, fmt);
-    ls_fmt_vprint(e->text, sizeof e->text, fmt, ap);
-    va_end(ap);
-    core->fault_log_count++;
-}
-
-const ls_fault_entry_t *ls_core_fault_entry(const ls_core_t *core, uint32_t k, uint32_t *n_kept, uint32_t *dropped)
-{
-    const uint32_t count = core->fault_log_count;
-    const uint32_t kept = count < LS_FAULT_LOG_LEN ? count : LS_FAULT_LOG_LEN;
-    if (n_kept != NULL) {
-        *n_kept = kept;
-    }
-    if (dropped != NULL) {
-        *dropped = count - kept;
-    }
-    if (k >= kept) {
-        return NULL;
-    }
-    if (k < LS_FAULT_LOG_FIRST) {
-        return &core->fault_log[k];
-    }
-    /* the ring's oldest kept entry is number count - LS_FAULT_LOG_LATEST (once it has wrapped) */
-    const uint32_t first_in_ring = count > LS_FAULT_LOG_LEN ? count - LS_FAULT_LOG_LATEST : LS_FAULT_LOG_FIRST;
-    const uint32_t n = first_in_ring + (k - LS_FAULT_LOG_FIRST);
-    return &core->fault_log[LS_FAULT_LOG_FIRST + (n - LS_FAULT_LOG_FIRST) % LS_FAULT_LOG_LATEST];
-}
-
-/* One alarm and one fault-log entry for the window's suppressed repeats;
- * the window restarts now. */
-static void alarm_window_report(ls_core_t *core, uint64_t now_us)
-{
-    ls_alarm_window_t *w = &core->alarm_window;
-    char d1[32], d2[32], d3[96];
-    ls_fmt_print(d1, sizeof d1, "suppressed=%u", (unsigned)w->suppressed);
-    ls_fmt_print(d2, sizeof d2, "window_ms=%u", (unsigned)((now_us - w->since_us) / 1000u));
-    ls_fmt_print(d3, sizeof d3, "fault=%s", w->text);
-    const char *data[] = { d1, d2, d3 };
-    ls_core_log_fault(core, now_us, "%u repeats suppressed: %.60s", (unsigned)w->suppressed, w->text);
-    ls_core_notify(core, LS_ALL_SESSIONS, ls_NoticeKind_ALARM, ls_EventId_alarmsSuppressed, 0, false, data, 3);
-    w->suppressed = 0;
-    w->since_us = now_us;
-}
-
-/* The end of an alarm window: its repeats are reported and it runs on (they
- * may go on) until one passes without any. */
-static void alarm_window_tick(ls_core_t *core, uint64_t now_us)
-{
-    ls_alarm_window_t *w = &core->alarm_window;
-    if (!w->open || now_us - w->since_us < (uint64_t)LS_ALARM_WINDOW_MS * 1000u) {
-        return;
-    }
-    if (w->suppressed == 0) {
-        w->open = false;
-        return;
-    }
-    alarm_window_report(core, now_us);
-}
-
-/* True when the alarm `text` repeats the one of the open window (counted,
- * not sent); else it opens a new window and is sent. */
-static bool alarm_repeat(ls_core_t *core, const char *text, uint64_t now_us)
-{
-    ls_alarm_window_t *w = &core->alarm_window;
-    alarm_window_tick(core, now_us);
-    if (w->open && strncmp(w->text, text, sizeof w->text - 1u) == 0) {
-        w->suppressed++;
-        core->alarms_suppressed++;
-        return true;
-    }
-    if (w->open && w->suppressed > 0) {
-        alarm_window_report(core, now_us); /* another alarm: this window's repeats first */
-    }
-    w->open = true;
-    w->since_us = now_us;
-    w->suppressed = 0;
-    ls_fmt_print(w->text, sizeof w->text, "%s", text);
-    return false;
-}
-
-static void fault_as(ls_core_t *core, ls_run_end_t why, const char *text, uint64_t now_us)
-{
-    ls_fmt_print(core->fault, sizeof core->fault, "%s", text);
-    if (core->state == ls_State_MOVING || core->state == ls_State_PAUSED || core->halt.active) {
-        /* Stop along the path at the model's maximum deceleration, then drives
-         * off; ls_run_tick changes the state and sends the motion's notice. */
-        ls_run_halt(core, why, text, true, LS_NO_SESSION, now_us);
-    } else {
-        if (core->state == ls_State_RESTING) {
-            if (core->act.enable_drives != NULL) {
-                (void)core->act.enable_drives(core->act.ctx, false);
-            }
-            core->state = ls_State_LOCKED;
-        }
-        ls_core_set_motion_state(core, LANDSCAPE_STATUS_ST_MOTION_ROBOT_STOPPED_ON_ERROR_CHOICE);
-    }
-    if (alarm_repeat(core, text, now_us)) {
-        return; /* latched and stopping; counted, reported at the window's end */
-    }
-    ls_core_log_fault(core, now_us, "%s", text);
-    char d[80];
-    ls_fmt_print(d, sizeof d, "fault=%s", text);
-    const char *data[] = { d };
-    ls_core_notify(core, LS_ALL_SESSIONS, ls_NoticeKind_ALARM, ls_EventId_fault, 0, false, data, 1);
-}
-
-void ls_core_fault(ls_core_t *core, const char *text, uint64_t now_us)
-{
-    fault_as(core, LS_RUN_END_FAULT, text, now_us);
-}
-
-void ls_core_emergency(ls_core_t *core, uint64_t now_us)
-{
-    core->emergency_frames++;
-    fault_as(core, LS_RUN_END_EMERGENCY, "emergency stop frame on the bus", now_us);
-}
-
-void ls_core_owner_lost_alarm(ls_core_t *core, uint8_t addr, const char *why, ls_DisconnectAction action,
-                              uint64_t now_us)
-{
-    const char *name = ls_core_disconnect_action_name(action);
-    char d1[40], d2[64], d3[48];
-    ls_fmt_print(d1, sizeof d1, "supervisor=0x%02X", addr);
-    ls_fmt_print(d2, sizeof d2, "reason=%s", why);
-    ls_fmt_print(d3, sizeof d3, "action=%s", name != NULL ? name : "?");
-    const char *data[] = { d1, d2, d3 };
-    ls_core_notify(core, LS_ALL_SESSIONS, ls_NoticeKind_ALARM, ls_EventId_ownerLost, 0, false, data, 3);
-    ls_core_log_fault(core, now_us, "owner 0x%02X lost (%s): action %s", addr, why, name != NULL ? name : "?");
 }
 
 /* Seed 2.2 disconnect handler, the owner's session's action (docs/protocol.md
@@ -417,7 +120,7 @@ static void drop_session(ls_core_t *core, int i, const char *why, uint64_t now_u
 
 void ls_core_on_heartbeat(ls_core_t *core, uint8_t addr, uint32_t token, uint64_t now_us)
 {
-    int i = find_session(core, addr);
+    int i = ls_core_session_of(core, addr);
     if (i < 0) {
         return; /* not ours: e.g. a supervisor of another device on this bus */
     }
@@ -448,176 +151,6 @@ static uint32_t heartbeat_token(uint64_t nonce, uint32_t epoch, uint64_t now_us)
     return t != 0u ? t : 1u;
 }
 
-static void rsvp_remember(ls_core_t *core, const ls_rsvp_t *r, bool timed_out, const char *action)
-{
-    ls_rsvp_ended_t *e = &core->rsvp_ended[core->rsvp_ended_count % LS_RSVP_ENDED_LEN];
-    core->rsvp_ended_count++;
-    *e = (ls_rsvp_ended_t){
-        .id = r->id, .addr = r->addr, .timed_out = timed_out, .ref_seq = r->ref_seq, .epoch = r->epoch
-    };
-    ls_fmt_print(e->action, sizeof e->action, "%s", action != NULL ? action : "");
-}
-
-static void rsvp_tick(ls_core_t *core, uint64_t now_us)
-{
-    for (int i = 0; i < LS_MAX_RSVP; i++) {
-        ls_rsvp_t *r = &core->rsvp[i];
-        if (r->used && now_us >= r->deadline_us) {
-            ls_rsvp_t copy = *r;
-            r->used = false;
-            const char *action = copy.done(core, copy.ctx, ls_RetCode_CMD_TIMEOUT_ERR, true, now_us);
-            rsvp_remember(core, &copy, true, action);
-            ls_core_log_event(core, now_us, "rsvp %u %s (seq %u) to 0x%02X: no answer, default action %s",
-                              (unsigned)copy.id, copy.event_id, (unsigned)copy.ref_seq, copy.addr,
-                              action != NULL ? action : copy.default_action);
-        }
-    }
-}
-
-/* The reply's data as "a,b,c" for the event log. */
-static void join_data(const ls_RsvpReply *reply, char *out, size_t cap)
-{
-    size_t n = 0;
-    out[0] = '\0';
-    for (pb_size_t k = 0; k < reply->data_count && n < cap; k++) {
-        int w = ls_fmt_print(out + n, cap - n, "%s%s", k > 0 ? "," : "", reply->data[k]);
-        if (w < 0) {
-            return;
-        }
-        n += (size_t)w;
-    }
-}
-
-static void send_rsvp_ack(ls_core_t *core, uint8_t addr, uint32_t id, int32_t code, const char *action,
-                          uint32_t ref_seq, uint32_t epoch, const char *fmt, ...) __attribute__((format(printf, 8, 9)));
-static void send_rsvp_ack(ls_core_t *core, uint8_t addr, uint32_t id, int32_t code, const char *action,
-                          uint32_t ref_seq, uint32_t epoch, const char *fmt, ...)
-{
-    memset(&core->note, 0, sizeof core->note);
-    core->note.which_msg = ls_Downlink_rsvp_ack_tag;
-    ls_RsvpAck *a = &core->note.msg.rsvp_ack;
-    a->rsvp_id = id;
-    a->ret_code = code;
-    a->ref_seq = ref_seq;
-    a->session_epoch = epoch;
-    ls_fmt_print(a->action, sizeof a->action, "%s", action);
-    va_list ap;
-    va_start(ap, fmt);
-    ls_fmt_vtext(a->ret_msg, sizeof a->ret_msg, fmt, ap);
-    va_end(ap);
-    size_t len = encode_msg(&core->note, core->note_enc, sizeof core->note_enc);
-    if (len > 0) {
-        send_bytes(core, addr, core->note_enc, len);
-    }
-}
-
-/* Every reply gets an RsvpAck: taken (with the action), late, or unknown. */
-static void rsvp_on_reply(ls_core_t *core, uint8_t addr, const ls_RsvpReply *reply, uint64_t now_us)
-{
-    char data[128];
-    join_data(reply, data, sizeof data);
-    for (int i = 0; i < LS_MAX_RSVP; i++) {
-        ls_rsvp_t *r = &core->rsvp[i];
-        if (r->used && r->id == reply->rsvp_id && r->addr == addr) {
-            ls_rsvp_t copy = *r;
-            r->used = false;
-            const char *action = copy.done(core, copy.ctx, reply->ret_code, false, now_us);
-            if (action == NULL) {
-                action = "none";
-            }
-            rsvp_remember(core, &copy, false, action);
-            ls_core_log_event(core, now_us, "rsvp %u %s (seq %u) from 0x%02X: %s %d, action %s, data [%s]",
-                              (unsigned)copy.id, copy.event_id, (unsigned)copy.ref_seq, addr,
-                              reply->ret_code >= 0 ? "accepted" : "declined", (int)reply->ret_code, action, data);
-            send_rsvp_ack(core, addr, copy.id, ls_RetCode_CMD_EXEC_OK, action, copy.ref_seq, copy.epoch,
-                          "rsvp %u (%s): %s, action %s", (unsigned)copy.id, copy.event_id,
-                          reply->ret_code >= 0 ? "accepted" : "declined", action);
-            return;
-        }
-    }
-    const uint32_t n = core->rsvp_ended_count < LS_RSVP_ENDED_LEN ? core->rsvp_ended_count : LS_RSVP_ENDED_LEN;
-    for (uint32_t k = 0; k < n; k++) {
-        const ls_rsvp_ended_t *e = &core->rsvp_ended[(core->rsvp_ended_count - 1u - k) % LS_RSVP_ENDED_LEN];
-        if (e->id != reply->rsvp_id || e->addr != addr) {
-            continue;
-        }
-        ls_core_log_event(core, now_us, "rsvp %u from 0x%02X refused: %s, answer %d, data [%s]", (unsigned)e->id, addr,
-                          e->timed_out ? "late" : "already answered", (int)reply->ret_code, data);
-        if (e->timed_out) {
-            send_rsvp_ack(core, addr, e->id, ls_RetCode_CMD_TIMEOUT_ERR, "", e->ref_seq, e->epoch,
-                          "rsvp %u: late, its time-out had passed and the default action (%s) was taken: answer "
-                          "within rsvp_timeout_ms",
-                          (unsigned)e->id, e->action);
-        } else {
-            send_rsvp_ack(core, addr, e->id, ls_RetCode_CMD_PARAM_ERR, "", e->ref_seq, e->epoch,
-                          "rsvp %u: already answered (action %s): answer each RSVP once", (unsigned)e->id, e->action);
-        }
-        return;
-    }
-    ls_core_log_event(core, now_us, "rsvp %u from 0x%02X refused: unknown id, answer %d, data [%s]",
-                      (unsigned)reply->rsvp_id, addr, (int)reply->ret_code, data);
-    send_rsvp_ack(core, addr, reply->rsvp_id, ls_RetCode_CMD_PARAM_ERR, "", 0, 0,
-                  "rsvp %u: no RSVP with this id is waiting for 0x%02X: quote the rsvp_id of an RSVP notice sent "
-                  "to you",
-                  (unsigned)reply->rsvp_id, addr);
-}
-
-int32_t ls_core_rsvp(ls_core_t *core, int sup, uint32_t ref_seq, ls_NoticeKind kind, const char *event_id,
-                     const char *const *data, size_t n_data, uint32_t timeout_ms, const char *default_action,
-                     ls_rsvp_done_fn done, void *ctx, uint64_t now_us)
-{
-    if (sup < 0 || sup >= LS_MAX_SUPERVISORS || !core->sessions[sup].connected || done == NULL) {
-        return LS_EINVAL;
-    }
-    ls_rsvp_t *slot = NULL;
-    for (int i = 0; i < LS_MAX_RSVP; i++) {
-        if (!core->rsvp[i].used) {
-            slot = &core->rsvp[i];
-            break;
-        }
-    }
-    if (slot == NULL) {
-        return LS_ENOSPC;
-    }
-    uint32_t id = core->rsvp_next_id++;
-    if (core->rsvp_next_id == 0) {
-        core->rsvp_next_id = 1;
-    }
-    ls_session_t *s = &core->sessions[sup];
-    memset(&core->note, 0, sizeof core->note);
-    core->note.which_msg = ls_Downlink_notice_tag;
-    ls_Notice *n = &core->note.msg.notice;
-    n->kind = kind;
-    ls_fmt_print(n->event_id, sizeof n->event_id, "%s", event_id);
-    n->rsvp_id = id;
-    n->ref_seq = ref_seq;
-    n->session_epoch = ref_seq != 0u ? s->epoch : 0u;
-    n->rsvp_timeout_ms = timeout_ms;
-    ls_fmt_print(n->rsvp_default, sizeof n->rsvp_default, "%s", default_action);
-    n->notice_seq = ++s->notice_seq;
-    size_t cap = sizeof n->data / sizeof n->data[0];
-    for (size_t k = 0; k < n_data && k < cap; k++) {
-        ls_fmt_text(n->data[k], sizeof n->data[k], "%s", data[k]);
-        n->data_count++;
-    }
-    size_t len = encode_msg(&core->note, core->note_enc, sizeof core->note_enc);
-    if (len == 0) {
-        return LS_EINVAL;
-    }
-    *slot = (ls_rsvp_t){ .used = true,
-                         .id = id,
-                         .addr = s->addr,
-                         .ref_seq = ref_seq,
-                         .epoch = n->session_epoch,
-                         .deadline_us = now_us + (uint64_t)timeout_ms * 1000u,
-                         .done = done,
-                         .ctx = ctx };
-    ls_fmt_print(slot->event_id, sizeof slot->event_id, "%s", event_id);
-    ls_fmt_print(slot->default_action, sizeof slot->default_action, "%s", default_action);
-    send_bytes(core, s->addr, core->note_enc, len);
-    return (int32_t)id;
-}
-
 /* What a joint's drive reported (an EMCY, its error code read back): in
  * the fault log, and to every supervisor (docs/protocol.md "Drives"). */
 static void on_arm_event(ls_core_t *core, const hal_arm_event_t *e, uint64_t now_us)
@@ -633,10 +166,10 @@ static void on_arm_event(ls_core_t *core, const hal_arm_event_t *e, uint64_t now
         ls_fmt_print(vendor, sizeof vendor, "vendor=%02X%02X%02X%02X%02X", (unsigned)e->vendor[0],
                      (unsigned)e->vendor[1], (unsigned)e->vendor[2], (unsigned)e->vendor[3], (unsigned)e->vendor[4]);
         const char *data[] = { joint, node, code, meaning, reg, vendor };
-        ls_core_notify(core, -1, ls_NoticeKind_ALARM, ls_EventId_driveEmcy, 0, false, data, 6);
+        ls_core_notify(core, LS_ALL_SESSIONS, ls_NoticeKind_ALARM, ls_EventId_driveEmcy, 0, false, data, 6);
     } else {
         const char *data[] = { joint, node, code, meaning };
-        ls_core_notify(core, -1, ls_NoticeKind_EVENT, ls_EventId_driveErrorCode, 0, false, data, 4);
+        ls_core_notify(core, LS_ALL_SESSIONS, ls_NoticeKind_EVENT, ls_EventId_driveErrorCode, 0, false, data, 4);
     }
 }
 
@@ -686,8 +219,8 @@ void ls_core_take_loop_events(ls_core_t *core, uint64_t now_us)
 void ls_core_tick(ls_core_t *core, uint64_t now_us)
 {
     ls_core_take_loop_events(core, now_us);
-    rsvp_tick(core, now_us);
-    alarm_window_tick(core, now_us);
+    ls_rsvp_tick(core, now_us);
+    ls_log_alarm_tick(core, now_us);
     for (int i = 0; i < LS_MAX_SUPERVISORS; i++) {
         ls_session_t *s = &core->sessions[i];
         const uint64_t limit = (uint64_t)s->heartbeat_timeout_ms * 1000u;
@@ -786,7 +319,7 @@ static int32_t do_connect(ls_core_t *core, uint8_t addr, ls_call_t *call)
     if (period_ms * LS_HB_MISSED_MAX > timeout_ms) {
         timeout_ms = period_ms * LS_HB_MISSED_MAX;
     }
-    int i = find_session(core, addr);
+    int i = ls_core_session_of(core, addr);
     if (i >= 0 && core->sessions[i].nonce != rq->client_nonce) {
         /* Another client on a live session's address: it would take that
          * session's answers and ownership (docs/protocol.md "Identity"). Nothing
@@ -1018,25 +551,6 @@ static int32_t dispatch(ls_core_t *core, uint8_t addr, ls_call_t *call, ls_Reque
     return d->handler(core, call);
 }
 
-static void send_response(ls_core_t *core, ls_session_t *s, uint8_t addr)
-{
-    size_t len = encode_downlink(core);
-    if (len == 0) {
-        /* Cannot happen with bounded fields; answer something rather than nothing. */
-        ls_Response *r = &core->down.msg.response;
-        r->which_result = 0;
-        r->ret_code = ls_RetCode_CMD_ERR;
-        ls_fmt_print(r->ret_msg, sizeof r->ret_msg, "internal: response did not encode");
-        len = encode_downlink(core);
-    }
-    if (s != NULL) {
-        memcpy(s->last_resp, core->enc, len);
-        s->last_resp_len = len;
-        s->last_pending = false;
-    }
-    send_bytes(core, addr, core->enc, len);
-}
-
 static void answer_bad_request(ls_core_t *core, uint8_t addr, int32_t code, uint32_t seq, const char *fmt, ...)
     __attribute__((format(printf, 5, 6)));
 
@@ -1054,7 +568,7 @@ static uint64_t request_hash(const uint8_t *buf, size_t len)
 static void on_request(ls_core_t *core, uint8_t addr, ls_Request *rq, const uint8_t *raw, size_t raw_len,
                        uint64_t now_us)
 {
-    int sup = find_session(core, addr);
+    int sup = ls_core_session_of(core, addr);
     ls_session_t *s = sup >= 0 ? &core->sessions[sup] : NULL;
     const uint64_t hash = request_hash(raw, raw_len);
     if (rq->seq == 0u && rq->which_cmd != ls_Request_connect_tag) {
@@ -1094,7 +608,7 @@ static void on_request(ls_core_t *core, uint8_t addr, ls_Request *rq, const uint
             s->last_heard_us = now_us;
         }
         if (!s->last_pending && s->last_resp_len > 0) {
-            send_bytes(core, addr, s->last_resp, s->last_resp_len);
+            ls_send_bytes(core, addr, s->last_resp, s->last_resp_len);
         }
         return;
     }
@@ -1111,9 +625,9 @@ static void on_request(ls_core_t *core, uint8_t addr, ls_Request *rq, const uint
         busy->ret_code = ls_RetCode_CMD_BUSY_ERR;
         ls_fmt_text(busy->ret_msg, sizeof busy->ret_msg, "%s (seq %u) is still running: wait for its answer",
                     pd != NULL ? pd->name : "a blocking command", (unsigned)s->last_seq);
-        size_t len = encode_downlink(core);
+        size_t len = ls_send_encode(&core->down, core->enc, sizeof core->enc);
         if (len > 0) {
-            send_bytes(core, addr, core->enc, len);
+            ls_send_bytes(core, addr, core->enc, len);
         }
         return;
     }
@@ -1146,27 +660,7 @@ static void on_request(ls_core_t *core, uint8_t addr, ls_Request *rq, const uint
     if (code < 0) {
         res->which_result = 0; /* no result on errors */
     }
-    send_response(core, s, addr);
-}
-
-void ls_core_finish_deferred(ls_core_t *core, int sup, int32_t code, const char *msg)
-{
-    if (sup < 0 || sup >= LS_MAX_SUPERVISORS) {
-        return;
-    }
-    ls_session_t *s = &core->sessions[sup];
-    if (!s->connected || !s->last_pending) {
-        return;
-    }
-    memset(&core->down, 0, sizeof core->down);
-    core->down.which_msg = ls_Downlink_response_tag;
-    ls_Response *res = &core->down.msg.response;
-    res->seq = s->last_seq;
-    res->session_epoch = s->epoch;
-    res->ret_code = code;
-    res->which_result = code >= 0 ? s->pending_tag : 0;
-    ls_fmt_text(res->ret_msg, sizeof res->ret_msg, "%s", msg);
-    send_response(core, s, s->addr);
+    ls_send_response(core, s, addr);
 }
 
 /* Read the seq and the command's field number of an ls.Uplink without
@@ -1224,13 +718,13 @@ static void answer_bad_request(ls_core_t *core, uint8_t addr, int32_t code, uint
     res->seq = seq;
     res->ret_code = code;
     /* Every answer carries the epoch of the session it answers (docs/protocol.md). */
-    const int sup = find_session(core, addr);
+    const int sup = ls_core_session_of(core, addr);
     res->session_epoch = sup >= 0 ? core->sessions[sup].epoch : 0u;
     va_list ap;
     va_start(ap, fmt);
     ls_fmt_vtext(res->ret_msg, sizeof res->ret_msg, fmt, ap);
     va_end(ap);
-    send_response(core, NULL, addr);
+    ls_send_response(core, NULL, addr);
 }
 
 void ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t len, uint64_t now_us)
@@ -1289,7 +783,7 @@ void ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t
         on_request(core, addr, &core->up.msg.request, buf, len, now_us);
     } else if (core->up.which_msg == ls_Uplink_rsvp_reply_tag) {
         /* Only HEARTBEAT frames keep a session (docs/protocol.md "Liveness"). */
-        rsvp_on_reply(core, addr, &core->up.msg.rsvp_reply, now_us);
+        ls_rsvp_on_reply(core, addr, &core->up.msg.rsvp_reply, now_us);
     } else {
         core->rx_malformed++;
     }

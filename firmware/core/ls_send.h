@@ -1,0 +1,79 @@
+/* What the core sends, and the session lookups it needs: answers (with
+ * each session's retransmission cache), notices (events and alarms, to one
+ * session, to an address or to all) and the handlers' reply text. Every
+ * downlink is encoded here, so only valid UTF-8 leaves the device
+ * (docs/protocol.md "Strings"), and one whose queue is full is counted
+ * (ls_core_t.tx_lost).
+ *
+ * Services layer of firmware/core (docs/architecture.md "Core layers"):
+ * includes the types only; the handlers and the dispatcher call it. Comms
+ * thread only; no allocation (the messages are encoded in ls_core_t's
+ * scratch: core->down for answers, core->note for notices, so a handler may
+ * notify while its answer is being built). */
+#ifndef LS_SEND_H
+#define LS_SEND_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "ls_core_types.h"
+
+/* Index of the connected session of `addr`, or LS_NO_SESSION. */
+int ls_core_session_of(const ls_core_t *core, uint8_t addr);
+
+/* The units of session `sup` (SI when sup < 0 or not connected). */
+ls_units_t ls_core_units(const ls_core_t *core, int sup);
+
+/* The units of the session that started the run (SI when it has ended):
+ * the run's notices speak the units of the supervisor that started it. */
+ls_units_t ls_core_run_units(const ls_core_t *core);
+
+/* Set motion_state (getMotionControlState's motion_control_state) to the DBC's
+ * name of STATUS st_motion `choice` (LANDSCAPE_STATUS_ST_MOTION_*_CHOICE), so the
+ * text and the telemetry code have one home. Dispatcher only. */
+void ls_core_set_motion_state(ls_core_t *core, uint32_t choice);
+
+/* "stop", "stop_deactivate", "stop_deactivate_release" (the schema's names
+ * in lower case without DISCONNECT_); "configured" for 0, NULL outside the enum. */
+const char *ls_core_disconnect_action_name(ls_DisconnectAction a);
+
+/* Fill call->res->ret_msg (printf-style) and return `code`: handlers end with
+ * `return ls_reply(call, CODE, "...", ...)`. */
+int32_t ls_reply(ls_call_t *call, int32_t code, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+
+/* Send a notice (event, alarm) to one session (sup >= 0) or to all (sup < 0:
+ * LS_ALL_SESSIONS).
+ * Its event id is one the schema declares (enum ls.EventId, sent by name), its
+ * data "key=value" strings with the keys the schema lists for it. */
+void ls_core_notify(ls_core_t *core, int sup, ls_NoticeKind kind, ls_EventId id, uint32_t ref_seq, bool final,
+                    const char *const *data, size_t n_data);
+
+/* Send a notice to the session at `addr` (if any) carrying session epoch
+ * `epoch`: the notices of a run go to the session that started it. */
+void ls_core_notify_to(ls_core_t *core, uint8_t addr, uint32_t epoch, ls_NoticeKind kind, ls_EventId id,
+                       uint32_t ref_seq, bool final, const char *const *data, size_t n_data);
+
+/* ls_core_notify_to for a path's auxiliary `event NAME`: the name the path
+ * chose, which no schema can declare (ls.EventId AUX_NAMED_EVENT has its keys). */
+void ls_core_notify_named_to(ls_core_t *core, uint8_t addr, uint32_t epoch, ls_NoticeKind kind, const char *name,
+                             uint32_t ref_seq, bool final, const char *const *data, size_t n_data);
+
+/* Answer a request that a handler deferred (LS_CALL_DEFERRED) for session
+ * `sup`: the response carries the deferred request's seq and command id. */
+void ls_core_finish_deferred(ls_core_t *core, int sup, int32_t code, const char *msg);
+
+/* Encode `msg` into buf (its strings repaired to whole UTF-8 first): the
+ * length, or 0 when it does not fit (bounded fields make that a bug). */
+size_t ls_send_encode(ls_Downlink *msg, uint8_t *buf, size_t cap);
+
+/* Queue `len` encoded bytes for the supervisor at `addr` (io.send_downlink);
+ * a refusal is counted in tx_lost, never retried here. */
+void ls_send_bytes(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t len);
+
+/* Send the answer built in core->down to `addr`, and keep it as session
+ * s's last answer (its retransmission cache; s NULL: not cached). An answer
+ * that does not encode is replaced by CMD_ERR "internal: ...". */
+void ls_send_response(ls_core_t *core, ls_session_t *s, uint8_t addr);
+
+#endif
