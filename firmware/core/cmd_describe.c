@@ -8,7 +8,7 @@
 #include <string.h>
 
 #include "cmd_sensor.h"
-#include "ls_core.h"
+#include "ls_core_services.h"
 #include "ls_fmt.h"
 #include "ls_robot_urdf.h"
 

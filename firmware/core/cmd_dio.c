@@ -18,7 +18,7 @@
 #include <string.h>
 
 #include "ls_control.h"
-#include "ls_core.h"
+#include "ls_core_services.h"
 #include "ls_core_events.h"
 #include "ls_fmt.h"
 

@@ -15,7 +15,7 @@
 #include <stdint.h>
 
 #include "ls_control.h"
-#include "ls_core.h"
+#include "ls_core_services.h"
 #include "ls_motion.h"
 
 /* ------------------------------------------------------------- cmd_motion.c */

@@ -1,5 +1,5 @@
 /* Seed 3.3 state queries that need nothing but the core. */
-#include "ls_core.h"
+#include "ls_core_services.h"
 
 #include <string.h>
 

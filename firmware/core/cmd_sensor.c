@@ -16,7 +16,7 @@
 #include "cmd_sensor.h"
 #include "ls_control.h"
 #include "landscape.h"
-#include "ls_core.h"
+#include "ls_core_services.h"
 #include "ls_fmt.h"
 #include "ls_kin.h"
 #include "ls_math.h"
@@ -572,22 +572,6 @@ int32_t ls_h_manual_control(struct ls_core *core, struct ls_call *call)
     return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "manual control off");
 }
 
-void ls_core_manual_off(ls_core_t *core)
-{
-    if (core->sensor.sup < 0 && strcmp(core->sensor.mode, "off") == 0) {
-        return;
-    }
-    if (core->ctl != NULL) {
-        (void)ls_control_set_manual(core->ctl, NULL, NULL, NULL, 0);
-    }
-    ls_fmt_print(core->sensor.mode, sizeof core->sensor.mode, "off");
-    core->sensor.sup = LS_NO_SESSION;
-    core->sensor.kind = -1;
-    if (strncmp(core->motion_state, "manual_", 7) == 0) {
-        ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_at_rest");
-    }
-}
-
 /* ------------------------------------------------------------- loop events */
 
 static void rest(ls_core_t *core)
@@ -754,9 +738,6 @@ static void manual_event(ls_core_t *core, const ls_ctl_event_t *ev)
 
 bool ls_core_sensor_on_event(ls_core_t *core, const ls_ctl_event_t *ev)
 {
-    if (ls_core_tool_on_event(core, ev)) {
-        return true;
-    }
     bool mine = core->run.active && core->run.react && ev->ref_seq == core->run.ref_seq;
     switch (ev->kind) {
     case LS_CEV_MOTION:

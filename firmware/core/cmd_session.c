@@ -1,7 +1,6 @@
 /* Seed 3.1: lock, release, activate, deactivate. The dispatcher has already
  * checked the state and the owner. */
-#include "cmd_sensor.h"
-#include "ls_core.h"
+#include "ls_core_services.h"
 #include "ls_fmt.h"
 
 

@@ -8,7 +8,7 @@
 #include <string.h>
 
 #include "ls_control.h"
-#include "ls_core.h"
+#include "ls_core_services.h"
 #include "ls_fmt.h"
 #include "ls_kin.h"
 #include "ls_units.h"

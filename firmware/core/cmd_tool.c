@@ -21,7 +21,7 @@
 
 #include "cmd_sensor.h"
 #include "ls_control.h"
-#include "ls_core.h"
+#include "ls_core_services.h"
 #include "ls_fmt.h"
 #include "ls_kin.h"
 #include "ls_motion.h"

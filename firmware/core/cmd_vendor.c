@@ -12,7 +12,7 @@
 #include <stdarg.h>
 #include <string.h>
 
-#include "ls_core.h"
+#include "ls_core_services.h"
 #include "ls_fmt.h"
 #include "ls_motion.h"
 

@@ -179,7 +179,7 @@ static void on_arm_event(ls_core_t *core, const hal_arm_event_t *e, uint64_t now
  * (cmd_motion_events.c), the fault latch and the DIO watches. */
 static void on_loop_event(ls_core_t *core, const ls_ctl_event_t *ev, uint64_t now_us)
 {
-    if (ls_core_sensor_on_event(core, ev)) {
+    if (ls_core_tool_on_event(core, ev) || ls_core_sensor_on_event(core, ev)) {
         return;
     }
     switch (ev->kind) {

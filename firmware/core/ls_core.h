@@ -1,5 +1,9 @@
 /* The controller core: supervisor sessions, ownership, the state machine of
  * docs/state-machine.md, the command dispatcher and the seed's return codes.
+ * This header is the core's interface to the rest of the firmware (the app,
+ * the network layer, the footprint build, the fuzzers): the top layer's
+ * functions below, and through ls_core_services.h the types and services.
+ * The core's own layers are in docs/architecture.md "Core layers".
  *
  * Runs in the comms thread only (never in the control loop). Time is passed
  * in. All storage is static, inside ls_core_t (ls_core_types.h). */
@@ -10,13 +14,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "ls_core_types.h"
-#include "ls_fault.h"
-#include "ls_log.h"
-#include "ls_rsvp.h"
-#include "ls_run.h"
-#include "ls_send.h"
-#include "ls_units.h"
+#include "ls_core_services.h"
 
 
 void ls_core_init(ls_core_t *core, const ls_core_config_t *cfg, const ls_core_io_t *io, const ls_core_actions_t *act);
@@ -54,10 +52,6 @@ void ls_core_tick(ls_core_t *core, uint64_t now_us);
  * publishes the cycle's snapshot, so the report's state and its motion agree). */
 void ls_core_take_loop_events(ls_core_t *core, uint64_t now_us);
 
-/* While the core follows the control loop's state by sampling its
- * snapshot (a halt coming to rest, a DIO write taking effect, a path's
- * `wait` for inputs), it is ticked this often. */
-#define LS_CORE_SAMPLE_US 1000u
 
 /* When ls_core_tick next has work, for an event-driven comms thread that
  * otherwise sleeps until a frame or a control loop event (ls_control's
@@ -68,12 +62,5 @@ void ls_core_take_loop_events(ls_core_t *core, uint64_t now_us);
  * UINT64_MAX: nothing is timed. O(sessions + RSVPs + watches), no clock
  * read, no allocation. */
 uint64_t ls_core_next_deadline_us(const ls_core_t *core, uint64_t now_us);
-
-/* The control loop's answer to the drives' enable (LS_CEV_ENABLED with
- * `failure` NULL, LS_CEV_ENABLE_FAILED with its text): finishes the
- * deferred activate of core->activating (RESTING, or refused naming the
- * joint and what its drive said); drives that came on for a session that
- * ended or lost the lock are switched off again. Comms thread. */
-void ls_core_on_enable_result(ls_core_t *core, const char *failure, uint64_t now_us);
 
 #endif

@@ -71,4 +71,9 @@
 #define LS_RATE_MIN_PCT (100.0 * LS_RATE_MIN_FRACTION)
 #define LS_FRAME_ANGLE_MAX_RAD (2.0 * LS_PI)
 
+/* While the core follows the control loop's state by sampling its
+ * snapshot (a halt coming to rest, a DIO write taking effect, a path's
+ * `wait` for inputs), it is ticked this often. */
+#define LS_CORE_SAMPLE_US 1000u
+
 #endif

@@ -4,12 +4,12 @@
 #include <math.h>
 #include <string.h>
 
-#include "cmd_sensor.h"
 #include "landscape.h"
 #include "ls_cmd_table.h"
 #include "ls_control.h"
-#include "ls_core.h"
 #include "ls_fmt.h"
+#include "ls_log.h"
+#include "ls_send.h"
 
 /* "At rest": every measured joint speed below this. */
 #define REST_SPEED_RAD_S 1e-3
@@ -82,6 +82,22 @@ void ls_run_finish(ls_core_t *core, ls_run_end_t why, const char *const *extra, 
         ls_core_finish_deferred(core, r->stop_sup,
                                 why == LS_RUN_END_COMPLETE ? ls_RetCode_CMD_EXEC_OK : ls_RetCode_CMD_ERR,
                                 why == LS_RUN_END_COMPLETE ? "the motion completed before it could stop" : msg);
+    }
+}
+
+void ls_core_manual_off(ls_core_t *core)
+{
+    if (core->sensor.sup < 0 && strcmp(core->sensor.mode, "off") == 0) {
+        return;
+    }
+    if (core->ctl != NULL) {
+        (void)ls_control_set_manual(core->ctl, NULL, NULL, NULL, 0);
+    }
+    ls_fmt_print(core->sensor.mode, sizeof core->sensor.mode, "off");
+    core->sensor.sup = LS_NO_SESSION;
+    core->sensor.kind = -1;
+    if (strncmp(core->motion_state, "manual_", 7) == 0) {
+        ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_at_rest");
     }
 }
 

@@ -81,4 +81,10 @@ void ls_run_tick(struct ls_core *core, uint64_t now_us);
  * core->halt.active is false. */
 bool ls_run_shutdown(struct ls_core *core, uint64_t now_us);
 
+/* Manual control ends with the owner's control of the device (release, or
+ * the owner lost) and with every halt: the next owner must switch it on
+ * itself. Here, below the handlers, because a halt needs it too
+ * (cmd_sensor.c switches it on). */
+void ls_core_manual_off(ls_core_t *core);
+
 #endif
