@@ -167,12 +167,12 @@ static uint64_t request_hash(const uint8_t *buf, size_t len)
     return h;
 }
 
-static void on_request(ls_core_t *core, uint8_t addr, ls_Request *rq, const uint8_t *raw, size_t raw_len,
-                       uint64_t now_us)
+/* The sequence-number rules (docs/protocol.md "Sequence numbers"): true
+ * when the request was refused for its seq (0, or a reused one carrying
+ * another request), answered without caching; nothing runs. */
+static bool refused_for_its_seq(ls_core_t *core, uint8_t addr, const ls_Request *rq, const ls_session_t *s,
+                                uint64_t hash)
 {
-    int sup = ls_core_session_of(core, addr);
-    ls_session_t *s = sup >= 0 ? &core->sessions[sup] : NULL;
-    const uint64_t hash = request_hash(raw, raw_len);
     if (rq->seq == 0u && rq->which_cmd != ls_Request_connect_tag) {
         /* seq 0 is what proto3 sends when the client set none: such a request
          * could never be told from a retransmission of the one before it
@@ -182,7 +182,7 @@ static void on_request(ls_core_t *core, uint8_t addr, ls_Request *rq, const uint
                            "%s: seq is 0 (not set): every request but connect needs a seq > 0, a new one "
                            "for each request (docs/protocol.md \"Sequence numbers\")",
                            d != NULL ? d->name : "request");
-        return;
+        return true;
     }
     if (s != NULL && s->have_last && rq->seq == s->last_seq && rq->which_cmd != ls_Request_connect_tag &&
         hash != s->last_req_hash) {
@@ -194,8 +194,16 @@ static void on_request(ls_core_t *core, uint8_t addr, ls_Request *rq, const uint
                            "seq %u reused with a different request (previous: %s, now: %s): use a new seq; "
                            "only a retransmission repeats one",
                            (unsigned)rq->seq, prev != NULL ? prev->name : "?", now != NULL ? now->name : "request");
-        return;
+        return true;
     }
+    return false;
+}
+
+/* A retransmission of the session's last request: answered from its cache
+ * (true), never executed twice. */
+static bool answered_from_cache(ls_core_t *core, uint8_t addr, const ls_Request *rq, ls_session_t *s, uint64_t hash,
+                                uint64_t now_us)
+{
     const bool connect_again = rq->which_cmd == ls_Request_connect_tag && s != NULL && s->have_last &&
                                s->last_tag == ls_Request_connect_tag && hash == s->last_req_hash;
     if (s != NULL && s->have_last && rq->seq == s->last_seq &&
@@ -212,8 +220,15 @@ static void on_request(ls_core_t *core, uint8_t addr, ls_Request *rq, const uint
         if (!s->last_pending && s->last_resp_len > 0) {
             ls_send_bytes(core, addr, s->last_resp, s->last_resp_len);
         }
-        return;
+        return true;
     }
+    return false;
+}
+
+/* One request in flight per session: true when this one was refused (busy)
+ * because the session's deferred request still runs. */
+static bool refused_while_deferred(ls_core_t *core, uint8_t addr, const ls_Request *rq, const ls_session_t *s)
+{
     if (s != NULL && s->last_pending && rq->which_cmd != ls_Request_connect_tag &&
         rq->which_cmd != ls_Request_disconnect_tag) {
         /* One request in flight per session: the deferred one keeps its
@@ -231,8 +246,16 @@ static void on_request(ls_core_t *core, uint8_t addr, ls_Request *rq, const uint
         if (len > 0) {
             ls_send_bytes(core, addr, core->enc, len);
         }
-        return;
+        return true;
     }
+    return false;
+}
+
+/* Run the request: dispatch it, keep it as the session's last (the
+ * retransmission cache) and answer, unless its handler answers later. */
+static void run_request(ls_core_t *core, uint8_t addr, ls_Request *rq, int sup, uint64_t hash, uint64_t now_us)
+{
+    ls_session_t *s = sup >= 0 ? &core->sessions[sup] : NULL;
     memset(&core->down, 0, sizeof core->down);
     core->down.which_msg = ls_Downlink_response_tag;
     ls_Response *res = &core->down.msg.response;
@@ -263,6 +286,19 @@ static void on_request(ls_core_t *core, uint8_t addr, ls_Request *rq, const uint
         res->which_result = 0; /* no result on errors */
     }
     ls_send_response(core, s, addr);
+}
+
+static void on_request(ls_core_t *core, uint8_t addr, ls_Request *rq, const uint8_t *raw, size_t raw_len,
+                       uint64_t now_us)
+{
+    const int sup = ls_core_session_of(core, addr);
+    ls_session_t *s = sup >= 0 ? &core->sessions[sup] : NULL;
+    const uint64_t hash = request_hash(raw, raw_len);
+    if (refused_for_its_seq(core, addr, rq, s, hash) || answered_from_cache(core, addr, rq, s, hash, now_us) ||
+        refused_while_deferred(core, addr, rq, s)) {
+        return;
+    }
+    run_request(core, addr, rq, sup, hash, now_us);
 }
 
 /* Read the seq and the command's field number of an ls.Uplink without

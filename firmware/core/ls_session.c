@@ -110,18 +110,20 @@ static uint32_t heartbeat_token(uint64_t nonce, uint32_t epoch, uint64_t now_us)
     return t != 0u ? t : 1u;
 }
 
-int32_t ls_session_connect(ls_core_t *core, uint8_t addr, ls_call_t *call)
+/* What a connect asks for: its heartbeat period and the disconnect action it
+ * narrows the configured one to. */
+typedef struct {
+    uint32_t period_ms;
+    uint32_t timeout_ms; /* the configured time-out, or LS_HB_MISSED_MAX periods when longer */
+    ls_DisconnectAction action;
+} connect_terms_t;
+
+/* Check the request's protocol version, schema hash, heartbeat period and
+ * disconnect action: LS_OK with *t filled, or the ret_code of the refusal
+ * (answered). Changes no session. */
+static int32_t connect_terms(ls_core_t *core, ls_call_t *call, connect_terms_t *t)
 {
     const ls_ConnectReq *rq = &call->req->cmd.connect;
-    ls_ConnectRes *rs = &call->res->result.connect;
-    call->res->which_result = ls_Response_connect_tag;
-    rs->protocol_version = ls_Protocol_PROTOCOL_VERSION;
-    rs->schema_hash = LS_SCHEMA_HASH;
-    ls_fmt_print(rs->device_name, sizeof rs->device_name, "%s", core->cfg.device_name);
-    ls_fmt_print(rs->firmware_version, sizeof rs->firmware_version, "%s", core->cfg.firmware_version);
-    rs->joint_count = core->cfg.joint_count;
-    rs->heartbeat_timeout_ms = core->cfg.heartbeat_timeout_ms;
-    rs->client_nonce = rq->client_nonce; /* an error carries no result: only an accepted connect's */
     if (rq->protocol_version != (uint32_t)ls_Protocol_PROTOCOL_VERSION) {
         bool host_older = rq->protocol_version < (uint32_t)ls_Protocol_PROTOCOL_VERSION;
         return ls_reply(call, ls_RetCode_CMD_VERSION_MISMATCH_ERR,
@@ -163,6 +165,18 @@ int32_t ls_session_connect(ls_core_t *core, uint8_t addr, ls_call_t *call)
     if (period_ms * LS_HB_MISSED_MAX > timeout_ms) {
         timeout_ms = period_ms * LS_HB_MISSED_MAX;
     }
+    *t = (connect_terms_t){ .period_ms = period_ms, .timeout_ms = timeout_ms, .action = action };
+    return LS_OK;
+}
+
+/* The session slot of a connect from `addr`: the session this client has
+ * there already (its cache cleared: a connect starts a new session, the host
+ * restarts its seq; ownership stays), else a free one. LS_NO_SESSION with
+ * *code the refusal (answered) when another client's session lives on the
+ * address or every slot is taken; nothing of any session changes then. */
+static int connect_slot(ls_core_t *core, uint8_t addr, ls_call_t *call, int32_t *code)
+{
+    const ls_ConnectReq *rq = &call->req->cmd.connect;
     int i = ls_core_session_of(core, addr);
     if (i >= 0 && core->sessions[i].nonce != rq->client_nonce) {
         /* Another client on a live session's address: it would take that
@@ -172,26 +186,13 @@ int32_t ls_session_connect(ls_core_t *core, uint8_t addr, ls_call_t *call)
         call->sup = LS_NO_SESSION;
         call->res->session_epoch = 0u;
         core->connects_refused++;
-        return ls_reply(call, ls_RetCode_CMD_NOT_OWNER_ERR,
-                        "connect: address 0x%02X is in use by another client, \"%s\"%s: pass another "
-                        "--source-address, or none to let the host pick a free one",
-                        addr, live->name, core->owner == i ? " (the owner)" : "");
+        *code = ls_reply(call, ls_RetCode_CMD_NOT_OWNER_ERR,
+                         "connect: address 0x%02X is in use by another client, \"%s\"%s: pass another "
+                         "--source-address, or none to let the host pick a free one",
+                         addr, live->name, core->owner == i ? " (the owner)" : "");
+        return LS_NO_SESSION;
     }
-    if (i < 0) {
-        for (int k = 0; k < LS_MAX_SUPERVISORS; k++) {
-            if (!core->sessions[k].connected) {
-                i = k;
-                break;
-            }
-        }
-        if (i < 0) {
-            return ls_reply(call, ls_RetCode_CMD_NO_RESOURCES_ERR,
-                            "%d supervisors are already connected: disconnect one first", LS_MAX_SUPERVISORS);
-        }
-        bool was_owner_slot = core->owner == i;
-        memset(&core->sessions[i], 0, sizeof core->sessions[i]);
-        (void)was_owner_slot;
-    } else {
+    if (i >= 0) {
         /* connect again from a connected address: a new session (new epoch, the
          * host restarts its seq), so the old retransmission cache must not
          * answer (or swallow) the new session's requests; ownership stays. */
@@ -203,7 +204,24 @@ int32_t ls_session_connect(ls_core_t *core, uint8_t addr, ls_call_t *call)
         old->last_pending = false;
         old->last_resp_len = 0;
         old->notice_seq = 0;
+        return i;
     }
+    for (int k = 0; k < LS_MAX_SUPERVISORS; k++) {
+        if (!core->sessions[k].connected) {
+            memset(&core->sessions[k], 0, sizeof core->sessions[k]);
+            return k;
+        }
+    }
+    *code = ls_reply(call, ls_RetCode_CMD_NO_RESOURCES_ERR,
+                     "%d supervisors are already connected: disconnect one first", LS_MAX_SUPERVISORS);
+    return LS_NO_SESSION;
+}
+
+/* Open session i for the connect's client: a new epoch and heartbeat token,
+ * SI units, the terms it asked for. */
+static void connect_open(ls_core_t *core, int i, uint8_t addr, const ls_call_t *call, const connect_terms_t *t)
+{
+    const ls_ConnectReq *rq = &call->req->cmd.connect;
     ls_session_t *s = &core->sessions[i];
     s->connected = true;
     s->addr = addr;
@@ -211,32 +229,57 @@ int32_t ls_session_connect(ls_core_t *core, uint8_t addr, ls_call_t *call)
     if (core->epoch_next == 0u) {
         core->epoch_next = 1u;
     }
-    rs->session_epoch = s->epoch;
     s->nonce = rq->client_nonce;
     s->hb_token = heartbeat_token(s->nonce, s->epoch, call->now_us);
-    rs->heartbeat_token = s->hb_token;
     /* The supervisor cannot beat before this answer, which carries the token,
      * has reached it: the session counts as heard until the network layer
      * may have given up delivering it (docs/protocol.md "Liveness"). */
     s->last_heard_us = call->now_us + LS_CONNECT_ANSWER_GRACE_US;
-    s->heartbeat_period_ms = period_ms;
-    s->heartbeat_timeout_ms = timeout_ms;
+    s->heartbeat_period_ms = t->period_ms;
+    s->heartbeat_timeout_ms = t->timeout_ms;
     s->units = LS_UNITS_SI; /* every session starts in SI (docs/conformance.md, setUnits) */
-    s->disconnect_action = action;
+    s->disconnect_action = t->action;
     ls_fmt_print(s->name, sizeof s->name, "%s", rq->client_name);
+}
+
+int32_t ls_session_connect(ls_core_t *core, uint8_t addr, ls_call_t *call)
+{
+    const ls_ConnectReq *rq = &call->req->cmd.connect;
+    ls_ConnectRes *rs = &call->res->result.connect;
+    call->res->which_result = ls_Response_connect_tag;
+    rs->protocol_version = ls_Protocol_PROTOCOL_VERSION;
+    rs->schema_hash = LS_SCHEMA_HASH;
+    ls_fmt_print(rs->device_name, sizeof rs->device_name, "%s", core->cfg.device_name);
+    ls_fmt_print(rs->firmware_version, sizeof rs->firmware_version, "%s", core->cfg.firmware_version);
+    rs->joint_count = core->cfg.joint_count;
+    rs->heartbeat_timeout_ms = core->cfg.heartbeat_timeout_ms;
+    rs->client_nonce = rq->client_nonce; /* an error carries no result: only an accepted connect's */
+    connect_terms_t t = { 0 };
+    int32_t code = connect_terms(core, call, &t);
+    if (code != LS_OK) {
+        return code;
+    }
+    const int i = connect_slot(core, addr, call, &code);
+    if (i == LS_NO_SESSION) {
+        return code;
+    }
+    connect_open(core, i, addr, call, &t);
+    const ls_session_t *s = &core->sessions[i];
     call->sup = i;
     if (core->held && core->held_addr == addr) {
         /* The lost owner is back: the kept lock is its own again. */
         core->held = false;
         core->owner = i;
     }
-    rs->heartbeat_timeout_ms = timeout_ms;
-    rs->disconnect_action = action;
-    rs->linear_unit = s->units.linear;
-    rs->angular_unit = s->units.angular;
     if (core->state == ls_State_IDLE) {
         core->state = ls_State_UNLOCKED;
     }
+    rs->session_epoch = s->epoch;
+    rs->heartbeat_token = s->hb_token;
+    rs->heartbeat_timeout_ms = t.timeout_ms;
+    rs->disconnect_action = t.action;
+    rs->linear_unit = s->units.linear;
+    rs->angular_unit = s->units.angular;
     rs->state = core->state;
     rs->owner = core->owner == i;
     return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "connected to %s as 0x%02X", core->cfg.device_name, addr);
