@@ -1,8 +1,9 @@
 #!/bin/sh
-# Regenerate the host package's copies of the protocol artefacts from protocol/.
+# Regenerate the host package's copies of the protocol artefacts from protocol/,
+# and the command index docs/handlers.md.
 # Run after every change of protocol/landscape.proto, .dbc or .options, of the
-# robot model (firmware/model/ls_robot_model.c, the URDF's source) or of the
-# model file's keys (firmware/model/ls_robot_model_file.c);
+# robot model (firmware/model/ls_robot_model.c, the URDF's source), of the
+# model file's keys (firmware/model/ls_robot_model_file.c) or of a handler;
 # tests/host/test_generated.py fails while the committed copies are stale.
 set -eu
 here=$(cd "$(dirname "$0")" && pwd)
@@ -18,4 +19,7 @@ ls_urdf="${LS_BUILD_DIR:-$root/build}/bin/ls_urdf"
 "$ls_urdf" -o "$out/ls-sim6.urdf"
 # The robot model file's keys, units and ranges (`landscape model check`).
 "${LS_BUILD_DIR:-$root/build}/bin/ls_robot_model" keys > "$out/robot-model-keys.json"
-echo "updated $out/landscape_pb2.py(i), landscape.desc, landscape.dbc, landscape.options, ls-sim6.urdf and robot-model-keys.json"
+# The command index: each command's handler, file and final notices.
+/usr/bin/python3 "$root/protocol/gen_registry.py" --index "$out" "$root/firmware/core" "$root/docs/handlers.md"
+echo "updated $out/landscape_pb2.py(i), landscape.desc, landscape.dbc, landscape.options, ls-sim6.urdf,"\
+  "robot-model-keys.json and docs/handlers.md"

@@ -172,7 +172,7 @@ int32_t ls_mcmd_start_plan(ls_core_t *core, ls_call_t *call, ls_motion_plan_t *s
         return ls_reply(call, ls_RetCode_CMD_BUSY_ERR, "%s: the control loop's command queue is full; try again",
                         seed_name);
     }
-    ls_run_begin(core, call, false, seed_name, point, path);
+    ls_run_begin(core, call, false, point, path);
     return ls_reply(call, ls_RetCode_CMD_STARTED_OK, "%s started: expect %sComplete or an alarm%s%s", seed_name,
                     seed_name, note != NULL ? "; " : "", note != NULL ? note : "");
 }

@@ -179,7 +179,7 @@ static int32_t start_react(ls_core_t *core, ls_call_t *call, ls_react_plan_t *sl
         return ls_reply(call, ls_RetCode_CMD_BUSY_ERR, "%s: the control loop's command queue is full; try again",
                         run->seed_name);
     }
-    ls_run_begin(core, call, true, run->seed_name, run->seed_name, LS_PATH_NONE);
+    ls_run_begin(core, call, true, run->seed_name, LS_PATH_NONE);
     core->run.comply = run->comply;
     core->run.sensor = run->sensor;
     core->run.length = run->length;
@@ -582,19 +582,22 @@ static void rest(ls_core_t *core)
     }
 }
 
-const char *ls_core_sensor_end_suffix(ls_react_end_t end)
+ls_EventId ls_core_sensor_final(const ls_cmd_finals_t *f, ls_react_end_t end)
 {
+    if (f == NULL) {
+        return ls_EventId_EVENT_ID_NONE;
+    }
     switch (end) {
     case LS_REACT_END_THRESHOLD:
-    case LS_REACT_END_MAX_DISTANCE: return "Complete";
-    case LS_REACT_END_ENVELOPE: return "Envelope";
-    case LS_REACT_END_TIMEOUT: return "Timeout";
-    case LS_REACT_END_PANIC: return "PanicStop";
-    case LS_REACT_END_ABORTED: return "Aborted";
+    case LS_REACT_END_MAX_DISTANCE: return f->complete;
+    case LS_REACT_END_ENVELOPE: return f->envelope;
+    case LS_REACT_END_TIMEOUT: return f->timeout;
+    case LS_REACT_END_PANIC: return f->panic_stop;
+    case LS_REACT_END_ABORTED: return f->aborted;
     case LS_REACT_END_UNREACHABLE:
     case LS_REACT_END_NO_SENSOR: break;
     }
-    return "Failed";
+    return f->failed;
 }
 
 static void react_end(ls_core_t *core, const ls_ctl_event_t *ev)
@@ -654,7 +657,7 @@ static void react_end(ls_core_t *core, const ls_ctl_event_t *ev)
         }
     }
     bool ok = rep->end == LS_REACT_END_THRESHOLD || rep->end == LS_REACT_END_MAX_DISTANCE;
-    const ls_EventId id = ls_run_end_event(core->run.seed_name, ls_core_sensor_end_suffix(rep->end));
+    const ls_EventId id = ls_core_sensor_final(core->run.finals, rep->end);
     core->run.active = false;
     rest(core);
     ls_core_notify_to(core, core->run.addr, core->run.epoch, ok ? ls_NoticeKind_EVENT : ls_NoticeKind_ALARM, id,

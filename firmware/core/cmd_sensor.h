@@ -10,10 +10,11 @@
 #include "ls_control.h"
 #include "ls_core_services.h"
 
-/* The suffix of a sensor-guided move's final event id for its ending:
- * "Complete", "Envelope", "Timeout", "PanicStop", "Aborted" or "Failed"
- * (docs/protocol.md "Motion lifecycle"; ls_run_end_event makes the id). */
-const char *ls_core_sensor_end_suffix(ls_react_end_t end);
+/* A sensor-guided move's final notice for its ending, from its command's
+ * finals `f` (ls_cmd_table: <command>Complete, ...Envelope, ...Timeout,
+ * ...PanicStop, ...Aborted or ...Failed; docs/protocol.md "Motion
+ * lifecycle"). EVENT_ID_NONE for f NULL. */
+ls_EventId ls_core_sensor_final(const ls_cmd_finals_t *f, ls_react_end_t end);
 
 /* The name of value `k` of sensor `s` ("Fx", ..., "distance") and its SI unit
  * in *unit_si ("N", "Nm", "m"), or NULL past its last value (describe). */

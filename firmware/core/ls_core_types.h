@@ -48,7 +48,7 @@ typedef struct {
     uint8_t addr;   /* its address: the final notice goes there */
     uint32_t epoch; /* its session epoch */
     uint32_t ref_seq;
-    char seed_name[24]; /* "moveAbsolute", "pathMove", "comply", ... */
+    const ls_cmd_finals_t *finals; /* its command's final notices (ls_cmd_table: ls_EventId_<command><ending>) */
     char point[LS_MOTION_NAME_LEN];
     int path;          /* index of the path queue it runs, LS_PATH_NONE for single moves */
     bool dry_run;      /* pathMove with number_of_cycles 0: its notices carry dry_run=true */

@@ -21,21 +21,14 @@ const char *ls_run_end_name(ls_run_end_t why)
     return ls_motion_end_text((ls_MotionEnd)why);
 }
 
-ls_EventId ls_run_end_event(const char *seed_name, const char *suffix)
-{
-    char name[48];
-    int n = ls_fmt_print(name, sizeof name, "%s%s", seed_name, suffix);
-    return n > 0 && (size_t)n < sizeof name ? ls_event_find(name) : ls_EventId_EVENT_ID_NONE;
-}
-
 const char *ls_run_end_suffix(ls_run_end_t why)
 {
     return ls_motion_end_suffix((ls_MotionEnd)why);
 }
 
-void ls_run_begin(ls_core_t *core, const ls_call_t *call, bool react, const char *seed_name, const char *point,
-                  int path)
+void ls_run_begin(ls_core_t *core, const ls_call_t *call, bool react, const char *point, int path)
 {
+    const ls_cmd_desc_t *cmd = ls_cmd_find(call->req->which_cmd);
     ls_run_t *r = &core->run;
     const ls_session_t *s = &core->sessions[call->sup];
     memset(r, 0, sizeof *r);
@@ -47,7 +40,7 @@ void ls_run_begin(ls_core_t *core, const ls_call_t *call, bool react, const char
     r->ref_seq = call->req->seq;
     r->path = path;
     r->stop_sup = LS_NO_SESSION;
-    ls_fmt_print(r->seed_name, sizeof r->seed_name, "%s", seed_name);
+    r->finals = cmd != NULL ? cmd->finals : NULL;
     ls_fmt_print(r->point, sizeof r->point, "%s", point);
     core->state = ls_State_MOVING;
     ls_core_set_motion_state(core, LANDSCAPE_STATUS_ST_MOTION_RUNNING_TRAJECTORY_CHOICE);
@@ -70,7 +63,7 @@ void ls_run_finish(ls_core_t *core, ls_run_end_t why, const char *const *extra, 
     if (r->dry_run) {
         data[n++] = "dry_run=true";
     }
-    const ls_EventId id = ls_run_end_event(r->seed_name, ls_run_end_suffix(why));
+    const ls_EventId id = ls_motion_end_final(r->finals, (ls_MotionEnd)why);
     r->active = false;
     r->wait_active = false;
     ls_core_notify_to(core, r->addr, r->epoch, why == LS_RUN_END_COMPLETE ? ls_NoticeKind_EVENT : ls_NoticeKind_ALARM,

@@ -30,15 +30,10 @@ struct ls_call;
 const char *ls_run_end_name(ls_run_end_t why);
 const char *ls_run_end_suffix(ls_run_end_t why);
 
-/* The schema's event id <seed_name><suffix> (enum ls.EventId), or
- * ls_EventId_EVENT_ID_NONE when the schema does not declare it (a bug that
- * protocol/gen_registry.py and tests/unit/core catch). Dispatcher; O(ids). */
-ls_EventId ls_run_end_event(const char *seed_name, const char *suffix);
-
-/* Take the run for the request being answered (call); ls_core_t.state becomes
+/* Take the run for the request being answered (call): its final notices are
+ * its command's (the schema's, ls_cmd_desc_t.finals); ls_core_t.state becomes
  * MOVING and motion_state running_trajectory. */
-void ls_run_begin(struct ls_core *core, const struct ls_call *call, bool react, const char *seed_name,
-                  const char *point, int path);
+void ls_run_begin(struct ls_core *core, const struct ls_call *call, bool react, const char *point, int path);
 
 /* Send the run's one final notice now and close it (no-op when no run).
  * extra: data strings after `point=` and `reason=` (e.g. joints=, fault=). */

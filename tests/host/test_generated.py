@@ -4,6 +4,7 @@ from __future__ import annotations
 import os
 import shutil
 import subprocess
+import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -62,3 +63,11 @@ def test_model_keys_copy_matches_the_firmwares_key_table() -> None:
 def test_options_copy_matches_protocol() -> None:
     assert (GEN / "landscape.options").read_bytes() == (ROOT / "protocol" / "landscape.options").read_bytes(), \
         f"landscape.options is stale: {FIX}"
+
+
+def test_command_index_matches_the_schema_and_the_handlers(tmp_path: Path) -> None:
+    """docs/handlers.md leads from every command's wire name to its handler and file."""
+    out = tmp_path / "handlers.md"
+    subprocess.run([sys.executable, str(ROOT / "protocol" / "gen_registry.py"), "--index", str(GEN),
+                    str(ROOT / "firmware" / "core"), str(out)], check=True)
+    assert (ROOT / "docs" / "handlers.md").read_text() == out.read_text(), f"docs/handlers.md is stale: {FIX}"

@@ -2658,9 +2658,9 @@ static void test_describe_robot_sends_the_urdf_of_the_model_in_pieces(void **sta
     assert_non_null(strstr(past->ret_msg, "is past the end of the URDF"));
 }
 
-/* Every final notice the core composes (<command><suffix>) is declared in the
- * schema: each ending of every non-blocking command, and each ending of the
- * sensor-guided moves. */
+/* Every final notice the core sends is declared in the schema: each ending
+ * of every non-blocking command, and each ending of the sensor-guided moves
+ * (the generated finals of ls_cmd_table, protocol/gen_registry.py). */
 static void test_every_final_notice_id_is_declared_in_the_schema(void **state)
 {
     (void)state;
@@ -2668,30 +2668,35 @@ static void test_every_final_notice_id_is_declared_in_the_schema(void **state)
     for (size_t i = 0; i < LS_CMD_COUNT; i++) {
         const ls_cmd_desc_t *d = &ls_cmd_table[i];
         if ((d->flags & LS_CMD_F_BLOCKING) != 0u) {
+            assert_null(d->finals); /* a blocking command answers; it sends no final notice */
             continue;
         }
         for (int why = 0; why < (int)LS_RUN_END_COUNT; why++) {
-            const char *suffix = ls_run_end_suffix((ls_run_end_t)why);
-            if (ls_run_end_event(d->name, suffix) == ls_EventId_EVENT_ID_NONE) {
-                fail_msg("%s%s (ending %s) is not declared in enum EventId", d->name, suffix,
-                         ls_run_end_name((ls_run_end_t)why));
+            const ls_EventId id = ls_motion_end_final(d->finals, (ls_MotionEnd)why);
+            if (id == ls_EventId_EVENT_ID_NONE) {
+                fail_msg("%s%s (ending %s) is not declared in enum EventId", d->name,
+                         ls_run_end_suffix((ls_run_end_t)why), ls_run_end_name((ls_run_end_t)why));
             }
+            /* the id's name is the command's and the ending's: <command><suffix> */
+            char want[48];
+            snprintf(want, sizeof want, "%s%s", d->name, ls_run_end_suffix((ls_run_end_t)why));
+            assert_string_equal(ls_EventId_name(id), want);
             checked++;
         }
     }
-    const char *const react[] = { "moveReact", "comply" };
+    const pb_size_t react[] = { ls_Request_move_react_tag, ls_Request_comply_tag };
     for (size_t i = 0; i < 2; i++) {
+        const ls_cmd_desc_t *d = ls_cmd_find(react[i]);
         for (int end = LS_REACT_END_THRESHOLD; end <= LS_REACT_END_NO_SENSOR; end++) {
-            const char *suffix = ls_core_sensor_end_suffix((ls_react_end_t)end);
-            if (ls_run_end_event(react[i], suffix) == ls_EventId_EVENT_ID_NONE) {
-                fail_msg("%s%s is not declared in enum EventId", react[i], suffix);
+            if (ls_core_sensor_final(d->finals, (ls_react_end_t)end) == ls_EventId_EVENT_ID_NONE) {
+                fail_msg("%s: the ending %d is not declared in enum EventId", d->name, end);
             }
             checked++;
         }
     }
     assert_true(checked >= 6u * LS_RUN_END_COUNT);
     /* and the lookup refuses what the schema does not declare */
-    assert_int_equal(ls_run_end_event("moveAbsolute", "Exploded"), ls_EventId_EVENT_ID_NONE);
+    assert_int_equal(ls_motion_end_final(NULL, ls_MotionEnd_END_COMPLETE), ls_EventId_EVENT_ID_NONE);
     assert_int_equal(ls_event_find("moveComplete"), ls_EventId_EVENT_ID_NONE);
     assert_int_equal(ls_event_find("AUX_NAMED_EVENT"), ls_EventId_EVENT_ID_NONE);
     assert_string_equal(ls_EventId_name(ls_event_find("moveAbsoluteComplete")), "moveAbsoluteComplete");
