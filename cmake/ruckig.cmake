@@ -1,50 +1,39 @@
-# ruckig's C++ sources, the same release as the Python oracle and benchmark
-# (host_tools/constraints.txt pins ruckig==0.19.4), from its PyPI sdist: one
-# download per machine, checked against the sdist's published SHA256, then
-# extracted into the build tree. Defines the static library ls_ruckig (the
-# state-to-state solver only; ls_otg in firmware/motion is its C API).
+# ruckig's C++ sources, the same release as the Python oracle and benchmark:
+# the version host_tools/constraints.txt pins (ruckig==V, its one home), from
+# its sdist, which .ci/setup fetches with the registry's own client (pip
+# download --no-binary :all: --no-deps ruckig==V, which knows its index and
+# this machine's settings) into .deps/. The configure never downloads: it
+# checks the file against the sdist's SHA256 below and extracts it into the
+# build tree. Defines the static library ls_ruckig (the state-to-state solver
+# only; ls_otg in firmware/motion is its C API).
 #
-#   -DLS_RUCKIG_SDIST=/path/to/ruckig-0.19.4.tar.gz   use this file (offline)
-#   default: ${LS_DEPS_DIR}/ruckig-0.19.4.tar.gz, downloaded once when absent;
-#   LS_DEPS_DIR defaults to .deps/ in the source tree, shared by every build dir.
-set(LS_RUCKIG_VERSION 0.19.4)
-set(LS_RUCKIG_SHA256 71d003bf0ff9aa0031d4520b0290a5ffa6458149f5afce8be3ed6d6fba49ea64)
-set(LS_RUCKIG_URL
-    "https://files.pythonhosted.org/packages/4a/2a/d1c1639bf76699ab1c3c1281101372f2b749d0ad8aee4c19200947b92785/ruckig-${LS_RUCKIG_VERSION}.tar.gz")
+#   -DLS_RUCKIG_SDIST=/path/to/ruckig-V.tar.gz   use this file
+#   default: ${LS_DEPS_DIR}/ruckig-V.tar.gz; LS_DEPS_DIR defaults to .deps/ in
+#   the source tree, shared by every build dir.
 get_filename_component(ls_ruckig_root "${CMAKE_CURRENT_LIST_DIR}/.." ABSOLUTE)
-set(LS_DEPS_DIR "${ls_ruckig_root}/.deps" CACHE PATH "Where downloaded third-party sources are kept")
+file(STRINGS "${ls_ruckig_root}/host_tools/constraints.txt" ls_ruckig_pin REGEX "^ruckig==")
+set_property(DIRECTORY APPEND PROPERTY CMAKE_CONFIGURE_DEPENDS "${ls_ruckig_root}/host_tools/constraints.txt")
+string(REGEX REPLACE "^ruckig==([0-9.]+).*$" "\\1" LS_RUCKIG_VERSION "${ls_ruckig_pin}")
+if(NOT LS_RUCKIG_VERSION MATCHES "^[0-9]+\\.[0-9]+\\.[0-9]+$")
+  message(FATAL_ERROR "ruckig: host_tools/constraints.txt pins no ruckig==X.Y.Z (found '${ls_ruckig_pin}')")
+endif()
+# The SHA256 of that version's sdist: a new pin fails here until this is its hash.
+set(LS_RUCKIG_SHA256 71d003bf0ff9aa0031d4520b0290a5ffa6458149f5afce8be3ed6d6fba49ea64)
+set(LS_DEPS_DIR "${ls_ruckig_root}/.deps" CACHE PATH "Where third-party sources are kept (.ci/setup fills it)")
 set(LS_RUCKIG_SDIST "${LS_DEPS_DIR}/ruckig-${LS_RUCKIG_VERSION}.tar.gz" CACHE FILEPATH
-    "ruckig ${LS_RUCKIG_VERSION} sdist (PyPI); downloaded here when absent")
+    "ruckig ${LS_RUCKIG_VERSION} sdist (.ci/setup fetches it with pip download)")
 
 if(NOT EXISTS "${LS_RUCKIG_SDIST}")
-  message(STATUS "ruckig: downloading ${LS_RUCKIG_URL}")
-  # A name of its own, renamed when complete: configures that run at once
-  # (CI's build directories) never read each other's half-written file.
-  string(RANDOM LENGTH 8 ls_dl_tag)
-  set(ls_dl_part "${LS_RUCKIG_SDIST}.${ls_dl_tag}.part")
-  # Where HTTPS goes through a proxy with a CA of its own, SSL_CERT_FILE names
-  # the bundle to trust (OpenSSL's convention, which Python follows too);
-  # otherwise curl's default, Debian's ca-certificates.
-  set(ls_dl_cainfo "")
-  if(DEFINED ENV{SSL_CERT_FILE} AND EXISTS "$ENV{SSL_CERT_FILE}")
-    set(ls_dl_cainfo TLS_CAINFO "$ENV{SSL_CERT_FILE}")
-  endif()
-  file(DOWNLOAD "${LS_RUCKIG_URL}" "${ls_dl_part}" STATUS ls_dl_status TLS_VERIFY ON ${ls_dl_cainfo})
-  list(GET ls_dl_status 0 ls_dl_code)
-  if(NOT ls_dl_code EQUAL 0)
-    list(GET ls_dl_status 1 ls_dl_text)
-    file(REMOVE "${ls_dl_part}")
-    message(FATAL_ERROR "ruckig: could not download ${LS_RUCKIG_URL} (${ls_dl_text}). Offline: fetch "
-                        "ruckig-${LS_RUCKIG_VERSION}.tar.gz elsewhere (pip download --no-binary :all: --no-deps "
-                        "ruckig==${LS_RUCKIG_VERSION}) and configure with -DLS_RUCKIG_SDIST=/path/to/it")
-  endif()
-  file(RENAME "${ls_dl_part}" "${LS_RUCKIG_SDIST}")
+  message(FATAL_ERROR "ruckig: ${LS_RUCKIG_SDIST} is missing: run bash .ci/setup (it fetches it with "
+                      "pip download --no-binary :all: --no-deps ruckig==${LS_RUCKIG_VERSION} into .deps/), or "
+                      "configure with -DLS_RUCKIG_SDIST=/path/to/ruckig-${LS_RUCKIG_VERSION}.tar.gz")
 endif()
 file(SHA256 "${LS_RUCKIG_SDIST}" ls_ruckig_sha)
 if(NOT ls_ruckig_sha STREQUAL LS_RUCKIG_SHA256)
-  message(FATAL_ERROR "ruckig: ${LS_RUCKIG_SDIST} has SHA256 ${ls_ruckig_sha}, not the ${LS_RUCKIG_VERSION} sdist's "
-                      "${LS_RUCKIG_SHA256}. Delete it (the next configure downloads it again) or point "
-                      "-DLS_RUCKIG_SDIST at the genuine ruckig-${LS_RUCKIG_VERSION}.tar.gz from PyPI")
+  message(FATAL_ERROR "ruckig: ${LS_RUCKIG_SDIST} has SHA256 ${ls_ruckig_sha}, not the one this tree expects "
+                      "(${LS_RUCKIG_SHA256}, cmake/ruckig.cmake). Delete it and run bash .ci/setup again, or "
+                      "point -DLS_RUCKIG_SDIST at the genuine ruckig-${LS_RUCKIG_VERSION}.tar.gz; after a new "
+                      "pin in host_tools/constraints.txt, set LS_RUCKIG_SHA256 to its sdist's hash")
 endif()
 
 set(LS_RUCKIG_DIR "${CMAKE_BINARY_DIR}/_deps/ruckig-${LS_RUCKIG_VERSION}")
