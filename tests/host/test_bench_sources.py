@@ -15,21 +15,21 @@ from b_footprint import deb_src_parts
 def test_one_line_sources_list_as_mmdebstrap_writes_it(tmp_path: Path) -> None:
     (tmp_path / "sources.list").write_text(
         "# a comment: deb http://example.org/ bookworm main\n"
-        "deb http://deb.debian.org/debian bookworm main\n"
-        "  deb [arch=amd64 signed-by=/k.gpg] http://deb.debian.org/debian bookworm-updates main contrib\n"
-        "deb-src http://deb.debian.org/debian bookworm main\n")
+        "deb http://archive.invalid/debian bookworm main\n"
+        "  deb [arch=amd64 signed-by=/k.gpg] http://archive.invalid/debian bookworm-updates main contrib\n"
+        "deb-src http://archive.invalid/debian bookworm main\n")
     assert deb_src_parts(tmp_path) == {"src0.list": (
-        "deb-src http://deb.debian.org/debian bookworm main\n"
-        "  deb-src [arch=amd64 signed-by=/k.gpg] http://deb.debian.org/debian bookworm-updates main contrib\n")}
+        "deb-src http://archive.invalid/debian bookworm main\n"
+        "  deb-src [arch=amd64 signed-by=/k.gpg] http://archive.invalid/debian bookworm-updates main contrib\n")}
 
 
 def test_deb822_sources_as_debian_12_cloud_images_write_them(tmp_path: Path) -> None:
     d = tmp_path / "sources.list.d"
     d.mkdir()
-    (d / "debian.sources").write_text("Types: deb\nURIs: http://deb.debian.org/debian\nSuites: bookworm\n"
+    (d / "debian.sources").write_text("Types: deb\nURIs: http://archive.invalid/debian\nSuites: bookworm\n"
                                       "Components: main\n\nTypes: deb deb-src\nURIs: http://x/\nSuites: y\n")
     (d / "notes.txt").write_text("deb http://ignored/ x main\n")
-    assert deb_src_parts(tmp_path) == {"src0.sources": "Types: deb-src\nURIs: http://deb.debian.org/debian\n"
+    assert deb_src_parts(tmp_path) == {"src0.sources": "Types: deb-src\nURIs: http://archive.invalid/debian\n"
                                        "Suites: bookworm\nComponents: main\n\nTypes: deb-src\nURIs: http://x/\n"
                                        "Suites: y\n"}
 
