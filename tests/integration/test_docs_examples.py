@@ -29,6 +29,15 @@ import pytest
 
 from conftest import CLI, ROOT, start_controller
 
+#: Runs the command that follows with SIGINT at its default action. A suite started in the
+#: background by a non-interactive shell (`nohup ... &`) has SIGINT ignored, and an ignored
+#: signal stays ignored across exec: the open-ended commands would never see the SIGINT that
+#: ends them. Resetting it in the child itself, just before its exec, keeps the test's own
+#: disposition and needs no preexec_fn (not safe while the test has threads).
+WITH_DEFAULT_SIGINT = [sys.executable, "-c",
+                       "import os, signal, sys; signal.signal(signal.SIGINT, signal.SIG_DFL); "
+                       "os.execv(sys.argv[1], sys.argv[1:])"]
+
 DOCS = ("README.md", "docs/host-tool.md")
 DOC_PTY = "/tmp/ls0"
 #: Commands that run until Ctrl-C unless bounded by one of these options.
@@ -186,8 +195,8 @@ def run_sh_line(ws: Workspace, block: Block, lineno: int, line: str) -> list[str
         args = [ws.here(a) for a in argv[1:]]
         sub = next((a for a in args if not a.startswith("-") and a in OPEN_ENDED), None)
         open_ended = sub is not None and not any(a in OPEN_ENDED[sub] for a in args)
-        proc = subprocess.Popen([str(CLI), *args], cwd=ws.cwd, env=ws.env, stdin=subprocess.DEVNULL,
-                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        proc = subprocess.Popen([*WITH_DEFAULT_SIGINT, str(CLI), *args], cwd=ws.cwd, env=ws.env,
+                                stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         first = ""
         if open_ended:
             # once it runs (its first line, or a few seconds for a display that prints at its end)
