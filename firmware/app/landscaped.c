@@ -58,7 +58,8 @@ static volatile sig_atomic_t g_stop; /* the signal that asked us to stop, 0: non
  * takes a spinlock for a counter add and a wake-up (a priority-inheriting
  * lock on PREEMPT_RT), where a pipe's write takes the pipe's sleeping mutex,
  * which the comms thread's read holds at normal priority. */
-static int g_wake_fd = -1;
+#define NO_FD (-1) /* g_wake_fd: none (before start, after the stop) */
+static int g_wake_fd = NO_FD;
 
 /* Async-signal-safe; never blocks (EAGAIN only at a counter of 2^64 - 2). */
 static void wake_comms(void *ctx)
@@ -553,76 +554,86 @@ static int compose(const ls_config_t *o)
     return LS_OK;
 }
 
-int main(int argc, char **argv)
+/* The command line and the configuration file: true to go on; false with
+ * *exit_code when landscaped ends here (--help, --check, a bad
+ * configuration: one line on stderr, or --check's report on stdout). */
+static bool read_configuration(ls_config_t *opt, int argc, char **argv, int *exit_code)
 {
-    static ls_config_t opt;
     char cmsg[512];
-    ls_config_defaults(&opt);
-    int cr = ls_config_from_args(&opt, argc, argv, cmsg, sizeof cmsg);
+    ls_config_defaults(opt);
+    int cr = ls_config_from_args(opt, argc, argv, cmsg, sizeof cmsg);
     if (cr == 1) {
-        return LS_EXIT_OK; /* --help */
+        *exit_code = LS_EXIT_OK; /* --help */
+        return false;
     }
     if (cr < 0) {
-        if (opt.check) {
-            return ls_check_config_error(cmsg, stdout);
+        if (opt->check) {
+            *exit_code = ls_check_config_error(cmsg, stdout);
+            return false;
         }
         LOG_ERR("%s", cmsg);
-        return LS_EXIT_BAD_CONFIG;
+        *exit_code = LS_EXIT_BAD_CONFIG;
+        return false;
     }
-    if (opt.check) {
-        return ls_check_run(&opt, stdout);
+    if (opt->check) {
+        *exit_code = ls_check_run(opt, stdout);
+        return false;
     }
-    if (ls_config_validate(&opt, cmsg, sizeof cmsg) != 0 ||
-        ls_robot_config_load(&opt, &g_model, cmsg, sizeof cmsg) != 0) {
+    if (ls_config_validate(opt, cmsg, sizeof cmsg) != 0 ||
+        ls_robot_config_load(opt, &g_model, cmsg, sizeof cmsg) != 0) {
         LOG_ERR("%s", cmsg);
-        return LS_EXIT_BAD_CONFIG;
+        *exit_code = LS_EXIT_BAD_CONFIG;
+        return false;
     }
-    if (strcmp(opt.arm, "cia402") == 0) {
+    if (strcmp(opt->arm, "cia402") == 0) {
         /* The drives' EDS files and the bus budget are configuration too:
          * refused like a bad key, before anything opens (exit 2). */
         static ls_drive_plan_t plan;
-        const int pr = ls_drive_plan(&opt, &plan, cmsg, sizeof cmsg);
+        const int pr = ls_drive_plan(opt, &plan, cmsg, sizeof cmsg);
         if (pr != LS_OK) {
             LOG_ERR("%s", cmsg);
-            return pr == LS_EIO ? 1 : LS_EXIT_BAD_CONFIG; /* an unreadable EDS file is the machine's */
+            *exit_code = pr == LS_EIO ? 1 : LS_EXIT_BAD_CONFIG; /* an unreadable EDS file is the machine's */
+            return false;
         }
         if (!plan.budget_fits) {
             LOG_ERR("%s", plan.budget);
-            return LS_EXIT_BAD_CONFIG;
+            *exit_code = LS_EXIT_BAD_CONFIG;
+            return false;
         }
     }
-    g_wake_fd = eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
-    if (g_wake_fd < 0) {
-        LOG_ERR("the comms thread's eventfd: %s", strerror(errno));
-        return 1;
-    }
-    install_signals();
+    return true;
+}
 
+/* The core and the network layer on the configured links, then the rest of
+ * the composition (compose: devices and the control thread). 0, or 1 with
+ * the cause logged. */
+static int start(const ls_config_t *opt)
+{
     ls_core_config_t cfg = {
-        .device_name = opt.name,
+        .device_name = opt->name,
         .firmware_version = LS_FIRMWARE_VERSION,
-        .node_addr = opt.node,
+        .node_addr = opt->node,
         .joint_count = LS_N_JOINTS,
-        .heartbeat_timeout_ms = opt.heartbeat_timeout_ms,
-        .disconnect_action = (ls_DisconnectAction)opt.disconnect_action,
+        .heartbeat_timeout_ms = opt->heartbeat_timeout_ms,
+        .disconnect_action = (ls_DisconnectAction)opt->disconnect_action,
     };
     ls_core_io_t io = { .send_downlink = ls_net_send_downlink, .describe = ls_net_describe, .ctx = &g_net };
-    g_cfg_running = &opt;
+    g_cfg_running = opt;
     ls_core_actions_t act = { .describe_rt = describe_rt,
                               .log_warn = core_log_warn,
                               .describe_config = describe_config };
     ls_core_actions_for_loop(&act, &g_ctl);
     ls_core_init(&g_core, &cfg, &io, &act);
-    ls_net_init(&g_net, opt.node, &g_core);
+    ls_net_init(&g_net, opt->node, &g_core);
 
     int rc = 0;
-    for (size_t i = 0; i < opt.n_links; i++) {
+    for (size_t i = 0; i < opt->n_links; i++) {
         hal_can_link_t link;
-        if (open_link(opt.links[i], &link) != 0) {
+        if (open_link(opt->links[i], &link) != 0) {
             rc = 1;
             break;
         }
-        if (opt.link_faults[0] != '\0' && wrap_faults(opt.link_faults, &link) != 0) {
+        if (opt->link_faults[0] != '\0' && wrap_faults(opt->link_faults, &link) != 0) {
             hal_can_close(&link);
             rc = 1;
             break;
@@ -633,87 +644,106 @@ int main(int argc, char **argv)
     /* The control thread (and anything it starts) never takes a stop signal:
      * this thread runs the stop. */
     block_stop_signals(true);
-    if (rc == 0 && compose(&opt) != 0) {
+    if (rc == 0 && compose(opt) != 0) {
         rc = 1;
     }
     block_stop_signals(false);
-    const bool started = rc == 0;
     if (rc == 0) {
-        LOG_INFO("%s ready: node 0x%02X, firmware %s, schema %08X", opt.name, opt.node, LS_FIRMWARE_VERSION,
+        LOG_INFO("%s ready: node 0x%02X, firmware %s, schema %08X", opt->name, opt->node, LS_FIRMWARE_VERSION,
                  (unsigned)LS_SCHEMA_HASH);
     }
+    return rc;
+}
+
+/* SIGTERM/SIGINT/SIGHUP/SIGQUIT: a motion stops along its path at the
+ * model's maximum deceleration, the drives go off, its final notice
+ * (reason=shutdown) goes out, then the process exits, within the shutdown's
+ * budget (ls_run.h LS_RUN_SHUTDOWN_*, which the systemd unit's
+ * TimeoutStopSec follows: docs/reliability.md "Signals"). */
+typedef struct {
+    uint64_t at;         /* the stop signal came, 0: not yet */
+    uint64_t flushed_at; /* the final notices have left by then, 0: the stop still runs */
+} shutdown_t;
+
+/* One comms turn's part of the shutdown: true when the comms loop ends now. */
+static bool shutdown_over(shutdown_t *sd)
+{
+    if (g_stop && sd->at == 0) {
+        sd->at = mono_us();
+        LOG_INFO("%s received at %llu.%06llu s (CLOCK_MONOTONIC), control loop behind by %llu us",
+                 signal_name((int)g_stop), (unsigned long long)(sd->at / 1000000u),
+                 (unsigned long long)(sd->at % 1000000u), (unsigned long long)rt_behind_us());
+        if (g_core.ctl == NULL || !ls_run_shutdown(&g_core, sd->at)) {
+            return true;
+        }
+        LOG_INFO("shutting down: stopping the motion first");
+    }
+    if (sd->at == 0) {
+        return false;
+    }
+    const uint64_t t = mono_us();
+    if (g_core.halt.active && t - sd->at > LS_RUN_SHUTDOWN_STOP_MAX_US) {
+        LOG_WARN("shutting down: the motion did not stop within %llu ms",
+                 (unsigned long long)(LS_RUN_SHUTDOWN_STOP_MAX_US / 1000u));
+        return true;
+    }
+    if (!g_core.halt.active && sd->flushed_at == 0) {
+        /* The stop is timed in control cycles; overruns (rtstats) stretch it
+         * in wall time by the growth of behind_us. */
+        LOG_INFO("shutting down: the motion stopped at %llu.%06llu s, control loop behind by %llu us",
+                 (unsigned long long)(t / 1000000u), (unsigned long long)(t % 1000000u),
+                 (unsigned long long)rt_behind_us());
+        sd->flushed_at = t + LS_RUN_SHUTDOWN_FLUSH_US; /* the final notices leave (ISO-TP flow control) */
+    }
+    return sd->flushed_at != 0 && t >= sd->flushed_at;
+}
+
+/* Sleep until a frame, a wake-up (loop event, signal) or `due`: no fixed
+ * poll period. */
+static void comms_sleep(uint64_t due)
+{
+    struct pollfd fds[LS_NET_MAX_LINKS + 1];
+    nfds_t n = 0;
+    fds[n++] = (struct pollfd){ .fd = g_wake_fd, .events = POLLIN, .revents = 0 };
+    for (size_t i = 0; i < g_net.n_links; i++) {
+        due = earliest(due, hal_can_next_due_us(&g_net.links[i]));
+        int fd = hal_can_poll_fd(&g_net.links[i]);
+        if (fd >= 0) {
+            const short out = hal_can_tx_pending(&g_net.links[i]) ? POLLOUT : 0;
+            fds[n++] = (struct pollfd){ .fd = fd, .events = (short)(POLLIN | out), .revents = 0 };
+        }
+    }
+    const uint64_t now = mono_us();
+    const uint64_t wait_us = due > now ? due - now : 0u;
+    const struct timespec ts = { .tv_sec = (time_t)(wait_us / 1000000u),
+                                 .tv_nsec = (long)(wait_us % 1000000u) * 1000L };
+    g_comms_wakeups++;
+    if (ppoll(fds, n, &ts, NULL) > 0 && (fds[0].revents & POLLIN) != 0) {
+        take_wake_ups(); /* before the ring is drained (ls_core_tick): no event is missed */
+    }
+}
+
+/* The comms thread's loop (docs/architecture.md "Threads"): the network
+ * layer, the core's tick, the heartbeat and the telemetry, until the
+ * shutdown is over. */
+static void run_comms(const ls_config_t *opt)
+{
     uint64_t next_hb = mono_us();
     uint64_t next_tm = next_hb;
-    uint64_t tm_period = opt.telemetry_hz > 0 ? 1000000u / opt.telemetry_hz : 0;
+    const uint64_t tm_period = opt->telemetry_hz > 0 ? 1000000u / opt->telemetry_hz : 0;
     uint8_t hb_counter = 0;
-    /* SIGTERM/SIGINT/SIGHUP/SIGQUIT: a motion stops along its path at the
-     * model's maximum deceleration, the drives go off, its final notice
-     * (reason=shutdown) goes out, then the process exits, within the
-     * shutdown's budget (ls_run.h LS_RUN_SHUTDOWN_*, which the systemd unit's
-     * TimeoutStopSec follows: docs/reliability.md "Signals"). */
-    const uint64_t shutdown_max_us = LS_RUN_SHUTDOWN_STOP_MAX_US;
     uint64_t now = mono_us();
-    uint64_t shutdown_at = 0;
-    uint64_t flushed_at = 0;
-    while (rc == 0) {
-        if (g_stop && shutdown_at == 0) {
-            shutdown_at = mono_us();
-            LOG_INFO("%s received at %llu.%06llu s (CLOCK_MONOTONIC), control loop behind by %llu us",
-                     signal_name((int)g_stop), (unsigned long long)(shutdown_at / 1000000u),
-                     (unsigned long long)(shutdown_at % 1000000u), (unsigned long long)rt_behind_us());
-            if (g_core.ctl == NULL || !ls_run_shutdown(&g_core, shutdown_at)) {
-                break;
-            }
-            LOG_INFO("shutting down: stopping the motion first");
-        }
-        if (shutdown_at != 0) {
-            const uint64_t t = mono_us();
-            if (g_core.halt.active && t - shutdown_at > shutdown_max_us) {
-                LOG_WARN("shutting down: the motion did not stop within %llu ms",
-                         (unsigned long long)(shutdown_max_us / 1000u));
-                break;
-            }
-            if (!g_core.halt.active && flushed_at == 0) {
-                /* The stop is timed in control cycles; overruns (rtstats)
-                 * stretch it in wall time by the growth of behind_us. */
-                LOG_INFO("shutting down: the motion stopped at %llu.%06llu s, control loop behind by %llu us",
-                         (unsigned long long)(t / 1000000u), (unsigned long long)(t % 1000000u),
-                         (unsigned long long)rt_behind_us());
-                flushed_at = t + LS_RUN_SHUTDOWN_FLUSH_US; /* the final notices leave (ISO-TP flow control) */
-            }
-            if (flushed_at != 0 && t >= flushed_at) {
-                break;
-            }
-        }
-        /* Sleep until a frame, a wake-up (loop event, signal) or the next
-         * deadline: no fixed poll period. */
+    shutdown_t sd = { 0, 0 };
+    while (!shutdown_over(&sd)) {
         uint64_t due = earliest(ls_net_next_deadline_us(&g_net), ls_core_next_deadline_us(&g_core, now));
         due = earliest(due, next_hb);
         if (tm_period > 0) {
             due = earliest(due, next_tm);
         }
-        if (shutdown_at != 0) {
-            due = earliest(due, flushed_at != 0 ? flushed_at : shutdown_at + shutdown_max_us + 1u);
+        if (sd.at != 0) {
+            due = earliest(due, sd.flushed_at != 0 ? sd.flushed_at : sd.at + LS_RUN_SHUTDOWN_STOP_MAX_US + 1u);
         }
-        struct pollfd fds[LS_NET_MAX_LINKS + 1];
-        nfds_t n = 0;
-        fds[n++] = (struct pollfd){ .fd = g_wake_fd, .events = POLLIN, .revents = 0 };
-        for (size_t i = 0; i < g_net.n_links; i++) {
-            due = earliest(due, hal_can_next_due_us(&g_net.links[i]));
-            int fd = hal_can_poll_fd(&g_net.links[i]);
-            if (fd >= 0) {
-                const short out = hal_can_tx_pending(&g_net.links[i]) ? POLLOUT : 0;
-                fds[n++] = (struct pollfd){ .fd = fd, .events = (short)(POLLIN | out), .revents = 0 };
-            }
-        }
-        now = mono_us();
-        const uint64_t wait_us = due > now ? due - now : 0u;
-        const struct timespec ts = { .tv_sec = (time_t)(wait_us / 1000000u),
-                                     .tv_nsec = (long)(wait_us % 1000000u) * 1000L };
-        g_comms_wakeups++;
-        if (ppoll(fds, n, &ts, NULL) > 0 && (fds[0].revents & POLLIN) != 0) {
-            take_wake_ups(); /* before the ring is drained (ls_core_tick): no event is missed */
-        }
+        comms_sleep(due);
         now = mono_us();
         ls_net_poll(&g_net, now);
         ls_core_tick(&g_core, now);
@@ -726,6 +756,13 @@ int main(int argc, char **argv)
             next_tm = now + tm_period;
         }
     }
+}
+
+/* Everything down in order: the control thread, the drives off, the
+ * simulated world (its set-point trace written), DIO, the links, the
+ * eventfd. */
+static void stop_everything(bool started)
+{
     if (started) {
         LOG_INFO("shutting down");
     }
@@ -752,7 +789,27 @@ int main(int argc, char **argv)
     }
     ls_net_close(&g_net);
     const int wake_fd = g_wake_fd;
-    g_wake_fd = -1; /* the control thread has stopped; a late signal finds no fd */
+    g_wake_fd = NO_FD; /* the control thread has stopped; a late signal finds no fd */
     close(wake_fd);
+}
+
+int main(int argc, char **argv)
+{
+    static ls_config_t opt;
+    int exit_code = LS_EXIT_OK;
+    if (!read_configuration(&opt, argc, argv, &exit_code)) {
+        return exit_code;
+    }
+    g_wake_fd = eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
+    if (g_wake_fd < 0) {
+        LOG_ERR("the comms thread's eventfd: %s", strerror(errno));
+        return 1;
+    }
+    install_signals();
+    const int rc = start(&opt);
+    if (rc == 0) {
+        run_comms(&opt);
+    }
+    stop_everything(rc == 0);
     return rc;
 }
