@@ -85,10 +85,11 @@ def test_shell_completion_offers_what_the_device_describes(bus: can.BusABC) -> N
     from prompt_toolkit.completion import CompleteEvent
     from prompt_toolkit.document import Document
 
+    from landscape.backend import BusBackend
     from landscape.cli import published_choices, shell_completer
 
     with Supervisor(bus, client_name="completion") as sup:
-        published = published_choices(sup)
+        published = published_choices(BusBackend(sup))
         assert published("tool_id") == ["gripper", "probe"]
         assert published("sensor_type") == ["force_sensor", "laser_standoff_sensor"]
         assert published("path_name") == []  # free text: the device does not list it

@@ -22,6 +22,7 @@ import click
 from . import cli_gateway, cli_model, cli_tools, cli_view  # noqa: F401  (register gateway; model; path, record, plot, demo, session; view)
 from . import telemetry as tm
 from ._generated import landscape_pb2 as pb
+from .backend import Backend
 from .cli_core import (
     EXIT_BUS,
     EXIT_COMMAND,
@@ -29,17 +30,14 @@ from .cli_core import (
     EXIT_USAGE,
     EXIT_VERSION,
     AlreadyReported,
-    Backend,
     CliState,
     CommandFailed,
     EnumType,
     classify,
     cli,
-    description_of,
     fmt_notice,
     one_line,
     say_link_lost,
-    send,
     session_units,
     state_of,
     stop_after_interrupt,
@@ -52,7 +50,6 @@ from .errors import (
 )
 from .notices import SI, Units
 from .registry import (
-    COMMANDS,
     enum_aliases,
 )
 from .session import SessionClient, SessionError
@@ -210,14 +207,10 @@ def published_choices(backend: Backend) -> Callable[[str], list[str]]:
     (completion then offers only values typed before). Our own session read it at connect;
     a background session is asked once."""
     desc: DeviceDescription | None = None
-    if isinstance(backend, Supervisor):
-        desc = backend.description
-    else:
-        try:
-            rv = send(backend, COMMANDS["describe"], {}, wait_s=None)
-            desc = description_of(rv) if rv.ok else None
-        except LandscapeError as exc:
-            log.warning("no device description for completion: %s", exc)
+    try:
+        desc = backend.device_description()
+    except LandscapeError as exc:
+        log.warning("no device description for completion: %s", exc)
     return (lambda field: desc.choices("", field)) if desc is not None else (lambda field: [])
 
 
@@ -454,7 +447,7 @@ class TelemetryFeed:
         self._closing = False
         self.error: LandscapeError | None = None
         client = st.background()
-        self.units = session_units(client if client is not None else st.session())
+        self.units = session_units(st.backend())
         if client is None:
             self._sup = st.session()
             self._sup.on_notice(self.notices.append)

@@ -27,12 +27,11 @@ from typing import Any
 
 import can
 import click
-from google.protobuf import json_format
 from google.protobuf.descriptor import EnumDescriptor, FieldDescriptor
 
 from ._generated import landscape_pb2 as pb
+from .backend import Backend, BusBackend, SessionBackend, description_of
 from .bus import DEFAULT_DEVICE, HOST_POOL, BusSpec
-from .description import DeviceDescription
 from .errors import (
     AlarmError,
     ArgumentError,
@@ -272,8 +271,6 @@ OPTION_HELP: dict[tuple[str, str], str] = {
 # ---------------------------------------------------------------- state shared by the subcommands
 
 
-Backend = Supervisor | SessionClient
-"""Where a command goes: the invocation's own session, or a background session's socket."""
 
 
 @dataclass
@@ -339,7 +336,8 @@ class CliState:
 
     def backend(self) -> Backend:
         """Where commands go: the background session when one runs, else our own session."""
-        return self.background() or self.session()
+        client = self.background()
+        return SessionBackend(client) if client is not None else BusBackend(self.session())
 
     def close(self) -> None:
         if self.client is not None:
@@ -375,23 +373,11 @@ def send(backend: Backend, cmd: Command, fields: dict[str, Any], *, wait_s: floa
     """Send one command through `backend` (never raises for a negative code). With a
     background session, `wait_s` asks it to stream the notices up to the final one.
     `-v` logs the request and its answer (logger landscape.cli)."""
-    via = "session" if isinstance(backend, SessionClient) else "bus"
-    log.info("-> %s %s (via %s)", cmd.name, json.dumps(fields, default=str), via)
-    rv = _send(backend, cmd, fields, wait_s=wait_s)
+    log.info("-> %s %s (via %s)", cmd.name, json.dumps(fields, default=str), backend.via)
+    rv = backend.send(cmd, fields, wait_s=wait_s)
     log.info("<- %s seq %d %s%s %s", cmd.name, rv.seq, rv.ret_name, f" {rv.ret_msg!r}" if rv.ret_msg else "",
              json.dumps(rv.result, default=str))
     return rv
-
-
-def _send(backend: Backend, cmd: Command, fields: dict[str, Any], *, wait_s: float | None) -> RetVal:
-    if isinstance(backend, SessionClient):
-        return backend.request(cmd, wait_s=wait_s, **fields)
-    if cmd.field == "connect":
-        assert backend.connect_result is not None
-        return backend.connect_result.retval
-    if cmd.field == "disconnect":
-        return backend.disconnect(check=False)
-    return backend.request(cmd, check=False, **fields)
 
 
 def collect(backend: Backend, rv: RetVal, *, wait_timeout_s: float,
@@ -481,13 +467,13 @@ class MotionFollower:
             say_link_lost(self.st, exc, line, then=self.ended.set)
         finally:
             self.ended.set()
-            if isinstance(self.backend, SessionClient):
+            if self.backend.shared:
                 self.backend.close()
 
     def abandon(self) -> None:
         """The shell leaves while the motion has not ended: say what becomes of it, stop following."""
         self.abandoned.set()
-        if isinstance(self.backend, SessionClient):
+        if self.backend.shared:
             click.echo(f"shell: {self.cmd.cli_name} has not ended; it goes on in the background session "
                        f"(`landscape events` follows its notices)", err=True)
             self.backend.close()
@@ -507,7 +493,7 @@ def execute_followed(st: CliState, cmd: Command, fields: dict[str, Any], wait_ti
     if not rv.started:
         check_outcome(cmd, rv, None, wait=False, wait_timeout_s=wait_timeout_s)
         return rv
-    if isinstance(backend, SessionClient):
+    if backend.shared:
         st.client = None  # the follower owns this connection; the next line opens another
     follower = MotionFollower(cmd, rv, backend, wait_timeout_s, st)
     st.followers = [f for f in st.followers if f.running] + [follower]
@@ -569,7 +555,7 @@ LOCK_NOTE = ("this lock ends when this invocation exits (it disconnects, and the
 
 def lock_note(st: CliState, cmd: Command, rv: RetVal, backend: Backend) -> str | None:
     """What a one-shot `lock` without a background session says beside its answer."""
-    if cmd.field == "lock" and rv.ok and st.one_shot and isinstance(backend, Supervisor):
+    if cmd.field == "lock" and rv.ok and st.one_shot and not backend.shared:
         return LOCK_NOTE
     return None
 
@@ -828,8 +814,3 @@ def cli(ctx: click.Context, interface: str | None, channel: str | None, bitrate:
 for _cmd in COMMANDS.values():
     cli.add_command(make_command(_cmd))
 
-def description_of(rv: RetVal) -> DeviceDescription:
-    """The DeviceDescription of a describe answer, from our own session or a background one."""
-    res = rv.message if isinstance(rv.message, pb.DescribeRes) else \
-        json_format.ParseDict(rv.result, pb.DescribeRes())  # through a background session
-    return DeviceDescription(res)

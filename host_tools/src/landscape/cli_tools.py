@@ -24,6 +24,7 @@ from typing import Any
 import click
 
 from ._generated import landscape_pb2 as pb
+from .backend import Backend
 from .bus import SLCAN_DEFAULT_BITRATE, resolve_config
 from .cli_core import (
     EXIT_COMMAND,
@@ -34,7 +35,6 @@ from .cli_core import (
     call,
     classify,
     cli,
-    description_of,
     execute,
     fmt_notice,
     fmt_value,
@@ -71,15 +71,11 @@ def path_group() -> None:
     """Load named paths from point files (CSV, YAML, JSON), run and clear them."""
 
 
-def path_points_limit(backend: Supervisor | SessionClient) -> int | None:
+def path_points_limit(backend: Backend) -> int | None:
     """The points one path holds on the device (describe: max_points_per_path): the bound a
     path file is read with. None when the device did not describe itself (a lossy link:
     the session checks requests against the host's copy of the schema, which has no tables)."""
-    if isinstance(backend, Supervisor):
-        desc = backend.description
-    else:
-        rv = send(backend, lookup("describe"), {}, wait_s=None)
-        desc = description_of(rv) if rv.ok else None
+    desc = backend.device_description()
     if desc is None or not desc.from_device:
         return None
     return int(desc.res.max_points_per_path) or None
@@ -319,7 +315,7 @@ def events_cmd(ctx: click.Context, duration: float | None) -> None:
     notices are in the session's units (named in the first line). Ctrl-C ends it (exit 0)."""
     st = state_of(ctx)
     client = st.background()
-    units = session_units(client if client is not None else st.session())
+    units = session_units(st.backend())
     where = f"device {st.device:#04x} on {st.spec.describe()}" + (" (via the session)" if client else "")
     units_text = (f"positions in {units.describe()} (get-units)" if units is not None
                   else "units unknown (get-units failed)")
@@ -442,8 +438,7 @@ def demo_cmd(ctx: click.Context, record_file: Path | None, plot_file: Path | Non
     if plot_file is not None and rec_path is None:
         rec_path = Path(tempfile.mkstemp(prefix="landscape-demo-", suffix=".csv")[1])
     rec = open_recorder(rec_path) if rec_path is not None else None
-    if isinstance(backend, Supervisor):
-        backend.on_rsvp(None, lambda n: None)  # confirm every RSVP: the demo goes on
+    backend.confirm_every_rsvp()  # the demo goes on
     info = send(backend, lookup("connect"), {}, wait_s=None)
     if not st.json_out:
         r = info.result
