@@ -97,7 +97,7 @@ class SessionBackend:
         self.client = client
 
     def send(self, cmd: Command, fields: dict[str, Any], *, wait_s: float | None) -> RetVal:
-        return self.client.request(cmd, wait_s=wait_s, **fields)
+        return self.client.request(cmd, check=False, wait_s=wait_s, **fields)
 
     def notices(self, timeout_s: float | None = None) -> Iterator[pb.Notice]:
         return self.client.notices(timeout_s)

@@ -586,7 +586,7 @@ def stop_after_interrupt(st: CliState, cmd: Command) -> None:
                 if stopper is None:
                     raise LandscapeError("the background session went away")
                 with stopper:
-                    rv = stopper.request("stop_motion", timeout_s=1.0)
+                    rv = stopper.request("stop_motion", check=False, timeout_s=1.0)
             elif st.sup is not None and st.sup.connected:
                 rv = st.sup.request("stop_motion", check=False, timeout_s=1.0)
             else:

@@ -465,10 +465,11 @@ class SessionClient:
     def stop(self) -> None:
         self._call({"op": "stop"}, "stopping")
 
-    def request(self, command: str | Command, /, *, check: bool = False, timeout_s: float | None = None,
+    def request(self, command: str | Command, /, *, check: bool = True, timeout_s: float | None = None,
                 wait_s: float | None = None, **fields: Any) -> RetVal:
         """Run `command` in the session. With wait_s, notices() then yields its notices
-        until the final one (or wait_s has passed)."""
+        until the final one (or wait_s has passed). `check`: a negative code raises its
+        CommandError subclass, as Supervisor.request does (check=False returns it)."""
         cmd = command if isinstance(command, Command) else lookup(command)
         self._send({"op": "request", "command": cmd.field, "fields": _jsonable(fields), "timeout_s": timeout_s,
                     "wait_s": wait_s})
@@ -493,9 +494,9 @@ class SessionClient:
 
     @property
     def connect_result_retval(self) -> RetVal:
-        return self.request("connect")
+        return self.request("connect", check=False)
 
-    def disconnect(self, check: bool = False) -> RetVal:
+    def disconnect(self, check: bool = True) -> RetVal:
         return self.request("disconnect", check=check)
 
     def watch(self, *, notices_only: bool = False) -> Iterator[tuple[str, Any, float]]:
