@@ -35,7 +35,8 @@ from .errors import (
 )
 from .paths import PathFile, PathFileError, build_path_load_requests, load_path_file, parse_path_text
 from .registry import COMMANDS, PROTOCOL_VERSION, SCHEMA_HASH, Command, build_request, lookup
-from .supervisor import ConnectResult, RetVal, Supervisor, mismatch_message, notice_data
+from .retval import RetVal
+from .supervisor import ConnectResult, Supervisor, mismatch_message, notice_data
 
 __all__ = [
     "ls", "BusSpec", "open_bus", "Supervisor", "RetVal", "ConnectResult", "mismatch_message", "notice_data",

@@ -15,8 +15,9 @@ from google.protobuf import json_format
 from ._generated import landscape_pb2 as pb
 from .description import DeviceDescription
 from .registry import Command, lookup
+from .retval import RetVal
 from .session import SessionClient
-from .supervisor import RetVal, Supervisor
+from .supervisor import Supervisor
 
 
 class Backend(Protocol):

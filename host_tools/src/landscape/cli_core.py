@@ -56,8 +56,9 @@ from .registry import (
     message_to_dict,
     parse_enum,
 )
+from .retval import RetVal
 from .session import SessionClient, socket_path
-from .supervisor import RetVal, Supervisor
+from .supervisor import Supervisor
 
 log = logging.getLogger("landscape.cli")
 

@@ -53,8 +53,9 @@ from .plotting import KINDS, plot
 from .record_files import open_recorder, read_recording
 from .recording import Recorder, record_format
 from .registry import lookup, message_to_dict
+from .retval import RetVal
 from .session import SessionClient, SessionError, SessionServer
-from .supervisor import RetVal, Supervisor
+from .supervisor import Supervisor
 from .urdf import robot_urdf, urdf_text, write_urdf
 
 
@@ -203,7 +204,7 @@ class Follow:
                     f"the session at {watcher.path} went away ({exc}): check `landscape session status`")
 
 
-def device_urdf(backend: Supervisor | SessionClient) -> str:
+def device_urdf(backend: Backend) -> str:
     """The URDF of the arm the device runs (describeRobot), through our own session or the background one."""
     cmd = lookup("describe_robot")
     return robot_urdf(lambda offset: send(backend, cmd, {"offset": offset}, wait_s=None))

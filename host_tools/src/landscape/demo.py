@@ -17,7 +17,7 @@ from typing import Any
 
 from ._generated import landscape_pb2 as pb
 from .paths import PathFile, build_path_load_requests, parse_path_text, request_fields, resolve_settings
-from .supervisor import RetVal
+from .retval import RetVal
 
 #: call(command, fields, wait) -> (RetVal, final notice or None when not waited / no final came)
 Call = Callable[[str, dict[str, Any], bool], tuple[RetVal, "pb.Notice | None"]]

@@ -50,7 +50,8 @@ from .bus import BusSpec, resolve_config
 from .errors import ArgumentError, LandscapeError
 from .notices import format_notice
 from .registry import Command, lookup, message_to_dict
-from .supervisor import RetVal, Supervisor
+from .retval import RetVal
+from .supervisor import Supervisor
 
 log = logging.getLogger("landscape.session")
 

@@ -19,9 +19,9 @@ import queue
 import secrets
 import threading
 import time
-from collections.abc import Callable, Iterator, Mapping, Sequence
-from dataclasses import dataclass, field
-from typing import Any, TypedDict, Unpack
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass
+from typing import Any, Unpack
 
 import can
 import isotp
@@ -29,7 +29,6 @@ from google.protobuf import message_factory
 from google.protobuf.message import DecodeError, Message
 
 from . import telemetry as tm
-from . import urdf
 from ._generated import landscape_pb2 as pb
 from .bus import (
     ADDRESS_LISTEN_S,
@@ -47,7 +46,9 @@ from .bus import (
     physical_address,
     release_bus,
 )
+from .commands import Commands
 from .description import DeviceDescription
+from .downlink_scan import response_seq, undecodable_reason
 from .errors import (
     AddressInUseError,
     AlarmError,
@@ -59,58 +60,17 @@ from .errors import (
     ProtocolError,
     VersionMismatchError,
     error_for_code,
-    ret_name,
 )
 from .limits import max_string_bytes
-from .paths import build_path_load_requests, request_fields
 from .registry import PROTOCOL_VERSION, SCHEMA_HASH, Command, build_request, lookup, message_to_dict
+from .retval import CallOptions as CallOptions
+from .retval import Enum as Enum
+from .retval import RetVal as RetVal
 
 log = logging.getLogger("landscape")
 
-Enum = int | str
-"""An enum argument: its number, its name (JOINT_FRAME) or its short name (joint)."""
-
 RSVP_KINDS = (pb.EVENT_RSVP, pb.ALARM_RSVP)
 ALARM_KINDS = (pb.ALARM, pb.ALARM_RSVP)
-
-
-@dataclass
-class RetVal:
-    """What a command returned (the seed's RetVal plus the result fields)."""
-
-    command: Command
-    seq: int
-    ret_code: int
-    ret_msg: str
-    message: Message | None          # the result message, e.g. ls.GetRobotPositionRes
-    result: dict[str, Any] = field(default_factory=dict)
-    epoch: int = 0                   # the session epoch the device answered in (docs/protocol.md)
-
-    @property
-    def name(self) -> str:
-        return self.command.name
-
-    def __repr__(self) -> str:
-        msg = f", ret_msg={self.ret_msg!r}" if self.ret_msg else ""
-        return f"RetVal({self.name} seq={self.seq} {self.ret_name}{msg} result={self.result!r})"
-
-    @property
-    def ret_name(self) -> str:
-        return ret_name(self.ret_code)
-
-    @property
-    def ok(self) -> bool:
-        return self.ret_code >= 0
-
-    @property
-    def started(self) -> bool:
-        """True when a non-blocking command started: wait_complete() waits for its end."""
-        return self.ret_code == pb.CMD_STARTED_OK
-
-
-class CallOptions(TypedDict, total=False):
-    check: bool              # raise CommandError for a negative code (default True)
-    timeout_s: float | None  # per-try response time-out (default: the command's host_timeout_ms)
 
 
 RsvpAnswer = int | tuple[int, Sequence[str]] | pb.RsvpReply | None
@@ -138,93 +98,6 @@ def mismatch_message(host_version: int, host_hash: int, device_version: int, dev
                 f"update the firmware (flash landscaped built from this tool's tree)")
     return (f"host and firmware were built from different schemas (host {host_hash:08X}, device "
             f"{device_hash:08X}): install the host tool built from the firmware's tree")
-
-
-
-def _varint(data: bytes, i: int) -> tuple[int, int]:
-    """A protobuf varint at data[i:]: (value, next index); ValueError when cut short."""
-    value = shift = 0
-    while i < len(data) and shift < 64:
-        b = data[i]
-        i += 1
-        value |= (b & 0x7F) << shift
-        if not b & 0x80:
-            return value, i
-        shift += 7
-    raise ValueError("truncated varint")
-
-
-def _fields(data: bytes) -> Iterator[tuple[int, int, int | bytes]]:
-    """(field number, wire type, value) of the top level of a protobuf message."""
-    i = 0
-    while i < len(data):
-        key, i = _varint(data, i)
-        number, wt = key >> 3, key & 7
-        if wt == 0:
-            v, i = _varint(data, i)
-            yield number, wt, v
-        elif wt == 2:
-            n, i = _varint(data, i)
-            if i + n > len(data):
-                raise ValueError("truncated field")
-            yield number, wt, data[i:i + n]
-            i += n
-        elif wt in (1, 5):
-            i += 8 if wt == 1 else 4
-        else:
-            raise ValueError(f"wire type {wt}")
-
-
-def _scan_response_seq(data: bytes) -> int | None:
-    """The seq of an ls.Downlink carrying a response, read at the wire level (for a
-    message the full decode refused), or None."""
-    try:
-        for number, _wt, value in _fields(data):
-            if number == 1 and isinstance(value, bytes):  # Downlink.response
-                for n2, wt2, v2 in _fields(value):
-                    if n2 == 1 and wt2 == 0 and isinstance(v2, int):  # Response.seq
-                        return v2
-    except ValueError:
-        return None
-    return None
-
-
-def _bad_string(msg: bytes, depth: int = 0) -> str | None:
-    """Where a length-delimited field of msg (or of a message inside it) that is
-    neither a message nor UTF-8 text goes wrong, or None."""
-    for _number, wt, value in _fields(msg):
-        if wt != 2 or not isinstance(value, bytes):
-            continue
-        try:
-            value.decode("utf-8")
-            continue
-        except UnicodeDecodeError as e:
-            err = e
-        if depth < 4:
-            try:
-                inner = _bad_string(value, depth + 1)
-            except ValueError:
-                inner = None
-            else:
-                if inner is None:
-                    continue  # a nested message whose strings are fine
-            if inner is not None:
-                return inner
-        return (f"a text field is not valid UTF-8 at byte {err.start} "
-                f"({value[max(0, err.start - 8):err.start + 4]!r})")
-    return None
-
-
-def _undecodable_reason(data: bytes, exc: Exception) -> str:
-    """Why a downlink did not decode, in words a user can act on."""
-    try:
-        why = _bad_string(data)
-    except ValueError:
-        why = None
-    if why is not None:
-        return f"{why}; the firmware must send UTF-8 text: update it"
-    return (f"{exc or 'malformed protobuf'} ({len(data)} bytes): are host tool and firmware built from the "
-            f"same schema?")
 
 
 #: errno values of a write that means the line is gone (a pty whose other end closed, an
@@ -257,7 +130,7 @@ class _LinkWatch(can.Listener):
         time.sleep(0.05)  # the Notifier calls recv again at once: do not spin on a dead line
 
 
-class Supervisor:
+class Supervisor(Commands):
     """One session with the device at `device`, speaking from node `source_address`.
 
     `source_address` None (the default): open() picks a free address of the hosts' pool
@@ -861,8 +734,8 @@ class Supervisor:
             dl.ParseFromString(data)
         except DecodeError as exc:
             self.protocol_errors += 1
-            what = _undecodable_reason(data, exc)
-            seq = _scan_response_seq(data)
+            what = undecodable_reason(data, exc)
+            seq = response_seq(data)
             with self._cv:
                 if seq is not None and seq == self._pending_seq and self._pending_resp is None:
                     # the request waiting for it fails now, naming why, instead of timing out
@@ -1081,215 +954,6 @@ class Supervisor:
     def remove_frame_listener(self, fn: Callable[[can.Message], None]) -> None:
         if self._notifier is not None:
             self._notifier.remove_listener(fn)
-
-    # ------------------------------------------------------------ typed commands (one per schema command)
-    # Argument names are the schema's field names, so units are in them (speed_pct,
-    # max_timeout_s, polling_timeout_ms); tests/host checks each method against the registry.
-
-    def lock(self, **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("lock", **opts)
-
-    def release(self, **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("release", **opts)
-
-    def activate(self, **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("activate", **opts)
-
-    def deactivate(self, **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("deactivate", **opts)
-
-    def set_speed(self, speed: float, *, attribute: Enum = pb.PERCENT_SPEED, **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("set_speed", speed=speed, attribute=attribute, **opts)
-
-    def set_acceleration(self, accel: float, *, attribute: Enum = pb.PERCENT_ACCEL,
-                         **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("set_acceleration", accel=accel, attribute=attribute, **opts)
-
-    def set_tool_offset(self, offset: Sequence[float], **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("set_tool_offset", offset=offset, **opts)
-
-    def set_world_cartesian_frame(self, frame: Sequence[float], **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("set_world_cartesian_frame", frame=frame, **opts)
-
-    def set_units(self, *, linear: Enum = pb.METERS, angular: Enum = pb.RADIANS,
-                  **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("set_units", linear=linear, angular=angular, **opts)
-
-    def get_units(self, **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("get_units", **opts)
-
-    def get_velocities(self, **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("get_velocities", **opts)
-
-    def get_accelerations(self, **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("get_accelerations", **opts)
-
-    def get_max_velocities(self, **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("get_max_velocities", **opts)
-
-    def get_max_accelerations(self, **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("get_max_accelerations", **opts)
-
-    def get_tool_offsets(self, **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("get_tool_offsets", **opts)
-
-    def get_robot_position(self, **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("get_robot_position", **opts)
-
-    def get_motion_control_state(self, **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("get_motion_control_state", **opts)
-
-    def get_tag_id(self, **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("get_tag_id", **opts)
-
-    def move_relative(self, point_name: str, values: Sequence[float], *, frame: Enum = pb.JOINT_FRAME,
-                      speed_pct: float = 0.0, **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("move_relative", point_name=point_name, values=values, frame=frame,
-                            speed_pct=speed_pct, **opts)
-
-    def move_absolute(self, point_name: str, values: Sequence[float], *, frame: Enum = pb.JOINT_FRAME,
-                      speed_pct: float = 0.0, **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("move_absolute", point_name=point_name, values=values, frame=frame,
-                            speed_pct=speed_pct, **opts)
-
-    def move_arc(self, point_name: str, arc_value: Sequence[float], goal_value: Sequence[float], *,
-                 frame: Enum = pb.BASE_CARTESIAN_FRAME, offset_type: Enum = pb.ABSOLUTE_DATA,
-                 **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("move_arc", point_name=point_name, arc_value=arc_value, goal_value=goal_value,
-                            frame=frame, offset_type=offset_type, **opts)
-
-    def path_load(self, path_name: str, tags: Sequence[pb.TagPoint | Mapping[str, Any]], *,
-                  frame: Enum = pb.JOINT_FRAME, motion_type: Enum = pb.JOINT_MOTION,
-                  offset_type: Enum = pb.ABSOLUTE_DATA, number_of_points: int | None = None,
-                  **opts: Unpack[CallOptions]) -> RetVal:
-        """Append `tags` to path `path_name`; number_of_points defaults to len(tags)."""
-        n = len(tags) if number_of_points is None else number_of_points
-        return self.request("path_load", path_name=path_name, tags=tags, frame=frame, motion_type=motion_type,
-                            offset_type=offset_type, number_of_points=n, **opts)
-
-    def path_load_points(self, path_name: str, points: Sequence[pb.TagPoint | Mapping[str, Any]], *,
-                         frame: Enum = pb.JOINT_FRAME, motion_type: Enum = pb.JOINT_MOTION,
-                         offset_type: Enum = pb.ABSOLUTE_DATA,
-                         progress: Callable[[int, int], None] | None = None,
-                         **opts: Unpack[CallOptions]) -> RetVal:
-        """Append any number of `points` to path `path_name`, split into as many pathLoad
-        messages as needed (paths.build_path_load_requests), sent in order.
-
-        progress(points_sent, points_total) is called after each message. Returns the last
-        RetVal (result["points_in_path"]). When a message is refused the error (or, with
-        check=False, its RetVal) says how many points were already loaded: pathClearPath
-        starts over."""
-        reqs = build_path_load_requests(path_name, points, frame=frame, motion_type=motion_type,
-                                        offset_type=offset_type)
-        check = opts.get("check", True)
-        timeout_s = opts.get("timeout_s")
-        total = sum(len(r.path_load.tags) for r in reqs)
-        sent = 0
-        rv: RetVal | None = None
-        for i, req in enumerate(reqs):
-            rv = self.request("path_load", check=False, timeout_s=timeout_s, **request_fields(req))
-            if rv.ret_code < 0:
-                rv.ret_msg = (f"{rv.ret_msg} (message {i + 1} of {len(reqs)}; {sent} of {total} points were "
-                              f"loaded: pathClearPath {path_name} to start over)").lstrip()
-                if check:
-                    raise error_for_code(rv.name, rv.ret_code, rv.ret_msg)
-                return rv
-            sent += len(req.path_load.tags)
-            if progress is not None:
-                progress(sent, total)
-        assert rv is not None  # build_path_load_requests returns at least one request
-        return rv
-
-    def path_clear_path(self, path_name: str, **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("path_clear_path", path_name=path_name, **opts)
-
-    def path_move(self, path_name: str, *, number_of_cycles: int | None = None,
-                  **opts: Unpack[CallOptions]) -> RetVal:
-        """Run a loaded path `number_of_cycles` times (None: left out, the device runs it once as
-        seed 3.5.2 says; 0: a dry run without auxiliary commands, whose notices say dry_run=true)."""
-        return self.request("path_move", path_name=path_name, number_of_cycles=number_of_cycles, **opts)
-
-    def stop_motion(self, **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("stop_motion", **opts)
-
-    def resume_motion(self, **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("resume_motion", **opts)
-
-    def abort_motion(self, **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("abort_motion", **opts)
-
-    def get_sensor_reading(self, sensor_type: str, **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("get_sensor_reading", sensor_type=sensor_type, **opts)
-
-    def move_react(self, sensor_type: str, motion_offsets: Sequence[float], *, motion_speed_pct: float = 0.0,
-                   compliance_speed_pct: float = 0.0, thresholds: Sequence[float] = (),
-                   gains: Sequence[float] = (), envelope_min: Sequence[float] = (),
-                   envelope_max: Sequence[float] = (), **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("move_react", sensor_type=sensor_type, motion_offsets=motion_offsets,
-                            motion_speed_pct=motion_speed_pct, compliance_speed_pct=compliance_speed_pct,
-                            thresholds=thresholds, gains=gains, envelope_min=envelope_min,
-                            envelope_max=envelope_max, **opts)
-
-    def comply(self, sensor_type: str, thresholds: Sequence[float], *, max_timeout_s: float = 0.0,
-               panic_stop_code: int = 0, max_travel: Sequence[float] = (),
-               proportional_gains: Sequence[float] = (), differential_gains: Sequence[float] = (),
-               speed_pct: float = 0.0, compliance_speed_pct: float = 0.0, envelope_min: Sequence[float] = (),
-               envelope_max: Sequence[float] = (), **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("comply", sensor_type=sensor_type, thresholds=thresholds, max_timeout_s=max_timeout_s,
-                            panic_stop_code=panic_stop_code, max_travel=max_travel,
-                            proportional_gains=proportional_gains, differential_gains=differential_gains,
-                            speed_pct=speed_pct, compliance_speed_pct=compliance_speed_pct,
-                            envelope_min=envelope_min, envelope_max=envelope_max, **opts)
-
-    def manual_control(self, type: str, **opts: Unpack[CallOptions]) -> RetVal:  # noqa: A002 (schema name)
-        return self.request("manual_control", type=type, **opts)
-
-    def get_end_effector_state(self, **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("get_end_effector_state", **opts)
-
-    def get_tool(self, tool_id: str, **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("get_tool", tool_id=tool_id, **opts)
-
-    def put_tool(self, tool_id: str, **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("put_tool", tool_id=tool_id, **opts)
-
-    def activate_tool(self, tool_id: str, bit_field: int, **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("activate_tool", tool_id=tool_id, bit_field=bit_field, **opts)
-
-    def deactivate_tool(self, tool_id: str, bit_field: int, **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("deactivate_tool", tool_id=tool_id, bit_field=bit_field, **opts)
-
-    def set_digital_io(self, type: str, unit_id: int, *, bits_on: int = 0, bits_off: int = 0,  # noqa: A002
-                       description: str = "", **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("set_digital_io", type=type, unit_id=unit_id, bits_on=bits_on, bits_off=bits_off,
-                            description=description, **opts)
-
-    def get_digital_io(self, type: str, unit_id: int, *, description: str = "",  # noqa: A002
-                       **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("get_digital_io", type=type, unit_id=unit_id, description=description, **opts)
-
-    def signal_digital_io(self, type: str, unit_id: int, bit_string: int, *,  # noqa: A002
-                          polling_timeout_ms: int = 0, polling_cycle_time_ms: int = 0,
-                          callback_type: Enum = pb.CB_EVENT, **opts: Unpack[CallOptions]) -> RetVal:
-        return self.request("signal_digital_io", type=type, unit_id=unit_id, bit_string=bit_string,
-                            polling_timeout_ms=polling_timeout_ms, polling_cycle_time_ms=polling_cycle_time_ms,
-                            callback_type=callback_type, **opts)
-
-    def send_command(self, input: str, **opts: Unpack[CallOptions]) -> RetVal:  # noqa: A002 (schema name)
-        return self.request("send_command", input=input, **opts)
-
-    def describe(self, **opts: Unpack[CallOptions]) -> RetVal:
-        """Read the device's description (limits, DIO map, sensors, tools, joints, workspace; SI).
-        connect() already read it once for this session: see ``description``."""
-        return self.request("describe", **opts)
-
-    def describe_robot(self, *, offset: int = 0, **opts: Unpack[CallOptions]) -> RetVal:
-        """One piece of the arm's URDF, from byte `offset` (describeRobot); robot_urdf() joins them all."""
-        return self.request("describe_robot", offset=offset, **opts)
-
-    def robot_urdf(self) -> str:
-        """The URDF of the robot model the device runs (docs/protocol.md "Robot description")."""
-        return urdf.robot_urdf(lambda offset: self.describe_robot(offset=offset, check=False))
 
 
 @dataclass
