@@ -44,7 +44,7 @@ LIBRARIES = {
 # The host's system headers: the cross compiler has its own (newlib); nanopb's headers come with its runtime.
 HOST_INCLUDE = Path("/usr/include")
 MANIFEST = BUILD / "footprint" / "portable.txt"
-# Issue 22's goals for the mcu profile's image.
+# The goals for the mcu profile's image (docs/performance.md section 7).
 FLASH_GOAL_KIB = 128
 RAM_GOAL_KIB = 192
 CACHE = Path(os.environ.get("LS_BENCH_CACHE", Path.home() / ".cache" / "landscape-bench"))

@@ -1,4 +1,4 @@
-"""Host exits on hostile input and when the device dies (issue 17, item 7).
+"""Host exits on hostile input and when the device dies (docs/host-tool.md "Errors and exit codes").
 
 Every failure is one line on stderr with the documented exit code (docs/host-tool.md,
 "Errors and exit codes"), never a traceback; a path file is read with a bound taken from

@@ -1,5 +1,5 @@
 """`landscape gateway` on the command line, before it serves: --hash-password on a terminal and from a
-pipe, a configuration nobody could connect with, and a missing bus (issue 24)."""
+pipe, a configuration nobody could connect with, and a missing bus (docs/gateway.md)."""
 from __future__ import annotations
 
 import json

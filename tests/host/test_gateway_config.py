@@ -166,7 +166,8 @@ def test_method_arguments_become_request_fields() -> None:
 
 
 def test_a_string_is_not_an_array() -> None:
-    """Issue 24: "000000" for moveAbsolute's values moved the arm to zeros (one value per character)."""
+    """"000000" for moveAbsolute's values moved the arm to zeros (one value per character):
+    docs/gateway.md "Methods"."""
     move, load = lookup("moveAbsolute"), lookup("pathLoad")
     with pytest.raises(ArgumentShapeError,
                        match=r"moveAbsolute\.values: an array \(Double\[\]\) is expected, got str"):
@@ -177,7 +178,7 @@ def test_a_string_is_not_an_array() -> None:
 
 
 def test_an_unknown_enum_value_names_the_argument() -> None:
-    """Issue 24: "SpeedType: 'WARP_SPEED' is not a value" did not say which argument was wrong."""
+    """"SpeedType: 'WARP_SPEED' is not a value" did not say which argument was wrong: docs/gateway.md "Methods"."""
     with pytest.raises(ArgumentError, match=r"^setSpeed\.attribute: 'WARP_SPEED' is not a SpeedType value \(one "
                                             r"of PERCENT_SPEED, LINEAR_SPEED, ANGULAR_SPEED\)$"):
         fields_of(lookup("setSpeed"), [50.0, "WARP_SPEED"])

@@ -1,5 +1,5 @@
 """Docs and comments name files of this repository only, and the paths the docs name exist
-(issue 21: references to files the repository does not have)."""
+(docs/contributing.md "Style": a reference a reader cannot follow is a bug)."""
 from __future__ import annotations
 
 import itertools

@@ -360,7 +360,7 @@ def test_multi_frame_request_and_response(bus, notifier, device: FakeDevice) -> 
 
 
 def test_an_answer_that_is_not_utf8_fails_its_request_naming_why(bus, notifier, device: FakeDevice) -> None:
-    """A device that cuts a character in half (issue 17): the request fails at once with
+    """A device that cuts a character in half (docs/protocol.md "Strings"): the request fails at once with
     a ProtocolError naming the undecodable text, not a time-out asking whether
     landscaped runs."""
     with sup_on(bus, notifier, timeout_s=2.0, retries=0) as sup:

@@ -1,4 +1,4 @@
-"""Blended paths (issue 18, item 3), against the running landscaped with the simulated arm:
+"""Blended paths (docs/architecture.md "Blended paths"), against the running landscaped with the simulated arm:
 a Cartesian zig-zag with transition_speed_pct > 0 passes its points without stopping,
 within the deviation docs/architecture.md "Blended paths" documents, with one tag event
 per tagged point; transition_speed_pct 0 still stops at every point; a point's
@@ -16,7 +16,7 @@ import can
 import numpy as np
 import pytest
 from test_motion import HOME, WATCH, JointWatch, _rpy, fk, tip
-from test_motion18 import _tagged_run
+from test_seed_motion import _tagged_run
 
 from conftest import Controller
 from landscape._generated import landscape_pb2 as pb
@@ -27,7 +27,7 @@ STEP_M = 0.035  # advance per point along base y
 ZIG_M = 0.05  # swing along base x: legs (0.05, 0.035) and (-0.05, 0.035) m, every corner alike
 SPEED_PCT = 25.0  # 0.25 m/s
 ACCEL_PCT = 100.0  # A = 4 m/s^2, J = 40 m/s^3 (the model's maxima)
-TRACK_M = 1.5e-3  # the simulated arm's tracking error, as in test_motion18's circle
+TRACK_M = 1.5e-3  # the simulated arm's tracking error, as in test_seed_motion's circle
 PERIOD_S = 0.02  # telemetry_hz 50
 
 

@@ -1,4 +1,4 @@
-"""The landscape CLI against the running simulated controller (issue 8): a
+"""The landscape CLI against the running simulated controller (docs/host-tool.md "CLI"): a
 background session that locks, activates, loads a path from a CSV file, runs
 it and prints the tag events; --json output; record and plot."""
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """landscaped composes HAL backends from options; a missing AF_CAN, CAN
 interface or gpiochip gives one clear message naming the cause and the fix,
-never a crash or a hang (issue 5, on a machine without CAN and GPIO)."""
+never a crash or a hang (on a machine without CAN and GPIO: docs/deploy.md)."""
 from __future__ import annotations
 
 import socket

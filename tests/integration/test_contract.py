@@ -1,4 +1,5 @@
-"""Issue 19 part B through the host library against the running landscaped: RSVP
+"""The session's contract (docs/protocol.md "Envelope and sessions", "RSVP") through the host
+library against the running landscaped: RSVP
 answers decide and are acknowledged, units belong to the session, the disconnect
 handler's action is configured and narrowed per session, liveness follows the
 heartbeat period stated at connect (docs/protocol.md "RSVP", "Disconnect handler",
@@ -108,7 +109,7 @@ def test_units_belong_to_the_session(bus: can.BusABC) -> None:
             assert qa == pytest.approx([math.degrees(v) for v in qb], abs=1e-3)
             assert "units=millimeters,degrees" in _status_line(b, OWNER)
             assert "units=meters,radians" in _status_line(b, OTHER)
-        # the next session of the same supervisor starts in SI (issue 19: `landscape demo`
+        # the next session of the same supervisor starts in SI (docs/conformance.md, setUnits: `landscape demo`
         # once failed after a previous session had left degrees set)
         with Supervisor(bus, notifier=notifier, source_address=OWNER, client_name="next") as c:
             assert c.connect_result is not None and c.connect_result.units == ("METERS", "RADIANS")

@@ -1,4 +1,4 @@
-"""Deployment (issue 12): the install layout, the Debian package installed
+"""Deployment (docs/deploy.md): the install layout, the Debian package installed
 for real with dpkg (the CI machine is a throwaway root), the systemd unit,
 `--check` on this machine and configuration errors as the user sees them.
 

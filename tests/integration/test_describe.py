@@ -1,4 +1,4 @@
-"""Issue 19 item 2 against the running controller: the device describes itself, the host
+"""docs/protocol.md "Device description" against the running controller: the device describes itself, the host
 library reads it once per session and checks requests against it before sending, names and
 tags of 63 bytes go through whole, and `landscape describe` prints it."""
 from __future__ import annotations

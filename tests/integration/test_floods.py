@@ -1,4 +1,4 @@
-"""Issue 17 item 4: fairness under floods, against the running landscaped (sim arm, SLCAN pty).
+"""docs/protocol.md "Budgets under floods": fairness under floods, against the running landscaped (sim arm, SLCAN pty).
 
 Each flood of the issue is reproduced with raw frames written on the pty next to the
 supervisors (one python-can bus and one Notifier shared by everything in this process),

@@ -1,5 +1,5 @@
 """landscaped killed (SIGKILL) in the middle of a command: the CLI ends with exit 4 and one
-line naming what happened, no traceback, within seconds (issue 17, item 7; docs/host-tool.md,
+line naming what happened, no traceback, within seconds (docs/host-tool.md,
 "Errors and exit codes").
 
 Each case starts a landscaped of its own (the fixture of conftest.py would fail the test

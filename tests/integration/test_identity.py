@@ -1,4 +1,4 @@
-"""Issue 17 item 3, one supervisor per address, against landscaped: a second client on a live
+"""docs/protocol.md "Identity", one supervisor per address, against landscaped: a second client on a live
 session's address is refused naming the holder; the same client (its nonce) reconnects; only
 heartbeats carrying the session's token keep it; supervisors without a pinned address pick
 different free ones and the owner stays the owner; `-s` pins; `kill -9` of the owner with a

@@ -1,4 +1,4 @@
-"""Issue 16: every started motion ends with exactly one final notice naming why, and
+"""docs/state-machine.md "Motion lifecycle": every started motion ends with exactly one final notice naming why, and
 the reported state is the arm's real state (docs/state-machine.md "Motion lifecycle").
 Each test is one case of the issue, against the running landscaped with the simulated
 arm; what the arm really does comes from the device's telemetry (lifecycle_rig)."""

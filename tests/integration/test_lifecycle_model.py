@@ -1,4 +1,5 @@
-"""Issue 16: a model-based test of the motion lifecycle. A hypothesis state machine drives
+"""A model-based test of the motion lifecycle (docs/state-machine.md "Motion lifecycle",
+docs/reliability.md section 7). A hypothesis state machine drives
 one running landscaped (simulated arm) through the host library with random interleavings
 of moves, paths, stopMotion/resumeMotion/abortMotion, deactivate/activate, EMERGENCY
 frames, heartbeat loss, disconnect/reconnect and a second supervisor, and checks after

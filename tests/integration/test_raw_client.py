@@ -1,4 +1,4 @@
-"""Issue 19, acceptance: a client written from the contract alone.
+"""A client written from the contract alone (docs/protocol.md).
 
 This module imports nothing of the `landscape` package: only python-can, can-isotp and
 the classes protoc generates from protocol/landscape.proto while the test runs. What it

@@ -1,4 +1,4 @@
-"""Issue 17: safety and hostile input, against the running landscaped (sim arm, SLCAN pty).
+"""Safety and hostile input (docs/reliability.md section 8), against the running landscaped (sim arm, SLCAN pty).
 
 - Stopping distance and time of the category-1 stop (EMERGENCY frame, e-stop input,
   SIGTERM) on joint 1 at 100 % speed, user acceleration 5/50/100 %, against the bound the
@@ -540,7 +540,7 @@ def test_ranges_refuse_subnormals_far_offsets_and_empty_names(controller: Contro
                          if b.name == "TOOL_RPY" else None)
         sup.lock()
         sup.activate()
-        # a subnormal acceleration was accepted and wedged the device (issue 17)
+        # a subnormal acceleration was accepted and wedged the device (docs/protocol.md "Limits")
         rv = sup.set_acceleration(1e-300, check=False)
         assert rv.ret_code == pb.CMD_PARAM_OUT_OF_RANGE_ERR and "allowed [0.1, 100]" in rv.ret_msg, rv
         rv = sup.set_speed(0.05, check=False)

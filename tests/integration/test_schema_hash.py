@@ -1,4 +1,4 @@
-"""Issue 19: the schema hash recipe in docs/protocol.md is exact. The test runs the
+"""The schema hash recipe in docs/protocol.md ("Schema hash") is exact. The test runs the
 published command (read from the page, not copied here) with protoc and the shell alone,
 and compares the result with the hash the firmware was built with and the host's."""
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Many local clients on one SLCAN link, and stopping from anywhere (issue 20), against
+"""Many local clients on one SLCAN link, and stopping from anywhere (docs/host-tool.md "Sharing the link"), against
 landscaped: the background session owns the pty and shares it on loopback; monitor, record,
 a second supervisor address and other invocations run next to a moving arm; Ctrl-C and a
 stop from another terminal pause a move; the shell survives --help, errors, a bad quote

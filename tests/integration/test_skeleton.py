@@ -1,4 +1,4 @@
-"""Walking skeleton: landscaped + the CLI over SLCAN on a pty (issue 2)."""
+"""Walking skeleton: landscaped + the CLI over SLCAN on a pty (docs/protocol.md "SLCAN on a pseudo-terminal")."""
 from __future__ import annotations
 
 import json

@@ -1,4 +1,5 @@
-"""Stops keep the jerk limit (issue 22), checked from outside: landscaped records every
+"""Stops keep the jerk limit (docs/architecture.md "Stopping and resuming"), checked from outside:
+landscaped records every
 cycle's commanded joints (`--setpoint-trace`), and the jerk is the third difference of that
 record over the control period (a weighted mean of the true jerk over three cycles, so never
 above its peak), including the cycles where a stop and a resume begin.

@@ -456,7 +456,7 @@ def test_two_controllers_and_two_supervisors_on_one_bus(controller: Landscaped, 
 
 
 def test_two_supervisors_in_separate_processes(controller: Landscaped, tmp_path: Path) -> None:
-    """Issue 3 on real SocketCAN: two supervisor processes with their own
+    """Sharing real SocketCAN (docs/host-tool.md "Sharing the link"): two supervisor processes with their own
     sockets and addresses (0xF1 in this process, 0xF3 a CLI process), each
     owning its own controller (0x10, 0x11), move at the same time."""
     import can

@@ -1,4 +1,4 @@
-# Installation layout and the Debian package of the controller (issue 12).
+# Installation layout and the Debian package of the controller (docs/deploy.md).
 # Included at the end of the top CMakeLists.txt, after every target exists.
 #
 #   cmake --install build --prefix X   X/bin/landscaped, X/etc/landscape/landscaped.conf,

@@ -114,7 +114,7 @@ static void add_link(cx_t *c, const char *spec)
     memcpy(c->cfg.links[c->cfg.n_links++], spec, n + 1);
 }
 
-/* The deployment case of issue 12: socketcan:can0 and gpiod:gpiochip0. */
+/* The deployment case of docs/deploy.md: socketcan:can0 and gpiod:gpiochip0. */
 static void test_socketcan_and_gpiod_on_this_machine(void **state)
 {
     cx_t *c = *state;

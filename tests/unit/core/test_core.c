@@ -545,7 +545,7 @@ static void test_set_refusals_name_value_and_range(void **state)
     assert_string_equal(msg, "PERCENT_SPEED 150 %: allowed [0.1, 100]");
     assert_int_equal(set_speed(ls_SpeedType_PERCENT_SPEED, 0.0, &msg), ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
     assert_int_equal(set_speed(ls_SpeedType_PERCENT_SPEED, -5.0, &msg), ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
-    /* issue 17: a subnormal (or anything below 0.1 %) planned a move that never ended */
+    /* docs/protocol.md "Limits": a subnormal (or anything below 0.1 %) planned a move that never ended */
     assert_int_equal(set_speed(ls_SpeedType_PERCENT_SPEED, 1e-300, &msg), ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
     assert_int_equal(set_accel(ls_AccelType_PERCENT_ACCEL, 1e-300, &msg), ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
     assert_string_equal(msg, "PERCENT_ACCEL 1e-300 %: allowed [0.1, 100]");
@@ -592,7 +592,7 @@ static void test_set_refusals_name_value_and_range(void **state)
     w->frame_count = 6;
     w->frame[1] = -INFINITY;
     assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_PARAM_ERR);
-    /* issue 17: within the arm's reach (ls_robot_model_reach_m), angles within +-2 pi */
+    /* docs/protocol.md "Limits": within the arm's reach (ls_robot_model_reach_m), angles within +-2 pi */
     const double reach_m = ls_robot_model_reach_m(g_core.model);
     assert_true(reach_m > 1.0 && reach_m < 2.0);
     t = &req(ls_Request_set_tool_offset_tag)->cmd.set_tool_offset;
@@ -615,7 +615,7 @@ static void test_set_refusals_name_value_and_range(void **state)
     w->frame_count = 6;
     w->frame[1] = -(reach_m + 0.01);
     assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
-    /* issue 17: empty names */
+    /* docs/protocol.md "Limits": empty names */
     ls_PathLoadReq *pl = &req(ls_Request_path_load_tag)->cmd.path_load;
     pl->number_of_points = 1;
     pl->has_frame = pl->has_motion_type = pl->has_offset_type = pl->has_number_of_points = true;
@@ -1313,11 +1313,11 @@ static void test_signal_rsvp_unanswered_takes_the_default(void **state)
     assert_non_null(strstr(a->ret_msg, "default action (cancel)"));
 }
 
-/* ---------------------------------------------------------------- issue 16: the motion lifecycle */
+/* ---------------------------------------------------------------- the motion lifecycle (docs/state-machine.md) */
 
 static const double k_home[6] = { 0.0, 0.3, 0.3, 0.0, 0.9, 0.0 };
 
-/* ---------------------------------------------------------------- seq reuse (issue 17) */
+/* ---------------------------------------------------------------- seq reuse (docs/protocol.md "Sequence numbers") */
 
 /* Send g_rq again with the seq of the previous request; every response to it. */
 static size_t resend_same_seq(uint8_t addr, size_t *first)
@@ -1404,7 +1404,7 @@ static void test_seq_reuse_with_another_request_is_refused(void **state)
     assert_true(fabs(g_core.settings.speed_pct - 80.0) < 1e-9);
 }
 
-/* ---------------------------------------------------------------- UTF-8 (issue 17) */
+/* ---------------------------------------------------------------- UTF-8 (docs/protocol.md "Strings") */
 
 static void test_utf8_check_and_repair(void **state)
 {
@@ -1704,7 +1704,7 @@ static void test_emergency_fails_the_motion_once_stopped(void **state)
     assert_string_equal(g_core.motion_state, "robot_stopped_on_error");
 }
 
-/* ---------------------------------------------------------------- issue 17: floods */
+/* ---------------------------------------------------------------- floods (docs/protocol.md "Budgets under floods") */
 
 static int g_halt_posts;
 static const char *fault_log_text(void);
@@ -1854,7 +1854,7 @@ static void test_disconnect_during_motion_releases_after_the_stop(void **state)
     assert_int_not_equal(g_core.sessions[ls_core_session_of(&g_core, HOST_A)].epoch, epoch);
 }
 
-/* ---------------------------------------------------------------- issue 17: one supervisor per address */
+/* ---------------------------------------------------------------- one supervisor per address (docs/protocol.md "Identity") */
 
 static const ls_Response *connect_as(uint8_t addr, uint64_t nonce, const char *name)
 {
@@ -1957,7 +1957,7 @@ static void test_heartbeats_keep_a_session_only_with_its_token(void **state)
     assert_non_null(strstr(r->result.send_command.result, "hb_refused=3\n"));
 }
 
-/* ---------------------------------------------------------------- issue 19: the session's contract */
+/* ---------------------------------------------------------------- the session's contract (docs/protocol.md "Envelope and sessions") */
 
 static const ls_Response *connect_with(uint8_t addr, uint32_t period_ms, ls_DisconnectAction action)
 {
@@ -2358,7 +2358,7 @@ static void test_aux_dio_refused_at_run_time_fails_the_path_and_leaves_it_usable
     assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
 }
 
-/* ---------------------------------------------------------------- issue 19: presence, seq 0, describe */
+/* ---------------------------------------------------------------- presence, seq 0, describe (docs/protocol.md) */
 
 static void test_absent_required_fields_are_refused_naming_them(void **state)
 {

@@ -750,9 +750,9 @@ static void test_busy_links_are_not_evicted(void **state)
     assert_int_equal(ls_net_send_downlink(&g_net, 0x43, ans, sizeof ans), LS_ENOSPC);
 }
 
-/* ---------------------------------------------------------------- budgets under floods (issue 17) */
+/* ---------------------------------------------------------------- budgets under floods (docs/protocol.md "Budgets under floods") */
 
-/* The issue's floods: first frames announcing 4095 B from changing sources
+/* The floods of docs/reliability.md section 8: first frames announcing 4095 B from changing sources
  * every few ms, and single frames from changing sources each answered. A
  * session's link is never taken, it is answered all along, and a new
  * supervisor's multi-frame connect arrives whole. */

@@ -1,5 +1,5 @@
 /* TOOL_POS / TOOL_RPY: a value outside its DBC range is sent as the nearest
- * end of the range with its tool_saturated bit, never wrapped (issue 17: a 4 m
+ * end of the range with its tool_saturated bit, never wrapped (docs/reliability.md section 8: a 4 m
  * tool offset sent 45100 into a 16-bit field). */
 #include <math.h>
 #include <setjmp.h>

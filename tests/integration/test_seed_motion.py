@@ -1,4 +1,4 @@
-"""Motion as the seed specifies it (issue 18), against the running landscaped
+"""Motion as the seed specifies it, against the running landscaped
 with the simulated arm: PERCENT_SPEED and PERCENT_ACCEL scale Cartesian moves
 (seed 3.2.1), the tag_struct's 24 jointvals on the wire and the refusals that
 name the field and its limit, comply's valid states, and every MotionType in
@@ -119,7 +119,7 @@ def test_percent_speed_scales_cartesian_moves(sup: Supervisor) -> None:
     sup.set_speed(90)
     fast = _timed_line(sup, LINE)
     # Planned: 1.5 s cruise + ~0.1 s ramps at 10 %, 0.17 s + ~0.33 s ramps at 90 % (about 3.1);
-    # without the percent applied both took the same (issue 18: 0.96 s each).
+    # without the percent applied both took the same (0.96 s each).
     assert slow / fast > 2.5, f"15 cm line: {slow:.3f} s at 10 %, {fast:.3f} s at 90 %"
     # LINEAR_SPEED after PERCENT_SPEED: the most recent call's kind wins
     sup.set_speed(0.05, attribute=pb.LINEAR_SPEED)
