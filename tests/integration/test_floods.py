@@ -1,6 +1,6 @@
 """docs/protocol.md "Budgets under floods": fairness under floods, against the running landscaped (sim arm, SLCAN pty).
 
-Each flood of the issue is reproduced with raw frames written on the pty next to the
+Each flood of docs/reliability.md section 8 is reproduced with raw frames written on the pty next to the
 supervisors (one python-can bus and one Notifier shared by everything in this process),
 and each test asserts what must still work meanwhile:
 
@@ -41,7 +41,7 @@ from landscape.supervisor import Supervisor, notice_data
 TELEMETRY_HZ = 50  # more and the host (python-can reads the pty byte by byte) loses ISO-TP frames
 DEVICE = pb.DEFAULT_DEVICE_ADDRESS
 OWNER, NEWCOMER, OBSERVER = 0xF1, 0x22, 0x23
-#: a request answered within this during a flood (unloaded, a few ms; the issue: never)
+#: a request answered within this during a flood (unloaded, a few ms; before the budgets: never)
 ANSWER_BOUND_S = 1.0
 #: stopMotion answers once the arm has paused (its deceleration at the user's setting)
 STOP_BOUND_S = 1.5
@@ -134,7 +134,7 @@ class Flood(threading.Thread):
 
 
 def ff_flood(k: int) -> list[can.Message]:
-    """The issue's first flood: first frames announcing 4,095 B from 6 source addresses."""
+    """The first flood: first frames announcing 4,095 B from 6 source addresses."""
     return [can.Message(arbitration_id=pb.ISOTP_PHYSICAL_BASE | DEVICE << 8 | (0x60 + i), is_extended_id=True,
                         data=bytes([0x1F, 0xFF, 0, 0, 0, 0, 0, 0])) for i in range(6)]
 
@@ -143,7 +143,7 @@ SF_REQUEST = pb.Uplink(request=build_request(lookup("getMotionControlState"), 1)
 
 
 def sf_flood(k: int) -> list[can.Message]:
-    """The issue's second flood: single frames (a real request) from a new address each time."""
+    """The second flood: single frames (a real request) from a new address each time."""
     assert len(SF_REQUEST) <= 7
     payload = bytes([len(SF_REQUEST)]) + SF_REQUEST
     return [can.Message(arbitration_id=pb.ISOTP_PHYSICAL_BASE | DEVICE << 8 | (0x80 + k % 100), is_extended_id=True,

@@ -1,5 +1,5 @@
-/* The controller core, black box (core_fixture.h). Digital I/O: setDigitalIO, signalDigitalIO watches, their RSVPs and their end, and RSVPs in
- * general. */
+/* The controller core, black box (core_fixture.h). Digital I/O: setDigitalIO,
+ * signalDigitalIO watches, their RSVPs and their end, and RSVPs in general. */
 #include "core_fixture.h"
 
 static void test_set_digital_io_refusals(void **state)

@@ -1,5 +1,6 @@
-/* The controller core, black box (core_fixture.h). The dispatcher: every command in every state, the owner rule, the seq rules and the
- * retransmission cache, UTF-8, the presence rules, describe and the generated final notices. */
+/* The controller core, black box (core_fixture.h). The dispatcher: every
+ * command in every state, the owner rule, the seq rules and the retransmission
+ * cache, UTF-8, the presence rules, describe and the generated final notices. */
 #include "core_fixture.h"
 
 /* describeRobot: the URDF of the running model in pieces that join into

@@ -1,8 +1,9 @@
-/* The controller core, black box (core_fixture.h). Faults and floods (docs/protocol.md "Budgets under floods"): an emergency flood stops once,
+/* The controller core, black box (core_fixture.h). Faults and floods
+ * (docs/protocol.md "Budgets under floods"): an emergency flood stops once,
  * repeats are counted, the fault log keeps the first and the latest. */
 #include "core_fixture.h"
 
-/* 500 EMERGENCY frames in a second (the issue's flood): the first stops at
+/* 500 EMERGENCY frames in a second (docs/reliability.md section 8): the first stops at
  * once and raises one alarm; the repeats post no more stops and send no more
  * alarms, and one alarm at the window's end says how many were suppressed. */
 static void test_an_emergency_flood_stops_once_and_counts_the_repeats(void **state)

@@ -1,5 +1,7 @@
-/* The controller core, black box (core_fixture.h). The run (docs/state-machine.md "Motion lifecycle"): loop events, halts, deactivate while
- * moving, a path's auxiliary commands and cycles, the final notices, and when the tick acts. */
+/* The controller core, black box (core_fixture.h). The run (docs/state-
+ * machine.md "Motion lifecycle"): loop events, halts, deactivate while moving,
+ * a path's auxiliary commands and cycles, the final notices, and when the tick
+ * acts. */
 #include "core_fixture.h"
 
 /* A request is answered from the state as of its arrival: the loop's events

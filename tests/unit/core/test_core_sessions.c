@@ -1,5 +1,6 @@
-/* The controller core, black box (core_fixture.h). Sessions (docs/protocol.md "Identity", "Liveness", "Disconnect handler"): one client per
- * address, heartbeats with their token, the stated period, and the disconnect actions. */
+/* The controller core, black box (core_fixture.h). Sessions (docs/protocol.md
+ * "Identity", "Liveness", "Disconnect handler"): one client per address,
+ * heartbeats with their token, the stated period, and the disconnect actions. */
 #include "core_fixture.h"
 
 /* Another client on the owner's address is refused and changes nothing; the

@@ -1,5 +1,5 @@
-/* The controller core, black box (core_fixture.h). The settings and queries: units, set commands and their refusals, the robot position and
- * the sensors. */
+/* The controller core, black box (core_fixture.h). The settings and queries:
+ * units, set commands and their refusals, the robot position and the sensors. */
 #include "core_fixture.h"
 
 static void test_units_conversions(void **state)
