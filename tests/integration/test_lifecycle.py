@@ -1,7 +1,7 @@
-"""docs/state-machine.md "Motion lifecycle": every started motion ends with exactly one final notice naming why, and
-the reported state is the arm's real state (docs/state-machine.md "Motion lifecycle").
-Each test is one case of docs/state-machine.md "Motion lifecycle", against the running landscaped with the simulated
-arm; what the arm really does comes from the device's telemetry (lifecycle_rig)."""
+"""Every started motion ends with exactly one final notice naming why, and the reported state
+is the arm's real state (docs/state-machine.md "Motion lifecycle"). Each test is one case of
+that rule, against the running landscaped with the simulated arm; what the arm really does
+comes from the device's telemetry (lifecycle_rig)."""
 from __future__ import annotations
 
 import contextlib
