@@ -144,22 +144,12 @@ int32_t ls_core_rsvp(ls_core_t *core, int sup, uint32_t ref_seq, ls_NoticeKind k
         core->rsvp_next_id = 1;
     }
     ls_session_t *s = &core->sessions[sup];
-    memset(&core->note, 0, sizeof core->note);
-    core->note.which_msg = ls_Downlink_notice_tag;
-    ls_Notice *n = &core->note.msg.notice;
-    n->kind = kind;
-    ls_fmt_print(n->event_id, sizeof n->event_id, "%s", event_id);
+    ls_Notice *n = ls_send_new_notice(core, kind, event_id, ref_seq, data, n_data);
     n->rsvp_id = id;
-    n->ref_seq = ref_seq;
     n->session_epoch = ref_seq != 0u ? s->epoch : 0u;
     n->rsvp_timeout_ms = timeout_ms;
     ls_fmt_print(n->rsvp_default, sizeof n->rsvp_default, "%s", default_action);
     n->notice_seq = ++s->notice_seq;
-    size_t cap = sizeof n->data / sizeof n->data[0];
-    for (size_t k = 0; k < n_data && k < cap; k++) {
-        ls_fmt_text(n->data[k], sizeof n->data[k], "%s", data[k]);
-        n->data_count++;
-    }
     size_t len = ls_send_encode(&core->note, core->note_enc, sizeof core->note_enc);
     if (len == 0) {
         return LS_EINVAL;

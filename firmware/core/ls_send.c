@@ -104,6 +104,23 @@ int32_t ls_reply(ls_call_t *call, int32_t code, const char *fmt, ...)
     return code;
 }
 
+ls_Notice *ls_send_new_notice(ls_core_t *core, ls_NoticeKind kind, const char *event_id, uint32_t ref_seq,
+                              const char *const *data, size_t n_data)
+{
+    memset(&core->note, 0, sizeof core->note);
+    core->note.which_msg = ls_Downlink_notice_tag;
+    ls_Notice *n = &core->note.msg.notice;
+    n->kind = kind;
+    ls_fmt_print(n->event_id, sizeof n->event_id, "%s", event_id);
+    n->ref_seq = ref_seq;
+    size_t cap = sizeof n->data / sizeof n->data[0];
+    for (size_t k = 0; k < n_data && k < cap; k++) {
+        ls_fmt_text(n->data[k], sizeof n->data[k], "%s", data[k]);
+        n->data_count++;
+    }
+    return n;
+}
+
 void ls_core_notify(ls_core_t *core, int sup, ls_NoticeKind kind, ls_EventId id, uint32_t ref_seq, bool final,
                     const char *const *data, size_t n_data)
 {
@@ -113,20 +130,10 @@ void ls_core_notify(ls_core_t *core, int sup, ls_NoticeKind kind, ls_EventId id,
         if (!s->connected || (sup >= 0 && i != sup)) {
             continue;
         }
-        memset(&core->note, 0, sizeof core->note);
-        core->note.which_msg = ls_Downlink_notice_tag;
-        ls_Notice *n = &core->note.msg.notice;
-        n->kind = kind;
-        ls_fmt_print(n->event_id, sizeof n->event_id, "%s", event_id);
-        n->ref_seq = ref_seq;
+        ls_Notice *n = ls_send_new_notice(core, kind, event_id, ref_seq, data, n_data);
         n->final = final;
         n->notice_seq = ++s->notice_seq;
         n->session_epoch = ref_seq != 0u ? s->epoch : 0u;
-        size_t cap = sizeof n->data / sizeof n->data[0];
-        for (size_t k = 0; k < n_data && k < cap; k++) {
-            ls_fmt_text(n->data[k], sizeof n->data[k], "%s", data[k]);
-            n->data_count++;
-        }
         size_t len = ls_send_encode(&core->note, core->note_enc, sizeof core->note_enc);
         if (len > 0) {
             ls_send_bytes(core, s->addr, core->note_enc, len);
@@ -144,22 +151,12 @@ void ls_core_notify_named_to(ls_core_t *core, uint8_t addr, uint32_t epoch, ls_N
                              uint32_t ref_seq, bool final, const char *const *data, size_t n_data)
 {
     int i = ls_core_session_of(core, addr);
-    memset(&core->note, 0, sizeof core->note);
-    core->note.which_msg = ls_Downlink_notice_tag;
-    ls_Notice *n = &core->note.msg.notice;
-    n->kind = kind;
-    ls_fmt_print(n->event_id, sizeof n->event_id, "%s", event_id);
-    n->ref_seq = ref_seq;
+    ls_Notice *n = ls_send_new_notice(core, kind, event_id, ref_seq, data, n_data);
     n->final = final;
     n->session_epoch = epoch;
     /* The session that started it may be gone (disconnect, heartbeat): the
      * address still gets the notice, outside any session's numbering. */
     n->notice_seq = i >= 0 ? ++core->sessions[i].notice_seq : 0u;
-    size_t cap = sizeof n->data / sizeof n->data[0];
-    for (size_t k = 0; k < n_data && k < cap; k++) {
-        ls_fmt_text(n->data[k], sizeof n->data[k], "%s", data[k]);
-        n->data_count++;
-    }
     size_t len = ls_send_encode(&core->note, core->note_enc, sizeof core->note_enc);
     if (len > 0) {
         ls_send_bytes(core, addr, core->note_enc, len);

@@ -63,6 +63,13 @@ void ls_core_notify_named_to(ls_core_t *core, uint8_t addr, uint32_t epoch, ls_N
  * `sup`: the response carries the deferred request's seq and command id. */
 void ls_core_finish_deferred(ls_core_t *core, int sup, int32_t code, const char *msg);
 
+/* Start the notice in core->note (its encoding scratch): kind, event id,
+ * ref_seq and up to the notice's capacity of `data` strings (each cut to the
+ * field's size); the caller sets the rest (final, notice_seq, session_epoch,
+ * the RSVP fields) and sends it. */
+ls_Notice *ls_send_new_notice(ls_core_t *core, ls_NoticeKind kind, const char *event_id, uint32_t ref_seq,
+                              const char *const *data, size_t n_data);
+
 /* Encode `msg` into buf (its strings repaired to whole UTF-8 first): the
  * length, or 0 when it does not fit (bounded fields make that a bug). */
 size_t ls_send_encode(ls_Downlink *msg, uint8_t *buf, size_t cap);
