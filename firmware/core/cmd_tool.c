@@ -5,8 +5,8 @@
  * a joint move to the approach point above the tool's rack pose, a straight
  * line down to the rack pose, coupling (or uncoupling) in the control loop,
  * a straight line back up. Each step is started here when the loop reports
- * the previous one (cmd_sensor.h: the loop's events reach
- * ls_core_tool_on_event first). The tool's bits are driven in the loop as
+ * the previous one (the loop's events reach ls_core_tool_on_event first:
+ * ls_core.c, on_loop_event). The tool's bits are driven in the loop as
  * well and answered when the loop reports them.
  *
  * The rack poses and tool offsets are read with the tool changer's
