@@ -234,11 +234,7 @@ static bool refused_while_deferred(ls_core_t *core, uint8_t addr, const ls_Reque
         /* One request in flight per session: the deferred one keeps its
          * answer slot; this one is refused without running. */
         const ls_cmd_desc_t *pd = ls_cmd_find(s->pending_tag);
-        memset(&core->down, 0, sizeof core->down);
-        core->down.which_msg = ls_Downlink_response_tag;
-        ls_Response *busy = &core->down.msg.response;
-        busy->seq = rq->seq;
-        busy->session_epoch = s->epoch;
+        ls_Response *busy = ls_send_new_response(core, rq->seq, s->epoch);
         busy->ret_code = ls_RetCode_CMD_BUSY_ERR;
         ls_fmt_text(busy->ret_msg, sizeof busy->ret_msg, "%s (seq %u) is still running: wait for its answer",
                     pd != NULL ? pd->name : "a blocking command", (unsigned)s->last_seq);
@@ -256,13 +252,9 @@ static bool refused_while_deferred(ls_core_t *core, uint8_t addr, const ls_Reque
 static void run_request(ls_core_t *core, uint8_t addr, ls_Request *rq, int sup, uint64_t hash, uint64_t now_us)
 {
     ls_session_t *s = sup >= 0 ? &core->sessions[sup] : NULL;
-    memset(&core->down, 0, sizeof core->down);
-    core->down.which_msg = ls_Downlink_response_tag;
-    ls_Response *res = &core->down.msg.response;
-    res->seq = rq->seq;
-    ls_call_t call = { .core = core, .sup = sup, .req = rq, .res = res, .now_us = now_us };
     /* disconnect ends the session it answers: its answer still carries that epoch */
-    res->session_epoch = s != NULL ? s->epoch : 0u;
+    ls_Response *res = ls_send_new_response(core, rq->seq, s != NULL ? s->epoch : 0u);
+    ls_call_t call = { .core = core, .sup = sup, .req = rq, .res = res, .now_us = now_us };
     int32_t code = dispatch(core, addr, &call, rq);
     sup = call.sup; /* connect may have created the session */
     s = sup >= 0 && core->sessions[sup].connected ? &core->sessions[sup] : NULL;
@@ -350,14 +342,10 @@ static bool scan_request(const uint8_t *buf, size_t len, uint32_t *seq, uint32_t
 
 static void answer_bad_request(ls_core_t *core, uint8_t addr, int32_t code, uint32_t seq, const char *fmt, ...)
 {
-    memset(&core->down, 0, sizeof core->down);
-    core->down.which_msg = ls_Downlink_response_tag;
-    ls_Response *res = &core->down.msg.response;
-    res->seq = seq;
-    res->ret_code = code;
     /* Every answer carries the epoch of the session it answers (docs/protocol.md). */
     const int sup = ls_core_session_of(core, addr);
-    res->session_epoch = sup >= 0 ? core->sessions[sup].epoch : 0u;
+    ls_Response *res = ls_send_new_response(core, seq, sup >= 0 ? core->sessions[sup].epoch : 0u);
+    res->ret_code = code;
     va_list ap;
     va_start(ap, fmt);
     ls_fmt_vtext(res->ret_msg, sizeof res->ret_msg, fmt, ap);

@@ -163,6 +163,16 @@ void ls_core_notify_named_to(ls_core_t *core, uint8_t addr, uint32_t epoch, ls_N
     }
 }
 
+ls_Response *ls_send_new_response(ls_core_t *core, uint32_t seq, uint32_t epoch)
+{
+    memset(&core->down, 0, sizeof core->down);
+    core->down.which_msg = ls_Downlink_response_tag;
+    ls_Response *res = &core->down.msg.response;
+    res->seq = seq;
+    res->session_epoch = epoch;
+    return res;
+}
+
 void ls_core_finish_deferred(ls_core_t *core, int sup, int32_t code, const char *msg)
 {
     if (sup < 0 || sup >= LS_MAX_SUPERVISORS) {
@@ -172,11 +182,7 @@ void ls_core_finish_deferred(ls_core_t *core, int sup, int32_t code, const char 
     if (!s->connected || !s->last_pending) {
         return;
     }
-    memset(&core->down, 0, sizeof core->down);
-    core->down.which_msg = ls_Downlink_response_tag;
-    ls_Response *res = &core->down.msg.response;
-    res->seq = s->last_seq;
-    res->session_epoch = s->epoch;
+    ls_Response *res = ls_send_new_response(core, s->last_seq, s->epoch);
     res->ret_code = code;
     res->which_result = code >= 0 ? s->pending_tag : 0;
     ls_fmt_text(res->ret_msg, sizeof res->ret_msg, "%s", msg);

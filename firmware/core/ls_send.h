@@ -63,6 +63,11 @@ void ls_core_notify_named_to(ls_core_t *core, uint8_t addr, uint32_t epoch, ls_N
  * `sup`: the response carries the deferred request's seq and command id. */
 void ls_core_finish_deferred(ls_core_t *core, int sup, int32_t code, const char *msg);
 
+/* Start the answer in core->down (its encoding scratch) to request `seq` in
+ * session epoch `epoch` (0: none); the caller sets the code, the text and the
+ * result, then sends it (ls_send_response, or ls_send_bytes uncached). */
+ls_Response *ls_send_new_response(ls_core_t *core, uint32_t seq, uint32_t epoch);
+
 /* Start the notice in core->note (its encoding scratch): kind, event id,
  * ref_seq and up to the notice's capacity of `data` strings (each cut to the
  * field's size); the caller sets the rest (final, notice_seq, session_epoch,
