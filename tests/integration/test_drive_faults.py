@@ -100,7 +100,10 @@ def _final(sup: Supervisor, seq: int, seen: list[pb.Notice], timeout_s: float = 
 def _moving(sup: Supervisor) -> int:
     rv = sup.move_absolute("far", TARGET, speed_pct=30)
     time.sleep(0.6)
-    assert sup.get_motion_control_state().result["state"] == "MOVING"
+    state = sup.get_motion_control_state().result["state"]
+    if state != "MOVING":  # say why the move ended before the fault was injected
+        why = [f"{n.event_id}: {n.text}" for n in sup.notices(timeout_s=0.2) if n.ref_seq == rv.seq]
+        raise AssertionError(f"the move is {state} 0.6 s after it started, not MOVING: {why}")
     return rv.seq
 
 
