@@ -155,11 +155,16 @@ static void tap_syncs(hal_can_link_t *link)
 
 /* Sleep until a frame, a command, room for pending output or `due`; a
  * stop signal, blocked outside, ends the sleep (ppoll unblocks it). */
-static void wait_for_work(hal_can_link_t *link, uint64_t due, const sigset_t *unblocked)
+/* How often a failed link is tried again (its descriptor may stay readable
+ * with the error, so it is not waited on meanwhile). */
+#define LINK_RETRY_US 10000u
+#define NO_FD (-1) /* the link's descriptor is not waited on */
+
+static void wait_for_work(hal_can_link_t *link, bool link_failed, uint64_t due, const sigset_t *unblocked)
 {
     struct pollfd fds[2];
     nfds_t n = 0;
-    int lfd = hal_can_poll_fd(link);
+    int lfd = link_failed ? NO_FD : hal_can_poll_fd(link);
     if (lfd >= 0) {
         short out = (hal_can_tx_pending(link) || hal_sim_drives_tx_pending()) ? POLLOUT : 0;
         fds[n++] = (struct pollfd){ .fd = lfd, .events = (short)(POLLIN | out), .revents = 0 };
@@ -169,8 +174,9 @@ static void wait_for_work(hal_can_link_t *link, uint64_t due, const sigset_t *un
     }
     uint64_t now = mono_us();
     uint64_t wait_us = due > now ? due - now : 0u;
-    if (wait_us > 1000000u) {
-        wait_us = 1000000u;
+    const uint64_t cap = link_failed ? LINK_RETRY_US : 1000000u;
+    if (wait_us > cap) {
+        wait_us = cap;
     }
     const struct timespec ts = { .tv_sec = (time_t)(wait_us / 1000000u),
                                  .tv_nsec = (long)(wait_us % 1000000u) * 1000L };
@@ -266,17 +272,23 @@ int main(int argc, char **argv)
     LOG_INFO("ready: nodes %s (joints 1-%zu) on %s, %.6g counts/rad, control %s", nodes, o.n_nodes, link.name,
              o.counts_per_rad, o.control[0] != '\0' ? o.control : "(none)");
     uint32_t malformed = 0;
-    int exit_code = LS_EXIT_OK;
+    bool link_failed = false;
     while (!g_stop) {
         uint64_t now = mono_us();
         uint64_t due = hal_sim_drives_next_due_us(now);
         uint64_t link_due = hal_can_next_due_us(&link);
-        wait_for_work(&link, link_due < due ? link_due : due, &unblocked);
+        wait_for_work(&link, link_failed, link_due < due ? link_due : due, &unblocked);
         int r = hal_sim_drives_poll(mono_us());
-        if (r < 0) {
-            LOG_ERR("link %s failed (%s): stopping", link.name, ls_err_text(r));
-            exit_code = 1;
-            break;
+        /* A drive outlives its bus (an interface taken down, a cable pulled):
+         * the drives run on, their heartbeat consumers stop the joints, and
+         * the link is tried again until it carries frames. */
+        if (r < 0 && !link_failed) {
+            LOG_WARN("link %s failed (%s): the drives run on without it, trying it every %u ms", link.name,
+                     ls_err_text(r), LINK_RETRY_US / 1000u);
+            link_failed = true;
+        } else if (r == LS_OK && link_failed) {
+            LOG_INFO("link %s carries frames again", link.name);
+            link_failed = false;
         }
         if (hal_sim_drives_malformed_messages() != malformed) {
             malformed = hal_sim_drives_malformed_messages();
@@ -303,5 +315,5 @@ int main(int argc, char **argv)
     hal_sim_drives_close();
     hal_can_close(&link);
     hal_sim_world_close();
-    return exit_code;
+    return LS_EXIT_OK;
 }

@@ -68,6 +68,9 @@ static void node_tx(void *ctx, const sd_node_t *from, const hal_can_frame_t *f)
     }
 }
 
+/* The frames the nodes sent, out to the link. A link that fails takes none
+ * of them: they are dropped (and counted), as a drive's frames are when its
+ * bus is gone, and the link's error is returned. */
 static int flush_tx(void)
 {
     while (S.tx_len > 0) {
@@ -76,6 +79,8 @@ static int flush_tx(void)
             return LS_OK;
         }
         if (r < 0) {
+            S.stats.tx_dropped += S.tx_len;
+            S.tx_len = 0;
             return r;
         }
         S.tx_head = (S.tx_head + 1) % TX_RING;
@@ -448,6 +453,9 @@ int hal_sim_drives_poll(uint64_t now_us)
     if (S.bus_off && now_us >= S.bus_off_until_us) {
         set_bus_off(false, now_us);
     }
+    /* A drive outlives its bus: when the link fails, the nodes still keep
+     * their time (a heartbeat consumer stops a moving joint, 0x6007). */
+    int link_err = LS_OK;
     for (unsigned k = 0; k < HAL_SIM_DRIVES_RX_PER_POLL; k++) {
         hal_can_frame_t f;
         int r = hal_can_recv(S.link, &f);
@@ -455,7 +463,8 @@ int hal_sim_drives_poll(uint64_t now_us)
             break;
         }
         if (r < 0) {
-            return r;
+            link_err = r;
+            break;
         }
         handle_frame(&f, now_us);
         if (S.tx_len > TX_RING / 2) {
@@ -465,7 +474,8 @@ int hal_sim_drives_poll(uint64_t now_us)
     drain_control(now_us);
     deliver_local(now_us);
     tick_all(now_us);
-    return flush_tx();
+    const int r = flush_tx();
+    return link_err != LS_OK ? link_err : r;
 }
 
 uint64_t hal_sim_drives_next_due_us(uint64_t now_us)

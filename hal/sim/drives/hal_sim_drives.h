@@ -197,7 +197,9 @@ void hal_sim_drives_close(void);
  * whatever the bus carries), the control socket's commands (at most 64 per
  * call), timers, then the frames the nodes sent, out to the link; the
  * frames left wait for the next call. LS_OK, LS_ENODEV when not open, or the
- * link's negative status when it failed (the caller stops). */
+ * link's negative status when it failed: the nodes ran on all the same (a
+ * drive outlives its bus: its heartbeat consumer acts), and the frames the
+ * link would not take are dropped and counted (tx_dropped). */
 int hal_sim_drives_poll(uint64_t now_us);
 
 /* One frame as if it came from the link, and the frames it caused handed

@@ -37,9 +37,14 @@ static hal_can_frame_t g_sent[MAX_SENT];
 static size_t g_n_sent;
 static uint64_t g_now;
 
+static bool g_link_down; /* the fake link fails every call, as SocketCAN on an interface taken down */
+
 static int fake_send(void *self, const hal_can_frame_t *f)
 {
     (void)self;
+    if (g_link_down) {
+        return LS_EIO;
+    }
     if (g_n_sent < MAX_SENT) {
         g_sent[g_n_sent++] = *f;
     }
@@ -50,6 +55,9 @@ static uint32_t g_taken; /* frames it gave */
 static int fake_recv(void *self, hal_can_frame_t *f)
 {
     (void)self;
+    if (g_link_down) {
+        return LS_EIO;
+    }
     if (g_flood == 0u) {
         return LS_EAGAIN;
     }
@@ -774,6 +782,42 @@ static void test_a_lost_heartbeat_reacts_as_0x6007_says(void **state)
     assert_true(in_state(statusword(N1), LS_CO_SW_STATE_MASK_SHORT, LS_CO_SW_SWITCH_ON_DISABLED_STATE));
 }
 
+static void test_the_drives_run_on_while_their_link_is_down(void **state)
+{
+    (void)state;
+    open_drives(1);
+    const uint8_t master = 0x7F;
+    uint32_t entry = (uint32_t)master << LS_CO_HB_CONSUMER_NODE_SHIFT | 100u;
+    assert_int_equal(sdo_write(N1, LS_CO_OBJ_CONSUMER_HB, 1, entry, 4), 0);
+    assert_int_equal(sdo_write(N1, LS_CO_OBJ_PRODUCER_HB, 0, 20, 2), 0);
+    nmt(LS_CO_NMT_START, N1);
+    enable_csp(N1);
+    uint8_t hb = LS_CO_NMT_OPERATIONAL;
+    rx(LS_CO_COB_HEARTBEAT + master, &hb, 1);
+    advance_ms(50);
+    hal_sim_drives_stats_t before;
+    hal_sim_drives_stats(&before);
+    size_t mark = g_n_sent;
+    g_link_down = true;
+    for (int ms = 0; ms < 200; ms++) {
+        g_now += 1000u;
+        assert_int_equal(hal_sim_drives_poll(g_now), LS_EIO); /* said every call, and the drive runs on */
+    }
+    g_link_down = false;
+    hal_sim_drives_stats_t during;
+    hal_sim_drives_stats(&during);
+    assert_int_equal(g_n_sent, mark);
+    /* its heartbeats (one per 20 ms) and the EMCY of its consumer's time-out: dropped, counted */
+    assert_true(during.tx_dropped >= before.tx_dropped + 10u);
+    advance_ms(1); /* the link carries frames again */
+    assert_true(count_sent(LS_CO_COB_HEARTBEAT + N1, mark, NULL) <= 1);
+    /* the heartbeat consumer acted while the bus was gone (0x6007 = 1: fault) */
+    assert_true(in_state(statusword(N1), LS_CO_SW_STATE_MASK_SHORT, LS_CO_SW_FAULT_STATE));
+    assert_int_equal(sdo_read(N1, LS_CO_OBJ_ERROR_CODE, 0), LS_CO_EMCY_HEARTBEAT);
+    advance_ms(25);
+    assert_true(count_sent(LS_CO_COB_HEARTBEAT + N1, mark, NULL) >= 1);
+}
+
 /* ======================================================================
  * The CiA 402 power state machine
  * ====================================================================== */
@@ -1411,6 +1455,7 @@ int main(void)
         cmocka_unit_test_teardown(test_a_synchronous_rpdo_acts_at_the_next_sync_and_tpdos_follow_each_sync, teardown),
         cmocka_unit_test_teardown(test_event_driven_tpdos_follow_changes_inhibit_time_and_event_timer, teardown),
         cmocka_unit_test_teardown(test_a_lost_heartbeat_reacts_as_0x6007_says, teardown),
+        cmocka_unit_test_teardown(test_the_drives_run_on_while_their_link_is_down, teardown),
         cmocka_unit_test_teardown(test_every_power_state_transition, teardown),
         cmocka_unit_test_teardown(test_fault_reset_acts_on_the_rising_edge_of_bit_7_only, teardown),
         cmocka_unit_test_teardown(test_modes_are_checked_and_the_display_follows, teardown),
