@@ -181,16 +181,23 @@ bool ls_control_snapshot(ls_control_t *c, ls_ctl_snapshot_t *out)
 
 /* --- the loop */
 
+static void enable_failed(ls_control_t *c, const char *text);
+
 static void fault(ls_control_t *c, const char *text)
 {
+    if (c->enabling) {
+        /* Nothing moves while the drives enable; the enable's requester waits
+         * for its one answer: this is it. */
+        enable_failed(c, text);
+        return;
+    }
     ls_motion_abort(&c->motion);
     /* The core ends whatever ran with its final alarm on LS_CEV_FAULT. */
     ls_react_abort(&c->react, c->q, NULL);
     ls_react_jog_halt(&c->react);
-    if (c->enabled || c->enabling) {
+    if (c->enabled) {
         (void)hal_arm_enable(c->cfg.arm, false);
         c->enabled = false;
-        c->enabling = false;
     }
     ls_ctl_event_t ev;
     memset(&ev, 0, sizeof ev);

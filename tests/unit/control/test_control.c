@@ -94,8 +94,10 @@ typedef struct {
     fake_arm_t arm;
     int enable_cycles;
     int fault_joint;
-    bool wanted;  /* enable(true) asked */
-    int progress; /* update() calls since */
+    bool bus_failed; /* update() fails, then every joint is LOST, as a drive bus gone down */
+    bool bus_lost;   /* update() has failed */
+    bool wanted;     /* enable(true) asked */
+    int progress;    /* update() calls since */
     uint64_t last_update_us;
     int updates;
     hal_arm_event_t pending; /* reported by next_event once, when pending.node != 0 */
@@ -125,6 +127,10 @@ static int drives_update(void *self, uint64_t now_us)
     fake_drives_t *d = self;
     d->updates++;
     d->last_update_us = now_us;
+    if (d->bus_failed) {
+        d->bus_lost = true;
+        return LS_EIO;
+    }
     if (d->wanted && ++d->progress >= d->enable_cycles) {
         d->arm.enabled = true;
     }
@@ -138,7 +144,10 @@ static int drives_status(void *self, hal_joint_status_t *out)
         memset(&out[j], 0, sizeof out[j]);
         out[j].node = (uint16_t)(0x21 + j);
         out[j].state = d->arm.enabled ? HAL_JOINT_ENABLED : d->wanted ? HAL_JOINT_ENABLING : HAL_JOINT_OFF;
-        if (j + 1 == d->fault_joint) {
+        if (d->bus_lost) {
+            out[j].state = HAL_JOINT_LOST;
+            strcpy(out[j].text, "the drive bus fake failed: every drive is lost");
+        } else if (j + 1 == d->fault_joint) {
             out[j].state = HAL_JOINT_FAULT;
             out[j].code = 0x8611u;
             strcpy(out[j].text, "FAULT, EMCY 0x8611 following error");
@@ -671,6 +680,28 @@ static void test_enable_times_out_naming_a_joint_still_enabling(void **state)
     assert_string_equal(ev.text, "joint 1 (node 0x21): not enabled within 20 ms (ENABLING)");
     assert_false(g_drives.wanted);
     assert_false(snap(f).enabling);
+}
+
+/* The bus fails while the drives enable: the enable ends with the bus's
+ * words (and the enable's one event), as it would were the drives on. */
+static void test_a_bus_failing_during_an_enable_fails_the_enable(void **state)
+{
+    (void)state;
+    fx_t *f = fx_drives(50, 0);
+    post(f, LS_CTL_ENABLE, 18);
+    cycle(f);
+    cycle(f);
+    assert_no_event(f);
+    g_drives.bus_failed = true;
+    cycle(f);
+    ls_ctl_event_t ev = next(f, LS_CEV_ENABLE_FAILED);
+    assert_int_equal(ev.ref_seq, 18);
+    assert_string_equal(ev.text, "the drive bus fake failed: every drive is lost");
+    assert_false(g_drives.wanted);
+    assert_false(snap(f).enabling);
+    assert_false(snap(f).enabled);
+    cycle(f);
+    assert_no_event(f);
 }
 
 static void test_disable_cancels_an_enable_in_progress(void **state)
@@ -1444,6 +1475,7 @@ int main(void)
         cmocka_unit_test(test_enable_waits_for_every_joint_to_confirm),
         cmocka_unit_test(test_enable_fails_naming_the_joint_its_node_and_what_its_drive_said),
         cmocka_unit_test(test_enable_times_out_naming_a_joint_still_enabling),
+        cmocka_unit_test(test_a_bus_failing_during_an_enable_fails_the_enable),
         cmocka_unit_test(test_disable_cancels_an_enable_in_progress),
         cmocka_unit_test(test_a_joint_that_faults_under_control_faults_the_arm),
         cmocka_unit_test(test_a_drive_fault_while_moving_stops_the_others_along_the_path_then_disables),
