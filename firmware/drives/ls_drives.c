@@ -521,13 +521,10 @@ static int drives_info(void *self, hal_arm_info_t *out)
 static int drives_enable(void *self, bool on)
 {
     ls_drives_t *d = self;
-    if (on && d->link_failed) {
-        d->link_failed = false; /* an enable looks again: the drives are lost, and booted again below */
-        for (uint8_t j = 0; j < d->cfg.n_joints; j++) {
-            (void)ls_co_master_reboot_node(&d->master, d->cfg.joint[j].node_id, d->now_us);
-            d->axis[j].rebooting = true;
-        }
-    }
+    /* After a failed link an enable looks again: every drive is booted anew
+     * below, as the master cannot know what each did meanwhile. */
+    const bool relink = on && d->link_failed;
+    d->link_failed = d->link_failed && !on;
     d->want_enabled = on;
     d->reset_allowed = on;
     d->enable_epoch++; /* what the axes said before this call no longer answers it */
@@ -539,7 +536,10 @@ static int drives_enable(void *self, bool on)
          * boot an earlier enable began may have reset the drive unheard). */
         const uint8_t node = d->cfg.joint[j].node_id;
         const ls_co_phase_t phase = ls_co_master_node_phase(&d->master, node);
-        if (on && phase != LS_CO_PHASE_READY && ls_co_master_reboot_node(&d->master, node, d->now_us) == LS_OK) {
+        /* One reset per node: a second would boot it twice, and the answer
+         * to the first boot's configuration would meet the second's. */
+        if (on && (relink || phase != LS_CO_PHASE_READY) &&
+            ls_co_master_reboot_node(&d->master, node, d->now_us) == LS_OK) {
             a->rebooting = true;
         }
     }
