@@ -351,6 +351,18 @@ int ls_co_master_reboot_node(ls_co_master_t *m, uint8_t node_id, uint64_t now_us
     return LS_OK;
 }
 
+void ls_co_master_drop_unsent(ls_co_master_t *m)
+{
+    m->nmt_all_pending = 0;
+    for (size_t i = 0; i < m->node_count; i++) {
+        m->nodes[i].nmt_pending = 0;
+    }
+    m->cycle_pending = false;
+    m->bootup_pending = false;
+    m->hb_pending = false;
+    m->tx_blocked = false;
+}
+
 static void send_own(ls_co_master_t *m)
 {
     if (m->bootup_pending) {

@@ -287,6 +287,14 @@ int ls_co_master_boot(ls_co_master_t *m, uint64_t now_us);
  * deadline. The only way out of FAILED and LOST. O(1). */
 int ls_co_master_reboot_node(ls_co_master_t *m, uint8_t node_id, uint64_t now_us);
 
+/* The link failed: what was waiting to be sent (NMT commands, the rest of a
+ * sync cycle, the master's boot-up and heartbeat) is dropped, as a dead bus
+ * carried none of it. Without this, the first frame after the link is back
+ * would send every node's stale command, and a reboot then its own again:
+ * two resets, two boot-ups. Nodes keep their phases; SDO transfers time out
+ * as usual. O(nodes). */
+void ls_co_master_drop_unsent(ls_co_master_t *m);
+
 /* Feed one received CAN frame. 29-bit and remote frames, and frames of no
  * configured node or service, are ignored (the bus may carry other
  * traffic). Routes SDO responses (the next request or configuration step

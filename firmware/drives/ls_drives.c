@@ -292,6 +292,7 @@ static int link_failed(ls_drives_t *d, const char *why)
         ls_fmt_print(d->text, sizeof d->text, "the drive bus %s %s: every drive is lost", d->cfg.link->name, why);
     }
     d->link_failed = true;
+    ls_co_master_drop_unsent(&d->master);
     return LS_EIO;
 }
 

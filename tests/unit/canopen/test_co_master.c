@@ -734,6 +734,33 @@ static void test_a_sync_while_the_last_cycle_is_unfinished_restarts_it(void **st
     assert_int_equal(counters().sync_overruns, 1);
 }
 
+/* A dead link sent nothing: after drop_unsent, a reboot sends its node's
+ * one reset and no stale command of another node goes with it. */
+static void test_after_a_dead_link_a_reboot_sends_one_reset_for_its_node_only(void **state)
+{
+    (void)state;
+    boot_to_ready(2);
+    w.bus.refuse_all = true;
+    assert_int_equal(ls_co_master_reboot_node(&w.m, 0x21, w.now_us), LS_OK);
+    assert_int_equal(ls_co_master_reboot_node(&w.m, 0x22, w.now_us), LS_OK);
+    assert_int_equal(ls_co_master_sync(&w.m, w.now_us), LS_EAGAIN);
+    ls_co_master_drop_unsent(&w.m);
+    w.bus.refuse_all = false;
+    w.bus.n = w.bus.seen = 0;
+    assert_int_equal(ls_co_master_reboot_node(&w.m, 0x21, w.now_us), LS_OK);
+    ls_co_master_poll(&w.m, w.now_us);
+    int resets = 0;
+    for (size_t i = 0; i < w.bus.n; i++) {
+        if (w.bus.f[i].id == LS_CO_COB_NMT) {
+            assert_int_equal(w.bus.f[i].data[0], LS_CO_NMT_RESET_COMM);
+            assert_int_equal(w.bus.f[i].data[1], 0x21);
+            resets++;
+        }
+        assert_int_not_equal(w.bus.f[i].id, LS_CO_COB_SYNC); /* the dead cycle's frames stay unsent */
+    }
+    assert_int_equal(resets, 1);
+}
+
 static void test_tpdo_age_counts_sync_periods_since_arrival(void **state)
 {
     (void)state;
@@ -914,6 +941,7 @@ int main(void)
         cmocka_unit_test(test_a_refused_send_resumes_the_cycle_in_order_with_sync_last),
         cmocka_unit_test(test_a_sync_while_the_last_cycle_is_unfinished_restarts_it),
         cmocka_unit_test(test_tpdo_age_counts_sync_periods_since_arrival),
+        cmocka_unit_test(test_after_a_dead_link_a_reboot_sends_one_reset_for_its_node_only),
         cmocka_unit_test(test_nmt_commands_reach_one_node_or_all_and_set_the_expected_state),
         cmocka_unit_test(test_a_caller_sdo_runs_on_a_ready_node_and_not_while_configuring),
         cmocka_unit_test(test_no_sdo_traffic_is_started_while_ready),
