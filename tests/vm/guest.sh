@@ -2,7 +2,8 @@
 # Runs inside the VM guest (as root, host root fs read-only): sets up two vcan
 # buses (vcan0 for the supervisors, vcan1 for the CiA 402 drives), a gpio-sim
 # chip and uinput, then runs tests/vm/test_guest.py with the project venv's
-# pytest. Writes into OUT (a writable dir shared with the host):
+# pytest (-rP: with the figures the passing tests print). Writes into OUT (a
+# writable dir shared with the host):
 #   started       written first: the host measures the boot time by it
 #   setup_error   the set-up step that failed (then no pytest.rc)
 #   pytest.log    pytest's output;  pytest.rc  its exit status
@@ -56,7 +57,7 @@ export LS_VM_CAN_IF=vcan0 LS_VM_DRIVE_IF=vcan1 LS_VM_GPIO_CHIP=$chip LS_VM_GPIO_
 export LS_BUILD_DIR=$build LS_VM_OUT=$out PYTHONDONTWRITEBYTECODE=1 PATH=$venv/bin:$PATH
 cd "$repo" || fail "cd $repo"
 echo "guest: running pytest at $(cut -d' ' -f1 /proc/uptime) s"
-"$venv/bin/python" -m pytest -v -rfEsx -p no:cacheprovider --junitxml="$out/junit.xml" \
+"$venv/bin/python" -m pytest -v -rfEsxP -p no:cacheprovider --junitxml="$out/junit.xml" \
   tests/vm/test_guest.py "$@" > "$out/pytest.log" 2>&1
 echo $? > "$out/pytest.rc"
 cat /proc/uptime > "$out/finished"
