@@ -61,31 +61,20 @@ static int summary(report_t *r)
 /* ---- configuration ---------------------------------------------------- */
 
 /* false when the configuration as a whole is refused (docs/deploy.md: exit 2,
- * as when landscaped would start with it). */
+ * as when landscaped would start with it). The robot model it names is part
+ * of it: a model that does not load refuses the configuration, named by its
+ * file as every other refused key is. */
 static bool check_config(report_t *r, const ls_config_t *cfg)
 {
+    static ls_robot_model_t m;
     char msg[512];
     const char *src = cfg->config_path[0] != '\0' ? cfg->config_path : "(command line only)";
-    if (ls_config_validate(cfg, msg, sizeof msg) != 0) {
+    if (ls_config_validate(cfg, msg, sizeof msg) != 0 || ls_robot_config_load(cfg, &m, msg, sizeof msg) != LS_OK) {
         report(r, LS_CHECK_FAIL, "configuration", "%s: %s", src, msg);
         return false;
     }
     report(r, LS_CHECK_PASS, "configuration", "%s: node 0x%02X, %zu link(s), arm %s, dio %s, clock %s, %u Hz", src,
            (unsigned)cfg->node, cfg->n_links, cfg->arm, cfg->dio, cfg->clock, (unsigned)cfg->rate_hz);
-    return true;
-}
-
-/* ---- robot model ---------------------------------------------------------- */
-
-/* false when the model is refused: a refused configuration (exit 2). */
-static bool check_model(report_t *r, const ls_config_t *cfg)
-{
-    static ls_robot_model_t m;
-    char msg[512];
-    if (ls_robot_config_load(cfg, &m, msg, sizeof msg) != LS_OK) {
-        report(r, LS_CHECK_FAIL, "robot model", "%s", msg);
-        return false;
-    }
     report(r, LS_CHECK_PASS, "robot model", "%s: %s, %s inverse kinematics",
            cfg->model[0] != '\0' ? cfg->model : "(compiled in)", m.name, ls_ik_class_name(m.ik_class));
     return true;
@@ -434,7 +423,6 @@ int ls_check_run(const ls_config_t *cfg, FILE *out)
 {
     report_t r = { .out = out, .n = { 0, 0, 0 } };
     bool config_ok = check_config(&r, cfg);
-    config_ok = check_model(&r, cfg) && config_ok;
     check_afcan(&r, cfg);
     check_links(&r, cfg);
     config_ok = check_drives(&r, cfg, config_ok) && config_ok;

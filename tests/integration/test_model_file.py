@@ -283,7 +283,7 @@ def test_a_bad_model_file_is_refused_alike_by_landscaped_and_the_host(tmp_path: 
     check = subprocess.run([str(LANDSCAPED), "--hal", "sim", "--link", f"slcan:pty:{tmp_path}/ls0", "--model",
                             str(bad), "--check"], capture_output=True, text=True, timeout=10)
     assert check.returncode == 2
-    assert f"FAIL  robot model: {msg}\n" in check.stdout
+    assert check.stdout.startswith(f"FAIL  configuration: (command line only): {msg}\n")
 
 
 def test_the_refusals_name_what_was_wrong(tmp_path: Path) -> None:

@@ -223,7 +223,8 @@ static void test_invalid_configuration_fails(void **state)
 }
 
 /* A model file that is refused is a refused configuration (exit 2), as
- * when landscaped starts with it; so is one the simulator cannot build. */
+ * when landscaped starts with it, on the configuration's line that names
+ * its source; so is one the simulator cannot build. */
 static void test_a_refused_robot_model_is_a_bad_configuration(void **state)
 {
     cx_t *c = *state;
@@ -234,15 +235,15 @@ static void test_a_refused_robot_model_is_a_bad_configuration(void **state)
     assert_int_equal(run(c), LS_EXIT_BAD_CONFIG);
     char want[512];
     snprintf(want, sizeof want,
-             "FAIL  robot model: %s/no-such-arm.ini: cannot read the robot model file: No such file or directory "
-             "(name an existing file in [robot] model or --model)",
+             "FAIL  configuration: (command line only): %s/no-such-arm.ini: cannot read the robot model file: No "
+             "such file or directory (name an existing file in [robot] model or --model)",
              c->dir);
-    assert_string_equal(line_of(c, "robot model"), want);
+    assert_string_equal(line_of(c, "configuration"), want);
     snprintf(c->cfg.model, sizeof c->cfg.model, "%s/puma560.ini", LS_ROBOTS_DIR);
     clear(c);
     assert_int_equal(run(c), LS_EXIT_BAD_CONFIG);
-    assert_contains(line_of(c, "robot model"), "FAIL  robot model: [hal] arm = sim cannot simulate robot model "
-                                               "puma560 (");
+    assert_contains(line_of(c, "configuration"), "FAIL  configuration: (command line only): [hal] arm = sim cannot "
+                                                 "simulate robot model puma560 (");
     snprintf(c->cfg.model, sizeof c->cfg.model, "%s/ur5e.ini", LS_ROBOTS_DIR);
     clear(c);
     assert_int_equal(run(c), LS_EXIT_OK);
