@@ -5,6 +5,7 @@
 
 #include "ls_fmt.h"
 #include "ls_kin.h"
+#include "ls_seqlock.h"
 
 /* --- SPSC rings: the producer writes the slot then publishes head (release);
  * the consumer reads head (acquire), copies the slot, then publishes tail. */
@@ -139,40 +140,20 @@ bool ls_control_start_plan(ls_control_t *c, uint32_t ref_seq)
     return true;
 }
 
-/* --- seqlock snapshot: odd sequence while the loop writes. The data words
- * are atomics accessed relaxed: the fences order them against the sequence
- * (writer: seq odd, release fence, words, seq even with release; reader:
- * seq with acquire, words, acquire fence, seq again). */
+/* --- the snapshot: a seqlock (ls_seqlock.h), the loop writes, the comms thread reads */
 
 static void publish(ls_control_t *c, const ls_ctl_snapshot_t *s)
 {
-    uint32_t w[LS_CTL_SNAP_WORDS];
-    w[LS_CTL_SNAP_WORDS - 1u] = 0u; /* the tail past sizeof, if any */
-    memcpy(w, s, sizeof *s);
-    unsigned seq = atomic_load_explicit(&c->snap_seq, memory_order_relaxed);
-    atomic_store_explicit(&c->snap_seq, seq + 1u, memory_order_relaxed);
-    atomic_thread_fence(memory_order_release);
-    for (size_t i = 0; i < LS_CTL_SNAP_WORDS; i++) {
-        atomic_store_explicit(&c->snap_words[i], w[i], memory_order_relaxed);
-    }
-    atomic_store_explicit(&c->snap_seq, seq + 2u, memory_order_release);
+    ls_seqlock_write(&c->snap_seq, c->snap_words, LS_CTL_SNAP_WORDS, s, sizeof *s);
 }
 
 bool ls_control_snapshot(ls_control_t *c, ls_ctl_snapshot_t *out)
 {
-    uint32_t w[LS_CTL_SNAP_WORDS];
-    for (unsigned attempt = 0; attempt < LS_CTL_SNAPSHOT_TRIES; attempt++) {
-        unsigned s1 = atomic_load_explicit(&c->snap_seq, memory_order_acquire);
-        for (size_t i = 0; i < LS_CTL_SNAP_WORDS; i++) {
-            w[i] = atomic_load_explicit(&c->snap_words[i], memory_order_relaxed);
-        }
-        atomic_thread_fence(memory_order_acquire);
-        unsigned s2 = atomic_load_explicit(&c->snap_seq, memory_order_relaxed);
-        if ((s1 & 1u) == 0u && s1 == s2) {
-            memcpy(&c->snap_last, w, sizeof c->snap_last);
-            *out = c->snap_last;
-            return true;
-        }
+    ls_ctl_snapshot_t s;
+    if (ls_seqlock_read(&c->snap_seq, c->snap_words, LS_CTL_SNAP_WORDS, &s, sizeof s, LS_CTL_SNAPSHOT_TRIES)) {
+        c->snap_last = s;
+        *out = s;
+        return true;
     }
     c->snap_stale++;
     *out = c->snap_last;

@@ -40,6 +40,7 @@
 #include "ls_motion.h"
 #include "ls_react.h"
 #include "ls_robot_model.h"
+#include "ls_seqlock.h"
 
 /* Commands to and events from the loop (power of two). Per profile
  * (CMakeLists.txt LS_PROFILE): the mcu one halves them (one arm, one or two
@@ -156,11 +157,9 @@ typedef struct {
     uint8_t joint_state[LS_N_JOINTS]; /* hal_joint_state_t of each joint's drive */
 } ls_ctl_snapshot_t;
 
-/* The snapshot as 32-bit words: the seqlock copies it word by word with
- * relaxed atomics, so a read racing a write is defined behaviour (and torn
- * copies are caught by the sequence check). 32-bit words stay lock-free on
- * Cortex-M too. */
-#define LS_CTL_SNAP_WORDS ((sizeof(ls_ctl_snapshot_t) + sizeof(uint32_t) - 1u) / sizeof(uint32_t))
+/* The snapshot as 32-bit words of a seqlock (ls_seqlock.h): a read racing
+ * the loop's publish is defined behaviour, and a torn copy is caught. */
+#define LS_CTL_SNAP_WORDS LS_SEQLOCK_WORDS(sizeof(ls_ctl_snapshot_t))
 /* Attempts of ls_control_snapshot before it gives up. Each attempt copies
  * the whole snapshot, so it lasts about as long as the loop's own publish:
  * a publish in progress costs one or two attempts; running out means the
