@@ -102,6 +102,9 @@
  * 4 runs method 37 (or 35): the current position becomes 0x607C; statusword
  * bits 10 + 12 (attained); another method: 10 + 13 (error). The homing
  * survives disable and enable; reset node forgets it.
+ * Temperature (0x2100:03, 0.1 degrees Celsius): 30.0 at rest, rising with
+ * the torque the drive gives (a quarter of a tenth of a degree per mille of
+ * the joint's maximum torque), so a readout shows a working axis warm.
  * Safe torque off (0x2100:02, set from the control socket): the power stage
  * goes off at once (SWITCH ON DISABLED, brake on, no fault) and switch on
  * is refused while it lasts; statusword bit 7 (warning) shows it.
@@ -149,6 +152,7 @@
 #define SD_OBJ_BRAKE_STO 0x2100u /* record: */
 #define SD_SUB_BRAKE_ENGAGED 1u  /*   u8 ro, mappable: 1 while the holding brake holds */
 #define SD_SUB_STO_ACTIVE 2u     /*   u8 ro, mappable: 1 while safe torque off is active */
+#define SD_SUB_TEMPERATURE 3u    /*   i16 ro, mappable: the drive's temperature, 0.1 degrees Celsius */
 
 #define HAL_SIM_DRIVES_SUBSTEP_S 0.001 /* the physics' default sub-step */
 #define HAL_SIM_DRIVES_SUBSTEP_MAX_S 0.1

@@ -3,6 +3,7 @@
  * brake and safe torque off. hal_sim_drives.h describes what a master sees;
  * this file explains only the choices that are not the standard's. */
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "sd_node.h"
@@ -10,6 +11,8 @@
 enum { SD_HM_IDLE, SD_HM_ATTAINED, SD_HM_ERROR };
 
 #define PER_MILLE 1000.0
+#define SD_TEMPERATURE_REST 300     /* 0x2100:03 at rest: 30.0 degrees Celsius (the EDS's default) */
+#define SD_TEMPERATURE_PER_MILLE 4L /* per mille of the maximum torque per 0.1 degree */
 
 static int64_t V(const sd_node_t *n, int entry)
 {
@@ -127,6 +130,8 @@ void sd_drive_refresh(sd_node_t *n)
     set(n, n->e.error_register, sd_node_error_register(n));
     set(n, n->e.brake, on ? 0 : 1);
     set(n, n->e.sto, d->sto ? 1 : 0);
+    /* 30.0 degrees at rest, warmer with the torque given (0.1 degree units). */
+    set(n, n->e.temperature, SD_TEMPERATURE_REST + (on ? labs((long)per_mille) / SD_TEMPERATURE_PER_MILLE : 0));
 }
 
 /* Hold the joint where it is (entering OPERATION ENABLED, a mode change):

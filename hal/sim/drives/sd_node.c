@@ -60,6 +60,7 @@ static const need_t k_needs[] = {
     NEED(error_behaviour, LS_CO_OBJ_ERROR_BEHAVIOUR, 1, false),
     NEED(brake, SD_OBJ_BRAKE_STO, SD_SUB_BRAKE_ENGAGED, false),
     NEED(sto, SD_OBJ_BRAKE_STO, SD_SUB_STO_ACTIVE, false),
+    NEED(temperature, SD_OBJ_BRAKE_STO, SD_SUB_TEMPERATURE, false),
     NEED(hb_count, LS_CO_OBJ_CONSUMER_HB, 0, false),
 };
 

@@ -133,7 +133,7 @@ typedef struct {
     int cw, sw, modes, modes_display, pos_actual, vel_actual, torque_actual, target, vel_offset, error_code,
         error_register, fe_window, fe_timeout, fe_actual, home_offset, homing_method, sw_min, sw_max, qs_option,
         qs_decel, abort_option, interp_value, interp_index, supported_modes, sync_cobid, emcy_cobid, producer_hb,
-        error_behaviour, vendor, product, brake, sto, hb_count;
+        error_behaviour, vendor, product, brake, sto, temperature, hb_count;
 } sd_entries_t;
 
 typedef struct sd_node {
