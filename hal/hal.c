@@ -137,6 +137,24 @@ int hal_arm_next_event(hal_arm_t *arm, hal_arm_event_t *out)
     }
     return 0;
 }
+int hal_arm_home(hal_arm_t *arm, uint32_t joint_mask)
+{
+    return HAL_CALL(arm, home, joint_mask);
+}
+int hal_arm_readout(hal_arm_t *arm, hal_arm_readout_t *out)
+{
+    return HAL_CALL(arm, readout, out);
+}
+const char *hal_home_name(hal_home_t home)
+{
+    switch (home) {
+    case HAL_HOME_NOT_HOMED: return "not_homed";
+    case HAL_HOME_HOMING: return "homing";
+    case HAL_HOME_HOMED: return "homed";
+    case HAL_HOME_FAILED: return "failed";
+    }
+    return "?";
+}
 int hal_arm_update(hal_arm_t *arm, uint64_t now_us)
 {
     if (arm != NULL && arm->ops != NULL && arm->ops->update != NULL) {

@@ -1,6 +1,7 @@
 /* The arm of CiA 402 drives (ls_drives.h). */
 #include "ls_drives.h"
 
+#include <stdarg.h>
 #include <string.h>
 
 #include "ls_canopen.h"
@@ -65,6 +66,74 @@ static void interp_period(uint32_t cycle_us, uint8_t *value, int8_t *index)
     *index = e;
 }
 
+/* ---- the PDO layout ----------------------------------------------------- */
+
+static const ls_drive_obj_t *ro_obj(const ls_drive_joint_t *jc, ls_drive_ro_t ro)
+{
+    switch (ro) {
+    case LS_DRIVE_RO_BRAKE: return &jc->brake;
+    case LS_DRIVE_RO_STO: return &jc->sto;
+    case LS_DRIVE_RO_TORQUE: return &jc->torque;
+    case LS_DRIVE_RO_TEMPERATURE: return &jc->temperature;
+    case LS_DRIVE_RO_VELOCITY: return &jc->velocity;
+    case LS_DRIVE_RO_COUNT: break;
+    }
+    return &jc->brake;
+}
+
+const char *ls_drives_ro_name(ls_drive_ro_t ro)
+{
+    switch (ro) {
+    case LS_DRIVE_RO_BRAKE: return "brake";
+    case LS_DRIVE_RO_STO: return "safe torque off";
+    case LS_DRIVE_RO_TORQUE: return "torque actual";
+    case LS_DRIVE_RO_TEMPERATURE: return "temperature";
+    case LS_DRIVE_RO_VELOCITY: return "velocity actual";
+    case LS_DRIVE_RO_COUNT: break;
+    }
+    return "?";
+}
+
+static void place(ls_drive_layout_t *l, uint8_t slot, uint16_t index, uint8_t sub, uint8_t bytes)
+{
+    l->map[slot][l->n_map[slot]++] = LS_CO_PDO_MAP_ENTRY(index, sub, 8u * bytes);
+    l->tpdo_bytes[slot] = (uint8_t)(l->tpdo_bytes[slot] + bytes);
+    if (slot + 1u > l->n_tpdo) {
+        l->n_tpdo = (uint8_t)(slot + 1u);
+    }
+}
+
+void ls_drives_layout(const ls_drive_joint_t *jc, ls_drive_layout_t *out)
+{
+    memset(out, 0, sizeof *out);
+    out->rpdo1_bytes = jc->map_mode ? 7u : 6u;
+    place(out, 0, LS_CO_OBJ_STATUSWORD, 0, 2);
+    place(out, 0, LS_CO_OBJ_POSITION_ACTUAL, 0, 4);
+    if (jc->map_mode) {
+        place(out, 0, LS_CO_OBJ_MODES_DISPLAY, 0, 1);
+    }
+    for (unsigned r = 0; r < LS_DRIVE_RO_COUNT; r++) {
+        const ls_drive_obj_t *o = ro_obj(jc, (ls_drive_ro_t)r);
+        if (!o->map || o->bytes == 0u || o->bytes > 4u) {
+            continue;
+        }
+        bool placed = false;
+        for (uint8_t slot = 0; slot < LS_DRIVES_TPDOS && !placed; slot++) {
+            if (out->tpdo_bytes[slot] + o->bytes <= 8u && out->n_map[slot] < jc->tpdo_room[slot] &&
+                out->n_map[slot] < LS_DRIVES_MAP_MAX) {
+                out->ro[r].mapped = true;
+                out->ro[r].slot = slot;
+                out->ro[r].offset = out->tpdo_bytes[slot];
+                place(out, slot, o->index, o->sub, o->bytes);
+                placed = true;
+            }
+        }
+        if (!placed) {
+            out->left_out |= 1u << r;
+        }
+    }
+}
+
 static bool build_script(ls_drives_t *d, int j, size_t *len)
 {
     const ls_drive_joint_t *jc = &d->cfg.joint[j];
@@ -105,25 +174,48 @@ static bool build_script(ls_drives_t *d, int j, size_t *len)
                             LS_CO_COB_TPDO(p + 1u, node) | LS_CO_COBID_INVALID));
         }
     }
+    const ls_drive_layout_t *l = &d->layout[j];
     const uint32_t rpdo1[] = { LS_CO_PDO_MAP_ENTRY(LS_CO_OBJ_CONTROLWORD, 0, 16),
-                               LS_CO_PDO_MAP_ENTRY(LS_CO_OBJ_TARGET_POSITION, 0, 32) };
-    ok = ok &&
-         map_pdo(script, &n, jc, LS_CO_OBJ_RPDO_COMM, LS_CO_OBJ_RPDO_MAP, LS_CO_COB_RPDO(1, node), rpdo1, 2, false);
+                               LS_CO_PDO_MAP_ENTRY(LS_CO_OBJ_TARGET_POSITION, 0, 32),
+                               LS_CO_PDO_MAP_ENTRY(LS_CO_OBJ_MODES, 0, 8) };
+    ok = ok && map_pdo(script, &n, jc, LS_CO_OBJ_RPDO_COMM, LS_CO_OBJ_RPDO_MAP, LS_CO_COB_RPDO(1, node), rpdo1,
+                       jc->map_mode ? 3u : 2u, false);
     if (jc->feedforward) {
         const uint32_t rpdo2[] = { LS_CO_PDO_MAP_ENTRY(LS_CO_OBJ_VELOCITY_OFFSET, 0, 32) };
         ok = ok && map_pdo(script, &n, jc, LS_CO_OBJ_RPDO_COMM + 1u, LS_CO_OBJ_RPDO_MAP + 1u, LS_CO_COB_RPDO(2, node),
                            rpdo2, 1, false);
     }
-    const uint32_t tpdo1[] = { LS_CO_PDO_MAP_ENTRY(LS_CO_OBJ_STATUSWORD, 0, 16),
-                               LS_CO_PDO_MAP_ENTRY(LS_CO_OBJ_POSITION_ACTUAL, 0, 32) };
-    ok =
-        ok && map_pdo(script, &n, jc, LS_CO_OBJ_TPDO_COMM, LS_CO_OBJ_TPDO_MAP, LS_CO_COB_TPDO(1, node), tpdo1, 2, true);
+    for (uint8_t t = 0; t < l->n_tpdo; t++) {
+        ok = ok && map_pdo(script, &n, jc, (uint16_t)(LS_CO_OBJ_TPDO_COMM + t), (uint16_t)(LS_CO_OBJ_TPDO_MAP + t),
+                           LS_CO_COB_TPDO(t + 1u, node), l->map[t], l->n_map[t], true);
+    }
     if (jc->write_interp_period) {
         uint8_t value;
         int8_t index;
         interp_period(d->cfg.control_period_us * d->cfg.cycle_ticks, &value, &index);
         ADD(LS_CO_WRITE(LS_CO_OBJ_INTERP_PERIOD, 1, 1, value));
         ADD(LS_CO_WRITE(LS_CO_OBJ_INTERP_PERIOD, 2, 1, (uint8_t)index));
+    }
+    /* What the configuration sets of the drive's own supervision and
+     * homing (only where the EDS lets it be written: ls_drive_setup). */
+    if (jc->write_fe_window) {
+        ADD(LS_CO_WRITE(LS_CO_OBJ_FOLLOWING_WINDOW, 0, 4, jc->fe_window_counts));
+    }
+    if (jc->write_fe_timeout) {
+        ADD(LS_CO_WRITE(LS_CO_OBJ_FOLLOWING_TIMEOUT, 0, 2, jc->fe_timeout_ms));
+    }
+    if (jc->write_quick_stop) {
+        ADD(LS_CO_WRITE(LS_CO_OBJ_QUICK_STOP_OPTION, 0, 2, (uint16_t)jc->quick_stop_option));
+    }
+    if (jc->write_home_method) {
+        ADD(LS_CO_WRITE(LS_CO_OBJ_HOMING_METHOD, 0, 1, (uint8_t)jc->home_method));
+    }
+    if (jc->write_home_offset) {
+        ADD(LS_CO_WRITE(LS_CO_OBJ_HOME_OFFSET, 0, 4, (uint32_t)jc->home_offset_counts));
+    }
+    if (jc->read_limits) {
+        ADD(LS_CO_READ_INTO(LS_CO_OBJ_SW_POSITION_LIMIT, 1, &a->lim0[0]));
+        ADD(LS_CO_READ_INTO(LS_CO_OBJ_SW_POSITION_LIMIT, 2, &a->lim0[1]));
     }
     /* CSP, confirmed in the display before anything enables the drive. */
     ADD(LS_CO_WRITE(LS_CO_OBJ_MODES, 0, 1, (uint8_t)LS_CO_MODE_CSP));
@@ -196,6 +288,7 @@ int ls_drives_init(ls_drives_t *d, const ls_drives_config_t *cfg)
             return LS_EINVAL;
         }
         d->cfg.joint[j].scale = s;
+        ls_drives_layout(jc, &d->layout[j]);
         (void)ls_402_init(&a->ax, &ac);
         ls_402_unwrap_reset(&a->unwrap);
         size_t len = 0;
@@ -211,11 +304,15 @@ int ls_drives_init(ls_drives_t *d, const ls_drives_config_t *cfg)
         nc->heartbeat_timeout_ms = cfg->heartbeat_timeout_ms;
         nc->script = d->script[j];
         nc->script_len = len;
-        nc->rpdo[0] = (ls_co_pdo_t){ .cob_id = (uint16_t)LS_CO_COB_RPDO(1, jc->node_id), .len = 6 };
+        const ls_drive_layout_t *l = &d->layout[j];
+        nc->rpdo[0] = (ls_co_pdo_t){ .cob_id = (uint16_t)LS_CO_COB_RPDO(1, jc->node_id), .len = l->rpdo1_bytes };
         if (jc->feedforward) {
             nc->rpdo[1] = (ls_co_pdo_t){ .cob_id = (uint16_t)LS_CO_COB_RPDO(2, jc->node_id), .len = 4 };
         }
-        nc->tpdo[0] = (ls_co_pdo_t){ .cob_id = (uint16_t)LS_CO_COB_TPDO(1, jc->node_id), .len = 6 };
+        for (uint8_t t = 0; t < l->n_tpdo; t++) {
+            nc->tpdo[t] =
+                (ls_co_pdo_t){ .cob_id = (uint16_t)LS_CO_COB_TPDO(t + 1u, jc->node_id), .len = l->tpdo_bytes[t] };
+        }
     }
     if (ls_co_master_init(&d->master, &mc, link_send, cfg->link) != LS_OK) {
         ls_fmt_print(d->text, sizeof d->text, "drives: %s", ls_co_master_text(&d->master));
@@ -274,6 +371,15 @@ static void axis_ready(ls_drives_t *d, uint8_t j)
     a->last_age = 0;
     a->ready_sync = d->master.sync_count;
     a->rebooting = false;
+    /* The script confirmed CSP; a drive that booted has forgotten its homing. */
+    a->mode_shown = LS_CO_MODE_CSP;
+    a->mode_known = true;
+    a->mode_cmd = LS_CO_MODE_CSP;
+    a->home = HAL_HOME_NOT_HOMED;
+    a->hm_phase = 0u;
+    a->hm_sdo = 0u;
+    a->hm_text[0] = '\0';
+    memset(a->ro_seen, 0, sizeof a->ro_seen);
 }
 
 /* Every drive READY for the first time. */
@@ -343,6 +449,46 @@ int ls_drives_service(ls_drives_t *d, uint64_t now_us)
 
 /* ---- the drive cycle ------------------------------------------------------- */
 
+/* Little-endian, `bytes` (1..4) of `b`, zero-extended. */
+static uint32_t get_le(const uint8_t *b, uint8_t bytes)
+{
+    uint32_t v = 0;
+    for (uint8_t i = 0; i < bytes && i < 4u; i++) {
+        v |= (uint32_t)b[i] << (8u * i);
+    }
+    return v;
+}
+
+/* The readouts TPDO `slot` carries, as received. */
+static void take_readouts(ls_drives_t *d, uint8_t j, uint8_t slot, const uint8_t *b, size_t len)
+{
+    ls_drive_axis_t *a = &d->axis[j];
+    const ls_drive_layout_t *l = &d->layout[j];
+    for (unsigned r = 0; r < LS_DRIVE_RO_COUNT; r++) {
+        const uint8_t bytes = ro_obj(&d->cfg.joint[j], (ls_drive_ro_t)r)->bytes;
+        if (l->ro[r].mapped && l->ro[r].slot == slot && (size_t)l->ro[r].offset + bytes <= len) {
+            a->ro_raw[r] = get_le(&b[l->ro[r].offset], bytes);
+            a->ro_seen[r] = true;
+        }
+    }
+}
+
+/* TPDO2 (readouts only), when this SYNC's has come. */
+static void take_second(ls_drives_t *d, uint8_t j)
+{
+    ls_drive_axis_t *a = &d->axis[j];
+    uint8_t b[8];
+    size_t len = 0;
+    uint32_t age = 0;
+    if (d->layout[j].n_tpdo < 2u ||
+        ls_co_master_tpdo_get(&d->master, d->cfg.joint[j].node_id, 1, b, &len, &age) != LS_OK || age != 0u ||
+        a->taken_sync2 == d->master.sync_count) {
+        return;
+    }
+    a->taken_sync2 = d->master.sync_count;
+    take_readouts(d, j, 1, b, len);
+}
+
 /* The drive's answer to the latest SYNC, taken in the control cycle it
  * arrives in (not at the next drive cycle: a drive cycle sooner). Its age
  * in SYNC periods says how stale the feedback is when it does not come. */
@@ -366,6 +512,11 @@ static void take_feedback(ls_drives_t *d, uint8_t j)
     const uint32_t periods = a->fresh_seen && syncs > a->taken_sync ? syncs - a->taken_sync : 1u;
     a->statusword = (uint16_t)((uint16_t)b[0] | (uint16_t)((uint16_t)b[1] << 8));
     a->pos_raw = le32(&b[2]);
+    take_readouts(d, j, 0, b, len);
+    if (d->cfg.joint[j].map_mode && len >= 7u) {
+        a->mode_shown = (int8_t)(b[6] < 0x80u ? (int)b[6] : (int)b[6] - 0x100);
+        a->mode_known = true;
+    }
     a->q = ls_402_pos_rad(&d->cfg.joint[j].scale, ls_402_unwrap(&a->unwrap, a->pos_raw));
     const double dt = (double)d->cfg.control_period_us * 1e-6 * (double)d->cfg.cycle_ticks * (double)periods;
     a->qd = a->fresh_seen ? (a->q - q_old) / dt : 0.0;
@@ -373,6 +524,193 @@ static void take_feedback(ls_drives_t *d, uint8_t j)
     a->taken_sync = syncs;
     a->feedback_age = 0;
 }
+
+/* ---- homing -------------------------------------------------------------- */
+
+/* The phases of a homing (ls_drive_axis_t.hm_phase). */
+enum {
+    HM_IDLE = 0,
+    HM_TO_HOMING, /* mode 6 asked, awaited in 0x6061 */
+    HM_START,     /* the rising edge of controlword bit 4 goes out */
+    HM_RUNNING,   /* bit 4 held; statusword bits 12 / 13 awaited */
+    HM_TO_CSP,    /* homed: mode 8 asked, the target at the new actual position */
+    HM_RESTORE,   /* failed: mode 8 again over SDO (without map_mode) */
+};
+
+/* Drive cycles from a command's SYNC until a TPDO shows its effect: it is
+ * applied at that SYNC, and the TPDO answering it was sampled before. */
+#define HM_SETTLE_SYNCS 2u
+
+/* A mode change over SDO (a drive whose EDS does not let 0x6060 and 0x6061
+ * be mapped): write 0x6060, then read 0x6061 until it shows the mode. 1
+ * when confirmed, 0 while under way, LS_EIO when the drive refused (the
+ * node's text says why). One step per drive cycle, at rest. */
+static int mode_by_sdo(ls_drives_t *d, uint8_t j, int8_t mode, uint64_t now_us)
+{
+    ls_drive_axis_t *a = &d->axis[j];
+    const uint8_t node = d->cfg.joint[j].node_id;
+    if (a->reading) {
+        return 0; /* the error code's read has the node's SDO client */
+    }
+    if (a->hm_sdo == 0u) {
+        const uint8_t v = (uint8_t)mode;
+        if (ls_co_master_sdo_write(&d->master, node, LS_CO_OBJ_MODES, 0, &v, 1, now_us) == LS_OK) {
+            a->hm_sdo = 1u;
+        }
+        return 0;
+    }
+    uint8_t b[8];
+    size_t len = 0;
+    const int r = ls_co_master_sdo_result(&d->master, node, b, sizeof b, &len);
+    if (r == LS_EBUSY) {
+        return 0;
+    }
+    if (r != LS_OK) {
+        a->hm_sdo = 0u;
+        return LS_EIO;
+    }
+    if (a->hm_sdo == 2u && len >= 1u) {
+        a->mode_shown = (int8_t)(b[0] < 0x80u ? (int)b[0] : (int)b[0] - 0x100);
+        a->mode_known = true;
+        if (a->mode_shown == mode) {
+            a->hm_sdo = 0u;
+            return 1;
+        }
+    }
+    a->hm_sdo = ls_co_master_sdo_read(&d->master, node, LS_CO_OBJ_MODES_DISPLAY, 0, now_us) == LS_OK ? 2u : 1u;
+    return 0;
+}
+
+static void home_failed(ls_drives_t *d, uint8_t j, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+static void home_failed(ls_drives_t *d, uint8_t j, const char *fmt, ...)
+{
+    ls_drive_axis_t *a = &d->axis[j];
+    char why[HAL_JOINT_TEXT_LEN];
+    va_list ap;
+    va_start(ap, fmt);
+    (void)ls_fmt_vprint(why, sizeof why, fmt, ap);
+    va_end(ap);
+    ls_fmt_print(a->hm_text, sizeof a->hm_text, "homing failed: %s", why);
+    a->home = HAL_HOME_FAILED;
+    a->mode_cmd = LS_CO_MODE_CSP;
+    a->hm_sdo = 0u;
+    /* With the mode in the PDOs, RPDO1 carries CSP again from now on. */
+    a->hm_phase = d->cfg.joint[j].map_mode ? HM_IDLE : HM_RESTORE;
+}
+
+/* Homed: CSP again at the new actual position. The drive's counter has a
+ * new zero: the unwrapping starts over from it, and the joint holds where
+ * it reads now until the loop's next set-point (which starts there). */
+static void home_done(ls_drives_t *d, uint8_t j)
+{
+    ls_drive_axis_t *a = &d->axis[j];
+    ls_402_unwrap_reset(&a->unwrap);
+    a->q = ls_402_pos_rad(&d->cfg.joint[j].scale, ls_402_unwrap(&a->unwrap, a->pos_raw));
+    a->qd = 0.0;
+    a->hold_raw = a->pos_raw;
+    a->cmd_valid = false;
+    a->home = HAL_HOME_HOMED;
+    a->hm_phase = HM_IDLE;
+}
+
+/* One drive cycle of a joint's homing, after its 402 step: the mode it
+ * asks for (mode_cmd) and the phase. */
+static void home_cycle(ls_drives_t *d, uint8_t j, uint64_t now_us)
+{
+    ls_drive_axis_t *a = &d->axis[j];
+    const ls_drive_joint_t *jc = &d->cfg.joint[j];
+    const uint8_t ph = a->hm_phase;
+    if (ph == HM_IDLE) {
+        return;
+    }
+    if (ph == HM_RESTORE) {
+        const int r = mode_by_sdo(d, j, LS_CO_MODE_CSP, now_us);
+        a->hm_phase = r == 0 ? HM_RESTORE : HM_IDLE; /* a refusal: the next enable finds the mode wrong and says so */
+        return;
+    }
+    if (!d->want_enabled) {
+        home_failed(d, j, "interrupted: the drives were switched off");
+        return;
+    }
+    if (!a->out.enabled) {
+        home_failed(d, j, "interrupted: the drive left OPERATION ENABLED (%s)", ls_402_state_name(a->out.state));
+        return;
+    }
+    if (now_us > a->hm_deadline_us) {
+        home_failed(d, j, "the drive did not end its homing within %u ms (statusword 0x%04X)",
+                    (unsigned)LS_DRIVES_HOME_TIMEOUT_MS, (unsigned)a->statusword);
+        return;
+    }
+    const uint32_t settled = a->taken_sync - a->hm_sync;
+    switch (ph) {
+    case HM_TO_HOMING:
+        a->mode_cmd = LS_CO_MODE_HM;
+        if (jc->map_mode) {
+            if (a->mode_known && a->mode_shown == LS_CO_MODE_HM && settled >= HM_SETTLE_SYNCS) {
+                a->hm_phase = HM_START;
+            }
+        } else {
+            const int r = mode_by_sdo(d, j, LS_CO_MODE_HM, now_us);
+            if (r < 0) {
+                home_failed(d, j, "homing mode (0x6060 = 6) refused: %s",
+                            ls_co_master_node_text(&d->master, jc->node_id));
+            } else if (r == 1) {
+                a->hm_phase = HM_START;
+            }
+        }
+        break;
+    case HM_START:
+        a->hm_phase = HM_RUNNING; /* this cycle's controlword carries the edge */
+        a->hm_sync = d->master.sync_count;
+        break;
+    case HM_RUNNING:
+        if (settled < HM_SETTLE_SYNCS) {
+            break;
+        }
+        if ((a->statusword & LS_CO_SW_OMS13) != 0u) {
+            home_failed(d, j, "the drive reports a homing error (statusword 0x%04X, bit 13)", (unsigned)a->statusword);
+        } else if ((a->statusword & (LS_CO_SW_OMS12 | LS_CO_SW_TARGET_REACHED)) ==
+                   (LS_CO_SW_OMS12 | LS_CO_SW_TARGET_REACHED)) {
+            a->hm_phase = HM_TO_CSP;
+            a->mode_cmd = LS_CO_MODE_CSP;
+            a->hm_sync = d->master.sync_count;
+        }
+        break;
+    case HM_TO_CSP:
+        if (jc->map_mode) {
+            if (a->mode_known && a->mode_shown == LS_CO_MODE_CSP && settled >= HM_SETTLE_SYNCS) {
+                home_done(d, j);
+            }
+        } else {
+            const int r = mode_by_sdo(d, j, LS_CO_MODE_CSP, now_us);
+            if (r < 0) {
+                home_failed(d, j, "cyclic synchronous position (0x6060 = 8) refused after the homing: %s",
+                            ls_co_master_node_text(&d->master, jc->node_id));
+            } else if (r == 1) {
+                home_done(d, j);
+            }
+        }
+        break;
+    default: break;
+    }
+}
+
+/* The RPDO1 bytes of a joint: controlword, target position and, with
+ * map_mode, the mode of operation. */
+static size_t rpdo1(const ls_drives_t *d, uint8_t j, int32_t target, uint8_t *b)
+{
+    const ls_drive_axis_t *a = &d->axis[j];
+    uint16_t cw = a->out.controlword;
+    if ((a->hm_phase == HM_RUNNING) && a->out.state == LS_402_OPERATION_ENABLED) {
+        cw |= LS_CO_CW_HOMING_START;
+    }
+    put_le16(b, cw);
+    put_le32(&b[2], target);
+    b[6] = (uint8_t)a->mode_cmd;
+    return d->layout[j].rpdo1_bytes;
+}
+
+static void publish_readouts(ls_drives_t *d, uint64_t now_us);
 
 static void drive_cycle(ls_drives_t *d, uint64_t now_us)
 {
@@ -385,10 +723,15 @@ static void drive_cycle(ls_drives_t *d, uint64_t now_us)
         }
         (void)ls_402_step(&a->ax, a->statusword, want, d->reset_allowed, &a->out);
         a->step_epoch = d->enable_epoch;
+        home_cycle(d, j, now_us);
         /* Target = actual until the drive is under control, then held
-         * there until the loop gives set-points: no axis jumps. */
+         * there until the loop gives set-points: no axis jumps. While it
+         * homes the drive ignores the target; it stays at the actual
+         * position, so CSP takes over from there. */
         int32_t target = a->pos_raw;
-        if (a->out.state == LS_402_OPERATION_ENABLED) {
+        if (a->hm_phase != HM_IDLE) {
+            a->hold_raw = a->pos_raw;
+        } else if (a->out.state == LS_402_OPERATION_ENABLED) {
             target = a->hold_raw;
             int32_t raw;
             if (a->cmd_valid && ls_402_target_raw(&jc->scale, &a->unwrap, a->q_cmd, &raw) == LS_OK) {
@@ -397,13 +740,11 @@ static void drive_cycle(ls_drives_t *d, uint64_t now_us)
         } else {
             a->hold_raw = a->pos_raw;
         }
-        uint8_t b[6];
-        put_le16(b, a->out.controlword);
-        put_le32(&b[2], target);
-        (void)ls_co_master_rpdo_set(&d->master, jc->node_id, 0, b, sizeof b);
+        uint8_t b[8];
+        (void)ls_co_master_rpdo_set(&d->master, jc->node_id, 0, b, rpdo1(d, j, target, b));
         if (jc->feedforward) {
             int32_t v = 0;
-            if (!(a->cmd_valid && a->out.state == LS_402_OPERATION_ENABLED &&
+            if (!(a->cmd_valid && a->hm_phase == HM_IDLE && a->out.state == LS_402_OPERATION_ENABLED &&
                   ls_402_vel_raw(&jc->scale, a->qd_cmd, &v) == LS_OK)) {
                 v = 0;
             }
@@ -423,6 +764,7 @@ static void drive_cycle(ls_drives_t *d, uint64_t now_us)
         d->reset_allowed = false;
     }
     (void)ls_co_master_sync(&d->master, now_us);
+    publish_readouts(d, now_us);
 }
 
 /* ---- events -------------------------------------------------------------- */
@@ -493,7 +835,7 @@ static void read_error_codes(ls_drives_t *d, uint64_t now_us)
             }
             continue;
         }
-        if (a->read_error_code && ls_co_master_node_phase(&d->master, node) == LS_CO_PHASE_READY) {
+        if (a->read_error_code && a->hm_sdo == 0u && ls_co_master_node_phase(&d->master, node) == LS_CO_PHASE_READY) {
             a->read_error_code = false;
             if (ls_co_master_sdo_read(&d->master, node, LS_CO_OBJ_ERROR_CODE, 0, now_us) == LS_OK) {
                 a->reading = true;
@@ -587,6 +929,7 @@ static int drives_update(void *self, uint64_t now_us)
                 axis_ready(d, j); /* configured again: its position read anew */
             }
             take_feedback(d, j);
+            take_second(d, j);
         }
     }
     if (r < 0) {
@@ -599,6 +942,8 @@ static int drives_update(void *self, uint64_t now_us)
     }
     return LS_OK;
 }
+
+static hal_tri_t ro_tri(const ls_drives_t *d, uint8_t j, ls_drive_ro_t ro);
 
 static int drives_status(void *self, hal_joint_status_t *out)
 {
@@ -628,6 +973,14 @@ static int drives_status(void *self, hal_joint_status_t *out)
         } else if (a->last_age > d->cfg.stale_cycles) {
             s->state = HAL_JOINT_LOST;
             ls_fmt_print(s->text, sizeof s->text, "no feedback (TPDO1) for %u drive cycles", (unsigned)a->last_age);
+        } else if (d->want_enabled && ro_tri(d, j, LS_DRIVE_RO_STO) == HAL_TRI_ON && !a->out.fault) {
+            /* The drive cannot switch on while it lasts: say so at once,
+             * not as a step not followed. */
+            const ls_drive_obj_t *o = &d->cfg.joint[j].sto;
+            s->state = HAL_JOINT_FAULT;
+            ls_fmt_print(s->text, sizeof s->text, "safe torque off is active (0x%04X:%02X bit %u%s, statusword 0x%04X)",
+                         (unsigned)o->index, (unsigned)o->sub, (unsigned)o->bit, o->inverted ? " clear" : "",
+                         (unsigned)a->statusword);
         } else if (a->out.fault || a->out.error != LS_402_OK) {
             /* While an enable asked for it, a FAULT is being reset (the
              * stepper's edges) until it stays: only then is it one. */
@@ -647,13 +1000,203 @@ static int drives_status(void *self, hal_joint_status_t *out)
             ls_fmt_print(s->text, sizeof s->text, "%s%s%s%s", resetting ? "resetting its " : "", fault,
                          fault[0] != '\0' && why[0] != '\0' ? ": " : "", why);
         } else if (d->want_enabled) {
-            const bool confirmed = a->step_epoch == d->enable_epoch && a->out.enabled && !a->out.target_ignored;
+            /* In CSP the drive confirms it follows (bit 12) in the mode it
+             * shows; while it homes, bit 12 means attained instead. */
+            const bool homing = a->hm_phase != HM_IDLE && a->hm_phase != HM_RESTORE;
+            const bool csp = !a->mode_known || a->mode_shown == LS_CO_MODE_CSP;
+            const bool confirmed = a->step_epoch == d->enable_epoch && a->out.enabled &&
+                                   (homing || (csp && a->hm_phase == HM_IDLE && !a->out.target_ignored));
             s->state = confirmed ? HAL_JOINT_ENABLED : HAL_JOINT_ENABLING;
-            if (s->state == HAL_JOINT_ENABLING) {
+            if (s->state == HAL_JOINT_ENABLING && a->out.enabled && (!csp || a->hm_phase == HM_RESTORE)) {
+                ls_fmt_print(s->text, sizeof s->text,
+                             "its mode of operation (0x6061) is %d, not 8 (cyclic synchronous "
+                             "position) yet",
+                             (int)a->mode_shown);
+            } else if (s->state == HAL_JOINT_ENABLING) {
                 (void)ls_402_describe(&a->out, s->text, sizeof s->text);
             }
         } else {
             s->state = HAL_JOINT_OFF;
+        }
+        s->home = a->home;
+        s->home_required = d->cfg.joint[j].home_required;
+        if (a->home == HAL_HOME_FAILED && s->text[0] == '\0') {
+            ls_fmt_print(s->text, sizeof s->text, "%s", a->hm_text);
+        }
+    }
+    return LS_OK;
+}
+
+static int drives_home(void *self, uint32_t joint_mask)
+{
+    ls_drives_t *d = self;
+    if (joint_mask == 0u || (joint_mask >> d->cfg.n_joints) != 0u) {
+        return LS_EINVAL;
+    }
+    for (uint8_t j = 0; j < d->cfg.n_joints; j++) {
+        const ls_drive_axis_t *a = &d->axis[j];
+        if ((joint_mask & (1u << j)) == 0u) {
+            continue;
+        }
+        if (!d->want_enabled || !a->out.enabled || a->step_epoch != d->enable_epoch || a->hm_phase != HM_IDLE ||
+            ls_co_master_node_phase(&d->master, d->cfg.joint[j].node_id) != LS_CO_PHASE_READY) {
+            return LS_EBUSY;
+        }
+    }
+    for (uint8_t j = 0; j < d->cfg.n_joints; j++) {
+        ls_drive_axis_t *a = &d->axis[j];
+        if ((joint_mask & (1u << j)) == 0u) {
+            continue;
+        }
+        a->hm_text[0] = '\0';
+        if (!d->cfg.joint[j].can_home) {
+            home_failed(d, j, "the drive offers no homing mode (0x6502 bit 5 clear)");
+            a->hm_phase = HM_IDLE;
+            continue;
+        }
+        a->home = HAL_HOME_HOMING;
+        a->hm_phase = HM_TO_HOMING;
+        a->hm_sdo = 0u;
+        a->hm_sync = d->master.sync_count;
+        a->hm_deadline_us = d->now_us + (uint64_t)LS_DRIVES_HOME_TIMEOUT_MS * 1000u;
+    }
+    return LS_OK;
+}
+
+/* ---- readouts ------------------------------------------------------------- */
+
+static hal_tri_t ro_tri(const ls_drives_t *d, uint8_t j, ls_drive_ro_t ro)
+{
+    const ls_drive_axis_t *a = &d->axis[j];
+    const ls_drive_obj_t *o = ro_obj(&d->cfg.joint[j], ro);
+    if (!d->layout[j].ro[ro].mapped || !a->ro_seen[ro]) {
+        return HAL_TRI_UNKNOWN;
+    }
+    const bool set = ((a->ro_raw[ro] >> o->bit) & 1u) != 0u;
+    return set != o->inverted ? HAL_TRI_ON : HAL_TRI_OFF;
+}
+
+/* A readout's raw bytes as a signed or unsigned number. */
+static double ro_value(const ls_drives_t *d, uint8_t j, ls_drive_ro_t ro)
+{
+    const ls_drive_obj_t *o = ro_obj(&d->cfg.joint[j], ro);
+    const uint32_t raw = d->axis[j].ro_raw[ro];
+    if (!o->is_signed || o->bytes == 0u || o->bytes > 4u) {
+        return (double)raw;
+    }
+    const uint32_t sign = 1u << (8u * o->bytes - 1u);
+    const uint32_t mask = o->bytes == 4u ? UINT32_MAX : (sign << 1) - 1u;
+    const uint32_t v = raw & mask;
+    return (v & sign) != 0u ? -(double)((~v & mask) + 1u) : (double)v;
+}
+
+static void publish_readouts(ls_drives_t *d, uint64_t now_us)
+{
+    hal_arm_readout_t *r = &d->ro_build;
+    memset(r, 0, sizeof *r); /* padding too: the seqlock copies raw words */
+    r->t_us = now_us != 0u ? now_us : 1u;
+    r->n_joints = d->cfg.n_joints;
+    for (uint8_t j = 0; j < d->cfg.n_joints; j++) {
+        const ls_drive_axis_t *a = &d->axis[j];
+        const ls_drive_joint_t *jc = &d->cfg.joint[j];
+        const ls_drive_layout_t *l = &d->layout[j];
+        hal_drive_readout_t *o = &r->joint[j];
+        o->node = jc->node_id;
+        o->statusword = a->statusword;
+        o->state = ls_402_state_name(ls_402_state(a->statusword));
+        o->mode = a->mode_known ? a->mode_shown : 0;
+        o->last_error = a->emcy_code;
+        o->error_name = a->emcy_code == 0u ? "" : a->emcy_name != NULL ? a->emcy_name : ls_co_emcy_name(a->emcy_code);
+        o->position_rad = a->q;
+        o->has_velocity = l->ro[LS_DRIVE_RO_VELOCITY].mapped && a->ro_seen[LS_DRIVE_RO_VELOCITY];
+        if (o->has_velocity) {
+            o->velocity_rad_s = ls_402_vel_rad_s(&jc->scale, (int32_t)ro_value(d, j, LS_DRIVE_RO_VELOCITY));
+        }
+        o->has_torque = l->ro[LS_DRIVE_RO_TORQUE].mapped && a->ro_seen[LS_DRIVE_RO_TORQUE];
+        if (o->has_torque) {
+            o->torque_permille = (int16_t)ro_value(d, j, LS_DRIVE_RO_TORQUE);
+        }
+        o->has_temperature = l->ro[LS_DRIVE_RO_TEMPERATURE].mapped && a->ro_seen[LS_DRIVE_RO_TEMPERATURE];
+        if (o->has_temperature) {
+            o->temperature_c = ro_value(d, j, LS_DRIVE_RO_TEMPERATURE) * jc->temperature_scale;
+        }
+        o->brake = ro_tri(d, j, LS_DRIVE_RO_BRAKE);
+        o->sto = ro_tri(d, j, LS_DRIVE_RO_STO);
+        o->home = a->home;
+        o->home_required = jc->home_required;
+        o->feedback_age = a->feedback_age;
+    }
+    ls_co_counters_t c;
+    (void)ls_co_master_counters(&d->master, &c);
+    const struct {
+        const char *name;
+        uint32_t value;
+    } k[] = {
+        { "frames_in", c.frames_in },
+        { "frames_out", c.frames_out },
+        { "sync_sent", c.sync_sent },
+        { "sync_deferred", c.sync_deferred },
+        { "sync_overruns", c.sync_overruns },
+        { "sends_refused", c.sends_refused },
+        { "emcy_received", c.emcy_received },
+        { "emcy_lost", c.emcy_lost },
+        { "heartbeats_lost", c.heartbeats_lost },
+        { "sdo_timeouts", c.sdo_timeouts },
+        { "sdo_aborts_sent", c.sdo_aborts_sent },
+        { "sdo_aborts_received", c.sdo_aborts_received },
+        { "unexpected", c.unexpected },
+        { "optional_failures", c.optional_failures },
+        { "events_lost", d->events_lost },
+    };
+    _Static_assert(sizeof k / sizeof k[0] <= HAL_READOUT_COUNTERS, "hal_arm_readout_t holds every counter");
+    for (size_t i = 0; i < sizeof k / sizeof k[0]; i++) {
+        r->counter[i].name = k[i].name;
+        r->counter[i].value = k[i].value;
+    }
+    r->n_counters = (uint8_t)(sizeof k / sizeof k[0]);
+    ls_seqlock_write(&d->ro_seq, d->ro_words, LS_SEQLOCK_WORDS(sizeof *r), r, sizeof *r);
+}
+
+static int drives_readout(void *self, hal_arm_readout_t *out)
+{
+    ls_drives_t *d = self;
+    hal_arm_readout_t r;
+    if (ls_seqlock_read(&d->ro_seq, d->ro_words, LS_SEQLOCK_WORDS(sizeof r), &r, sizeof r, LS_DRIVES_READOUT_TRIES)) {
+        d->ro_last = r;
+        *out = r;
+        return LS_OK;
+    }
+    *out = d->ro_last;
+    return LS_EAGAIN;
+}
+
+int ls_drives_check_limits(const ls_drives_t *d, const double *q_min_rad, const double *q_max_rad, char *msg,
+                           size_t msglen)
+{
+    if (d == NULL || q_min_rad == NULL || q_max_rad == NULL || msg == NULL) {
+        return LS_EINVAL;
+    }
+    msg[0] = '\0';
+    for (uint8_t j = 0; j < d->cfg.n_joints; j++) {
+        const ls_drive_joint_t *jc = &d->cfg.joint[j];
+        const int32_t lo = (int32_t)d->axis[j].lim0[0], hi = (int32_t)d->axis[j].lim0[1];
+        if (!jc->read_limits || lo >= hi) {
+            continue; /* the drive enforces none */
+        }
+        double a = ls_402_pos_rad(&jc->scale, lo), b = ls_402_pos_rad(&jc->scale, hi);
+        if (a > b) {
+            const double t = a;
+            a = b;
+            b = t;
+        }
+        const double count_rad = 1.0 / jc->scale.counts_per_rad;
+        if (a > q_min_rad[j] + count_rad || b < q_max_rad[j] - count_rad) {
+            ls_fmt_print(msg, msglen,
+                         "joint %u (node 0x%02X): the drive's software position limits 0x607D = %ld..%ld counts "
+                         "(%.4f..%.4f rad) do not contain the robot model's %.4f..%.4f rad: widen the drive's "
+                         "limits, or check counts_per_rad, sign and offset_rad",
+                         (unsigned)j + 1u, (unsigned)jc->node_id, (long)lo, (long)hi, a, b, q_min_rad[j], q_max_rad[j]);
+            return LS_ERANGE;
         }
     }
     return LS_OK;
@@ -685,6 +1228,8 @@ static const hal_arm_ops_t k_ops = {
     .status = drives_status,
     .update = drives_update,
     .next_event = drives_next_event,
+    .home = drives_home,
+    .readout = drives_readout,
 };
 
 void ls_drives_arm(ls_drives_t *d, hal_arm_t *out)

@@ -5,10 +5,13 @@
  * The arm of real drives (firmware/drives: CiA 402 over CANopen) enables in
  * steps, one per drive cycle, and its feedback arrives once per drive cycle:
  * enable() asks, status() tells when each joint is under control, and read()
- * returns the latest feedback with its age in status().
+ * returns the latest feedback with its age in status(). Such an arm may also
+ * home its joints (the drives' own homing: home(), its progress in status())
+ * and publish per-axis readouts for operators (readout()).
  *
- * Threading: every operation except open/close is called from the control
- * loop: no blocking, no allocation. Units: SI (m, rad, N, Nm, s).
+ * Threading: every operation except open/close and readout() is called from
+ * the control loop: no blocking, no allocation. readout() is the comms
+ * thread's: it copies what the control thread published, without a lock. Units: SI (m, rad, N, Nm, s).
  * A simulated world advances through its own call (hal/sim/world:
  * hal_sim_world_step), which the contract of a real arm does not have. */
 #ifndef HAL_ARM_H
@@ -45,6 +48,17 @@ typedef enum {
     HAL_JOINT_LOST,     /* the drive stopped answering (heartbeat, feedback, bus) */
 } hal_joint_state_t;
 
+/* Where a joint's homing stands (the drive's own homing, CiA 402 mode 6).
+ * A joint whose position is absolute (an absolute encoder, a simulated
+ * arm) needs none; one with an incremental encoder must be homed once
+ * after its drive boots before anything moves it (home_required). */
+typedef enum {
+    HAL_HOME_NOT_HOMED = 0, /* not homed since its drive booted */
+    HAL_HOME_HOMING,        /* the drive's homing runs */
+    HAL_HOME_HOMED,         /* homed since its drive booted (kept across disable and enable) */
+    HAL_HOME_FAILED,        /* the last homing failed (status text says why) */
+} hal_home_t;
+
 typedef struct {
     hal_joint_state_t state;
     uint16_t node;         /* the drive's bus address, 0 when it has none (a simulated arm) */
@@ -53,7 +67,52 @@ typedef struct {
     /* What the drive said, for one-line messages, e.g. "FAULT, EMCY 0x8611 following
      * error" or "no heartbeat for 300 ms"; "" when there is nothing to say. */
     char text[HAL_JOINT_TEXT_LEN];
+    hal_home_t home;    /* HAL_HOME_NOT_HOMED on an arm without homing */
+    bool home_required; /* motion waits for HAL_HOME_HOMED (an incremental encoder) */
 } hal_joint_status_t;
+
+/* What an operator reads of each joint's drive (what moteus_tool and
+ * odrivetool show): published by the control thread once per drive cycle,
+ * read by the comms thread (readout()). Every value is the drive's own
+ * report, not the controller's command. */
+#define HAL_READOUT_COUNTERS 16 /* counters of the drive bus's master */
+typedef enum {
+    HAL_TRI_UNKNOWN = 0, /* the drive does not publish it (not configured, not mappable) */
+    HAL_TRI_OFF,         /* brake released / safe torque off inactive */
+    HAL_TRI_ON,          /* brake engaged / safe torque off active */
+} hal_tri_t;
+
+typedef struct {
+    uint16_t node;          /* the drive's bus address */
+    uint16_t statusword;    /* CiA 402 0x6041 as received */
+    const char *state;      /* its power state, "OPERATION ENABLED" (static text) */
+    int8_t mode;            /* mode of operation displayed (0x6061); 0 when unknown */
+    uint16_t last_error;    /* the last EMCY's error code since the drive booted (0: none) */
+    const char *error_name; /* its CiA 301/402 name (static text; "" when none) */
+    double position_rad;    /* position actual, joint radians */
+    bool has_velocity;      /* velocity actual (0x606C) is mapped */
+    double velocity_rad_s;
+    bool has_torque;         /* torque actual (0x6077) is mapped */
+    int16_t torque_permille; /* per mille of the motor's rated torque */
+    bool has_temperature;    /* the configured temperature object is mapped */
+    double temperature_c;
+    hal_tri_t brake; /* the holding brake, from the drive's status */
+    hal_tri_t sto;   /* the safe torque off input, from the drive's status */
+    hal_home_t home;
+    bool home_required;
+    uint32_t feedback_age; /* control cycles since its feedback was fresh */
+} hal_drive_readout_t;
+
+typedef struct {
+    uint64_t t_us; /* the drive cycle that published it (0: none yet) */
+    uint8_t n_joints;
+    hal_drive_readout_t joint[HAL_ARM_MAX_JOINTS];
+    uint8_t n_counters;
+    struct {
+        const char *name; /* "sync_sent" (static text) */
+        uint32_t value;
+    } counter[HAL_READOUT_COUNTERS];
+} hal_arm_readout_t;
 
 /* Something a joint's drive reported that the supervisors should hear of:
  * an emergency message (CiA 301 EMCY) or the drive's error register read
@@ -95,6 +154,20 @@ typedef struct {
     /* Optional: the oldest event the drives reported and nobody took yet;
      * 1 when *out was written, 0 when none. NULL: an arm without events. */
     int (*next_event)(void *self, hal_arm_event_t *out);
+    /* Optional: start the drives' own homing of the joints in `joint_mask`
+     * (bit j: joint j + 1), each enabled and at rest. Returns at once: the
+     * homing runs over drive cycles, status() shows it (HAL_HOME_HOMING,
+     * then HOMED or FAILED with the drive's words) and the joint then holds
+     * its new measured position. LS_OK; LS_EINVAL (an empty mask, a joint
+     * the arm has not); LS_EBUSY (a joint not ENABLED, or homing already).
+     * NULL: LS_EUNSUPPORTED (an arm whose positions are absolute). */
+    int (*home)(void *self, uint32_t joint_mask);
+    /* Optional, the comms thread's: copy the readouts the control thread
+     * published at the latest drive cycle into *out (lock-free, bounded,
+     * O(joints); never the backend's working state). LS_OK, LS_EAGAIN (the
+     * publish overlapped every try: *out holds the previous copy).
+     * NULL: LS_EUNSUPPORTED (an arm without drives to read). */
+    int (*readout)(void *self, hal_arm_readout_t *out);
 } hal_arm_ops_t;
 
 typedef struct {
@@ -146,5 +219,10 @@ int hal_arm_status(hal_arm_t *arm, bool enabled, uint8_t n_joints, hal_joint_sta
 int hal_arm_update(hal_arm_t *arm, uint64_t now_us);
 /* next_event without a backend operation: 0 (none). */
 int hal_arm_next_event(hal_arm_t *arm, hal_arm_event_t *out);
+/* home and readout without a backend operation: LS_EUNSUPPORTED. */
+int hal_arm_home(hal_arm_t *arm, uint32_t joint_mask);
+int hal_arm_readout(hal_arm_t *arm, hal_arm_readout_t *out);
+/* "not_homed", "homing", "homed", "failed"; "?" out of range. */
+const char *hal_home_name(hal_home_t home);
 
 #endif

@@ -195,6 +195,116 @@ static void test_a_bad_configuration_is_named(void **state)
     assert_int_equal(ls_drives_init(&g_d, &c), LS_EINVAL);
 }
 
+static const ls_co_step_t *find_step(const ls_co_step_t *s, size_t n, ls_co_step_kind_t kind, uint16_t index,
+                                     uint8_t sub)
+{
+    for (size_t i = 0; i < n; i++) {
+        if (s[i].kind == kind && s[i].index == index && s[i].sub == sub) {
+            return &s[i];
+        }
+    }
+    return NULL;
+}
+
+static void test_the_mode_rides_in_the_pdos_where_the_eds_lets_it(void **state)
+{
+    (void)state;
+    ls_drives_config_t c = config();
+    c.joint[0].map_mode = true;
+    c.joint[0].tpdo_room[0] = 8;
+    assert_int_equal(ls_drives_init(&g_d, &c), LS_OK);
+    const ls_co_step_t *s = g_d.script[0];
+    const size_t n = script_len(0);
+    const int r = find_write(s, n, 0, 0x1600, 3, 0x60600008u);
+    assert_true(r >= 0 && find_write(s, n, (size_t)r, 0x1600, 0, 3) > r);
+    const int t = find_write(s, n, 0, 0x1A00, 3, 0x60610008u);
+    assert_true(t >= 0 && find_write(s, n, (size_t)t, 0x1A00, 0, 3) > t);
+    assert_int_equal(g_d.master.nodes[0].cfg.rpdo[0].len, 7);
+    assert_int_equal(g_d.master.nodes[0].cfg.tpdo[0].len, 7);
+    /* without it the PDOs stay as they were: 6 bytes each */
+    assert_int_equal(find_write(g_d.script[1], script_len(1), 0, 0x1600, 3, 0x60600008u), -1);
+    assert_int_equal(g_d.master.nodes[1].cfg.rpdo[0].len, 6);
+}
+
+static void test_the_readouts_fill_tpdo1_then_tpdo2_in_their_order(void **state)
+{
+    (void)state;
+    ls_drive_joint_t jc;
+    memset(&jc, 0, sizeof jc);
+    jc.map_mode = true;
+    jc.tpdo_room[0] = jc.tpdo_room[1] = 8;
+    jc.brake = (ls_drive_obj_t){ .map = true, .index = 0x2100, .sub = 1, .bytes = 1 };
+    jc.sto = (ls_drive_obj_t){ .map = true, .index = 0x2100, .sub = 2, .bytes = 1 };
+    jc.torque = (ls_drive_obj_t){ .map = true, .index = 0x6077, .bytes = 2 };
+    jc.velocity = (ls_drive_obj_t){ .map = true, .index = 0x606C, .bytes = 4 };
+    ls_drive_layout_t l;
+    ls_drives_layout(&jc, &l);
+    assert_int_equal(l.rpdo1_bytes, 7);
+    assert_int_equal(l.n_tpdo, 2);
+    assert_int_equal(l.tpdo_bytes[0], 8); /* statusword, position, mode display, brake */
+    assert_int_equal(l.map[0][3], 0x21000108u);
+    assert_true(l.ro[LS_DRIVE_RO_BRAKE].mapped && l.ro[LS_DRIVE_RO_BRAKE].slot == 0 &&
+                l.ro[LS_DRIVE_RO_BRAKE].offset == 7);
+    assert_int_equal(l.tpdo_bytes[1], 7); /* STO, torque, velocity */
+    assert_int_equal(l.map[1][0], 0x21000208u);
+    assert_int_equal(l.map[1][1], 0x60770010u);
+    assert_int_equal(l.map[1][2], 0x606C0020u);
+    assert_int_equal(l.ro[LS_DRIVE_RO_VELOCITY].offset, 3);
+    assert_int_equal(l.left_out, 0);
+    /* a temperature of 4 bytes finds no room: named, the rest stays */
+    jc.temperature = (ls_drive_obj_t){ .map = true, .index = 0x2101, .bytes = 4 };
+    ls_drives_layout(&jc, &l);
+    assert_int_equal(l.left_out, 1u << LS_DRIVE_RO_VELOCITY);
+    assert_true(l.ro[LS_DRIVE_RO_TEMPERATURE].mapped);
+    /* a TPDO2 the EDS does not let be mapped takes nothing */
+    jc.tpdo_room[1] = 0;
+    ls_drives_layout(&jc, &l);
+    assert_int_equal(l.n_tpdo, 1);
+    assert_int_equal(l.left_out, (1u << LS_DRIVE_RO_STO) | (1u << LS_DRIVE_RO_TORQUE) |
+                                     (1u << LS_DRIVE_RO_TEMPERATURE) | (1u << LS_DRIVE_RO_VELOCITY));
+    /* nothing asked: TPDO1 as before */
+    memset(&jc, 0, sizeof jc);
+    ls_drives_layout(&jc, &l);
+    assert_int_equal(l.n_tpdo, 1);
+    assert_int_equal(l.tpdo_bytes[0], 6);
+    assert_int_equal(l.rpdo1_bytes, 6);
+}
+
+static void test_the_drives_own_supervision_and_homing_are_set_at_start(void **state)
+{
+    (void)state;
+    ls_drives_config_t c = config();
+    ls_drive_joint_t *dj = &c.joint[2];
+    dj->write_fe_window = dj->write_fe_timeout = dj->write_quick_stop = true;
+    dj->fe_window_counts = 2000;
+    dj->fe_timeout_ms = 50;
+    dj->quick_stop_option = 6;
+    dj->write_home_method = dj->write_home_offset = true;
+    dj->home_method = 37;
+    dj->home_offset_counts = -5000;
+    dj->read_limits = true;
+    assert_int_equal(ls_drives_init(&g_d, &c), LS_OK);
+    const ls_co_step_t *s = g_d.script[2];
+    const size_t n = script_len(2);
+    assert_true(find_write(s, n, 0, 0x6065, 0, 2000) >= 0);
+    assert_true(find_write(s, n, 0, 0x6066, 0, 50) >= 0);
+    assert_true(find_write(s, n, 0, 0x605A, 0, 6) >= 0);
+    assert_true(find_write(s, n, 0, 0x6098, 0, 37) >= 0);
+    assert_true(find_write(s, n, 0, 0x607C, 0, (uint32_t)(int32_t)-5000) >= 0);
+    const ls_co_step_t *lo = find_step(s, n, LS_CO_STEP_READ_INTO, 0x607D, 1);
+    const ls_co_step_t *hi = find_step(s, n, LS_CO_STEP_READ_INTO, 0x607D, 2);
+    assert_non_null(lo);
+    assert_non_null(hi);
+    /* written before CSP is set: the drive is at rest, nothing maps them */
+    assert_true(find_write(s, n, 0, 0x6065, 0, 2000) < find_write(s, n, 0, 0x6060, 0, 8));
+    /* and nothing of it where it was not asked */
+    const ls_co_step_t *s0 = g_d.script[0];
+    for (size_t i = 0; i < script_len(0); i++) {
+        const uint16_t x = s0[i].index;
+        assert_true(x != 0x6065 && x != 0x6066 && x != 0x605A && x != 0x6098 && x != 0x607C && x != 0x607D);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -204,6 +314,9 @@ int main(void)
         cmocka_unit_test(test_only_what_the_eds_allows_is_written),
         cmocka_unit_test(test_interpolation_periods_in_ms_and_below),
         cmocka_unit_test(test_a_bad_configuration_is_named),
+        cmocka_unit_test(test_the_mode_rides_in_the_pdos_where_the_eds_lets_it),
+        cmocka_unit_test(test_the_readouts_fill_tpdo1_then_tpdo2_in_their_order),
+        cmocka_unit_test(test_the_drives_own_supervision_and_homing_are_set_at_start),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -1,0 +1,517 @@
+/* The drive arm (firmware/drives/ls_drives.h) against the simulated drives
+ * (hal/sim/drives) in one process: two in-memory links joined back to
+ * back, time driven by the test, nothing sleeps. What the arm reports is
+ * checked against what the simulated drive does (its world's joint, its
+ * objects read over the same bus), never against the arm's own code:
+ * homing with the mode in the PDOs and over SDO, the readouts (402 state,
+ * mode, brake, safe torque off, temperature, torque, velocity), a homing
+ * kept across disable and enable and lost when the drive boots again, a
+ * homing interrupted, safe torque off refusing the enable, and the
+ * software position limits against a model's. */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "hal_sim_drives.h"
+#include "hal_sim_world.h"
+#include "ls_canopen.h"
+#include "ls_drives.h"
+#include "ls_robot_model_sim.h"
+
+#define NJ 6
+#define CPR 100000.0     /* counts per radian, both sides */
+#define HOME_OFFSET 5000 /* 0x607C of joint 2: 0.05 rad after homing */
+#define QUEUE 4096
+
+/* ---- two links back to back ---- */
+
+typedef struct {
+    hal_can_frame_t f[QUEUE];
+    size_t head, count;
+} queue_t;
+
+static queue_t g_to_sim, g_to_master;
+
+static int q_send(queue_t *q, const hal_can_frame_t *f)
+{
+    if (q->count == QUEUE) {
+        return LS_EAGAIN;
+    }
+    q->f[(q->head + q->count++) % QUEUE] = *f;
+    return LS_OK;
+}
+
+static int q_recv(queue_t *q, hal_can_frame_t *f)
+{
+    if (q->count == 0) {
+        return LS_EAGAIN;
+    }
+    *f = q->f[q->head];
+    q->head = (q->head + 1) % QUEUE;
+    q->count--;
+    return 1;
+}
+
+static int master_send(void *self, const hal_can_frame_t *f)
+{
+    (void)self;
+    return q_send(&g_to_sim, f);
+}
+static int master_recv(void *self, hal_can_frame_t *f)
+{
+    (void)self;
+    return q_recv(&g_to_master, f);
+}
+static int sim_send(void *self, const hal_can_frame_t *f)
+{
+    (void)self;
+    return q_send(&g_to_master, f);
+}
+static int sim_recv(void *self, hal_can_frame_t *f)
+{
+    (void)self;
+    return q_recv(&g_to_sim, f);
+}
+static int no_fd(void *self)
+{
+    (void)self;
+    return -1;
+}
+static int ok_status(void *self, hal_can_status_t *out)
+{
+    (void)self;
+    memset(out, 0, sizeof *out);
+    return LS_OK;
+}
+static void no_close(void *self)
+{
+    (void)self;
+}
+
+static const hal_can_ops_t k_master_ops = {
+    .send = master_send, .recv = master_recv, .poll_fd = no_fd, .status = ok_status, .close = no_close
+};
+static const hal_can_ops_t k_sim_ops = {
+    .send = sim_send, .recv = sim_recv, .poll_fd = no_fd, .status = ok_status, .close = no_close
+};
+static hal_can_link_t g_master_link = { .ops = &k_master_ops, .self = NULL, .name = "mem-master" };
+static hal_can_link_t g_sim_link = { .ops = &k_sim_ops, .self = NULL, .name = "mem-sim" };
+
+/* ---- the rig ---- */
+
+static ls_drives_t g_d;
+static hal_arm_t g_arm;
+static uint64_t g_now;
+
+/* What the simulated drive's EDS offers, as ls_drive_setup derives it. */
+static ls_drives_config_t config(bool map_mode)
+{
+    ls_drives_config_t c;
+    memset(&c, 0, sizeof c);
+    c.n_joints = NJ;
+    c.link = &g_master_link;
+    c.control_period_us = 1000;
+    c.cycle_ticks = 4;
+    c.master_node = 0x7F;
+    c.heartbeat_ms = 100;
+    c.heartbeat_timeout_ms = 350;
+    c.boot_timeout_ms = 2000;
+    c.abort_option = 3;
+    c.stale_cycles = 5;
+    for (int j = 0; j < NJ; j++) {
+        ls_drive_joint_t *dj = &c.joint[j];
+        dj->node_id = (uint8_t)(0x21 + j);
+        dj->scale.counts_per_rad = CPR;
+        dj->scale.sign = 1;
+        dj->write_consumer_hb = dj->write_abort_option = dj->write_interp_period = true;
+        dj->write_pdo_type = dj->write_tpdo_inhibit = true;
+        dj->feedforward = true;
+        for (int p = 0; p < 4; p++) {
+            dj->rpdo_present[p] = dj->tpdo_present[p] = true;
+        }
+        dj->map_mode = map_mode;
+        dj->can_home = true;
+        dj->read_limits = true;
+        dj->tpdo_room[0] = dj->tpdo_room[1] = 8;
+        dj->brake = (ls_drive_obj_t){ .map = true, .index = SD_OBJ_BRAKE_STO, .sub = SD_SUB_BRAKE_ENGAGED, .bytes = 1 };
+        dj->sto = (ls_drive_obj_t){ .map = true, .index = SD_OBJ_BRAKE_STO, .sub = SD_SUB_STO_ACTIVE, .bytes = 1 };
+        dj->temperature = (ls_drive_obj_t){
+            .map = true, .index = SD_OBJ_BRAKE_STO, .sub = SD_SUB_TEMPERATURE, .bytes = 2, .is_signed = true
+        };
+        dj->temperature_scale = 0.1;
+        dj->torque = (ls_drive_obj_t){ .map = true, .index = LS_CO_OBJ_TORQUE_ACTUAL, .bytes = 2, .is_signed = true };
+        dj->velocity =
+            (ls_drive_obj_t){ .map = true, .index = LS_CO_OBJ_VELOCITY_ACTUAL, .bytes = 4, .is_signed = true };
+    }
+    /* joint 2 must be homed, to 0.05 rad by "home here" (37) */
+    c.joint[1].home_required = true;
+    c.joint[1].write_home_method = true;
+    c.joint[1].home_method = 37;
+    c.joint[1].write_home_offset = true;
+    c.joint[1].home_offset_counts = HOME_OFFSET;
+    return c;
+}
+
+/* One millisecond: the arm's control cycle (command, update), then the drives. */
+static void step_ms(unsigned ms)
+{
+    for (unsigned k = 0; k < ms; k++) {
+        g_now += 1000u;
+        (void)hal_arm_update(&g_arm, g_now);
+        assert_int_equal(hal_sim_drives_poll(g_now), LS_OK);
+    }
+}
+
+static void open_rig(bool map_mode)
+{
+    memset(&g_to_sim, 0, sizeof g_to_sim);
+    memset(&g_to_master, 0, sizeof g_to_master);
+    hal_sim_arm_model_t am;
+    ls_robot_model_to_sim(&ls_robot_model_default, &am);
+    hal_sim_world_config_t wc = { .arm = &am };
+    char msg[200] = "";
+    if (hal_sim_world_open(&wc, msg, sizeof msg) != LS_OK) {
+        fail_msg("world: %s", msg);
+    }
+    hal_sim_drives_config_t dc = { .link = &g_sim_link, .n_drives = NJ, .counts_per_rad = CPR };
+    for (int j = 0; j < NJ; j++) {
+        dc.drives[j] = (hal_sim_drive_config_t){ (uint8_t)(0x21 + j), (uint8_t)j, 0 };
+    }
+    g_now = 1000000u;
+    if (hal_sim_drives_open(&dc, g_now, msg, sizeof msg) != LS_OK) {
+        fail_msg("drives: %s", msg);
+    }
+    /* What the drives said before a master listened is gone (as on the
+     * pty of ls-simdrives): the master's reset brings their boot-ups. */
+    g_to_master.count = 0;
+    ls_drives_config_t c = config(map_mode);
+    assert_int_equal(ls_drives_init(&g_d, &c), LS_OK);
+    assert_int_equal(ls_drives_boot(&g_d, g_now), LS_OK);
+    int r = 0;
+    for (int ms = 0; ms < 3000 && r == 0; ms++) {
+        g_now += 1000u;
+        r = ls_drives_service(&g_d, g_now);
+        assert_int_equal(hal_sim_drives_poll(g_now), LS_OK);
+    }
+    if (r != 1) {
+        hal_sim_drives_close();
+        hal_sim_world_close();
+        fail_msg("boot: %d %s", r, ls_drives_text(&g_d));
+    }
+    ls_drives_arm(&g_d, &g_arm);
+    step_ms(20);
+}
+
+static int setup_pdo(void **state)
+{
+    (void)state;
+    open_rig(true);
+    return 0;
+}
+
+static int setup_sdo(void **state)
+{
+    (void)state;
+    open_rig(false);
+    return 0;
+}
+
+static int teardown(void **state)
+{
+    (void)state;
+    hal_sim_drives_close();
+    hal_sim_world_close();
+    return 0;
+}
+
+static void status(hal_joint_status_t *st)
+{
+    assert_int_equal(hal_arm_status(&g_arm, true, NJ, st), LS_OK);
+}
+
+/* Enable, holding where the joints are, until every joint confirms. */
+static void enable(void)
+{
+    assert_int_equal(hal_arm_enable(&g_arm, true), LS_OK);
+    hal_joint_status_t st[NJ];
+    for (int ms = 0; ms < 200; ms++) {
+        double q[NJ], qd[NJ];
+        assert_int_equal(hal_arm_read(&g_arm, q, qd), LS_OK);
+        assert_int_equal(hal_arm_command(&g_arm, q, NULL), LS_OK);
+        step_ms(1);
+        status(st);
+        bool all = true;
+        for (int j = 0; j < NJ; j++) {
+            all = all && st[j].state == HAL_JOINT_ENABLED;
+        }
+        if (all) {
+            return;
+        }
+    }
+    fail_msg("not enabled: joint 1 %d '%s'", (int)st[0].state, st[0].text);
+}
+
+static void readout(hal_arm_readout_t *r)
+{
+    assert_int_equal(hal_arm_readout(&g_arm, r), LS_OK);
+    assert_int_equal(r->n_joints, NJ);
+}
+
+/* The arm holds the measured position while the drives home: the loop's
+ * part. Returns the joint's home state once it is no longer HOMING. */
+static hal_home_t run_homing(int j, unsigned max_ms)
+{
+    hal_joint_status_t st[NJ];
+    for (unsigned ms = 0; ms < max_ms; ms++) {
+        double q[NJ], qd[NJ];
+        assert_int_equal(hal_arm_read(&g_arm, q, qd), LS_OK);
+        assert_int_equal(hal_arm_command(&g_arm, q, NULL), LS_OK);
+        step_ms(1);
+        status(st);
+        assert_int_equal(st[j].state, HAL_JOINT_ENABLED); /* under control throughout */
+        if (st[j].home != HAL_HOME_HOMING) {
+            return st[j].home;
+        }
+    }
+    fail_msg("homing did not end within %u ms", max_ms);
+    return HAL_HOME_HOMING;
+}
+
+static double world_q(int j)
+{
+    hal_arm_t w;
+    hal_sim_world_get_arm(&w);
+    double q[NJ], qd[NJ];
+    assert_int_equal(hal_arm_read(&w, q, qd), LS_OK);
+    return q[j];
+}
+
+/* ---- tests ---- */
+
+static void test_the_readouts_say_what_the_drives_publish(void **state)
+{
+    (void)state;
+    hal_arm_readout_t r;
+    readout(&r);
+    assert_true(r.t_us > 0u);
+    for (int j = 0; j < NJ; j++) {
+        const hal_drive_readout_t *o = &r.joint[j];
+        assert_int_equal(o->node, 0x21 + j);
+        assert_string_equal(o->state, "SWITCH ON DISABLED");
+        assert_int_equal(o->mode, LS_CO_MODE_CSP);
+        assert_int_equal(o->brake, HAL_TRI_ON); /* off: the brake holds */
+        assert_int_equal(o->sto, HAL_TRI_OFF);
+        assert_true(o->has_temperature && fabs(o->temperature_c - 30.0) < 1e-9);
+        assert_true(o->has_torque && o->torque_permille == 0);
+        /* 2 + 4 + 1 (mode) + 1 (brake) bytes, then 1 + 2 + 2: the velocity's 4 do not fit */
+        assert_false(o->has_velocity);
+        assert_int_equal(g_d.layout[j].left_out, 1u << LS_DRIVE_RO_VELOCITY);
+        assert_int_equal(o->last_error, 0);
+        assert_string_equal(o->error_name, "");
+        assert_int_equal(o->home, HAL_HOME_NOT_HOMED);
+        assert_int_equal(o->home_required, j == 1);
+        assert_true(o->feedback_age < 8u);
+    }
+    bool syncs = false;
+    for (uint8_t k = 0; k < r.n_counters; k++) {
+        syncs = syncs || (strcmp(r.counter[k].name, "sync_sent") == 0 && r.counter[k].value > 0u);
+    }
+    assert_true(syncs);
+    enable();
+    step_ms(40);
+    readout(&r);
+    for (int j = 0; j < NJ; j++) {
+        assert_string_equal(r.joint[j].state, "OPERATION ENABLED");
+        assert_int_equal(r.joint[j].brake, HAL_TRI_OFF); /* released: from the drive, not our command */
+        assert_true(fabs(r.joint[j].position_rad - world_q(j)) < 1e-3);
+    }
+    /* the shoulder holds the arm against gravity: it gives torque, and warms */
+    assert_true(abs(r.joint[1].torque_permille) > 0);
+    assert_true(r.joint[1].temperature_c > 30.0);
+}
+
+static void test_a_joint_homes_to_its_offset_without_moving(void **state)
+{
+    (void)state;
+    enable();
+    const double q_before = world_q(1);
+    hal_joint_status_t st[NJ];
+    status(st);
+    assert_true(st[1].home_required);
+    assert_int_equal(st[1].home, HAL_HOME_NOT_HOMED);
+    assert_int_equal(hal_arm_home(&g_arm, 1u << 1), LS_OK);
+    status(st);
+    assert_int_equal(st[1].home, HAL_HOME_HOMING);
+    assert_int_equal(hal_arm_home(&g_arm, 1u << 1), LS_EBUSY); /* one at a time */
+    assert_int_equal(run_homing(1, 500), HAL_HOME_HOMED);
+    /* the drive's counter now reads the home offset where the joint stands */
+    double q[NJ], qd[NJ];
+    assert_int_equal(hal_arm_read(&g_arm, q, qd), LS_OK);
+    assert_true(fabs(q[1] - HOME_OFFSET / CPR) < 2e-4);
+    /* held there in CSP: the joint did not move, and keeps not moving */
+    for (int ms = 0; ms < 200; ms++) {
+        assert_int_equal(hal_arm_read(&g_arm, q, qd), LS_OK);
+        assert_int_equal(hal_arm_command(&g_arm, q, NULL), LS_OK);
+        step_ms(1);
+    }
+    status(st);
+    assert_int_equal(st[1].state, HAL_JOINT_ENABLED);
+    assert_true(fabs(world_q(1) - q_before) < 1e-3);
+    hal_arm_readout_t r;
+    readout(&r);
+    assert_int_equal(r.joint[1].mode, LS_CO_MODE_CSP);
+    assert_int_equal(r.joint[1].home, HAL_HOME_HOMED);
+    assert_int_equal(r.joint[0].home, HAL_HOME_NOT_HOMED);
+    /* a set-point from here moves it as commanded */
+    for (int ms = 0; ms < 400; ms++) {
+        assert_int_equal(hal_arm_read(&g_arm, q, qd), LS_OK);
+        q[1] = HOME_OFFSET / CPR + 0.05 * fmin(1.0, ms / 200.0);
+        assert_int_equal(hal_arm_command(&g_arm, q, NULL), LS_OK);
+        step_ms(1);
+    }
+    assert_int_equal(hal_arm_read(&g_arm, q, qd), LS_OK);
+    assert_true(fabs(q[1] - (HOME_OFFSET / CPR + 0.05)) < 5e-3);
+    assert_true(fabs(world_q(1) - (q_before + 0.05)) < 5e-3);
+}
+
+static void test_a_homing_is_kept_across_disable_and_lost_when_the_drive_boots(void **state)
+{
+    (void)state;
+    enable();
+    assert_int_equal(hal_arm_home(&g_arm, 1u << 1), LS_OK);
+    assert_int_equal(run_homing(1, 500), HAL_HOME_HOMED);
+    assert_int_equal(hal_arm_enable(&g_arm, false), LS_OK);
+    step_ms(40);
+    hal_joint_status_t st[NJ];
+    status(st);
+    assert_int_equal(st[1].state, HAL_JOINT_OFF);
+    assert_int_equal(st[1].home, HAL_HOME_HOMED);
+    enable();
+    status(st);
+    assert_int_equal(st[1].home, HAL_HOME_HOMED);
+    /* the drive restarts (NMT reset node from elsewhere): lost, then configured again by an enable */
+    const hal_can_frame_t reset = { .id = LS_CO_COB_NMT, .len = 2, .data = { LS_CO_NMT_RESET_NODE, 0x22 } };
+    assert_int_equal(hal_sim_drives_rx(&reset, g_now), LS_OK);
+    step_ms(40);
+    status(st);
+    assert_int_equal(st[1].state, HAL_JOINT_LOST);
+    assert_int_equal(hal_arm_enable(&g_arm, false), LS_OK);
+    step_ms(10);
+    enable();
+    status(st);
+    assert_int_equal(st[1].home, HAL_HOME_NOT_HOMED);
+}
+
+static void test_a_homing_interrupted_fails_and_the_drive_enables_in_csp_again(void **state)
+{
+    (void)state;
+    enable();
+    assert_int_equal(hal_arm_home(&g_arm, 1u << 1), LS_OK);
+    assert_int_equal(hal_arm_enable(&g_arm, false), LS_OK);
+    step_ms(40);
+    hal_joint_status_t st[NJ];
+    status(st);
+    assert_int_equal(st[1].home, HAL_HOME_FAILED);
+    assert_string_equal(st[1].text, "homing failed: interrupted: the drives were switched off");
+    enable(); /* in CSP again: bit 12 follows the target */
+    hal_arm_readout_t r;
+    readout(&r);
+    assert_int_equal(r.joint[1].mode, LS_CO_MODE_CSP);
+    /* and a new homing succeeds */
+    assert_int_equal(hal_arm_home(&g_arm, 1u << 1), LS_OK);
+    assert_int_equal(run_homing(1, 500), HAL_HOME_HOMED);
+}
+
+static void test_a_joint_homes_over_sdo_where_the_mode_cannot_be_mapped(void **state)
+{
+    test_a_joint_homes_to_its_offset_without_moving(state);
+}
+
+static void test_an_interrupted_homing_over_sdo_restores_csp(void **state)
+{
+    test_a_homing_interrupted_fails_and_the_drive_enables_in_csp_again(state);
+}
+
+static void test_homing_needs_an_enabled_joint_and_a_known_one(void **state)
+{
+    (void)state;
+    assert_int_equal(hal_arm_home(&g_arm, 1u << 1), LS_EBUSY); /* the drives are off */
+    enable();
+    assert_int_equal(hal_arm_home(&g_arm, 0u), LS_EINVAL);
+    assert_int_equal(hal_arm_home(&g_arm, 1u << NJ), LS_EINVAL);
+}
+
+static void test_safe_torque_off_is_named_and_refuses_the_enable(void **state)
+{
+    (void)state;
+    enable();
+    const char cmd[] = "sto 0x23 on";
+    assert_int_equal(hal_sim_drives_control(cmd, sizeof cmd - 1u, g_now), 1);
+    step_ms(20);
+    hal_joint_status_t st[NJ];
+    status(st);
+    assert_int_equal(st[2].state, HAL_JOINT_FAULT);
+    assert_non_null(strstr(st[2].text, "safe torque off is active (0x2100:02 bit 0"));
+    hal_arm_readout_t r;
+    readout(&r);
+    assert_int_equal(r.joint[2].sto, HAL_TRI_ON);
+    assert_int_equal(r.joint[2].brake, HAL_TRI_ON);
+    assert_int_equal(r.joint[0].sto, HAL_TRI_OFF);
+    /* off and on again: still named at once, not as a step not followed */
+    assert_int_equal(hal_arm_enable(&g_arm, false), LS_OK);
+    step_ms(20);
+    assert_int_equal(hal_arm_enable(&g_arm, true), LS_OK);
+    step_ms(20);
+    status(st);
+    assert_int_equal(st[2].state, HAL_JOINT_FAULT);
+    const char off[] = "sto 0x23 off";
+    assert_int_equal(hal_sim_drives_control(off, sizeof off - 1u, g_now), 1);
+    assert_int_equal(hal_arm_enable(&g_arm, false), LS_OK);
+    step_ms(20);
+    enable();
+}
+
+static void test_the_drives_limits_are_checked_against_the_models(void **state)
+{
+    (void)state;
+    const double lo[NJ] = { -3, -2, -2, -3, -2, -6 }, hi[NJ] = { 3, 2, 2, 3, 2, 6 };
+    char msg[320];
+    /* the simulated drives power on without limits (INT32_MIN..INT32_MAX) */
+    assert_int_equal(ls_drives_check_limits(&g_d, lo, hi, msg, sizeof msg), LS_OK);
+    /* as the script read them: narrower than the model on joint 4 */
+    g_d.axis[3].lim0[0] = (uint32_t)(int32_t)-100000;
+    g_d.axis[3].lim0[1] = 250000u;
+    assert_int_equal(ls_drives_check_limits(&g_d, lo, hi, msg, sizeof msg), LS_ERANGE);
+    assert_string_equal(msg, "joint 4 (node 0x24): the drive's software position limits 0x607D = -100000..250000 "
+                             "counts (-1.0000..2.5000 rad) do not contain the robot model's -3.0000..3.0000 rad: "
+                             "widen the drive's limits, or check counts_per_rad, sign and offset_rad");
+    /* min >= max: the drive enforces none */
+    g_d.axis[3].lim0[0] = g_d.axis[3].lim0[1] = 0u;
+    assert_int_equal(ls_drives_check_limits(&g_d, lo, hi, msg, sizeof msg), LS_OK);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test_setup_teardown(test_the_readouts_say_what_the_drives_publish, setup_pdo, teardown),
+        cmocka_unit_test_setup_teardown(test_a_joint_homes_to_its_offset_without_moving, setup_pdo, teardown),
+        cmocka_unit_test_setup_teardown(test_a_joint_homes_over_sdo_where_the_mode_cannot_be_mapped, setup_sdo,
+                                        teardown),
+        cmocka_unit_test_setup_teardown(test_a_homing_is_kept_across_disable_and_lost_when_the_drive_boots, setup_pdo,
+                                        teardown),
+        cmocka_unit_test_setup_teardown(test_a_homing_interrupted_fails_and_the_drive_enables_in_csp_again, setup_pdo,
+                                        teardown),
+        cmocka_unit_test_setup_teardown(test_an_interrupted_homing_over_sdo_restores_csp, setup_sdo, teardown),
+        cmocka_unit_test_setup_teardown(test_homing_needs_an_enabled_joint_and_a_known_one, setup_pdo, teardown),
+        cmocka_unit_test_setup_teardown(test_safe_torque_off_is_named_and_refuses_the_enable, setup_pdo, teardown),
+        cmocka_unit_test_setup_teardown(test_the_drives_limits_are_checked_against_the_models, setup_pdo, teardown),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
