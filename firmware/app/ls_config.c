@@ -501,6 +501,88 @@ static int set_drives_feedforward(ls_config_t *cfg, const char *v, char *why, si
     return 0;
 }
 
+static int set_drives_quick_stop(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    cfg->drives_has_quick_stop = v[0] != '\0';
+    if (cfg->drives_has_quick_stop && parse_int(v, 0, 8, &cfg->drives_quick_stop) != 0) {
+        return EXPECT("0..8 (CiA 402 0x605A: how a drive stops on a quick stop; 2 = on the quick-stop ramp, then "
+                      "switched off), or nothing for each drive's own setting");
+    }
+    return 0;
+}
+
+static int set_drives_readouts(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    static const struct {
+        const char *name;
+        uint32_t bit;
+    } k[] = { { "velocity", LS_CONFIG_READOUT_VELOCITY }, { "torque", LS_CONFIG_READOUT_TORQUE } };
+    uint32_t bits = 0;
+    const char *p = v;
+    while (*p != '\0') {
+        while (*p == ' ' || *p == ',') {
+            p++;
+        }
+        size_t n = strcspn(p, ", ");
+        if (n == 0) {
+            break;
+        }
+        size_t i = 0;
+        while (i < sizeof k / sizeof k[0] && !(strlen(k[i].name) == n && strncmp(k[i].name, p, n) == 0)) {
+            i++;
+        }
+        if (i == sizeof k / sizeof k[0]) {
+            return EXPECT("a comma-separated list of velocity and torque (the actual values each drive maps for the "
+                          "per-axis readouts; each costs bus time), or nothing for none");
+        }
+        bits |= k[i].bit;
+        p += n;
+    }
+    cfg->drives_readouts = bits;
+    return 0;
+}
+
+/* "INDEX:SUB" (allow_bit false) or "[!]INDEX:SUB/BIT" (BIT 0 when absent);
+ * "" clears it. Numbers in C notation. LS_EINVAL for anything else, *out
+ * untouched. */
+static int parse_obj(const char *v, bool allow_bit, ls_config_obj_t *out)
+{
+    ls_config_obj_t o = { 0 };
+    if (v[0] == '\0') {
+        *out = o;
+        return 0;
+    }
+    const char *p = v;
+    if (allow_bit && *p == '!') {
+        o.inverted = true;
+        p++;
+    }
+    char buf[40];
+    if (copy_str(buf, sizeof buf, p) != 0) {
+        return LS_EINVAL;
+    }
+    char *bit = allow_bit ? strchr(buf, '/') : NULL;
+    if (bit != NULL) {
+        *bit++ = '\0';
+    }
+    char *sub = strchr(buf, ':');
+    if (sub == NULL) {
+        return LS_EINVAL;
+    }
+    *sub++ = '\0';
+    uint32_t index = 0, s = 0, b = 0;
+    if (parse_u32(buf, 0x1000, 0xFFFF, &index) != 0 || parse_u32(sub, 0, 0xFF, &s) != 0 ||
+        (bit != NULL && parse_u32(bit, 0, 31, &b) != 0)) {
+        return LS_EINVAL;
+    }
+    o.given = true;
+    o.index = (uint16_t)index;
+    o.sub = (uint8_t)s;
+    o.bit = (uint8_t)b;
+    *out = o;
+    return 0;
+}
+
 /* ---- [joint.N] */
 
 typedef int (*joint_setter_fn)(ls_config_joint_t *j, const char *v, char *why, size_t whylen);
@@ -556,6 +638,89 @@ static int set_joint_offset(ls_config_joint_t *j, const char *v, char *why, size
 {
     if (parse_double(v, -1e3, 1e3, &j->offset_rad) != 0) {
         return EXPECT("radians -1000..1000 (the joint angle at which the drive reads 0)");
+    }
+    return 0;
+}
+
+static int set_joint_home_required(ls_config_joint_t *j, const char *v, char *why, size_t whylen)
+{
+    if (parse_bool(v, &j->home_required) != 0) {
+        return EXPECT("true or false (true: the joint has an incremental encoder and nothing moves it until "
+                      "sendCommand home has homed it)");
+    }
+    return 0;
+}
+
+static int set_joint_home_method(ls_config_joint_t *j, const char *v, char *why, size_t whylen)
+{
+    j->has_home_method = v[0] != '\0';
+    if (j->has_home_method && parse_int(v, -128, 127, &j->home_method) != 0) {
+        return EXPECT("-128..127 (the drive's homing method 0x6098, e.g. 37: home where it stands), or nothing for "
+                      "the drive's own setting");
+    }
+    return 0;
+}
+
+static int set_joint_home_offset(ls_config_joint_t *j, const char *v, char *why, size_t whylen)
+{
+    j->has_home_offset = v[0] != '\0';
+    if (j->has_home_offset && parse_double(v, -1e3, 1e3, &j->home_offset_rad) != 0) {
+        return EXPECT("radians -1000..1000 (the joint angle at the home position, written as 0x607C), or nothing for "
+                      "the drive's own setting");
+    }
+    return 0;
+}
+
+static int set_joint_following_window(ls_config_joint_t *j, const char *v, char *why, size_t whylen)
+{
+    j->has_following_window = v[0] != '\0';
+    if (j->has_following_window && parse_double(v, 1e-9, 1e3, &j->following_window_rad) != 0) {
+        return EXPECT("radians above 0 up to 1000 (the drive's following error window 0x6065), or nothing for the "
+                      "drive's own setting");
+    }
+    return 0;
+}
+
+static int set_joint_following_timeout(ls_config_joint_t *j, const char *v, char *why, size_t whylen)
+{
+    j->has_following_timeout = v[0] != '\0';
+    if (j->has_following_timeout && parse_u32(v, 0, 65535, &j->following_timeout_ms) != 0) {
+        return EXPECT("0..65535 ms (the drive's following error time-out 0x6066), or nothing for the drive's own "
+                      "setting");
+    }
+    return 0;
+}
+
+static int set_joint_brake(ls_config_joint_t *j, const char *v, char *why, size_t whylen)
+{
+    if (parse_obj(v, true, &j->brake) != 0) {
+        return EXPECT("INDEX:SUB/BIT, e.g. 0x2100:01/0 (the drive's object and bit that say its holding brake is "
+                      "engaged; '!' first when the bit clear says it), or nothing for none");
+    }
+    return 0;
+}
+
+static int set_joint_sto(ls_config_joint_t *j, const char *v, char *why, size_t whylen)
+{
+    if (parse_obj(v, true, &j->sto) != 0) {
+        return EXPECT("INDEX:SUB/BIT, e.g. 0x2100:02/0 (the drive's object and bit that say its safe torque off is "
+                      "active; '!' first when the bit clear says it), or nothing for none");
+    }
+    return 0;
+}
+
+static int set_joint_temperature(ls_config_joint_t *j, const char *v, char *why, size_t whylen)
+{
+    if (parse_obj(v, false, &j->temperature) != 0) {
+        return EXPECT("INDEX:SUB, e.g. 0x2100:03 (the drive's temperature object), or nothing for none");
+    }
+    return 0;
+}
+
+static int set_joint_temperature_scale(ls_config_joint_t *j, const char *v, char *why, size_t whylen)
+{
+    if (parse_double(v, 1e-6, 1e6, &j->temperature_scale) != 0) {
+        return EXPECT("a number 1e-6..1e6 (degrees Celsius per unit of the temperature object: 0.1 for tenths)");
     }
     return 0;
 }
@@ -708,6 +873,15 @@ static const joint_key_def_t JOINT_KEYS[] = {
     { "sign", set_joint_sign, false },
     { "offset_rad", set_joint_offset, false },
     { "velocity_counts_per_rad_s", set_joint_vel_counts, false },
+    { "home_required", set_joint_home_required, false },
+    { "home_method", set_joint_home_method, false },
+    { "home_offset_rad", set_joint_home_offset, false },
+    { "following_window_rad", set_joint_following_window, false },
+    { "following_timeout_ms", set_joint_following_timeout, false },
+    { "brake", set_joint_brake, false },
+    { "sto", set_joint_sto, false },
+    { "temperature", set_joint_temperature, false },
+    { "temperature_scale", set_joint_temperature_scale, false },
 };
 #define N_JOINT_KEYS (sizeof JOINT_KEYS / sizeof JOINT_KEYS[0])
 
@@ -779,6 +953,8 @@ static const key_def_t KEYS[] = {
     { "manual", "speed_steps", NULL, false, set_speed_steps },
     { "drives", "stale_cycles", NULL, false, set_drives_stale },
     { "robot", "model", "model", false, set_model },
+    { "drives", "quick_stop_option", NULL, false, set_drives_quick_stop },
+    { "drives", "readouts", NULL, false, set_drives_readouts },
 };
 #define N_KEYS (sizeof KEYS / sizeof KEYS[0])
 
@@ -839,6 +1015,7 @@ void ls_config_defaults(ls_config_t *cfg)
     cfg->drives_stale_cycles = 5;
     for (int j = 0; j < LS_N_JOINTS; j++) {
         cfg->joint[j].sign = 1;
+        cfg->joint[j].temperature_scale = 1.0;
     }
     for (int k = 0; k < LS_MANUAL_KINDS; k++) {
         (void)copy_str(cfg->manual[k].map_name, sizeof cfg->manual[k].map_name,
@@ -964,7 +1141,7 @@ static int ini_handler_fn(void *user, const char *section, const char *name, con
             k++;
         }
         if (k == N_JOINT_KEYS) {
-            char keys[256];
+            char keys[512];
             size_t used = 0;
             keys[0] = '\0';
             for (size_t i = 0; i < N_JOINT_KEYS && used < sizeof keys; i++) {

@@ -35,6 +35,21 @@ typedef enum {
     LS_DRIVE_ABORT_QUICK_STOP = 3,      /* decelerate on the quick-stop ramp, then per 0x605A */
 } ls_drive_abort_t;
 
+/* An object of a drive named in the configuration: INDEX:SUB, and for a
+ * bit of it (brake engaged, safe torque off active) /BIT, '!' first when
+ * the bit clear says it. */
+typedef struct {
+    bool given;
+    uint16_t index;
+    uint8_t sub;
+    uint8_t bit;
+    bool inverted;
+} ls_config_obj_t;
+
+/* Readouts a drive may map besides its feedback (bits of ls_config_t.drives_readouts). */
+#define LS_CONFIG_READOUT_VELOCITY 0x1u /* velocity actual 0x606C */
+#define LS_CONFIG_READOUT_TORQUE 0x2u   /* torque actual 0x6077 */
+
 /* One [joint.N] section: the CiA 402 drive of joint N (arm = cia402). */
 typedef struct {
     bool present;                /* the section was given */
@@ -45,6 +60,19 @@ typedef struct {
     double offset_rad;           /* offset_rad = 0 (finite): the joint angle where the drive reads 0 */
     double vel_counts_per_rad_s; /* velocity_counts_per_rad_s = N (> 0; default counts_per_rad): units of
                                      0x60B1/0x606C per rad/s */
+    bool home_required;          /* home_required = false (true: an incremental encoder, motion waits for a homing) */
+    bool has_home_method;
+    int home_method; /* home_method = (empty: the drive's own 0x6098; else -128..127) */
+    bool has_home_offset;
+    double home_offset_rad; /* home_offset_rad = (empty: the drive's own 0x607C; else the joint angle of home) */
+    bool has_following_window;
+    double following_window_rad; /* following_window_rad = (empty: the drive's own 0x6065) */
+    bool has_following_timeout;
+    uint32_t following_timeout_ms; /* following_timeout_ms = (empty: the drive's own 0x6066; else 0..65535) */
+    ls_config_obj_t brake;         /* brake = (empty: none; INDEX:SUB/BIT that says the holding brake is engaged) */
+    ls_config_obj_t sto;           /* sto = (empty: none; INDEX:SUB/BIT that says safe torque off is active) */
+    ls_config_obj_t temperature;   /* temperature = (empty: none; INDEX:SUB of the drive's temperature) */
+    double temperature_scale;      /* temperature_scale = 1 (degrees Celsius per unit of that object) */
 } ls_config_joint_t;
 
 /* The [manual] keys of one manual device kind, named after it (KIND is
@@ -105,6 +133,9 @@ typedef struct {
     bool drives_feedforward;              /* velocity_feedforward = true (map 0x60B1 where the drive can) */
     uint32_t drives_stale_cycles;         /* stale_cycles = 5 (2..100: a drive whose TPDO misses this many drive cycles
                                      is lost) */
+    bool drives_has_quick_stop;
+    int drives_quick_stop;    /* quick_stop_option = (empty: each drive's own 0x605A; else 0..8) */
+    uint32_t drives_readouts; /* readouts = (empty: none; velocity, torque: LS_CONFIG_READOUT_*) */
     ls_config_joint_t joint[LS_N_JOINTS];
     /* [manual] */
     ls_config_manual_t manual[LS_MANUAL_KINDS]; /* by ls_manual_kind_t, from these keys: */

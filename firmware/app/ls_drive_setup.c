@@ -2,6 +2,7 @@
 #include "ls_drive_setup.h"
 
 #include <errno.h>
+#include <math.h>
 #include <poll.h>
 #include <stdarg.h>
 #include <string.h>
@@ -146,6 +147,197 @@ static int load_eds(int j, const char *path, char *msg, size_t msglen)
     return LS_OK;
 }
 
+static bool readable(uint16_t index, uint8_t sub)
+{
+    return ls_eds_readable(ls_eds_find(&g_eds, index, sub));
+}
+
+/* How many mapping entries of a PDO mapping object the EDS lets the master
+ * write (its sub 0 and entries 1..n, each writable): 0 when none. */
+static uint8_t map_room(uint16_t map)
+{
+    if (!writable(map, 0)) {
+        return 0;
+    }
+    uint8_t n = 0;
+    while (n < LS_DRIVES_MAP_MAX && writable(map, (uint8_t)(n + 1u))) {
+        n++;
+    }
+    return n;
+}
+
+/* A readout object of the configuration (brake, STO, temperature) or the
+ * profile's (velocity, torque actual): mapped when the EDS lets it be;
+ * refused when the EDS has no such object (a typo in the configuration). */
+static int plan_readout(ls_drive_plan_t *p, int j, const char *eds, const char *key, const ls_config_obj_t *want,
+                        ls_drive_obj_t *o, char *msg, size_t msglen)
+{
+    const ls_eds_entry_t *e = ls_eds_find(&g_eds, want->index, want->sub);
+    memset(o, 0, sizeof *o);
+    if (e == NULL) {
+        return fail(msg, msglen, LS_EINVAL, "[joint.%d] %s = 0x%04X:%02X: the drive's EDS %s has no such object", j + 1,
+                    key, (unsigned)want->index, (unsigned)want->sub, eds);
+    }
+    const unsigned bytes = ls_eds_size(e);
+    if (bytes != 1u && bytes != 2u && bytes != 4u) {
+        return fail(msg, msglen, LS_EINVAL,
+                    "[joint.%d] %s = 0x%04X:%02X: %s says it is %u bytes long; a readout is 1, 2 or 4 bytes", j + 1,
+                    key, (unsigned)want->index, (unsigned)want->sub, eds, bytes);
+    }
+    if (want->bit >= 8u * bytes) {
+        return fail(msg, msglen, LS_EINVAL, "[joint.%d] %s = 0x%04X:%02X/%u: the object has %u bits", j + 1, key,
+                    (unsigned)want->index, (unsigned)want->sub, (unsigned)want->bit, 8u * bytes);
+    }
+    o->index = want->index;
+    o->sub = want->sub;
+    o->bytes = (uint8_t)bytes;
+    o->bit = want->bit;
+    o->inverted = want->inverted;
+    o->is_signed = e->data_type == LS_CO_TYPE_INTEGER8 || e->data_type == LS_CO_TYPE_INTEGER16 ||
+                   e->data_type == LS_CO_TYPE_INTEGER32;
+    o->map = ls_eds_mappable(e);
+    if (!o->map) {
+        warn(p, "joint %d (node 0x%02X): its EDS does not let 0x%04X:%02X be mapped into a TPDO: its %s is not shown",
+             j + 1, (unsigned)p->drives.joint[j].node_id, (unsigned)want->index, (unsigned)want->sub, key);
+    }
+    return LS_OK;
+}
+
+/* A configured value for an object the drive's EDS may not let be written. */
+static bool settable(ls_drive_plan_t *p, int j, bool given, uint16_t index, const char *key)
+{
+    if (!given) {
+        return false;
+    }
+    if (!writable(index, 0)) {
+        warn(p, "joint %d (node 0x%02X): its EDS has no writable 0x%04X: %s is left as the drive has it", j + 1,
+             (unsigned)p->drives.joint[j].node_id, (unsigned)index, key);
+        return false;
+    }
+    return true;
+}
+
+/* Homing: whether the drive can, whether it changes modes in its PDOs, the
+ * method and offset it is given. */
+static int plan_homing(const ls_config_t *cfg, int j, ls_drive_plan_t *p, char *msg, size_t msglen)
+{
+    const ls_config_joint_t *jc = &cfg->joint[j];
+    ls_drive_joint_t *dj = &p->drives.joint[j];
+    const uint8_t node = jc->node;
+    uint64_t modes = 0;
+    dj->can_home =
+        !power_on_value(LS_CO_OBJ_SUPPORTED_MODES, 0, node, &modes) || (modes & (1u << (LS_CO_MODE_HM - 1))) != 0u;
+    dj->home_required = jc->home_required;
+    if (jc->home_required && !dj->can_home) {
+        return fail(msg, msglen, LS_EINVAL,
+                    "[joint.%d] home_required = true, but the drive's EDS %s says it has no homing mode (0x6502 = "
+                    "0x%08llX, bit 5 clear): it could never move; set home_required = false (an absolute encoder)",
+                    j + 1, jc->eds, (unsigned long long)modes);
+    }
+    dj->map_mode = dj->can_home && ls_eds_mappable(ls_eds_find(&g_eds, LS_CO_OBJ_MODES, 0)) &&
+                   ls_eds_mappable(ls_eds_find(&g_eds, LS_CO_OBJ_MODES_DISPLAY, 0)) &&
+                   map_room(LS_CO_OBJ_RPDO_MAP) >= 3u && dj->tpdo_room[0] >= 3u;
+    if (dj->can_home && !dj->map_mode) {
+        warn(p,
+             "joint %d (node 0x%02X): its EDS does not let 0x6060 and 0x6061 be mapped into RPDO1 and TPDO1: a "
+             "homing switches the drive's mode over SDO, with the arm at rest",
+             j + 1, (unsigned)node);
+    }
+    dj->write_home_method = settable(p, j, jc->has_home_method, LS_CO_OBJ_HOMING_METHOD, "home_method");
+    dj->home_method = (int8_t)jc->home_method;
+    dj->write_home_offset = settable(p, j, jc->has_home_offset, LS_CO_OBJ_HOME_OFFSET, "home_offset_rad");
+    const double home_counts = (jc->home_offset_rad - jc->offset_rad) * (double)jc->sign * jc->counts_per_rad;
+    if (dj->write_home_offset && !(fabs(home_counts) < 2147483647.0)) {
+        return fail(msg, msglen, LS_EINVAL,
+                    "[joint.%d] home_offset_rad = %g is %.0f counts from the drive's zero: beyond 0x607C's int32",
+                    j + 1, jc->home_offset_rad, home_counts);
+    }
+    dj->home_offset_counts = dj->write_home_offset ? (int32_t)lround(home_counts) : 0;
+    return LS_OK;
+}
+
+/* The drive's own supervision: following error, quick stop, limits. */
+static int plan_supervision(const ls_config_t *cfg, int j, ls_drive_plan_t *p, char *msg, size_t msglen)
+{
+    const ls_config_joint_t *jc = &cfg->joint[j];
+    ls_drive_joint_t *dj = &p->drives.joint[j];
+    dj->write_fe_window = settable(p, j, jc->has_following_window, LS_CO_OBJ_FOLLOWING_WINDOW, "following_window_rad");
+    const double window = jc->following_window_rad * jc->counts_per_rad;
+    if (dj->write_fe_window && !(window >= 1.0 && window < 4294967295.0)) {
+        return fail(msg, msglen, LS_EINVAL,
+                    "[joint.%d] following_window_rad = %g is %.0f counts: 0x6065 takes 1..4294967294 (0xFFFFFFFF "
+                    "switches the drive's check off)",
+                    j + 1, jc->following_window_rad, window);
+    }
+    dj->fe_window_counts = dj->write_fe_window ? (uint32_t)lround(window) : 0u;
+    dj->write_fe_timeout =
+        settable(p, j, jc->has_following_timeout, LS_CO_OBJ_FOLLOWING_TIMEOUT, "following_timeout_ms");
+    dj->fe_timeout_ms = (uint16_t)jc->following_timeout_ms;
+    dj->write_quick_stop =
+        settable(p, j, cfg->drives_has_quick_stop, LS_CO_OBJ_QUICK_STOP_OPTION, "[drives] quick_stop_option");
+    dj->quick_stop_option = (int16_t)cfg->drives_quick_stop;
+    dj->read_limits = readable(LS_CO_OBJ_SW_POSITION_LIMIT, 1) && readable(LS_CO_OBJ_SW_POSITION_LIMIT, 2);
+    if (!dj->read_limits) {
+        warn(p,
+             "joint %d (node 0x%02X): its EDS has no readable 0x607D: the drive's software position limits are not "
+             "checked against the robot model's",
+             j + 1, (unsigned)jc->node);
+    }
+    return LS_OK;
+}
+
+/* The readouts: brake, STO and temperature as configured, velocity and
+ * torque actual as [drives] readouts asks; what finds no room is named. */
+static int plan_readouts(const ls_config_t *cfg, int j, ls_drive_plan_t *p, char *msg, size_t msglen)
+{
+    const ls_config_joint_t *jc = &cfg->joint[j];
+    ls_drive_joint_t *dj = &p->drives.joint[j];
+    const ls_config_obj_t velocity = { .given = (cfg->drives_readouts & LS_CONFIG_READOUT_VELOCITY) != 0u,
+                                       .index = LS_CO_OBJ_VELOCITY_ACTUAL };
+    const ls_config_obj_t torque = { .given = (cfg->drives_readouts & LS_CONFIG_READOUT_TORQUE) != 0u,
+                                     .index = LS_CO_OBJ_TORQUE_ACTUAL };
+    const struct {
+        const char *key;
+        const ls_config_obj_t *want;
+        ls_drive_obj_t *o;
+    } k[] = { { "brake", &jc->brake, &dj->brake },
+              { "sto", &jc->sto, &dj->sto },
+              { "temperature", &jc->temperature, &dj->temperature },
+              { "velocity", &velocity, &dj->velocity },
+              { "torque", &torque, &dj->torque } };
+    for (size_t i = 0; i < sizeof k / sizeof k[0]; i++) {
+        const int r = k[i].want->given ? plan_readout(p, j, jc->eds, k[i].key, k[i].want, k[i].o, msg, msglen) : LS_OK;
+        if (r != LS_OK) {
+            return r;
+        }
+    }
+    dj->temperature_scale = jc->temperature_scale;
+    ls_drive_layout_t l;
+    ls_drives_layout(dj, &l);
+    for (unsigned r = 0; r < LS_DRIVE_RO_COUNT; r++) {
+        if ((l.left_out & (1u << r)) != 0u) {
+            warn(p,
+                 "joint %d (node 0x%02X): no room for its %s in two TPDOs (8 bytes each, as many entries as the "
+                 "EDS lets be mapped): not shown",
+                 j + 1, (unsigned)jc->node, ls_drives_ro_name((ls_drive_ro_t)r));
+        }
+    }
+    return LS_OK;
+}
+
+/* What the configuration asks of homing, supervision and readouts. */
+static int plan_ops(const ls_config_t *cfg, int j, ls_drive_plan_t *p, char *msg, size_t msglen)
+{
+    ls_drive_joint_t *dj = &p->drives.joint[j];
+    dj->tpdo_room[0] = map_room(LS_CO_OBJ_TPDO_MAP);
+    dj->tpdo_room[1] = dj->tpdo_present[1] ? map_room(LS_CO_OBJ_TPDO_MAP + 1u) : 0u;
+    int r = plan_homing(cfg, j, p, msg, msglen);
+    if (r == LS_OK) {
+        r = plan_supervision(cfg, j, p, msg, msglen);
+    }
+    return r == LS_OK ? plan_readouts(cfg, j, p, msg, msglen) : r;
+}
+
 /* One joint: its EDS checked and its drive's configuration derived. */
 static int plan_joint(const ls_config_t *cfg, int j, ls_drive_plan_t *p, char *msg, size_t msglen)
 {
@@ -225,7 +417,7 @@ static int plan_joint(const ls_config_t *cfg, int j, ls_drive_plan_t *p, char *m
              "not the drive cycle",
              j + 1, (unsigned)node);
     }
-    return LS_OK;
+    return plan_ops(cfg, j, p, msg, msglen);
 }
 
 int ls_drive_plan(const ls_config_t *cfg, ls_drive_plan_t *p, char *msg, size_t msglen)
@@ -249,11 +441,15 @@ int ls_drive_plan(const ls_config_t *cfg, ls_drive_plan_t *p, char *msg, size_t 
         if (r != LS_OK) {
             return r;
         }
+        ls_drive_layout_t l;
+        ls_drives_layout(&dc->joint[j], &l);
         axes[j].n_rpdo = dc->joint[j].feedforward ? 2u : 1u;
-        axes[j].rpdo_bytes[0] = 6;
+        axes[j].rpdo_bytes[0] = l.rpdo1_bytes;
         axes[j].rpdo_bytes[1] = 4;
-        axes[j].n_tpdo = 1;
-        axes[j].tpdo_bytes[0] = 6;
+        axes[j].n_tpdo = l.n_tpdo;
+        for (uint8_t t = 0; t < l.n_tpdo; t++) {
+            axes[j].tpdo_bytes[t] = l.tpdo_bytes[t];
+        }
         axes[j].heartbeat_ms = cfg->drives_heartbeat_ms;
     }
     const ls_drive_budget_in_t in = { .control_period_us = dc->control_period_us,
@@ -297,7 +493,21 @@ static int open_drive_link(const ls_config_t *cfg, char *msg, size_t msglen)
     return LS_OK;
 }
 
-int ls_drive_compose(const ls_config_t *cfg, hal_arm_t *arm, FILE *log, char *msg, size_t msglen)
+/* Every drive's communication reset (they stop their PDOs and forget the
+ * controller's heartbeat, which would otherwise fault them once it is
+ * gone), then the link closed. */
+static void reset_and_close(void)
+{
+    (void)ls_co_master_nmt(&g_drives.master, LS_CO_NMT_ALL_NODES, LS_CO_NMT_RESET_COMM, mono_us());
+    for (int i = 0; i < 20; i++) {
+        ls_co_master_poll(&g_drives.master, mono_us());
+        wait_link(&g_link);
+    }
+    hal_can_close(&g_link);
+}
+
+int ls_drive_compose(const ls_config_t *cfg, const ls_robot_model_t *model, hal_arm_t *arm, FILE *log, char *msg,
+                     size_t msglen)
 {
     static ls_drive_plan_t plan; /* large: not on the stack */
     int r = ls_drive_plan(cfg, &plan, msg, msglen);
@@ -344,6 +554,12 @@ int ls_drive_compose(const ls_config_t *cfg, hal_arm_t *arm, FILE *log, char *ms
         }
         wait_link(&g_link);
     }
+    char lim[LS_DRIVE_SETUP_LINE];
+    if (ls_drives_check_limits(&g_drives, model->q_min_rad, model->q_max_rad, lim, sizeof lim) != LS_OK) {
+        (void)snprintf(msg, msglen, "drives: %s", lim);
+        reset_and_close();
+        return LS_ERANGE;
+    }
     ls_drives_arm(&g_drives, arm);
     g_composed = true;
     return LS_OK;
@@ -371,12 +587,7 @@ void ls_drive_shutdown(void)
         }
         wait_link(&g_link);
     }
-    (void)ls_co_master_nmt(&g_drives.master, LS_CO_NMT_ALL_NODES, LS_CO_NMT_RESET_COMM, mono_us());
-    for (int i = 0; i < 20; i++) {
-        ls_co_master_poll(&g_drives.master, mono_us());
-        wait_link(&g_link);
-    }
-    hal_can_close(&g_link);
+    reset_and_close();
 }
 
 /* ---- --check ---------------------------------------------------------------- */

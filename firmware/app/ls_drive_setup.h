@@ -17,10 +17,18 @@
  *  - a drive link that does not open;
  *  - a drive that does not boot within boot_timeout_ms, refuses a step of
  *    its configuration (the abort code's meaning) or has another identity
- *    than its EDS.
+ *    than its EDS;
+ *  - a readout object (brake, sto, temperature) the drive's EDS does not
+ *    have, a joint that must be homed on a drive without homing mode, a
+ *    home offset or following-error window beyond its object's range;
+ *  - a drive whose software position limits (0x607D) do not contain the
+ *    robot model's joint limits.
  * Warnings (logged, and WARN lines in --check): what a drive's EDS does
  * not let the controller set (0x1016: the drive cannot watch the
- * controller's heartbeat; 0x6007; 0x60C2; 0x60B1 when feed-forward is on).
+ * controller's heartbeat; 0x6007; 0x60C2; 0x60B1 when feed-forward is on;
+ * a configured 0x6065, 0x6066, 0x605A, 0x6098 or 0x607C; 0x6060/0x6061 in
+ * the PDOs; a readout object it does not let be mapped, or that finds no
+ * room in two TPDOs) or read (0x607D).
  *
  * Init-time only (reads files, opens the link, waits for the drives with
  * a deadline); nothing here runs in the control loop. The composed arm's
@@ -36,6 +44,7 @@
 #include "hal/hal_can.h"
 #include "ls_config.h"
 #include "ls_drives.h"
+#include "ls_robot_model.h"
 
 #define LS_DRIVE_SETUP_MAX_WARNINGS 16u
 #define LS_DRIVE_SETUP_LINE 320u
@@ -60,11 +69,17 @@ typedef struct {
 int ls_drive_plan(const ls_config_t *cfg, ls_drive_plan_t *plan, char *msg, size_t msglen);
 
 /* Start: plan (refusing a budget above the ceiling), open the drive link,
- * boot and configure every drive within its deadline. On success *arm is
- * the drives' arm (valid until ls_drive_shutdown) and `log` (may be NULL)
- * got the warnings and the budget line, each line prefixed as landscaped's
- * logs. LS_OK, or a negative status with `msg` the one line to log. */
-int ls_drive_compose(const ls_config_t *cfg, hal_arm_t *arm, FILE *log, char *msg, size_t msglen);
+ * boot and configure every drive within its deadline, then check each
+ * drive's software position limits (0x607D) against the joint limits of
+ * `model` (the composition's robot model): a drive range that does not
+ * contain the model's refuses the start (LS_ERANGE, naming the joint, the
+ * node and both ranges), the drives reset and the link closed. On success
+ * *arm is the drives' arm (valid until ls_drive_shutdown) and `log` (may
+ * be NULL) got the warnings and the budget line, each line prefixed as
+ * landscaped's logs. LS_OK, or a negative status with `msg` the one line
+ * to log. */
+int ls_drive_compose(const ls_config_t *cfg, const ls_robot_model_t *model, hal_arm_t *arm, FILE *log, char *msg,
+                     size_t msglen);
 
 /* At exit, after the control thread stopped: every drive disabled, then
  * reset communication (the drives stop their PDOs and forget the

@@ -779,9 +779,15 @@ static const char DRIVES_FILE[] = "[hal]\n"
                                   "budget_pct = 60\n"
                                   "abort_connection = disable_voltage\n"
                                   "velocity_feedforward = no\n"
+                                  "quick_stop_option = 6\n"
+                                  "readouts = torque, velocity\n"
                                   "[joint.1]\nnode = 0x21\neds = /a.eds\ncounts_per_rad = 2086000.5\n"
+                                  "brake = 0x2100:01\nsto = !0x60FD:00/3\ntemperature = 0x2100:03\n"
+                                  "temperature_scale = 0.1\n"
                                   "[joint.2]\nnode = 34\neds = /b.dcf\ncounts_per_rad = 1e6\nsign = -1\n"
                                   "offset_rad = -1.5707963\nvelocity_counts_per_rad_s = 9.549\n"
+                                  "home_required = yes\nhome_method = 35\nhome_offset_rad = 0.25\n"
+                                  "following_window_rad = 0.02\nfollowing_timeout_ms = 50\n"
                                   "[joint.3]\nnode = 0x23\neds = /a.eds\ncounts_per_rad = 1000\n"
                                   "[joint.4]\nnode = 0x24\neds = /a.eds\ncounts_per_rad = 1000\n"
                                   "[joint.5]\nnode = 0x25\neds = /a.eds\ncounts_per_rad = 1000\n"
@@ -812,6 +818,27 @@ static void test_a_drive_configuration_sets_every_drive_key(void **state)
     assert_int_equal(c->joint[1].sign, -1);
     assert_true(c->joint[1].offset_rad == -1.5707963);
     assert_true(c->joint[1].vel_counts_per_rad_s == 9.549);
+    /* what the drives publish and do of their own */
+    assert_true(c->drives_has_quick_stop);
+    assert_int_equal(c->drives_quick_stop, 6);
+    assert_int_equal(c->drives_readouts, LS_CONFIG_READOUT_TORQUE | LS_CONFIG_READOUT_VELOCITY);
+    assert_true(c->joint[0].brake.given && !c->joint[0].brake.inverted);
+    assert_int_equal(c->joint[0].brake.index, 0x2100);
+    assert_int_equal(c->joint[0].brake.sub, 1);
+    assert_int_equal(c->joint[0].brake.bit, 0);
+    assert_true(c->joint[0].sto.given && c->joint[0].sto.inverted);
+    assert_int_equal(c->joint[0].sto.index, 0x60FD);
+    assert_int_equal(c->joint[0].sto.bit, 3);
+    assert_int_equal(c->joint[0].temperature.sub, 3);
+    assert_true(c->joint[0].temperature_scale == 0.1);
+    assert_false(c->joint[0].home_required || c->joint[0].has_home_method || c->joint[0].has_following_window);
+    assert_true(c->joint[2].temperature_scale == 1.0); /* the default */
+    assert_false(c->joint[1].brake.given);
+    assert_true(c->joint[1].home_required);
+    assert_true(c->joint[1].has_home_method && c->joint[1].home_method == 35);
+    assert_true(c->joint[1].has_home_offset && c->joint[1].home_offset_rad == 0.25);
+    assert_true(c->joint[1].has_following_window && c->joint[1].following_window_rad == 0.02);
+    assert_true(c->joint[1].has_following_timeout && c->joint[1].following_timeout_ms == 50);
     f->cfg.n_links = 1;
     strcpy(f->cfg.links[0], "slcan:pty:/tmp/a");
     strcpy(f->cfg.dio, "none");
@@ -847,7 +874,48 @@ static void test_drive_keys_refuse_bad_values_naming_what_is_allowed(void **stat
     refused(f, "[joint.1]\nnode = 1\nnode = 2\n", "3: [joint.1] node: given twice (first on line 2); keep one");
     refused(f, "[joint.1]\nnodes = 1\n",
             "2: [joint.1] nodes: unknown key; expected one of node, eds, counts_per_rad, sign, offset_rad, "
-            "velocity_counts_per_rad_s");
+            "velocity_counts_per_rad_s, home_required, home_method, home_offset_rad, following_window_rad, "
+            "following_timeout_ms, brake, sto, temperature, temperature_scale");
+    refused(f, "[drives]\nquick_stop_option = 9\n",
+            "2: [drives] quick_stop_option: got '9', expected 0..8 (CiA 402 0x605A: how a drive stops on a quick "
+            "stop; 2 = on the quick-stop ramp, then switched off), or nothing for each drive's own setting");
+    refused(f, "[drives]\nreadouts = velocity, current\n",
+            "2: [drives] readouts: got 'velocity, current', expected a comma-separated list of velocity and torque "
+            "(the actual values each drive maps for the per-axis readouts; each costs bus time), or nothing for none");
+    refused(f, "[joint.3]\nbrake = 0x2100\n",
+            "2: [joint.3] brake: got '0x2100', expected INDEX:SUB/BIT, e.g. 0x2100:01/0 (the drive's object and bit "
+            "that say its holding brake is engaged; '!' first when the bit clear says it), or nothing for none");
+    refused(f, "[joint.3]\nsto = 0x2100:02/32\n",
+            "2: [joint.3] sto: got '0x2100:02/32', expected INDEX:SUB/BIT, e.g. 0x2100:02/0 (the drive's object and "
+            "bit that say its safe torque off is active; '!' first when the bit clear says it), or nothing for none");
+    refused(f, "[joint.3]\ntemperature = 0x2100:03/1\n",
+            "2: [joint.3] temperature: got '0x2100:03/1', expected INDEX:SUB, e.g. 0x2100:03 (the drive's "
+            "temperature object), or nothing for none");
+    refused(f, "[joint.3]\nhome_method = 200\n",
+            "2: [joint.3] home_method: got '200', expected -128..127 (the drive's homing method 0x6098, e.g. 37: "
+            "home where it stands), or nothing for the drive's own setting");
+    refused(f, "[joint.3]\nhome_required = maybe\n",
+            "2: [joint.3] home_required: got 'maybe', expected true or false (true: the joint has an incremental "
+            "encoder and nothing moves it until sendCommand home has homed it)");
+    refused(f, "[joint.3]\nfollowing_window_rad = 0\n",
+            "2: [joint.3] following_window_rad: got '0', expected radians above 0 up to 1000 (the drive's following "
+            "error window 0x6065), or nothing for the drive's own setting");
+    refused(f, "[joint.3]\nfollowing_timeout_ms = 70000\n",
+            "2: [joint.3] following_timeout_ms: got '70000', expected 0..65535 ms (the drive's following error "
+            "time-out 0x6066), or nothing for the drive's own setting");
+}
+
+static void test_an_empty_drive_value_means_the_drives_own_setting(void **state)
+{
+    fx_t *f = *state;
+    assert_int_equal(load(f, "[drives]\nquick_stop_option =\nreadouts =\n[joint.4]\nhome_method =\nbrake =\n"
+                             "home_offset_rad =\nfollowing_window_rad =\nfollowing_timeout_ms =\n"),
+                     0);
+    assert_false(f->cfg.drives_has_quick_stop);
+    assert_int_equal(f->cfg.drives_readouts, 0);
+    const ls_config_joint_t *j = &f->cfg.joint[3];
+    assert_false(j->has_home_method || j->has_home_offset || j->has_following_window || j->has_following_timeout);
+    assert_false(j->brake.given);
 }
 
 static void test_validate_a_drive_configuration(void **state)
@@ -928,6 +996,7 @@ int tc_run_config_tests(void)
         cmocka_unit_test_setup_teardown(test_a_drive_configuration_sets_every_drive_key, setup, teardown),
         cmocka_unit_test_setup_teardown(test_drive_keys_refuse_bad_values_naming_what_is_allowed, setup, teardown),
         cmocka_unit_test_setup_teardown(test_validate_a_drive_configuration, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_an_empty_drive_value_means_the_drives_own_setting, setup, teardown),
     };
     return cmocka_run_group_tests_name("config", tests, NULL, NULL);
 }
