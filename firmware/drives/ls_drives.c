@@ -525,6 +525,20 @@ static void take_feedback(ls_drives_t *d, uint8_t j)
     a->feedback_age = 0;
 }
 
+/* The axis's statusword was sampled after the first controlword of the
+ * latest enable() took effect: one sent before a disable may still show
+ * OPERATION ENABLED for a drive it has since switched off. */
+static bool settled_since(uint32_t taken_sync, uint32_t since_sync)
+{
+    const uint32_t n = taken_sync - since_sync; /* modulo 2^32: a TPDO taken before `since` is "negative" */
+    return n >= LS_DRIVES_SETTLE_SYNCS && n < 0x80000000u;
+}
+
+static bool settled_since_enable(const ls_drives_t *d, const ls_drive_axis_t *a)
+{
+    return settled_since(a->taken_sync, d->enable_sync);
+}
+
 /* ---- homing -------------------------------------------------------------- */
 
 /* The phases of a homing (ls_drive_axis_t.hm_phase). */
@@ -537,9 +551,6 @@ enum {
     HM_RESTORE,   /* failed: mode 8 again over SDO (without map_mode) */
 };
 
-/* Drive cycles from a command's SYNC until a TPDO shows its effect: it is
- * applied at that SYNC, and the TPDO answering it was sampled before. */
-#define HM_SETTLE_SYNCS 2u
 
 /* A mode change over SDO (a drive whose EDS does not let 0x6060 and 0x6061
  * be mapped): write 0x6060, then read 0x6061 until it shows the mode. 1
@@ -641,12 +652,12 @@ static void home_cycle(ls_drives_t *d, uint8_t j, uint64_t now_us)
                     (unsigned)LS_DRIVES_HOME_TIMEOUT_MS, (unsigned)a->statusword);
         return;
     }
-    const uint32_t settled = a->taken_sync - a->hm_sync;
+    const bool settled = settled_since(a->taken_sync, a->hm_sync);
     switch (ph) {
     case HM_TO_HOMING:
         a->mode_cmd = LS_CO_MODE_HM;
         if (jc->map_mode) {
-            if (a->mode_known && a->mode_shown == LS_CO_MODE_HM && settled >= HM_SETTLE_SYNCS) {
+            if (a->mode_known && a->mode_shown == LS_CO_MODE_HM && settled) {
                 a->hm_phase = HM_START;
             }
         } else {
@@ -664,7 +675,7 @@ static void home_cycle(ls_drives_t *d, uint8_t j, uint64_t now_us)
         a->hm_sync = d->master.sync_count;
         break;
     case HM_RUNNING:
-        if (settled < HM_SETTLE_SYNCS) {
+        if (!settled) {
             break;
         }
         if ((a->statusword & LS_CO_SW_OMS13) != 0u) {
@@ -678,7 +689,7 @@ static void home_cycle(ls_drives_t *d, uint8_t j, uint64_t now_us)
         break;
     case HM_TO_CSP:
         if (jc->map_mode) {
-            if (a->mode_known && a->mode_shown == LS_CO_MODE_CSP && settled >= HM_SETTLE_SYNCS) {
+            if (a->mode_known && a->mode_shown == LS_CO_MODE_CSP && settled) {
                 home_done(d, j);
             }
         } else {
@@ -721,17 +732,25 @@ static void drive_cycle(ls_drives_t *d, uint64_t now_us)
         if (ls_co_master_node_phase(&d->master, jc->node_id) != LS_CO_PHASE_READY) {
             continue;
         }
-        (void)ls_402_step(&a->ax, a->statusword, want, d->reset_allowed, &a->out);
-        a->step_epoch = d->enable_epoch;
+        /* An enable steps on statuswords the drive sampled after it: an
+         * older one may still show the state a disable since left (the
+         * controlword of the disable goes on meanwhile). A disable steps at
+         * once: set-points stop being followed at once. */
+        if (want != LS_402_WANT_ENABLED || settled_since_enable(d, a)) {
+            (void)ls_402_step(&a->ax, a->statusword, want, d->reset_allowed, &a->out);
+            a->step_epoch = d->enable_epoch;
+        }
         home_cycle(d, j, now_us);
         /* Target = actual until the drive is under control, then held
-         * there until the loop gives set-points: no axis jumps. While it
-         * homes the drive ignores the target; it stays at the actual
-         * position, so CSP takes over from there. */
+         * there until the loop gives set-points: no axis jumps. Disabled
+         * (or being disabled) it is the actual position again, so the next
+         * enable holds where the joint is then, not where an earlier enable
+         * found it. While it homes the drive ignores the target; it stays at
+         * the actual position, so CSP takes over from there. */
         int32_t target = a->pos_raw;
         if (a->hm_phase != HM_IDLE) {
             a->hold_raw = a->pos_raw;
-        } else if (a->out.state == LS_402_OPERATION_ENABLED) {
+        } else if (d->want_enabled && a->out.state == LS_402_OPERATION_ENABLED) {
             target = a->hold_raw;
             int32_t raw;
             if (a->cmd_valid && ls_402_target_raw(&jc->scale, &a->unwrap, a->q_cmd, &raw) == LS_OK) {
@@ -758,7 +777,8 @@ static void drive_cycle(ls_drives_t *d, uint64_t now_us)
      * next enable (nothing resumes by itself). */
     bool all_enabled = d->want_enabled;
     for (uint8_t j = 0; j < d->cfg.n_joints && all_enabled; j++) {
-        all_enabled = d->axis[j].out.enabled && d->axis[j].step_epoch == d->enable_epoch;
+        all_enabled =
+            d->axis[j].out.enabled && d->axis[j].step_epoch == d->enable_epoch && settled_since_enable(d, &d->axis[j]);
     }
     if (all_enabled) {
         d->reset_allowed = false;
@@ -858,6 +878,7 @@ static int drives_info(void *self, hal_arm_info_t *out)
      * arrives in, and stands for a whole drive cycle until the next one:
      * three drive cycles, and two control cycles for the frames' way. */
     out->feedback_lag_cycles = (uint16_t)(3u * d->cfg.cycle_ticks + 2u);
+    out->home_timeout_ms = LS_DRIVES_HOME_TIMEOUT_MS;
     return LS_OK;
 }
 
@@ -871,9 +892,14 @@ static int drives_enable(void *self, bool on)
     d->want_enabled = on;
     d->reset_allowed = on;
     d->enable_epoch++; /* what the axes said before this call no longer answers it */
+    d->enable_sync = d->master.sync_count;
     for (uint8_t j = 0; j < d->cfg.n_joints; j++) {
         ls_drive_axis_t *a = &d->axis[j];
         a->cmd_valid = false;
+        /* Held from now on where the joint is now, whatever an earlier
+         * enable found (an enable right after a disable may reach a drive
+         * that never saw the disable, with no set-point in between). */
+        a->hold_raw = a->pos_raw;
         /* A lost drive is configured again only when an enable asks for it:
          * nothing comes back by itself. Any phase but READY starts over (a
          * boot an earlier enable began may have reset the drive unheard). */
@@ -1004,7 +1030,7 @@ static int drives_status(void *self, hal_joint_status_t *out)
              * shows; while it homes, bit 12 means attained instead. */
             const bool homing = a->hm_phase != HM_IDLE && a->hm_phase != HM_RESTORE;
             const bool csp = !a->mode_known || a->mode_shown == LS_CO_MODE_CSP;
-            const bool confirmed = a->step_epoch == d->enable_epoch && a->out.enabled &&
+            const bool confirmed = a->step_epoch == d->enable_epoch && settled_since_enable(d, a) && a->out.enabled &&
                                    (homing || (csp && a->hm_phase == HM_IDLE && !a->out.target_ignored));
             s->state = confirmed ? HAL_JOINT_ENABLED : HAL_JOINT_ENABLING;
             if (s->state == HAL_JOINT_ENABLING && a->out.enabled && (!csp || a->hm_phase == HM_RESTORE)) {

@@ -97,6 +97,11 @@
  * on a real axis; "home here", 35/37, a few drive cycles). */
 #define LS_DRIVES_HOME_TIMEOUT_MS 30000u
 #define LS_DRIVES_READOUT_TRIES 16u /* seqlock copies a readout() tries */
+/* SYNCs from a command's RPDO until a TPDO shows its effect: the drive
+ * applies it at the SYNC after it, and the TPDO answering that SYNC was
+ * sampled before (CiA 301: synchronous PDOs sample at the SYNC). A
+ * statusword confirms an enable or a homing step only from then on. */
+#define LS_DRIVES_SETTLE_SYNCS 2u
 
 /* An object of a drive the arm maps into a TPDO to read it (brake, safe
  * torque off, temperature, velocity and torque actual): where it is, how
@@ -128,8 +133,9 @@ typedef struct {
     bool feedforward;                      /* 0x60B1 mappable and wanted: RPDO2 carries it */
     bool rpdo_present[LS_DRIVES_PDO_SETS]; /* 0x1400 + n in the EDS: disabled unless used */
     bool tpdo_present[LS_DRIVES_PDO_SETS]; /* 0x1800 + n */
-    /* 0x6060 mappable into RPDO1 and 0x6061 into TPDO1: a homing changes
-     * modes in the PDOs (else over SDO, the arm at rest). */
+    /* 0x6060 in RPDO1 and 0x6061 in TPDO1 (a joint configured for homing,
+     * whose EDS lets them be mapped): a homing changes modes in the PDOs
+     * (else over SDO, the arm at rest). */
     bool map_mode;
     bool can_home;      /* the drive offers homing mode (0x6502 bit 5, or its EDS does not say) */
     bool home_required; /* an incremental encoder: motion waits for a homing */
@@ -255,6 +261,7 @@ typedef struct {
     bool want_enabled;
     bool reset_allowed;    /* an enable asked since the last disable: FAULTs may be reset */
     uint32_t enable_epoch; /* enable() calls: a joint is ENABLED only by a step taken since the last one */
+    uint32_t enable_sync;  /* the master's SYNC count at the latest enable() */
     uint64_t now_us;       /* the last update()'s time (enable() has none of its own) */
     bool link_failed;      /* the link failed or is bus-off: every drive lost until an enable */
     uint32_t status_tick;

@@ -37,6 +37,9 @@ typedef struct {
      * interpolation, the feedback's way back); 0: they follow within the
      * cycle. The following-error check allows for it. */
     uint16_t feedback_lag_cycles;
+    /* How long a homing (home()) may take before it fails, ms; 0: the arm
+     * has no homing. */
+    uint32_t home_timeout_ms;
 } hal_arm_info_t;
 
 /* One joint's drive, as the backend knows it this cycle. */

@@ -396,6 +396,21 @@ static void test_a_homing_is_kept_across_disable_and_lost_when_the_drive_boots(v
     enable();
     status(st);
     assert_int_equal(st[1].home, HAL_HOME_HOMED);
+    /* and it moves as commanded in the homed frame */
+    double q[NJ], qd[NJ];
+    assert_int_equal(hal_arm_read(&g_arm, q, qd), LS_OK);
+    const double q0 = q[1], w0 = world_q(1);
+    for (int ms = 0; ms < 400; ms++) {
+        q[1] = q0 - 0.05 * fmin(1.0, ms / 200.0);
+        assert_int_equal(hal_arm_command(&g_arm, q, NULL), LS_OK);
+        step_ms(1);
+    }
+    double qm[NJ];
+    assert_int_equal(hal_arm_read(&g_arm, qm, qd), LS_OK);
+    assert_true(fabs(qm[1] - (q0 - 0.05)) < 5e-3);
+    assert_true(fabs(world_q(1) - (w0 - 0.05)) < 5e-3);
+    status(st);
+    assert_int_equal(st[1].state, HAL_JOINT_ENABLED);
     /* the drive restarts (NMT reset node from elsewhere): lost, then configured again by an enable */
     const hal_can_frame_t reset = { .id = LS_CO_COB_NMT, .len = 2, .data = { LS_CO_NMT_RESET_NODE, 0x22 } };
     assert_int_equal(hal_sim_drives_rx(&reset, g_now), LS_OK);
@@ -446,6 +461,62 @@ static void test_homing_needs_an_enabled_joint_and_a_known_one(void **state)
     enable();
     assert_int_equal(hal_arm_home(&g_arm, 0u), LS_EINVAL);
     assert_int_equal(hal_arm_home(&g_arm, 1u << NJ), LS_EINVAL);
+}
+
+static void test_an_enable_right_after_a_disable_holds_where_the_drive_is_as_the_drive_confirms(void **state)
+{
+    (void)state;
+    enable();
+    /* somewhere else than where the enable found the arm */
+    double q[NJ], qd[NJ];
+    assert_int_equal(hal_arm_read(&g_arm, q, qd), LS_OK);
+    const double q0 = q[0];
+    for (int ms = 0; ms < 400; ms++) {
+        q[0] = q0 + 0.1 * fmin(1.0, ms / 200.0);
+        assert_int_equal(hal_arm_command(&g_arm, q, NULL), LS_OK);
+        step_ms(1);
+    }
+    const double w1 = world_q(0);
+    assert_true(fabs(w1 - (q0 + 0.1)) < 5e-3);
+    /* off, and on again before the drives' statuswords can show the switch-off:
+     * the TPDOs still say OPERATION ENABLED for a drive that has switched off */
+    assert_int_equal(hal_arm_enable(&g_arm, false), LS_OK);
+    step_ms(5);
+    assert_int_equal(hal_arm_enable(&g_arm, true), LS_OK);
+    hal_joint_status_t st[NJ];
+    bool confirmed = false;
+    for (int ms = 0; ms < 300; ms++) {
+        assert_int_equal(hal_arm_read(&g_arm, q, qd), LS_OK);
+        assert_int_equal(hal_arm_command(&g_arm, q, NULL), LS_OK);
+        step_ms(1);
+        status(st);
+        if (st[0].state == HAL_JOINT_ENABLED) {
+            confirmed = true;
+        } else if (confirmed) {
+            fail_msg("joint 1 was confirmed ENABLED, then %d '%s' %d ms after the enable", (int)st[0].state, st[0].text,
+                     ms);
+        }
+    }
+    assert_true(confirmed);
+    /* held where it was when enabled again: no jump back to where the first enable found it */
+    assert_true(fabs(world_q(0) - w1) < 2e-3);
+    /* moved on, then off and on with no drive cycle in between: the drives
+     * never see the disable, and hold where they are */
+    assert_int_equal(hal_arm_read(&g_arm, q, qd), LS_OK);
+    const double q1 = q[0];
+    for (int ms = 0; ms < 400; ms++) {
+        q[0] = q1 + 0.1 * fmin(1.0, ms / 200.0);
+        assert_int_equal(hal_arm_command(&g_arm, q, NULL), LS_OK);
+        step_ms(1);
+    }
+    const double w2 = world_q(0);
+    assert_true(fabs(w2 - (w1 + 0.1)) < 5e-3);
+    assert_int_equal(hal_arm_enable(&g_arm, false), LS_OK);
+    assert_int_equal(hal_arm_enable(&g_arm, true), LS_OK);
+    step_ms(100);
+    status(st);
+    assert_int_equal(st[0].state, HAL_JOINT_ENABLED);
+    assert_true(fabs(world_q(0) - w2) < 2e-3);
 }
 
 static void test_safe_torque_off_is_named_and_refuses_the_enable(void **state)
@@ -511,6 +582,8 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_an_interrupted_homing_over_sdo_restores_csp, setup_sdo, teardown),
         cmocka_unit_test_setup_teardown(test_homing_needs_an_enabled_joint_and_a_known_one, setup_pdo, teardown),
         cmocka_unit_test_setup_teardown(test_safe_torque_off_is_named_and_refuses_the_enable, setup_pdo, teardown),
+        cmocka_unit_test_setup_teardown(
+            test_an_enable_right_after_a_disable_holds_where_the_drive_is_as_the_drive_confirms, setup_pdo, teardown),
         cmocka_unit_test_setup_teardown(test_the_drives_limits_are_checked_against_the_models, setup_pdo, teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
