@@ -234,10 +234,14 @@ static int plan_homing(const ls_config_t *cfg, int j, ls_drive_plan_t *p, char *
                     "0x%08llX, bit 5 clear): it could never move; set home_required = false (an absolute encoder)",
                     j + 1, jc->eds, (unsigned long long)modes);
     }
-    dj->map_mode = dj->can_home && ls_eds_mappable(ls_eds_find(&g_eds, LS_CO_OBJ_MODES, 0)) &&
+    /* The mode rides in the PDOs of a joint configured for homing (a byte
+     * each way, every cycle: counted in the budget); another joint homed on
+     * request changes its mode over SDO, at rest. */
+    const bool homes = jc->home_required || jc->has_home_method || jc->has_home_offset;
+    dj->map_mode = homes && dj->can_home && ls_eds_mappable(ls_eds_find(&g_eds, LS_CO_OBJ_MODES, 0)) &&
                    ls_eds_mappable(ls_eds_find(&g_eds, LS_CO_OBJ_MODES_DISPLAY, 0)) &&
                    map_room(LS_CO_OBJ_RPDO_MAP) >= 3u && dj->tpdo_room[0] >= 3u;
-    if (dj->can_home && !dj->map_mode) {
+    if (homes && dj->can_home && !dj->map_mode) {
         warn(p,
              "joint %d (node 0x%02X): its EDS does not let 0x6060 and 0x6061 be mapped into RPDO1 and TPDO1: a "
              "homing switches the drive's mode over SDO, with the arm at rest",
