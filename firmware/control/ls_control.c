@@ -213,6 +213,42 @@ static void cmd_failed(ls_control_t *c, uint32_t ref_seq, const char *text)
     ev_push(c, &ev);
 }
 
+/* Joints that must be homed and are not: bit j for joint j + 1. */
+static uint32_t unhomed(const ls_control_t *c)
+{
+    uint32_t m = 0;
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        if (c->joints[j].home_required && c->joints[j].home != HAL_HOME_HOMED) {
+            m |= 1u << j;
+        }
+    }
+    return m;
+}
+
+/* "joints 2, 3 are not homed (...)": why a motion may not start, or NULL. */
+static const char *motion_blocked(const ls_control_t *c, char *buf, size_t cap)
+{
+    if (c->homing_joints != 0u) {
+        return "the drives are homing";
+    }
+    const uint32_t m = unhomed(c);
+    if (m == 0u) {
+        return NULL;
+    }
+    size_t len = (size_t)ls_fmt_print(buf, cap, "joint");
+    const char *sep = (m & (m - 1u)) != 0u ? "s " : " ";
+    for (int j = 0; j < LS_N_JOINTS && len < cap; j++) {
+        if ((m & (1u << j)) != 0u) {
+            len += (size_t)ls_fmt_print(buf + len, cap - len, "%s%d", sep, j + 1);
+            sep = ", ";
+        }
+    }
+    if (len < cap) {
+        (void)ls_fmt_print(buf + len, cap - len, " must be homed first (sendCommand home)");
+    }
+    return buf;
+}
+
 static void read_feedback(ls_control_t *c)
 {
     if (c->cfg.arm != NULL && hal_arm_read(c->cfg.arm, c->q, c->qd) < 0) {
@@ -297,6 +333,7 @@ void ls_control_init(ls_control_t *c, const ls_control_config_t *cfg)
     hal_arm_info_t info;
     if (cfg->arm != NULL && hal_arm_info(cfg->arm, &info) >= 0) {
         ls_motion_set_feedback_lag(&c->motion, info.feedback_lag_cycles);
+        c->home_timeout_ms = info.home_timeout_ms;
     }
     c->react_sensor = -1;
     read_feedback(c);
@@ -491,6 +528,80 @@ static void drive_fault(ls_control_t *c, uint32_t bad_mask, const char *line)
     }
 }
 
+static void home_event(ls_control_t *c, ls_cev_kind_t kind, const char *text)
+{
+    ls_ctl_event_t ev;
+    memset(&ev, 0, sizeof ev);
+    ev.kind = kind;
+    ev.ref_seq = c->home_ref_seq;
+    ls_fmt_print(ev.text, sizeof ev.text, "%s", text);
+    ev_push(c, &ev);
+}
+
+/* LS_CTL_HOME: the drives' own homing of `joints`, the drives on and the
+ * arm at rest; the arm holds where it is meanwhile. */
+static void home_joints(ls_control_t *c, const ls_ctl_cmd_t *cmd)
+{
+    c->home_ref_seq = cmd->ref_seq;
+    const char *why = NULL;
+    char text[LS_CTL_TEXT_LEN];
+    if (!c->enabled) {
+        why = "the drives are off: activate first";
+    } else if (busy(c) || c->jogging || c->homing_joints != 0u) {
+        why = c->homing_joints != 0u ? "a homing runs already" : "the arm is moving: home it at rest";
+    } else {
+        const int r = hal_arm_home(c->cfg.arm, cmd->home.joints);
+        if (r == LS_OK) {
+            c->homing_joints = cmd->home.joints;
+            ls_motion_hold(&c->motion, c->q_cmd);
+            return;
+        }
+        ls_fmt_print(text, sizeof text, "%s (%s)",
+                     r == LS_EUNSUPPORTED ? "this arm has no homing: its joints' positions are absolute"
+                     : r == LS_EBUSY      ? "a joint to home is not enabled or homes already"
+                                          : "the arm refused the joints to home",
+                     ls_err_name(r));
+        why = text;
+    }
+    home_event(c, LS_CEV_HOME_FAILED, why);
+}
+
+/* A homing under way: its end, once no joint of it is HOMING any more.
+ * The drive's counter may have a new zero: the arm holds where it now
+ * reads, not where the old set-point pointed. */
+static void check_homing(ls_control_t *c)
+{
+    if (c->homing_joints == 0u) {
+        return;
+    }
+    int failed = -1;
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        if ((c->homing_joints & (1u << j)) == 0u) {
+            continue;
+        }
+        if (c->joints[j].home == HAL_HOME_HOMING) {
+            return;
+        }
+        if (c->joints[j].home != HAL_HOME_HOMED && failed < 0) {
+            failed = j;
+        }
+    }
+    c->homing_joints = 0u;
+    if (c->enabled) {
+        ls_motion_hold(&c->motion, c->q);
+        memcpy(c->q_cmd, c->q, sizeof c->q_cmd);
+        memset(c->qd_cmd, 0, sizeof c->qd_cmd);
+    }
+    if (failed < 0) {
+        home_event(c, LS_CEV_HOMED, "");
+        return;
+    }
+    const hal_joint_status_t *st = &c->joints[failed];
+    char line[LS_CTL_TEXT_LEN];
+    joint_line(line, sizeof line, failed, st, st->text[0] != '\0' ? st->text : "homing failed");
+    home_event(c, LS_CEV_HOME_FAILED, line);
+}
+
 /* The drives' states, once per cycle: finish an enable, and fault when a
  * joint under control faults or is lost. A backend whose status() fails is
  * a lost arm. */
@@ -508,6 +619,7 @@ static void check_joints(ls_control_t *c)
                          ls_err_name(r));
         }
     }
+    check_homing(c);
     if (!c->enabling && !c->enabled) {
         return;
     }
@@ -562,10 +674,14 @@ static void check_joints(ls_control_t *c)
 /* LS_CTL_START: the plan in the plan slot becomes the motion. */
 static void start_plan(ls_control_t *c, const ls_ctl_cmd_t *cmd)
 {
-    if (!c->enabled || c->react.active || c->manual != NULL || ls_motion_start(&c->motion, &c->plan_slot) != 0) {
+    char buf[LS_CTL_TEXT_LEN];
+    const char *blocked = motion_blocked(c, buf, sizeof buf);
+    if (!c->enabled || c->react.active || c->manual != NULL || blocked != NULL ||
+        ls_motion_start(&c->motion, &c->plan_slot) != 0) {
         cmd_failed(c, cmd->ref_seq,
                    !c->enabled         ? "the drives are off"
                    : c->manual != NULL ? "manualControl is on: switch it off first"
+                   : blocked != NULL   ? blocked
                                        : "a motion is already running");
     }
     atomic_store_explicit(&c->plan_slot_busy, false, memory_order_release);
@@ -575,12 +691,15 @@ static void start_plan(ls_control_t *c, const ls_ctl_cmd_t *cmd)
 static void start_react(ls_control_t *c, const ls_ctl_cmd_t *cmd)
 {
     int si = sensor_index(c, c->react_slot.sensor);
-    if (!c->enabled || busy(c) || c->manual != NULL || si < 0 ||
+    char buf[LS_CTL_TEXT_LEN];
+    const char *blocked = motion_blocked(c, buf, sizeof buf);
+    if (!c->enabled || busy(c) || c->manual != NULL || si < 0 || blocked != NULL ||
         ls_react_start(&c->react, &c->react_slot, c->q_cmd, c->cfg.sensors[si].n_values) != 0) {
         cmd_failed(c, cmd->ref_seq,
                    !c->enabled         ? "the drives are off"
                    : busy(c)           ? "a motion is already running"
                    : c->manual != NULL ? "manualControl is on: switch it off first"
+                   : blocked != NULL   ? blocked
                    : si < 0            ? "the move's sensor is not composed"
                                        : "the sensor-guided move was refused");
     } else {
@@ -648,6 +767,7 @@ static void handle_command(ls_control_t *c, const ls_ctl_cmd_t *cmd)
         c->estop_unit = cmd->dio.unit;
         c->estop_bit = cmd->dio.on;
         return;
+    case LS_CTL_HOME: home_joints(c, cmd); return;
     }
 }
 
@@ -733,7 +853,8 @@ void ls_control_cycle(ls_control_t *c, uint64_t now_us)
                           c->qd_cmd, &mev);
             /* The path executor holds where the guarded move is (or ended). */
             ls_motion_hold(&c->motion, c->q_cmd);
-        } else if (c->motion.phase == LS_MOTION_IDLE && c->manual != NULL) {
+        } else if (c->motion.phase == LS_MOTION_IDLE && c->manual != NULL && c->homing_joints == 0u &&
+                   unhomed(c) == 0u) {
             c->jogging = ls_react_jog_step(&c->react, c->dt_s, twist, c->q_cmd, c->qd_cmd, &mev);
             ls_motion_hold(&c->motion, c->q_cmd);
         } else {
@@ -782,7 +903,12 @@ void ls_control_cycle(ls_control_t *c, uint64_t now_us)
     s.enabling = c->enabling;
     for (int j = 0; j < LS_N_JOINTS; j++) {
         s.joint_state[j] = (uint8_t)c->joints[j].state;
+        s.joint_home[j] = (uint8_t)c->joints[j].home;
+        s.home_required |= c->joints[j].home_required ? 1u << j : 0u;
     }
+    s.unhomed = unhomed(c);
+    s.homing = c->homing_joints != 0u;
+    s.home_timeout_ms = c->home_timeout_ms;
     s.phase = c->react.active ? (c->react.paused ? LS_MOTION_PAUSED : LS_MOTION_RUNNING) : c->motion.phase;
     s.react_active = c->react.active;
     s.manual_on = c->manual != NULL;
@@ -796,4 +922,9 @@ void ls_control_cycle(ls_control_t *c, uint64_t now_us)
     s.events_lost = atomic_load_explicit(&c->events_lost, memory_order_relaxed);
     s.max_cycle_us = c->max_cycle_us;
     publish(c, &s);
+}
+
+int ls_control_readout(ls_control_t *c, hal_arm_readout_t *out)
+{
+    return hal_arm_readout(c->cfg.arm, out);
 }

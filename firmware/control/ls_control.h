@@ -21,9 +21,14 @@
  * coupling and tool bits run in the loop too (LS_CTL_TOOL_*), because the
  * devices are the loop's (the simulated world is single-threaded).
  *
+ * Joints that must be homed (hal_joint_status_t.home_required) and are
+ * not keep every motion, react move and jog from starting (LS_CEV_CMD_FAILED
+ * naming them); LS_CTL_HOME runs the drives' own homing while the arm holds
+ * still, and once it ends the arm holds the new measured position.
+ *
  * Comms thread API: ls_control_post, ls_control_plan_slot/ls_control_start_plan,
  * ls_control_react_slot/ls_control_start_react, ls_control_set_manual,
- * ls_control_snapshot, ls_control_next_event. */
+ * ls_control_snapshot, ls_control_next_event, ls_control_readout. */
 #ifndef LS_CONTROL_H
 #define LS_CONTROL_H
 
@@ -73,6 +78,8 @@ typedef enum {
     LS_CTL_TOOL_COUPLE, /* tool.dev, tool.id, tool.attach: LS_MEV_TOOL reports the HAL status */
     LS_CTL_TOOL_BITS,   /* tool.dev, tool.on, tool.off: LS_MEV_TOOL reports the status, dio.on the bits */
     LS_CTL_HALT,        /* as DISABLE, stopping along the path at the model's maximum deceleration */
+    LS_CTL_HOME,        /* home.joints: the drives' own homing, drives on and at rest: LS_CEV_HOMED or
+                           LS_CEV_HOME_FAILED */
 } ls_ctl_kind_t;
 
 #define LS_CTL_TOOL_ID_LEN 64 /* a tool id of the schema (63 bytes) and its NUL */
@@ -95,6 +102,9 @@ typedef struct {
         ls_jog_config_t jog;
         ls_manual_config_t gate; /* the device's enabling switch, staleness, override steps */
     } manual;
+    struct {
+        uint32_t joints; /* bit j: joint j + 1 */
+    } home;
 } ls_ctl_cmd_t;
 
 typedef enum {
@@ -109,6 +119,8 @@ typedef enum {
                              what its drive said, or that no arm is composed, or that it was cancelled */
     LS_CEV_MANUAL,        /* manual: what the operator's device did (ls_manual.h), while manual control is on */
     LS_CEV_ARM_EVENT,     /* arm: what a joint's drive reported (an EMCY, its error code read back) */
+    LS_CEV_HOMED,         /* ref_seq: every joint of LS_CTL_HOME homed; the arm holds its new measured position */
+    LS_CEV_HOME_FAILED,   /* ref_seq, text: LS_CTL_HOME refused or ended with a joint not homed: which, and why */
 } ls_cev_kind_t;
 
 /* An event's text: one line naming a joint, its drive's node and what the
@@ -155,6 +167,11 @@ typedef struct {
     bool manual_on;                   /* jogging is switched on */
     bool jogging;                     /* the set-point moved by jogging this cycle */
     uint8_t joint_state[LS_N_JOINTS]; /* hal_joint_state_t of each joint's drive */
+    uint8_t joint_home[LS_N_JOINTS];  /* hal_home_t of each joint */
+    uint32_t home_required;           /* bit j: joint j + 1 must be homed before it moves */
+    uint32_t unhomed;                 /* bit j: joint j + 1 must be, and is not (motion is refused) */
+    bool homing;                      /* LS_CTL_HOME runs */
+    uint32_t home_timeout_ms;         /* how long a homing may take (hal_arm_info_t); 0: the arm has none */
 } ls_ctl_snapshot_t;
 
 /* The snapshot as 32-bit words of a seqlock (ls_seqlock.h): a read racing
@@ -229,6 +246,9 @@ typedef struct ls_control {
     bool disable_pending;                   /* DISABLE while moving: stop along the path first */
     hal_joint_status_t joints[LS_N_JOINTS]; /* this cycle's status of each joint's drive */
     uint32_t failed_joints;                 /* joints whose drive failed while under control (drive_fault) */
+    uint32_t homing_joints;                 /* LS_CTL_HOME runs on these (0: none) */
+    uint32_t home_timeout_ms;               /* the arm's (hal_arm_info_t), read at init */
+    uint32_t home_ref_seq;
     double q[LS_N_JOINTS], qd[LS_N_JOINTS], q_cmd[LS_N_JOINTS], qd_cmd[LS_N_JOINTS];
     uint32_t dio_levels[LS_CTL_MAX_DIO_UNITS];
     uint16_t estop_unit;
@@ -284,5 +304,10 @@ bool ls_control_manual_on(ls_control_t *c);
 bool ls_control_snapshot(ls_control_t *c, ls_ctl_snapshot_t *out);
 /* Take the next event; false when none. */
 bool ls_control_next_event(ls_control_t *c, ls_ctl_event_t *out);
+/* The per-axis readouts of the arm's drives (hal_arm_readout: the copy the
+ * control thread published at the latest drive cycle; lock-free). LS_OK,
+ * LS_EAGAIN (a publish overlapped every try: the previous copy),
+ * LS_EUNSUPPORTED (no arm, or an arm without drives to read). */
+int ls_control_readout(ls_control_t *c, hal_arm_readout_t *out);
 
 #endif

@@ -773,7 +773,9 @@ bool ls_core_sensor_on_event(ls_core_t *core, const ls_ctl_event_t *ev)
     case LS_CEV_DIO_CHANGED:
     case LS_CEV_ARM_EVENT:
     case LS_CEV_ENABLED:
-    case LS_CEV_ENABLE_FAILED: return false;
+    case LS_CEV_ENABLE_FAILED:
+    case LS_CEV_HOMED:
+    case LS_CEV_HOME_FAILED: return false;
     case LS_CEV_MANUAL: manual_event(core, ev); return true;
     }
     return false;

@@ -77,7 +77,9 @@ static void on_loop_event(ls_core_t *core, const ls_ctl_event_t *ev, uint64_t no
     case LS_CEV_ARM_EVENT: on_arm_event(core, &ev->arm, now_us); break;
     case LS_CEV_ENABLED: ls_core_on_enable_result(core, NULL, now_us); break;
     case LS_CEV_ENABLE_FAILED: ls_core_on_enable_result(core, ev->text, now_us); break;
-    case LS_CEV_MANUAL: break; /* cmd_sensor.c takes them all */
+    case LS_CEV_HOMED:
+    case LS_CEV_HOME_FAILED: break; /* no command asks the loop to home yet */
+    case LS_CEV_MANUAL: break;      /* cmd_sensor.c takes them all */
     case LS_CEV_CMD_FAILED: {
         char d[80];
         ls_fmt_print(d, sizeof d, "reason=%s", ev->text);
