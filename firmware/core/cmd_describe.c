@@ -3,11 +3,13 @@
  * description"). Each figure is read from its one home: the field bounds
  * from the table protocol/gen_registry.py derives from landscape.options,
  * table sizes from the core's headers, the DIO map, sensors and tool rack
- * from the composed HAL, joint and Cartesian limits from the robot model.
+ * from the composed HAL, joint and Cartesian limits from the robot model,
+ * each joint's homing from the control loop.
  * Everything is SI, whatever setUnits chose. */
 #include <string.h>
 
 #include "cmd_sensor.h"
+#include "ls_control.h"
 #include "ls_core_services.h"
 #include "ls_fmt.h"
 #include "ls_robot_urdf.h"
@@ -22,6 +24,32 @@ _Static_assert(LS_N_JOINTS <= pb_arraysize(ls_DescribeRes, joints), "ls.Describe
 _Static_assert(sizeof(((ls_DescribeRes *)0)->robot_model) >= LS_ROBOT_MODEL_NAME_MAX &&
                    sizeof(((ls_DescribeRobotRes *)0)->robot_model) >= LS_ROBOT_MODEL_NAME_MAX,
                "landscape.options: robot_model must hold LS_ROBOT_MODEL_NAME_MAX bytes");
+_Static_assert(LS_N_JOINTS <= pb_arraysize(ls_DescribeRes, homing), "ls.DescribeRes.homing must hold every joint");
+/* The schema's HomeState is the HAL's hal_home_t on the wire. */
+_Static_assert((int)ls_HomeState_HOME_NOT_HOMED == (int)HAL_HOME_NOT_HOMED &&
+                   (int)ls_HomeState_HOME_HOMING == (int)HAL_HOME_HOMING &&
+                   (int)ls_HomeState_HOME_HOMED == (int)HAL_HOME_HOMED &&
+                   (int)ls_HomeState_HOME_FAILED == (int)HAL_HOME_FAILED,
+               "ls.HomeState and hal_home_t must agree");
+
+/* Each joint's homing, on an arm whose drives home (the loop's snapshot). */
+static void describe_homing(ls_core_t *core, ls_DescribeRes *r)
+{
+    if (core->ctl == NULL) {
+        return;
+    }
+    ls_ctl_snapshot_t snap;
+    ls_control_snapshot(core->ctl, &snap);
+    r->homing_timeout_ms = snap.home_timeout_ms;
+    if (snap.home_timeout_ms == 0u) {
+        return;
+    }
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        ls_JointHoming *h = &r->homing[r->homing_count++];
+        h->required = (snap.home_required & (1u << j)) != 0u;
+        h->state = (ls_HomeState)snap.joint_home[j];
+    }
+}
 
 static void describe_limits(ls_DescribeRes *r)
 {
@@ -121,6 +149,7 @@ int32_t ls_h_describe(struct ls_core *core, struct ls_call *call)
     if (core->model != NULL) {
         describe_model(core->model, r);
     }
+    describe_homing(core, r);
     if (!whole) {
         return ls_reply(call, ls_RetCode_CMD_EXEC_OK,
                         "described, but the HAL has more sensors, components or tools than describe holds "

@@ -6,6 +6,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "cmd_drives.h"
 #include "cmd_motion.h"
 #include "ls_control.h"
 #include "ls_fmt.h"
@@ -186,6 +187,9 @@ int32_t ls_mcmd_no_arm(ls_call_t *call, const char *what)
 /* The plan slot, or NULL after answering CMD_BUSY_ERR in *code. */
 ls_motion_plan_t *ls_mcmd_take_slot(ls_core_t *core, ls_call_t *call, const char *what, int32_t *code)
 {
+    if (ls_drv_refuse_unhomed(core, call, what, code)) {
+        return NULL;
+    }
     ls_motion_plan_t *slot = ls_control_plan_slot(core->ctl);
     if (slot == NULL && ls_control_manual_on(core->ctl)) {
         *code = ls_reply(call, ls_RetCode_CMD_BUSY_ERR, "%s: manualControl is on: send manualControl off first", what);

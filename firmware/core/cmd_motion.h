@@ -49,7 +49,8 @@ int32_t ls_mcmd_check_name(ls_call_t *call, const char *what, const char *field,
 bool ls_mcmd_all_finite(const double *v, size_t n);
 /* CMD_UNSUPPORTED_ERR: no arm is composed. */
 int32_t ls_mcmd_no_arm(ls_call_t *call, const char *what);
-/* The plan slot, or NULL after answering CMD_BUSY_ERR in *code. */
+/* The plan slot, or NULL after answering in *code: CMD_BUSY_ERR, or a joint
+ * that must be homed is not (ls_drv_refuse_unhomed). */
 ls_motion_plan_t *ls_mcmd_take_slot(ls_core_t *core, ls_call_t *call, const char *what, int32_t *code);
 /* Hand the plan in the slot over and enter MOVING (the answer: STARTED_OK,
  * with `note` after it when not NULL: why the move runs slower, say). */

@@ -12,6 +12,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "cmd_drives.h"
 #include "cmd_motion.h"
 #include "cmd_sensor.h"
 #include "ls_control.h"
@@ -191,6 +192,9 @@ static int32_t start_react(ls_core_t *core, ls_call_t *call, ls_react_plan_t *sl
 
 static ls_react_plan_t *take_slot(ls_core_t *core, ls_call_t *call, const char *what, int32_t *code)
 {
+    if (ls_drv_refuse_unhomed(core, call, what, code)) {
+        return NULL;
+    }
     ls_react_plan_t *slot = ls_control_react_slot(core->ctl);
     if (slot == NULL) {
         *code = ls_reply(call, ls_RetCode_CMD_BUSY_ERR,
@@ -541,6 +545,10 @@ int32_t ls_h_manual_control(struct ls_core *core, struct ls_call *call)
     }
     bool ok;
     ls_jog_config_t jog;
+    int32_t refused = 0;
+    if (kind >= 0 && ls_drv_refuse_unhomed(core, call, "manualControl", &refused)) {
+        return refused;
+    }
     if (kind >= 0) {
         jog_config(core, frac, &jog);
         ls_manual_config_t gate = core->manual_gate[kind];

@@ -19,6 +19,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "cmd_drives.h"
 #include "cmd_sensor.h"
 #include "ls_control.h"
 #include "ls_core_services.h"
@@ -196,6 +197,10 @@ static int32_t change(ls_core_t *core, ls_call_t *call, const char *id, bool att
     }
     if (core->tool_cmds.op.active) {
         return ls_reply(call, ls_RetCode_CMD_BUSY_ERR, "%s: a tool change is in progress", what);
+    }
+    int32_t code = 0;
+    if (ls_drv_refuse_unhomed(core, call, what, &code)) {
+        return code;
     }
     ls_tool_op_t op;
     memset(&op, 0, sizeof op);

@@ -8,10 +8,13 @@
  *            the comms thread's wake-ups
  *   config   the running configuration (file and options merged)
  *   stopping the category-1 stop's bound per joint, from the robot model
+ *   drives   the drives' readouts: a line per joint, `drives N` one in full, `drives bus` the master's counters
+ *   home     the drives' own homing: `home` the joints that must be homed, `home 2 3` those (cmd_drives.h)
  * Output is plain text, one item per line, at most 1 KiB. */
 #include <stdarg.h>
 #include <string.h>
 
+#include "cmd_drives.h"
 #include "ls_core_services.h"
 #include "ls_fmt.h"
 #include "ls_motion.h"
@@ -42,7 +45,7 @@ int32_t ls_h_send_command(struct ls_core *core, struct ls_call *call)
     ls_SendCommandRes *r = &call->res->result.send_command;
     out_t o = { r->result, sizeof r->result, 0 };
     if (strcmp(in, "help") == 0 || in[0] == '\0') {
-        put(&o, "help\nversion\nstatus\nfaults\nevents\nrtstats\nconfig\nstopping\n");
+        put(&o, "help\nversion\nstatus\nfaults\nevents\nrtstats\nconfig\nstopping\ndrives\nhome\n");
     } else if (strcmp(in, "version") == 0) {
         put(&o, "firmware=%s\nprotocol=%u\nschema=%08X\n", core->cfg.firmware_version,
             (unsigned)ls_Protocol_PROTOCOL_VERSION, (unsigned)LS_SCHEMA_HASH);
@@ -79,8 +82,9 @@ int32_t ls_h_send_command(struct ls_core *core, struct ls_call *call)
                     (unsigned)w->fired);
             }
         }
+        ls_drv_status_lines(core, o.buf, o.cap, &o.len);
         /* the transport's counters last: when the 1 KiB runs out (four sessions
-         * with long names, watches) it ends inside them, not inside the sessions */
+         * with long names, watches, drives) it ends inside them, not inside the sessions */
         if (core->io.describe != NULL && o.len < o.cap) {
             core->io.describe(core->io.ctx, o.buf + o.len, o.cap - o.len);
             o.len += strlen(o.buf + o.len);
@@ -113,6 +117,13 @@ int32_t ls_h_send_command(struct ls_core *core, struct ls_call *call)
         }
         if (n == 0) {
             put(&o, "no events\n");
+        }
+    } else if (strcmp(in, "home") == 0 || strncmp(in, "home ", 5) == 0) {
+        return ls_drv_home(core, call, in + 4);
+    } else if (strcmp(in, "drives") == 0 || strncmp(in, "drives ", 7) == 0) {
+        const int32_t code = ls_drv_readouts(core, call, in + 6, o.buf, o.cap);
+        if (code != ls_RetCode_CMD_EXEC_OK) {
+            return code;
         }
     } else if (strcmp(in, "stopping") == 0) {
         if (core->model == NULL) {

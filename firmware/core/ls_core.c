@@ -22,6 +22,7 @@ void ls_core_init(ls_core_t *core, const ls_core_config_t *cfg, const ls_core_io
     core->state = ls_State_IDLE;
     core->owner = LS_NO_SESSION;
     core->activating = LS_NO_SESSION;
+    core->homing = LS_NO_SESSION;
     ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_at_rest");
     core->settings.speed_pct = 25.0;
     core->settings.accel_pct = 50.0;
@@ -77,9 +78,9 @@ static void on_loop_event(ls_core_t *core, const ls_ctl_event_t *ev, uint64_t no
     case LS_CEV_ARM_EVENT: on_arm_event(core, &ev->arm, now_us); break;
     case LS_CEV_ENABLED: ls_core_on_enable_result(core, NULL, now_us); break;
     case LS_CEV_ENABLE_FAILED: ls_core_on_enable_result(core, ev->text, now_us); break;
-    case LS_CEV_HOMED:
-    case LS_CEV_HOME_FAILED: break; /* no command asks the loop to home yet */
-    case LS_CEV_MANUAL: break;      /* cmd_sensor.c takes them all */
+    case LS_CEV_HOMED: ls_drv_on_home_result(core, NULL, now_us); break;
+    case LS_CEV_HOME_FAILED: ls_drv_on_home_result(core, ev->text, now_us); break;
+    case LS_CEV_MANUAL: break; /* cmd_sensor.c takes them all */
     case LS_CEV_CMD_FAILED: {
         char d[80];
         ls_fmt_print(d, sizeof d, "reason=%s", ev->text);

@@ -3,8 +3,9 @@
  * tick call. Motion events: firmware/core/cmd_motion_events.c; a path's
  * auxiliary commands: cmd_aux.c; DIO changes: cmd_dio.c; the sensor-guided
  * moves and jogs: cmd_sensor.c; tool changes: cmd_tool.c; the drives'
- * enable: cmd_session.c. Handlers layer (docs/architecture.md "Core
- * layers"): only the layer above calls these. Comms thread only. */
+ * enable: cmd_session.c; their homing: cmd_drives.c. Handlers layer
+ * (docs/architecture.md "Core layers"): only the layer above calls these.
+ * Comms thread only. */
 #ifndef LS_CORE_EVENTS_H
 #define LS_CORE_EVENTS_H
 
@@ -44,5 +45,10 @@ bool ls_core_tool_on_event(ls_core_t *core, const ls_ctl_event_t *ev);
  * joint and what its drive said); drives that came on for a session that
  * ended or lost the lock are switched off again. Comms thread. */
 void ls_core_on_enable_result(ls_core_t *core, const char *failure, uint64_t now_us);
+
+/* cmd_drives.c: the homing's end (LS_CEV_HOMED with `failure` NULL,
+ * LS_CEV_HOME_FAILED with its line): the deferred answer of sendCommand
+ * home to core->homing. Comms thread. */
+void ls_drv_on_home_result(ls_core_t *core, const char *failure, uint64_t now_us);
 
 #endif

@@ -262,8 +262,10 @@ typedef struct ls_core {
     char held_name[LS_PB_FIELD_SIZE(ls_ConnectReq, client_name)]; /* the session name, whole */
     ls_DisconnectAction held_action;
     ls_State state;
-    int owner;      /* index in sessions[], LS_NO_SESSION when unlocked */
-    int activating; /* the session whose activate waits for the drives (LS_CEV_ENABLED), LS_NO_SESSION: none */
+    int owner;              /* index in sessions[], LS_NO_SESSION when unlocked */
+    int activating;         /* the session whose activate waits for the drives (LS_CEV_ENABLED), LS_NO_SESSION: none */
+    int homing;             /* the session whose sendCommand home waits (LS_CEV_HOMED), LS_NO_SESSION: none */
+    uint32_t homing_joints; /* the joints it homes (bit j: joint j + 1) */
     ls_session_t sessions[LS_MAX_SUPERVISORS];
     char fault[LS_PB_FIELD_SIZE(ls_GetMotionControlStateRes, fault)]; /* latched fault, empty when none */
     /* seed 3.3.1 motionControlState (docs/state-machine.md) */

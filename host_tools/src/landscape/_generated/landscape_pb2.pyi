@@ -63,6 +63,10 @@ FUNCTIONAL_ALL_DEVICES: NodeAddress
 HEARTBEAT_PERIOD_MAX_MS: HeartbeatPeriod
 HEARTBEAT_PERIOD_MIN_MS: HeartbeatPeriod
 HEARTBEAT_PERIOD_NONE: HeartbeatPeriod
+HOME_FAILED: HomeState
+HOME_HOMED: HomeState
+HOME_HOMING: HomeState
+HOME_NOT_HOMED: HomeState
 HOST_ADDRESS_POOL_LAST: NodeAddress
 IDLE: State
 INCHES: LinearUnit
@@ -301,10 +305,12 @@ class DescribeReq(_message.Message):
     def __init__(self) -> None: ...
 
 class DescribeRes(_message.Message):
-    __slots__ = ["dio_units", "field_limits", "frame_angle_max_rad", "joints", "max_angular_accel_rad_s2", "max_angular_speed_rad_s", "max_answer_bytes", "max_cycles", "max_dio_watches", "max_linear_accel_m_s2", "max_linear_speed_m_s", "max_notice_datum_bytes", "max_paths", "max_points_per_path", "max_sessions", "min_rate_pct", "reach_m", "robot_model", "sensors", "tools", "workspace_max_m", "workspace_min_m"]
+    __slots__ = ["dio_units", "field_limits", "frame_angle_max_rad", "homing", "homing_timeout_ms", "joints", "max_angular_accel_rad_s2", "max_angular_speed_rad_s", "max_answer_bytes", "max_cycles", "max_dio_watches", "max_linear_accel_m_s2", "max_linear_speed_m_s", "max_notice_datum_bytes", "max_paths", "max_points_per_path", "max_sessions", "min_rate_pct", "reach_m", "robot_model", "sensors", "tools", "workspace_max_m", "workspace_min_m"]
     DIO_UNITS_FIELD_NUMBER: _ClassVar[int]
     FIELD_LIMITS_FIELD_NUMBER: _ClassVar[int]
     FRAME_ANGLE_MAX_RAD_FIELD_NUMBER: _ClassVar[int]
+    HOMING_FIELD_NUMBER: _ClassVar[int]
+    HOMING_TIMEOUT_MS_FIELD_NUMBER: _ClassVar[int]
     JOINTS_FIELD_NUMBER: _ClassVar[int]
     MAX_ANGULAR_ACCEL_RAD_S2_FIELD_NUMBER: _ClassVar[int]
     MAX_ANGULAR_SPEED_RAD_S_FIELD_NUMBER: _ClassVar[int]
@@ -327,6 +333,8 @@ class DescribeRes(_message.Message):
     dio_units: _containers.RepeatedCompositeFieldContainer[DioUnitInfo]
     field_limits: _containers.RepeatedCompositeFieldContainer[FieldLimit]
     frame_angle_max_rad: float
+    homing: _containers.RepeatedCompositeFieldContainer[JointHoming]
+    homing_timeout_ms: int
     joints: _containers.RepeatedCompositeFieldContainer[JointLimit]
     max_angular_accel_rad_s2: float
     max_angular_speed_rad_s: float
@@ -346,7 +354,7 @@ class DescribeRes(_message.Message):
     tools: _containers.RepeatedScalarFieldContainer[str]
     workspace_max_m: _containers.RepeatedScalarFieldContainer[float]
     workspace_min_m: _containers.RepeatedScalarFieldContainer[float]
-    def __init__(self, max_sessions: _Optional[int] = ..., max_paths: _Optional[int] = ..., max_points_per_path: _Optional[int] = ..., max_dio_watches: _Optional[int] = ..., max_cycles: _Optional[int] = ..., min_rate_pct: _Optional[float] = ..., frame_angle_max_rad: _Optional[float] = ..., field_limits: _Optional[_Iterable[_Union[FieldLimit, _Mapping]]] = ..., dio_units: _Optional[_Iterable[_Union[DioUnitInfo, _Mapping]]] = ..., sensors: _Optional[_Iterable[_Union[SensorInfo, _Mapping]]] = ..., tools: _Optional[_Iterable[str]] = ..., robot_model: _Optional[str] = ..., joints: _Optional[_Iterable[_Union[JointLimit, _Mapping]]] = ..., max_linear_speed_m_s: _Optional[float] = ..., max_angular_speed_rad_s: _Optional[float] = ..., max_linear_accel_m_s2: _Optional[float] = ..., max_angular_accel_rad_s2: _Optional[float] = ..., workspace_min_m: _Optional[_Iterable[float]] = ..., workspace_max_m: _Optional[_Iterable[float]] = ..., reach_m: _Optional[float] = ..., max_answer_bytes: _Optional[int] = ..., max_notice_datum_bytes: _Optional[int] = ...) -> None: ...
+    def __init__(self, max_sessions: _Optional[int] = ..., max_paths: _Optional[int] = ..., max_points_per_path: _Optional[int] = ..., max_dio_watches: _Optional[int] = ..., max_cycles: _Optional[int] = ..., min_rate_pct: _Optional[float] = ..., frame_angle_max_rad: _Optional[float] = ..., field_limits: _Optional[_Iterable[_Union[FieldLimit, _Mapping]]] = ..., dio_units: _Optional[_Iterable[_Union[DioUnitInfo, _Mapping]]] = ..., sensors: _Optional[_Iterable[_Union[SensorInfo, _Mapping]]] = ..., tools: _Optional[_Iterable[str]] = ..., robot_model: _Optional[str] = ..., joints: _Optional[_Iterable[_Union[JointLimit, _Mapping]]] = ..., max_linear_speed_m_s: _Optional[float] = ..., max_angular_speed_rad_s: _Optional[float] = ..., max_linear_accel_m_s2: _Optional[float] = ..., max_angular_accel_rad_s2: _Optional[float] = ..., workspace_min_m: _Optional[_Iterable[float]] = ..., workspace_max_m: _Optional[_Iterable[float]] = ..., reach_m: _Optional[float] = ..., max_answer_bytes: _Optional[int] = ..., max_notice_datum_bytes: _Optional[int] = ..., homing: _Optional[_Iterable[_Union[JointHoming, _Mapping]]] = ..., homing_timeout_ms: _Optional[int] = ...) -> None: ...
 
 class DescribeRobotReq(_message.Message):
     __slots__ = ["offset"]
@@ -579,6 +587,14 @@ class GetVelocitiesRes(_message.Message):
     world_angular_velocity: float
     world_linear_velocity: float
     def __init__(self, percent_velocity: _Optional[float] = ..., world_linear_velocity: _Optional[float] = ..., world_angular_velocity: _Optional[float] = ..., joint_velocities: _Optional[_Iterable[float]] = ...) -> None: ...
+
+class JointHoming(_message.Message):
+    __slots__ = ["required", "state"]
+    REQUIRED_FIELD_NUMBER: _ClassVar[int]
+    STATE_FIELD_NUMBER: _ClassVar[int]
+    required: bool
+    state: HomeState
+    def __init__(self, required: bool = ..., state: _Optional[_Union[HomeState, str]] = ...) -> None: ...
 
 class JointLimit(_message.Message):
     __slots__ = ["max_accel_rad_s2", "max_rad", "max_velocity_rad_s", "min_rad"]
@@ -1209,6 +1225,9 @@ class CallbackType(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
     __slots__ = []
 
 class DisconnectAction(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
+    __slots__ = []
+
+class HomeState(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
     __slots__ = []
 
 class NoticeKind(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
