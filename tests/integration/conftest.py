@@ -101,9 +101,10 @@ def start_simdrives(path: Path, *extra: str) -> tuple[subprocess.Popen[bytes], P
     return proc, control
 
 
-def drive_config(path: Path, drive_pty: Path, **drives: str) -> Path:
+def drive_config(path: Path, drive_pty: Path, joints: dict[int, dict[str, str]] | None = None,
+                 **drives: str) -> Path:
     """A landscaped.conf for arm = cia402 on `drive_pty`: six joints of ls-simdrives;
-    `drives` sets more [drives] keys."""
+    `drives` sets more [drives] keys, `joints` more [joint.N] keys (N = 1..6)."""
     # ls-simdrives is a process on a machine the test shares with builds: even at SCHED_FIFO
     # it was seen answering a SYNC over 100 ms late there (once in a few runs of a module
     # whose other tests load both cores), where a drive would not; so the suites allow
@@ -113,14 +114,17 @@ def drive_config(path: Path, drive_pty: Path, **drives: str) -> Path:
              *(f"{k} = {v}" for k, v in drives.items())]
     for j, node in enumerate(DRIVE_NODES):
         lines += [f"[joint.{j + 1}]", f"node = {node:#x}", f"eds = {SIMDRIVE_EDS}",
-                  f"counts_per_rad = {COUNTS_PER_RAD!r}"]
+                  f"counts_per_rad = {COUNTS_PER_RAD!r}",
+                  *(f"{k} = {v}" for k, v in (joints or {}).get(j + 1, {}).items())]
     path.write_text("\n".join(lines) + "\n")
     return path
 
 
-def start_controller(path: Path, *extra: str, drive_keys: dict[str, str] | None = None) -> Controller:
+def start_controller(path: Path, *extra: str, joints: dict[int, dict[str, str]] | None = None,
+                     drive_keys: dict[str, str] | None = None) -> Controller:
     """landscaped on a new pty at `path` with `extra` options; with LS_ARM=cia402 behind
-    ls-simdrives, `drive_keys` setting more [drives] keys of its configuration."""
+    ls-simdrives, `drive_keys` setting more [drives] keys and `joints` more [joint.N] keys
+    of its configuration (drive_config)."""
     if not LANDSCAPED.exists():
         raise AssertionError(f"{LANDSCAPED} is missing: build first (bash .ci/build)")
     # stderr to a file, never a pipe: a pipe nobody reads would block the controller's logging
@@ -133,7 +137,7 @@ def start_controller(path: Path, *extra: str, drive_keys: dict[str, str] | None 
         drives, control = start_simdrives(path.with_name(path.name + "-drives"),
                                           *(["--model", model[0]] if model else []))
         conf = drive_config(path.with_name(path.name + "-drives.conf"), path.with_name(path.name + "-drives"),
-                            **(drive_keys or {}))
+                            joints, **(drive_keys or {}))
         hal = ["--config", str(conf)]
     else:
         hal = ["--hal", "sim"]

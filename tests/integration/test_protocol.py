@@ -136,7 +136,18 @@ def test_owner_heartbeat_loss_deactivates_and_releases(bus: can.BusABC) -> None:
 def test_send_command_vendor_hooks(bus: can.BusABC) -> None:
     with Supervisor(bus, client_name="vendor") as sup:
         helps = sup.request("sendCommand", input="help").result["result"].split()
-        assert helps == ["help", "version", "status", "faults", "events", "rtstats", "config", "stopping"]
+        assert helps == ["help", "version", "status", "faults", "events", "rtstats", "config", "stopping", "drives",
+                         "home"]
+        # the simulated arm has no drives to read and nothing to home: one line each, naming why
+        rv = sup.request("sendCommand", check=False, input="drives")
+        assert rv.ret_code == pb.CMD_UNSUPPORTED_ERR
+        assert rv.ret_msg == "sendCommand drives: this arm has no drives to read (docs/deploy.md \"Drives\")"
+        sup.lock()
+        sup.activate()
+        rv = sup.request("sendCommand", check=False, input="home")
+        assert rv.ret_code == pb.CMD_UNSUPPORTED_ERR
+        assert rv.ret_msg == "sendCommand home: this arm has no homing: its joints' positions are absolute"
+        assert "homing" not in sup.describe().result or not sup.describe().result["homing"]
         stopping = sup.request("sendCommand", input="stopping").result["result"].splitlines()
         assert len(stopping) == 6 and stopping[0].startswith("j1 time_s="), stopping
         rt = dict(line.split("=", 1) for line in sup.request("sendCommand", input="rtstats").result["result"].split())

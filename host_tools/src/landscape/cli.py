@@ -19,7 +19,7 @@ from typing import Any, NoReturn
 
 import click
 
-from . import cli_gateway, cli_model, cli_tools, cli_view  # noqa: F401  (register gateway; model; path, record, plot, demo, session; view)
+from . import cli_drives, cli_gateway, cli_model, cli_tools, cli_view  # noqa: F401  (register drives, home; gateway; model; path, record, plot, demo, session; view)
 from . import telemetry as tm
 from ._generated import landscape_pb2 as pb
 from .backend import Backend

@@ -14,6 +14,8 @@ from typing import Any, Unpack
 
 from . import urdf
 from ._generated import landscape_pb2 as pb
+from .description import DeviceDescription
+from .drives import home_request
 from .errors import error_for_code
 from .paths import build_path_load_requests, request_fields
 from .registry import Command
@@ -22,6 +24,9 @@ from .retval import CallOptions, Enum, RetVal
 
 class Commands:
     """The typed commands, on top of `request` (Supervisor.request)."""
+
+    #: What connect read (Supervisor's): `home` waits as long as its homing may take.
+    description: DeviceDescription | None
 
     def request(self, command: str | Command, /, *, check: bool = True, timeout_s: float | None = None,
                 **fields: Any) -> RetVal:
@@ -218,6 +223,14 @@ class Commands:
 
     def send_command(self, input: str, **opts: Unpack[CallOptions]) -> RetVal:  # noqa: A002 (schema name)
         return self.request("send_command", input=input, **opts)
+
+    def home(self, *joints: int, **opts: Unpack[CallOptions]) -> RetVal:
+        """sendCommand home: the drives' own homing of `joints` (none: every joint that must
+        be homed; docs/protocol.md "Drives"). Waits up to the device's homing time-out
+        (describe) unless `timeout_s` says otherwise."""
+        if "timeout_s" not in opts and self.description is not None and self.description.res.homing_timeout_ms:
+            opts["timeout_s"] = self.description.res.homing_timeout_ms / 1000.0 + 2.0
+        return self.send_command(home_request(joints), **opts)
 
     def describe(self, **opts: Unpack[CallOptions]) -> RetVal:
         """Read the device's description (limits, DIO map, sensors, tools, joints, workspace; SI).

@@ -195,6 +195,12 @@ class DeviceDescription:
                        f"{joint.max_velocity_rad_s:.4g} rad/s, {joint.max_accel_rad_s2:.4g} rad/s^2")
             yield (f"cartesian: {r.max_linear_speed_m_s:g} m/s, {r.max_angular_speed_rad_s:g} rad/s, "
                    f"{r.max_linear_accel_m_s2:g} m/s^2, {r.max_angular_accel_rad_s2:g} rad/s^2")
+            if r.homing:
+                need = [str(j) for j, h in enumerate(r.homing, 1) if h.required]
+                states = " ".join(f"{j}={pb.HomeState.Name(h.state).removeprefix('HOME_').lower()}"
+                                  for j, h in enumerate(r.homing, 1))
+                yield (f"homing: joints that must be homed: {', '.join(need) or 'none'}; {states}; "
+                       f"sendCommand home within {r.homing_timeout_ms / 1000:g} s")
             lo = ", ".join(f"{v:g}" for v in r.workspace_min_m)
             hi = ", ".join(f"{v:g}" for v in r.workspace_max_m)
             yield f"workspace (tool tip, base frame): min ({lo}) m, max ({hi}) m"
