@@ -489,7 +489,7 @@ static int compose(const ls_config_t *o)
         /* The drives boot and are configured here, within their deadline,
          * before the control loop reads the arm (docs/deploy.md "Drives"). */
         char dmsg[512];
-        const int r = ls_drive_compose(o, &ls_robot_model_default, &g_arm, stderr, dmsg, sizeof dmsg);
+        const int r = ls_drive_compose(o, &g_model, &g_arm, stderr, dmsg, sizeof dmsg);
         if (r != LS_OK) {
             LOG_ERR("%s", dmsg);
             return r;
