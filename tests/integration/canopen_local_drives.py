@@ -13,7 +13,9 @@ a drive does it:
 - at each SYNC while OPERATIONAL: the RPDOs received since the last SYNC are applied per
   their mapping, the CiA 402 power state machine takes the controlword, the position
   follows the target in CSP, and the TPDOs go out per their mapping;
-- the statusword, position actual and mode display (0x6041, 0x6064, 0x6061) read live.
+- the statusword, position actual and mode display (0x6041, 0x6064, 0x6061) read live;
+- faults on command: an EMCY with its code (the drive in FAULT, 0x603F set), and a hung
+  NMT slave (no heartbeat, no boot-up after a reset command) until it beats again.
 
 The network is python-can's `virtual` bus; `PtyBridge` joins it to the SLCAN pty of
 landscaped's drive link, so a RemoteNode on the same virtual channel can read the
@@ -71,6 +73,7 @@ class LocalDrive:
     last_cw: int = 0
     rpdo_data: dict[int, bytes] = field(default_factory=dict)
     syncs: int = 0
+    silent: bool = False  # stop_heartbeat: no heartbeat, no boot-up
     controlwords: list[int] = field(default_factory=list)
     lock: threading.Lock = field(default_factory=threading.Lock)
 
@@ -99,6 +102,8 @@ class LocalDrive:
                 del self.node.data_store[index]
             self.rpdo_data.clear()
         self.node.nmt.stop_heartbeat()
+        if self.silent:
+            return
         self.node.nmt.send_command(0x82)  # INITIALISING: python-canopen sends the boot-up
         self.node.nmt.send_command(0x80)  # PRE-OPERATIONAL, heartbeat at 0x1017's time
 
@@ -194,6 +199,24 @@ class LocalDrive:
 
     def fault(self) -> None:
         self.state = "FAULT"
+
+    def emcy(self, code: int, register: int = 0x01) -> None:
+        """A fault of the drive's own: FAULT, its error code in 0x603F, and the EMCY frame
+        (CiA 301: code, error register, five manufacturer bytes)."""
+        if 0x603F in self.node.object_dictionary:
+            self.node.set_data(0x603F, 0, struct.pack("<H", code), check_writable=False)
+        self.state = "FAULT"
+        self.node.emcy.send(code, register, b"\x00\x00\x00\x00\x00")
+
+    def stop_heartbeat(self) -> None:
+        """The drive's NMT slave hangs: no heartbeat, and no boot-up after a reset command
+        either (its PDOs go on: a half-dead node), until start_heartbeat."""
+        self.silent = True
+        self.node.nmt.stop_heartbeat()
+
+    def start_heartbeat(self) -> None:
+        self.silent = False
+        self.node.nmt.start_heartbeat(self.raw(0x1017, 0))
 
     # ---- PDOs at SYNC
 

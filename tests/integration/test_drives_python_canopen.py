@@ -3,9 +3,12 @@ LocalNode holding two vendors' device descriptions (a maxon EPOS4 DCF, ros2_cano
 CiA 402 test drive EDS; LS_VENDOR_EDS_DIR), with the glue of canopen_local_drives.py.
 
 The master must boot them, remap their PDOs in CiA 301's order (the drives refuse
-anything else), set CSP and the interpolation period, enable them through the 402 state
-machine and drive them; an independent python-canopen RemoteNode then reads the
-configuration back."""
+anything else), set CSP, the interpolation period and the drives' own supervision
+(following error, quick stop), enable them through the 402 state machine and drive them;
+an independent python-canopen RemoteNode then reads the configuration back. Drives that
+send an EMCY or stop their heartbeat meet the reaction they meet on ls-simdrives
+(test_drive_faults.py): the final notice, the alarm, the stop, nothing resuming by
+itself, and recovery by activate."""
 from __future__ import annotations
 
 import signal
@@ -22,7 +25,7 @@ import pytest
 from canopen_local_drives import EPOS4_DCF, ROS2_EDS, LocalDrive, PtyBridge, wait_until
 from conftest import LANDSCAPED
 from landscape._generated import landscape_pb2 as pb
-from landscape.supervisor import Supervisor
+from landscape.supervisor import Supervisor, notice_data
 
 NODES = [0x21, 0x22, 0x23, 0x24, 0x25, 0x26]
 FILES = [EPOS4_DCF, EPOS4_DCF, EPOS4_DCF, ROS2_EDS, ROS2_EDS, ROS2_EDS]
@@ -41,13 +44,20 @@ class Rig:
     bridge: PtyBridge
 
 
+FE_WINDOW_RAD = 0.2  # the drives' own following-error window, 2000 counts
+FE_TIMEOUT_MS = 50
+QUICK_STOP_OPTION = 6  # decelerate on the quick-stop ramp, stay in QUICK STOP ACTIVE
+
+
 def _config(tmp: Path) -> Path:
     joints = "".join(f"[joint.{j + 1}]\nnode = {NODES[j]:#x}\neds = {FILES[j]}\ncounts_per_rad = {COUNTS_PER_RAD}\n"
+                     f"following_window_rad = {FE_WINDOW_RAD}\nfollowing_timeout_ms = {FE_TIMEOUT_MS}\n"
                      + ("sign = -1\noffset_rad = 0.25\n" if j == 4 else "") for j in range(6))
     conf = tmp / "drives.conf"
     conf.write_text("[hal]\narm = cia402\ndio = none\n"
                     f"[drives]\nlink = slcan:pty:{tmp / 'drv'}\ncycle = {CYCLE}\nheartbeat_ms = 100\n"
-                    "heartbeat_timeout_ms = 600\nboot_timeout_ms = 8000\n" + joints)
+                    f"heartbeat_timeout_ms = 600\nboot_timeout_ms = 8000\nquick_stop_option = {QUICK_STOP_OPTION}\n"
+                    + joints)
     return conf
 
 
@@ -136,6 +146,13 @@ def test_the_master_configures_python_canopen_drives_as_an_independent_reader_re
             # heartbeats: the drive's own, and its watch of the controller's (node 0x7F, 600 ms)
             assert _sdo_read(node, 0x1017, 0) == 100
             assert _sdo_read(node, 0x1016, 1) == (0x7F << 16) | 600
+            # the drive's own supervision, from the configuration where its file lets it be written
+            assert _sdo_read(node, 0x6065, 0) == round(FE_WINDOW_RAD * COUNTS_PER_RAD)
+            assert _sdo_read(node, 0x605A, 0) == QUICK_STOP_OPTION
+            if 0x6066 in node.object_dictionary:
+                assert _sdo_read(node, 0x6066, 0) == FE_TIMEOUT_MS
+            else:
+                assert f"joint {NODES.index(node_id) + 1} (node {node_id:#04x}): its EDS has no writable 0x6066" in log
     finally:
         reader.disconnect()
 
@@ -205,5 +222,79 @@ def test_activate_resets_a_drive_in_fault_and_names_one_that_stays_in_fault(rig:
             assert rv.ret_msg.startswith("activate failed, the drives are off: joint 3 (node 0x23): "), rv.ret_msg
             assert "stays in FAULT after 2 fault resets" in rv.ret_msg, rv.ret_msg
             assert s.get_motion_control_state().result["state"] == "LOCKED"
+    finally:
+        bus.shutdown()
+
+
+def _final(s: Supervisor, seq: int, seen: list[pb.Notice], timeout_s: float = 15) -> pb.Notice:
+    for n in s.notices(timeout_s=timeout_s):
+        seen.append(n)
+        if n.ref_seq == seq and n.final:
+            return n
+    raise AssertionError(f"no final notice for seq {seq} within {timeout_s} s")
+
+
+TARGET = [0.4, -0.3, 0.5, 0.6, -0.5, 0.6]
+
+
+def test_an_emcy_of_a_python_canopen_drive_ends_the_move_as_with_the_simulated_drives(rig: Rig) -> None:
+    """The same reaction as tests/integration/test_drive_faults.py on ls-simdrives: the
+    motion's one final notice names the joint, the node and the code; the EMCY is an alarm to
+    every supervisor; the drive's 0x603F is read back once the drives are off; activate resets
+    the fault and the arm moves again."""
+    bus = can.Bus(interface="slcan", channel=str(rig.sup_pty), bitrate=1000000, sleep_after_open=0)
+    try:
+        with Supervisor(bus, client_name="emcy") as s:
+            s.lock()
+            s.activate()
+            list(s.notices(timeout_s=0.1))
+            seq = s.move_absolute("far", TARGET, speed_pct=10).seq
+            time.sleep(0.8)
+            rig.drives[2].emcy(0x8611)
+            seen: list[pb.Notice] = []
+            final = _final(s, seq, seen)
+            assert final.event_id == "moveAbsoluteFailed" and final.kind == pb.ALARM
+            d = notice_data(final)
+            assert d["reason"] == "fault" and d["fault"] == "joint 3 (node 0x23): FAULT, EMCY 0x8611 following error", d
+            st = s.get_motion_control_state().result
+            assert st["state"] == "LOCKED" and st["motion_control_state"] == "robot_stopped_on_error", st
+            seen += list(s.notices(timeout_s=2.0))
+            emcy = [notice_data(n) for n in seen if n.event_id == "driveEmcy"]
+            assert emcy and (emcy[0]["joint"], emcy[0]["node"], emcy[0]["code"]) == ("3", "0x23", "0x8611"), seen
+            assert any(notice_data(n).get("code") == "0x8611" for n in seen if n.event_id == "driveErrorCode"), seen
+            q = s.get_robot_position().result["joints"]
+            time.sleep(0.3)
+            assert s.get_robot_position().result["joints"] == pytest.approx(q, abs=1e-4)  # nothing resumes
+            s.activate()  # the master's reset edge clears the drive's FAULT
+            s.wait_complete(s.move_absolute("back", [0.0] * 6, speed_pct=10), timeout_s=30)
+    finally:
+        bus.shutdown()
+
+
+def test_a_python_canopen_drive_whose_heartbeat_stops_is_lost_until_activate_finds_it(rig: Rig) -> None:
+    """Its PDOs go on, its heartbeat does not: the master's consumer time-out (600 ms) loses
+    the node, the move ends naming it, activate is refused while it stays silent, and once it
+    beats again activate configures it anew and the arm moves."""
+    bus = can.Bus(interface="slcan", channel=str(rig.sup_pty), bitrate=1000000, sleep_after_open=0)
+    try:
+        with Supervisor(bus, client_name="heartbeat") as s:
+            s.lock()
+            s.activate()
+            list(s.notices(timeout_s=0.1))
+            seq = s.move_absolute("far", TARGET, speed_pct=10).seq
+            time.sleep(0.5)
+            t0 = time.monotonic()
+            rig.drives[3].stop_heartbeat()
+            final = _final(s, seq, [])
+            took = time.monotonic() - t0
+            d = notice_data(final)
+            assert final.event_id == "moveAbsoluteFailed" and d["reason"] == "fault", d
+            assert d["fault"].startswith("joint 4 (node 0x24): ") and "heartbeat" in d["fault"], d
+            assert took < 2.0, f"the silent drive was noticed after {took:.2f} s"
+            rv = s.activate(check=False)
+            assert rv.ret_code != pb.CMD_EXEC_OK and "joint 4 (node 0x24)" in rv.ret_msg, rv.ret_msg
+            rig.drives[3].start_heartbeat()
+            s.activate()
+            s.wait_complete(s.move_absolute("back", [0.0] * 6, speed_pct=10), timeout_s=30)
     finally:
         bus.shutdown()
