@@ -528,12 +528,12 @@ static void drive_fault(ls_control_t *c, uint32_t bad_mask, const char *line)
     }
 }
 
-static void home_event(ls_control_t *c, ls_cev_kind_t kind, const char *text)
+static void home_event(ls_control_t *c, ls_cev_kind_t kind, uint32_t ref_seq, const char *text)
 {
     ls_ctl_event_t ev;
     memset(&ev, 0, sizeof ev);
     ev.kind = kind;
-    ev.ref_seq = c->home_ref_seq;
+    ev.ref_seq = ref_seq;
     ls_fmt_print(ev.text, sizeof ev.text, "%s", text);
     ev_push(c, &ev);
 }
@@ -542,7 +542,6 @@ static void home_event(ls_control_t *c, ls_cev_kind_t kind, const char *text)
  * arm at rest; the arm holds where it is meanwhile. */
 static void home_joints(ls_control_t *c, const ls_ctl_cmd_t *cmd)
 {
-    c->home_ref_seq = cmd->ref_seq;
     const char *why = NULL;
     char text[LS_CTL_TEXT_LEN];
     if (!c->enabled) {
@@ -553,6 +552,7 @@ static void home_joints(ls_control_t *c, const ls_ctl_cmd_t *cmd)
         const int r = hal_arm_home(c->cfg.arm, cmd->home.joints);
         if (r == LS_OK) {
             c->homing_joints = cmd->home.joints;
+            c->home_ref_seq = cmd->ref_seq;
             ls_motion_hold(&c->motion, c->q_cmd);
             return;
         }
@@ -563,7 +563,7 @@ static void home_joints(ls_control_t *c, const ls_ctl_cmd_t *cmd)
                      ls_err_name(r));
         why = text;
     }
-    home_event(c, LS_CEV_HOME_FAILED, why);
+    home_event(c, LS_CEV_HOME_FAILED, cmd->ref_seq, why); /* a homing under way keeps its own */
 }
 
 /* A homing under way: its end, once no joint of it is HOMING any more.
@@ -593,13 +593,13 @@ static void check_homing(ls_control_t *c)
         memset(c->qd_cmd, 0, sizeof c->qd_cmd);
     }
     if (failed < 0) {
-        home_event(c, LS_CEV_HOMED, "");
+        home_event(c, LS_CEV_HOMED, c->home_ref_seq, "");
         return;
     }
     const hal_joint_status_t *st = &c->joints[failed];
     char line[LS_CTL_TEXT_LEN];
     joint_line(line, sizeof line, failed, st, st->text[0] != '\0' ? st->text : "homing failed");
-    home_event(c, LS_CEV_HOME_FAILED, line);
+    home_event(c, LS_CEV_HOME_FAILED, c->home_ref_seq, line);
 }
 
 /* The drives' states, once per cycle: finish an enable, and fault when a

@@ -220,8 +220,8 @@ int LLVMFuzzerInitialize(int *argc, char ***argv)
     return 0;
 }
 
-static const uint32_t k_services[] = { LS_CO_COB_TPDO1, LS_CO_COB_TPDO1 + 0x100u, LS_CO_COB_EMCY,
-                                       LS_CO_COB_HEARTBEAT, LS_CO_COB_SDO_TX };
+static const uint32_t k_services[] = { LS_CO_COB_TPDO1, LS_CO_COB_TPDO1 + 0x100u, LS_CO_COB_EMCY, LS_CO_COB_HEARTBEAT,
+                                       LS_CO_COB_SDO_TX };
 
 static void check_views(void)
 {

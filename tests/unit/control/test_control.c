@@ -101,6 +101,14 @@ typedef struct {
     uint64_t last_update_us;
     int updates;
     hal_arm_event_t pending; /* reported by next_event once, when pending.node != 0 */
+    /* homing: joints that must be homed, each joint's state, and a homing that
+     * ends after home_cycles updates with the counter's new zero (home_shift) */
+    uint32_t home_required;
+    hal_home_t home[LS_N_JOINTS];
+    uint32_t homing;
+    int home_cycles, home_progress;
+    double home_shift;
+    bool home_fails;
 } fake_drives_t;
 
 static int drives_enable(void *self, bool on)
@@ -134,6 +142,31 @@ static int drives_update(void *self, uint64_t now_us)
     if (d->wanted && ++d->progress >= d->enable_cycles) {
         d->arm.enabled = true;
     }
+    if (d->homing != 0u && ++d->home_progress >= d->home_cycles) {
+        for (int j = 0; j < LS_N_JOINTS; j++) {
+            if ((d->homing & (1u << j)) != 0u) {
+                d->home[j] = d->home_fails ? HAL_HOME_FAILED : HAL_HOME_HOMED;
+                d->arm.q[j] += d->home_fails ? 0.0 : d->home_shift; /* the counter's new zero */
+            }
+        }
+        d->homing = 0u;
+    }
+    return LS_OK;
+}
+
+static int drives_home(void *self, uint32_t joint_mask)
+{
+    fake_drives_t *d = self;
+    if (!d->arm.enabled || d->homing != 0u) {
+        return LS_EBUSY;
+    }
+    d->homing = joint_mask;
+    d->home_progress = 0;
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        if ((joint_mask & (1u << j)) != 0u) {
+            d->home[j] = HAL_HOME_HOMING;
+        }
+    }
     return LS_OK;
 }
 
@@ -151,6 +184,11 @@ static int drives_status(void *self, hal_joint_status_t *out)
             out[j].state = HAL_JOINT_FAULT;
             out[j].code = 0x8611u;
             strcpy(out[j].text, "FAULT, EMCY 0x8611 following error");
+        }
+        out[j].home = d->home[j];
+        out[j].home_required = (d->home_required & (1u << j)) != 0u;
+        if (d->home[j] == HAL_HOME_FAILED) {
+            strcpy(out[j].text, "homing failed: the drive reports a homing error (statusword 0x2637, bit 13)");
         }
     }
     return LS_OK;
@@ -172,7 +210,8 @@ static const hal_arm_ops_t DRIVES_OPS = { .enable = drives_enable,
                                           .read = drives_read,
                                           .status = drives_status,
                                           .update = drives_update,
-                                          .next_event = drives_next_event };
+                                          .next_event = drives_next_event,
+                                          .home = drives_home };
 
 /* ---------------------------------------------------------------- fake DIO */
 
@@ -784,6 +823,103 @@ static void test_a_drive_fault_while_moving_stops_the_others_along_the_path_then
     while (ls_control_next_event(&f->ctl, &e)) {
         assert_int_not_equal(e.kind, LS_CEV_FAULT); /* one fault: the following check left joint 2 out */
     }
+}
+
+static void post_home(fx_t *f, uint32_t joints, uint32_t ref_seq)
+{
+    ls_ctl_cmd_t c;
+    memset(&c, 0, sizeof c);
+    c.kind = LS_CTL_HOME;
+    c.ref_seq = ref_seq;
+    c.home.joints = joints;
+    assert_true(ls_control_post(&f->ctl, &c));
+}
+
+/* Joint 2 counts from an incremental encoder: nothing moves before its
+ * homing, which holds the new measured position when it ends. */
+static void test_motion_waits_for_a_required_homing_which_holds_the_new_position(void **state)
+{
+    (void)state;
+    fx_t *f = fx_drives(1, 0);
+    g_drives.home_required = 1u << 1;
+    g_drives.home_cycles = 5;
+    g_drives.home_shift = 0.3;
+    post(f, LS_CTL_ENABLE, 30);
+    cycle(f);
+    cycle(f);
+    (void)next(f, LS_CEV_ENABLED);
+    ls_ctl_snapshot_t s = snap(f);
+    assert_int_equal(s.home_required, 1u << 1);
+    assert_int_equal(s.unhomed, 1u << 1);
+    fill_plan(f, 0.6, 31);
+    assert_true(ls_control_start_plan(&f->ctl, 31));
+    cycle(f);
+    ls_ctl_event_t ev = next(f, LS_CEV_CMD_FAILED);
+    assert_int_equal(ev.ref_seq, 31);
+    assert_string_equal(ev.text, "joint 2 must be homed first (sendCommand home)");
+    assert_int_equal(snap(f).phase, LS_MOTION_IDLE);
+    /* the homing: under way, then ended with the arm holding where joint 2 now reads */
+    post_home(f, 1u << 1, 32);
+    cycle(f);
+    s = snap(f);
+    assert_true(s.homing);
+    assert_int_equal(s.joint_home[1], HAL_HOME_HOMING);
+    assert_no_event(f);
+    for (int i = 0; i < 6; i++) {
+        cycle(f);
+    }
+    ev = next(f, LS_CEV_HOMED);
+    assert_int_equal(ev.ref_seq, 32);
+    assert_no_event(f);
+    s = snap(f);
+    assert_false(s.homing);
+    assert_int_equal(s.unhomed, 0u);
+    assert_int_equal(s.joint_home[1], HAL_HOME_HOMED);
+    assert_true(s.q_cmd_rad[1] == Q0[1] + 0.3); /* no jump back to the old set-point */
+    assert_true(s.q_cmd_rad[0] == Q0[0]);
+    /* and now a plan runs */
+    fill_plan(f, 0.6, 33);
+    assert_true(ls_control_start_plan(&f->ctl, 33));
+    cycle(f);
+    assert_int_equal(snap(f).phase, LS_MOTION_RUNNING);
+}
+
+static void test_a_homing_is_refused_off_or_busy_and_a_failure_names_the_joint(void **state)
+{
+    (void)state;
+    fx_t *f = fx_drives(1, 0);
+    post_home(f, 1u << 1, 40);
+    cycle(f);
+    ls_ctl_event_t ev = next(f, LS_CEV_HOME_FAILED);
+    assert_int_equal(ev.ref_seq, 40);
+    assert_string_equal(ev.text, "the drives are off: activate first");
+    post(f, LS_CTL_ENABLE, 41);
+    cycle(f);
+    cycle(f);
+    (void)next(f, LS_CEV_ENABLED);
+    g_drives.home_cycles = 3;
+    g_drives.home_fails = true;
+    post_home(f, 1u << 2, 42);
+    post_home(f, 1u << 2, 43); /* while one runs */
+    cycle(f);
+    ev = next(f, LS_CEV_HOME_FAILED);
+    assert_int_equal(ev.ref_seq, 43);
+    assert_string_equal(ev.text, "a homing runs already");
+    for (int i = 0; i < 4; i++) {
+        cycle(f);
+    }
+    ev = next(f, LS_CEV_HOME_FAILED);
+    assert_int_equal(ev.ref_seq, 42);
+    assert_string_equal(ev.text, "joint 3 (node 0x23): homing failed: the drive reports a homing error (statusword "
+                                 "0x2637, bit 13)");
+    assert_true(snap(f).enabled); /* a failed homing is no fault: the arm holds */
+    /* an arm without homing says so */
+    fx_t *g = fx_init(false);
+    enable(g);
+    post_home(g, 1u, 44);
+    cycle(g);
+    ev = next(g, LS_CEV_HOME_FAILED);
+    assert_string_equal(ev.text, "this arm has no homing: its joints' positions are absolute (LS_EUNSUPPORTED)");
 }
 
 static void test_the_drives_reports_reach_the_comms_thread(void **state)
@@ -1479,6 +1615,8 @@ int main(void)
         cmocka_unit_test(test_disable_cancels_an_enable_in_progress),
         cmocka_unit_test(test_a_joint_that_faults_under_control_faults_the_arm),
         cmocka_unit_test(test_a_drive_fault_while_moving_stops_the_others_along_the_path_then_disables),
+        cmocka_unit_test(test_motion_waits_for_a_required_homing_which_holds_the_new_position),
+        cmocka_unit_test(test_a_homing_is_refused_off_or_busy_and_a_failure_names_the_joint),
         cmocka_unit_test(test_the_drives_reports_reach_the_comms_thread),
         cmocka_unit_test(test_world_steps_every_cycle),
         cmocka_unit_test(test_enable_without_arm_fails),

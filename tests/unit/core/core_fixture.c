@@ -460,6 +460,14 @@ bool has_data(const ls_Notice *n, const char *item)
 }
 
 /* The loop posts a motion event as the control loop does (ls_control.c ev_push). */
+/* The loop's side of its event ring: `ev` posted for the core to take. */
+static void ring_post(const ls_ctl_event_t *ev)
+{
+    const unsigned head = atomic_load(&g_ctl.ev_head);
+    g_ctl.ev_ring[head % LS_CTL_QUEUE_LEN] = *ev;
+    atomic_store(&g_ctl.ev_head, head + 1u);
+}
+
 void loop_posts(ls_motion_event_kind_t kind, uint32_t ref_seq)
 {
     ls_ctl_event_t ev;
@@ -467,9 +475,36 @@ void loop_posts(ls_motion_event_kind_t kind, uint32_t ref_seq)
     ev.kind = LS_CEV_MOTION;
     ev.motion.kind = kind;
     ev.motion.ref_seq = ref_seq;
-    const unsigned head = atomic_load(&g_ctl.ev_head);
-    g_ctl.ev_ring[head % LS_CTL_QUEUE_LEN] = ev;
-    atomic_store(&g_ctl.ev_head, head + 1u);
+    ring_post(&ev);
+}
+
+/* The loop posts an event of `kind` with `text` (the homing's end). */
+void loop_posts_event(ls_cev_kind_t kind, uint32_t ref_seq, const char *text)
+{
+    ls_ctl_event_t ev;
+    memset(&ev, 0, sizeof ev);
+    ev.kind = kind;
+    ev.ref_seq = ref_seq;
+    snprintf(ev.text, sizeof ev.text, "%s", text);
+    ring_post(&ev);
+}
+
+const ls_Response *send_command_from(uint8_t addr, const char *input)
+{
+    ls_SendCommandReq *sc = &req(ls_Request_send_command_tag)->cmd.send_command;
+    snprintf(sc->input, sizeof sc->input, "%s", input);
+    return send_req(addr);
+}
+
+/* The response to seq `seq` among what the device sent, or NULL. */
+const ls_Response *response_to(uint32_t seq)
+{
+    for (size_t i = 0; i < g_nrx; i++) {
+        if (g_rx[i].which_msg == ls_Downlink_response_tag && g_rx[i].msg.response.seq == seq) {
+            return &g_rx[i].msg.response;
+        }
+    }
+    return NULL;
 }
 
 int g_halt_posts;

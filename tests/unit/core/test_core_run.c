@@ -1,7 +1,7 @@
 /* The controller core, black box (core_fixture.h). The run (docs/state-
  * machine.md "Motion lifecycle"): loop events, halts, deactivate while moving,
- * a path's auxiliary commands and cycles, the final notices, and when the tick
- * acts. */
+ * a path's auxiliary commands and cycles, the final notices, when the tick
+ * acts, and the drives' homing that motion waits for (sendCommand home). */
 #include "core_fixture.h"
 
 /* A request is answered from the state as of its arrival: the loop's events
@@ -256,6 +256,90 @@ static void test_next_deadline_of_watches_and_a_halt(void **state)
     assert_true(ls_core_next_deadline_us(&g_core, g_now + 400000) > g_now + 400000 + LS_CORE_SAMPLE_US);
 }
 
+/* docs/protocol.md "Drives": sendCommand home runs the drives' homing and
+ * answers when it ends; until the joints that must be homed are, nothing moves. */
+static void test_home_answers_when_the_homing_ends_and_motion_waits_for_it(void **state)
+{
+    (void)state;
+    setup_core(ls_State_RESTING);
+    atomic_store(&g_ctl.plan_slot_busy, false);
+    memcpy(g_snap.q_cmd_rad, k_home, sizeof k_home);
+    g_snap.enabled = true;
+    g_snap.home_timeout_ms = 30000;
+    g_snap.home_required = 1u << 1;
+    g_snap.unhomed = 1u << 1;
+    /* a move first: refused naming the joint */
+    ls_MoveAbsoluteReq *m = &req(ls_Request_move_absolute_tag)->cmd.move_absolute;
+    snprintf(m->point_name, sizeof m->point_name, "p1");
+    m->values_count = 6;
+    m->has_frame = true;
+    m->frame = ls_ReferenceFrame_JOINT_FRAME;
+    memcpy(m->values, k_home, sizeof k_home);
+    m->values[0] += 0.5;
+    const ls_Response *r = must(HOST_A);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_WRONG_STATE_ERR);
+    assert_string_equal(r->ret_msg, "moveAbsolute refused, nothing moved: joint 2 must be homed first (an incremental "
+                                    "encoder): send sendCommand home");
+    assert_int_equal(g_nposted, 0);
+    /* the homing: posted for the joints that must be homed, answered later */
+    assert_null(send_command_from(HOST_A, "home"));
+    const uint32_t seq = g_seq;
+    assert_int_equal(g_nposted, 1);
+    assert_int_equal(g_posted[0].kind, LS_CTL_HOME);
+    assert_int_equal(g_posted[0].home.joints, 1u << 1);
+    assert_int_equal(g_posted[0].ref_seq, seq);
+    /* meanwhile another session's request to home is refused as busy, a move too */
+    g_snap.homing = true;
+    r = send_command_from(HOST_B, "home 3");
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_NOT_OWNER_ERR);
+    loop_posts_event(LS_CEV_HOMED, seq, "");
+    g_snap.homing = false;
+    g_snap.unhomed = 0u;
+    ls_core_tick(&g_core, g_now);
+    r = response_to(seq);
+    assert_non_null(r);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_EXEC_OK);
+    assert_string_equal(r->ret_msg, "homed: joint 2");
+    assert_non_null(strstr(events_text(), "sendCommand home: joint 2 homed"));
+    /* a failure names the joint and what its drive said */
+    assert_null(send_command_from(HOST_A, "home 2,3"));
+    const uint32_t seq2 = g_seq;
+    assert_int_equal(g_posted[1].home.joints, (1u << 1) | (1u << 2));
+    loop_posts_event(LS_CEV_HOME_FAILED, seq2, "joint 3 (node 0x23): homing failed: the drive reports a homing error");
+    ls_core_tick(&g_core, g_now);
+    r = response_to(seq2);
+    assert_non_null(r);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_ERR);
+    assert_string_equal(
+        r->ret_msg, "sendCommand home failed: joint 3 (node 0x23): homing failed: the drive reports a homing error");
+}
+
+static void test_home_is_refused_naming_what_is_wrong(void **state)
+{
+    (void)state;
+    setup_core(ls_State_LOCKED);
+    g_snap.home_timeout_ms = 30000;
+    const ls_Response *r = send_command_from(HOST_A, "home");
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_WRONG_STATE_ERR);
+    assert_string_equal(r->ret_msg, "sendCommand home is valid in RESTING (drives on, at rest), the device is LOCKED: "
+                                    "activate first");
+    g_core.state = ls_State_RESTING;
+    r = send_command_from(HOST_A, "home 0");
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_ERR);
+    assert_string_equal(
+        r->ret_msg, "sendCommand home: '0' is no joint: name joints 1..6, or none for every joint that must be homed");
+    r = send_command_from(HOST_A, "home");
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_ERR); /* none must be homed, none named */
+    assert_string_equal(r->ret_msg, "sendCommand home: no joint must be homed here ([joint.N] home_required): name "
+                                    "the joints to home, e.g. 'home 2'");
+    g_snap.home_timeout_ms = 0; /* an arm without homing */
+    r = send_command_from(HOST_A, "home 1");
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_UNSUPPORTED_ERR);
+    r = send_command_from(HOST_A, "drives");
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_UNSUPPORTED_ERR); /* no drives to read */
+    assert_int_equal(g_nposted, 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -269,6 +353,8 @@ int main(void)
         cmocka_unit_test(test_final_notice_writes_a_joint_at_rest_as_0),
         cmocka_unit_test(test_next_deadline_is_when_the_tick_acts),
         cmocka_unit_test_setup(test_next_deadline_of_watches_and_a_halt, setup_locked),
+        cmocka_unit_test(test_home_answers_when_the_homing_ends_and_motion_waits_for_it),
+        cmocka_unit_test(test_home_is_refused_naming_what_is_wrong),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
