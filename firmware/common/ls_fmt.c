@@ -599,6 +599,20 @@ int ls_fmt_text(char *buf, size_t cap, const char *fmt, ...)
     return n;
 }
 
+void ls_fmt_append(char *buf, size_t cap, size_t *len, const char *fmt, ...)
+{
+    if (*len + 1u >= cap) {
+        return;
+    }
+    va_list ap;
+    va_start(ap, fmt);
+    const int w = ls_fmt_vprint(buf + *len, cap - *len, fmt, ap);
+    va_end(ap);
+    if (w > 0) {
+        *len += (size_t)w < cap - *len ? (size_t)w : cap - *len - 1u;
+    }
+}
+
 /* ------------------------------------------------------------------ parser */
 
 /* Significant digits kept exactly; any further nonzero digit only makes the

@@ -42,6 +42,14 @@ int ls_fmt_vprint(char *buf, size_t cap, const char *fmt, va_list ap) __attribut
 int ls_fmt_text(char *buf, size_t cap, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 int ls_fmt_vtext(char *buf, size_t cap, const char *fmt, va_list ap) __attribute__((format(printf, 3, 0)));
 
+/* Append to a text being built in buf (cap bytes in all, *len used, kept
+ * NUL-terminated): formats at buf + *len as ls_fmt_vprint and advances *len
+ * by what fits. Once the text has filled buf (*len + 1 >= cap) nothing more
+ * is written: a line that did not fit is cut, and the ones after it are
+ * left out. For texts of several lines built piece by piece (sendCommand's
+ * answers). No allocation; cost as ls_fmt_vprint. */
+void ls_fmt_append(char *buf, size_t cap, size_t *len, const char *fmt, ...) __attribute__((format(printf, 4, 5)));
+
 /* strtod's contract for decimal text: skips leading white space (isspace
  * in the C locale), takes an optional sign, then "inf", "infinity", "nan"
  * or "nan(chars)" (any case), or decimal digits with an optional '.' and

@@ -203,14 +203,20 @@ static void enable_failed(ls_control_t *c, const char *text)
     ev_push(c, &ev);
 }
 
-static void cmd_failed(ls_control_t *c, uint32_t ref_seq, const char *text)
+/* An event that answers a command with a line of text. */
+static void text_event(ls_control_t *c, ls_cev_kind_t kind, uint32_t ref_seq, const char *text)
 {
     ls_ctl_event_t ev;
     memset(&ev, 0, sizeof ev);
-    ev.kind = LS_CEV_CMD_FAILED;
+    ev.kind = kind;
     ev.ref_seq = ref_seq;
     ls_fmt_print(ev.text, sizeof ev.text, "%s", text);
     ev_push(c, &ev);
+}
+
+static void cmd_failed(ls_control_t *c, uint32_t ref_seq, const char *text)
+{
+    text_event(c, LS_CEV_CMD_FAILED, ref_seq, text);
 }
 
 /* Joints that must be homed and are not: bit j for joint j + 1. */
@@ -528,16 +534,6 @@ static void drive_fault(ls_control_t *c, uint32_t bad_mask, const char *line)
     }
 }
 
-static void home_event(ls_control_t *c, ls_cev_kind_t kind, uint32_t ref_seq, const char *text)
-{
-    ls_ctl_event_t ev;
-    memset(&ev, 0, sizeof ev);
-    ev.kind = kind;
-    ev.ref_seq = ref_seq;
-    ls_fmt_print(ev.text, sizeof ev.text, "%s", text);
-    ev_push(c, &ev);
-}
-
 /* LS_CTL_HOME: the drives' own homing of `joints`, the drives on and the
  * arm at rest; the arm holds where it is meanwhile. */
 static void home_joints(ls_control_t *c, const ls_ctl_cmd_t *cmd)
@@ -563,7 +559,7 @@ static void home_joints(ls_control_t *c, const ls_ctl_cmd_t *cmd)
                      ls_err_name(r));
         why = text;
     }
-    home_event(c, LS_CEV_HOME_FAILED, cmd->ref_seq, why); /* a homing under way keeps its own */
+    text_event(c, LS_CEV_HOME_FAILED, cmd->ref_seq, why); /* a homing under way keeps its own */
 }
 
 /* A homing under way: its end, once no joint of it is HOMING any more.
@@ -593,13 +589,13 @@ static void check_homing(ls_control_t *c)
         memset(c->qd_cmd, 0, sizeof c->qd_cmd);
     }
     if (failed < 0) {
-        home_event(c, LS_CEV_HOMED, c->home_ref_seq, "");
+        text_event(c, LS_CEV_HOMED, c->home_ref_seq, "");
         return;
     }
     const hal_joint_status_t *st = &c->joints[failed];
     char line[LS_CTL_TEXT_LEN];
     joint_line(line, sizeof line, failed, st, st->text[0] != '\0' ? st->text : "homing failed");
-    home_event(c, LS_CEV_HOME_FAILED, c->home_ref_seq, line);
+    text_event(c, LS_CEV_HOME_FAILED, c->home_ref_seq, line);
 }
 
 /* The drives' states, once per cycle: finish an enable, and fault when a

@@ -1,7 +1,6 @@
 /* The drives' own operations through the vendor hook (cmd_drives.h). */
 #include "cmd_drives.h"
 
-#include <stdarg.h>
 #include <string.h>
 
 #include "ls_control.h"
@@ -13,20 +12,7 @@ typedef struct {
     size_t cap, len;
 } text_t;
 
-static void put(text_t *t, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
-static void put(text_t *t, const char *fmt, ...)
-{
-    if (t->len + 1u >= t->cap) {
-        return;
-    }
-    va_list ap;
-    va_start(ap, fmt);
-    const int w = ls_fmt_vprint(t->buf + t->len, t->cap - t->len, fmt, ap);
-    va_end(ap);
-    if (w > 0) {
-        t->len += (size_t)w < t->cap - t->len ? (size_t)w : t->cap - t->len - 1u;
-    }
-}
+#define put(t, ...) ls_fmt_append((t)->buf, (t)->cap, &(t)->len, __VA_ARGS__)
 
 /* "joints 2, 3" / "joint 2" of a mask (bit j: joint j + 1). */
 static void joint_list(uint32_t mask, char *out, size_t cap)

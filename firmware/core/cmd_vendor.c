@@ -11,7 +11,6 @@
  *   drives   the drives' readouts: a line per joint, `drives N` one in full, `drives bus` the master's counters
  *   home     the drives' own homing: `home` the joints that must be homed, `home 2 3` those (cmd_drives.h)
  * Output is plain text, one item per line, at most 1 KiB. */
-#include <stdarg.h>
 #include <string.h>
 
 #include "cmd_drives.h"
@@ -24,20 +23,7 @@ typedef struct {
     size_t cap, len;
 } out_t;
 
-static void put(out_t *o, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
-static void put(out_t *o, const char *fmt, ...)
-{
-    if (o->len >= o->cap) {
-        return;
-    }
-    va_list ap;
-    va_start(ap, fmt);
-    int w = ls_fmt_vprint(o->buf + o->len, o->cap - o->len, fmt, ap);
-    va_end(ap);
-    if (w > 0) {
-        o->len += (size_t)w < o->cap - o->len ? (size_t)w : o->cap - o->len - 1u;
-    }
-}
+#define put(o, ...) ls_fmt_append((o)->buf, (o)->cap, &(o)->len, __VA_ARGS__)
 
 int32_t ls_h_send_command(struct ls_core *core, struct ls_call *call)
 {

@@ -3,7 +3,6 @@
 #include "ls_cia402.h"
 
 #include <math.h>
-#include <stdarg.h>
 
 #include "ls_canopen.h"
 #include "ls_fmt.h"
@@ -240,22 +239,6 @@ int ls_402_step(ls_402_axis_t *ax, uint16_t statusword, ls_402_want_t want, bool
     return LS_OK;
 }
 
-/* Appends to buf at *len (kept NUL-terminated, cut at cap). */
-static void append(char *buf, size_t cap, size_t *len, const char *fmt, ...) __attribute__((format(printf, 4, 5)));
-static void append(char *buf, size_t cap, size_t *len, const char *fmt, ...)
-{
-    if (*len + 1u >= cap) {
-        return;
-    }
-    va_list ap;
-    va_start(ap, fmt);
-    int n = ls_fmt_vprint(buf + *len, cap - *len, fmt, ap);
-    va_end(ap);
-    if (n > 0) {
-        *len += (size_t)n < cap - *len ? (size_t)n : cap - *len - 1u;
-    }
-}
-
 int ls_402_describe(const ls_402_out_t *out, char *buf, size_t cap)
 {
     if (out == NULL || buf == NULL || cap == 0u) {
@@ -266,37 +249,37 @@ int ls_402_describe(const ls_402_out_t *out, char *buf, size_t cap)
     switch (out->error) {
     case LS_402_STUCK:
         if (out->stuck_in == LS_402_NOT_READY_TO_SWITCH_ON || out->stuck_in == LS_402_FAULT_REACTION_ACTIVE) {
-            append(buf, cap, &len, "stuck in %s: not left by itself within %lu cycles",
-                   ls_402_state_name(out->stuck_in), (unsigned long)out->timeout_cycles);
+            ls_fmt_append(buf, cap, &len, "stuck in %s: not left by itself within %lu cycles",
+                          ls_402_state_name(out->stuck_in), (unsigned long)out->timeout_cycles);
         } else if (out->stuck_in == LS_402_UNKNOWN) {
-            append(buf, cap, &len, "the statusword shows no CiA 402 state for %lu cycles",
-                   (unsigned long)out->timeout_cycles);
+            ls_fmt_append(buf, cap, &len, "the statusword shows no CiA 402 state for %lu cycles",
+                          (unsigned long)out->timeout_cycles);
         } else {
-            append(buf, cap, &len, "stuck in %s: %s (0x%04X) not followed within %lu cycles",
-                   ls_402_state_name(out->stuck_in), ls_402_command_name(out->stuck_command),
-                   (unsigned)out->stuck_command, (unsigned long)out->timeout_cycles);
+            ls_fmt_append(buf, cap, &len, "stuck in %s: %s (0x%04X) not followed within %lu cycles",
+                          ls_402_state_name(out->stuck_in), ls_402_command_name(out->stuck_command),
+                          (unsigned)out->stuck_command, (unsigned long)out->timeout_cycles);
         }
         break;
     case LS_402_STAYS_IN_FAULT:
-        append(buf, cap, &len, "stays in FAULT after %u fault resets", (unsigned)out->reset_edges_sent);
+        ls_fmt_append(buf, cap, &len, "stays in FAULT after %u fault resets", (unsigned)out->reset_edges_sent);
         break;
     case LS_402_OK:
     default:
-        append(buf, cap, &len, "%s", ls_402_state_name(out->state));
+        ls_fmt_append(buf, cap, &len, "%s", ls_402_state_name(out->state));
         if (out->warning) {
-            append(buf, cap, &len, ", warning");
+            ls_fmt_append(buf, cap, &len, ", warning");
         }
         if (out->following_error) {
-            append(buf, cap, &len, ", following error");
+            ls_fmt_append(buf, cap, &len, ", following error");
         }
         if (out->target_ignored) {
-            append(buf, cap, &len, ", target ignored");
+            ls_fmt_append(buf, cap, &len, ", target ignored");
         }
         break;
     }
-    append(buf, cap, &len, " (statusword 0x%04X)", (unsigned)out->statusword);
+    ls_fmt_append(buf, cap, &len, " (statusword 0x%04X)", (unsigned)out->statusword);
     if (!out->remote) {
-        append(buf, cap, &len, "; the drive is under local control (statusword bit 9 = 0)");
+        ls_fmt_append(buf, cap, &len, "; the drive is under local control (statusword bit 9 = 0)");
     }
     return (int)len;
 }

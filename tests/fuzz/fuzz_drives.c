@@ -2,9 +2,8 @@
  * frames of its drives' services and any sequence of the HAL arm's calls.
  *
  * Once per process the arm boots against the simulated drives in this
- * process (hal/sim/drives: two in-memory links back to back) with every
- * readout mapped and joint 2 homing with the mode in its PDOs, enables,
- * and is saved. Each input starts from that saved arm (its pointers point
+ * process (tests/support/drive_rig.h) with every readout mapped and joint 2
+ * homing with the mode in its PDOs, enables, and is saved. Each input starts from that saved arm (its pointers point
  * into itself, so a copy back is the same arm), with the simulated drives
  * gone: the input is the only peer. Its bytes are a script:
  *   0: a frame: a service (TPDO1/TPDO2 with any bytes and length, EMCY,
@@ -18,203 +17,43 @@
  * an 11-bit data frame of 0..8 bytes; status() and readout() say what they
  * promise (states in range, a text that ends, static names that are
  * strings, a homing state in range). */
-#include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "hal_sim_drives.h"
-#include "hal_sim_world.h"
+#include "drive_rig.h"
 #include "ls_canopen.h"
 #include "ls_drives.h"
-#include "ls_robot_model_sim.h"
 
-#define NJ 6
-#define QUEUE 512
-
-typedef struct {
-    hal_can_frame_t f[QUEUE];
-    size_t head, count;
-} queue_t;
-
-static queue_t g_to_sim, g_to_master;
-static bool g_sim_attached; /* the simulated drives answer (boot only) */
-
-static void push(queue_t *q, const hal_can_frame_t *f)
-{
-    if (q->count < QUEUE) {
-        q->f[(q->head + q->count++) % QUEUE] = *f;
-    }
-}
-
-static int pop(queue_t *q, hal_can_frame_t *f)
-{
-    if (q->count == 0) {
-        return LS_EAGAIN;
-    }
-    *f = q->f[q->head];
-    q->head = (q->head + 1) % QUEUE;
-    q->count--;
-    return 1;
-}
-
-static int master_send(void *self, const hal_can_frame_t *f)
-{
-    (void)self;
-    if ((f->flags & (HAL_CAN_F_EXT | HAL_CAN_F_RTR)) != 0u || f->id > 0x7FFu || f->len > 8u) {
-        abort(); /* the master sends 11-bit data frames only */
-    }
-    if (g_sim_attached) {
-        push(&g_to_sim, f);
-    }
-    return LS_OK;
-}
-static int master_recv(void *self, hal_can_frame_t *f)
-{
-    (void)self;
-    return pop(&g_to_master, f);
-}
-static int sim_send(void *self, const hal_can_frame_t *f)
-{
-    (void)self;
-    push(&g_to_master, f);
-    return LS_OK;
-}
-static int sim_recv(void *self, hal_can_frame_t *f)
-{
-    (void)self;
-    return pop(&g_to_sim, f);
-}
-static int no_fd(void *self)
-{
-    (void)self;
-    return -1;
-}
-static int ok_status(void *self, hal_can_status_t *out)
-{
-    (void)self;
-    memset(out, 0, sizeof *out);
-    return LS_OK;
-}
-static void no_close(void *self)
-{
-    (void)self;
-}
-
-static const hal_can_ops_t k_master_ops = {
-    .send = master_send, .recv = master_recv, .poll_fd = no_fd, .status = ok_status, .close = no_close
-};
-static const hal_can_ops_t k_sim_ops = {
-    .send = sim_send, .recv = sim_recv, .poll_fd = no_fd, .status = ok_status, .close = no_close
-};
-static hal_can_link_t g_master_link = { .ops = &k_master_ops, .self = NULL, .name = "fuzz-master" };
-static hal_can_link_t g_sim_link = { .ops = &k_sim_ops, .self = NULL, .name = "fuzz-sim" };
+#define NJ DRIVE_RIG_JOINTS
 
 static ls_drives_t g_d, g_saved;
 static uint64_t g_saved_now, g_now;
 static hal_arm_t g_arm;
 
-static ls_drives_config_t config(void)
-{
-    ls_drives_config_t c;
-    memset(&c, 0, sizeof c);
-    c.n_joints = NJ;
-    c.link = &g_master_link;
-    c.control_period_us = 1000;
-    c.cycle_ticks = 4;
-    c.master_node = 0x7F;
-    c.heartbeat_ms = 100;
-    c.heartbeat_timeout_ms = 350;
-    c.boot_timeout_ms = 2000;
-    c.abort_option = 3;
-    c.stale_cycles = 5;
-    for (int j = 0; j < NJ; j++) {
-        ls_drive_joint_t *dj = &c.joint[j];
-        dj->node_id = (uint8_t)(0x21 + j);
-        dj->scale.counts_per_rad = 100000.0;
-        dj->scale.sign = j % 2 == 0 ? 1 : -1;
-        dj->write_consumer_hb = dj->write_abort_option = dj->write_interp_period = true;
-        dj->write_pdo_type = dj->write_tpdo_inhibit = dj->feedforward = true;
-        for (int p = 0; p < 4; p++) {
-            dj->rpdo_present[p] = dj->tpdo_present[p] = true;
-        }
-        dj->can_home = dj->read_limits = true;
-        dj->map_mode = j == 1;
-        dj->home_required = j == 1;
-        dj->tpdo_room[0] = dj->tpdo_room[1] = 8;
-        dj->brake = (ls_drive_obj_t){ .map = true, .index = SD_OBJ_BRAKE_STO, .sub = SD_SUB_BRAKE_ENGAGED, .bytes = 1 };
-        dj->sto = (ls_drive_obj_t){
-            .map = true, .index = SD_OBJ_BRAKE_STO, .sub = SD_SUB_STO_ACTIVE, .bytes = 1, .bit = 0, .inverted = j == 3
-        };
-        dj->temperature = (ls_drive_obj_t){
-            .map = true, .index = SD_OBJ_BRAKE_STO, .sub = SD_SUB_TEMPERATURE, .bytes = 2, .is_signed = true
-        };
-        dj->temperature_scale = 0.1;
-        dj->torque = (ls_drive_obj_t){ .map = true, .index = LS_CO_OBJ_TORQUE_ACTUAL, .bytes = 2, .is_signed = true };
-        dj->velocity =
-            (ls_drive_obj_t){ .map = true, .index = LS_CO_OBJ_VELOCITY_ACTUAL, .bytes = 4, .is_signed = true };
-    }
-    return c;
-}
-
-static void step_ms(unsigned ms)
-{
-    for (unsigned k = 0; k < ms; k++) {
-        g_now += 1000u;
-        (void)hal_arm_update(&g_arm, g_now);
-        if (g_sim_attached) {
-            (void)hal_sim_drives_poll(g_now);
-        }
-    }
-}
-
 int LLVMFuzzerInitialize(int *argc, char ***argv)
 {
     (void)argc;
     (void)argv;
-    hal_sim_arm_model_t am;
-    ls_robot_model_to_sim(&ls_robot_model_default, &am);
-    hal_sim_world_config_t wc = { .arm = &am };
+    /* joint 2 homes with the mode in its PDOs, the others over SDO; signs
+     * and an inverted STO bit vary the decoding */
+    ls_drives_config_t c = drive_rig_config(false);
+    c.joint[1].map_mode = true;
+    for (int j = 1; j < NJ; j += 2) {
+        c.joint[j].scale.sign = -1;
+    }
+    c.joint[3].sto.inverted = true;
     char msg[200] = "";
-    if (hal_sim_world_open(&wc, msg, sizeof msg) != LS_OK) {
-        fprintf(stderr, "fuzz_drives: world: %s\n", msg);
+    if (drive_rig_open(&c, &g_d, &g_arm, &g_now, msg, sizeof msg) != LS_OK) {
+        fprintf(stderr, "fuzz_drives: %s\n", msg);
         abort();
     }
-    hal_sim_drives_config_t dc = { .link = &g_sim_link, .n_drives = NJ, .counts_per_rad = 100000.0 };
-    for (int j = 0; j < NJ; j++) {
-        dc.drives[j] = (hal_sim_drive_config_t){ (uint8_t)(0x21 + j), (uint8_t)j, 0 };
-    }
-    g_now = 1000000u;
-    if (hal_sim_drives_open(&dc, g_now, msg, sizeof msg) != LS_OK) {
-        fprintf(stderr, "fuzz_drives: drives: %s\n", msg);
-        abort();
-    }
-    g_sim_attached = true;
-    g_to_master.count = 0; /* their boot-ups before the master listened */
-    ls_drives_config_t c = config();
-    if (ls_drives_init(&g_d, &c) != LS_OK || ls_drives_boot(&g_d, g_now) != LS_OK) {
-        abort();
-    }
-    int r = 0;
-    for (int ms = 0; ms < 5000 && r == 0; ms++) {
-        g_now += 1000u;
-        r = ls_drives_service(&g_d, g_now);
-        (void)hal_sim_drives_poll(g_now);
-    }
-    if (r != 1) {
-        fprintf(stderr, "fuzz_drives: boot: %s\n", ls_drives_text(&g_d));
-        abort();
-    }
-    ls_drives_arm(&g_d, &g_arm);
     (void)hal_arm_enable(&g_arm, true);
-    step_ms(100);
+    drive_rig_step(&g_arm, &g_now, 100);
     /* from here on the input is the drives' only voice */
-    g_sim_attached = false;
-    hal_sim_drives_close();
-    hal_sim_world_close();
-    g_to_sim.count = g_to_master.count = 0;
+    drive_rig_detach();
     g_saved = g_d;
     g_saved_now = g_now;
     return 0;
@@ -259,7 +98,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     g_d = g_saved;
     g_now = g_saved_now;
-    g_to_sim.count = g_to_master.count = 0;
+    drive_rig_clear();
     ls_drives_arm(&g_d, &g_arm);
     size_t i = 0;
     while (i < size) {
@@ -275,10 +114,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             for (uint8_t k = 0; k < f.len && i < size; k++) {
                 f.data[k] = data[i++];
             }
-            push(&g_to_master, &f);
+            drive_rig_inject(&f);
             break;
         }
-        case 1: step_ms(1u + (unsigned)(a % 64u)); break;
+        case 1: drive_rig_step(&g_arm, &g_now, 1u + (unsigned)(a % 64u)); break;
         case 2: (void)hal_arm_enable(&g_arm, (a & 1u) != 0u); break;
         case 3: (void)hal_arm_home(&g_arm, a); break;
         case 4: {
@@ -294,5 +133,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         }
     }
     check_views();
+    if (drive_rig_bad_frames() != 0u) {
+        abort(); /* the arm sends 11-bit data frames only */
+    }
     return 0;
 }

@@ -21,6 +21,9 @@ from pathlib import Path
 import can
 import pytest
 
+from landscape._generated import landscape_pb2 as pb
+from landscape.supervisor import Supervisor
+
 ROOT = Path(__file__).resolve().parents[2]
 BUILD = Path(os.environ.get("LS_BUILD_DIR", ROOT / "build"))
 LANDSCAPED = BUILD / "bin" / "landscaped"
@@ -166,11 +169,25 @@ def controller(tmp_path: Path) -> Iterator[Controller]:
     try:
         yield c
     finally:
-        code = c.stop()
-        # A crash, a sanitizer report or a leak at shutdown must fail the test that caused it.
-        log = c.log.read_text(errors="replace")
-        assert code == 0, f"landscaped exited with {code}:\n{log[-4000:]}"
-        assert "Sanitizer" not in log, log[-4000:]
+        stop_clean(c)
+
+
+def stop_clean(c: Controller) -> None:
+    """Stop a controller a test started. A crash, a sanitizer report or a leak at shutdown
+    must fail the test that caused it."""
+    code = c.stop()
+    log = c.log.read_text(errors="replace")
+    assert code == 0, f"landscaped exited with {code}:\n{log[-4000:]}"
+    assert "Sanitizer" not in log, log[-4000:]
+
+
+def final_notice(sup: Supervisor, seq: int, seen: list[pb.Notice], timeout_s: float = 10) -> pb.Notice:
+    """The final notice of request `seq`; every notice until then goes to `seen`."""
+    for n in sup.notices(timeout_s=timeout_s):
+        seen.append(n)
+        if n.ref_seq == seq and n.final:
+            return n
+    raise AssertionError(f"no final notice for seq {seq} within {timeout_s} s")
 
 
 def open_slcan(pty: str) -> can.BusABC:

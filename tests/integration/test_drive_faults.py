@@ -15,7 +15,7 @@ from pathlib import Path
 import can
 import pytest
 
-from conftest import Controller, start_controller
+from conftest import Controller, final_notice, start_controller
 from landscape import errors
 from landscape._generated import landscape_pb2 as pb
 from landscape.supervisor import Supervisor, notice_data
@@ -88,13 +88,7 @@ def _joints(sup: Supervisor) -> list[float]:
     return list(sup.get_robot_position().result["joints"])
 
 
-def _final(sup: Supervisor, seq: int, seen: list[pb.Notice], timeout_s: float = 10) -> pb.Notice:
-    """The final notice of `seq`; every notice until then goes to `seen`."""
-    for n in sup.notices(timeout_s=timeout_s):
-        seen.append(n)
-        if n.ref_seq == seq and n.final:
-            return n
-    raise AssertionError(f"no final notice for seq {seq} within {timeout_s} s")
+_final = final_notice
 
 
 def _moving(sup: Supervisor) -> int:

@@ -19,7 +19,15 @@ import canopen
 import pytest
 from simdrives_rig import EDS, canopen_network
 
-from conftest import LANDSCAPED, Controller, drive_config, start_controller, start_simdrives, stop_drives
+from conftest import (
+    LANDSCAPED,
+    Controller,
+    drive_config,
+    start_controller,
+    start_simdrives,
+    stop_clean,
+    stop_drives,
+)
 from landscape import errors
 from landscape._generated import landscape_pb2 as pb
 from landscape.supervisor import Supervisor
@@ -49,10 +57,7 @@ def rig(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[tuple[Contr
             yield c, sup
     finally:
         bus.shutdown()
-        code = c.stop()
-        log = c.log.read_text(errors="replace")
-        assert code == 0, log[-4000:]
-        assert "Sanitizer" not in log, log[-4000:]
+        stop_clean(c)
 
 
 def _joints(sup: Supervisor) -> list[float]:
@@ -204,7 +209,7 @@ def test_the_host_view_lists_every_drive(tmp_path: Path, monkeypatch: pytest.Mon
         assert "0x22" in lines[2] and "not_homed*" in lines[2] and "engaged" in lines[2], lines
         assert lines[-1].startswith("bus: frames_in="), lines
     finally:
-        assert c.stop() == 0, c.log.read_text()[-4000:]
+        stop_clean(c)
 
 
 def test_a_drive_range_narrower_than_the_models_refuses_the_start(tmp_path: Path) -> None:

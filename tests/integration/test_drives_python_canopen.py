@@ -15,6 +15,7 @@ import signal
 import subprocess
 import time
 from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -23,7 +24,7 @@ import canopen
 import pytest
 
 from canopen_local_drives import EPOS4_DCF, ROS2_EDS, LocalDrive, PtyBridge, wait_until
-from conftest import LANDSCAPED
+from conftest import LANDSCAPED, final_notice
 from landscape._generated import landscape_pb2 as pb
 from landscape.supervisor import Supervisor, notice_data
 
@@ -226,15 +227,21 @@ def test_activate_resets_a_drive_in_fault_and_names_one_that_stays_in_fault(rig:
         bus.shutdown()
 
 
-def _final(s: Supervisor, seq: int, seen: list[pb.Notice], timeout_s: float = 15) -> pb.Notice:
-    for n in s.notices(timeout_s=timeout_s):
-        seen.append(n)
-        if n.ref_seq == seq and n.final:
-            return n
-    raise AssertionError(f"no final notice for seq {seq} within {timeout_s} s")
-
-
 TARGET = [0.4, -0.3, 0.5, 0.6, -0.5, 0.6]
+
+
+@contextmanager
+def _owner(rig: Rig, name: str) -> Iterator[Supervisor]:
+    """A supervisor on landscaped's pty that has locked the device and activated it."""
+    bus = can.Bus(interface="slcan", channel=str(rig.sup_pty), bitrate=1000000, sleep_after_open=0)
+    try:
+        with Supervisor(bus, client_name=name) as s:
+            s.lock()
+            s.activate()
+            list(s.notices(timeout_s=0.1))
+            yield s
+    finally:
+        bus.shutdown()
 
 
 def test_an_emcy_of_a_python_canopen_drive_ends_the_move_as_with_the_simulated_drives(rig: Rig) -> None:
@@ -242,59 +249,45 @@ def test_an_emcy_of_a_python_canopen_drive_ends_the_move_as_with_the_simulated_d
     motion's one final notice names the joint, the node and the code; the EMCY is an alarm to
     every supervisor; the drive's 0x603F is read back once the drives are off; activate resets
     the fault and the arm moves again."""
-    bus = can.Bus(interface="slcan", channel=str(rig.sup_pty), bitrate=1000000, sleep_after_open=0)
-    try:
-        with Supervisor(bus, client_name="emcy") as s:
-            s.lock()
-            s.activate()
-            list(s.notices(timeout_s=0.1))
-            seq = s.move_absolute("far", TARGET, speed_pct=10).seq
-            time.sleep(0.8)
-            rig.drives[2].emcy(0x8611)
-            seen: list[pb.Notice] = []
-            final = _final(s, seq, seen)
-            assert final.event_id == "moveAbsoluteFailed" and final.kind == pb.ALARM
-            d = notice_data(final)
-            assert d["reason"] == "fault" and d["fault"] == "joint 3 (node 0x23): FAULT, EMCY 0x8611 following error", d
-            st = s.get_motion_control_state().result
-            assert st["state"] == "LOCKED" and st["motion_control_state"] == "robot_stopped_on_error", st
-            seen += list(s.notices(timeout_s=2.0))
-            emcy = [notice_data(n) for n in seen if n.event_id == "driveEmcy"]
-            assert emcy and (emcy[0]["joint"], emcy[0]["node"], emcy[0]["code"]) == ("3", "0x23", "0x8611"), seen
-            assert any(notice_data(n).get("code") == "0x8611" for n in seen if n.event_id == "driveErrorCode"), seen
-            q = s.get_robot_position().result["joints"]
-            time.sleep(0.3)
-            assert s.get_robot_position().result["joints"] == pytest.approx(q, abs=1e-4)  # nothing resumes
-            s.activate()  # the master's reset edge clears the drive's FAULT
-            s.wait_complete(s.move_absolute("back", [0.0] * 6, speed_pct=10), timeout_s=30)
-    finally:
-        bus.shutdown()
+    with _owner(rig, "emcy") as s:
+        seq = s.move_absolute("far", TARGET, speed_pct=10).seq
+        time.sleep(0.8)
+        rig.drives[2].emcy(0x8611)
+        seen: list[pb.Notice] = []
+        final = final_notice(s, seq, seen, timeout_s=15)
+        assert final.event_id == "moveAbsoluteFailed" and final.kind == pb.ALARM
+        d = notice_data(final)
+        assert d["reason"] == "fault" and d["fault"] == "joint 3 (node 0x23): FAULT, EMCY 0x8611 following error", d
+        st = s.get_motion_control_state().result
+        assert st["state"] == "LOCKED" and st["motion_control_state"] == "robot_stopped_on_error", st
+        seen += list(s.notices(timeout_s=2.0))
+        emcy = [notice_data(n) for n in seen if n.event_id == "driveEmcy"]
+        assert emcy and (emcy[0]["joint"], emcy[0]["node"], emcy[0]["code"]) == ("3", "0x23", "0x8611"), seen
+        assert any(notice_data(n).get("code") == "0x8611" for n in seen if n.event_id == "driveErrorCode"), seen
+        q = s.get_robot_position().result["joints"]
+        time.sleep(0.3)
+        assert s.get_robot_position().result["joints"] == pytest.approx(q, abs=1e-4)  # nothing resumes
+        s.activate()  # the master's reset edge clears the drive's FAULT
+        s.wait_complete(s.move_absolute("back", [0.0] * 6, speed_pct=10), timeout_s=30)
 
 
 def test_a_python_canopen_drive_whose_heartbeat_stops_is_lost_until_activate_finds_it(rig: Rig) -> None:
     """Its PDOs go on, its heartbeat does not: the master's consumer time-out (600 ms) loses
     the node, the move ends naming it, activate is refused while it stays silent, and once it
     beats again activate configures it anew and the arm moves."""
-    bus = can.Bus(interface="slcan", channel=str(rig.sup_pty), bitrate=1000000, sleep_after_open=0)
-    try:
-        with Supervisor(bus, client_name="heartbeat") as s:
-            s.lock()
-            s.activate()
-            list(s.notices(timeout_s=0.1))
-            seq = s.move_absolute("far", TARGET, speed_pct=10).seq
-            time.sleep(0.5)
-            t0 = time.monotonic()
-            rig.drives[3].stop_heartbeat()
-            final = _final(s, seq, [])
-            took = time.monotonic() - t0
-            d = notice_data(final)
-            assert final.event_id == "moveAbsoluteFailed" and d["reason"] == "fault", d
-            assert d["fault"].startswith("joint 4 (node 0x24): ") and "heartbeat" in d["fault"], d
-            assert took < 2.0, f"the silent drive was noticed after {took:.2f} s"
-            rv = s.activate(check=False)
-            assert rv.ret_code != pb.CMD_EXEC_OK and "joint 4 (node 0x24)" in rv.ret_msg, rv.ret_msg
-            rig.drives[3].start_heartbeat()
-            s.activate()
-            s.wait_complete(s.move_absolute("back", [0.0] * 6, speed_pct=10), timeout_s=30)
-    finally:
-        bus.shutdown()
+    with _owner(rig, "heartbeat") as s:
+        seq = s.move_absolute("far", TARGET, speed_pct=10).seq
+        time.sleep(0.5)
+        t0 = time.monotonic()
+        rig.drives[3].stop_heartbeat()
+        final = final_notice(s, seq, [], timeout_s=15)
+        took = time.monotonic() - t0
+        d = notice_data(final)
+        assert final.event_id == "moveAbsoluteFailed" and d["reason"] == "fault", d
+        assert d["fault"].startswith("joint 4 (node 0x24): ") and "heartbeat" in d["fault"], d
+        assert took < 2.0, f"the silent drive was noticed after {took:.2f} s"
+        rv = s.activate(check=False)
+        assert rv.ret_code != pb.CMD_EXEC_OK and "joint 4 (node 0x24)" in rv.ret_msg, rv.ret_msg
+        rig.drives[3].start_heartbeat()
+        s.activate()
+        s.wait_complete(s.move_absolute("back", [0.0] * 6, speed_pct=10), timeout_s=30)

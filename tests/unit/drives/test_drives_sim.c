@@ -1,12 +1,13 @@
 /* The drive arm (firmware/drives/ls_drives.h) against the simulated drives
- * (hal/sim/drives) in one process: two in-memory links joined back to
- * back, time driven by the test, nothing sleeps. What the arm reports is
- * checked against what the simulated drive does (its world's joint, its
- * objects read over the same bus), never against the arm's own code:
- * homing with the mode in the PDOs and over SDO, the readouts (402 state,
- * mode, brake, safe torque off, temperature, torque, velocity), a homing
- * kept across disable and enable and lost when the drive boots again, a
- * homing interrupted, safe torque off refusing the enable, and the
+ * (hal/sim/drives) in one process (tests/support/drive_rig.h: two
+ * in-memory links joined back to back, time driven by the test, nothing
+ * sleeps). What the arm reports is checked against what the simulated
+ * drive does (its world's joint, its objects read over the same bus),
+ * never against the arm's own code: homing with the mode in the PDOs and
+ * over SDO, the readouts (402 state, mode, brake, safe torque off,
+ * temperature, torque, velocity), a homing kept across disable and enable
+ * and lost when the drive boots again, a homing interrupted, an enable
+ * right after a disable, safe torque off refusing the enable, and the
  * software position limits against a model's. */
 #include <math.h>
 #include <setjmp.h>
@@ -19,193 +20,32 @@
 
 #include <cmocka.h>
 
+#include "drive_rig.h"
 #include "hal_sim_drives.h"
 #include "hal_sim_world.h"
 #include "ls_canopen.h"
 #include "ls_drives.h"
-#include "ls_robot_model_sim.h"
 
-#define NJ 6
-#define CPR 100000.0     /* counts per radian, both sides */
-#define HOME_OFFSET 5000 /* 0x607C of joint 2: 0.05 rad after homing */
-#define QUEUE 4096
-
-/* ---- two links back to back ---- */
-
-typedef struct {
-    hal_can_frame_t f[QUEUE];
-    size_t head, count;
-} queue_t;
-
-static queue_t g_to_sim, g_to_master;
-
-static int q_send(queue_t *q, const hal_can_frame_t *f)
-{
-    if (q->count == QUEUE) {
-        return LS_EAGAIN;
-    }
-    q->f[(q->head + q->count++) % QUEUE] = *f;
-    return LS_OK;
-}
-
-static int q_recv(queue_t *q, hal_can_frame_t *f)
-{
-    if (q->count == 0) {
-        return LS_EAGAIN;
-    }
-    *f = q->f[q->head];
-    q->head = (q->head + 1) % QUEUE;
-    q->count--;
-    return 1;
-}
-
-static int master_send(void *self, const hal_can_frame_t *f)
-{
-    (void)self;
-    return q_send(&g_to_sim, f);
-}
-static int master_recv(void *self, hal_can_frame_t *f)
-{
-    (void)self;
-    return q_recv(&g_to_master, f);
-}
-static int sim_send(void *self, const hal_can_frame_t *f)
-{
-    (void)self;
-    return q_send(&g_to_master, f);
-}
-static int sim_recv(void *self, hal_can_frame_t *f)
-{
-    (void)self;
-    return q_recv(&g_to_sim, f);
-}
-static int no_fd(void *self)
-{
-    (void)self;
-    return -1;
-}
-static int ok_status(void *self, hal_can_status_t *out)
-{
-    (void)self;
-    memset(out, 0, sizeof *out);
-    return LS_OK;
-}
-static void no_close(void *self)
-{
-    (void)self;
-}
-
-static const hal_can_ops_t k_master_ops = {
-    .send = master_send, .recv = master_recv, .poll_fd = no_fd, .status = ok_status, .close = no_close
-};
-static const hal_can_ops_t k_sim_ops = {
-    .send = sim_send, .recv = sim_recv, .poll_fd = no_fd, .status = ok_status, .close = no_close
-};
-static hal_can_link_t g_master_link = { .ops = &k_master_ops, .self = NULL, .name = "mem-master" };
-static hal_can_link_t g_sim_link = { .ops = &k_sim_ops, .self = NULL, .name = "mem-sim" };
-
-/* ---- the rig ---- */
+#define NJ DRIVE_RIG_JOINTS
+#define CPR DRIVE_RIG_CPR
+#define HOME_OFFSET DRIVE_RIG_HOME_OFFSET
 
 static ls_drives_t g_d;
 static hal_arm_t g_arm;
 static uint64_t g_now;
 
-/* What the simulated drive's EDS offers, as ls_drive_setup derives it. */
-static ls_drives_config_t config(bool map_mode)
-{
-    ls_drives_config_t c;
-    memset(&c, 0, sizeof c);
-    c.n_joints = NJ;
-    c.link = &g_master_link;
-    c.control_period_us = 1000;
-    c.cycle_ticks = 4;
-    c.master_node = 0x7F;
-    c.heartbeat_ms = 100;
-    c.heartbeat_timeout_ms = 350;
-    c.boot_timeout_ms = 2000;
-    c.abort_option = 3;
-    c.stale_cycles = 5;
-    for (int j = 0; j < NJ; j++) {
-        ls_drive_joint_t *dj = &c.joint[j];
-        dj->node_id = (uint8_t)(0x21 + j);
-        dj->scale.counts_per_rad = CPR;
-        dj->scale.sign = 1;
-        dj->write_consumer_hb = dj->write_abort_option = dj->write_interp_period = true;
-        dj->write_pdo_type = dj->write_tpdo_inhibit = true;
-        dj->feedforward = true;
-        for (int p = 0; p < 4; p++) {
-            dj->rpdo_present[p] = dj->tpdo_present[p] = true;
-        }
-        dj->map_mode = map_mode;
-        dj->can_home = true;
-        dj->read_limits = true;
-        dj->tpdo_room[0] = dj->tpdo_room[1] = 8;
-        dj->brake = (ls_drive_obj_t){ .map = true, .index = SD_OBJ_BRAKE_STO, .sub = SD_SUB_BRAKE_ENGAGED, .bytes = 1 };
-        dj->sto = (ls_drive_obj_t){ .map = true, .index = SD_OBJ_BRAKE_STO, .sub = SD_SUB_STO_ACTIVE, .bytes = 1 };
-        dj->temperature = (ls_drive_obj_t){
-            .map = true, .index = SD_OBJ_BRAKE_STO, .sub = SD_SUB_TEMPERATURE, .bytes = 2, .is_signed = true
-        };
-        dj->temperature_scale = 0.1;
-        dj->torque = (ls_drive_obj_t){ .map = true, .index = LS_CO_OBJ_TORQUE_ACTUAL, .bytes = 2, .is_signed = true };
-        dj->velocity =
-            (ls_drive_obj_t){ .map = true, .index = LS_CO_OBJ_VELOCITY_ACTUAL, .bytes = 4, .is_signed = true };
-    }
-    /* joint 2 must be homed, to 0.05 rad by "home here" (37) */
-    c.joint[1].home_required = true;
-    c.joint[1].write_home_method = true;
-    c.joint[1].home_method = 37;
-    c.joint[1].write_home_offset = true;
-    c.joint[1].home_offset_counts = HOME_OFFSET;
-    return c;
-}
-
-/* One millisecond: the arm's control cycle (command, update), then the drives. */
 static void step_ms(unsigned ms)
 {
-    for (unsigned k = 0; k < ms; k++) {
-        g_now += 1000u;
-        (void)hal_arm_update(&g_arm, g_now);
-        assert_int_equal(hal_sim_drives_poll(g_now), LS_OK);
-    }
+    drive_rig_step(&g_arm, &g_now, ms);
 }
 
 static void open_rig(bool map_mode)
 {
-    memset(&g_to_sim, 0, sizeof g_to_sim);
-    memset(&g_to_master, 0, sizeof g_to_master);
-    hal_sim_arm_model_t am;
-    ls_robot_model_to_sim(&ls_robot_model_default, &am);
-    hal_sim_world_config_t wc = { .arm = &am };
     char msg[200] = "";
-    if (hal_sim_world_open(&wc, msg, sizeof msg) != LS_OK) {
-        fail_msg("world: %s", msg);
+    const ls_drives_config_t c = drive_rig_config(map_mode);
+    if (drive_rig_open(&c, &g_d, &g_arm, &g_now, msg, sizeof msg) != LS_OK) {
+        fail_msg("%s", msg);
     }
-    hal_sim_drives_config_t dc = { .link = &g_sim_link, .n_drives = NJ, .counts_per_rad = CPR };
-    for (int j = 0; j < NJ; j++) {
-        dc.drives[j] = (hal_sim_drive_config_t){ (uint8_t)(0x21 + j), (uint8_t)j, 0 };
-    }
-    g_now = 1000000u;
-    if (hal_sim_drives_open(&dc, g_now, msg, sizeof msg) != LS_OK) {
-        fail_msg("drives: %s", msg);
-    }
-    /* What the drives said before a master listened is gone (as on the
-     * pty of ls-simdrives): the master's reset brings their boot-ups. */
-    g_to_master.count = 0;
-    ls_drives_config_t c = config(map_mode);
-    assert_int_equal(ls_drives_init(&g_d, &c), LS_OK);
-    assert_int_equal(ls_drives_boot(&g_d, g_now), LS_OK);
-    int r = 0;
-    for (int ms = 0; ms < 3000 && r == 0; ms++) {
-        g_now += 1000u;
-        r = ls_drives_service(&g_d, g_now);
-        assert_int_equal(hal_sim_drives_poll(g_now), LS_OK);
-    }
-    if (r != 1) {
-        hal_sim_drives_close();
-        hal_sim_world_close();
-        fail_msg("boot: %d %s", r, ls_drives_text(&g_d));
-    }
-    ls_drives_arm(&g_d, &g_arm);
     step_ms(20);
 }
 
@@ -226,8 +66,8 @@ static int setup_sdo(void **state)
 static int teardown(void **state)
 {
     (void)state;
-    hal_sim_drives_close();
-    hal_sim_world_close();
+    assert_int_equal(drive_rig_bad_frames(), 0);
+    drive_rig_close();
     return 0;
 }
 
@@ -291,6 +131,22 @@ static double world_q(int j)
     double q[NJ], qd[NJ];
     assert_int_equal(hal_arm_read(&w, q, qd), LS_OK);
     return q[j];
+}
+
+/* Joint j's set-point moves by `by` rad on a 200 ms ramp from where the arm
+ * reads it now, then holds for 200 ms; the others hold. Returns where the
+ * ramp started. */
+static double ramp_joint(int j, double by)
+{
+    double q[NJ], qd[NJ];
+    assert_int_equal(hal_arm_read(&g_arm, q, qd), LS_OK);
+    const double q0 = q[j];
+    for (int ms = 0; ms < 400; ms++) {
+        q[j] = q0 + by * fmin(1.0, ms / 200.0);
+        assert_int_equal(hal_arm_command(&g_arm, q, NULL), LS_OK);
+        step_ms(1);
+    }
+    return q0;
 }
 
 /* ---- tests ---- */
@@ -370,12 +226,7 @@ static void test_a_joint_homes_to_its_offset_without_moving(void **state)
     assert_int_equal(r.joint[1].home, HAL_HOME_HOMED);
     assert_int_equal(r.joint[0].home, HAL_HOME_NOT_HOMED);
     /* a set-point from here moves it as commanded */
-    for (int ms = 0; ms < 400; ms++) {
-        assert_int_equal(hal_arm_read(&g_arm, q, qd), LS_OK);
-        q[1] = HOME_OFFSET / CPR + 0.05 * fmin(1.0, ms / 200.0);
-        assert_int_equal(hal_arm_command(&g_arm, q, NULL), LS_OK);
-        step_ms(1);
-    }
+    (void)ramp_joint(1, 0.05);
     assert_int_equal(hal_arm_read(&g_arm, q, qd), LS_OK);
     assert_true(fabs(q[1] - (HOME_OFFSET / CPR + 0.05)) < 5e-3);
     assert_true(fabs(world_q(1) - (q_before + 0.05)) < 5e-3);
@@ -397,14 +248,9 @@ static void test_a_homing_is_kept_across_disable_and_lost_when_the_drive_boots(v
     status(st);
     assert_int_equal(st[1].home, HAL_HOME_HOMED);
     /* and it moves as commanded in the homed frame */
-    double q[NJ], qd[NJ];
-    assert_int_equal(hal_arm_read(&g_arm, q, qd), LS_OK);
-    const double q0 = q[1], w0 = world_q(1);
-    for (int ms = 0; ms < 400; ms++) {
-        q[1] = q0 - 0.05 * fmin(1.0, ms / 200.0);
-        assert_int_equal(hal_arm_command(&g_arm, q, NULL), LS_OK);
-        step_ms(1);
-    }
+    double qd[NJ];
+    const double w0 = world_q(1);
+    const double q0 = ramp_joint(1, -0.05);
     double qm[NJ];
     assert_int_equal(hal_arm_read(&g_arm, qm, qd), LS_OK);
     assert_true(fabs(qm[1] - (q0 - 0.05)) < 5e-3);
@@ -469,13 +315,7 @@ static void test_an_enable_right_after_a_disable_holds_where_the_drive_is_as_the
     enable();
     /* somewhere else than where the enable found the arm */
     double q[NJ], qd[NJ];
-    assert_int_equal(hal_arm_read(&g_arm, q, qd), LS_OK);
-    const double q0 = q[0];
-    for (int ms = 0; ms < 400; ms++) {
-        q[0] = q0 + 0.1 * fmin(1.0, ms / 200.0);
-        assert_int_equal(hal_arm_command(&g_arm, q, NULL), LS_OK);
-        step_ms(1);
-    }
+    const double q0 = ramp_joint(0, 0.1);
     const double w1 = world_q(0);
     assert_true(fabs(w1 - (q0 + 0.1)) < 5e-3);
     /* off, and on again before the drives' statuswords can show the switch-off:
@@ -502,13 +342,7 @@ static void test_an_enable_right_after_a_disable_holds_where_the_drive_is_as_the
     assert_true(fabs(world_q(0) - w1) < 2e-3);
     /* moved on, then off and on with no drive cycle in between: the drives
      * never see the disable, and hold where they are */
-    assert_int_equal(hal_arm_read(&g_arm, q, qd), LS_OK);
-    const double q1 = q[0];
-    for (int ms = 0; ms < 400; ms++) {
-        q[0] = q1 + 0.1 * fmin(1.0, ms / 200.0);
-        assert_int_equal(hal_arm_command(&g_arm, q, NULL), LS_OK);
-        step_ms(1);
-    }
+    (void)ramp_joint(0, 0.1);
     const double w2 = world_q(0);
     assert_true(fabs(w2 - (w1 + 0.1)) < 5e-3);
     assert_int_equal(hal_arm_enable(&g_arm, false), LS_OK);

@@ -475,6 +475,24 @@ static void test_parse_no_hex(void **state)
     assert_true(ls_fmt_parse_double("garbage", &end) == 0.0);
 }
 
+static void test_append_builds_lines_and_stops_when_the_buffer_is_full(void **state)
+{
+    (void)state;
+    char buf[16];
+    size_t len = 0;
+    buf[0] = '\0';
+    ls_fmt_append(buf, sizeof buf, &len, "a=%d\n", 1);
+    ls_fmt_append(buf, sizeof buf, &len, "b=%s\n", "two");
+    assert_string_equal(buf, "a=1\nb=two\n");
+    assert_int_equal(len, 10);
+    ls_fmt_append(buf, sizeof buf, &len, "c=%d\n", 123456); /* cut to fit */
+    assert_string_equal(buf, "a=1\nb=two\nc=123");
+    assert_int_equal(len, 15);
+    ls_fmt_append(buf, sizeof buf, &len, "d\n"); /* full: nothing more */
+    assert_string_equal(buf, "a=1\nb=two\nc=123");
+    assert_int_equal(len, 15);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -493,6 +511,7 @@ int main(void)
         cmocka_unit_test(test_parse_long_mantissas),
         cmocka_unit_test(test_parse_round_trips),
         cmocka_unit_test(test_parse_no_hex),
+        cmocka_unit_test(test_append_builds_lines_and_stops_when_the_buffer_is_full),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
