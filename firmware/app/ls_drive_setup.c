@@ -644,7 +644,7 @@ bool ls_drive_check(const ls_config_t *cfg, ls_drive_say_fn say, void *ctx)
 {
     static ls_drive_plan_t plan;
     static ls_co_master_t master;
-    char line[LS_DRIVE_SETUP_LINE + 64];
+    char line[LS_DRIVE_SETUP_LINE + 128]; /* a finding: a line of the plan, or one with an EDS path (255) in it */
     const int pr = ls_drive_plan(cfg, &plan, line, sizeof line);
     if (pr != LS_OK) {
         say(ctx, 2, "drives", line);
