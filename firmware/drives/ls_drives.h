@@ -68,7 +68,7 @@
  * from then on every operation from the control thread, which owns the
  * drive link, except readout(): no blocking, no allocation, O(joints) per
  * call plus the frames received. Memory: the caller owns the ls_drives_t
- * (about 60 kB with its scripts; static in landscaped). */
+ * (about 60 kB with its scripts and readouts; static in landscaped). */
 #ifndef LS_DRIVES_H
 #define LS_DRIVES_H
 
@@ -82,7 +82,7 @@
 #include "ls_co_master.h"
 #include "ls_seqlock.h"
 
-#define LS_DRIVES_SCRIPT_MAX 96u   /* SDO steps of one drive's configuration */
+#define LS_DRIVES_SCRIPT_MAX 80u   /* SDO steps of one drive's configuration (the longest: 61, tests/unit/drives) */
 #define LS_DRIVES_PDO_SETS 4u      /* RPDO and TPDO parameter sets a drive may have disabled at start */
 #define LS_DRIVES_RX_PER_CYCLE 64u /* frames taken per update(): bounds a cycle's time under a flood */
 #define LS_DRIVES_STALE_CYCLES 5u  /* default stale_cycles */

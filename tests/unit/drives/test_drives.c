@@ -305,6 +305,31 @@ static void test_the_drives_own_supervision_and_homing_are_set_at_start(void **s
     }
 }
 
+/* Every object the configuration may ask for, on a drive that offers them
+ * all: the script still fits LS_DRIVES_SCRIPT_MAX. */
+static void test_the_longest_configuration_fits_its_script(void **state)
+{
+    (void)state;
+    ls_drives_config_t c = config();
+    for (int j = 0; j < 6; j++) {
+        ls_drive_joint_t *dj = &c.joint[j];
+        dj->has_revision = true;
+        dj->map_mode = dj->can_home = dj->read_limits = true;
+        dj->write_fe_window = dj->write_fe_timeout = dj->write_quick_stop = true;
+        dj->write_home_method = dj->write_home_offset = true;
+        dj->tpdo_room[0] = dj->tpdo_room[1] = 8;
+        /* one-byte readouts: the most mapping entries two TPDOs can hold */
+        dj->brake = (ls_drive_obj_t){ .map = true, .index = 0x2100, .sub = 1, .bytes = 1 };
+        dj->sto = (ls_drive_obj_t){ .map = true, .index = 0x2100, .sub = 2, .bytes = 1 };
+        dj->temperature = (ls_drive_obj_t){ .map = true, .index = 0x2100, .sub = 3, .bytes = 1 };
+        dj->torque = (ls_drive_obj_t){ .map = true, .index = 0x6077, .bytes = 2 };
+        dj->velocity = (ls_drive_obj_t){ .map = true, .index = 0x606C, .bytes = 4 };
+    }
+    assert_int_equal(ls_drives_init(&g_d, &c), LS_OK);
+    assert_int_equal(script_len(0), 61);         /* LS_DRIVES_SCRIPT_MAX's margin: ls_drives.h */
+    assert_int_equal(g_d.layout[0].left_out, 0); /* 8 + 8 bytes: everything placed */
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -317,6 +342,7 @@ int main(void)
         cmocka_unit_test(test_the_mode_rides_in_the_pdos_where_the_eds_lets_it),
         cmocka_unit_test(test_the_readouts_fill_tpdo1_then_tpdo2_in_their_order),
         cmocka_unit_test(test_the_drives_own_supervision_and_homing_are_set_at_start),
+        cmocka_unit_test(test_the_longest_configuration_fits_its_script),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
