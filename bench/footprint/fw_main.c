@@ -120,8 +120,10 @@ static int arm_read(void *self, double *q_rad, double *qd_rad_s)
     return LS_OK;
 }
 
-static const hal_arm_ops_t arm_ops = { NULL, arm_enable, arm_command, arm_read, NULL };
-static hal_arm_t g_arm = { &arm_ops, NULL, "arm0" };
+/* Designated: hal_arm_ops_t grows (the drives' operations), and what this
+ * arm leaves out is NULL, "unsupported" through the HAL's wrappers. */
+static const hal_arm_ops_t arm_ops = { .enable = arm_enable, .command = arm_command, .read = arm_read };
+static hal_arm_t g_arm = { .ops = &arm_ops, .self = NULL, .name = "arm0" };
 
 static uint64_t now_us(void)
 {
