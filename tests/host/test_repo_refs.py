@@ -9,10 +9,14 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
 TOP = ("firmware/", "hal/", "protocol/", "host_tools/", "tests/", "docs/", "bench/", ".ci/")
-# Names of files outside the repository (the project brief and notes beside it). The one
-# exception is the directory of the vendor EDS/DCF files the drive tests read
-# (LS_VENDOR_EDS_DIR, tests/CMakeLists.txt): third-party files that must stay outside.
-OUTSIDE = re.compile(r"DESIGN\.md|\.\./shared(?!/eds\b)|house-style\.md|notes/environment\.md")
+# Names of files outside the repository (the project brief and notes beside it).
+OUTSIDE = re.compile(r"DESIGN\.md|\.\./shared|house-style\.md|notes/environment\.md")
+# The one exception: the directory of the vendor EDS/DCF files the drive tests read,
+# third-party files that must stay outside. Its default is named once, where
+# tests/CMakeLists.txt sets LS_VENDOR_EDS_DIR; everything else says "the vendor EDS
+# directory (LS_VENDOR_EDS_DIR)" and takes its value from there.
+VENDOR_EDS_DEFAULT = ("tests/CMakeLists.txt",
+                      re.compile(r'^set\(LS_VENDOR_EDS_DIR "\$\{CMAKE_SOURCE_DIR\}/\.\./shared/eds"'))
 
 
 def _tracked() -> list[str]:
@@ -44,7 +48,7 @@ def test_nothing_names_a_file_outside_the_repository() -> None:
                 not name.startswith(".ci/") and path.name != "CMakeLists.txt":
             continue
         for n, line in enumerate(path.read_text(errors="replace").splitlines(), 1):
-            if OUTSIDE.search(line):
+            if OUTSIDE.search(line) and not (name == VENDOR_EDS_DEFAULT[0] and VENDOR_EDS_DEFAULT[1].match(line)):
                 hits.append(f"{name}:{n}: {line.strip()}")
     assert not hits, "references to files outside the repository:\n" + "\n".join(hits)
 

@@ -35,9 +35,25 @@ import canopen
 from canopen.objectdictionary import ODVariable
 from canopen.sdo import SdoAbortedError
 
-# The vendor files: tests/CMakeLists.txt's LS_VENDOR_EDS_DIR, which ctest passes on;
-# run by hand, the same default (beside the clone: third-party files stay outside it).
-VENDOR_EDS = Path(os.environ.get("LS_VENDOR_EDS_DIR") or Path(__file__).resolve().parents[3] / "shared" / "eds")
+
+def vendor_eds_dir() -> Path | None:
+    """The vendor EDS directory (LS_VENDOR_EDS_DIR, set once in tests/CMakeLists.txt): ctest
+    passes it on in the environment; run by hand, the build's own value from its
+    CMakeCache.txt (LS_BUILD_DIR, else build/). None when neither says."""
+    given = os.environ.get("LS_VENDOR_EDS_DIR")
+    if given:
+        return Path(given)
+    build = Path(os.environ.get("LS_BUILD_DIR") or Path(__file__).resolve().parents[2] / "build")
+    cache = build / "CMakeCache.txt"
+    for line in cache.read_text().splitlines() if cache.is_file() else []:
+        if line.startswith("LS_VENDOR_EDS_DIR:"):
+            return Path(line.partition("=")[2])
+    return None
+
+
+# The vendor files (third-party: they stay outside the repository); a relative
+# placeholder when no one says where they are, which the tests report as missing.
+VENDOR_EDS = vendor_eds_dir() or Path("LS_VENDOR_EDS_DIR")
 EPOS4_DCF = VENDOR_EDS / "epos4_50_15_can_ec90flat_gp52c_mile800_node1.dcf"
 ROS2_EDS = VENDOR_EDS / "ros2_canopen_cia402_slave.eds"
 

@@ -64,6 +64,10 @@ def _config(tmp: Path) -> Path:
 
 @pytest.fixture
 def rig(tmp_path: Path) -> Iterator[Rig]:
+    for f in sorted(set(FILES)):
+        if not f.is_file():
+            pytest.fail(f"{f} is missing: the vendor EDS directory (LS_VENDOR_EDS_DIR) holds it: run through "
+                        "ctest, configure with -DLS_VENDOR_EDS_DIR=DIR, or set LS_VENDOR_EDS_DIR=DIR")
     channel = f"drives-{tmp_path.name}"
     network = canopen.Network()
     network.connect(interface="virtual", channel=channel)

@@ -12,8 +12,9 @@ python-canopen keeps a signed DefaultValue written in hex as the unsigned
 number (0xFD in an INTEGER8 is 253 there, -3 here): signed integers are
 compared modulo 2^bits.
 
-Run through ctest (which sets LS_EDS_DUMP and LS_VENDOR_EDS_DIR), or by hand:
-    LS_EDS_DUMP=build/bin/ls_eds_dump LS_VENDOR_EDS_DIR=../shared/eds \\
+Run through ctest (which sets LS_EDS_DUMP and LS_VENDOR_EDS_DIR), or by hand with DIR
+the vendor EDS directory (LS_VENDOR_EDS_DIR in the build's CMakeCache.txt):
+    LS_EDS_DUMP=build/bin/ls_eds_dump LS_VENDOR_EDS_DIR=DIR \\
         .venv/bin/python -m pytest tests/unit/eds/test_eds_vs_canopen.py
 """
 
