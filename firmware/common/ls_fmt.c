@@ -613,6 +613,43 @@ void ls_fmt_append(char *buf, size_t cap, size_t *len, const char *fmt, ...)
     }
 }
 
+size_t ls_fmt_name_tail(char *buf, size_t cap, const char *name)
+{
+    static const char ellipsis[] = "\xE2\x80\xA6"; /* U+2026 */
+    const size_t el = sizeof ellipsis - 1u;
+    if (cap == 0) {
+        return 0;
+    }
+    const size_t n = strlen(name);
+    if (n < cap) {
+        memcpy(buf, name, n + 1u);
+        return n;
+    }
+    buf[0] = '\0';
+    if (cap < el + 2u) {
+        return 0; /* not even an ellipsis and one byte of the end */
+    }
+    const char *slash = strchr(name, '/');
+    size_t kind = slash != NULL ? (size_t)(slash - name) : 0u;
+    if (kind + el + 1u >= cap) {
+        kind = 0; /* the kind alone leaves no room for the end */
+    }
+    const size_t room = cap - 1u - kind - el;
+    const char *tail = name + n - room;
+    const char *from = strchr(tail, '/');
+    if (from != NULL && from[1] != '\0') {
+        tail = from;
+    }
+    while (((unsigned char)*tail & 0xC0u) == 0x80u) {
+        tail++; /* a character's continuation bytes: start at its next one */
+    }
+    const size_t tl = strlen(tail);
+    memcpy(buf, name, kind);
+    memcpy(buf + kind, ellipsis, el);
+    memcpy(buf + kind + el, tail, tl + 1u);
+    return kind + el + tl;
+}
+
 /* ------------------------------------------------------------------ parser */
 
 /* Significant digits kept exactly; any further nonzero digit only makes the

@@ -50,6 +50,16 @@ int ls_fmt_vtext(char *buf, size_t cap, const char *fmt, va_list ap) __attribute
  * answers). No allocation; cost as ls_fmt_vprint. */
 void ls_fmt_append(char *buf, size_t cap, size_t *len, const char *fmt, ...) __attribute__((format(printf, 4, 5)));
 
+/* A device's name (a link such as "slcan:tty:/dev/serial/by-id/usb-...",
+ * a path) for a text with little room: the whole name when it fits in
+ * cap - 1 bytes; otherwise its kind (what comes before the first '/', such
+ * as "slcan:tty:"), an ellipsis (U+2026) and the name's end, from a '/' when
+ * one falls within it: the path's last part, the device's own name, is what
+ * stays. Never splits a UTF-8 character. The kind is dropped when even it
+ * leaves no room; cap < 5 writes nothing but the NUL (nothing at all when
+ * cap is 0). Returns the length written. No allocation; O(length of name). */
+size_t ls_fmt_name_tail(char *buf, size_t cap, const char *name);
+
 /* strtod's contract for decimal text: skips leading white space (isspace
  * in the C locale), takes an optional sign, then "inf", "infinity", "nan"
  * or "nan(chars)" (any case), or decimal digits with an optional '.' and

@@ -79,7 +79,7 @@ typedef struct {
 typedef struct {
     bool active;
     ls_run_end_t why;
-    char text[72];    /* the fault, or "" */
+    char text[LS_PB_FIELD_SIZE(ls_GetMotionControlStateRes, fault)]; /* the fault, or "": as the state query holds it */
     int answer_sup;   /* deferred deactivate to answer at the end, LS_NO_SESSION: none */
     bool keep_drives; /* owner lost with the action `stop`: pause, drop the motion, drives stay on (RESTING) */
     bool fast;        /* the stop at the model's maximum deceleration is posted: repeats post nothing more */

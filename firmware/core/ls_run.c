@@ -132,7 +132,7 @@ void ls_run_halt(ls_core_t *core, ls_run_end_t why, const char *text, bool fast,
         /* Already stopping: a fault takes over the reason and the speed of the stop. */
         if (is_fault(why) && !is_fault(h->why)) {
             h->why = why;
-            ls_fmt_print(h->text, sizeof h->text, "%s", text != NULL ? text : "");
+            ls_fmt_text(h->text, sizeof h->text, "%s", text != NULL ? text : "");
         }
         if (answer_sup >= 0) {
             h->answer_sup = answer_sup;
@@ -150,7 +150,7 @@ void ls_run_halt(ls_core_t *core, ls_run_end_t why, const char *text, bool fast,
     h->answer_sup = answer_sup;
     h->since_us = now_us;
     h->fast = fast;
-    ls_fmt_print(h->text, sizeof h->text, "%s", text != NULL ? text : "");
+    ls_fmt_text(h->text, sizeof h->text, "%s", text != NULL ? text : "");
     halt_enter(core);
     post_stop(core, fast);
 }
@@ -211,11 +211,11 @@ void ls_run_tick(ls_core_t *core, uint64_t now_us)
     }
     h->active = false;
     const bool fault = is_fault(h->why) || h->why == LS_RUN_END_AUX_FAILED;
-    char d_fault[80];
+    char d_fault[sizeof(((ls_Notice *)0)->data[0])]; /* one notice datum: its whole room */
     const char *extra[1] = { d_fault };
     size_t n_extra = 0;
     if (h->text[0] != '\0') {
-        ls_fmt_print(d_fault, sizeof d_fault, "fault=%s", h->text);
+        ls_fmt_text(d_fault, sizeof d_fault, "fault=%s", h->text);
         n_extra = 1;
     }
     if (h->keep_drives && core->ctl != NULL) {

@@ -395,7 +395,11 @@ static void booted(ls_drives_t *d)
 static int link_failed(ls_drives_t *d, const char *why)
 {
     if (!d->link_failed) {
-        ls_fmt_print(d->text, sizeof d->text, "the drive bus %s %s: every drive is lost", d->cfg.link->name, why);
+        /* The text goes out as a notice's datum (95 bytes, "fault=" first):
+         * a by-id path would not fit, its end names the device. */
+        char link[36];
+        ls_fmt_name_tail(link, sizeof link, d->cfg.link->name);
+        ls_fmt_print(d->text, sizeof d->text, "the drive bus %s %s: every drive is lost", link, why);
     }
     d->link_failed = true;
     ls_co_master_drop_unsent(&d->master);

@@ -245,6 +245,6 @@ int hal_linux_slcan_tty_open(hal_can_link_t *out, const char *path, uint32_t bit
     }
     out->ops = &k_ops;
     out->self = t;
-    (void)snprintf(out->name, sizeof out->name, "slcan:tty:%.53s", path);
+    (void)snprintf(out->name, sizeof out->name, "slcan:tty:%.120s", path);
     return LS_OK;
 }

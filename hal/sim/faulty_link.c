@@ -397,7 +397,7 @@ int hal_sim_faulty_wrap(hal_can_link_t *out, const hal_can_link_t *inner, const 
     f->start_us = now_of(f);
     out->ops = &g_ops;
     out->self = f;
-    snprintf(out->name, sizeof out->name, "faulty:%.56s", inner->name);
+    snprintf(out->name, sizeof out->name, "faulty:%.120s", inner->name);
     return LS_OK;
 }
 

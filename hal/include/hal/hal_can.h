@@ -15,6 +15,8 @@
 #define HAL_CAN_F_EXT 0x01u /* 29-bit identifier */
 #define HAL_CAN_F_RTR 0x02u /* remote frame */
 
+#define HAL_CAN_NAME_LEN 136 /* hal_can_link_t.name with its NUL: a kind ("slcan:tty:") and a path of 120 */
+
 typedef struct {
     uint32_t id;   /* 11 or 29 bits, without flag bits */
     uint8_t flags; /* HAL_CAN_F_* */
@@ -79,7 +81,10 @@ typedef struct {
 typedef struct {
     const hal_can_ops_t *ops;
     void *self;
-    char name[64]; /* e.g. "slcan:pty:/tmp/ls0" or "socketcan:vcan0", for logs */
+    /* e.g. "slcan:pty:/tmp/ls0" or "socketcan:vcan0", for logs: as long as
+     * the longest link a configuration names, so that a device's by-id path
+     * is whole (texts with less room shorten it: ls_fmt_name_tail). */
+    char name[HAL_CAN_NAME_LEN];
 } hal_can_link_t;
 
 int hal_can_send(hal_can_link_t *link, const hal_can_frame_t *frame);

@@ -493,6 +493,36 @@ static void test_append_builds_lines_and_stops_when_the_buffer_is_full(void **st
     assert_int_equal(len, 15);
 }
 
+/* A long device name keeps its kind and its last part (the device's own
+ * name), never a cut character; a short one stays whole. */
+static void test_name_tail_keeps_the_kind_and_the_devices_own_name(void **state)
+{
+    (void)state;
+    char buf[48];
+    assert_int_equal(ls_fmt_name_tail(buf, sizeof buf, "socketcan:vcan1"), 15);
+    assert_string_equal(buf, "socketcan:vcan1");
+    const char *by_id = "slcan:tty:/dev/serial/by-id/usb-CANable_8c005eb_12345-if00";
+    const size_t n = ls_fmt_name_tail(buf, sizeof buf, by_id);
+    assert_string_equal(buf, "slcan:tty:\xE2\x80\xA6/usb-CANable_8c005eb_12345-if00");
+    assert_int_equal(n, strlen(buf));
+    assert_true(n < sizeof buf);
+    /* no '/' in the part that fits: the end as it is, from a whole character */
+    const char *utf = "slcan:tty:/d/\xC3\xA9\xC3\xA9\xC3\xA9\xC3\xA9\xC3\xA9\xC3\xA9\xC3\xA9\xC3\xA9\xC3\xA9\xC3\xA9"
+                      "\xC3\xA9\xC3\xA9\xC3\xA9\xC3\xA9\xC3\xA9\xC3\xA9\xC3\xA9\xC3\xA9";
+    char small[21]; /* 7 bytes of the end: the first is inside a character */
+    ls_fmt_name_tail(small, sizeof small, utf);
+    assert_memory_equal(small, "slcan:tty:\xE2\x80\xA6", 13);
+    assert_int_equal(((unsigned char)small[13] & 0xC0u) != 0x80u, 1);
+    assert_true(strlen(small) < sizeof small);
+    /* a kind that leaves no room is dropped; a buffer too small for anything is empty */
+    char tiny[8];
+    ls_fmt_name_tail(tiny, sizeof tiny, by_id);
+    assert_string_equal(tiny, "\xE2\x80\xA6"
+                              "if00");
+    assert_int_equal(ls_fmt_name_tail(tiny, 4, by_id), 0);
+    assert_string_equal(tiny, "");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -512,6 +542,7 @@ int main(void)
         cmocka_unit_test(test_parse_round_trips),
         cmocka_unit_test(test_parse_no_hex),
         cmocka_unit_test(test_append_builds_lines_and_stops_when_the_buffer_is_full),
+        cmocka_unit_test(test_name_tail_keeps_the_kind_and_the_devices_own_name),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
