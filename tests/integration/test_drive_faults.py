@@ -1,7 +1,8 @@
 """When drives fail (docs/deploy.md "Drives", docs/protocol.md "Drives"): landscaped as
 the CiA 402 master of ls-simdrives, whose drives misbehave on command through its
 control socket (docs/simulated-drives.md). One test per defect class: an EMCY during a
-motion, a drive that stops answering, a frozen feedback, a fault a reset does not clear;
+motion, a drive that stops answering, a frozen feedback, a fault a reset does not clear,
+a drive bus gone quiet (bus-off), the drive link's device vanishing;
 each asserts the final notice, the alarm, the state, that the healthy joints stopped
 along the path, that nothing resumes by itself, and that activate recovers the arm."""
 from __future__ import annotations
@@ -202,6 +203,70 @@ def test_a_drive_that_stays_in_fault_refuses_activate_with_what_it_says(rig: tup
         sup.move_absolute("no", TARGET)
     _send(c.drives_control, "reset")
     sup.activate()
+
+
+def test_a_drive_bus_gone_quiet_loses_every_drive_until_activate(rig: tuple[Controller, Supervisor]) -> None:
+    """Bus-off as the drives see it: nothing crosses the bus either way for 1.5 s, then
+    each node reports EMCY 0x8140. Every axis is lost, the fault names a node and why,
+    and nothing resumes when the bus comes back: activate does it."""
+    c, sup = rig
+    watch = Joint1(sup)
+    list(sup.notices(timeout_s=0.1))
+    seq = _moving(sup)
+    assert c.drives_control is not None
+    t0 = _send(c.drives_control, "bus-off 1500")
+    seen: list[pb.Notice] = []
+    final = _final(sup, seq, seen)
+    took = time.monotonic() - t0
+    d = notice_data(final)
+    assert final.event_id == "moveAbsoluteFailed" and final.kind == pb.ALARM and d["reason"] == "fault", d
+    assert d["fault"].startswith("joint ") and " (node 0x2" in d["fault"], d
+    assert "no feedback" in d["fault"] or "heartbeat" in d["fault"], d
+    assert took < 1.0, f"a silent drive bus was noticed after {took:.2f} s"
+    st = sup.get_motion_control_state().result
+    assert st["state"] == "LOCKED" and st["motion_control_state"] == "robot_stopped_on_error", st
+    _report("the drive bus carries nothing for 1.5 s (bus-off) during a move", sup, watch, t0, "joint ")
+    # the bus back: each drive says it recovered from bus-off; the arm stays where it is, off
+    time.sleep(max(0.0, t0 + 2.0 - time.monotonic()))
+    seen += list(sup.notices(timeout_s=0.5))
+    recovered = {notice_data(n)["node"] for n in seen if n.event_id == "driveEmcy"
+                 and notice_data(n)["code"] == "0x8140"}
+    assert recovered == {"0x21", "0x22", "0x23", "0x24", "0x25", "0x26"}, [notice_data(n) for n in seen]
+    q = _joints(sup)
+    time.sleep(0.3)
+    assert _joints(sup) == pytest.approx(q, abs=1e-3)
+    assert sup.get_motion_control_state().result["state"] == "LOCKED"
+    sup.activate()
+    rv = sup.move_absolute("back", START, speed_pct=50)
+    sup.wait_complete(rv, timeout_s=20)
+    assert _joints(sup) == pytest.approx(START, abs=2e-3)
+
+
+def test_the_drive_links_device_vanishing_loses_every_drive_naming_the_link(
+        rig: tuple[Controller, Supervisor]) -> None:
+    """The drive link's device goes away (an SLCAN adapter unplugged: here the simulator
+    holding the pty dies): the move fails naming the link, activate is refused naming it,
+    and nothing moves by itself."""
+    c, sup = rig
+    list(sup.notices(timeout_s=0.1))
+    seq = _moving(sup)
+    assert c.drives is not None
+    c.drives.kill()
+    t0 = time.monotonic()
+    final = _final(sup, seq, [])
+    took = time.monotonic() - t0
+    d = notice_data(final)
+    assert final.event_id == "moveAbsoluteFailed" and d["reason"] == "fault", d
+    assert d["fault"].startswith("the drive bus slcan:tty:") and d["fault"].endswith("every drive is lost"), d
+    assert took < 1.0, f"the vanished drive link was noticed after {took:.2f} s"
+    print(f"\nFIGURE drive fault | the drive link's device vanishes during a move | move failed after "
+          f"{took * 1e3:.0f} ms")
+    st = sup.get_motion_control_state().result
+    assert st["state"] == "LOCKED" and st["motion_control_state"] == "robot_stopped_on_error", st
+    rv = sup.activate(check=False)
+    assert rv.ret_code != pb.CMD_EXEC_OK
+    assert "the drive bus slcan:tty:" in rv.ret_msg and "every drive is lost" in rv.ret_msg, rv.ret_msg
+    assert sup.get_motion_control_state().result["state"] == "LOCKED"
 
 
 def test_drives_stop_by_themselves_when_landscaped_dies(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
