@@ -2,8 +2,9 @@
 docs/reliability.md section 7). A hypothesis state machine drives
 one running landscaped (simulated arm) through the host library with random interleavings
 of moves, paths, stopMotion/resumeMotion/abortMotion, deactivate/activate, EMERGENCY
-frames, heartbeat loss, disconnect/reconnect and a second supervisor, and checks after
-every step:
+frames, heartbeat loss, disconnect/reconnect and a second supervisor (and, on the drive
+arm, LS_ARM=cia402: drive faults, an EMCY of a drive or a drive that goes silent and
+answers again), and checks after every step:
 
 - exactly one final notice per request answered CMD_STARTED_OK: none missing once the
   device says nothing moves, none extra, none for a request that did not start (a
@@ -25,6 +26,7 @@ import collections
 import contextlib
 import os
 import random
+import socket
 import sys
 import time
 from collections.abc import Iterator
@@ -44,6 +46,7 @@ from hypothesis.stateful import (
 )
 from lifecycle_rig import DRIVES_ON, HOME, REST_STEP_RAD, ArmWatch, send_emergency
 
+import conftest
 from conftest import Controller, open_slcan, start_controller
 from landscape._generated import landscape_pb2 as pb
 from landscape.errors import ControllerTimeoutError
@@ -60,6 +63,11 @@ OFF = ("LOCKED", "UNLOCKED", "IDLE")
 ACTIONS = (["move"] * 6 + ["path"] * 3 + ["stop"] * 3 + ["resume"] * 2 + ["abort"] * 2 + ["deactivate"] * 2
            + ["activate"] * 5 + ["lock"] * 3 + ["release", "emergency", "heartbeat_loss", "disconnect_reconnect"]
            + ["wait"] * 3)
+# On the drive arm a drive's fault is one more kind of step: ls-simdrives misbehaves on command
+# (docs/simulated-drives.md); every started request still ends once, the arm at rest, drives off.
+if conftest.ARM == "cia402":
+    ACTIONS += ["drive_fault"] * 2
+DRIVE_FAULTS = ("emcy {node:#x} 0x8611", "emcy {node:#x} 0x2310", "silence {node:#x}")
 TARGETS = [HOME, [0.4, 0.3, 0.3, 0.0, 0.9, 0.0], [-0.3, 0.1, 0.5, 0.2, 0.7, 0.0], [0.2, 0.5, 0.1, -0.3, 1.1, 0.4]]
 
 
@@ -237,8 +245,8 @@ class LifecycleModel(RuleBasedStateMachine):
 
     def move(self, role: str, pose: int, speed: float) -> None:
         self._count("move")
-        self._call(self._pick(role), "moveAbsolute", point_name=f"t{pose}", values=TARGETS[pose],
-                   speed_pct=speed)
+        self._call(self._pick(role), "moveAbsolute", point_name=f"t{pose}", frame=pb.JOINT_FRAME,
+                   values=TARGETS[pose], speed_pct=speed)
 
     def path(self, role: str) -> None:
         self._count("path")
@@ -326,6 +334,22 @@ class LifecycleModel(RuleBasedStateMachine):
         self.history.append(f"{who}:reconnect")
         self._resync_owner()
 
+    def drive_fault(self, pose: int, speed: float) -> None:
+        """A drive of the drive arm faults (an EMCY) or goes silent, then answers again:
+        drawn from the step's other draws, so that the seed alone fixes the run."""
+        self._count("drive_fault")
+        ctl = self.world.controller.drives_control
+        assert ctl is not None
+        node = 0x21 + (pose + int(speed)) % 6
+        what = DRIVE_FAULTS[pose % len(DRIVE_FAULTS)].format(node=node)
+        self.history.append(f"drive: {what}")
+        with socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM) as sk:
+            sk.sendto(what.encode(), str(ctl))
+            time.sleep(0.3)  # its heartbeat or its feedback missed for longer than the device allows
+            if what.startswith("silence"):
+                sk.sendto(b"reset", str(ctl))
+        self._wait_not_moving()
+
     def wait(self, dt: float) -> None:
         self._count("wait")
         time.sleep(dt)
@@ -357,6 +381,8 @@ class LifecycleModel(RuleBasedStateMachine):
             getattr(self, action)(who)
         elif action == "wait":
             self.wait(dt)
+        elif action == "drive_fault":
+            self.drive_fault(pose, speed)
         else:
             getattr(self, action)()
 
@@ -472,6 +498,11 @@ def test_lifecycle_model(world: World) -> None:
           f"answers {dict(s.answers)}, "
           f"{s.transport} host time-outs, {len(s.violations)} violations")
     assert s.steps > 0 and s.started > 0
+    # the model sends well-formed requests only: a parameter refusal is a model gone stale
+    # (it once sent no frame, and not one move started)
+    bad = {k: n for k, n in s.answers.items() if k.endswith(("PARAM_ERR", "PARAM_OUT_OF_RANGE_ERR"))}
+    assert not bad, f"requests the device found malformed: {bad}"
+    assert s.answers["moveAbsolute:CMD_STARTED_OK"] > 0, "not one move started"
     assert not s.violations, "\n".join(s.violations[:10])
     # A time-out is not a lifecycle violation, but a device that stopped
     # answering would turn every later step into one: more than a tenth fails.
