@@ -16,6 +16,7 @@
 #include <unistd.h>
 
 #include "hal_linux_msg.h"
+#include "ls_seqlock.h"
 
 #define READ_BATCH 64  /* input_events per read(2) */
 #define SLOT_TRIES 16u /* seqlock attempts of one read() before it takes the last copy */
@@ -32,7 +33,7 @@ typedef struct {
     uint32_t pad_;
 } slot_t;
 
-#define SLOT_WORDS ((sizeof(slot_t) + sizeof(uint32_t) - 1u) / sizeof(uint32_t))
+#define SLOT_WORDS LS_SEQLOCK_WORDS(sizeof(slot_t))
 
 typedef struct {
     bool used;
@@ -79,15 +80,7 @@ static void publish(evdev_t *e, bool present, uint64_t last_us)
     s.present = present ? 1u : 0u;
     s.last_us = last_us;
     s.generation = e->generation;
-    uint32_t w[SLOT_WORDS];
-    memcpy(w, &s, sizeof s);
-    unsigned q = atomic_load_explicit(&e->seq, memory_order_relaxed);
-    atomic_store_explicit(&e->seq, q + 1u, memory_order_relaxed);
-    atomic_thread_fence(memory_order_release);
-    for (size_t i = 0; i < SLOT_WORDS; i++) {
-        atomic_store_explicit(&e->words[i], w[i], memory_order_relaxed);
-    }
-    atomic_store_explicit(&e->seq, q + 2u, memory_order_release);
+    ls_seqlock_write(&e->seq, e->words, SLOT_WORDS, &s, sizeof s);
 }
 
 static int evdev_read(void *self, hal_manual_state_t *out)
@@ -100,18 +93,9 @@ static int evdev_read(void *self, hal_manual_state_t *out)
     if (e == NULL || !e->used) {
         return LS_ENODEV;
     }
-    uint32_t w[SLOT_WORDS];
-    for (unsigned attempt = 0; attempt < SLOT_TRIES; attempt++) {
-        unsigned s1 = atomic_load_explicit(&e->seq, memory_order_acquire);
-        for (size_t i = 0; i < SLOT_WORDS; i++) {
-            w[i] = atomic_load_explicit(&e->words[i], memory_order_relaxed);
-        }
-        atomic_thread_fence(memory_order_acquire);
-        unsigned s2 = atomic_load_explicit(&e->seq, memory_order_relaxed);
-        if ((s1 & 1u) == 0u && s1 == s2) {
-            memcpy(&e->last, w, sizeof e->last);
-            break;
-        }
+    slot_t fresh;
+    if (ls_seqlock_read(&e->seq, e->words, SLOT_WORDS, &fresh, sizeof fresh, SLOT_TRIES)) {
+        e->last = fresh;
     }
     /* Out of attempts (the reader thread stopped mid-publish): the last copy. */
     const slot_t *s = &e->last;

@@ -1,4 +1,4 @@
-/* The seqlock (firmware/common/ls_seqlock.h): what a reader gets is always
+/* The seqlock (common/ls_seqlock.h): what a reader gets is always
  * one published value whole, never a mix of two, while a writer publishes
  * as fast as it can on another thread. */
 #include <pthread.h>

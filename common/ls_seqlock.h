@@ -4,11 +4,15 @@
  * per-axis readouts (ls_drives.h): the comms thread reads them while the
  * real-time thread never blocks on it.
  *
- * The value lives in 32-bit atomic words accessed with relaxed atomics, so
- * a read racing a write is defined behaviour; the sequence word orders them
- * (writer: seq odd, release fence, words, seq even with release; reader:
- * seq with acquire, words, acquire fence, seq again) and a torn copy is
- * caught by the sequence check. 32-bit words stay lock-free on Cortex-M.
+ * The value lives in 32-bit atomic words, so a read racing a write is
+ * defined behaviour; the orders of the accesses themselves, not fences,
+ * keep a torn copy from passing the sequence check (fences ThreadSanitizer
+ * cannot follow, and GCC refuses them under it). Writer: seq odd, each
+ * word with release (none is seen before the odd seq), seq even with
+ * release. Reader: seq with acquire, each word with acquire (none is read
+ * after the second seq), seq again: a word of a newer write makes the
+ * second seq differ. On x86 these are plain moves; on Cortex-M a barrier
+ * per word. 32-bit words stay lock-free on Cortex-M.
  *
  * The caller owns the storage (an atomic_uint sequence and
  * LS_SEQLOCK_WORDS(sizeof value) atomic_uint words, zero-initialised or
