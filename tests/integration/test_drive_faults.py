@@ -102,6 +102,18 @@ def _moving(sup: Supervisor) -> int:
     return rv.seq
 
 
+def _during_a_move(c: Controller, sup: Supervisor, command: str) -> tuple[Joint1, float, pb.Notice, list[pb.Notice]]:
+    """Start a move of every joint and send the simulator `command` while it runs: the watch
+    of joint 1, the time it was sent, the move's final notice and every notice until it."""
+    watch = Joint1(sup)
+    list(sup.notices(timeout_s=0.1))
+    seq = _moving(sup)
+    assert c.drives_control is not None
+    t0 = _send(c.drives_control, command)
+    seen: list[pb.Notice] = []
+    return watch, t0, _final(sup, seq, seen), seen
+
+
 def _healthy_stopped_along_the_path(sup: Supervisor, failed: int) -> None:
     q = _joints(sup)
     fr = [(qi - s) / (t - s) for j, (qi, s, t) in enumerate(zip(q, START, TARGET, strict=True)) if j != failed]
@@ -113,13 +125,7 @@ def _healthy_stopped_along_the_path(sup: Supervisor, failed: int) -> None:
 
 def test_an_emcy_during_a_move_fails_it_naming_joint_node_and_code(rig: tuple[Controller, Supervisor]) -> None:
     c, sup = rig
-    watch = Joint1(sup)
-    list(sup.notices(timeout_s=0.1))
-    seq = _moving(sup)
-    assert c.drives_control is not None
-    t0 = _send(c.drives_control, "emcy 0x23 0x8611")
-    seen: list[pb.Notice] = []
-    final = _final(sup, seq, seen)
+    watch, t0, final, seen = _during_a_move(c, sup, "emcy 0x23 0x8611")
     assert final.event_id == "moveAbsoluteFailed" and final.kind == pb.ALARM
     d = notice_data(final)
     assert d["reason"] == "fault"
@@ -147,12 +153,7 @@ def test_an_emcy_during_a_move_fails_it_naming_joint_node_and_code(rig: tuple[Co
 
 def test_a_drive_that_stops_answering_is_lost_and_stays_lost(rig: tuple[Controller, Supervisor]) -> None:
     c, sup = rig
-    watch = Joint1(sup)
-    list(sup.notices(timeout_s=0.1))
-    seq = _moving(sup)
-    assert c.drives_control is not None
-    t0 = _send(c.drives_control, "silence 0x24")
-    final = _final(sup, seq, [])
+    watch, t0, final, seen = _during_a_move(c, sup, "silence 0x24")
     took = time.monotonic() - t0
     d = notice_data(final)
     assert final.event_id == "moveAbsoluteFailed" and d["reason"] == "fault"
@@ -175,12 +176,7 @@ def test_a_drive_that_stops_answering_is_lost_and_stays_lost(rig: tuple[Controll
 
 def test_a_frozen_feedback_is_a_lost_drive(rig: tuple[Controller, Supervisor]) -> None:
     c, sup = rig
-    watch = Joint1(sup)
-    list(sup.notices(timeout_s=0.1))
-    seq = _moving(sup)
-    assert c.drives_control is not None
-    t0 = _send(c.drives_control, "freeze-tpdo 0x25")
-    final = _final(sup, seq, [])
+    watch, t0, final, seen = _during_a_move(c, sup, "freeze-tpdo 0x25")
     d = notice_data(final)
     assert d["fault"].startswith("joint 5 (node 0x25): no feedback (TPDO1) for "), d
     _healthy_stopped_along_the_path(sup, failed=4)
@@ -210,13 +206,7 @@ def test_a_drive_bus_gone_quiet_loses_every_drive_until_activate(rig: tuple[Cont
     each node reports EMCY 0x8140. Every axis is lost, the fault names a node and why,
     and nothing resumes when the bus comes back: activate does it."""
     c, sup = rig
-    watch = Joint1(sup)
-    list(sup.notices(timeout_s=0.1))
-    seq = _moving(sup)
-    assert c.drives_control is not None
-    t0 = _send(c.drives_control, "bus-off 1500")
-    seen: list[pb.Notice] = []
-    final = _final(sup, seq, seen)
+    watch, t0, final, seen = _during_a_move(c, sup, "bus-off 1500")
     took = time.monotonic() - t0
     d = notice_data(final)
     assert final.event_id == "moveAbsoluteFailed" and final.kind == pb.ALARM and d["reason"] == "fault", d

@@ -661,6 +661,17 @@ def statusword_by_sdo(net: canopen.Network, node_id: int) -> int:
     return int(node.sdo[0x6041].raw)
 
 
+def statuswords_by_sdo() -> dict[int, int]:
+    """Every drive's 0x6041, read by python-canopen's SDO client on the drive bus."""
+    import canopen
+    net = canopen.Network()
+    net.connect(interface="socketcan", channel=DRIVE_IF)
+    try:
+        return {n: statusword_by_sdo(net, n) for n in DRIVE_NODES}
+    finally:
+        net.disconnect()
+
+
 def test_the_drive_bus_carries_each_cycles_rpdos_before_its_sync_and_no_sdo_while_enabled(tmp_path: Path) -> None:
     """landscaped with arm = cia402 drives ls-simdrives on vcan1 while the host library on
     vcan0 locks, activates and moves the arm. candump's log of vcan1 shows: in every drive
@@ -669,7 +680,6 @@ def test_the_drive_bus_carries_each_cycles_rpdos_before_its_sync_and_no_sdo_whil
     drive cycle (its jitter printed); no SDO between the first enable-operation controlword
     and the disable. The arm moved; after deactivate and landscaped's exit no drive is in
     OPERATION ENABLED."""
-    import canopen
 
     assert SIMDRIVES.exists(), f"{SIMDRIVES} missing: build first (bash .ci/build)"
     out = log_dir(tmp_path)
@@ -717,12 +727,7 @@ def test_the_drive_bus_carries_each_cycles_rpdos_before_its_sync_and_no_sdo_whil
             sup.release()
         rc = ctl.stop()
         assert rc == 0, ctl.log.read_text()
-        net = canopen.Network()
-        net.connect(interface="socketcan", channel=DRIVE_IF)
-        try:
-            words = {n: statusword_by_sdo(net, n) for n in DRIVE_NODES}
-        finally:
-            net.disconnect()
+        words = statuswords_by_sdo()
     finally:
         if ctl is not None:
             ctl.stop()
@@ -922,7 +927,6 @@ def test_drives_killed_on_vcan_fail_the_move_and_activate_recovers_them(drive_ar
     """SIGKILL of ls-simdrives during a move: no TPDO and no heartbeat on vcan1 any more.
     The move fails naming a joint, its node and "no feedback"; LOCKED; a new ls-simdrives
     boots and nothing resumes; activate configures the drives again and the arm moves."""
-    import canopen
 
     with supervisor(DRIVE_FAULT_NODE, 0xF1, "vm-drive-kill") as sup:
         sup.lock()
@@ -939,12 +943,7 @@ def test_drives_killed_on_vcan_fail_the_move_and_activate_recovers_them(drive_ar
               f"x {1000 * DRIVE_CYCLE_S:g} ms)")
         drive_arm.start_drives()  # the drives power up again, PRE-OPERATIONAL
         nothing_resumes(sup, 3.0)
-        net = canopen.Network()
-        net.connect(interface="socketcan", channel=DRIVE_IF)
-        try:
-            words = {n: statusword_by_sdo(net, n) for n in DRIVE_NODES}
-        finally:
-            net.disconnect()
+        words = statuswords_by_sdo()
         on = {hex(n): hex(w) for n, w in words.items() if w & SW_STATE_MASK_LONG == 0x0027}
         assert on == {}, f"drives in OPERATION ENABLED before any activate: {on}"
         recovers(sup, start)
