@@ -298,27 +298,6 @@ static void send_frame(uint32_t base, const uint8_t *data)
     (void)ls_net_send_frame(&g_net, &f);
 }
 
-/* STATUS st_motion (the DBC's value table). MOVING with the loop not yet on
- * the plan (the cycle between the core accepting a move and the loop taking
- * it) is running, so a STATUS frame never says MOVING and none at once. */
-static uint8_t status_motion(const ls_ctl_snapshot_t *s)
-{
-    if (g_core.halt.active) {
-        return LANDSCAPE_STATUS_ST_MOTION_ROBOT_STOPPING_CHOICE;
-    }
-    if (s->phase == LS_MOTION_RUNNING || s->phase == LS_MOTION_STOPPING) {
-        return LANDSCAPE_STATUS_ST_MOTION_RUNNING_TRAJECTORY_CHOICE;
-    }
-    if (s->phase == LS_MOTION_PAUSED) {
-        return LANDSCAPE_STATUS_ST_MOTION_ROBOT_PAUSED_CHOICE;
-    }
-    if (g_core.fault[0] != '\0') {
-        return LANDSCAPE_STATUS_ST_MOTION_ROBOT_STOPPED_ON_ERROR_CHOICE;
-    }
-    return g_core.state == ls_State_MOVING ? LANDSCAPE_STATUS_ST_MOTION_RUNNING_TRAJECTORY_CHOICE
-                                           : LANDSCAPE_STATUS_ST_MOTION_NONE_CHOICE;
-}
-
 /* Telemetry broadcasts of protocol/landscape.dbc (SI units). */
 static void send_telemetry(void)
 {
@@ -328,7 +307,8 @@ static void send_telemetry(void)
     uint8_t d[8];
     struct landscape_status_t st = {
         .st_state = (uint8_t)g_core.state,
-        .st_motion = status_motion(&s),
+        /* the core's own code, whose name getMotionControlState answers */
+        .st_motion = g_core.motion_state,
         .st_control_mode = (uint8_t)(g_core.fault[0] != '\0' ? LANDSCAPE_STATUS_ST_CONTROL_MODE_CONTROLLER_ERROR_CHOICE
                                      : s.enabled             ? LANDSCAPE_STATUS_ST_CONTROL_MODE_POWER_ON_CHOICE
                                                              : LANDSCAPE_STATUS_ST_CONTROL_MODE_POWER_OFF_CHOICE),

@@ -49,7 +49,7 @@ void ls_core_on_motion_event(ls_core_t *core, const ls_motion_event_t *ev)
         const char *extra[] = { d2 };
         if (!core->halt.active && (core->state == ls_State_MOVING || core->state == ls_State_PAUSED)) {
             core->state = ls_State_RESTING;
-            ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_at_rest");
+            ls_core_set_motion_state(core, LANDSCAPE_STATUS_ST_MOTION_ROBOT_AT_REST_CHOICE);
         }
         /* It completed, even when a halt was already stopping it. */
         ls_run_finish(core, LS_RUN_END_COMPLETE, extra, 1);

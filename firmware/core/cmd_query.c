@@ -10,7 +10,7 @@
 int32_t ls_h_get_motion_control_state(struct ls_core *core, struct ls_call *call)
 {
     ls_GetMotionControlStateRes *r = &call->res->result.get_motion_control_state;
-    ls_fmt_print(r->motion_control_state, sizeof r->motion_control_state, "%s", core->motion_state);
+    ls_fmt_print(r->motion_control_state, sizeof r->motion_control_state, "%s", ls_core_motion_state_name(core));
     bool active = core->state == ls_State_RESTING || core->state == ls_State_MOVING || core->state == ls_State_PAUSED;
     uint32_t mode = core->fault[0] != '\0' ? LANDSCAPE_STATUS_ST_CONTROL_MODE_CONTROLLER_ERROR_CHOICE
                     : active               ? LANDSCAPE_STATUS_ST_CONTROL_MODE_POWER_ON_CHOICE

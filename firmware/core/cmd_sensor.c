@@ -566,7 +566,7 @@ int32_t ls_h_manual_control(struct ls_core *core, struct ls_call *call)
     core->sensor.sup = kind >= 0 ? call->sup : LS_NO_SESSION;
     core->sensor.kind = kind;
     if (frac > 0.0) {
-        ls_fmt_print(core->motion_state, sizeof core->motion_state, "manual_%s", type);
+        ls_core_set_motion_state(core, ls_core_manual_motion_state(kind));
         return ls_reply(call, ls_RetCode_CMD_EXEC_OK,
                         "%s jogging on: %.3g %s/s and %.3g %s/s at full deflection%s; motion commands are refused "
                         "until manualControl off",
@@ -574,8 +574,8 @@ int32_t ls_h_manual_control(struct ls_core *core, struct ls_call *call)
                         ls_units_from_si_angular(un.angular, jog.v_ang_rad_s), ls_units_angular_name(un.angular),
                         core->state == ls_State_RESTING ? "" : " (moves once activated)");
     }
-    if (strncmp(core->motion_state, "manual_", 7) == 0) {
-        ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_at_rest");
+    if (ls_core_motion_is_manual(core)) {
+        ls_core_set_motion_state(core, LANDSCAPE_STATUS_ST_MOTION_ROBOT_AT_REST_CHOICE);
     }
     return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "manual control off");
 }
@@ -586,7 +586,7 @@ static void rest(ls_core_t *core)
 {
     if (core->state == ls_State_MOVING || core->state == ls_State_PAUSED) {
         core->state = ls_State_RESTING;
-        ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_at_rest");
+        ls_core_set_motion_state(core, LANDSCAPE_STATUS_ST_MOTION_ROBOT_AT_REST_CHOICE);
     }
 }
 
@@ -685,7 +685,7 @@ static void jog_event(ls_core_t *core, const ls_ctl_event_t *ev)
             return;
         }
         if (core->state == ls_State_RESTING) {
-            ls_fmt_print(core->motion_state, sizeof core->motion_state, "manual_%s", core->sensor.mode);
+            ls_core_set_motion_state(core, ls_core_manual_motion_state(core->sensor.kind));
         }
         return;
     }

@@ -1,13 +1,19 @@
 /* Seed 3.1: lock, release, activate, deactivate. The dispatcher has already
  * checked the state and the owner. */
+#include "landscape.h"
 #include "ls_core_services.h"
 #include "ls_fmt.h"
-
 
 int32_t ls_h_lock(struct ls_core *core, struct ls_call *call)
 {
     core->owner = call->sup;
     core->state = ls_State_LOCKED;
+    /* How the last motion ended was the previous owner's news: a new lock
+     * starts at rest unless a fault is still latched (docs/state-machine.md
+     * "motion_control_state"). */
+    if (core->fault[0] == '\0') {
+        ls_core_set_motion_state(core, LANDSCAPE_STATUS_ST_MOTION_ROBOT_AT_REST_CHOICE);
+    }
     return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "locked by 0x%02X", core->sessions[call->sup].addr);
 }
 
@@ -41,7 +47,7 @@ int32_t ls_h_activate(struct ls_core *core, struct ls_call *call)
         }
     }
     core->state = ls_State_RESTING;
-    ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_at_rest");
+    ls_core_set_motion_state(core, LANDSCAPE_STATUS_ST_MOTION_ROBOT_AT_REST_CHOICE);
     return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "%s",
                     have_drives ? "active: drives enabled" : "active: no arm backend is composed, nothing can move");
 }
@@ -96,6 +102,6 @@ void ls_core_on_enable_result(ls_core_t *core, const char *failure, uint64_t now
         return;
     }
     core->state = ls_State_RESTING;
-    ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_at_rest");
+    ls_core_set_motion_state(core, LANDSCAPE_STATUS_ST_MOTION_ROBOT_AT_REST_CHOICE);
     ls_core_finish_deferred(core, sup, ls_RetCode_CMD_EXEC_OK, "active: drives enabled");
 }

@@ -21,6 +21,7 @@
 
 #include "cmd_drives.h"
 #include "cmd_sensor.h"
+#include "landscape.h"
 #include "ls_control.h"
 #include "ls_core_services.h"
 #include "ls_fmt.h"
@@ -85,7 +86,7 @@ static void rest(ls_core_t *core)
 {
     if (core->state == ls_State_MOVING || core->state == ls_State_PAUSED) {
         core->state = ls_State_RESTING;
-        ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_at_rest");
+        ls_core_set_motion_state(core, LANDSCAPE_STATUS_ST_MOTION_ROBOT_AT_REST_CHOICE);
     }
 }
 
@@ -228,7 +229,7 @@ static int32_t change(ls_core_t *core, ls_call_t *call, const char *id, bool att
     }
     core->tool_cmds.op.active = true;
     core->state = ls_State_MOVING;
-    ls_fmt_print(core->motion_state, sizeof core->motion_state, "changing_tool");
+    ls_core_set_motion_state(core, LANDSCAPE_STATUS_ST_MOTION_CHANGING_TOOL_CHOICE);
     return LS_CALL_DEFERRED;
 }
 

@@ -6,6 +6,7 @@
 
 #include <string.h>
 
+#include "landscape.h"
 #include "ls_control.h"
 #include "ls_core_events.h"
 #include "ls_fmt.h"
@@ -23,7 +24,7 @@ void ls_core_init(ls_core_t *core, const ls_core_config_t *cfg, const ls_core_io
     core->owner = LS_NO_SESSION;
     core->activating = LS_NO_SESSION;
     core->homing = LS_NO_SESSION;
-    ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_at_rest");
+    ls_core_set_motion_state(core, LANDSCAPE_STATUS_ST_MOTION_ROBOT_AT_REST_CHOICE);
     core->settings.speed_pct = 25.0;
     core->settings.accel_pct = 50.0;
     core->settings.linear_speed_m_s = 0.25;

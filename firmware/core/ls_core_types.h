@@ -268,8 +268,10 @@ typedef struct ls_core {
     uint32_t homing_joints; /* the joints it homes (bit j: joint j + 1) */
     ls_session_t sessions[LS_MAX_SUPERVISORS];
     char fault[LS_PB_FIELD_SIZE(ls_GetMotionControlStateRes, fault)]; /* latched fault, empty when none */
-    /* seed 3.3.1 motionControlState (docs/state-machine.md) */
-    char motion_state[LS_PB_FIELD_SIZE(ls_GetMotionControlStateRes, motion_control_state)];
+    /* seed 3.3.1 motionControlState (docs/state-machine.md) as the DBC's STATUS
+     * st_motion code (LANDSCAPE_STATUS_ST_MOTION_*_CHOICE): the query sends its
+     * name, the broadcast the code, so the two cannot disagree. */
+    uint8_t motion_state;
     ls_run_t run;                                 /* the started motion (ls_run.h) */
     ls_halt_t halt;                               /* a stop that ends with the drives off (ls_run.h) */
     uint32_t epoch_next;                          /* the next session epoch */

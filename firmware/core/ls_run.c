@@ -89,8 +89,8 @@ void ls_core_manual_off(ls_core_t *core)
     ls_fmt_print(core->sensor.mode, sizeof core->sensor.mode, "off");
     core->sensor.sup = LS_NO_SESSION;
     core->sensor.kind = -1;
-    if (strncmp(core->motion_state, "manual_", 7) == 0) {
-        ls_fmt_print(core->motion_state, sizeof core->motion_state, "robot_at_rest");
+    if (ls_core_motion_is_manual(core)) {
+        ls_core_set_motion_state(core, LANDSCAPE_STATUS_ST_MOTION_ROBOT_AT_REST_CHOICE);
     }
 }
 

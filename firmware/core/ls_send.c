@@ -7,6 +7,7 @@
 
 #include <pb_encode.h>
 
+#include "landscape.h"
 #include "landscape_choices.h"
 #include "ls_fmt.h"
 #include "ls_utf8.h"
@@ -42,8 +43,25 @@ ls_units_t ls_core_run_units(const ls_core_t *core)
 
 void ls_core_set_motion_state(ls_core_t *core, uint32_t choice)
 {
-    const char *name = landscape_status_st_motion_choice_name(choice);
-    ls_fmt_print(core->motion_state, sizeof core->motion_state, "%s", name != NULL ? name : "unknown");
+    core->motion_state = (uint8_t)choice;
+}
+
+const char *ls_core_motion_state_name(const ls_core_t *core)
+{
+    const char *name = landscape_status_st_motion_choice_name(core->motion_state);
+    return name != NULL ? name : "unknown";
+}
+
+uint32_t ls_core_manual_motion_state(int kind)
+{
+    return kind == LS_MANUAL_SPACEBALL ? LANDSCAPE_STATUS_ST_MOTION_MANUAL_SPACEBALL_CHOICE
+                                       : LANDSCAPE_STATUS_ST_MOTION_MANUAL_TEACHPENDANT_CHOICE;
+}
+
+bool ls_core_motion_is_manual(const ls_core_t *core)
+{
+    return core->motion_state == LANDSCAPE_STATUS_ST_MOTION_MANUAL_TEACHPENDANT_CHOICE ||
+           core->motion_state == LANDSCAPE_STATUS_ST_MOTION_MANUAL_SPACEBALL_CHOICE;
 }
 
 const char *ls_core_disconnect_action_name(ls_DisconnectAction a)

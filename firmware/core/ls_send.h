@@ -29,10 +29,19 @@ ls_units_t ls_core_units(const ls_core_t *core, int sup);
  * the run's notices speak the units of the supervisor that started it. */
 ls_units_t ls_core_run_units(const ls_core_t *core);
 
-/* Set motion_state (getMotionControlState's motion_control_state) to the DBC's
- * name of STATUS st_motion `choice` (LANDSCAPE_STATUS_ST_MOTION_*_CHOICE), so the
- * text and the telemetry code have one home. Dispatcher only. */
+/* Set motion_state to STATUS st_motion `choice` (LANDSCAPE_STATUS_ST_MOTION_*_CHOICE):
+ * the broadcast sends the code and getMotionControlState its DBC name, so the
+ * two agree by construction. Dispatcher only. */
 void ls_core_set_motion_state(ls_core_t *core, uint32_t choice);
+
+/* The DBC's name of motion_state (getMotionControlState's motion_control_state). */
+const char *ls_core_motion_state_name(const ls_core_t *core);
+
+/* The st_motion choice of jogging with manual device `kind` (ls_manual_kind_t). */
+uint32_t ls_core_manual_motion_state(int kind);
+
+/* Whether motion_state says manual control is jogging. */
+bool ls_core_motion_is_manual(const ls_core_t *core);
 
 /* "stop", "stop_deactivate", "stop_deactivate_release" (the schema's names
  * in lower case without DISCONNECT_); "configured" for 0, NULL outside the enum. */

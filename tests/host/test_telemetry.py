@@ -34,7 +34,7 @@ def test_choice_value_is_the_table_number() -> None:
 
 
 def test_choice_value_refuses_an_unknown_name_and_lists_the_known_ones() -> None:
-    with pytest.raises(ArgumentError, match="known: none, running_trajectory"):
+    with pytest.raises(ArgumentError, match="known: robot_at_rest, running_trajectory"):
         tm.choice_value("STATUS", "st_motion", "flying")
     with pytest.raises(ArgumentError, match="no value table"):
         tm.choice_value("STATUS", "st_overruns", "many")

@@ -221,7 +221,8 @@ def test_telemetry_is_broadcast_and_agrees_with_the_queries(bench: Bench, db: An
     for row_got, row_want in zip(got, want, strict=False):
         assert row_got == pytest.approx(row_want, abs=5e-4)
     status = last["STATUS"]
-    assert status["st_state"] == pb.RESTING and status["st_motion"] == tm.choice_value("STATUS", "st_motion", "none")
+    assert status["st_state"] == pb.RESTING
+    assert status["st_motion"] == tm.choice_value("STATUS", "st_motion", "robot_at_rest")
     assert status["st_control_mode"] == tm.choice_value("STATUS", "st_control_mode", "power_on")
     assert status["st_fault"] == tm.choice_value("STATUS", "st_fault", "none")
     assert last["DIO"]["dio_outputs"] | last["DIO"]["dio_inputs"] == \
@@ -300,3 +301,63 @@ def test_commanded_joints_differ_from_the_measured_ones_in_a_move_and_meet_them_
     assert c_end == pytest.approx([0.3, 0.0, 0.0, 0.0, 0.0, 0.0], abs=1e-5)
     assert q_end == pytest.approx(c_end, abs=1e-4)
     bench.sup.deactivate()
+
+
+def broadcast_motion(b: Bench, db: Any) -> str:
+    """The name of STATUS.st_motion in the frames of the next few telemetry periods (all alike)."""
+    b.capture.take()
+    time.sleep(0.15)
+    names = {tm.choice_name("STATUS", "st_motion", int(s["st_motion"]))
+             for _, name, s in device_broadcasts(b.capture.take(), db) if name == "STATUS"}
+    assert len(names) == 1, names
+    return names.pop()
+
+
+def test_status_st_motion_says_what_get_motion_control_state_says_after_every_ending(bench: Bench,
+                                                                                     db: Any) -> None:
+    """docs/protocol.md "Where each id, code and name is declared": motion_control_state is the DBC's
+    value name of st_motion, so a client that reads only the broadcast learns how a motion ended:
+    stopped on command after abortMotion, deactivate and the owner's disconnect, stopped on error after
+    the owner's heartbeat is lost, at rest again once a new owner locks."""
+    def agree(expected: str) -> None:
+        query = bench.sup.get_motion_control_state().result["motion_control_state"]
+        assert (query, broadcast_motion(bench, db)) == (expected, expected)
+
+    def paused_move(sup: Supervisor) -> None:
+        sup.set_speed(5, attribute=pb.PERCENT_SPEED)
+        sup.move_absolute("far", [1.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+        time.sleep(0.3)
+        sup.stop_motion()
+        deadline = time.monotonic() + 5
+        while sup.get_motion_control_state().result["state"] != "PAUSED":
+            assert time.monotonic() < deadline
+            time.sleep(0.05)
+
+    bench.sup.lock()
+    bench.sup.activate()
+    agree("robot_at_rest")
+    paused_move(bench.sup)
+    agree("robot_paused")
+    bench.sup.abort_motion()
+    agree("robot_stopped_on_command")
+    paused_move(bench.sup)
+    bench.sup.deactivate()
+    agree("robot_stopped_on_command")
+    bench.sup.release()
+
+    for ending, expected in (("disconnect", "robot_stopped_on_command"), ("heartbeat", "robot_stopped_on_error")):
+        with Supervisor(bench.bus, notifier=bench.notifier, source_address=0xF2, client_name="owner") as owner:
+            owner.lock()
+            owner.activate()
+            paused_move(owner)
+            if ending == "disconnect":
+                owner.disconnect()
+            else:
+                owner._stop_heartbeat()  # the owner vanishes without a word
+            deadline = time.monotonic() + 8
+            while bench.sup.get_motion_control_state().result["state"] not in ("UNLOCKED", "IDLE"):
+                assert time.monotonic() < deadline, f"the owner's {ending} did not release the device"
+                time.sleep(0.1)
+            agree(expected)
+    bench.sup.lock()  # a new owner starts at rest: the last one's ending was its news
+    agree("robot_at_rest")

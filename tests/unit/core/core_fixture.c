@@ -422,7 +422,7 @@ uint32_t start_move(void)
     const ls_Response *r = must(HOST_A);
     assert_int_equal(r->ret_code, ls_RetCode_CMD_STARTED_OK);
     assert_int_equal(g_core.state, ls_State_MOVING);
-    assert_string_equal(g_core.motion_state, "running_trajectory");
+    assert_string_equal(ls_core_motion_state_name(&g_core), "running_trajectory");
     return r->seq;
 }
 

@@ -4,6 +4,8 @@
  * acts, and the drives' homing that motion waits for (sendCommand home). */
 #include "core_fixture.h"
 
+#include "landscape.h"
+
 /* A request is answered from the state as of its arrival: the loop's events
  * posted before it count although no ls_core_tick ran in between (the comms
  * thread woke for both at once). */
@@ -31,7 +33,7 @@ static void test_deactivate_while_moving_answers_at_rest(void **state)
     assert_null(send_req(HOST_A)); /* deferred */
     const uint32_t deact = g_seq;
     assert_int_equal(g_core.state, ls_State_MOVING);
-    assert_string_equal(g_core.motion_state, "robot_stopping");
+    assert_string_equal(ls_core_motion_state_name(&g_core), "robot_stopping");
     /* owner-only commands wait for the stop; queries work */
     req(ls_Request_get_motion_control_state_tag);
     assert_int_equal(must(HOST_B)->ret_code, ls_RetCode_CMD_EXEC_OK);
@@ -46,7 +48,7 @@ static void test_deactivate_while_moving_answers_at_rest(void **state)
     assert_true(has_data(f, "reason=deactivate"));
     assert_int_equal(f->session_epoch, epoch);
     assert_int_equal(g_core.state, ls_State_LOCKED);
-    assert_string_equal(g_core.motion_state, "robot_stopped_on_command");
+    assert_string_equal(ls_core_motion_state_name(&g_core), "robot_stopped_on_command");
     /* then the deferred answer, after the notice */
     bool answered = false;
     for (size_t i = from; i < g_nrx; i++) {
@@ -79,7 +81,7 @@ static void test_emergency_fails_the_motion_once_stopped(void **state)
     assert_string_equal(f->event_id, "moveAbsoluteFailed");
     assert_true(has_data(f, "reason=emergency"));
     assert_int_equal(g_core.state, ls_State_LOCKED);
-    assert_string_equal(g_core.motion_state, "robot_stopped_on_error");
+    assert_string_equal(ls_core_motion_state_name(&g_core), "robot_stopped_on_error");
 }
 
 static void test_disconnect_during_motion_releases_after_the_stop(void **state)
@@ -100,10 +102,27 @@ static void test_disconnect_during_motion_releases_after_the_stop(void **state)
     assert_true(has_data(f, "reason=disconnect"));
     assert_int_equal(f->session_epoch, epoch);
     assert_int_equal(g_core.state, ls_State_UNLOCKED);
-    assert_string_equal(g_core.motion_state, "robot_stopped_on_command");
+    assert_string_equal(ls_core_motion_state_name(&g_core), "robot_stopped_on_command");
     /* the same address connects again: a new epoch, so the old notice cannot match */
     connect_host(HOST_A);
     assert_int_not_equal(g_core.sessions[ls_core_session_of(&g_core, HOST_A)].epoch, epoch);
+}
+
+/* How the last motion ended was its owner's news: the next lock starts at
+ * rest, and the broadcast's code says the same name (docs/state-machine.md). */
+static void test_a_new_lock_after_a_stopped_motion_starts_at_rest(void **state)
+{
+    (void)state;
+    (void)start_move();
+    req(ls_Request_disconnect_tag);
+    assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
+    loop_stopped();
+    ls_run_tick(&g_core, g_now + 1000);
+    assert_int_equal(g_core.motion_state, LANDSCAPE_STATUS_ST_MOTION_ROBOT_STOPPED_ON_COMMAND_CHOICE);
+    req(ls_Request_lock_tag);
+    assert_int_equal(must(HOST_B)->ret_code, ls_RetCode_CMD_EXEC_OK);
+    assert_int_equal(g_core.motion_state, LANDSCAPE_STATUS_ST_MOTION_ROBOT_AT_REST_CHOICE);
+    assert_string_equal(ls_core_motion_state_name(&g_core), "robot_at_rest");
 }
 
 static void test_aux_dio_waits_for_the_write_then_goes_on(void **state)
@@ -135,7 +154,7 @@ static void test_aux_dio_refused_at_run_time_fails_the_path_and_leaves_it_usable
     assert_true(has_data(f, "fault=DIO write refused by the backend"));
     assert_int_equal(g_posted[g_nposted - 1].kind, LS_CTL_ABORT);
     assert_int_equal(g_core.state, ls_State_RESTING);
-    assert_string_equal(g_core.motion_state, "robot_stopped_on_error");
+    assert_string_equal(ls_core_motion_state_name(&g_core), "robot_stopped_on_error");
     assert_string_equal(g_core.fault, "");
     /* the path is free again, nothing waits */
     ls_core_motion_tick(&g_core, g_now);
@@ -348,6 +367,7 @@ int main(void)
         cmocka_unit_test(test_emergency_fails_the_motion_once_stopped),
         cmocka_unit_test(test_disconnect_during_motion_releases_after_the_stop),
         cmocka_unit_test(test_aux_dio_waits_for_the_write_then_goes_on),
+        cmocka_unit_test(test_a_new_lock_after_a_stopped_motion_starts_at_rest),
         cmocka_unit_test(test_aux_dio_refused_at_run_time_fails_the_path_and_leaves_it_usable),
         cmocka_unit_test(test_path_move_cycles_absent_is_one_zero_is_a_dry_run_that_says_so),
         cmocka_unit_test(test_final_notice_writes_a_joint_at_rest_as_0),

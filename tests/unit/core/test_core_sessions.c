@@ -200,7 +200,7 @@ static void test_disconnect_action_stop_during_a_motion(void **state)
     ls_core_tick(&g_core, g_now + LS_CONNECT_ANSWER_GRACE_US + 600000001u); /* the owner's heartbeat is lost */
     assert_int_equal(g_stop_calls, 1);
     assert_int_equal(g_core.state, ls_State_MOVING);
-    assert_string_equal(g_core.motion_state, "robot_stopping");
+    assert_string_equal(ls_core_motion_state_name(&g_core), "robot_stopping");
     assert_null(owner_lost_alarm(from));
     g_snap.cycle += 2;
     g_snap.phase = LS_MOTION_PAUSED; /* paused on the path, drives still on */
