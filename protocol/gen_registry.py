@@ -139,20 +139,45 @@ def presence_rules(pb2, cmds):
     return out
 
 
+#: Entries of FieldLimit.path (landscape.options) and of ls_field_limit_t.path.
+FIELD_PATH_MAX = 4
+
+
 def uplink_limits(pb2):
     """Every bounded (string or repeated) field reachable from ls.Uplink, as
     (path of field numbers, C message type, field name, is string, is repeated)."""
+    return bounded_fields(pb2, "Uplink", strings_only=False)
+
+
+#: The description's own messages: their strings are the description (names the
+#: HAL and the model give), not texts about a request; downlink_limits leaves them out.
+DESCRIPTIONS = ("DescribeRes", "DescribeRobotRes")
+
+
+def downlink_limits(pb2):
+    """Every string field reachable from ls.Downlink outside the description itself (the
+    texts the device sends: answers, notices, acknowledgements, query results), as
+    uplink_limits gives them: what a client may expect whole (describe)."""
+    return bounded_fields(pb2, "Downlink", strings_only=True)
+
+
+def bounded_fields(pb2, root, *, strings_only):
     out = []
 
     def walk(mdesc, path, depth):
-        if depth > 4:
-            raise SystemExit("gen_registry: ls.Uplink nests deeper than FieldLimit.path holds")
+        if strings_only and mdesc.name in DESCRIPTIONS:
+            return
+        if depth >= FIELD_PATH_MAX:
+            raise SystemExit(f"gen_registry: ls.{root} nests deeper than FieldLimit.path holds")
         for f in mdesc.fields:
             repeated = f.label == f.LABEL_REPEATED
             if f.type == f.TYPE_MESSAGE:
-                if repeated:
+                if repeated and not strings_only:
                     out.append((path + [f.number], mdesc.name, f.name, False, True))
                 walk(f.message_type, path + [f.number], depth + 1)
+            elif strings_only:
+                if f.type == f.TYPE_STRING:
+                    out.append((path + [f.number], mdesc.name, f.name, True, repeated))
             elif f.type == f.TYPE_STRING or repeated:
                 if f.type == f.TYPE_BYTES:
                     raise SystemExit(f"gen_registry: {f.full_name}: bytes fields are not described")
@@ -164,7 +189,7 @@ def uplink_limits(pb2):
 
     req = pb2.DESCRIPTOR.message_types_by_name["Request"]
     top_requests = {f.message_type.name for f in req.oneofs_by_name["cmd"].fields}
-    walk(pb2.DESCRIPTOR.message_types_by_name["Uplink"], [], 0)
+    walk(pb2.DESCRIPTOR.message_types_by_name[root], [], 0)
     return out
 
 
@@ -263,6 +288,7 @@ def main() -> int:
     cmds = commands(pb2)
     rules = presence_rules(pb2, cmds)
     limits = uplink_limits(pb2)
+    down_limits = downlink_limits(pb2)
     evs = events(pb2, cmds)
     linear = enum_texts(pb2, "LinearUnit", ("text", "symbol", "si_per_unit"))
     angular = enum_texts(pb2, "AngularUnit", ("text", "symbol", "si_per_unit"))
@@ -341,16 +367,20 @@ def main() -> int:
         " * (ls.absent_means) to `rq` and returns NULL. Dispatcher only; O(fields). */",
         "const char *ls_request_presence(ls_Request *rq);",
         "",
-        "/* The bound of one string or repeated field of ls.Uplink (describe). */",
+        "/* The bound of one string or repeated field of ls.Uplink or ls.Downlink (describe). */",
         "typedef struct {",
         "    uint8_t depth;   /* entries of path */",
-        "    uint8_t path[4]; /* field numbers from ls.Uplink down */",
+        f"    uint8_t path[{FIELD_PATH_MAX}]; /* field numbers from ls.Uplink (ls.Downlink) down */",
         "    uint32_t max_bytes; /* strings: longest UTF-8 text in bytes, else 0 */",
         "    uint32_t max_count; /* repeated: most items, else 0 */",
         "} ls_field_limit_t;",
         "",
+        "/* Every bounded field of what a supervisor sends (describe: field_limits). */",
         f"#define LS_FIELD_LIMIT_COUNT {len(limits)}u",
         "extern const ls_field_limit_t ls_field_limits[LS_FIELD_LIMIT_COUNT];",
+        "/* Every text the device sends (describe: downlink_limits). */",
+        f"#define LS_DOWNLINK_LIMIT_COUNT {len(down_limits)}u",
+        "extern const ls_field_limit_t ls_downlink_limits[LS_DOWNLINK_LIMIT_COUNT];",
         "",
         "/* Event ids (enum ls.EventId; the name on the wire is ls_EventId_name(id)). */",
         "/* The id whose name is `name`, or ls_EventId_EVENT_ID_NONE when the schema",
@@ -497,20 +527,22 @@ def main() -> int:
         "    return NULL;",
         "}",
         "",
-        "const ls_field_limit_t ls_field_limits[LS_FIELD_LIMIT_COUNT] = {",
     ]
-    for path, mname, fname, is_str, rep in limits:
-        ptxt = ", ".join(f"{n}u" for n in path)
-        one = f"((ls_{mname} *)0)->{fname}"
-        if is_str and rep:
-            mb = f"(uint32_t)(sizeof {one}[0] - 1u)"
-        elif is_str:
-            mb = f"(uint32_t)(sizeof {one} - 1u)"
-        else:
-            mb = "0u"
-        mc = f"(uint32_t)pb_arraysize(ls_{mname}, {fname})" if rep else "0u"
-        src.append(f"    {{ {len(path)}u, {{ {ptxt} }}, {mb}, {mc} }}, /* {mname}.{fname} */")
-    src += ["};", ""]
+    for table, count, rows in (("ls_field_limits", "LS_FIELD_LIMIT_COUNT", limits),
+                               ("ls_downlink_limits", "LS_DOWNLINK_LIMIT_COUNT", down_limits)):
+        src.append(f"const ls_field_limit_t {table}[{count}] = {{")
+        for path, mname, fname, is_str, rep in rows:
+            ptxt = ", ".join(f"{n}u" for n in path)
+            one = f"((ls_{mname} *)0)->{fname}"
+            if is_str and rep:
+                mb = f"(uint32_t)(sizeof {one}[0] - 1u)"
+            elif is_str:
+                mb = f"(uint32_t)(sizeof {one} - 1u)"
+            else:
+                mb = "0u"
+            mc = f"(uint32_t)pb_arraysize(ls_{mname}, {fname})" if rep else "0u"
+            src.append(f"    {{ {len(path)}u, {{ {ptxt} }}, {mb}, {mc} }}, /* {mname}.{fname} */")
+        src += ["};", ""]
     src += [
         "typedef struct {",
         "    ls_EventId id;",

@@ -43,10 +43,26 @@ static bool parse_timeout(const char *tok, double *out)
     return true;
 }
 
+/* The NAME of `event NAME` and `rsvp NAME` becomes a notice's event id: one
+ * longer than the id holds would reach the supervisor cut, so a client
+ * waiting for that name would never see it. */
+static bool aux_name_fits(const char *name, char *why, size_t whylen)
+{
+    const size_t max = sizeof(((ls_Notice *)0)->event_id) - 1u;
+    if (strlen(name) <= max) {
+        return true;
+    }
+    ls_fmt_print(why, whylen,
+                 "NAME is %u bytes, a notice's event id holds at most %u (describe: downlink_limits): use a "
+                 "shorter name",
+                 (unsigned)strlen(name), (unsigned)max);
+    return false;
+}
+
 /* Syntax (docs/protocol.md "Auxiliary commands"):
  *   dio UNIT ON OFF          ON/OFF hex masks (0x optional)
  *   wait UNIT MASK TIMEOUT_S MASK hex, TIMEOUT_S in (0, 3600]
- *   event NAME
+ *   event NAME               NAME at most Notice.event_id's bytes
  *   rsvp NAME TIMEOUT_S */
 int ls_aux_parse(const char *text, ls_aux_t *a, char *why, size_t whylen)
 {
@@ -95,11 +111,14 @@ int ls_aux_parse(const char *text, ls_aux_t *a, char *why, size_t whylen)
     if (n == 2 && strcmp(tok[0], "event") == 0) {
         a->kind = LS_AUX_EVENT;
         ls_fmt_print(a->name, sizeof a->name, "%s", tok[1]);
-        return LS_OK;
+        return aux_name_fits(tok[1], why, whylen) ? LS_OK : LS_EINVAL;
     }
     if (n == 3 && strcmp(tok[0], "rsvp") == 0) {
         a->kind = LS_AUX_RSVP;
         ls_fmt_print(a->name, sizeof a->name, "%s", tok[1]);
+        if (!aux_name_fits(tok[1], why, whylen)) {
+            return LS_EINVAL;
+        }
         if (parse_timeout(tok[2], &a->timeout_s)) {
             return LS_OK;
         }

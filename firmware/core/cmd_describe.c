@@ -16,6 +16,8 @@
 
 _Static_assert(LS_FIELD_LIMIT_COUNT <= pb_arraysize(ls_DescribeRes, field_limits),
                "landscape.options: raise ls.DescribeRes.field_limits max_count to hold every bounded uplink field");
+_Static_assert(LS_DOWNLINK_LIMIT_COUNT <= pb_arraysize(ls_DescribeRes, downlink_limits),
+               "landscape.options: raise ls.DescribeRes.downlink_limits max_count to hold every downlink string");
 _Static_assert(pb_arraysize(ls_FieldLimit, path) >= sizeof(((ls_field_limit_t *)0)->path),
                "FieldLimit.path must hold the generated paths");
 _Static_assert(LS_CORE_MAX_DIO_UNITS <= pb_arraysize(ls_DescribeRes, dio_units),
@@ -51,16 +53,22 @@ static void describe_homing(ls_core_t *core, ls_DescribeRes *r)
     }
 }
 
+static void copy_limit(const ls_field_limit_t *g, ls_FieldLimit *f)
+{
+    for (uint8_t k = 0; k < g->depth; k++) {
+        f->path[f->path_count++] = g->path[k];
+    }
+    f->max_bytes = (uint16_t)g->max_bytes;
+    f->max_count = (uint16_t)g->max_count;
+}
+
 static void describe_limits(ls_DescribeRes *r)
 {
     for (size_t i = 0; i < LS_FIELD_LIMIT_COUNT; i++) {
-        const ls_field_limit_t *g = &ls_field_limits[i];
-        ls_FieldLimit *f = &r->field_limits[r->field_limits_count++];
-        for (uint8_t k = 0; k < g->depth; k++) {
-            f->path[f->path_count++] = g->path[k];
-        }
-        f->max_bytes = g->max_bytes;
-        f->max_count = g->max_count;
+        copy_limit(&ls_field_limits[i], &r->field_limits[r->field_limits_count++]);
+    }
+    for (size_t i = 0; i < LS_DOWNLINK_LIMIT_COUNT; i++) {
+        copy_limit(&ls_downlink_limits[i], &r->downlink_limits[r->downlink_limits_count++]);
     }
 }
 

@@ -153,7 +153,7 @@ static int32_t load_point(ls_core_t *core, ls_call_t *call, const ls_PathLoadReq
     pt->n_aux = (uint8_t)tp->aux_commands_count;
     for (int a = 0; a < pt->n_aux; a++) {
         ls_aux_t ax;
-        char why[96];
+        char why[128];
         if (ls_aux_parse(tp->aux_commands[a], &ax, why, sizeof why) != LS_OK ||
             ls_aux_check_io(core, &ax, why, sizeof why) != LS_OK) {
             return ls_reply(call, ls_RetCode_CMD_PARAM_ERR, "pathLoad point %d: aux command '%s': %s", k,

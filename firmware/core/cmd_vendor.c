@@ -10,7 +10,8 @@
  *   stopping the category-1 stop's bound per joint, from the robot model
  *   drives   the drives' readouts: a line per joint, `drives N` one in full, `drives bus` the master's counters
  *   home     the drives' own homing: `home` the joints that must be homed, `home 2 3` those (cmd_drives.h)
- * Output is plain text, one item per line, at most 1 KiB. */
+ * Output is plain text, one item per line, at most SendCommandRes.result's
+ * size (protocol/landscape.options), which holds `status` at its longest. */
 #include <string.h>
 
 #include "cmd_drives.h"
@@ -69,8 +70,8 @@ int32_t ls_h_send_command(struct ls_core *core, struct ls_call *call)
             }
         }
         ls_drv_status_lines(core, o.buf, o.cap, &o.len);
-        /* the transport's counters last: when the 1 KiB runs out (four sessions
-         * with long names, watches, drives) it ends inside them, not inside the sessions */
+        /* the transport's counters last; the answer holds them whole after
+         * every session, watch and drive line (LS_TRANSPORT_DESCRIBE_MAX) */
         if (core->io.describe != NULL && o.len < o.cap) {
             core->io.describe(core->io.ctx, o.buf + o.len, o.cap - o.len);
             o.len += strlen(o.buf + o.len);

@@ -21,6 +21,11 @@
 /* The size nanopb gives `field` of message type `msg` (protocol/landscape.options):
  * the core's copies of a wire string are sized by it, never by a second number. */
 #define LS_PB_FIELD_SIZE(msg, field) sizeof(((msg *)0)->field)
+/* The most the transport's counters take in sendCommand status (ls_core_io_t
+ * describe), its NUL included: the status answer is sized to hold them after
+ * every session and watch at their longest, so it is never cut
+ * (tests/unit/net checks the network layer's text, tests/unit/core the whole). */
+#define LS_TRANSPORT_DESCRIBE_MAX 1024u
 #define LS_DOWNLINK_MAX ls_Downlink_size
 #define LS_UPLINK_MAX ((size_t)ls_IsotpParam_ISOTP_MAX_MESSAGE_BYTES) /* one ISO-TP message */
 #define LS_CALL_DEFERRED INT32_MIN                                    /* a handler will answer later */

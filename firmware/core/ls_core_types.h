@@ -99,7 +99,8 @@ typedef struct {
      * LS_OK, or a negative ls_err.h status (a full queue: LS_EAGAIN) when the
      * message is lost (the core counts it, tx_lost). */
     int (*send_downlink)(void *ctx, uint8_t addr, const uint8_t *buf, size_t len);
-    /* Optional: the transport's counters as key=value lines (sendCommand status). */
+    /* Optional: the transport's counters as key=value lines (sendCommand status),
+     * at most LS_TRANSPORT_DESCRIBE_MAX bytes with the NUL. */
     void (*describe)(void *ctx, char *buf, size_t cap);
     void *ctx;
 } ls_core_io_t;

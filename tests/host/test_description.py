@@ -19,6 +19,8 @@ def description() -> DeviceDescription:
     r.field_limits.add(path=[1, LOAD, 6], max_count=32)
     r.field_limits.add(path=[1, LOAD, 6, 9], max_bytes=47, max_count=4)
     r.field_limits.add(path=[2, 3], max_bytes=63, max_count=4)
+    r.downlink_limits.add(path=[2, 2], max_bytes=31)
+    r.downlink_limits.add(path=[1, 34, 4], max_bytes=95)
     r.dio_units.add(unit_id=0, input_mask=0x0000FFFF, output_mask=0xFFFF0000)
     s = r.sensors.add(name="force_sensor")
     for name, unit in (("Fx", "N"), ("Tz", "Nm")):
@@ -64,8 +66,13 @@ def test_value_hooks_and_completion() -> None:
         d.check_values(build_request("getTool", tool_id="hammer"))
     with pytest.raises(ArgumentError, match="bits 0x00000001 of unit 0 are not outputs"):
         d.check_values(build_request("setDigitalIO", type="digital", unit_id=0, bits_on=1))
-    with pytest.raises(ArgumentError, match="bits 0x00010000 of unit 0 are not inputs"):
-        d.check_values(build_request("signalDigitalIO", type="digital", unit_id=0, bit_string=0x10000,
+    # a watch takes outputs too (docs/protocol.md "Device description": dio_units)
+    d.check_values(build_request("signalDigitalIO", type="digital", unit_id=0, bit_string=0x10001,
+                                 callback_type="event"))
+    d.res.dio_units[0].output_mask = 0x7FFF0000
+    with pytest.raises(ArgumentError, match="bits 0x80000000 are not lines of unit 0 .inputs 0x0000FFFF, outputs "
+                                            "0x7FFF0000"):
+        d.check_values(build_request("signalDigitalIO", type="digital", unit_id=0, bit_string=0x80000001,
                                      callback_type="event"))
     with pytest.raises(ArgumentError, match="no DIO unit 2; its units: 0"):
         d.check_values(build_request("getDigitalIO", type="digital", unit_id=2))
@@ -77,7 +84,8 @@ def test_text_names_every_part() -> None:
     for part in ("8 paths of 256 points", "dio unit 0: inputs 0x0000FFFF outputs 0xFFFF0000",
                  "sensor force_sensor: Fx[N] Tz[Nm]", "tools: gripper, probe", "joint 1: [-3, 3] rad",
                  "limit pathLoad.tags: 32 items", "limit rsvpReply.data: 4 items, 63 bytes",
-                 "answers up to 335 bytes, notice data up to 95 bytes each"):
+                 "answers up to 335 bytes, notice data up to 95 bytes each",
+                 "sends notice.event_id: 31 bytes", "sends getMotionControlState.fault: 95 bytes"):
         assert part in text, part
 
 
@@ -91,5 +99,12 @@ def test_the_host_copy_has_the_limits_of_the_options_file() -> None:
     assert (d.limit("pathLoad.tags.aux_commands").max_count, d.limit("pathLoad.tags.aux_commands").max_bytes) == (4, 47)
     assert d.limit("rsvpReply.data").max_bytes == 63
     assert d.sensors == {} and d.tools == [] and not d.res.joints
+    # the texts the device sends, the description's own names left out
+    assert d.downlink_bytes("notice.event_id") == 31 and d.downlink_bytes("response.ret_msg") == 335
+    assert (d.downlink["notice.data"].max_count, d.downlink_bytes("notice.data")) == (10, 95)
+    assert d.downlink_bytes("sendCommand.result") == 3071
+    assert not any(name.startswith(("describe.", "describeRobot.")) for name in d.downlink)
+    with pytest.raises(ArgumentError, match="no limit for the text 'notice.colour'"):
+        d.downlink_bytes("notice.colour")
     with pytest.raises(ArgumentError, match="pathLoad.path_name is 64 bytes"):
         d.check_request(build_request("pathLoad", path_name="p" * 64))

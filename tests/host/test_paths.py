@@ -96,7 +96,7 @@ POSE = "x,y,z,roll,pitch,yaw"
     ("csv", "", "f: empty file: the first row names the columns"),
     ("csv", f"{POSE}\n", "f: no points below the header"),
     ("csv", f"{POSE},colour\n1,2,3,4,5,6,red\n", "f: line 1: colour: unknown column; columns are "
-                                                 "x, y, z, roll, pitch, yaw, j1..j24, tag_name"),
+                                                 "x, y, z, roll, pitch, yaw, j1..j8, tag_name"),
     ("csv", "x,x,y,z,roll,pitch,yaw\n", "f: line 1: x: column named twice"),
     ("csv", "x,y,z,roll,pitch,yaw,j1\n", "f: line 1: j1: the file mixes Cartesian (x..yaw) and joint (j1..)"),
     ("csv", "tag_name,speed_pct\n", "f: line 1: no coordinates: name x, y, z, roll, pitch, yaw or j1..jN"),
@@ -148,6 +148,12 @@ POSE = "x,y,z,roll,pitch,yaw"
     ("yaml", "points: [\n  - {x: 1\n", "f: line 2: not valid YAML: expected the node content, but found '-'"),
     ("yaml", "", "f: empty file: list the points"),
     ("yaml", "- {j1: 0, j25: 1}", "f: points[0]: j25: unknown field"),
+    ("yaml", "- {j1: 0, j9: 1}", "f: points[0]: j9: unknown field"),
+    ("csv", f"{POSE},aux\n1,2,3,4,5,6,event {'e' * 41}\n", f"f: line 2: aux: 'event {'e' * 41}': NAME is 41 bytes, "
+                                                         f"a notice's event id holds at most 31 (describe: "
+                                                         f"downlink_limits): use a shorter name"),
+    ("csv", f"{POSE},aux\n1,2,3,4,5,6,rsvp {'e' * 32} 1\n", "f: line 2: aux: 'rsvp eeeeeeeeeeeeeeeeeeeeeeeeeeeeeeee "
+                                                          "1': NAME is 32 bytes"),
 ])
 def test_every_validation_error(fmt: str, text: str, message: str) -> None:
     with pytest.raises(PathFileError) as ei:

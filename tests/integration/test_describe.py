@@ -71,11 +71,46 @@ def test_limits_are_checked_before_sending_and_63_bytes_go_through(bus: can.BusA
         sup.release()
 
 
+def test_the_device_publishes_every_text_it_sends_and_refuses_an_event_name_it_would_cut(bus: can.BusABC) -> None:
+    """docs/protocol.md "Device description": downlink_limits bounds every text the device sends (answers,
+    notices, acknowledgements, query results), as the host's copy of the schema's options says; a path's
+    `event NAME` becomes a notice's event id, so pathLoad refuses a NAME longer than that id holds
+    (within the 47 bytes of an auxiliary command), and one of exactly that length arrives whole."""
+    from landscape.description import DeviceDescription
+
+    with Supervisor(bus, client_name="downlink") as sup:
+        d = sup.description
+        assert d is not None and d.from_device
+        host = DeviceDescription.host_copy()
+        assert {k: (v.max_bytes, v.max_count) for k, v in d.downlink.items()} == \
+            {k: (v.max_bytes, v.max_count) for k, v in host.downlink.items()}
+        max_id = d.downlink_bytes("notice.event_id")
+        assert max_id == 31 and d.downlink_bytes("response.ret_msg") == d.res.max_answer_bytes == 335
+        assert d.downlink_bytes("notice.data") == d.res.max_notice_datum_bytes
+        assert "sendCommand.result" in d.downlink and "rsvpAck.action" in d.downlink
+        sup.lock()
+        sup.activate()
+        long_name, name = "e" * 41, "n" * max_id
+        for aux in (f"event {long_name}", f"rsvp {long_name[:39]} 1"):
+            rv = sup.path_load("named", [{"joints": HOME, "aux_commands": [aux]}], check=False)
+            assert rv.ret_name == "CMD_PARAM_ERR", rv
+            why = f"aux command '{aux}': NAME is {len(aux.split()[1])} bytes, a notice's event id holds at most 31"
+            assert why in rv.ret_msg
+        assert sup.path_load("named", [{"joints": HOME, "aux_commands": [f"event {name}"]}]).ok
+        got = []
+        sup.on_notice(got.append)
+        sup.wait_complete(sup.path_move("named"), timeout_s=30)
+        assert [n.event_id for n in got if n.event_id == name] == [name]
+        sup.deactivate()
+        sup.release()
+
+
 def test_cli_describe(controller: Controller) -> None:
     out = controller.cli("describe")
     assert out.returncode == 0, out.stderr
     for part in ("dio unit 0: inputs 0x0000FFFF outputs 0xFFFF0000", "sensor force_sensor: Fx[N]",
-                 "tools: gripper, probe", "limit pathLoad.tags: 32 items", "joint 6: ["):
+                 "tools: gripper, probe", "limit pathLoad.tags: 32 items", "joint 6: [",
+                 "sends notice.event_id: 31 bytes", "sends notice.data: 10 items of 95 bytes"):
         assert part in out.stdout, (part, out.stdout)
 
 

@@ -20,26 +20,33 @@ from .errors import ArgumentError
 from .limits import field_option
 from .registry import COMMANDS, descriptor_of, field_message_type, is_repeated
 
-#: The field that selects the request in ls.Uplink and ls.RsvpReply's place there.
+#: The roots of FieldLimit paths: ls.Uplink (field_limits: what a supervisor sends) and
+#: ls.Downlink (downlink_limits: the texts the device sends).
 _UPLINK = descriptor_of(pb.Uplink)
+_DOWNLINK = descriptor_of(pb.Downlink)
+#: The description's own messages, whose strings downlink_limits leaves out (the
+#: generator's DESCRIPTIONS: they are the description, not texts about a request).
+_DESCRIPTIONS = ("DescribeRes", "DescribeRobotRes")
 
 
 @dataclass(frozen=True)
 class Limit:
-    """The bound of one string or repeated field of what a supervisor sends."""
+    """The bound of one string or repeated field of what a supervisor sends, or of a text
+    the device sends."""
 
-    path: tuple[int, ...]   # field numbers from ls.Uplink down
-    name: str               # "pathLoad.tags.tag_name", "rsvpReply.data"
+    path: tuple[int, ...]   # field numbers from ls.Uplink (ls.Downlink) down
+    name: str               # "pathLoad.tags.tag_name", "rsvpReply.data"; "notice.event_id"
     max_bytes: int          # strings: longest UTF-8 text in bytes (0: not a string)
     max_count: int          # repeated fields: most items (0: not repeated)
 
 
-def path_name(path: tuple[int, ...] | list[int]) -> str:
+def path_name(path: tuple[int, ...] | list[int], root: Descriptor = _UPLINK) -> str:
     """The readable name of a FieldLimit path: the command's seed name, then the field
-    names ([1, 39, 6, 3] -> "pathLoad.tags.tag_name", [2, 3] -> "rsvpReply.data").
+    names ([1, 39, 6, 3] -> "pathLoad.tags.tag_name", [2, 3] -> "rsvpReply.data"; from
+    ls.Downlink: [1, 34, 4] -> "getMotionControlState.fault", [2, 2] -> "notice.event_id").
     ArgumentError for a path this host tool's schema lacks."""
     fds: list[FieldDescriptor] = []
-    desc: Descriptor | None = _UPLINK
+    desc: Descriptor | None = root
     for number in path:
         fd = desc.fields_by_number.get(number) if desc is not None else None
         if fd is None:
@@ -48,7 +55,7 @@ def path_name(path: tuple[int, ...] | list[int]) -> str:
         desc = fd.message_type
     if not fds:
         raise ArgumentError("an empty field path")
-    if fds[0].name == "request" and len(fds) > 1:
+    if fds[0].name in ("request", "response") and len(fds) > 1 and fds[1].name in COMMANDS:
         head, rest = COMMANDS[fds[1].name].name, fds[2:]
     else:
         first, *words = fds[0].name.split("_")
@@ -67,6 +74,12 @@ class DeviceDescription:
         for fl in res.field_limits:
             path = tuple(fl.path)
             self.limits[path] = Limit(path, path_name(path), fl.max_bytes, fl.max_count)
+        #: The texts the device sends (downlink_limits), by name ("notice.event_id").
+        self.downlink: dict[str, Limit] = {}
+        for fl in res.downlink_limits:
+            path = tuple(fl.path)
+            lim = Limit(path, path_name(path, _DOWNLINK), fl.max_bytes, fl.max_count)
+            self.downlink[lim.name] = lim
 
     @classmethod
     def host_copy(cls) -> DeviceDescription:
@@ -79,7 +92,21 @@ class DeviceDescription:
             count = field_option(owner, fd.name, "max_count") if is_repeated(fd) else None
             if size is not None or count is not None:
                 res.field_limits.add(path=list(path), max_bytes=(size or 1) - 1, max_count=count or 0)
+        for path, owner, fd in _bounded(_DOWNLINK, (), skip=_DESCRIPTIONS):
+            size = field_option(owner, fd.name, "max_size") if fd.type == FieldDescriptor.TYPE_STRING else None
+            if size is not None:
+                count = field_option(owner, fd.name, "max_count") if is_repeated(fd) else None
+                res.downlink_limits.add(path=list(path), max_bytes=size - 1, max_count=count or 0)
         return cls(res, from_device=False)
+
+    def downlink_bytes(self, name: str) -> int:
+        """The longest text the device sends in field `name` ("notice.event_id",
+        "response.ret_msg"), in bytes of UTF-8. ArgumentError when it publishes none."""
+        lim = self.downlink.get(name)
+        if lim is None:
+            raise ArgumentError(f"the device publishes no limit for the text '{name}'; it has: "
+                                f"{', '.join(sorted(self.downlink))}")
+        return lim.max_bytes
 
     # ------------------------------------------------------------ lookups (completion hooks)
 
@@ -164,11 +191,13 @@ class DeviceDescription:
                 if bad:
                     raise ArgumentError(f"{name}: bits 0x{bad:08X} of unit {unit.unit_id} are not outputs "
                                         f"(outputs 0x{unit.output_mask:08X}, describe)")
-            if isinstance(sub, pb.SignalDigitalIOReq):
-                bad = sub.bit_string & ~unit.input_mask & 0xFFFFFFFF
+            if isinstance(sub, pb.SignalDigitalIOReq):  # a watch takes inputs and outputs alike
+                lines = unit.input_mask | unit.output_mask
+                bad = sub.bit_string & ~lines & 0xFFFFFFFF
                 if bad:
-                    raise ArgumentError(f"{name}: bits 0x{bad:08X} of unit {unit.unit_id} are not inputs "
-                                        f"(inputs 0x{unit.input_mask:08X}, describe)")
+                    raise ArgumentError(f"{name}: bits 0x{bad:08X} are not lines of unit {unit.unit_id} "
+                                        f"(inputs 0x{unit.input_mask:08X}, outputs 0x{unit.output_mask:08X}, "
+                                        f"describe)")
 
     # ------------------------------------------------------------ text
 
@@ -211,6 +240,9 @@ class DeviceDescription:
             if lim.max_bytes:
                 parts.append(f"{lim.max_bytes} bytes")
             yield f"limit {lim.name}: " + ", ".join(parts)
+        for lim in sorted(self.downlink.values(), key=lambda x: x.name):
+            items = f"{lim.max_count} items of " if lim.max_count else ""
+            yield f"sends {lim.name}: {items}{lim.max_bytes} bytes"
 
 
 def _split_hint(lim: Limit) -> str:
@@ -219,14 +251,18 @@ def _split_hint(lim: Limit) -> str:
     return ": send fewer"
 
 
-def _bounded(desc: Descriptor, path: tuple[int, ...]) -> Iterator[tuple[tuple[int, ...], str, FieldDescriptor]]:
-    """(path, message name, field) of every string and repeated field reachable from `desc`."""
+def _bounded(desc: Descriptor, path: tuple[int, ...], skip: tuple[str, ...] = ()
+             ) -> Iterator[tuple[tuple[int, ...], str, FieldDescriptor]]:
+    """(path, message name, field) of every string and repeated field reachable from `desc`,
+    the messages named in `skip` left out."""
+    if desc.name in skip:
+        return
     for fd in desc.fields:
         here = (*path, fd.number)
         if fd.type == FieldDescriptor.TYPE_STRING or is_repeated(fd):
             yield here, desc.name, fd
         if fd.type == FieldDescriptor.TYPE_MESSAGE:
-            yield from _bounded(field_message_type(fd), here)
+            yield from _bounded(field_message_type(fd), here, skip)
 
 
 def _walk(msg: Message, path: tuple[int, ...]) -> Iterator[tuple[tuple[int, ...], FieldDescriptor, Any]]:

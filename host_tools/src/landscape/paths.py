@@ -39,7 +39,9 @@ from .limits import max_count, max_string_bytes
 from .registry import build_request, parse_enum
 
 POSE_KEYS: tuple[str, ...] = ("x", "y", "z", "roll", "pitch", "yaw")
-_MAX_JOINTS: int = max_count("TagPoint", "joints") or 8
+#: The most joints an arm of this firmware has (describe: joints), not the 24 values the
+#: seed's tag_struct carries on the wire.
+_MAX_JOINTS: int = max_count("DescribeRes", "joints") or 8
 JOINT_KEYS: tuple[str, ...] = tuple(f"j{i}" for i in range(1, _MAX_JOINTS + 1))
 OPTIONAL_KEYS: tuple[str, ...] = ("tag_name", "tag_index", "time_delay_s", "transition_speed_pct", "speed_pct",
                                   "accel_pct", "aux")
@@ -53,6 +55,9 @@ MAX_PATH_NAME_BYTES: int = max_string_bytes("PathLoadReq", "path_name") or 63
 MAX_TAG_NAME_BYTES: int = max_string_bytes("TagPoint", "tag_name") or 63
 MAX_AUX_COMMANDS: int = max_count("TagPoint", "aux_commands") or 4
 MAX_AUX_BYTES: int = max_string_bytes("TagPoint", "aux_commands") or 47
+#: The NAME of `event NAME` / `rsvp NAME` becomes a notice's event id (docs/protocol.md
+#: "Auxiliary commands"), which holds this many bytes (describe: downlink_limits).
+MAX_EVENT_ID_BYTES: int = max_string_bytes("Notice", "event_id") or 31
 #: The most text one point (or the header) of a path file may take: a point whose text is
 #: longer than one ISO-TP message is not a point the device could take anyway.
 MAX_POINT_TEXT_BYTES: int = MAX_MESSAGE_BYTES
@@ -194,6 +199,12 @@ def _aux(raw: Any, err: Callable[[str], PathFileError]) -> list[str]:
         n = len(cmd.encode("utf-8"))
         if n > MAX_AUX_BYTES:
             raise err(f"{shown(cmd)} is {n} bytes; the firmware holds at most {MAX_AUX_BYTES} per command")
+        words = cmd.split()
+        if len(words) >= 2 and words[0] in ("event", "rsvp"):
+            n = len(words[1].encode("utf-8"))
+            if n > MAX_EVENT_ID_BYTES:
+                raise err(f"{shown(cmd)}: NAME is {n} bytes, a notice's event id holds at most {MAX_EVENT_ID_BYTES} "
+                          f"(describe: downlink_limits): use a shorter name")
         out.append(cmd)
     if len(out) > MAX_AUX_COMMANDS:
         raise err(f"{len(out)} commands; the firmware holds at most {MAX_AUX_COMMANDS} per point")

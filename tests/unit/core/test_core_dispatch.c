@@ -450,6 +450,18 @@ static void test_describe_publishes_the_limits_from_their_homes(void **state)
         }
     }
     assert_true(saw_tags && saw_tag_name && saw_client);
+    /* the texts the device sends: e.g. a notice's event id (31 bytes) */
+    assert_int_equal(d->downlink_limits_count, LS_DOWNLINK_LIMIT_COUNT);
+    bool saw_event_id = false;
+    for (pb_size_t i = 0; i < d->downlink_limits_count; i++) {
+        const ls_FieldLimit *f = &d->downlink_limits[i];
+        assert_true(f->max_bytes > 0); /* strings only */
+        if (f->path_count == 2 && f->path[0] == ls_Downlink_notice_tag && f->path[1] == ls_Notice_event_id_tag) {
+            assert_int_equal(f->max_bytes, sizeof(((ls_Notice *)0)->event_id) - 1u);
+            saw_event_id = true;
+        }
+    }
+    assert_true(saw_event_id);
     /* the DIO map, the sensors with their components, the model */
     assert_int_equal(d->dio_units_count, 1);
     assert_int_equal(d->dio_units[0].output_mask, 0xFFFF0000u);

@@ -263,6 +263,60 @@ static void test_connect_narrows_the_disconnect_action(void **state)
     assert_int_equal(r->result.connect.disconnect_action, ls_DisconnectAction_DISCONNECT_STOP_DEACTIVATE);
 }
 
+/* The transport's counters at their budget: LS_TRANSPORT_DESCRIBE_MAX - 1
+ * bytes, its last line named so the test can find it whole. */
+static void longest_transport(void *ctx, char *buf, size_t cap)
+{
+    (void)ctx;
+    const char *tail = "last_counter=4294967295\n";
+    const size_t want = LS_TRANSPORT_DESCRIBE_MAX - 1u;
+    assert_true(cap > want);
+    memset(buf, 'x', want - strlen(tail));
+    for (size_t k = 63; k < want - strlen(tail); k += 64) {
+        buf[k] = '\n';
+    }
+    memcpy(buf + want - strlen(tail), tail, strlen(tail) + 1u);
+}
+
+/* sendCommand status at its longest (every session with the longest name,
+ * every watch, every counter at ten digits, the longest fault, the transport's
+ * counters at their budget) arrives whole: docs/protocol.md "sendCommand". */
+static void test_send_command_status_at_its_longest_is_whole(void **state)
+{
+    (void)state;
+    setup_core(ls_State_LOCKED);
+    g_core.io.describe = longest_transport;
+    memset(g_core.fault, 'f', sizeof g_core.fault - 1u);
+    g_core.fault[sizeof g_core.fault - 1u] = '\0';
+    g_core.rx_malformed = g_core.tx_lost = g_core.sessions_dropped = UINT32_MAX;
+    g_core.hb_refused = g_core.connects_refused = UINT32_MAX;
+    for (int i = 0; i < LS_MAX_SUPERVISORS; i++) {
+        ls_session_t *s = &g_core.sessions[i];
+        s->connected = true;
+        s->addr = (uint8_t)(0x30 + i);
+        memset(s->name, 'n', sizeof s->name - 1u);
+        s->name[sizeof s->name - 1u] = '\0';
+        s->units = (ls_units_t){ .linear = ls_LinearUnit_MILLIMETERS, .angular = ls_AngularUnit_DEGREES };
+        s->heartbeat_timeout_ms = s->hb_refused = s->executed = UINT32_MAX;
+        s->disconnect_action = ls_DisconnectAction_DISCONNECT_STOP_DEACTIVATE_RELEASE;
+    }
+    g_core.sessions[0].addr = HOST_A;
+    for (int i = 0; i < LS_MAX_DIO_WATCHES; i++) {
+        ls_dio_watch_t *w = &g_core.dio.watch[i];
+        w->phase = LS_WATCH_AWAIT_RSVP;
+        w->id = w->bits = w->fired = UINT32_MAX;
+        w->unit = UINT16_MAX;
+        w->addr = 0xFF;
+    }
+    req(ls_Request_send_command_tag);
+    snprintf(g_rq.cmd.send_command.input, sizeof g_rq.cmd.send_command.input, "status");
+    const char *out = must(HOST_A)->result.send_command.result;
+    const size_t n = strlen(out);
+    assert_true(n + 1u < sizeof g_rx[0].msg.response.result.send_command.result);
+    assert_true(n > strlen("last_counter=4294967295\n"));
+    assert_string_equal(out + n - strlen("last_counter=4294967295\n"), "last_counter=4294967295\n");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -273,6 +327,7 @@ int main(void)
         cmocka_unit_test(test_disconnect_action_stop_during_a_motion),
         cmocka_unit_test(test_disconnect_action_stop_deactivate),
         cmocka_unit_test(test_connect_narrows_the_disconnect_action),
+        cmocka_unit_test(test_send_command_status_at_its_longest_is_whole),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -70,11 +70,15 @@ static int link_recv(void *self, hal_can_frame_t *frame)
     return 1;
 }
 
+static uint32_t g_status_count = 2; /* what every fake link's status counts */
+
 static int link_status(void *self, hal_can_status_t *out)
 {
     (void)self;
     memset(out, 0, sizeof *out);
-    out->rx_dropped = 2;
+    out->rx_dropped = g_status_count;
+    out->tx_dropped = g_status_count == 2 ? 0 : g_status_count;
+    out->close_held = g_status_count == 2 ? 0 : g_status_count;
     return LS_OK;
 }
 
@@ -1011,6 +1015,32 @@ static void test_a_busy_link_does_not_starve_the_others(void **state)
     assert_int_equal(describe_value("frames_in"), 301);
 }
 
+/* sendCommand status holds the transport's counters whole when they take
+ * at most LS_TRANSPORT_DESCRIBE_MAX: they do with every counter at its
+ * longest (ten digits) and every link in use. */
+static void test_the_counters_at_their_longest_fit_their_budget(void **state)
+{
+    (void)state;
+    setup_net(LS_NET_MAX_LINKS);
+    g_status_count = UINT32_MAX / LS_NET_MAX_LINKS; /* the links' sums: ten digits */
+    uint32_t *counters[] = { &g_net.frames_in,    &g_net.frames_out,    &g_net.frames_bridged,
+                             &g_net.tx_full,      &g_net.peers_evicted, &g_net.peers_preempted,
+                             &g_net.tx_retried,   &g_net.tx_given_up,   &g_net.tx_deduplicated,
+                             &g_net.tx_restarted, &g_net.fwd_dropped,   &g_net.fwd_emergency_dropped };
+    for (size_t i = 0; i < sizeof counters / sizeof counters[0]; i++) {
+        *counters[i] = UINT32_MAX;
+    }
+    for (int r = 0; r < LS_ISOTP_N_RESULT_COUNT; r++) {
+        g_net.rx_results_gone[r] = UINT32_MAX;
+    }
+    char buf[LS_TRANSPORT_DESCRIBE_MAX * 2];
+    ls_net_describe(&g_net, buf, sizeof buf);
+    g_status_count = 2;
+    assert_true(strlen(buf) + 1u <= LS_TRANSPORT_DESCRIBE_MAX);
+    assert_non_null(strstr(buf, "frames_in=4294967295\n"));
+    assert_non_null(strstr(buf, "isotp_malformed=4294967295\n")); /* the last line, whole */
+}
+
 static void test_link_table_is_bounded(void **state)
 {
     (void)state;
@@ -1048,6 +1078,7 @@ int main(void)
         cmocka_unit_test(test_single_link_does_not_echo),
         cmocka_unit_test(test_send_frame_on_every_link_and_full_queues),
         cmocka_unit_test(test_a_busy_link_does_not_starve_the_others),
+        cmocka_unit_test(test_the_counters_at_their_longest_fit_their_budget),
         cmocka_unit_test(test_link_table_is_bounded),
     };
     return cmocka_run_group_tests_name("ls_net", tests, NULL, NULL);

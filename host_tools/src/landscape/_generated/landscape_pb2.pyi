@@ -305,8 +305,9 @@ class DescribeReq(_message.Message):
     def __init__(self) -> None: ...
 
 class DescribeRes(_message.Message):
-    __slots__ = ["dio_units", "field_limits", "frame_angle_max_rad", "homing", "homing_timeout_ms", "joints", "max_angular_accel_rad_s2", "max_angular_speed_rad_s", "max_answer_bytes", "max_cycles", "max_dio_watches", "max_linear_accel_m_s2", "max_linear_speed_m_s", "max_notice_datum_bytes", "max_paths", "max_points_per_path", "max_sessions", "min_rate_pct", "reach_m", "robot_model", "sensors", "tools", "workspace_max_m", "workspace_min_m"]
+    __slots__ = ["dio_units", "downlink_limits", "field_limits", "frame_angle_max_rad", "homing", "homing_timeout_ms", "joints", "max_angular_accel_rad_s2", "max_angular_speed_rad_s", "max_answer_bytes", "max_cycles", "max_dio_watches", "max_linear_accel_m_s2", "max_linear_speed_m_s", "max_notice_datum_bytes", "max_paths", "max_points_per_path", "max_sessions", "min_rate_pct", "reach_m", "robot_model", "sensors", "tools", "workspace_max_m", "workspace_min_m"]
     DIO_UNITS_FIELD_NUMBER: _ClassVar[int]
+    DOWNLINK_LIMITS_FIELD_NUMBER: _ClassVar[int]
     FIELD_LIMITS_FIELD_NUMBER: _ClassVar[int]
     FRAME_ANGLE_MAX_RAD_FIELD_NUMBER: _ClassVar[int]
     HOMING_FIELD_NUMBER: _ClassVar[int]
@@ -331,6 +332,7 @@ class DescribeRes(_message.Message):
     WORKSPACE_MAX_M_FIELD_NUMBER: _ClassVar[int]
     WORKSPACE_MIN_M_FIELD_NUMBER: _ClassVar[int]
     dio_units: _containers.RepeatedCompositeFieldContainer[DioUnitInfo]
+    downlink_limits: _containers.RepeatedCompositeFieldContainer[FieldLimit]
     field_limits: _containers.RepeatedCompositeFieldContainer[FieldLimit]
     frame_angle_max_rad: float
     homing: _containers.RepeatedCompositeFieldContainer[JointHoming]
@@ -354,7 +356,7 @@ class DescribeRes(_message.Message):
     tools: _containers.RepeatedScalarFieldContainer[str]
     workspace_max_m: _containers.RepeatedScalarFieldContainer[float]
     workspace_min_m: _containers.RepeatedScalarFieldContainer[float]
-    def __init__(self, max_sessions: _Optional[int] = ..., max_paths: _Optional[int] = ..., max_points_per_path: _Optional[int] = ..., max_dio_watches: _Optional[int] = ..., max_cycles: _Optional[int] = ..., min_rate_pct: _Optional[float] = ..., frame_angle_max_rad: _Optional[float] = ..., field_limits: _Optional[_Iterable[_Union[FieldLimit, _Mapping]]] = ..., dio_units: _Optional[_Iterable[_Union[DioUnitInfo, _Mapping]]] = ..., sensors: _Optional[_Iterable[_Union[SensorInfo, _Mapping]]] = ..., tools: _Optional[_Iterable[str]] = ..., robot_model: _Optional[str] = ..., joints: _Optional[_Iterable[_Union[JointLimit, _Mapping]]] = ..., max_linear_speed_m_s: _Optional[float] = ..., max_angular_speed_rad_s: _Optional[float] = ..., max_linear_accel_m_s2: _Optional[float] = ..., max_angular_accel_rad_s2: _Optional[float] = ..., workspace_min_m: _Optional[_Iterable[float]] = ..., workspace_max_m: _Optional[_Iterable[float]] = ..., reach_m: _Optional[float] = ..., max_answer_bytes: _Optional[int] = ..., max_notice_datum_bytes: _Optional[int] = ..., homing: _Optional[_Iterable[_Union[JointHoming, _Mapping]]] = ..., homing_timeout_ms: _Optional[int] = ...) -> None: ...
+    def __init__(self, max_sessions: _Optional[int] = ..., max_paths: _Optional[int] = ..., max_points_per_path: _Optional[int] = ..., max_dio_watches: _Optional[int] = ..., max_cycles: _Optional[int] = ..., min_rate_pct: _Optional[float] = ..., frame_angle_max_rad: _Optional[float] = ..., field_limits: _Optional[_Iterable[_Union[FieldLimit, _Mapping]]] = ..., dio_units: _Optional[_Iterable[_Union[DioUnitInfo, _Mapping]]] = ..., sensors: _Optional[_Iterable[_Union[SensorInfo, _Mapping]]] = ..., tools: _Optional[_Iterable[str]] = ..., robot_model: _Optional[str] = ..., joints: _Optional[_Iterable[_Union[JointLimit, _Mapping]]] = ..., max_linear_speed_m_s: _Optional[float] = ..., max_angular_speed_rad_s: _Optional[float] = ..., max_linear_accel_m_s2: _Optional[float] = ..., max_angular_accel_rad_s2: _Optional[float] = ..., workspace_min_m: _Optional[_Iterable[float]] = ..., workspace_max_m: _Optional[_Iterable[float]] = ..., reach_m: _Optional[float] = ..., max_answer_bytes: _Optional[int] = ..., max_notice_datum_bytes: _Optional[int] = ..., homing: _Optional[_Iterable[_Union[JointHoming, _Mapping]]] = ..., homing_timeout_ms: _Optional[int] = ..., downlink_limits: _Optional[_Iterable[_Union[FieldLimit, _Mapping]]] = ...) -> None: ...
 
 class DescribeRobotReq(_message.Message):
     __slots__ = ["offset"]
