@@ -293,51 +293,96 @@ static void on_request(ls_core_t *core, uint8_t addr, ls_Request *rq, const uint
     run_request(core, addr, rq, sup, hash, now_us);
 }
 
+/* Open the ls.Uplink member `field` (a message) of buf as *sub, without
+ * decoding the rest: LS_OK; LS_EPROTO when it is there but cut short (its
+ * length runs past the buffer); LS_EINVAL when it is absent or the framing
+ * broke before it. Used when the full decode failed, so the answer still
+ * names what it can. */
+static int open_uplink_member(const uint8_t *buf, size_t len, uint32_t field, pb_istream_t *s, pb_istream_t *sub)
+{
+    *s = pb_istream_from_buffer(buf, len);
+    for (;;) {
+        pb_wire_type_t wt;
+        uint32_t tag;
+        bool eof = false;
+        if (!pb_decode_tag(s, &wt, &tag, &eof)) {
+            return LS_EINVAL;
+        }
+        if (tag == field && wt == PB_WT_STRING) {
+            return pb_make_string_substream(s, sub) ? LS_OK : LS_EPROTO;
+        }
+        if (!pb_skip_field(s, wt)) {
+            return LS_EINVAL;
+        }
+    }
+}
+
 /* Read the seq and the command's field number of an ls.Uplink without
  * decoding it: used when the full decode failed (an oversize value) or the
  * command is unknown to this schema (nanopb drops unknown fields), so that
  * the answer still carries the request's seq and names the command. */
 static bool scan_request(const uint8_t *buf, size_t len, uint32_t *seq, uint32_t *cmd)
 {
-    pb_istream_t s = pb_istream_from_buffer(buf, len);
+    pb_istream_t s, sub;
     *seq = 0;
     *cmd = 0;
-    for (;;) {
+    if (open_uplink_member(buf, len, ls_Uplink_request_tag, &s, &sub) != LS_OK) {
+        return false;
+    }
+    bool ok = true;
+    while (ok && sub.bytes_left > 0) {
         pb_wire_type_t wt;
         uint32_t tag;
         bool eof = false;
-        if (!pb_decode_tag(&s, &wt, &tag, &eof)) {
-            return false;
+        ok = pb_decode_tag(&sub, &wt, &tag, &eof);
+        if (!ok) {
+            break;
         }
-        if (tag == ls_Uplink_request_tag && wt == PB_WT_STRING) {
-            pb_istream_t sub;
-            if (!pb_make_string_substream(&s, &sub)) {
-                return false;
+        if (tag == ls_Request_seq_tag && wt == PB_WT_VARINT) {
+            uint64_t v = 0;
+            ok = pb_decode_varint(&sub, &v);
+            *seq = (uint32_t)v;
+        } else {
+            if (*cmd == 0u) {
+                *cmd = tag;
             }
-            bool ok = true;
-            while (ok && sub.bytes_left > 0) {
-                ok = pb_decode_tag(&sub, &wt, &tag, &eof);
-                if (!ok) {
-                    break;
-                }
-                if (tag == ls_Request_seq_tag && wt == PB_WT_VARINT) {
-                    uint64_t v = 0;
-                    ok = pb_decode_varint(&sub, &v);
-                    *seq = (uint32_t)v;
-                } else {
-                    if (*cmd == 0u) {
-                        *cmd = tag;
-                    }
-                    ok = pb_skip_field(&sub, wt);
-                }
-            }
-            (void)pb_close_string_substream(&s, &sub);
-            return true;
-        }
-        if (!pb_skip_field(&s, wt)) {
-            return false;
+            ok = pb_skip_field(&sub, wt);
         }
     }
+    (void)pb_close_string_substream(&s, &sub);
+    return true;
+}
+
+/* Whether an ls.Uplink that did not decode holds an RsvpReply, and its
+ * rsvp_id (0 when that did not come through): such a reply is refused with
+ * an RsvpAck, as every reply is answered (docs/protocol.md "RSVP"). */
+static bool scan_rsvp_reply(const uint8_t *buf, size_t len, uint32_t *rsvp_id)
+{
+    pb_istream_t s, sub;
+    *rsvp_id = 0;
+    const int rc = open_uplink_member(buf, len, ls_Uplink_rsvp_reply_tag, &s, &sub);
+    if (rc == LS_EPROTO) {
+        return true; /* cut short: still a reply, its id unknown */
+    }
+    if (rc != LS_OK) {
+        return false;
+    }
+    pb_wire_type_t wt;
+    uint32_t tag;
+    bool eof = false;
+    while (sub.bytes_left > 0 && pb_decode_tag(&sub, &wt, &tag, &eof)) {
+        if (tag == ls_RsvpReply_rsvp_id_tag && wt == PB_WT_VARINT) {
+            uint64_t v = 0;
+            if (pb_decode_varint(&sub, &v)) {
+                *rsvp_id = (uint32_t)v;
+            }
+            break;
+        }
+        if (!pb_skip_field(&sub, wt)) {
+            break;
+        }
+    }
+    return true;
 }
 
 static void answer_bad_request(ls_core_t *core, uint8_t addr, int32_t code, uint32_t seq, const char *fmt, ...)
@@ -366,6 +411,12 @@ void ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t
         const ls_cmd_desc_t *d = scanned ? ls_cmd_find((pb_size_t)cmd) : NULL;
         char where[120];
         ls_wire_fault_t fault = ls_wire_find_overflow(ls_Uplink_fields, &core->up, buf, len, where, sizeof where);
+        uint32_t rsvp_id = 0;
+        if (cmd == 0u && scan_rsvp_reply(buf, len, &rsvp_id)) {
+            ls_rsvp_refuse(core, addr, rsvp_id, "did not decode (%s): %s: send one within describe's field_limits",
+                           PB_GET_ERROR(&is), fault != LS_WIRE_FITS ? where : "a value exceeds the firmware's limits");
+            return;
+        }
         if (fault != LS_WIRE_FITS) {
             /* "request." is the envelope: name the field as the command has it */
             const char *field = strncmp(where, "request.", 8) == 0 ? where + 8 : where;
@@ -402,6 +453,9 @@ void ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t
             const ls_cmd_desc_t *d = ls_cmd_find(core->up.msg.request.which_cmd);
             answer_bad_request(core, addr, ls_RetCode_CMD_PARAM_ERR, core->up.msg.request.seq,
                                "%s: %s is not valid UTF-8: send text as UTF-8", d != NULL ? d->name : "request", where);
+        } else if (core->up.which_msg == ls_Uplink_rsvp_reply_tag) {
+            ls_rsvp_refuse(core, addr, core->up.msg.rsvp_reply.rsvp_id, "%s is not valid UTF-8: send UTF-8 text",
+                           where);
         }
         return;
     }

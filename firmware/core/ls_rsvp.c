@@ -122,6 +122,25 @@ void ls_rsvp_on_reply(ls_core_t *core, uint8_t addr, const ls_RsvpReply *reply, 
                   (unsigned)reply->rsvp_id, addr);
 }
 
+void ls_rsvp_refuse(ls_core_t *core, uint8_t addr, uint32_t rsvp_id, const char *fmt, ...)
+{
+    char why[sizeof core->note.msg.rsvp_ack.ret_msg];
+    va_list ap;
+    va_start(ap, fmt);
+    ls_fmt_vtext(why, sizeof why, fmt, ap);
+    va_end(ap);
+    uint32_t ref_seq = 0, epoch = 0;
+    for (int i = 0; i < LS_MAX_RSVP; i++) {
+        const ls_rsvp_t *r = &core->rsvp[i];
+        if (r->used && r->id == rsvp_id && r->addr == addr) {
+            ref_seq = r->ref_seq;
+            epoch = r->epoch;
+        }
+    }
+    send_rsvp_ack(core, addr, rsvp_id, ls_RetCode_CMD_PARAM_ERR, "", ref_seq, epoch,
+                  "rsvp %u: the RSVP still waits; the reply %s", (unsigned)rsvp_id, why);
+}
+
 int32_t ls_core_rsvp(ls_core_t *core, int sup, uint32_t ref_seq, ls_NoticeKind kind, const char *event_id,
                      const char *const *data, size_t n_data, uint32_t timeout_ms, const char *default_action,
                      ls_rsvp_done_fn done, void *ctx, uint64_t now_us)

@@ -36,4 +36,12 @@ void ls_rsvp_tick(ls_core_t *core, uint64_t now_us);
  * unknown reply with an RsvpAck saying which. O(LS_MAX_RSVP + LS_RSVP_ENDED_LEN). */
 void ls_rsvp_on_reply(ls_core_t *core, uint8_t addr, const ls_RsvpReply *reply, uint64_t now_us);
 
+/* A reply from `addr` that the device cannot take (it did not decode, a
+ * string is not UTF-8): refused with an RsvpAck CMD_PARAM_ERR saying why
+ * (printf-style), carrying the waiting RSVP's ref_seq and epoch when
+ * `rsvp_id` names one; that RSVP still waits for a valid reply. The caller
+ * counts the message in rx_malformed. O(LS_MAX_RSVP). */
+void ls_rsvp_refuse(ls_core_t *core, uint8_t addr, uint32_t rsvp_id, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+
 #endif

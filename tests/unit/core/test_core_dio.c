@@ -341,6 +341,63 @@ static void test_rsvp_reply_and_timeout(void **state)
 }
 
 /* Accept re-arms the watch: it fires again on the bits' next rising edge, not while they stay set. */
+/* Every reply gets an RsvpAck (docs/protocol.md "RSVP"), also one that does
+ * not decode (more data items than the firmware holds) or carries text that
+ * is not UTF-8: refused naming why, and the RSVP still waits. */
+static void test_a_reply_the_device_cannot_take_is_refused_with_an_ack(void **state)
+{
+    (void)state;
+    g_done_calls = 0;
+    const char *data[] = { "path=p" };
+    const uint32_t epoch_a = g_core.sessions[0].epoch;
+    int32_t id = ls_core_rsvp(&g_core, 0, 41, ls_NoticeKind_EVENT_RSVP, "ask", data, 1, 5000, "continue", done_cb,
+                              &g_done_calls, g_now);
+    assert_true(id > 0 && id < 128);
+    const size_t n_items = pb_arraysize(ls_RsvpReply, data) + 1u;
+    uint8_t buf[64];
+    size_t len = 0;
+    buf[len++] = (uint8_t)((ls_Uplink_rsvp_reply_tag << 3) | PB_WT_STRING);
+    buf[len++] = (uint8_t)(2u + 2u + 3u * n_items);
+    buf[len++] = (uint8_t)((ls_RsvpReply_rsvp_id_tag << 3) | PB_WT_VARINT);
+    buf[len++] = (uint8_t)id;
+    buf[len++] = (uint8_t)((ls_RsvpReply_ret_code_tag << 3) | PB_WT_VARINT);
+    buf[len++] = 0;
+    for (size_t k = 0; k < n_items; k++) {
+        buf[len++] = (uint8_t)((ls_RsvpReply_data_tag << 3) | PB_WT_STRING);
+        buf[len++] = 1;
+        buf[len++] = 'd';
+    }
+    const uint32_t malformed = g_core.rx_malformed;
+    size_t before = g_nrx;
+    ls_core_on_uplink(&g_core, HOST_A, buf, len, g_now);
+    const ls_RsvpAck *a = the_ack(before, HOST_A);
+    assert_int_equal(a->rsvp_id, (uint32_t)id);
+    assert_int_equal(a->ret_code, ls_RetCode_CMD_PARAM_ERR);
+    assert_int_equal(a->ref_seq, 41);
+    assert_int_equal(a->session_epoch, epoch_a);
+    assert_non_null(strstr(a->ret_msg, "the RSVP still waits; the reply did not decode"));
+    assert_non_null(strstr(a->ret_msg, "rsvp_reply.data"));
+    assert_non_null(strstr(a->ret_msg, "send one within describe's field_limits"));
+    assert_int_equal(g_core.rx_malformed, malformed + 1u);
+    assert_int_equal(g_done_calls, 0);
+
+    /* text that is not UTF-8: the same */
+    buf[1] = (uint8_t)(2u + 2u + 3u);
+    buf[8] = 0xFF;
+    before = g_nrx;
+    ls_core_on_uplink(&g_core, HOST_A, buf, 2u + 4u + 3u, g_now);
+    a = the_ack(before, HOST_A);
+    assert_int_equal(a->ret_code, ls_RetCode_CMD_PARAM_ERR);
+    assert_non_null(strstr(a->ret_msg, "not valid UTF-8"));
+    assert_int_equal(g_done_calls, 0);
+
+    /* still waiting: a valid reply is taken */
+    before = g_nrx;
+    send_rsvp_reply(HOST_A, (uint32_t)id, 0);
+    assert_int_equal(g_done_calls, 1);
+    assert_int_equal(the_ack(before, HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
+}
+
 static void test_signal_rsvp_accept_rearms_the_watch(void **state)
 {
     (void)state;
@@ -440,6 +497,7 @@ int main(void)
         cmocka_unit_test_setup(test_signal_refusals_and_table_full, setup_locked),
         cmocka_unit_test_setup(test_watches_end_with_their_session, setup_locked),
         cmocka_unit_test_setup(test_rsvp_reply_and_timeout, setup_locked),
+        cmocka_unit_test_setup(test_a_reply_the_device_cannot_take_is_refused_with_an_ack, setup_locked),
         cmocka_unit_test_setup(test_signal_rsvp_accept_rearms_the_watch, setup_locked),
         cmocka_unit_test_setup(test_signal_rsvp_decline_cancels_the_watch, setup_locked),
         cmocka_unit_test_setup(test_signal_rsvp_unanswered_takes_the_default, setup_locked),
