@@ -47,6 +47,10 @@ typedef struct {
     int sup;        /* session that started it */
     uint8_t addr;   /* its address: the final notice goes there */
     uint32_t epoch; /* its session epoch */
+    /* That session's notice_seq once it has ended (disconnect, heartbeat,
+     * a new connect): the run's later notices go on with its numbering, so a
+     * client's gap check per session holds to the final notice. */
+    uint32_t notice_seq;
     uint32_t ref_seq;
     const ls_cmd_finals_t *finals; /* its command's final notices (ls_cmd_table: ls_EventId_<command><ending>) */
     char point[LS_MOTION_NAME_LEN];

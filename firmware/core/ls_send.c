@@ -172,12 +172,24 @@ void ls_core_notify_named_to(ls_core_t *core, uint8_t addr, uint32_t epoch, ls_N
     ls_Notice *n = ls_send_new_notice(core, kind, event_id, ref_seq, data, n_data);
     n->final = final;
     n->session_epoch = epoch;
-    /* The session that started it may be gone (disconnect, heartbeat): the
-     * address still gets the notice, outside any session's numbering. */
-    n->notice_seq = i >= 0 ? ++core->sessions[i].notice_seq : 0u;
+    /* The session that started it may be gone (disconnect, heartbeat, a new
+     * connect): the address still gets the notice, numbered on in that
+     * session's count, which the run kept. */
+    if (i >= 0 && core->sessions[i].epoch == epoch) {
+        n->notice_seq = ++core->sessions[i].notice_seq;
+    } else if (core->run.addr == addr && core->run.epoch == epoch) {
+        n->notice_seq = ++core->run.notice_seq;
+    }
     size_t len = ls_send_encode(&core->note, core->note_enc, sizeof core->note_enc);
     if (len > 0) {
         ls_send_bytes(core, addr, core->note_enc, len);
+    }
+}
+
+void ls_send_session_ended(ls_core_t *core, const ls_session_t *s)
+{
+    if (core->run.active && core->run.addr == s->addr && core->run.epoch == s->epoch) {
+        core->run.notice_seq = s->notice_seq;
     }
 }
 

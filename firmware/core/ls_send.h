@@ -58,8 +58,10 @@ int32_t ls_reply(ls_call_t *call, int32_t code, const char *fmt, ...) __attribut
 void ls_core_notify(ls_core_t *core, int sup, ls_NoticeKind kind, ls_EventId id, uint32_t ref_seq, bool final,
                     const char *const *data, size_t n_data);
 
-/* Send a notice to the session at `addr` (if any) carrying session epoch
- * `epoch`: the notices of a run go to the session that started it. */
+/* Send a notice to the address `addr` about a request of its session
+ * `epoch`: the notices of a run go to the session that started it. They are
+ * numbered in that session's notice_seq, also once it has ended (the run
+ * keeps the count: ls_send_session_ended). */
 void ls_core_notify_to(ls_core_t *core, uint8_t addr, uint32_t epoch, ls_NoticeKind kind, ls_EventId id,
                        uint32_t ref_seq, bool final, const char *const *data, size_t n_data);
 
@@ -67,6 +69,10 @@ void ls_core_notify_to(ls_core_t *core, uint8_t addr, uint32_t epoch, ls_NoticeK
  * chose, which no schema can declare (ls.EventId AUX_NAMED_EVENT has its keys). */
 void ls_core_notify_named_to(ls_core_t *core, uint8_t addr, uint32_t epoch, ls_NoticeKind kind, const char *name,
                              uint32_t ref_seq, bool final, const char *const *data, size_t n_data);
+
+/* Session `s` ends (disconnect, heartbeat time-out, a new connect from its
+ * address): the run it started, if any, keeps its notice numbering. */
+void ls_send_session_ended(ls_core_t *core, const ls_session_t *s);
 
 /* Answer a request that a handler deferred (LS_CALL_DEFERRED) for session
  * `sup`: the response carries the deferred request's seq and command id. */

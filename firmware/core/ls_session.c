@@ -32,6 +32,7 @@ void ls_session_drop(ls_core_t *core, int i, const char *why, uint64_t now_us)
     ls_session_t *s = &core->sessions[i];
     bool was_owner = core->owner == i;
     uint8_t addr = s->addr;
+    ls_send_session_ended(core, s);
     s->connected = false;
     if (core->halt.answer_sup == i) {
         core->halt.answer_sup = LS_NO_SESSION; /* nobody to answer any more */
@@ -200,6 +201,7 @@ static int connect_slot(ls_core_t *core, uint8_t addr, ls_call_t *call, int32_t 
         if (old->last_pending && core->halt.answer_sup == i) {
             core->halt.answer_sup = LS_NO_SESSION;
         }
+        ls_send_session_ended(core, old);
         old->have_last = false;
         old->last_pending = false;
         old->last_resp_len = 0;

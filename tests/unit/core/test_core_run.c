@@ -89,6 +89,7 @@ static void test_disconnect_during_motion_releases_after_the_stop(void **state)
     (void)state;
     const uint32_t move = start_move();
     const uint32_t epoch = g_core.sessions[0].epoch;
+    const uint32_t numbered = g_core.sessions[0].notice_seq;
     size_t from = g_nrx, n;
     req(ls_Request_disconnect_tag);
     assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
@@ -101,6 +102,8 @@ static void test_disconnect_during_motion_releases_after_the_stop(void **state)
     assert_int_equal(n, 1);
     assert_true(has_data(f, "reason=disconnect"));
     assert_int_equal(f->session_epoch, epoch);
+    /* sent after its session ended, numbered on in that session's count */
+    assert_int_equal(f->notice_seq, numbered + 1u);
     assert_int_equal(g_core.state, ls_State_UNLOCKED);
     assert_string_equal(ls_core_motion_state_name(&g_core), "robot_stopped_on_command");
     /* the same address connects again: a new epoch, so the old notice cannot match */
