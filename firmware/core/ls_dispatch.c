@@ -204,7 +204,9 @@ static bool refused_for_its_seq(ls_core_t *core, uint8_t addr, const ls_Request 
 static bool answered_from_cache(ls_core_t *core, uint8_t addr, const ls_Request *rq, ls_session_t *s, uint64_t hash,
                                 uint64_t now_us)
 {
-    const bool connect_again = rq->which_cmd == ls_Request_connect_tag && s != NULL && s->have_last &&
+    /* A connect with seq 0 carries no seq to compare (docs/protocol.md
+     * "Sequence numbers"): always a new connect, never a retransmission. */
+    const bool connect_again = rq->which_cmd == ls_Request_connect_tag && rq->seq != 0u && s != NULL && s->have_last &&
                                s->last_tag == ls_Request_connect_tag && hash == s->last_req_hash;
     if (s != NULL && s->have_last && rq->seq == s->last_seq &&
         (rq->which_cmd != ls_Request_connect_tag || connect_again)) {

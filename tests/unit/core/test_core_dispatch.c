@@ -235,6 +235,34 @@ static void test_a_retransmitted_connect_gets_the_same_token(void **state)
     assert_int_equal(g_core.sessions[i].last_heard_us, g_now);
 }
 
+/* A connect with seq 0 has no seq to be retransmitted by: every one opens
+ * a new session (new epoch and token), byte-identical or not; with seq > 0
+ * the same bytes again are a retransmission (docs/protocol.md "Sequence
+ * numbers"). */
+static void test_a_connect_with_seq_0_is_never_answered_from_the_cache(void **state)
+{
+    (void)state;
+    const int i = ls_core_session_of(&g_core, HOST_A);
+    uint32_t epochs[3];
+    for (int k = 0; k < 3; k++) {
+        ls_ConnectReq *c = &req(ls_Request_connect_tag)->cmd.connect;
+        c->protocol_version = ls_Protocol_PROTOCOL_VERSION;
+        c->has_protocol_version = true;
+        c->schema_hash = LS_SCHEMA_HASH;
+        c->has_schema_hash = true;
+        c->client_nonce = nonce_of(HOST_A);
+        c->has_client_nonce = true;
+        g_seq = 0;
+        size_t first;
+        assert_int_equal(resend_same_seq(HOST_A, &first), 1);
+        assert_int_equal(g_rx[first].msg.response.ret_code, ls_RetCode_CMD_EXEC_OK);
+        epochs[k] = g_rx[first].msg.response.session_epoch;
+        assert_int_equal(g_core.sessions[i].epoch, epochs[k]);
+    }
+    assert_true(epochs[0] != epochs[1] && epochs[1] != epochs[2]);
+    assert_int_equal(g_core.owner, i); /* the same client: ownership kept */
+}
+
 static void test_utf8_check_and_repair(void **state)
 {
     (void)state;
@@ -517,6 +545,7 @@ int main(void)
         cmocka_unit_test(test_owner_only_commands_refuse_non_owners),
         cmocka_unit_test_setup(test_seq_reuse_with_another_request_is_refused, setup_locked),
         cmocka_unit_test_setup(test_a_retransmitted_connect_gets_the_same_token, setup_locked),
+        cmocka_unit_test_setup(test_a_connect_with_seq_0_is_never_answered_from_the_cache, setup_locked),
         cmocka_unit_test(test_utf8_check_and_repair),
         cmocka_unit_test_setup(test_strings_that_are_not_utf8_are_refused_naming_the_field, setup_locked),
         cmocka_unit_test_setup(test_what_the_device_shortens_stays_utf8, setup_locked),
