@@ -288,6 +288,13 @@ static void on_request(ls_core_t *core, uint8_t addr, ls_Request *rq, const uint
     const int sup = ls_core_session_of(core, addr);
     ls_session_t *s = sup >= 0 ? &core->sessions[sup] : NULL;
     const uint64_t hash = request_hash(raw, raw_len);
+    if (s != NULL && rq->which_cmd != ls_Request_connect_tag && s->last_heard_us > now_us) {
+        /* A request after the connect shows its answer arrived: the connect's
+         * grace ends and the heartbeat time-out runs from here, so a client
+         * that locks and dies keeps nothing for 3 s more (docs/protocol.md
+         * "Liveness"). */
+        s->last_heard_us = now_us;
+    }
     if (refused_for_its_seq(core, addr, rq, s, hash) || answered_from_cache(core, addr, rq, s, hash, now_us) ||
         refused_while_deferred(core, addr, rq, s)) {
         return;

@@ -263,6 +263,31 @@ static void test_connect_narrows_the_disconnect_action(void **state)
     assert_int_equal(r->result.connect.disconnect_action, ls_DisconnectAction_DISCONNECT_STOP_DEACTIVATE);
 }
 
+/* The connect's grace covers the time its answer may take; a request after
+ * it shows the answer arrived, so from then on the heartbeat time-out
+ * applies: a client that connects, locks and dies is dropped (and the lock
+ * released) its time-out after the lock, not 3 s later (docs/protocol.md
+ * "Liveness"). */
+static void test_a_request_ends_the_connect_grace(void **state)
+{
+    (void)state;
+    g_cfg_timeout_ms = 1000;
+    setup_core(ls_State_UNLOCKED);
+    g_core.owner = LS_NO_SESSION;
+    const int b = ls_core_session_of(&g_core, HOST_B);
+    connect_host(HOST_B); /* a fresh connect: its grace starts now */
+    assert_int_equal(g_core.sessions[b].last_heard_us, g_now + LS_CONNECT_ANSWER_GRACE_US);
+    g_now += 200000;
+    req(ls_Request_lock_tag);
+    assert_int_equal(must(HOST_B)->ret_code, ls_RetCode_CMD_EXEC_OK);
+    assert_int_equal(g_core.sessions[b].last_heard_us, g_now);
+    beat(HOST_A, g_now + 1000000);
+    ls_core_tick(&g_core, g_now + 1000001); /* no heartbeat since the lock: dropped, the lock released */
+    assert_int_equal(ls_core_session_of(&g_core, HOST_B), LS_NO_SESSION);
+    assert_int_equal(g_core.owner, LS_NO_SESSION);
+    assert_int_equal(g_core.state, ls_State_UNLOCKED);
+}
+
 /* The transport's counters at their budget: LS_TRANSPORT_DESCRIBE_MAX - 1
  * bytes, its last line named so the test can find it whole. */
 static void longest_transport(void *ctx, char *buf, size_t cap)
@@ -328,6 +353,7 @@ int main(void)
         cmocka_unit_test(test_disconnect_action_stop_deactivate),
         cmocka_unit_test(test_connect_narrows_the_disconnect_action),
         cmocka_unit_test(test_send_command_status_at_its_longest_is_whole),
+        cmocka_unit_test(test_a_request_ends_the_connect_grace),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
