@@ -98,7 +98,7 @@ static int32_t dispatch(ls_core_t *core, uint8_t addr, ls_call_t *call, ls_Reque
     const ls_cmd_desc_t *d = ls_cmd_find(rq->which_cmd);
     if (d == NULL) {
         return ls_reply(call, ls_RetCode_CMD_UNKNOWN_CMD_ERR,
-                        "command id %u is not in this firmware's schema: update the firmware or the host tool",
+                        "command id %u is not in this firmware's schema: update the firmware or the client",
                         (unsigned)rq->which_cmd);
     }
     if (rq->which_cmd == ls_Request_connect_tag) {
@@ -276,8 +276,8 @@ static void run_request(ls_core_t *core, uint8_t addr, ls_Request *rq, int sup, 
         return;
     }
     res->ret_code = code;
-    if (code < 0) {
-        res->which_result = 0; /* no result on errors */
+    if (code < 0 && !(code == ls_RetCode_CMD_VERSION_MISMATCH_ERR && rq->which_cmd == ls_Request_connect_tag)) {
+        res->which_result = 0; /* no result on errors, but a version refusal's (connect_terms) */
     }
     ls_send_response(core, s, addr);
 }
@@ -446,11 +446,11 @@ void ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t
         if (cmd != 0u) {
             answer_bad_request(core, addr, ls_RetCode_CMD_UNKNOWN_CMD_ERR, core->up.msg.request.seq,
                                "command id %u is not in this firmware's schema: update the firmware or the "
-                               "host tool (they must come from the same tree)",
+                               "client (they must come from the same schema)",
                                (unsigned)cmd);
         } else {
             answer_bad_request(core, addr, ls_RetCode_CMD_UNKNOWN_CMD_ERR, core->up.msg.request.seq,
-                               "the request carries no command: the host tool must set one");
+                               "the request carries no command: the client must set one");
         }
         return;
     }

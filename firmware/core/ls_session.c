@@ -125,17 +125,24 @@ typedef struct {
 static int32_t connect_terms(ls_core_t *core, ls_call_t *call, connect_terms_t *t)
 {
     const ls_ConnectReq *rq = &call->req->cmd.connect;
+    if (rq->protocol_version != (uint32_t)ls_Protocol_PROTOCOL_VERSION || rq->schema_hash != LS_SCHEMA_HASH) {
+        /* The refusal carries the device's version and hash as numbers too
+         * (ConnectRes), so no client has to read them out of the text. */
+        call->res->which_result = ls_Response_connect_tag;
+        call->res->result.connect.protocol_version = (uint32_t)ls_Protocol_PROTOCOL_VERSION;
+        call->res->result.connect.schema_hash = LS_SCHEMA_HASH;
+    }
     if (rq->protocol_version != (uint32_t)ls_Protocol_PROTOCOL_VERSION) {
-        bool host_older = rq->protocol_version < (uint32_t)ls_Protocol_PROTOCOL_VERSION;
+        bool client_older = rq->protocol_version < (uint32_t)ls_Protocol_PROTOCOL_VERSION;
         return ls_reply(call, ls_RetCode_CMD_VERSION_MISMATCH_ERR,
-                        "protocol version %u on the host, %u on the device: update the %s",
+                        "protocol version %u from the client, %u on the device: update the %s",
                         (unsigned)rq->protocol_version, (unsigned)ls_Protocol_PROTOCOL_VERSION,
-                        host_older ? "host tool" : "firmware");
+                        client_older ? "client" : "firmware");
     }
     if (rq->schema_hash != LS_SCHEMA_HASH) {
         return ls_reply(call, ls_RetCode_CMD_VERSION_MISMATCH_ERR,
-                        "schema %08X on the host, %08X on the device: install the host tool built from the "
-                        "firmware's tree (or update the firmware)",
+                        "schema %08X from the client, %08X on the device: build the client from the device's "
+                        "protocol/landscape.proto, or update the firmware",
                         (unsigned)rq->schema_hash, (unsigned)LS_SCHEMA_HASH);
     }
     const uint32_t period_ms = rq->heartbeat_period_ms;
@@ -188,8 +195,8 @@ static int connect_slot(ls_core_t *core, uint8_t addr, ls_call_t *call, int32_t 
         call->res->session_epoch = 0u;
         core->connects_refused++;
         *code = ls_reply(call, ls_RetCode_CMD_NOT_OWNER_ERR,
-                         "connect: address 0x%02X is in use by another client, \"%s\"%s: pass another "
-                         "--source-address, or none to let the host pick a free one",
+                         "connect: address 0x%02X is in use by another client, \"%s\"%s: connect from an "
+                         "address no live session uses",
                          addr, live->name, core->owner == i ? " (the owner)" : "");
         return LS_NO_SESSION;
     }

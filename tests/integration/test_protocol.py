@@ -91,7 +91,11 @@ def test_connect_with_another_schema_is_refused(bus: can.BusABC) -> None:
         rv = sup.request("connect", check=False, protocol_version=pb.PROTOCOL_VERSION,
                          schema_hash=0x12345678, client_nonce=sup.nonce, client_name="old")
         assert rv.ret_code == pb.CMD_VERSION_MISMATCH_ERR
-        assert "host tool" in rv.ret_msg and "12345678" in rv.ret_msg
+        assert "build the client from the device's protocol/landscape.proto" in rv.ret_msg, rv.ret_msg
+        assert "12345678" in rv.ret_msg
+        # the device's version and hash as numbers too, not only inside the text (docs/protocol.md "Schema hash")
+        assert isinstance(rv.message, pb.ConnectRes)
+        assert (rv.message.protocol_version, rv.message.schema_hash) == (pb.PROTOCOL_VERSION, SCHEMA_HASH)
         rv = sup.request("connect", check=False, protocol_version=pb.PROTOCOL_VERSION + 1,
                          schema_hash=SCHEMA_HASH, client_nonce=sup.nonce, client_name="new")
         assert rv.ret_code == pb.CMD_VERSION_MISMATCH_ERR

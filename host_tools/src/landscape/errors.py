@@ -125,7 +125,8 @@ class NotOwnerError(CommandError):
 class AddressInUseError(NotOwnerError):
     """connect was refused: another client has a live session on this source address."""
 
-    hint = ""
+    hint = ("pass another --source-address (Supervisor source_address), or none to let the host pick a free "
+            "one")
 
 
 class BusyError(CommandError):

@@ -338,8 +338,7 @@ class Supervisor(Commands):
             # the answer to another client's connect: another client speaks from this address
             raise AddressInUseError("connect", pb.CMD_NOT_OWNER_ERR,
                                     f"the answer on {self.source_address:#04x} accepts another client's connect "
-                                    f"(its nonce is not ours): another client uses this address: pass another "
-                                    f"--source-address, or none to let the host pick a free one")
+                                    f"(its nonce is not ours): another client uses this address")
         if rv.ret_code == pb.CMD_NOT_OWNER_ERR:
             raise AddressInUseError("connect", rv.ret_code, rv.ret_msg)
         if rv.ret_code == pb.CMD_VERSION_MISMATCH_ERR:

@@ -263,6 +263,29 @@ static void test_a_connect_with_seq_0_is_never_answered_from_the_cache(void **st
     assert_int_equal(g_core.owner, i); /* the same client: ownership kept */
 }
 
+/* A connect from another schema is refused with the device's protocol
+ * version and schema hash as numbers (ConnectRes), not only in the text,
+ * and the text speaks of the client, not of one host tool. */
+static void test_a_version_refusal_carries_the_device_hash(void **state)
+{
+    (void)state;
+    ls_ConnectReq *c = &req(ls_Request_connect_tag)->cmd.connect;
+    c->protocol_version = ls_Protocol_PROTOCOL_VERSION;
+    c->has_protocol_version = true;
+    c->schema_hash = LS_SCHEMA_HASH ^ 1u;
+    c->has_schema_hash = true;
+    c->client_nonce = 7;
+    c->has_client_nonce = true;
+    const ls_Response *r = must(0x30);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_VERSION_MISMATCH_ERR);
+    assert_int_equal(r->which_result, ls_Response_connect_tag);
+    assert_int_equal(r->result.connect.schema_hash, LS_SCHEMA_HASH);
+    assert_int_equal(r->result.connect.protocol_version, ls_Protocol_PROTOCOL_VERSION);
+    assert_int_equal(r->result.connect.heartbeat_token, 0); /* no session */
+    assert_non_null(strstr(r->ret_msg, "build the client from the device's protocol/landscape.proto"));
+    assert_int_equal(ls_core_session_of(&g_core, 0x30), LS_NO_SESSION);
+}
+
 static void test_utf8_check_and_repair(void **state)
 {
     (void)state;
@@ -546,6 +569,7 @@ int main(void)
         cmocka_unit_test_setup(test_seq_reuse_with_another_request_is_refused, setup_locked),
         cmocka_unit_test_setup(test_a_retransmitted_connect_gets_the_same_token, setup_locked),
         cmocka_unit_test_setup(test_a_connect_with_seq_0_is_never_answered_from_the_cache, setup_locked),
+        cmocka_unit_test_setup(test_a_version_refusal_carries_the_device_hash, setup_locked),
         cmocka_unit_test(test_utf8_check_and_repair),
         cmocka_unit_test_setup(test_strings_that_are_not_utf8_are_refused_naming_the_field, setup_locked),
         cmocka_unit_test_setup(test_what_the_device_shortens_stays_utf8, setup_locked),
