@@ -48,6 +48,38 @@ int32_t ls_mcmd_refused(ls_call_t *call, int status, const char *what, const cha
     return ls_reply(call, code, "%s refused, nothing moved: %s", what, why);
 }
 
+int ls_mcmd_joints_within(const ls_core_t *core, ls_units_t un, const double q_rad[LS_N_JOINTS], char *why,
+                          size_t whylen)
+{
+    const double per = ls_units_to_si_angular(un.angular, 1.0);
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        const double lo = core->model->q_min_rad[j], hi = core->model->q_max_rad[j];
+        if (q_rad[j] < lo || q_rad[j] > hi) {
+            const char *sym = ls_units_angular_symbol(un.angular);
+            ls_fmt_print(why, whylen, "joint %d: %.4g %s beyond its limit %.4g %s", j + 1, q_rad[j] / per, sym,
+                         (q_rad[j] < lo ? lo : hi) / per, sym);
+            return LS_ERANGE;
+        }
+    }
+    return LS_OK;
+}
+
+int ls_mcmd_tip_within(const ls_core_t *core, ls_units_t un, const double p_m[3], char *why, size_t whylen)
+{
+    static const char *const ax[3] = { "x", "y", "z" };
+    const double per = ls_units_to_si_linear(un.linear, 1.0);
+    for (int i = 0; i < 3; i++) {
+        const double lo = core->model->workspace_min_m[i], hi = core->model->workspace_max_m[i];
+        if (p_m[i] < lo || p_m[i] > hi) {
+            const char *sym = ls_units_linear_symbol(un.linear);
+            ls_fmt_print(why, whylen, "axis %s: %.4g %s beyond the workspace limit %.4g %s (base frame, tool tip)",
+                         ax[i], p_m[i] / per, sym, (p_m[i] < lo ? lo : hi) / per, sym);
+            return LS_ERANGE;
+        }
+    }
+    return LS_OK;
+}
+
 bool ls_mcmd_snapshot(ls_core_t *core, ls_ctl_snapshot_t *snap)
 {
     if (core->ctl == NULL) {

@@ -47,6 +47,14 @@ void ls_mcmd_cart_limits(const ls_core_t *core, double speed_pct, double accel_p
 int32_t ls_mcmd_check_speed_pct(ls_call_t *call, double pct);
 int32_t ls_mcmd_check_name(ls_call_t *call, const char *what, const char *field, const char *name);
 bool ls_mcmd_all_finite(const double *v, size_t n);
+/* Range checks in the session's units `un`, so a refusal speaks the units
+ * the request was written in ("joint 1: 500 deg beyond its limit 170 deg"):
+ * LS_OK, or LS_ERANGE with `why` naming the first joint of q_rad (SI) outside
+ * the model's limits, or the first axis of the tip position p_m (base frame,
+ * SI) outside its workspace box. No allocation; O(joints). */
+int ls_mcmd_joints_within(const ls_core_t *core, ls_units_t un, const double q_rad[LS_N_JOINTS], char *why,
+                          size_t whylen);
+int ls_mcmd_tip_within(const ls_core_t *core, ls_units_t un, const double p_m[3], char *why, size_t whylen);
 /* CMD_UNSUPPORTED_ERR: no arm is composed. */
 int32_t ls_mcmd_no_arm(ls_call_t *call, const char *what);
 /* The plan slot, or NULL after answering in *code: CMD_BUSY_ERR, or a joint

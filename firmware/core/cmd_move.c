@@ -73,6 +73,9 @@ static int32_t do_move(ls_core_t *core, ls_call_t *call, bool relative)
         for (int j = 0; j < LS_N_JOINTS; j++) {
             q1[j] = values[j] * ls_units_to_si_angular(un.angular, 1.0) + (relative ? q0[j] : 0.0);
         }
+        if (ls_mcmd_joints_within(core, un, q1, why, sizeof why) != LS_OK) {
+            return ls_mcmd_refused(call, LS_ERANGE, what, why);
+        }
         const double sf = (speed_pct > 0.0 ? speed_pct : set->speed_pct) / 100.0;
         st = ls_motion_plan_joint(slot, core->model, q0, q1, sf, set->accel_pct / 100.0, why, sizeof why);
     } else if (frame == ls_ReferenceFrame_BASE_CARTESIAN_FRAME || frame == ls_ReferenceFrame_WORLD_CARTESIAN_FRAME ||
@@ -99,6 +102,9 @@ static int32_t do_move(ls_core_t *core, ls_call_t *call, bool relative)
             const double zero[6] = { 0 };
             ls_pose_from_xyzrpy(zero, I);
             ls_mcmd_offset_in_frame(frame == ls_ReferenceFrame_WORLD_CARTESIAN_FRAME ? W : I, P0, d, P1);
+        }
+        if (ls_mcmd_tip_within(core, un, &P1[12], why, sizeof why) != LS_OK) {
+            return ls_mcmd_refused(call, LS_ERANGE, what, why);
         }
         ls_motion_cart_limits_t lim;
         ls_mcmd_cart_limits(core, speed_pct, 0.0, &lim);

@@ -85,17 +85,15 @@ static int32_t load_point(ls_core_t *core, ls_call_t *call, const ls_PathLoadReq
         if (!ls_mcmd_all_finite(tp->joints, LS_N_JOINTS)) {
             return ls_reply(call, ls_RetCode_CMD_PARAM_ERR, "pathLoad point %d: `joints` must be finite numbers", k);
         }
+        double q[LS_N_JOINTS];
         for (int j = 0; j < LS_N_JOINTS; j++) {
-            const double q = tp->joints[j] * ls_units_to_si_angular(un.angular, 1.0);
+            q[j] = tp->joints[j] * ls_units_to_si_angular(un.angular, 1.0);
             const double lo = core->model->q_min_rad[j], hi = core->model->q_max_rad[j];
-            pt->v[j] = pt->relative ? (ls_path_real_t)q : store_within(q, lo, hi);
-            if (!pt->relative && (q < lo || q > hi)) {
-                const double lim = q < lo ? lo : hi;
-                return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR,
-                                "pathLoad point %d: joint %d: %.4g %s beyond its limit %.4g %s", k, j + 1,
-                                tp->joints[j], ls_units_angular_symbol(un.angular),
-                                lim / ls_units_to_si_angular(un.angular, 1.0), ls_units_angular_symbol(un.angular));
-            }
+            pt->v[j] = pt->relative ? (ls_path_real_t)q[j] : store_within(q[j], lo, hi);
+        }
+        char why[LS_MOTION_WHY_LEN];
+        if (!pt->relative && ls_mcmd_joints_within(core, un, q, why, sizeof why) != LS_OK) {
+            return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR, "pathLoad point %d: %s", k, why);
         }
     } else {
         if (tp->pose_count != 6 || !ls_mcmd_all_finite(tp->pose, 6)) {
@@ -119,18 +117,9 @@ static int32_t load_point(ls_core_t *core, ls_call_t *call, const ls_PathLoadReq
             } else {
                 memcpy(P, T, sizeof P);
             }
-            for (int i = 0; i < 3; i++) {
-                const double lo = core->model->workspace_min_m[i], hi = core->model->workspace_max_m[i];
-                if (P[12 + i] < lo || P[12 + i] > hi) {
-                    static const char *const ax[3] = { "x", "y", "z" };
-                    return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR,
-                                    "pathLoad point %d: axis %s: %.4g %s beyond the workspace limit %.4g %s (base "
-                                    "frame)",
-                                    k, ax[i], P[12 + i] / ls_units_to_si_linear(un.linear, 1.0),
-                                    ls_units_linear_symbol(un.linear),
-                                    (P[12 + i] < lo ? lo : hi) / ls_units_to_si_linear(un.linear, 1.0),
-                                    ls_units_linear_symbol(un.linear));
-                }
+            char why[LS_MOTION_WHY_LEN];
+            if (ls_mcmd_tip_within(core, un, &P[12], why, sizeof why) != LS_OK) {
+                return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR, "pathLoad point %d: %s", k, why);
             }
         }
     }

@@ -404,6 +404,40 @@ static void test_units_belong_to_the_session(void **state)
     assert_near(must(HOST_A)->result.get_tool_offsets.offset[2], 0.05, 1e-12);
 }
 
+/* A move beyond a joint limit or the workspace is refused in the units the
+ * request was written in, not in SI (docs/protocol.md "Limits": the
+ * allowed range in the units in force). */
+static void test_range_refusals_speak_the_session_units(void **state)
+{
+    (void)state;
+    setup_core(ls_State_RESTING);
+    atomic_store(&g_ctl.plan_slot_busy, false); /* the loop took the previous test's plan */
+    set_units(ls_LinearUnit_MILLIMETERS, ls_AngularUnit_DEGREES);
+    ls_MoveAbsoluteReq *m = &req(ls_Request_move_absolute_tag)->cmd.move_absolute;
+    snprintf(m->point_name, sizeof m->point_name, "far");
+    m->frame = ls_ReferenceFrame_JOINT_FRAME;
+    m->has_frame = true;
+    m->values_count = 6;
+    m->values[0] = 500.0;
+    const ls_Response *r = must(HOST_A);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    char want[96];
+    snprintf(want, sizeof want, "joint 1: 500 deg beyond its limit %.4g deg",
+             ls_robot_model_default.q_max_rad[0] * 180.0 / 3.14159265358979323846);
+    assert_non_null(strstr(r->ret_msg, want));
+    m = &req(ls_Request_move_absolute_tag)->cmd.move_absolute;
+    snprintf(m->point_name, sizeof m->point_name, "high");
+    m->frame = ls_ReferenceFrame_BASE_CARTESIAN_FRAME;
+    m->has_frame = true;
+    m->values_count = 6;
+    m->values[2] = 5000.0; /* 5 m up */
+    r = must(HOST_A);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    snprintf(want, sizeof want, "axis z: 5000 mm beyond the workspace limit %.4g mm",
+             ls_robot_model_default.workspace_max_m[2] * 1000.0);
+    assert_non_null(strstr(r->ret_msg, want));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -414,6 +448,7 @@ int main(void)
         cmocka_unit_test_setup(test_robot_position_is_the_tool_tip_in_the_world, setup_locked),
         cmocka_unit_test_setup(test_sensor_reading, setup_locked),
         cmocka_unit_test_setup(test_units_belong_to_the_session, setup_locked),
+        cmocka_unit_test(test_range_refusals_speak_the_session_units),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
