@@ -10,9 +10,11 @@ control period (each a mean of the true value, so never above its peak).
   toppra (TOPP-RA, time-optimal under the same joint velocity and acceleration limits and
   the same Cartesian ones, without a jerk limit) on the recorded joint path is the lower
   bound of its duration.
-- The docs' square path from `ready` is refused: joint 4 reaches its limit, where only a
-  jump to another arm configuration would go on, which no speed avoids; the answer says
-  what to do, whole (never cut mid-word: describe publishes the answer text's limit).
+- A square with the tool level (pitch 1.57) from `ready` is refused (docs/host-tool.md's
+  square, with the tool pointing down, runs: tests/integration/test_docs_examples.py):
+  joint 4 reaches its limit, where only a jump to another arm configuration would go on,
+  which no speed avoids; the answer says what to do, whole (never cut mid-word: describe
+  publishes the answer text's limit).
 - A stop during a slowed line pauses on the line and resumes on it, every joint within
   its limits throughout; a path with a slowed segment says so in its answer and in a
   slowedDown notice."""
@@ -37,7 +39,7 @@ READY = [0.0, -0.3, 0.6, 0.0, 0.9, 0.0]  # README: `landscape move-absolute read
 MARGIN = 1.001
 #: "(0.564 s instead of 0.5 s)" in an answer or a notice.
 DURATIONS = re.compile(r"\(([0-9.e+-]+) s instead of ([0-9.e+-]+) s\)")
-#: The square path of docs/host-tool.md (square.csv), its points as the host tool loads them.
+#: A square with the tool level: its second line would turn joint 4 past its limit.
 SQUARE = [[0.45, 0.00, 0.50, 0, 1.57, 0], [0.45, 0.10, 0.50, 0, 1.57, 0], [0.35, 0.10, 0.50, 0, 1.57, 0]]
 #: A line from a pose near a wrist singularity that joint 4 must swing through fast (q5 from
 #: 0.15 rad down to about 0.01 and back): slowed to a few percent in the middle.
@@ -131,7 +133,7 @@ def test_a_line_the_joints_must_slow_runs_slower_within_every_joint_limit(tmp_pa
     assert bound <= took[90] <= 1.3 * bound
 
 
-def test_the_square_path_from_ready_is_refused_with_what_to_do_instead(tmp_path: Path) -> None:
+def test_a_level_square_from_ready_is_refused_with_what_to_do_instead(tmp_path: Path) -> None:
     with traced(tmp_path, "square") as (sup, _):
         assert sup.description is not None
         max_answer = sup.description.res.max_answer_bytes
