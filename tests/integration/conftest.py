@@ -21,6 +21,7 @@ from pathlib import Path
 import can
 import pytest
 
+from landscape import telemetry as tm
 from landscape._generated import landscape_pb2 as pb
 from landscape.supervisor import Supervisor
 
@@ -211,6 +212,27 @@ def notifier(bus: can.BusABC) -> Iterator[can.Notifier]:
         yield n
     finally:
         n.stop()
+
+
+class BroadcastMotion:
+    """STATUS st_motion as the broadcast says it, by its DBC value name (docs/protocol.md:
+    getMotionControlState's motion_control_state is that name): what a client that reads only
+    the broadcast learns."""
+
+    def __init__(self, sup: Supervisor) -> None:
+        self._last: int | None = None
+        sup.on_telemetry(self._on)
+
+    def _on(self, b: object) -> None:
+        if getattr(b, "name", "") == "STATUS":
+            self._last = int(b.signals["st_motion"])  # type: ignore[attr-defined]
+
+    def now(self, settle_s: float = 0.15) -> str:
+        """The name in the STATUS frames after `settle_s` (a few telemetry periods)."""
+        self._last = None
+        time.sleep(settle_s)
+        assert self._last is not None, f"no STATUS broadcast within {settle_s} s"
+        return tm.choice_name("STATUS", "st_motion", self._last)
 
 
 def pytest_configure(config: pytest.Config) -> None:

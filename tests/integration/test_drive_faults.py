@@ -16,7 +16,7 @@ from pathlib import Path
 import can
 import pytest
 
-from conftest import Controller, final_notice, start_controller
+from conftest import BroadcastMotion, Controller, final_notice, start_controller
 from landscape import errors
 from landscape._generated import landscape_pb2 as pb
 from landscape.supervisor import Supervisor, notice_data
@@ -125,6 +125,7 @@ def _healthy_stopped_along_the_path(sup: Supervisor, failed: int) -> None:
 
 def test_an_emcy_during_a_move_fails_it_naming_joint_node_and_code(rig: tuple[Controller, Supervisor]) -> None:
     c, sup = rig
+    broadcast = BroadcastMotion(sup)
     watch, t0, final, seen = _during_a_move(c, sup, "emcy 0x23 0x8611")
     assert final.event_id == "moveAbsoluteFailed" and final.kind == pb.ALARM
     d = notice_data(final)
@@ -132,6 +133,7 @@ def test_an_emcy_during_a_move_fails_it_naming_joint_node_and_code(rig: tuple[Co
     assert d["fault"] == "joint 3 (node 0x23): FAULT, EMCY 0x8611 following error", d
     st = sup.get_motion_control_state().result
     assert st["state"] == "LOCKED" and st["motion_control_state"] == "robot_stopped_on_error", st
+    assert broadcast.now() == "robot_stopped_on_error"  # the broadcast says it too
     _healthy_stopped_along_the_path(sup, failed=2)
     # the EMCY itself, to every supervisor, and the drive's error code read back once the drives are off
     seen += list(sup.notices(timeout_s=2.0))
@@ -141,6 +143,9 @@ def test_an_emcy_during_a_move_fails_it_naming_joint_node_and_code(rig: tuple[Co
     assert (e["joint"], e["node"], e["code"], e["meaning"]) == ("3", "0x23", "0x8611", "following error"), e
     read_back = [notice_data(n) for n in seen if n.event_id == "driveErrorCode"]
     assert read_back and read_back[0]["code"] == "0x8611", seen
+    # the drives' notices count on in the session's notice_seq: no gap, no 0
+    counted = [n.notice_seq for n in seen]
+    assert 0 not in counted and counted == list(range(counted[0], counted[0] + len(counted))), counted
     faults = str(sup.send_command("faults").result["result"])
     assert "joint 3 (node 0x23): EMCY 0x8611 following error" in faults, faults
     _report("EMCY 0x8611 (following error) of joint 3 during a move", sup, watch, t0, "joint 3 (node 0x23): FAULT")

@@ -11,6 +11,7 @@ import time
 
 import pytest
 
+from conftest import BroadcastMotion
 from landscape import errors
 from landscape._generated import landscape_pb2 as pb
 from landscape.supervisor import notice_data
@@ -107,6 +108,7 @@ def test_motion_commands_are_refused_while_jogging(rig: Rig) -> None:
 
 def test_manual_control_set_while_locked_jogs_once_active(rig: Rig) -> None:
     sup = rig.sup
+    broadcast = BroadcastMotion(sup)
     sup.deactivate()
     assert sup.manual_control("spaceball").ok
     p0 = sup.get_robot_position().result["world_pose"]
@@ -123,9 +125,11 @@ def test_manual_control_set_while_locked_jogs_once_active(rig: Rig) -> None:
     rig.send("jog-stop")
     time.sleep(0.3)
     assert sup.get_motion_control_state().result["motion_control_state"] == "manual_spaceball"
+    assert broadcast.now() == "manual_spaceball"  # the broadcast says what the query says
     p1 = sup.get_robot_position().result["world_pose"]
     assert math.dist(p0[:3], p1[:3]) > 0.05
     sup.manual_control("off")
+    assert broadcast.now() == sup.get_motion_control_state().result["motion_control_state"] == "robot_at_rest"
 
 
 def test_unknown_manual_type(rig: Rig) -> None:
