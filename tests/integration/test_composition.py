@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import LANDSCAPED
+from conftest import CLI, LANDSCAPED, stop_process, wait_for_path
 
 
 def _run(*args: str) -> subprocess.CompletedProcess[str]:
@@ -56,3 +56,23 @@ def test_check_names_every_problem_and_fails() -> None:
     fails = [line for line in r.stdout.splitlines() if line.startswith("FAIL")]
     assert any("can0" in f or "AF_CAN" in f for f in fails)
     assert any("gpiochip0" in f for f in fails)
+
+
+def test_activate_without_an_arm_says_nothing_can_be_enabled(tmp_path: Path) -> None:
+    """With arm = none, activate is refused and the CLI says why in one line: never "drives
+    enabled" followed by a move that fails."""
+    pty = tmp_path / "ls0"
+    proc = subprocess.Popen([str(LANDSCAPED), "--link", f"slcan:pty:{pty}", "--arm", "none", "--dio", "none"],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        wait_for_path(pty, proc)
+        script = tmp_path / "activate.lsc"
+        script.write_text("lock\nactivate\n")
+        r = subprocess.run([str(CLI), "--interface", "slcan", "--channel", str(pty), "run", str(script)],
+                           capture_output=True, text=True, timeout=60)
+    finally:
+        assert stop_process(proc, "landscaped") == 0
+    assert r.returncode == 3, r
+    assert "Traceback" not in r.stdout + r.stderr and "drives enabled" not in r.stdout + r.stderr
+    why = "activate failed, the drives are off: no arm backend is composed (arm = none): nothing can be enabled"
+    assert f"{script}:2: activate: CMD_ERR: {why}" in r.stderr.splitlines(), r.stderr
