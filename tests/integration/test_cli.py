@@ -48,6 +48,39 @@ def test_session_locks_activates_loads_a_csv_path_and_prints_its_tags(session: C
         assert session.cli(*cmd).returncode == 0
 
 
+def test_teach_appends_poses_that_path_load_reads_back_and_runs_to(session: Controller, tmp_path: Path) -> None:
+    """docs/host-tool.md "teach": move there, teach it; the file loads and the path goes there, in the
+    session's units (degrees here), joint values or the tool tip's world pose."""
+    def ok(*cmd: str) -> str:
+        r = session.cli(*cmd)
+        assert r.returncode == 0, (cmd, r.stdout, r.stderr)
+        return r.stdout
+
+    for cmd in (["lock"], ["activate"], ["set-units", "meters", "degrees"]):
+        ok(*cmd)
+    joints, poses = tmp_path / "taught.csv", tmp_path / "taught.yaml"
+    targets = ([0.0, -20.0, 30.0, 0.0, 45.0, 0.0], [15.0, -10.0, 40.0, 10.0, 30.0, 5.0])
+    for i, q in enumerate(targets):
+        ok("move-absolute", f"p{i}", "JOINT_FRAME", *map(str, q))
+        assert f"teach: here{i} appended to {joints} (joint values in degrees; point {i + 1})" in \
+            ok("teach", str(joints), f"here{i}")
+        ok("teach", str(poses), f"here{i}", "--kind", "cartesian")
+    assert joints.read_text().splitlines()[0] == "j1,j2,j3,j4,j5,j6,tag_name"
+    assert "frame: WORLD_CARTESIAN_FRAME" in poses.read_text()
+    ok("move-absolute", "home", "JOINT_FRAME", "0", "0", "0", "0", "0", "0")
+    for f in (joints, poses):
+        ok("path", "load", str(f), "--name", f.suffix[1:])
+        out = ok("path", "run", f.suffix[1:])
+        assert [t.split("tag=")[1].split()[0] for t in out.splitlines() if "tag=" in t] == ["here0", "here1"]
+        at = json.loads(ok("--json", "get-robot-position").splitlines()[0])["result"]["joints"]
+        assert at == pytest.approx(targets[1], abs=0.01)
+        ok("move-absolute", "home", "JOINT_FRAME", "0", "0", "0", "0", "0", "0")
+    # a Cartesian pose into a CSV file, which loads in the base frame: refused, nothing written
+    r = session.cli("teach", str(joints), "there", "--kind", "cartesian")
+    assert r.returncode == 2 and "holds joint points" in r.stderr and "Traceback" not in r.stderr, r.stderr
+    assert len(joints.read_text().splitlines()) == 3
+
+
 def test_json_output_parses_for_every_query(controller: Controller) -> None:
     for cmd in ("get-units", "get-velocities", "get-max-accelerations", "get-robot-position", "get-tool-offsets"):
         r = controller.cli("--json", cmd)

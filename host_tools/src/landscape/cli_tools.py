@@ -1,4 +1,4 @@
-"""The `path`, `record`, `plot`, `demo` and `session` subcommands of the landscape CLI.
+"""The `path`, `teach`, `record`, `plot`, `demo` and `session` subcommands of the landscape CLI.
 
 They follow the rules of cli.py: every error is one line on stderr and an exit
 code (docs/host-tool.md); commands go through the background session when one
@@ -47,7 +47,7 @@ from .demo import StepResult, demo_steps, run_demo
 from .errors import LandscapeError, error_for_code
 from .link import LinkBroker, is_local_line, pid_alive
 from .mcap_log import ChannelWriter, McapRecorder
-from .notices import format_notice
+from .notices import Units, format_notice
 from .paths import build_path_load_requests, load_path_file, request_fields, resolve_settings
 from .plotting import KINDS, plot
 from .record_files import open_recorder, read_recording
@@ -56,6 +56,7 @@ from .registry import lookup, message_to_dict
 from .retval import RetVal
 from .session import SessionClient, SessionError, SessionServer
 from .supervisor import Supervisor
+from .teach import POINT_KINDS, append_taught
 from .urdf import robot_urdf, urdf_text, write_urdf
 
 
@@ -165,6 +166,34 @@ def path_run_cmd(ctx: click.Context, name: str, cycles: int, wait_timeout: float
     """Run path NAME (pathMove), print its tag events as they come and wait for its end."""
     execute(ctx, lookup("path_move"), {"path_name": name, "number_of_cycles": cycles}, wait=True,
             wait_timeout_s=wait_timeout)
+
+
+@cli.command("teach")
+@click.argument("file", type=click.Path(dir_okay=False, path_type=Path))
+@click.argument("name")
+@click.option("--kind", type=click.Choice(POINT_KINDS), default=None,
+              help="what a new FILE holds: joint values (default) or the tool tip's world pose; an existing "
+                   "file keeps its kind")
+@click.pass_context
+def teach_cmd(ctx: click.Context, file: Path, name: str, kind: str | None) -> None:
+    """Append where the arm is now to path file FILE as a point tagged NAME, in the session's
+    units (getRobotPosition); `path load FILE` reads it back (docs/host-tool.md "teach")."""
+    st = state_of(ctx)
+    backend = st.backend()
+    cmd = lookup("get_robot_position")
+    rv = send(backend, cmd, {}, wait_s=None)
+    if not rv.ok:
+        raise CommandFailed(one_line(error_for_code("teach", rv.ret_code, rv.ret_msg)))
+    written, count = append_taught(file, name, joints=list(rv.result.get("joints", [])),
+                                   world_pose=list(rv.result.get("world_pose", [])), kind=kind)
+    units = session_units(backend) or Units()
+    unit = units.angular if written == "joint" else units.describe()
+    if st.json_out:
+        click.echo(json.dumps({"command": "teach", "ret_code": rv.ret_code, "ret_name": rv.ret_name, "ret_msg": "",
+                               "result": {"file": str(file), "tag_name": name, "kind": written, "points": count,
+                                          "units": unit}, "notices": []}))
+    else:
+        click.echo(f"teach: {name} appended to {file} ({written} values in {unit}; point {count})")
 
 
 # ---------------------------------------------------------------- record, plot
