@@ -10,6 +10,7 @@ import re
 import socket
 import subprocess
 import sys
+import time
 import types
 import typing
 from pathlib import Path
@@ -22,7 +23,15 @@ from foxglove_client import FoxgloveClient
 from landscape._generated import landscape_pb2 as pb
 from landscape.mcap_log import CHANNELS, SCHEMAS, McapRecorder, channel_schemas, read_mcap
 from landscape.urdf import urdf_text
-from landscape.view import LAYOUT_NAME, URDF_URI, LiveView, ViewError, layout_text
+from landscape.view import (
+    LAYOUT_NAME,
+    LEGACY_SUBPROTOCOL,
+    SUBPROTOCOL,
+    URDF_URI,
+    LiveView,
+    ViewError,
+    layout_text,
+)
 from test_mcap import _cycle
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -87,6 +96,52 @@ def test_the_live_view_publishes_the_channels_and_messages_of_the_mcap_recording
     assert (status, err, urdf.decode()) == (0, "", urdf_text())
     assert missing[0] == 1
     assert view.messages == sum(len(v) for v in recorded.values())
+
+
+VIEWER_CLIENT = ROOT / "tests" / "viewer" / "client.mjs"  # @foxglove/ws-protocol's client (npm), set up by .ci/setup
+
+
+@pytest.mark.parametrize("subprotocol", [LEGACY_SUBPROTOCOL, SUBPROTOCOL])
+def test_a_viewer_may_ask_for_either_name_of_the_protocol(subprotocol: str) -> None:
+    """Lichtblick and Foxglove before the SDK ask for foxglove.websocket.v1, the Foxglove app for
+    foxglove.sdk.v1 (docs/host-tool.md "view"): both get the same server; a client asking for
+    neither is refused, as by foxglove-sdk's server."""
+    from websockets.exceptions import InvalidStatus
+    from websockets.sync.client import connect
+
+    with LiveView(port=0) as view:
+        with connect(view.url, subprotocols=[subprotocol], open_timeout=5) as ws:  # type: ignore[list-item]
+            assert ws.subprotocol == subprotocol
+            assert json.loads(ws.recv(timeout=5))["op"] == "serverInfo"
+        with pytest.raises(InvalidStatus, match="400"):
+            connect(view.url, subprotocols=["foxglove.websocket.v2"], open_timeout=5)  # type: ignore[list-item]
+
+
+def test_the_ws_protocol_client_from_npm_sees_the_channels_messages_and_urdf() -> None:
+    """The published client of the protocol's first name (@foxglove/ws-protocol, under node),
+    which no one here wrote, against the live view: handshake, advertise, a message, the URDF."""
+    assert (VIEWER_CLIENT.parent / "node_modules" / "@foxglove" / "ws-protocol").is_dir(), \
+        "the npm client is not installed: run bash .ci/setup"
+    with LiveView(port=0) as view:
+        proc = subprocess.Popen(["node", str(VIEWER_CLIENT), view.url, "/notices", URDF_URI],
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        try:
+            deadline = time.monotonic() + 15
+            k = 0
+            while proc.poll() is None and time.monotonic() < deadline:  # until it has subscribed and got one
+                view.notice(pb.Notice(kind=pb.EVENT, event_id="tag", data=[f"tag=p{k}"], ref_seq=3), 100.0 + k)
+                k += 1
+                time.sleep(0.05)
+            out, err = proc.communicate(timeout=15)
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+    assert proc.returncode == 0, err
+    got = json.loads(out)
+    assert got["subprotocol"] == LEGACY_SUBPROTOCOL and got["server"] == "landscape"
+    assert set(got["topics"]) == set(CHANNELS)
+    assert json.loads(got["message"])["name"] == "tag"
+    assert got["asset_bytes"] == len(urdf_text().encode())
 
 
 def test_a_taken_port_is_one_line_before_the_bus_is_opened() -> None:
