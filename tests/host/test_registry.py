@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import inspect
+from typing import Any
 
 import click
 import pytest
@@ -159,6 +160,16 @@ def test_enum_short_names_strip_common_prefix_and_suffix() -> None:
         parse_enum(ls.ReferenceFrame.DESCRIPTOR, "sideways")
     with pytest.raises(ArgumentError):
         parse_enum(ls.ReferenceFrame.DESCRIPTOR, 9)
+
+
+@pytest.mark.parametrize(("enum", "spelling", "value"), [
+    (ls.LinearUnit, "mm", ls.MILLIMETERS), (ls.LinearUnit, "M", ls.METERS), (ls.LinearUnit, "in", ls.INCHES),
+    (ls.AngularUnit, "deg", ls.DEGREES), (ls.AngularUnit, "rad", ls.RADIANS)])
+def test_a_unit_is_also_spelled_by_its_symbol(enum: Any, spelling: str, value: int) -> None:
+    """The symbols the tool prints (`joints (deg)`, `0.5 mm`) are accepted back (set-units mm deg)."""
+    assert parse_enum(enum.DESCRIPTOR, spelling) == value
+    with pytest.raises(ArgumentError, match=r"choose one of METERS \(m\), MILLIMETERS \(mm\)"):
+        parse_enum(ls.LinearUnit.DESCRIPTOR, "km")
 
 
 def test_build_request_is_pure_and_exact() -> None:

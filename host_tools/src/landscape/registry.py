@@ -27,7 +27,7 @@ from ._generated import landscape_pb2 as pb
 from .errors import ArgumentError
 
 if TYPE_CHECKING:
-    from google.protobuf.descriptor_pb2 import FieldOptions, MessageOptions
+    from google.protobuf.descriptor_pb2 import EnumValueOptions, FieldOptions, MessageOptions
     from google.protobuf.internal.extension_dict import _ExtensionFieldDescriptor
 
 # protoc's .pyi declares the schema's extensions as plain FieldDescriptors; the protobuf stubs
@@ -35,6 +35,7 @@ if TYPE_CHECKING:
 _CMD_OPTION = cast("_ExtensionFieldDescriptor[MessageOptions, pb.CommandSpec]", pb.cmd)
 _ABSENT_MEANS_OPTION = cast("_ExtensionFieldDescriptor[FieldOptions, str]", pb.absent_means)
 _REQUIRED_OPTION = cast("_ExtensionFieldDescriptor[FieldOptions, bool]", pb.required)
+_SYMBOL_OPTION = cast("_ExtensionFieldDescriptor[EnumValueOptions, str]", pb.symbol)
 
 
 def descriptor_of(msg: Message | type[Message]) -> Descriptor:
@@ -176,8 +177,9 @@ def _common_affixes(names: list[str]) -> tuple[list[str], list[str]]:
 
 
 def enum_aliases(enum: EnumDescriptor) -> dict[str, int]:
-    """Accepted spellings (lower case) of each value: the full name and the name
-    without the tokens every value shares (JOINT_FRAME -> joint, CB_EVENT -> event)."""
+    """Accepted spellings (lower case) of each value: the full name, the name without the
+    tokens every value shares (JOINT_FRAME -> joint, CB_EVENT -> event) and its (symbol)
+    when the schema gives one (MILLIMETERS -> mm, DEGREES -> deg)."""
     names = [v.name for v in enum.values]
     prefix, suffix = _common_affixes(names)
     out: dict[str, int] = {}
@@ -188,6 +190,8 @@ def enum_aliases(enum: EnumDescriptor) -> dict[str, int]:
         if short:
             out.setdefault(short.lower(), v.number)
             out.setdefault(short.lower().replace("_", "-"), v.number)
+        if v.GetOptions().HasExtension(_SYMBOL_OPTION):
+            out.setdefault(v.GetOptions().Extensions[_SYMBOL_OPTION].lower(), v.number)
     return out
 
 
@@ -207,7 +211,12 @@ def parse_enum(enum: EnumDescriptor, value: Any) -> int:
 
 
 def enum_choices(enum: EnumDescriptor) -> str:
-    return ", ".join(v.name for v in enum.values)
+    """The values' names, each with its (symbol) when it has one: `MILLIMETERS (mm)`."""
+    def one(v: Any) -> str:
+        opts = v.GetOptions()
+        return f"{v.name} ({opts.Extensions[_SYMBOL_OPTION]})" if opts.HasExtension(_SYMBOL_OPTION) else str(v.name)
+
+    return ", ".join(one(v) for v in enum.values)
 
 
 # ---------------------------------------------------------------- builders
