@@ -327,7 +327,7 @@ def test_shell_completion_of_names_options_enums_files_and_values(tmp_path: Path
     assert {"joint", "joint_frame", "base_cartesian"} <= words("move-absolute p1 ")           # an enum value
     assert words("move-absolute p1 jo") == {"joint", "joint_frame"}
     assert "--speed-pct" in words("move-absolute p1 joint 0 0 0 0 0 0 --sp")                  # an option name
-    assert words("set-units millimeters d") == {"degrees"}                                     # 2nd enum
+    assert words("set-units millimeters d") == {"degrees", "deg"}                              # 2nd enum
     assert words("path-move ") == {"square", "'corner run'"}                                   # path names typed before
     assert words("get-tool g") == {"gripper"}                                                  # tools typed before
     assert words(f"path load {tmp_path}/sq") == {"uare.csv"}                                   # file names
@@ -365,6 +365,16 @@ def test_help_of_move_react_and_comply_explains_every_option(command: str) -> No
             helptext = OPTION_HELP[(cmd.field, f.name)]
             assert " ".join(helptext.split()) in text, opt
             assert any(w in helptext for w in ("%", " N", "s ", "linear unit", "not used", "integer")), opt
+
+
+@pytest.mark.parametrize("command", ["move-absolute", "move-relative"])
+def test_help_of_a_move_says_how_many_values_in_which_units_and_what_speed_0_means(command: str) -> None:
+    r = CliRunner().invoke(cli, [command, "--help"], terminal_width=200)
+    assert r.exit_code == 0
+    text = " ".join(r.stdout.split())
+    for said in ("one value per joint", "6 values x y z roll pitch yaw", "in the angular unit",
+                 "R = Rz(yaw) Ry(pitch) Rx(roll)", "0: the current set-speed", "Example", f"landscape {command} "):
+        assert said in text, said
 
 
 def test_set_units_needs_both_units() -> None:

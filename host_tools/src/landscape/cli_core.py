@@ -213,12 +213,25 @@ def cli_params(cmd: Command) -> list[click.Parameter]:
 #: Per-command help beside the schema's summary: what each argument means, in which unit, and
 #: an example (docs/conformance.md has the full behaviour). Units: "linear unit" and "angular
 #: unit" are the session's (set-units, get-units; meters and radians until changed).
+_MOVE_VALUES = (
+    "VALUES: with JOINT_FRAME one value per joint (6 for ls-sim6, describe: joints), in the angular unit; with a "
+    "Cartesian frame 6 values x y z roll pitch yaw: the tool tip, x y z in the linear unit, roll pitch yaw in the "
+    "angular unit as fixed-axis rotations about x, then y, then z (R = Rz(yaw) Ry(pitch) Rx(roll)). "
+    "BASE_CARTESIAN_FRAME: the arm's base; WORLD_CARTESIAN_FRAME: set-world-cartesian-frame's; TOOL_FRAME: the "
+    "tool at the start. Units: the session's (set-units; meters and radians until changed).")
 COMMAND_HELP: dict[str, str] = {
+    "move_absolute": (
+        f"{_MOVE_VALUES}\n\nExample (the README's ready pose): "
+        "landscape move-absolute ready JOINT_FRAME 0 -0.3 0.6 0 0.9 0"),
+    "move_relative": (
+        f"{_MOVE_VALUES} The values are an offset from where the arm is.\n\n"
+        "Example (5 cm up): landscape move-relative up BASE_CARTESIAN_FRAME 0 0 0.05 0 0 0"),
     "set_units": (
-        "Both units are required, in this order: LINEAR (meters, millimeters, centimeters, inches, feet) "
-        "and ANGULAR (radians, degrees); `set-units millimeters` alone is a usage error, so the angular unit "
-        "never changes silently. Every later position, speed and acceleration this session sends or receives "
-        "is in them; telemetry broadcasts (monitor, record) stay SI and are labelled.\n\n"
+        "Both units are required, in this order: LINEAR (meters, millimeters, centimeters, inches, feet, or "
+        "their symbols m, mm, cm, in, ft) and ANGULAR (radians, degrees, or rad, deg); `set-units millimeters` "
+        "alone is a usage error, so the angular unit never changes silently. Every later position, speed and "
+        "acceleration this session sends or receives is in them; telemetry broadcasts (monitor, record) stay "
+        "SI and are labelled.\n\n"
         "Example: landscape set-units millimeters degrees"),
     "move_react": (
         "A guarded move: straight along MOTION_OFFSETS (x y z in the tool frame at the start, in the linear "
@@ -242,6 +255,8 @@ COMMAND_HELP: dict[str, str] = {
 
 #: Per-option help (command field, request field) -> text; units in every one.
 OPTION_HELP: dict[tuple[str, str], str] = {
+    ("move_absolute", "speed_pct"): "% of the maximum speed (0: the current set-speed); e.g. 20",
+    ("move_relative", "speed_pct"): "% of the maximum speed (0: the current set-speed); e.g. 20",
     ("move_react", "motion_speed_pct"): "speed along the line, % of the maximum linear speed (0: the current "
                                         "set-speed); e.g. 10",
     ("move_react", "compliance_speed_pct"): "accepted and not used by this firmware (%)",
