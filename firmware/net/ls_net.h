@@ -23,7 +23,7 @@
 
 /* The limits below are per profile (CMakeLists.txt LS_PROFILE): linux, or
  * mcu for a 256 KiB-RAM Cortex-M4F, where each peer costs 2 x
- * LS_ISOTP_MAX_PAYLOAD plus LS_NET_OUTQ x LS_DOWNLINK_MAX (about 18.5 KB
+ * LS_ISOTP_MAX_PAYLOAD plus LS_NET_OUTQ x LS_DOWNLINK_MAX (about 20 KB
  * with 3 queued downlinks). */
 #if LS_PROFILE_MCU
 #define LS_NET_MAX_LINKS 2

@@ -102,7 +102,7 @@ def test_the_host_copy_has_the_limits_of_the_options_file() -> None:
     # the texts the device sends, the description's own names left out
     assert d.downlink_bytes("notice.event_id") == 31 and d.downlink_bytes("response.ret_msg") == 335
     assert (d.downlink["notice.data"].max_count, d.downlink_bytes("notice.data")) == (10, 95)
-    assert d.downlink_bytes("sendCommand.result") == 3071
+    assert d.downlink_bytes("sendCommand.result") == 3711
     assert not any(name.startswith(("describe.", "describeRobot.")) for name in d.downlink)
     with pytest.raises(ArgumentError, match="no limit for the text 'notice.colour'"):
         d.downlink_bytes("notice.colour")

@@ -15,8 +15,23 @@ ls_ctl_cmd_t g_posted[16];
 size_t g_nposted;
 bool g_post_ok;
 
+hal_arm_readout_t g_readout;
+int g_readout_rc;
+
 bool __wrap_ls_control_snapshot(ls_control_t *c, ls_ctl_snapshot_t *out);
 bool __wrap_ls_control_post(ls_control_t *c, const ls_ctl_cmd_t *cmd);
+int __wrap_ls_control_readout(ls_control_t *c, hal_arm_readout_t *out);
+
+/* The drives' readouts (sendCommand drives, status): g_readout when
+ * g_readout_rc is LS_OK; setup_core makes it LS_EUNSUPPORTED (no drives). */
+int __wrap_ls_control_readout(ls_control_t *c, hal_arm_readout_t *out)
+{
+    assert_ptr_equal(c, &g_ctl);
+    if (g_readout_rc == LS_OK) {
+        *out = g_readout;
+    }
+    return g_readout_rc;
+}
 
 bool __wrap_ls_control_snapshot(ls_control_t *c, ls_ctl_snapshot_t *out)
 {
@@ -195,6 +210,7 @@ void setup_core(ls_State state)
     g_snap.cycle = 100;
     g_nposted = 0;
     g_post_ok = true;
+    g_readout_rc = LS_EUNSUPPORTED;
     g_nrx = 0;
     g_now = 1000000;
     connect_host(HOST_A);

@@ -44,6 +44,8 @@ extern ls_ctl_snapshot_t g_snap;
 extern ls_ctl_cmd_t g_posted[16];
 extern size_t g_nposted;
 extern bool g_post_ok;
+extern hal_arm_readout_t g_readout;
+extern int g_readout_rc;
 extern ls_core_t g_core;
 extern ls_Downlink g_rx[MAX_RX];
 extern uint8_t g_rx_addr[MAX_RX];

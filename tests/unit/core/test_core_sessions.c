@@ -304,8 +304,9 @@ static void longest_transport(void *ctx, char *buf, size_t cap)
 }
 
 /* sendCommand status at its longest (every session with the longest name,
- * every watch, every counter at ten digits, the longest fault, the transport's
- * counters at their budget) arrives whole: docs/protocol.md "sendCommand". */
+ * every watch, every counter at ten digits, the longest fault, a line per
+ * drive at its longest, the transport's counters at their budget) arrives
+ * whole: docs/protocol.md "sendCommand". */
 static void test_send_command_status_at_its_longest_is_whole(void **state)
 {
     (void)state;
@@ -333,10 +334,25 @@ static void test_send_command_status_at_its_longest_is_whole(void **state)
         w->unit = UINT16_MAX;
         w->addr = 0xFF;
     }
+    g_readout_rc = LS_OK;
+    g_readout = (hal_arm_readout_t){ .t_us = 1u, .n_joints = LS_N_JOINTS };
+    for (int j = 0; j < LS_N_JOINTS; j++) {
+        g_readout.joint[j] = (hal_drive_readout_t){ .node = 0x7F,
+                                                    .state = "A STATE NAME LONGER THAN ANY CIA 402 ONE",
+                                                    .mode = INT8_MIN,
+                                                    .last_error = 0xFFFF,
+                                                    .brake = HAL_TRI_OFF,
+                                                    .sto = HAL_TRI_ON,
+                                                    .home = HAL_HOME_NOT_HOMED,
+                                                    .home_required = true };
+    }
     req(ls_Request_send_command_tag);
     snprintf(g_rq.cmd.send_command.input, sizeof g_rq.cmd.send_command.input, "status");
     const char *out = must(HOST_A)->result.send_command.result;
+    assert_non_null(strstr(out, "drive j6 node=0x7F")); /* the drives' lines are there */
     const size_t n = strlen(out);
+    print_message("status at its longest: %zu bytes of %zu\n", n,
+                  sizeof g_rx[0].msg.response.result.send_command.result);
     assert_true(n + 1u < sizeof g_rx[0].msg.response.result.send_command.result);
     assert_true(n > strlen("last_counter=4294967295\n"));
     assert_string_equal(out + n - strlen("last_counter=4294967295\n"), "last_counter=4294967295\n");
