@@ -503,9 +503,10 @@ def execute_followed(st: CliState, cmd: Command, fields: dict[str, Any], wait_ti
     MotionFollower so the prompt comes back at once."""
     backend = st.backend()
     rv = send(backend, cmd, fields, wait_s=wait_timeout_s)
-    click.echo(f"{cmd.cli_name}: {rv.ret_name}" + (f": {rv.ret_msg}" if rv.ret_msg else ""))
-    for k, v in rv.result.items():
-        click.echo(f"  {k}: {fmt_value(v)}")
+    if rv.ret_code >= 0:  # a refusal is said once, on stderr (check_outcome)
+        click.echo(f"{cmd.cli_name}: {rv.ret_name}" + (f": {rv.ret_msg}" if rv.ret_msg else ""))
+        for k, v in rv.result.items():
+            click.echo(f"  {k}: {fmt_value(v)}")
     if not rv.started:
         check_outcome(cmd, rv, None, wait=False, wait_timeout_s=wait_timeout_s)
         return rv
@@ -534,7 +535,7 @@ def execute(ctx: click.Context, cmd: Command, fields: dict[str, Any], *, wait: b
     try:
         rv = send(backend, cmd, fields, wait_s=wait_timeout_s if wait else None)
         note = lock_note(st, cmd, rv, backend)
-        if not st.json_out:
+        if not st.json_out and rv.ret_code >= 0:  # a refusal is said once, on stderr (check_outcome)
             click.echo(f"{cmd.cli_name}: {rv.ret_name}" + (f": {rv.ret_msg}" if rv.ret_msg else ""))
             if cmd.field == "describe" and rv.ok:
                 for line in description_of(rv).lines():
