@@ -170,7 +170,7 @@ void beat(uint8_t addr, uint64_t now_us)
     ls_core_on_heartbeat(&g_core, addr, i >= 0 ? g_core.sessions[i].hb_token : 0u, now_us);
 }
 
-void connect_host(uint8_t addr)
+ls_ConnectReq *connect_req(uint8_t addr)
 {
     ls_ConnectReq *c = &req(ls_Request_connect_tag)->cmd.connect;
     c->protocol_version = ls_Protocol_PROTOCOL_VERSION;
@@ -180,6 +180,12 @@ void connect_host(uint8_t addr)
     c->client_nonce = nonce_of(addr);
     c->has_client_nonce = true;
     snprintf(c->client_name, sizeof c->client_name, "test-%02X", addr);
+    return c;
+}
+
+void connect_host(uint8_t addr)
+{
+    (void)connect_req(addr);
     assert_int_equal(must(addr)->ret_code, ls_RetCode_CMD_EXEC_OK);
 }
 
@@ -548,27 +554,15 @@ size_t alarms_to(size_t from, uint8_t addr, const char *event_id, const ls_Notic
 
 const ls_Response *connect_as(uint8_t addr, uint64_t nonce, const char *name)
 {
-    ls_ConnectReq *c = &req(ls_Request_connect_tag)->cmd.connect;
-    c->protocol_version = ls_Protocol_PROTOCOL_VERSION;
-    c->has_protocol_version = true;
-    c->schema_hash = LS_SCHEMA_HASH;
-    c->has_schema_hash = true;
+    ls_ConnectReq *c = connect_req(addr);
     c->client_nonce = nonce;
-    c->has_client_nonce = true;
     snprintf(c->client_name, sizeof c->client_name, "%s", name);
     return must(addr);
 }
 
 const ls_Response *connect_with(uint8_t addr, uint32_t period_ms, ls_DisconnectAction action)
 {
-    ls_ConnectReq *c = &req(ls_Request_connect_tag)->cmd.connect;
-    c->protocol_version = ls_Protocol_PROTOCOL_VERSION;
-    c->has_protocol_version = true;
-    c->schema_hash = LS_SCHEMA_HASH;
-    c->has_schema_hash = true;
-    c->client_nonce = nonce_of(addr);
-    c->has_client_nonce = true;
-    snprintf(c->client_name, sizeof c->client_name, "test-%02X", addr);
+    ls_ConnectReq *c = connect_req(addr);
     c->heartbeat_period_ms = period_ms;
     c->disconnect_action = action;
     return must(addr);

@@ -66,6 +66,9 @@ const ls_Response *must(uint8_t addr);
 void send_rsvp_reply(uint8_t addr, uint32_t id, int32_t code);
 uint64_t nonce_of(uint8_t addr);
 void beat(uint8_t addr, uint64_t now_us);
+/* A connect request from addr as connect_host sends it (this schema, its
+ * nonce, "test-AA"), left in g_rq for the caller to change and send. */
+ls_ConnectReq *connect_req(uint8_t addr);
 void connect_host(uint8_t addr);
 extern ls_DisconnectAction g_cfg_action;
 extern uint32_t g_cfg_timeout_ms;

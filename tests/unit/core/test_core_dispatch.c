@@ -245,13 +245,7 @@ static void test_a_connect_with_seq_0_is_never_answered_from_the_cache(void **st
     const int i = ls_core_session_of(&g_core, HOST_A);
     uint32_t epochs[3];
     for (int k = 0; k < 3; k++) {
-        ls_ConnectReq *c = &req(ls_Request_connect_tag)->cmd.connect;
-        c->protocol_version = ls_Protocol_PROTOCOL_VERSION;
-        c->has_protocol_version = true;
-        c->schema_hash = LS_SCHEMA_HASH;
-        c->has_schema_hash = true;
-        c->client_nonce = nonce_of(HOST_A);
-        c->has_client_nonce = true;
+        (void)connect_req(HOST_A);
         g_seq = 0;
         size_t first;
         assert_int_equal(resend_same_seq(HOST_A, &first), 1);
@@ -269,13 +263,8 @@ static void test_a_connect_with_seq_0_is_never_answered_from_the_cache(void **st
 static void test_a_version_refusal_carries_the_device_hash(void **state)
 {
     (void)state;
-    ls_ConnectReq *c = &req(ls_Request_connect_tag)->cmd.connect;
-    c->protocol_version = ls_Protocol_PROTOCOL_VERSION;
-    c->has_protocol_version = true;
+    ls_ConnectReq *c = connect_req(0x30);
     c->schema_hash = LS_SCHEMA_HASH ^ 1u;
-    c->has_schema_hash = true;
-    c->client_nonce = 7;
-    c->has_client_nonce = true;
     const ls_Response *r = must(0x30);
     assert_int_equal(r->ret_code, ls_RetCode_CMD_VERSION_MISMATCH_ERR);
     assert_int_equal(r->which_result, ls_Response_connect_tag);
