@@ -5,12 +5,14 @@ from __future__ import annotations
 
 import json
 import os
+import subprocess
+import time
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
-from conftest import Controller
+from conftest import CLI, Controller
 
 
 @pytest.fixture
@@ -79,6 +81,25 @@ def test_teach_appends_poses_that_path_load_reads_back_and_runs_to(session: Cont
     r = session.cli("teach", str(joints), "there", "--kind", "cartesian")
     assert r.returncode == 2 and "holds joint points" in r.stderr and "Traceback" not in r.stderr, r.stderr
     assert len(joints.read_text().splitlines()) == 3
+
+
+def test_events_says_when_another_terminal_changes_the_units(session: Controller) -> None:
+    """docs/host-tool.md "Units": through the background session, a set-units from another terminal
+    shows in a running `events` (and `monitor`) within a second, not only at its start."""
+    assert session.cli("lock").returncode == 0  # set-units is the owner's
+    events = subprocess.Popen([str(CLI), "--interface", "slcan", "--channel", session.pty, "events", "--duration",
+                               "4"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        time.sleep(1.5)
+        assert session.cli("set-units", "mm", "deg").returncode == 0
+        out, err = events.communicate(timeout=30)
+    finally:
+        if events.poll() is None:
+            events.kill()
+    assert events.returncode == 0, err
+    lines = out.splitlines()
+    assert "positions in meters and radians" in lines[0], lines
+    assert "events: positions now in millimeters and degrees (set-units)" in lines, lines
 
 
 def test_json_output_parses_for_every_query(controller: Controller) -> None:

@@ -33,12 +33,12 @@ from .cli_core import (
     CliState,
     CommandFailed,
     EnumType,
+    UnitsWatch,
     classify,
     cli,
     fmt_notice,
     one_line,
     say_link_lost,
-    session_units,
     state_of,
     stop_after_interrupt,
 )
@@ -447,7 +447,7 @@ class TelemetryFeed:
         self._closing = False
         self.error: LandscapeError | None = None
         client = st.background()
-        self.units = session_units(st.backend())
+        self._units = UnitsWatch(st.backend(), follow=client is not None)
         if client is None:
             self._sup = st.session()
             self._sup.on_notice(self.notices.append)
@@ -475,6 +475,12 @@ class TelemetryFeed:
             if not self._closing:
                 self.error = exc if isinstance(exc, LandscapeError) else SessionError(
                     f"the session at {watcher.path} went away ({exc}): check `landscape session status`")
+
+    @property
+    def units(self) -> Units | None:
+        """The session's units now (another terminal's set-units shows within a second)."""
+        self._units.poll()
+        return self._units.units
 
     def check(self) -> None:
         """Raise what ended the feed: the device went away (LinkLostError), the session stopped."""

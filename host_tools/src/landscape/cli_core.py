@@ -586,6 +586,35 @@ def session_units(backend: Backend) -> Units | None:
     return Units.from_result(rv.result) if rv.ok else None
 
 
+class UnitsWatch:
+    """The session's units for a display that runs on (monitor, events): through a background
+    session another terminal's set-units changes them under it, so `poll` asks again (getUnits,
+    at most once per `period_s`) and says when they changed. Without one no one else speaks in
+    this session: `follow` False asks once."""
+
+    def __init__(self, backend: Backend, *, follow: bool, period_s: float = 1.0) -> None:
+        import time
+
+        self._backend = backend
+        self._follow = follow
+        self._period_s = period_s
+        self.units = session_units(backend)
+        self._next = time.monotonic() + period_s
+
+    def poll(self) -> bool:
+        """True when the units changed since the last look (self.units holds the new ones)."""
+        import time
+
+        if not self._follow or time.monotonic() < self._next:
+            return False
+        self._next = time.monotonic() + self._period_s
+        now = session_units(self._backend)
+        if now is None or now == self.units:
+            return False
+        self.units = now
+        return True
+
+
 def stop_after_interrupt(st: CliState, cmd: Command) -> None:
     """Ctrl-C while a motion command runs: send stopMotion (the move pauses; resume-motion
     continues it, abort-motion ends it) and say so on stderr. Never raises."""

@@ -32,6 +32,7 @@ from .cli_core import (
     CliState,
     CommandFailed,
     EnumType,
+    UnitsWatch,
     call,
     classify,
     cli,
@@ -345,7 +346,8 @@ def events_cmd(ctx: click.Context, duration: float | None) -> None:
     notices are in the session's units (named in the first line). Ctrl-C ends it (exit 0)."""
     st = state_of(ctx)
     client = st.background()
-    units = session_units(st.backend())
+    watch = UnitsWatch(st.backend(), follow=client is not None)
+    units = watch.units
     where = f"device {st.device:#04x} on {st.spec.describe()}" + (" (via the session)" if client else "")
     units_text = (f"positions in {units.describe()} (get-units)" if units is not None
                   else "units unknown (get-units failed)")
@@ -365,6 +367,11 @@ def events_cmd(ctx: click.Context, duration: float | None) -> None:
     try:
         while end is None or time.monotonic() < end:
             left = 0.2 if end is None else max(0.0, min(0.2, end - time.monotonic()))
+            if watch.poll() and watch.units is not None:  # another terminal's set-units
+                u = watch.units
+                click.echo(json.dumps({"units": {"linear": u.linear, "angular": u.angular}}) if st.json_out
+                           else f"events: positions now in {u.describe()} (set-units)")
+                sys.stdout.flush()
             try:
                 n, _ = q.get(timeout=left)
             except queue.Empty:
