@@ -377,6 +377,14 @@ def test_help_of_a_move_says_how_many_values_in_which_units_and_what_speed_0_mea
         assert said in text, said
 
 
+def test_numbers_show_without_float_noise() -> None:
+    from landscape.cli_core import fmt_value
+
+    assert [fmt_value(v) for v in (1.6661e-10, -1e-12, -0.0, 0.3356, 123.4567, 2e-9)] == \
+        ["0", "0", "0", "0.3356", "123.457", "2e-09"]
+    assert fmt_value([0.1, -3.2e-11]) == "0.1 0"
+
+
 def test_set_units_needs_both_units() -> None:
     r = CliRunner().invoke(cli, ["--interface", "virtual", "--channel", "nowhere", "set-units", "millimeters"])
     assert r.exit_code == 2

@@ -371,11 +371,16 @@ def state_of(ctx: click.Context) -> CliState:
     return st
 
 
+#: Decimals a shown number keeps: a billionth of its unit (a nanometre, a nanoradian in SI) is
+#: below any arm's resolution, so what is left beyond it is float noise (1.6661e-10 shows as 0).
+SHOWN_DECIMALS = 9
+
+
 def fmt_value(v: Any) -> str:
     if isinstance(v, list):
         return " ".join(fmt_value(x) for x in v) if v else "(none)"
     if isinstance(v, float):
-        return f"{v:g}"
+        return f"{round(v, SHOWN_DECIMALS) + 0.0:g}"  # + 0.0: never -0
     if isinstance(v, dict):
         return json.dumps(v)
     return str(v)
