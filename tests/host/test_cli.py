@@ -109,13 +109,15 @@ def test_run_stops_at_first_error(channel: str, device: FakeDevice, tmp_path: Pa
 
 def test_run_keep_going(channel: str, device: FakeDevice, tmp_path: Path) -> None:
     script = tmp_path / "bad.ls"
-    script.write_text("release\nfly away\nmove-absolute p sideways 1\nlock\n")
+    script.write_text("release\nfly away\nmove-absolute p sideways 1\nrecord x.csv\nlock\n")
     r = run(channel, "run", "--keep-going", str(script))
     assert r.exit_code == 3
     assert [q.WhichOneof("cmd") for q in device.requests] == ["connect", "describe", "release", "lock", "disconnect"]
     err = r.stderr.splitlines()
-    assert err[1] == f"{script}:2: unknown command 'fly' (landscape --help lists them)"
+    assert err[1] == f"{script}:2: unknown command 'fly' (`help` in the shell, landscape --help, lists them)"
     assert err[2].startswith(f"{script}:3: Invalid value for 'FRAME': 'sideways' is not a ReferenceFrame")
+    assert err[3] == (f"{script}:4: 'record' runs on its own, not in a `run` file or the shell (it holds the "
+                      f"terminal or the session): run `landscape record ...` in another terminal")
     assert r.stdout.splitlines()[-1] == "lock: CMD_EXEC_OK"
 
 
@@ -192,7 +194,8 @@ def test_shell_one_session_with_completion_names(channel: str, device: FakeDevic
                                env={"XDG_STATE_HOME": str(tmp_path)})
     assert r.exit_code == 0, r.stderr
     assert "lock: CMD_EXEC_OK" in r.stdout and "  owner: True" in r.stdout
-    assert r.stderr.splitlines() == ["error: unknown command 'fly' (landscape --help lists them)",
+    assert r.stderr.splitlines() == ["error: unknown command 'fly' (`help` in the shell, landscape --help, lists "
+                                     "them)",
                                      "error: Got unexpected extra argument (extra)"]
     assert [q.seq for q in device.requests] == [1, 2, 3, 4, 5]  # connect, describe, then the lines
     assert (tmp_path / "landscape" / "history").read_text().count("\n+") == 5

@@ -65,6 +65,12 @@ log = logging.getLogger("landscape.cli")
 NOT_IN_SCRIPTS = ("run", "shell", "monitor", "events", "record", "plot", "demo", "session")
 
 
+def not_in_scripts(name: str) -> click.UsageError:
+    """The one line for a subcommand that exists but not in a `run` file or the shell."""
+    return click.UsageError(f"'{name}' runs on its own, not in a `run` file or the shell (it holds the terminal "
+                            f"or the session): run `landscape {name} ...` in another terminal")
+
+
 def run_line(ctx: click.Context, line: str) -> None:
     """Run one command line (shlex) in the current session; errors propagate (a line that
     does not parse is a click.UsageError)."""
@@ -79,8 +85,10 @@ def run_line(ctx: click.Context, line: str) -> None:
     group = ctx.find_root().command
     assert isinstance(group, click.Group)
     sub = group.get_command(ctx, name)
-    if sub is None or name in NOT_IN_SCRIPTS:
-        raise click.UsageError(f"unknown command '{name}' (landscape --help lists them)")
+    if name in NOT_IN_SCRIPTS:
+        raise not_in_scripts(name)
+    if sub is None:
+        raise click.UsageError(f"unknown command '{name}' (`help` in the shell, landscape --help, lists them)")
     with sub.make_context(name, rest, parent=ctx.find_root()) as sub_ctx:
         sub.invoke(sub_ctx)
 
@@ -159,7 +167,9 @@ def shell_help(group: click.Group, ctx: click.Context, names: Sequence[str], top
         return ("commands (help CMD or CMD --help for one; Ctrl-C stops a running motion; quit or Ctrl-D "
                 "leaves):\n" + "\n".join(f"  {n:<28} {group.commands[n].get_short_help_str(60)}" for n in names))
     sub = group.get_command(ctx, topic)
-    if sub is None or topic in NOT_IN_SCRIPTS:
+    if topic in NOT_IN_SCRIPTS:
+        raise not_in_scripts(topic)
+    if sub is None:
         raise click.UsageError(f"no command '{topic}' in the shell: `help` lists them")
     with click.Context(sub, info_name=topic, parent=ctx.find_root()) as sub_ctx:
         return sub.get_help(sub_ctx)
