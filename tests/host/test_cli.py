@@ -157,6 +157,20 @@ def test_time_out_one_line_exit_4(channel: str) -> None:
         f"(seq 1, 3 tries of 0.05 s): is landscaped running on that channel with node address 0x10?")
 
 
+def test_no_controller_on_a_pty_is_one_line_without_the_librarys_warnings() -> None:
+    """can-isotp warns on its logger ("Reception of FlowControl timed out") while no one answers;
+    without -v none of that reaches the terminal before the one error line."""
+    master, slave = os.openpty()
+    try:
+        r = subprocess.run([str(Path(sys.executable).parent / "landscape"), "--interface", "slcan", "--channel",
+                            os.ttyname(slave), "get-units"], capture_output=True, text=True, timeout=60)
+    finally:
+        os.close(master)
+        os.close(slave)
+    assert r.returncode == 4, r.stderr
+    assert len(r.stderr.splitlines()) == 1 and "no answer from the controller" in r.stderr, r.stderr
+
+
 def test_device_address_option(channel: str) -> None:
     r = run(channel, "--timeout", "0.05", "--device", "0x22", "lock")
     assert r.exit_code == 4 and "at address 0x22" in r.stderr

@@ -41,7 +41,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import can
-import isotp
 from asyncua import ua
 from asyncua.common.node import Node
 from asyncua.crypto.permission_rules import SimpleRoleRuleset, User, UserRole
@@ -60,7 +59,7 @@ from .bus import BusSpec, SharedNotifier, open_bus, release_bus
 from .errors import AddressInUseError, ArgumentError, CommandError, LandscapeError, ret_name
 from .gateway_config import GatewayConfig
 from .registry import COMMANDS, Command, build_request, enum_choices, field_enum_type, is_repeated, message_to_dict
-from .supervisor import ALARM_KINDS, RSVP_KINDS, Supervisor
+from .supervisor import ALARM_KINDS, RSVP_KINDS, Supervisor, quiet_isotp
 
 log = logging.getLogger("landscape.gateway")
 
@@ -347,7 +346,7 @@ class Gateway:
 
     async def start(self) -> None:
         self._loop = asyncio.get_running_loop()
-        _quiet_isotp()
+        quiet_isotp()
         certificates: dict[bytes, str] = {}
         server = self.server
         server.iserver.set_user_manager(GatewayUsers(self.cfg, certificates))
@@ -968,25 +967,6 @@ def rsvp_arguments(args: Sequence[Any]) -> tuple[int, int, list[str]]:
     else:
         raise ArgumentError(f"AnswerRsvp.Data: an array of String is expected, got {type(data).__name__} {data!r}")
     return rid, code, items
-
-
-class _ToDebug(logging.Filter):
-    """Lower a record to DEBUG: it reaches -vv's handler, not the last-resort one on the terminal."""
-
-    def filter(self, record: logging.LogRecord) -> bool:
-        if record.levelno > logging.DEBUG:
-            record.msg = f"{record.levelname.lower()}: {record.msg}"
-            record.levelno, record.levelname = logging.DEBUG, "DEBUG"
-        return True
-
-
-def _quiet_isotp() -> None:
-    """can-isotp warns on its logger of what a shared bus shows it all the time (another supervisor's
-    FlowControl while we are idle, a FirstFrame that interrupts one): the supervisors already log its
-    errors at debug (Supervisor._isotp_error), so its own warnings go to debug too."""
-    logger = logging.getLogger(isotp.TransportLayer.LOGGER_NAME)
-    if not any(isinstance(f, _ToDebug) for f in logger.filters):
-        logger.addFilter(_ToDebug())
 
 
 def _listen_hint(exc: OSError) -> str:

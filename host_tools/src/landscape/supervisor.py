@@ -69,6 +69,26 @@ from .retval import RetVal as RetVal
 
 log = logging.getLogger("landscape")
 
+
+class _ToDebug(logging.Filter):
+    """Lower a record to DEBUG: it reaches -vv's handler, not the last-resort one on the terminal."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        if record.levelno > logging.DEBUG:
+            record.msg = f"{record.levelname.lower()}: {record.msg}"
+            record.levelno, record.levelname = logging.DEBUG, "DEBUG"
+        return True
+
+
+def quiet_isotp() -> None:
+    """can-isotp warns on its own logger of what the supervisor already handles and logs at debug
+    (_isotp_error: a FlowControl that never came while no controller answers, another supervisor's
+    FlowControl on a shared bus): with no handler configured Python prints such warnings on stderr,
+    before the one line that says what went wrong. Its warnings go to debug (-vv shows them)."""
+    logger = logging.getLogger(isotp.TransportLayer.LOGGER_NAME)
+    if not any(isinstance(f, _ToDebug) for f in logger.filters):
+        logger.addFilter(_ToDebug())
+
 RSVP_KINDS = (pb.EVENT_RSVP, pb.ALARM_RSVP)
 ALARM_KINDS = (pb.ALARM, pb.ALARM_RSVP)
 
@@ -297,6 +317,7 @@ class Supervisor(Commands):
             self._stack.set_address(self._address)
 
     def _start_transport(self) -> None:
+        quiet_isotp()
         if self._notifier is None:
             self._notifier = SharedNotifier(self.bus, [], timeout=0.05)
         self._stop.clear()
