@@ -249,8 +249,16 @@ static answered_t *find_answered(uint8_t addr, uint32_t seq, uint32_t epoch)
 
 static void note_answer(uint8_t addr, const ls_Response *r, pb_size_t tag)
 {
-    if (find_answered(addr, r->seq, r->session_epoch) != NULL) {
-        return; /* the cache answering a retransmission */
+    answered_t *seen = find_answered(addr, r->seq, r->session_epoch);
+    if (seen != NULL) {
+        if (seen->code == ls_RetCode_CMD_BUSY_ERR && r->ret_code != ls_RetCode_CMD_BUSY_ERR) {
+            /* the earlier answer refused it while another request was
+             * deferred, which the device does not cache: the same seq sent
+             * again ran this time */
+            *seen =
+                (answered_t){ .addr = addr, .seq = r->seq, .epoch = r->session_epoch, .tag = tag, .code = r->ret_code };
+        }
+        return; /* else the cache answering a retransmission */
     }
     if (g_n_answered == LEDGER_LEN) {
         g_ledger_full = true;
