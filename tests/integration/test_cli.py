@@ -50,6 +50,21 @@ def test_session_locks_activates_loads_a_csv_path_and_prints_its_tags(session: C
         assert session.cli(*cmd).returncode == 0
 
 
+def test_lock_again_in_the_session_that_holds_it_is_nothing_to_do(session: Controller) -> None:
+    """A script that starts with `lock`, run twice in one kept session: the device refuses the
+    second lock (the seed's lock is for an unlocked device); the tool says the session holds it
+    already and goes on. Another client's lock stays a refusal."""
+    assert session.cli("lock").returncode == 0
+    r = session.cli("lock")
+    assert r.returncode == 0, (r.stdout, r.stderr)
+    assert r.stdout == "lock: this session holds the lock already: nothing to do\n" and r.stderr == ""
+    r = session.cli("--json", "lock")
+    assert r.returncode == 0 and json.loads(r.stdout)["note"].startswith("this session holds the lock"), r.stdout
+    other = session.cli("--no-session", "-s", "0xf7", "lock")
+    assert other.returncode != 0 and "holds the lock already" not in other.stdout, other.stdout
+    assert session.cli("release").returncode == 0
+
+
 def test_teach_appends_poses_that_path_load_reads_back_and_runs_to(session: Controller, tmp_path: Path) -> None:
     """docs/host-tool.md "teach": move there, teach it; the file loads and the path goes there, in the
     session's units (degrees here), joint values or the tool tip's world pose."""

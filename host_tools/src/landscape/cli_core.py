@@ -539,6 +539,9 @@ def execute(ctx: click.Context, cmd: Command, fields: dict[str, Any], *, wait: b
     backend = st.backend()
     try:
         rv = send(backend, cmd, fields, wait_s=wait_timeout_s if wait else None)
+        if relocked(backend, cmd, rv):
+            say_relocked(st, cmd, rv)
+            return rv
         note = lock_note(st, cmd, rv, backend)
         if not st.json_out and rv.ret_code >= 0:  # a refusal is said once, on stderr (check_outcome)
             click.echo(f"{cmd.cli_name}: {rv.ret_name}" + (f": {rv.ret_msg}" if rv.ret_msg else ""))
@@ -580,6 +583,30 @@ def lock_note(st: CliState, cmd: Command, rv: RetVal, backend: Backend) -> str |
     if cmd.field == "lock" and rv.ok and st.one_shot and not backend.shared:
         return LOCK_NOTE
     return None
+
+
+RELOCK_NOTE = "this session holds the lock already: nothing to do"
+
+
+def relocked(backend: Backend, cmd: Command, rv: RetVal) -> bool:
+    """A `lock` the device refused because this very session holds the lock (a script that
+    starts with `lock` run again in a kept session): the seed's lock is valid only when
+    unlocked, so the device refuses; the tool asks who owns it and says it is already done."""
+    if cmd.field != "lock" or rv.ret_code != pb.CMD_WRONG_STATE_ERR:
+        return False
+    try:
+        st = send(backend, COMMANDS["get_motion_control_state"], {}, wait_s=None)
+    except LandscapeError:
+        return False
+    return st.ok and bool(st.result.get("owner"))
+
+
+def say_relocked(st: CliState, cmd: Command, rv: RetVal) -> None:
+    if st.json_out:
+        click.echo(json.dumps({"command": cmd.cli_name, "ret_code": rv.ret_code, "ret_name": rv.ret_name,
+                               "ret_msg": rv.ret_msg, "result": {}, "notices": [], "note": RELOCK_NOTE}))
+    else:
+        click.echo(f"{cmd.cli_name}: {RELOCK_NOTE}")
 
 
 def session_units(backend: Backend) -> Units | None:
