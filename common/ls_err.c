@@ -25,6 +25,8 @@ const char *ls_err_name(int status)
     case LS_EPROTO: return "LS_EPROTO";
     case LS_ESTATE: return "LS_ESTATE";
     case LS_ENOSPC: return "LS_ENOSPC";
+    case LS_ENOENT: return "LS_ENOENT";
+    case LS_EAUTH: return "LS_EAUTH";
     default: return status >= 0 ? "LS_OK" : "LS_E?";
     }
 }
@@ -53,6 +55,8 @@ const char *ls_err_text(int status)
     case LS_EPROTO: return "the peer broke the protocol";
     case LS_ESTATE: return "not valid in the present state";
     case LS_ENOSPC: return "a fixed-size table is full";
+    case LS_ENOENT: return "no such entry";
+    case LS_EAUTH: return "the signature does not verify";
     default: return status >= 0 ? "ok" : "unknown error";
     }
 }

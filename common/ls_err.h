@@ -36,6 +36,9 @@ extern "C" {
 /* Any module. */
 #define LS_ESTATE (-20) /* not valid in the module's present state (started twice, resumed while not paused) */
 #define LS_ENOSPC (-21) /* a fixed-size table is full (links, RSVPs, queues): nothing was added */
+#define LS_ENOENT (-22) /* no entry of that name (a key id, a challenge) */
+/* Security. */
+#define LS_EAUTH (-23) /* a signature does not verify (wrong key, forged or altered message) */
 
 /* The code's name ("LS_EAGAIN"), "LS_OK" for zero or positive, "LS_E?" for a
  * negative value that is none of the above. Never NULL; O(1); any context. */

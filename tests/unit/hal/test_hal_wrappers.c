@@ -164,7 +164,7 @@ static void test_strerror_names_every_status(void **state)
     const int codes[] = { LS_EUNSUPPORTED, LS_EAGAIN,   LS_EIO,    LS_EINVAL, LS_ENODEV,    LS_EPERM,
                           LS_EBUSOFF,      LS_ENOAFCAN, LS_EBUSY,  LS_ELEN,   LS_ETIME,     LS_EUNREACHABLE,
                           LS_ESINGULAR,    LS_ELIMITS,  LS_ERANGE, LS_EGEOM,  LS_ETIMEDOUT, LS_EABORTED,
-                          LS_EPROTO,       LS_ESTATE,   LS_ENOSPC };
+                          LS_EPROTO,       LS_ESTATE,   LS_ENOSPC, LS_ENOENT, LS_EAUTH };
     const size_t n = sizeof codes / sizeof codes[0];
     for (size_t i = 0; i < n; i++) {
         assert_true(codes[i] < 0);
