@@ -144,8 +144,8 @@ FIELD_PATH_MAX = 4
 
 
 def uplink_limits(pb2):
-    """Every bounded (string or repeated) field reachable from ls.Uplink, as
-    (path of field numbers, C message type, field name, is string, is repeated)."""
+    """Every bounded (string, bytes or repeated) field reachable from ls.Uplink, as
+    (path of field numbers, C message type, field name, "string" | "bytes" | "", is repeated)."""
     return bounded_fields(pb2, "Uplink", strings_only=False)
 
 
@@ -177,13 +177,14 @@ def bounded_fields(pb2, root, *, strings_only):
                 walk(f.message_type, path + [f.number], depth + 1)
             elif strings_only:
                 if f.type == f.TYPE_STRING:
-                    out.append((path + [f.number], mdesc.name, f.name, True, repeated))
-            elif f.type == f.TYPE_STRING or repeated:
-                if f.type == f.TYPE_BYTES:
-                    raise SystemExit(f"gen_registry: {f.full_name}: bytes fields are not described")
+                    out.append((path + [f.number], mdesc.name, f.name, "string", repeated))
+            elif f.type in (f.TYPE_STRING, f.TYPE_BYTES) or repeated:
+                if f.type == f.TYPE_BYTES and repeated:
+                    raise SystemExit(f"gen_registry: {f.full_name}: repeated bytes fields are not described")
                 if is_proto3_optional(f) and mdesc.name not in top_requests:
                     raise SystemExit(f"gen_registry: {f.full_name}: optional fields are handled in requests only")
-                out.append((path + [f.number], mdesc.name, f.name, f.type == f.TYPE_STRING, repeated))
+                kind = "string" if f.type == f.TYPE_STRING else "bytes" if f.type == f.TYPE_BYTES else ""
+                out.append((path + [f.number], mdesc.name, f.name, kind, repeated))
             elif is_proto3_optional(f) and mdesc.name not in top_requests:
                 raise SystemExit(f"gen_registry: {f.full_name}: optional fields are handled in requests only")
 
@@ -313,6 +314,7 @@ def main() -> int:
         "/* Command flags (ls_cmd_desc_t.flags). */",
         "#define LS_CMD_F_BLOCKING   0x01u /* answers when done; else CMD_STARTED_OK then one event or alarm */",
         "#define LS_CMD_F_OWNER_ONLY 0x02u /* only the supervisor that locked may call it */",
+        "#define LS_CMD_F_QUERY      0x04u /* reads and changes nothing (docs/protocol.md \"Security\") */",
         "",
         "struct ls_core;",
         "struct ls_call;",
@@ -442,6 +444,10 @@ def main() -> int:
             flags.append("LS_CMD_F_BLOCKING")
         if spec.owner_only:
             flags.append("LS_CMD_F_OWNER_ONLY")
+        if spec.query:
+            if spec.owner_only or not spec.blocking:
+                raise SystemExit(f"gen_registry: {spec.name} is a query: it can be neither owner-only nor non-blocking")
+            flags.append("LS_CMD_F_QUERY")
         finals = "NULL" if spec.blocking else f"&k_finals_{fname}"
         src.append(f"    {{ {num}u, \"{spec.name}\", 0x{mask:02X}u, {' | '.join(flags) or '0u'}, "
                    f"{spec.host_timeout_ms}u, ls_h_{fname}, {finals} }},")
@@ -531,13 +537,15 @@ def main() -> int:
     for table, count, rows in (("ls_field_limits", "LS_FIELD_LIMIT_COUNT", limits),
                                ("ls_downlink_limits", "LS_DOWNLINK_LIMIT_COUNT", down_limits)):
         src.append(f"const ls_field_limit_t {table}[{count}] = {{")
-        for path, mname, fname, is_str, rep in rows:
+        for path, mname, fname, kind, rep in rows:
             ptxt = ", ".join(f"{n}u" for n in path)
             one = f"((ls_{mname} *)0)->{fname}"
-            if is_str and rep:
+            if kind == "string" and rep:
                 mb = f"(uint32_t)(sizeof {one}[0] - 1u)"
-            elif is_str:
+            elif kind == "string":
                 mb = f"(uint32_t)(sizeof {one} - 1u)"
+            elif kind == "bytes":
+                mb = f"(uint32_t)sizeof {one}.bytes"
             else:
                 mb = "0u"
             mc = f"(uint32_t)pb_arraysize(ls_{mname}, {fname})" if rep else "0u"

@@ -152,6 +152,7 @@ int32_t ls_h_describe(struct ls_core *core, struct ls_call *call)
     r->frame_angle_max_rad = LS_FRAME_ANGLE_MAX_RAD;
     r->max_answer_bytes = (uint32_t)sizeof call->res->ret_msg - 1u; /* less the NUL */
     r->max_notice_datum_bytes = (uint32_t)sizeof(((ls_Notice *)0)->data[0]) - 1u;
+    r->auth_policy = ls_core_policy(core);
     describe_limits(r);
     bool whole = describe_devices(core, r);
     if (core->model != NULL) {

@@ -49,16 +49,23 @@ int32_t ls_h_send_command(struct ls_core *core, struct ls_call *call)
         put(&o, "fault=%s\nrx_malformed=%u\ntx_lost=%u\nsessions_dropped=%u\nhb_refused=%u\nconnects_refused=%u\n",
             core->fault, (unsigned)core->rx_malformed, (unsigned)core->tx_lost, (unsigned)core->sessions_dropped,
             (unsigned)core->hb_refused, (unsigned)core->connects_refused);
+        put(&o,
+            "policy=%s auth_refused=%u auth_stale=%u auth_connects_refused=%u functional_refused=%u "
+            "anonymous_stops=%u\n",
+            ls_core_policy(core) == ls_AuthPolicy_AUTH_SIGNED ? "signed" : "unsigned", (unsigned)core->auth_refused,
+            (unsigned)core->auth_stale, (unsigned)core->auth_connects_refused, (unsigned)core->functional_refused,
+            (unsigned)core->anonymous_stops);
         for (int i = 0; i < LS_MAX_SUPERVISORS; i++) {
             const ls_session_t *s = &core->sessions[i];
             if (s->connected) {
                 /* executed= stays last: tools read it as the line's tail */
                 put(&o,
                     "session 0x%02X name=%s units=%s,%s heartbeat_timeout_ms=%u disconnect_action=%s hb_refused=%u "
-                    "executed=%u\n",
+                    "link=%d signed=%s auth_refused=%u executed=%u\n",
                     s->addr, s->name, ls_units_linear_name(s->units.linear), ls_units_angular_name(s->units.angular),
                     (unsigned)s->heartbeat_timeout_ms, ls_core_disconnect_action_name(s->disconnect_action),
-                    (unsigned)s->hb_refused, (unsigned)s->executed);
+                    (unsigned)s->hb_refused, s->link, s->signed_session ? "yes" : "no", (unsigned)s->auth_refused,
+                    (unsigned)s->executed);
             }
         }
         for (int i = 0; i < LS_MAX_DIO_WATCHES; i++) {

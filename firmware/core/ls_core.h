@@ -27,15 +27,35 @@ void ls_core_init(ls_core_t *core, const ls_core_config_t *cfg, const ls_core_io
  * caller's. Init only. */
 void ls_core_actions_for_loop(ls_core_actions_t *act, struct ls_control *ctl);
 
-/* One ISO-TP message from the supervisor at `addr` (an encoded ls.Uplink). */
-void ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t len, uint64_t now_us);
+/* One ISO-TP message from the supervisor at `addr` (an encoded ls.Uplink)
+ * that came on link segment `link` (a connect binds its session to it). From
+ * the address of a signed session, a message that does not carry a valid MAC
+ * (or a request whose seq is not newer) is dropped unanswered and counted;
+ * nothing of the session changes (docs/protocol.md "Security"). */
+void ls_core_on_uplink(ls_core_t *core, uint8_t addr, int link, const uint8_t *buf, size_t len, uint64_t now_us);
 
-/* A supervisor's HEARTBEAT frame from `addr` carrying `token` (hb_token).
- * It keeps the session of `addr` only when `token` is that session's
- * heartbeat token; else it is counted (hb_refused) and changes nothing. A
- * heartbeat from an address without a session here (a supervisor of another
- * device) is ignored. O(LS_MAX_SUPERVISORS), no allocation. */
-void ls_core_on_heartbeat(ls_core_t *core, uint8_t addr, uint32_t token, uint64_t now_us);
+/* One functional single frame's payload from `addr` on `link` (docs/protocol.md
+ * "Functional requests"). Where a signature is needed (the policy is signed,
+ * or `addr` has a signed session) a frame cannot carry one: a stopMotion then
+ * pauses the motion under way whoever sent it (like an EMERGENCY frame,
+ * anyone may stop the arm), unanswered, touching no session; anything else is
+ * dropped and counted. Elsewhere it runs like ls_core_on_uplink. */
+void ls_core_on_functional(ls_core_t *core, uint8_t addr, int link, const uint8_t *buf, size_t len, uint64_t now_us);
+
+/* A supervisor's HEARTBEAT frame from `addr`: its hb_counter, hb_period_ms
+ * and hb_token. It keeps the session of `addr` only when `token` is that
+ * session's heartbeat token, or in a signed session the MAC of the frame's
+ * full counter (ls_auth_heartbeat_counter: newer than the last one taken);
+ * else it is counted (hb_refused) and changes nothing. A heartbeat from an
+ * address without a session here (a supervisor of another device) is
+ * ignored. O(LS_MAX_SUPERVISORS) and one HMAC, no allocation. */
+void ls_core_on_heartbeat(ls_core_t *core, uint8_t addr, uint8_t counter, uint16_t period_ms, uint32_t token,
+                          uint64_t now_us);
+
+/* The link segment the session of `addr` is bound to, or LS_NO_SESSION when
+ * the address has none: the network layer drops a frame from `addr` that
+ * comes on another one (docs/protocol.md "Security"). O(LS_MAX_SUPERVISORS). */
+int ls_core_session_link(const ls_core_t *core, uint8_t addr);
 
 /* Everything the core does with time, once every comms loop turn: it takes
  * the control loop's events (the one route by which they reach the core),

@@ -15,6 +15,7 @@
 #include "hal/hal_dio.h"
 #include "hal/hal_manual.h"
 #include "landscape.pb.h"
+#include "ls_auth.h"
 #include "ls_cmd_table.h"
 #include "ls_core_limits.h"
 #include "ls_core_state.h"
@@ -106,6 +107,10 @@ typedef struct {
     /* Optional: the transport's counters as key=value lines (sendCommand status),
      * at most LS_TRANSPORT_DESCRIBE_MAX bytes with the NUL. */
     void (*describe)(void *ctx, char *buf, size_t cap);
+    /* Optional: fill `len` bytes with unpredictable ones (the device's nonce of
+     * a signed connect: docs/protocol.md "Security"); LS_OK or a negative
+     * ls_err.h status. NULL: the device answers no challenge. */
+    int (*random)(void *ctx, uint8_t *buf, size_t len);
     void *ctx;
 } ls_core_io_t;
 
@@ -130,7 +135,14 @@ typedef struct {
     uint8_t last_resp[LS_DOWNLINK_MAX];
     size_t last_resp_len;
     uint32_t notice_seq;
-    uint32_t epoch;        /* session epoch: new at every connect (docs/protocol.md) */
+    uint32_t epoch; /* session epoch: new at every connect (docs/protocol.md) */
+    int link;       /* the link segment its connect came on: its frames on another are dropped (ls_net) */
+    /* A signed session (docs/protocol.md "Security"): every message both ways
+     * carries a MAC with `key`; its heartbeats a MAC over their full counter. */
+    bool signed_session;
+    ls_auth_session_key_t key;
+    uint32_t hb_counter;   /* signed: the full counter of the last heartbeat taken */
+    uint32_t auth_refused; /* messages from its address that did not verify, or were not newer */
     uint32_t executed;     /* requests executed (not answered from the cache) */
     pb_size_t pending_tag; /* command id of the deferred request (last_pending) */
 } ls_session_t;
@@ -210,6 +222,10 @@ typedef struct {
     uint8_t joint_count;
     uint32_t heartbeat_timeout_ms;         /* the least time-out of a session (docs/protocol.md "Liveness") */
     ls_DisconnectAction disconnect_action; /* the widest owner-loss action; 0: stop_deactivate_release */
+    /* The supervisor keys and the policy (docs/protocol.md "Security"), owned
+     * by the caller (landscaped keeps them out of core dumps). NULL: no keys,
+     * the policy unsigned. */
+    ls_auth_t *auth;
 } ls_core_config_t;
 
 /* Actions the core asks of the rest of the firmware (drives, motion). */
@@ -293,6 +309,24 @@ typedef struct ls_core {
     uint32_t sessions_dropped;  /* heartbeat time-outs */
     uint32_t hb_refused;        /* heartbeats that did not carry their session's token */
     uint32_t connects_refused;  /* connects from an address in use by another client */
+    /* Security (docs/protocol.md "Security"): messages from a signed session's
+     * address that did not verify, or whose seq was not newer (dropped
+     * unanswered); connects refused for their signature or the policy;
+     * functional frames that needed a signature; stopMotion taken from anyone. */
+    uint32_t auth_refused;
+    uint32_t auth_stale;
+    uint32_t auth_connects_refused;
+    uint32_t functional_refused;
+    uint32_t anonymous_stops;
+    /* Which key signs the downlinks being sent (ls_send_bytes): `set` false, the
+     * live signed session of their address (or none); else `key` (NULL: none)
+     * with `epoch`: the answer to a challenge or a connect. */
+    struct {
+        bool set;
+        const ls_auth_session_key_t *key;
+        uint32_t epoch;
+    } tx_sign;
+    ls_auth_session_key_t connect_key; /* the session key of the connect or challenge being answered */
     /* scratch (kept here, not on the stack: the messages are large) */
     ls_Uplink up;
     ls_Downlink down; /* the response being built (handlers write into it) */
@@ -308,6 +342,8 @@ typedef struct ls_call {
     const ls_Request *req;
     ls_Response *res;
     uint64_t now_us;
+    int link;                                 /* the link segment it came on */
+    const ls_auth_session_key_t *connect_key; /* a connect verified with this key (NULL: unsigned) */
 } ls_call_t;
 
 #endif

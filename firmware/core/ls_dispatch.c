@@ -104,11 +104,19 @@ static int32_t dispatch(ls_core_t *core, uint8_t addr, ls_call_t *call, ls_Reque
     if (rq->which_cmd == ls_Request_connect_tag) {
         return check_presence(call, d, rq) != 0 ? ls_RetCode_CMD_PARAM_ERR : ls_session_connect(core, addr, call);
     }
-    if (call->sup < 0) {
+    const ls_auth_t *auth = core->cfg.auth;
+    const bool sessionless_query = call->sup < 0 && (d->flags & LS_CMD_F_QUERY) != 0u &&
+                                   ls_core_policy(core) == ls_AuthPolicy_AUTH_SIGNED && auth->unsigned_queries;
+    if (call->sup < 0 && !sessionless_query) {
         return ls_reply(call, ls_RetCode_CMD_NOT_CONNECTED_ERR,
-                        "%s: supervisor 0x%02X has no session: send connect first", d->name, addr);
+                        "%s: supervisor 0x%02X has no session: send connect first%s", d->name, addr,
+                        ls_core_policy(core) == ls_AuthPolicy_AUTH_SIGNED ? ", signed (docs/protocol.md \"Security\")"
+                                                                          : "");
     }
-    if ((d->states & (uint8_t)core->state) == 0u) {
+    /* A query without a session (a signed device's unsigned_queries) reads the
+     * device as it is, also while nobody is connected. */
+    const uint8_t states = (uint8_t)(d->states | (sessionless_query ? (uint8_t)ls_State_IDLE : 0u));
+    if ((states & (uint8_t)core->state) == 0u) {
         char valid[64];
         describe_states(d->states, valid, sizeof valid);
         /* The way to the state is the owner's to take (release, activate,
@@ -190,7 +198,7 @@ static bool refused_for_its_seq(ls_core_t *core, uint8_t addr, const ls_Request 
          * silently not run it (docs/protocol.md "Sequence numbers"). */
         const ls_cmd_desc_t *prev = ls_cmd_find(s->last_tag);
         const ls_cmd_desc_t *now = ls_cmd_find(rq->which_cmd);
-        answer_bad_request(core, addr, ls_RetCode_CMD_PARAM_ERR, rq->seq,
+        answer_bad_request(core, addr, ls_RetCode_CMD_SEQ_CONFLICT_ERR, rq->seq,
                            "seq %u reused with a different request (previous: %s, now: %s): use a new seq; "
                            "only a retransmission repeats one",
                            (unsigned)rq->seq, prev != NULL ? prev->name : "?", now != NULL ? now->name : "request");
@@ -220,7 +228,7 @@ static bool answered_from_cache(ls_core_t *core, uint8_t addr, const ls_Request 
             s->last_heard_us = now_us;
         }
         if (!s->last_pending && s->last_resp_len > 0) {
-            ls_send_bytes(core, addr, s->last_resp, s->last_resp_len);
+            ls_send_bytes(core, addr, s->last_resp, s->last_resp_len, sizeof s->last_resp);
         }
         return true;
     }
@@ -242,21 +250,35 @@ static bool refused_while_deferred(ls_core_t *core, uint8_t addr, const ls_Reque
                     pd != NULL ? pd->name : "a blocking command", (unsigned)s->last_seq);
         size_t len = ls_send_encode(&core->down, core->enc, sizeof core->enc);
         if (len > 0) {
-            ls_send_bytes(core, addr, core->enc, len);
+            ls_send_bytes(core, addr, core->enc, len, sizeof core->enc);
         }
         return true;
     }
     return false;
 }
 
+/* How a request arrived: the link segment, and the key a signed connect
+ * was verified with (NULL: none). */
+typedef struct {
+    int link;
+    const ls_auth_session_key_t *connect_key;
+} arrival_t;
+
 /* Run the request: dispatch it, keep it as the session's last (the
  * retransmission cache) and answer, unless its handler answers later. */
-static void run_request(ls_core_t *core, uint8_t addr, ls_Request *rq, int sup, uint64_t hash, uint64_t now_us)
+static void run_request(ls_core_t *core, uint8_t addr, ls_Request *rq, int sup, uint64_t hash, uint64_t now_us,
+                        const arrival_t *how)
 {
     ls_session_t *s = sup >= 0 ? &core->sessions[sup] : NULL;
     /* disconnect ends the session it answers: its answer still carries that epoch */
     ls_Response *res = ls_send_new_response(core, rq->seq, s != NULL ? s->epoch : 0u);
-    ls_call_t call = { .core = core, .sup = sup, .req = rq, .res = res, .now_us = now_us };
+    ls_call_t call = { .core = core,
+                       .sup = sup,
+                       .req = rq,
+                       .res = res,
+                       .now_us = now_us,
+                       .link = how->link,
+                       .connect_key = how->connect_key };
     int32_t code = dispatch(core, addr, &call, rq);
     sup = call.sup; /* connect may have created the session */
     s = sup >= 0 && core->sessions[sup].connected ? &core->sessions[sup] : NULL;
@@ -282,12 +304,37 @@ static void run_request(ls_core_t *core, uint8_t addr, ls_Request *rq, int sup, 
     ls_send_response(core, s, addr);
 }
 
+/* A challenge: answered at once, outside every session (no seq rule, no
+ * cache): it changes nothing but the challenge table. */
+static void on_challenge(ls_core_t *core, uint8_t addr, ls_Request *rq, uint64_t now_us)
+{
+    ls_Response *res = ls_send_new_response(core, rq->seq, 0u);
+    ls_call_t call = { .core = core, .sup = LS_NO_SESSION, .req = rq, .res = res, .now_us = now_us };
+    res->ret_code = ls_session_challenge(core, addr, &call);
+    if (res->ret_code < 0) {
+        res->which_result = 0;
+    }
+    ls_send_response(core, NULL, addr);
+}
+
 static void on_request(ls_core_t *core, uint8_t addr, ls_Request *rq, const uint8_t *raw, size_t raw_len,
-                       uint64_t now_us)
+                       uint64_t now_us, const arrival_t *how)
 {
     const int sup = ls_core_session_of(core, addr);
     ls_session_t *s = sup >= 0 ? &core->sessions[sup] : NULL;
     const uint64_t hash = request_hash(raw, raw_len);
+    if (rq->which_cmd == ls_Request_challenge_tag) {
+        on_challenge(core, addr, rq, now_us);
+        return;
+    }
+    if (s != NULL && s->signed_session && s->have_last && rq->seq < s->last_seq &&
+        rq->which_cmd != ls_Request_connect_tag) {
+        /* A signed request is fresh when its seq is newer than the session's
+         * last: a replayed one is dropped unanswered (docs/protocol.md "Security"). */
+        s->auth_refused++;
+        core->auth_stale++;
+        return;
+    }
     if (s != NULL && rq->which_cmd != ls_Request_connect_tag && s->last_heard_us > now_us) {
         /* A request after the connect shows its answer arrived: the connect's
          * grace ends and the heartbeat time-out runs from here, so a client
@@ -299,7 +346,7 @@ static void on_request(ls_core_t *core, uint8_t addr, ls_Request *rq, const uint
         refused_while_deferred(core, addr, rq, s)) {
         return;
     }
-    run_request(core, addr, rq, sup, hash, now_us);
+    run_request(core, addr, rq, sup, hash, now_us, how);
 }
 
 /* Open the ls.Uplink member `field` (a message) of buf as *sub, without
@@ -407,13 +454,13 @@ static void answer_bad_request(ls_core_t *core, uint8_t addr, int32_t code, uint
     ls_send_response(core, NULL, addr);
 }
 
-void ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t len, uint64_t now_us)
+/* An uplink that passed verification (or needed none): answered as the
+ * schema and the session's rules say. */
+static void on_verified_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t len, uint64_t now_us,
+                               bool decoded, pb_istream_t *is, const arrival_t *how)
 {
-    ls_core_take_loop_events(core, now_us); /* answer from the state as of the request's arrival */
-    memset(&core->up, 0, sizeof core->up);
-    pb_istream_t is = pb_istream_from_buffer(buf, len);
     uint32_t seq = 0, cmd = 0;
-    if (!pb_decode(&is, ls_Uplink_fields, &core->up)) {
+    if (!decoded) {
         core->rx_malformed++;
         /* Answer so the host does not wait for a time-out. */
         bool scanned = scan_request(buf, len, &seq, &cmd);
@@ -430,7 +477,7 @@ void ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t
             /* "request." is the envelope: name the field as the command has it */
             const char *field = strncmp(where, "request.", 8) == 0 ? where + 8 : where;
             answer_bad_request(core, addr, ls_RetCode_CMD_PARAM_ERR, seq, "%s did not decode (%s): %s %s",
-                               d != NULL ? d->name : "the message", PB_GET_ERROR(&is), field,
+                               d != NULL ? d->name : "the message", PB_GET_ERROR(is), field,
                                fault == LS_WIRE_SIZE ? "(protocol/landscape.options): send fewer"
                                                      : "(the schema's type): send a value it holds");
             return;
@@ -438,7 +485,7 @@ void ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t
         answer_bad_request(core, addr, ls_RetCode_CMD_PARAM_ERR, seq,
                            "%s did not decode (%s): a value exceeds the firmware's limits "
                            "(protocol/landscape.options) or the schemas differ",
-                           d != NULL ? d->name : "the message", PB_GET_ERROR(&is));
+                           d != NULL ? d->name : "the message", PB_GET_ERROR(is));
         return;
     }
     if (core->up.which_msg == ls_Uplink_request_tag && core->up.msg.request.which_cmd == 0) {
@@ -469,11 +516,124 @@ void ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t
         return;
     }
     if (core->up.which_msg == ls_Uplink_request_tag) {
-        on_request(core, addr, &core->up.msg.request, buf, len, now_us);
+        on_request(core, addr, &core->up.msg.request, buf, len, now_us, how);
     } else if (core->up.which_msg == ls_Uplink_rsvp_reply_tag) {
         /* Only HEARTBEAT frames keep a session (docs/protocol.md "Liveness"). */
         ls_rsvp_on_reply(core, addr, &core->up.msg.rsvp_reply, now_us);
     } else {
         core->rx_malformed++;
     }
+}
+
+/* Which key a message from `addr` must verify with, and whether it does
+ * (docs/protocol.md "Security"). A connect that carries a host_nonce is
+ * signed with the session key of its challenge (epoch 0), else, when it is
+ * the connect that opened `addr`'s signed session sent again, with that
+ * session's key (epoch 0); every other message from the address of a signed
+ * session with the session's key and epoch. Returns true when the message
+ * may go on (how->connect_key set for a verified connect); false when it
+ * was dropped (counted) or refused. */
+static bool verified(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t len, bool decoded, uint64_t now_us,
+                     arrival_t *how)
+{
+    const int sup = ls_core_session_of(core, addr);
+    ls_session_t *s = sup >= 0 && core->sessions[sup].signed_session ? &core->sessions[sup] : NULL;
+    const uint8_t node = core->cfg.node_addr;
+    const ls_Request *rq = &core->up.msg.request;
+    const bool signed_connect = decoded && core->up.which_msg == ls_Uplink_request_tag &&
+                                rq->which_cmd == ls_Request_connect_tag && rq->cmd.connect.host_nonce.size > 0u;
+    if (!signed_connect) {
+        if (s != NULL && !ls_auth_verify(&s->key, LS_AUTH_UP, addr, node, s->epoch, buf, len)) {
+            s->auth_refused++;
+            core->auth_refused++;
+            return false;
+        }
+        return true;
+    }
+    ls_auth_t *auth = core->cfg.auth;
+    const ls_ConnectReq *c = &rq->cmd.connect;
+    const ls_auth_challenge_t *ch =
+        auth != NULL ? ls_auth_challenge_find(auth, addr, c->host_nonce.bytes, c->host_nonce.size, now_us) : NULL;
+    if (ch == NULL && s != NULL && s->have_last && s->last_tag == ls_Request_connect_tag &&
+        ls_auth_verify(&s->key, LS_AUTH_UP, addr, node, 0u, buf, len)) {
+        return true; /* its answer was lost: answered from the cache (on_request) */
+    }
+    const char *why = NULL;
+    if (ch == NULL) {
+        why = "no challenge of this host_nonce from this address is waiting (none, used, or older than "
+              "AUTH_CHALLENGE_TTL_MS): send challenge, then connect";
+    } else {
+        ls_auth_session_key(auth, ch, addr, node, &core->connect_key);
+        if (strcmp(auth->keys[ch->key].id, c->key_id) != 0) {
+            why = "its key_id is not the challenge's";
+        } else if (!ls_auth_verify(&core->connect_key, LS_AUTH_UP, addr, node, 0u, buf, len)) {
+            why = "its MAC does not verify: the host's key differs from the device's key of that name";
+        }
+    }
+    if (why != NULL) {
+        core->auth_connects_refused++;
+        if (s != NULL) {
+            /* the address of a signed session: nothing unverified gets an answer there */
+            s->auth_refused++;
+            core->auth_refused++;
+            return false;
+        }
+        core->tx_sign.set = true; /* unsigned: nothing verified */
+        core->tx_sign.key = NULL;
+        answer_bad_request(core, addr, ls_RetCode_CMD_AUTH_ERR, rq->seq, "connect with key \"%s\" refused: %s",
+                           c->key_id, why);
+        return false;
+    }
+    ls_auth_challenge_drop(auth, addr); /* a device nonce serves one connect */
+    core->tx_sign.set = true;           /* refusals of this connect: signed for its client */
+    core->tx_sign.key = &core->connect_key;
+    core->tx_sign.epoch = 0u;
+    how->connect_key = &core->connect_key;
+    return true;
+}
+
+void ls_core_on_uplink(ls_core_t *core, uint8_t addr, int link, const uint8_t *buf, size_t len, uint64_t now_us)
+{
+    ls_core_take_loop_events(core, now_us); /* answer from the state as of the request's arrival */
+    core->tx_sign.set = false;
+    memset(&core->up, 0, sizeof core->up);
+    pb_istream_t is = pb_istream_from_buffer(buf, len);
+    const bool decoded = pb_decode(&is, ls_Uplink_fields, &core->up);
+    arrival_t how = { .link = link, .connect_key = NULL };
+    if (!verified(core, addr, buf, len, decoded, now_us, &how)) {
+        core->tx_sign.set = false;
+        return;
+    }
+    on_verified_uplink(core, addr, buf, len, now_us, decoded, &is, &how);
+    core->tx_sign.set = false;
+}
+
+void ls_core_on_functional(ls_core_t *core, uint8_t addr, int link, const uint8_t *buf, size_t len, uint64_t now_us)
+{
+    const int sup = ls_core_session_of(core, addr);
+    if (ls_core_policy(core) != ls_AuthPolicy_AUTH_SIGNED && (sup < 0 || !core->sessions[sup].signed_session)) {
+        ls_core_on_uplink(core, addr, link, buf, len, now_us);
+        return;
+    }
+    /* A single frame has no room for a MAC, so nobody is known to have sent
+     * it: a stop is taken from anyone, like an EMERGENCY frame, and nothing
+     * else (docs/protocol.md "Security": "What stays unsigned"). */
+    ls_core_take_loop_events(core, now_us);
+    memset(&core->up, 0, sizeof core->up);
+    pb_istream_t is = pb_istream_from_buffer(buf, len);
+    ls_Request *rq = &core->up.msg.request;
+    if (!pb_decode(&is, ls_Uplink_fields, &core->up) || core->up.which_msg != ls_Uplink_request_tag ||
+        rq->which_cmd != ls_Request_stop_motion_tag) {
+        core->functional_refused++;
+        return;
+    }
+    core->anonymous_stops++;
+    if (core->state != ls_State_MOVING || core->halt.active || core->run.stop_pending) {
+        return; /* nothing moves, or a stop is under way already */
+    }
+    /* The owner's stopMotion without the owner's session: a pause the owner
+     * resumes or aborts; no answer, no seq, no cache. */
+    ls_Response *res = ls_send_new_response(core, rq->seq, 0u);
+    ls_call_t call = { .core = core, .sup = LS_NO_SESSION, .req = rq, .res = res, .now_us = now_us, .link = link };
+    (void)ls_h_stop_motion(core, &call);
 }

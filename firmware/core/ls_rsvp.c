@@ -60,6 +60,9 @@ static void send_rsvp_ack(ls_core_t *core, uint8_t addr, uint32_t id, int32_t co
     a->ret_code = code;
     a->ref_seq = ref_seq;
     a->session_epoch = epoch;
+    /* numbered with the session's notices: a signed session's freshness */
+    const int sup = ls_core_session_of(core, addr);
+    a->notice_seq = sup >= 0 ? ++core->sessions[sup].notice_seq : 0u;
     ls_fmt_print(a->action, sizeof a->action, "%s", action);
     va_list ap;
     va_start(ap, fmt);
@@ -67,7 +70,7 @@ static void send_rsvp_ack(ls_core_t *core, uint8_t addr, uint32_t id, int32_t co
     va_end(ap);
     size_t len = ls_send_encode(&core->note, core->note_enc, sizeof core->note_enc);
     if (len > 0) {
-        ls_send_bytes(core, addr, core->note_enc, len);
+        ls_send_bytes(core, addr, core->note_enc, len, sizeof core->note_enc);
     }
 }
 
@@ -183,6 +186,6 @@ int32_t ls_core_rsvp(ls_core_t *core, int sup, uint32_t ref_seq, ls_NoticeKind k
                          .ctx = ctx };
     ls_fmt_print(slot->event_id, sizeof slot->event_id, "%s", event_id);
     ls_fmt_print(slot->default_action, sizeof slot->default_action, "%s", default_action);
-    ls_send_bytes(core, s->addr, core->note_enc, len);
+    ls_send_bytes(core, s->addr, core->note_enc, len, sizeof core->note_enc);
     return (int32_t)id;
 }

@@ -87,8 +87,29 @@ size_t ls_send_encode(ls_Downlink *msg, uint8_t *buf, size_t cap)
     return os.bytes_written;
 }
 
-void ls_send_bytes(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t len)
+ls_AuthPolicy ls_core_policy(const ls_core_t *core)
 {
+    return core->cfg.auth != NULL && core->cfg.auth->policy == ls_AuthPolicy_AUTH_SIGNED ? ls_AuthPolicy_AUTH_SIGNED
+                                                                                         : ls_AuthPolicy_AUTH_UNSIGNED;
+}
+
+void ls_send_bytes(ls_core_t *core, uint8_t addr, uint8_t *buf, size_t len, size_t cap)
+{
+    const ls_auth_session_key_t *key = core->tx_sign.key;
+    uint32_t epoch = core->tx_sign.epoch;
+    if (!core->tx_sign.set) {
+        const int i = ls_core_session_of(core, addr);
+        key = i >= 0 && core->sessions[i].signed_session ? &core->sessions[i].key : NULL;
+        epoch = i >= 0 ? core->sessions[i].epoch : 0u;
+    }
+    if (key != NULL) {
+        const int n = ls_auth_sign(key, LS_AUTH_DOWN, core->cfg.node_addr, addr, epoch, buf, len, cap);
+        if (n < 0) {
+            core->tx_lost++; /* cannot happen: LS_DOWNLINK_MAX counts Downlink.mac */
+            return;
+        }
+        len = (size_t)n;
+    }
     if (core->io.send_downlink == NULL || core->io.send_downlink(core->io.ctx, addr, buf, len) != 0) {
         core->tx_lost++;
     }
@@ -110,7 +131,7 @@ void ls_send_response(ls_core_t *core, ls_session_t *s, uint8_t addr)
         s->last_resp_len = len;
         s->last_pending = false;
     }
-    ls_send_bytes(core, addr, core->enc, len);
+    ls_send_bytes(core, addr, core->enc, len, sizeof core->enc);
 }
 
 int32_t ls_reply(ls_call_t *call, int32_t code, const char *fmt, ...)
@@ -154,7 +175,7 @@ void ls_core_notify(ls_core_t *core, int sup, ls_NoticeKind kind, ls_EventId id,
         n->session_epoch = ref_seq != 0u ? s->epoch : 0u;
         size_t len = ls_send_encode(&core->note, core->note_enc, sizeof core->note_enc);
         if (len > 0) {
-            ls_send_bytes(core, s->addr, core->note_enc, len);
+            ls_send_bytes(core, s->addr, core->note_enc, len, sizeof core->note_enc);
         }
     }
 }
@@ -182,7 +203,7 @@ void ls_core_notify_named_to(ls_core_t *core, uint8_t addr, uint32_t epoch, ls_N
     }
     size_t len = ls_send_encode(&core->note, core->note_enc, sizeof core->note_enc);
     if (len > 0) {
-        ls_send_bytes(core, addr, core->note_enc, len);
+        ls_send_bytes(core, addr, core->note_enc, len, sizeof core->note_enc);
     }
 }
 

@@ -95,8 +95,14 @@ ls_Notice *ls_send_new_notice(ls_core_t *core, ls_NoticeKind kind, const char *e
 size_t ls_send_encode(ls_Downlink *msg, uint8_t *buf, size_t cap);
 
 /* Queue `len` encoded bytes for the supervisor at `addr` (io.send_downlink);
- * a refusal is counted in tx_lost, never retried here. */
-void ls_send_bytes(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t len);
+ * a refusal is counted in tx_lost, never retried here. Signed first (the
+ * MAC field appended in buf, `cap` bytes long: LS_DOWNLINK_MAX holds it)
+ * with the key core->tx_sign names, by default the live signed session of
+ * `addr`'s (docs/protocol.md "Security"). */
+void ls_send_bytes(ls_core_t *core, uint8_t addr, uint8_t *buf, size_t len, size_t cap);
+
+/* The device's policy: AUTH_UNSIGNED without keys (cfg.auth NULL). */
+ls_AuthPolicy ls_core_policy(const ls_core_t *core);
 
 /* Send the answer built in core->down to `addr`, and keep it as session
  * s's last answer (its retransmission cache; s NULL: not cached). An answer

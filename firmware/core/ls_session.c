@@ -34,6 +34,8 @@ void ls_session_drop(ls_core_t *core, int i, const char *why, uint64_t now_us)
     uint8_t addr = s->addr;
     ls_send_session_ended(core, s);
     s->connected = false;
+    s->signed_session = false;
+    ls_auth_wipe(&s->key, sizeof s->key);
     if (core->halt.answer_sup == i) {
         core->halt.answer_sup = LS_NO_SESSION; /* nobody to answer any more */
     }
@@ -78,21 +80,37 @@ void ls_session_drop(ls_core_t *core, int i, const char *why, uint64_t now_us)
     }
 }
 
-void ls_core_on_heartbeat(ls_core_t *core, uint8_t addr, uint32_t token, uint64_t now_us)
+void ls_core_on_heartbeat(ls_core_t *core, uint8_t addr, uint8_t counter, uint16_t period_ms, uint32_t token,
+                          uint64_t now_us)
 {
     int i = ls_core_session_of(core, addr);
     if (i < 0) {
         return; /* not ours: e.g. a supervisor of another device on this bus */
     }
     ls_session_t *s = &core->sessions[i];
-    if (token != s->hb_token) {
+    uint32_t full = 0;
+    bool ok = token == s->hb_token;
+    if (s->signed_session) {
+        /* Anyone reads a token off the bus; only the key holder makes the MAC
+         * of a counter newer than the last one (docs/protocol.md "Security"). */
+        full = ls_auth_heartbeat_counter(s->hb_counter, counter);
+        ok = ls_auth_heartbeat_mac(&s->key, addr, s->epoch, full, period_ms) == token;
+    }
+    if (!ok) {
         /* A bare heartbeat, or another client's on this address: it must not
          * keep alive a session whose supervisor is gone. */
         s->hb_refused++;
         core->hb_refused++;
         return;
     }
+    s->hb_counter = full;
     s->last_heard_us = now_us;
+}
+
+int ls_core_session_link(const ls_core_t *core, uint8_t addr)
+{
+    const int i = ls_core_session_of(core, addr);
+    return i >= 0 ? core->sessions[i].link : LS_NO_SESSION;
 }
 
 /* The session's heartbeat token: nonzero (a bare heartbeat never matches),
@@ -125,6 +143,13 @@ typedef struct {
 static int32_t connect_terms(ls_core_t *core, ls_call_t *call, connect_terms_t *t)
 {
     const ls_ConnectReq *rq = &call->req->cmd.connect;
+    if (call->connect_key == NULL && ls_core_policy(core) == ls_AuthPolicy_AUTH_SIGNED) {
+        /* No session slot for a client that proved nothing (docs/protocol.md "Security"). */
+        core->auth_connects_refused++;
+        return ls_reply(call, ls_RetCode_CMD_AUTH_ERR,
+                        "connect: this device serves signed supervisors only (policy signed): give the host one "
+                        "of the keys of the device's key file (docs/protocol.md \"Security\")");
+    }
     if (rq->protocol_version != (uint32_t)ls_Protocol_PROTOCOL_VERSION || rq->schema_hash != LS_SCHEMA_HASH) {
         /* The refusal carries the device's version and hash as numbers too
          * (ConnectRes), so no client has to read them out of the text. */
@@ -240,6 +265,14 @@ static void connect_open(ls_core_t *core, int i, uint8_t addr, const ls_call_t *
     }
     s->nonce = rq->client_nonce;
     s->hb_token = heartbeat_token(s->nonce, s->epoch, call->now_us);
+    s->link = call->link;
+    s->signed_session = call->connect_key != NULL;
+    s->hb_counter = 0;
+    if (call->connect_key != NULL) {
+        s->key = *call->connect_key;
+    } else {
+        ls_auth_wipe(&s->key, sizeof s->key);
+    }
     /* The supervisor cannot beat before this answer, which carries the token,
      * has reached it: the session counts as heard until the network layer
      * may have given up delivering it (docs/protocol.md "Liveness"). */
@@ -263,6 +296,7 @@ int32_t ls_session_connect(ls_core_t *core, uint8_t addr, ls_call_t *call)
     rs->joint_count = core->cfg.joint_count;
     rs->heartbeat_timeout_ms = core->cfg.heartbeat_timeout_ms;
     rs->client_nonce = rq->client_nonce; /* an error carries no result: only an accepted connect's */
+    rs->auth_policy = ls_core_policy(core);
     connect_terms_t t = { 0 };
     int32_t code = connect_terms(core, call, &t);
     if (code != LS_OK) {
@@ -291,7 +325,61 @@ int32_t ls_session_connect(ls_core_t *core, uint8_t addr, ls_call_t *call)
     rs->angular_unit = s->units.angular;
     rs->state = core->state;
     rs->owner = core->owner == i;
-    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "connected to %s as 0x%02X", core->cfg.device_name, addr);
+    rs->session_signed = s->signed_session;
+    if (s->signed_session) {
+        /* the acceptance is the session's first signed message, in its epoch */
+        core->tx_sign.set = true;
+        core->tx_sign.key = &s->key;
+        core->tx_sign.epoch = s->epoch;
+    }
+    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "connected to %s as 0x%02X%s", core->cfg.device_name, addr,
+                    s->signed_session ? ", signed" : "");
+}
+
+int32_t ls_session_challenge(ls_core_t *core, uint8_t addr, ls_call_t *call)
+{
+    const ls_ChallengeReq *rq = &call->req->cmd.challenge;
+    ls_ChallengeRes *rs = &call->res->result.challenge;
+    ls_auth_t *auth = core->cfg.auth;
+    call->res->which_result = ls_Response_challenge_tag;
+    rs->auth_policy = ls_core_policy(core);
+    ls_fmt_print(rs->key_id, sizeof rs->key_id, "%s", rq->key_id);
+    if (rq->host_nonce.size != LS_AUTH_NONCE_BYTES) {
+        return ls_reply(call, ls_RetCode_CMD_PARAM_ERR,
+                        "challenge: host_nonce has %u bytes, needs %u random ones (docs/protocol.md \"Security\")",
+                        (unsigned)rq->host_nonce.size, (unsigned)LS_AUTH_NONCE_BYTES);
+    }
+    const int key = auth != NULL ? ls_auth_key_index(auth, rq->key_id) : LS_ENOENT;
+    if (key < 0) {
+        return ls_reply(call, ls_RetCode_CMD_AUTH_ERR,
+                        "challenge: the device holds no key \"%s\" (%u keys in its key file): add it to the "
+                        "device's key file, or give the host one it holds",
+                        rq->key_id, auth != NULL ? (unsigned)auth->n_keys : 0u);
+    }
+    uint8_t nd[LS_AUTH_NONCE_BYTES];
+    if (core->io.random == NULL || core->io.random(core->io.ctx, nd, sizeof nd) != LS_OK) {
+        return ls_reply(call, ls_RetCode_CMD_ERR, "challenge: the device has no random source for its nonce");
+    }
+    (void)ls_auth_challenge_put(auth, addr, key, rq->host_nonce.bytes, nd, call->now_us);
+    const ls_auth_challenge_t *c =
+        ls_auth_challenge_find(auth, addr, rq->host_nonce.bytes, LS_AUTH_NONCE_BYTES, call->now_us);
+    /* The answer is signed with the session key the connect will use, so the
+     * host knows now whether both hold the same key. */
+    ls_auth_session_key(auth, c, addr, core->cfg.node_addr, &core->connect_key);
+    core->tx_sign.set = true;
+    core->tx_sign.key = &core->connect_key;
+    core->tx_sign.epoch = 0u;
+    memcpy(rs->device_nonce.bytes, nd, sizeof nd);
+    rs->device_nonce.size = (pb_size_t)sizeof nd;
+    ls_auth_wipe(nd, sizeof nd);
+    return ls_reply(call, ls_RetCode_CMD_EXEC_OK, "sign a connect with key \"%s\" within %u ms", rq->key_id,
+                    (unsigned)ls_AuthParam_AUTH_CHALLENGE_TTL_MS);
+}
+
+int32_t ls_h_challenge(struct ls_core *core, struct ls_call *call)
+{
+    (void)core;
+    return ls_reply(call, ls_RetCode_CMD_ERR, "challenge is handled by the dispatcher");
 }
 
 int32_t ls_h_connect(struct ls_core *core, struct ls_call *call)

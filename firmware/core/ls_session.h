@@ -19,6 +19,13 @@
  * on a refusal nothing of any session changes. */
 int32_t ls_session_connect(ls_core_t *core, uint8_t addr, ls_call_t *call);
 
+/* challenge from `addr` (docs/protocol.md "Security"): draws the device's
+ * nonce (io.random) for the key named, remembers the challenge for one
+ * connect from `addr` (ls_auth_challenge_put) and fills the ChallengeRes,
+ * signed with the session key the connect will use (core->tx_sign). Returns
+ * the ret_code; changes no session. */
+int32_t ls_session_challenge(ls_core_t *core, uint8_t addr, ls_call_t *call);
+
 /* End session i (disconnect, heartbeat lost: `why`), running the disconnect
  * handler when it owned the device: stop, deactivate or release as its
  * action says (a motion stops first, ls_run_halt_owner_lost), a kept lock

@@ -260,26 +260,43 @@ static void route(ls_net_t *net, const hal_can_frame_t *f, size_t from)
              * batch may already be the sender's next request. */
             size_t n = ls_isotp_take_rx(&p->isotp, net->rxbuf, sizeof net->rxbuf);
             if (n > 0) {
-                ls_core_on_uplink(net->core, p->addr, net->rxbuf, n, net->now_us);
+                ls_core_on_uplink(net->core, p->addr, (int)from, net->rxbuf, n, net->now_us);
             }
         }
     } else if (pf == LS_ID_ISOTP_FUNC && (target == LS_ADDR_ALL || target == net->node)) {
         uint8_t payload[8];
         size_t n = ls_isotp_decode_single(f->data, f->len, payload, sizeof payload);
         if (n > 0) {
-            ls_core_on_uplink(net->core, source, payload, n, net->now_us);
+            ls_core_on_functional(net->core, source, (int)from, payload, n, net->now_us);
         }
     } else if ((f->id & LS_ID_MASK_SRC) == LS_ID_HEARTBEAT) {
         /* The DBC's HEARTBEAT, multiplexed by hb_role: a supervisor's (1)
-         * keeps its session when it carries the session's token. */
+         * keeps its session when it carries the session's token (or MAC). */
         struct landscape_heartbeat_t hb;
         if (f->len == LANDSCAPE_HEARTBEAT_LENGTH && landscape_heartbeat_unpack(&hb, f->data, f->len) == 0 &&
             hb.hb_role == LANDSCAPE_HEARTBEAT_HB_ROLE_SUPERVISOR_CHOICE) {
-            ls_core_on_heartbeat(net->core, source, hb.hb_token, net->now_us);
+            ls_core_on_heartbeat(net->core, source, hb.hb_counter, hb.hb_period_ms, hb.hb_token, net->now_us);
         }
     } else if ((f->id & LS_ID_MASK_SRC) == LS_ID_EMERGENCY && source != net->node) {
         ls_core_emergency(net->core, net->now_us);
     }
+}
+
+/* A frame no node on link `from` may send: one carrying the device's own
+ * address as its source, or the address of a session bound to another link
+ * segment (docs/protocol.md "Security": "Sessions bound to their link"). It
+ * is neither routed nor bridged. */
+static bool foreign(const ls_net_t *net, const hal_can_frame_t *f, size_t from)
+{
+    if ((f->flags & HAL_CAN_F_EXT) == 0u) {
+        return false; /* 11-bit frames carry no source address of ours */
+    }
+    const uint8_t source = (uint8_t)(f->id & 0xFFu);
+    if (source == net->node) {
+        return true;
+    }
+    const int link = ls_core_session_link(net->core, source);
+    return link >= 0 && (size_t)link != from;
 }
 
 /* Copy a frame received on link `from` to every other link, within each
@@ -340,6 +357,10 @@ void ls_net_poll(ls_net_t *net, uint64_t now_us)
         /* Bounded per turn so one busy link cannot starve the others. */
         for (int k = 0; k < 256 && hal_can_recv(&net->links[i], &f) == 1; k++) {
             net->frames_in++;
+            if (foreign(net, &f, i)) {
+                net->frames_foreign++;
+                continue;
+            }
             if (net->n_links > 1) {
                 forward(net, &f, i);
             }
@@ -354,7 +375,7 @@ void ls_net_poll(ls_net_t *net, uint64_t now_us)
         ls_isotp_poll(&p->isotp, now_us);
         size_t n = ls_isotp_take_rx(&p->isotp, net->rxbuf, sizeof net->rxbuf);
         if (n > 0) {
-            ls_core_on_uplink(net->core, p->addr, net->rxbuf, n, now_us);
+            ls_core_on_uplink(net->core, p->addr, p->link, net->rxbuf, n, now_us);
         }
         if (p->tx_asked_again) {
             p->tx_asked_again = false;
@@ -448,12 +469,12 @@ void ls_net_describe(void *ctx, char *buf, size_t cap)
         buf, cap,
         "frames_in=%u\nframes_out=%u\ntx_full=%u\nlink_rx_dropped=%u\nlink_tx_dropped=%u\n"
         "peers_evicted=%u\npeers_preempted=%u\ntx_retried=%u\ntx_given_up=%u\ntx_deduplicated=%u\ntx_restarted=%u\n"
-        "frames_bridged=%u\nfwd_dropped=%u\nfwd_emergency_dropped=%u\nlink_close_held=%u\n",
+        "frames_bridged=%u\nfwd_dropped=%u\nfwd_emergency_dropped=%u\nlink_close_held=%u\nframes_foreign=%u\n",
         (unsigned)net->frames_in, (unsigned)net->frames_out, (unsigned)net->tx_full, (unsigned)link_rx_dropped,
         (unsigned)link_tx_dropped, (unsigned)net->peers_evicted, (unsigned)net->peers_preempted,
         (unsigned)net->tx_retried, (unsigned)net->tx_given_up, (unsigned)net->tx_deduplicated,
         (unsigned)net->tx_restarted, (unsigned)net->frames_bridged, (unsigned)net->fwd_dropped,
-        (unsigned)net->fwd_emergency_dropped, (unsigned)link_close_held);
+        (unsigned)net->fwd_emergency_dropped, (unsigned)link_close_held, (unsigned)net->frames_foreign);
     n = w > 0 ? (size_t)w : 0u;
     for (int r = 0; r < LS_ISOTP_N_RESULT_COUNT && n < cap; r++) {
         /* e.g. isotp_unexp_pdu=1: receive and send outcomes together, by ISO name */

@@ -118,7 +118,8 @@ typedef struct ls_net {
     uint32_t frames_in, frames_out, frames_bridged, tx_full, peers_evicted;
     uint32_t peers_preempted;                    /* busy links of session-less sources taken for another */
     uint32_t fwd_dropped, fwd_emergency_dropped; /* bridged frames over a link's forward budget */
-    ls_net_bucket_t fwd[LS_NET_MAX_LINKS];       /* forward budget per output link */
+    uint32_t frames_foreign; /* frames from the device's own address, or a session's on another link: dropped */
+    ls_net_bucket_t fwd[LS_NET_MAX_LINKS]; /* forward budget per output link */
     ls_net_bucket_t fwd_emergency[LS_NET_MAX_LINKS];
     bool link_held[LS_NET_MAX_LINKS]; /* told the link: sessions live on it (hal_can_hold_open) */
     uint32_t tx_retried, tx_given_up; /* downlink transfers sent again; downlinks given up */
@@ -134,7 +135,10 @@ void ls_net_init(ls_net_t *net, uint8_t node, ls_core_t *core);
 /* Add an opened link (copied). Returns LS_OK, or LS_ENOSPC when the table is full. */
 int ls_net_add_link(ls_net_t *net, const hal_can_link_t *link);
 /* Receive and route every pending frame, run ISO-TP timers, deliver complete
- * messages to the core and start queued transmissions. Tells each link
+ * messages to the core and start queued transmissions. A frame whose source
+ * is the device's own address, or the address of a session bound to another
+ * link (ls_core_session_link), is dropped before it is routed or bridged
+ * (frames_foreign). Tells each link
  * whether sessions live on it (hal_can_hold_open: a peer whose last frame
  * came on it has a session in the core, or downlinks still to send). */
 void ls_net_poll(ls_net_t *net, uint64_t now_us);

@@ -434,7 +434,7 @@ static void advance(uint64_t dt_us, bool heartbeats)
         g_now += CYCLE_US;
         if (heartbeats && n % 10u == 0u) {
             for (int i = 0; i < N_SUP; i++) {
-                ls_core_on_heartbeat(&g_core, k_addr[i], g_token[i], g_now);
+                ls_core_on_heartbeat(&g_core, k_addr[i], 0u, 0u, g_token[i], g_now);
             }
         }
         ls_control_cycle(&g_ctl, g_now);
@@ -443,7 +443,7 @@ static void advance(uint64_t dt_us, bool heartbeats)
     g_now = end;
     if (heartbeats) { /* the supervisors beat on while the loop stalls */
         for (int i = 0; i < N_SUP; i++) {
-            ls_core_on_heartbeat(&g_core, k_addr[i], g_token[i], g_now);
+            ls_core_on_heartbeat(&g_core, k_addr[i], 0u, 0u, g_token[i], g_now);
         }
     }
     comms_turn();
@@ -614,7 +614,7 @@ static void deliver(int sup, const uint8_t *buf, size_t len, uint32_t seq, pb_si
     g_req_sup = sup;
     g_req_seq = seq;
     g_req_answers = 0;
-    ls_core_on_uplink(&g_core, k_addr[sup], buf, len, g_now);
+    ls_core_on_uplink(&g_core, k_addr[sup], 0, buf, len, g_now);
     g_in_request = false;
     const int k = ls_core_session_of(&g_core, k_addr[sup]);
     const ls_session_t *s = k >= 0 ? &g_core.sessions[k] : NULL;
@@ -696,7 +696,7 @@ static void rsvp_reply(void)
     r->ret_code = (take8() & 1u) != 0u ? ls_RetCode_CMD_EXEC_OK : ls_RetCode_CMD_ERR;
     pb_ostream_t os = pb_ostream_from_buffer(g_enc, sizeof g_enc);
     if (pb_encode(&os, ls_Uplink_fields, &g_up)) {
-        ls_core_on_uplink(&g_core, k_addr[sup], g_enc, os.bytes_written, g_now);
+        ls_core_on_uplink(&g_core, k_addr[sup], 0, g_enc, os.bytes_written, g_now);
     }
     sync_deferred(sup);
 }
@@ -790,7 +790,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         case 7: {
             const int sup = take8() % N_SUP;
             const uint8_t b = take8(); /* mostly its token; else another (refused: hb_refused) */
-            ls_core_on_heartbeat(&g_core, k_addr[sup], b < 200u ? g_token[sup] : take32(), g_now);
+            ls_core_on_heartbeat(&g_core, k_addr[sup], 0u, 0u, b < 200u ? g_token[sup] : take32(), g_now);
             break;
         }
         case 8: advance((uint64_t)take8() * 1000u, (op & 0x10u) != 0u); break;

@@ -480,11 +480,11 @@ def test_reused_seq_with_another_request_is_refused(tmp_path: Path) -> None:
             assert (again.seq, again.ret_code) == (seq, pb.CMD_EXEC_OK), again
             # the same seq, another value: refused, naming the reuse, and not run
             other = _send_with_seq(sup, "setSpeed", seq, speed=80.0, attribute="percent")
-            assert (other.seq, other.ret_code) == (seq, pb.CMD_PARAM_ERR), other
+            assert (other.seq, other.ret_code) == (seq, pb.CMD_SEQ_CONFLICT_ERR), other
             assert "reused" in other.ret_msg and "setSpeed" in other.ret_msg, other.ret_msg
             # the same seq, another command: refused too
             move = _send_with_seq(sup, "moveAbsolute", seq, point_name="x", frame="joint", values=HOME)
-            assert (move.seq, move.ret_code) == (seq, pb.CMD_PARAM_ERR), move
+            assert (move.seq, move.ret_code) == (seq, pb.CMD_SEQ_CONFLICT_ERR), move
             assert "moveAbsolute" in move.ret_msg, move.ret_msg
             # the speed is still the first request's
             assert sup.get_velocities().result["percent_velocity"] == pytest.approx(40.0)

@@ -27,6 +27,8 @@ _DOWNLINK = descriptor_of(pb.Downlink)
 #: The description's own messages, whose strings downlink_limits leaves out (the
 #: generator's DESCRIPTIONS: they are the description, not texts about a request).
 _DESCRIPTIONS = ("DescribeRes", "DescribeRobotRes")
+#: The field types whose size nanopb bounds with max_size.
+_SIZED = (FieldDescriptor.TYPE_STRING, FieldDescriptor.TYPE_BYTES)
 
 
 @dataclass(frozen=True)
@@ -36,7 +38,7 @@ class Limit:
 
     path: tuple[int, ...]   # field numbers from ls.Uplink (ls.Downlink) down
     name: str               # "pathLoad.tags.tag_name", "rsvpReply.data"; "notice.event_id"
-    max_bytes: int          # strings: longest UTF-8 text in bytes (0: not a string)
+    max_bytes: int          # strings: longest UTF-8 text in bytes; bytes fields: most bytes (else 0)
     max_count: int          # repeated fields: most items (0: not repeated)
 
 
@@ -88,10 +90,12 @@ class DeviceDescription:
         stand-in when the device's own description could not be read (a lossy link)."""
         res = pb.DescribeRes()
         for path, owner, fd in _bounded(_UPLINK, ()):
-            size = field_option(owner, fd.name, "max_size") if fd.type == FieldDescriptor.TYPE_STRING else None
+            size = field_option(owner, fd.name, "max_size") if fd.type in _SIZED else None
             count = field_option(owner, fd.name, "max_count") if is_repeated(fd) else None
+            if size is not None and fd.type == FieldDescriptor.TYPE_STRING:
+                size -= 1  # nanopb's max_size counts a string's terminating zero
             if size is not None or count is not None:
-                res.field_limits.add(path=list(path), max_bytes=(size or 1) - 1, max_count=count or 0)
+                res.field_limits.add(path=list(path), max_bytes=size or 0, max_count=count or 0)
         for path, owner, fd in _bounded(_DOWNLINK, (), skip=_DESCRIPTIONS):
             size = field_option(owner, fd.name, "max_size") if fd.type == FieldDescriptor.TYPE_STRING else None
             if size is not None:
@@ -159,6 +163,9 @@ class DeviceDescription:
                     if n > lim.max_bytes:
                         raise ArgumentError(f"{lim.name} is {n} bytes of UTF-8 ('{text[:24]}...'); the device "
                                             f"holds at most {lim.max_bytes} (describe): shorten it")
+            if fd.type == FieldDescriptor.TYPE_BYTES and lim.max_bytes and len(value) > lim.max_bytes:
+                raise ArgumentError(f"{lim.name} is {len(value)} bytes; the device holds at most "
+                                    f"{lim.max_bytes} (describe)")
 
     def check_values(self, req: pb.Request) -> None:
         """ArgumentError when `req` names what the device does not have: an unknown sensor or
@@ -253,13 +260,13 @@ def _split_hint(lim: Limit) -> str:
 
 def _bounded(desc: Descriptor, path: tuple[int, ...], skip: tuple[str, ...] = ()
              ) -> Iterator[tuple[tuple[int, ...], str, FieldDescriptor]]:
-    """(path, message name, field) of every string and repeated field reachable from `desc`,
+    """(path, message name, field) of every string, bytes and repeated field reachable from `desc`,
     the messages named in `skip` left out."""
     if desc.name in skip:
         return
     for fd in desc.fields:
         here = (*path, fd.number)
-        if fd.type == FieldDescriptor.TYPE_STRING or is_repeated(fd):
+        if fd.type in _SIZED or is_repeated(fd):
             yield here, desc.name, fd
         if fd.type == FieldDescriptor.TYPE_MESSAGE:
             yield from _bounded(field_message_type(fd), here, skip)

@@ -74,6 +74,7 @@ class Command:
     states: tuple[int, ...]    # ls.State values in which it is valid
     blocking: bool             # False: CMD_STARTED_OK, then one final notice
     owner_only: bool
+    query: bool                # reads and changes nothing (docs/protocol.md "Security")
     host_timeout_ms: int
     seed_section: str
     summary: str
@@ -111,7 +112,7 @@ def _load() -> dict[str, Command]:
         out[f.name] = Command(
             field=f.name, number=f.number, name=spec.name, cli_name=kebab(spec.name),
             states=tuple(int(s) for s in spec.states), blocking=spec.blocking,
-            owner_only=spec.owner_only, host_timeout_ms=spec.host_timeout_ms,
+            owner_only=spec.owner_only, query=spec.query, host_timeout_ms=spec.host_timeout_ms,
             seed_section=spec.seed_section, summary=spec.summary,
             request_type=request_type, response_type=field_message_type(rf))
     return out

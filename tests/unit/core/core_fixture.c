@@ -89,10 +89,16 @@ void assert_notice_declared(const ls_Notice *n)
     }
 }
 
+uint8_t g_rx_raw[MAX_RX][LS_DOWNLINK_MAX];
+size_t g_rx_len[MAX_RX];
+
 int fake_send(void *ctx, uint8_t addr, const uint8_t *buf, size_t len)
 {
     (void)ctx;
     assert_true(g_nrx < MAX_RX);
+    assert_true(len <= sizeof g_rx_raw[g_nrx]);
+    memcpy(g_rx_raw[g_nrx], buf, len);
+    g_rx_len[g_nrx] = len;
     pb_istream_t is = pb_istream_from_buffer(buf, len);
     memset(&g_rx[g_nrx], 0, sizeof g_rx[g_nrx]);
     assert_true(pb_decode(&is, ls_Downlink_fields, &g_rx[g_nrx]));
@@ -120,7 +126,7 @@ void send_uplink(uint8_t addr)
 {
     pb_ostream_t os = pb_ostream_from_buffer(g_buf, sizeof g_buf);
     assert_true(pb_encode(&os, ls_Uplink_fields, &g_up));
-    ls_core_on_uplink(&g_core, addr, g_buf, os.bytes_written, g_now);
+    ls_core_on_uplink(&g_core, addr, 0, g_buf, os.bytes_written, g_now);
 }
 
 /* Send g_rq from addr; the response to it, or NULL when none came (deferred). */
@@ -167,7 +173,7 @@ uint64_t nonce_of(uint8_t addr)
 void beat(uint8_t addr, uint64_t now_us)
 {
     int i = ls_core_session_of(&g_core, addr);
-    ls_core_on_heartbeat(&g_core, addr, i >= 0 ? g_core.sessions[i].hb_token : 0u, now_us);
+    ls_core_on_heartbeat(&g_core, addr, 0u, 0u, i >= 0 ? g_core.sessions[i].hb_token : 0u, now_us);
 }
 
 ls_ConnectReq *connect_req(uint8_t addr)
@@ -193,18 +199,30 @@ void connect_host(uint8_t addr)
 ls_DisconnectAction g_cfg_action = ls_DisconnectAction_DISCONNECT_CONFIGURED;
 uint32_t g_cfg_timeout_ms = 600000;
 
-/* A core with HOST_A connected and owning the device in `state`, HOST_B connected. */
-void setup_core(ls_State state)
+/* The device's nonces: a counter, so that every challenge differs. */
+static int fake_random(void *ctx, uint8_t *buf, size_t len)
+{
+    static uint8_t next;
+    (void)ctx;
+    for (size_t i = 0; i < len; i++) {
+        buf[i] = next++;
+    }
+    return LS_OK;
+}
+
+/* A core with nobody connected, its keys and policy in `auth` (NULL: none). */
+void setup_bare_core(ls_auth_t *auth)
 {
     const ls_core_config_t cfg = { .device_name = "test",
                                    .firmware_version = "0",
                                    .node_addr = 0x10,
                                    .joint_count = 6,
                                    .heartbeat_timeout_ms = g_cfg_timeout_ms,
-                                   .disconnect_action = g_cfg_action };
+                                   .disconnect_action = g_cfg_action,
+                                   .auth = auth };
     g_cfg_action = ls_DisconnectAction_DISCONNECT_CONFIGURED;
     g_cfg_timeout_ms = 600000;
-    const ls_core_io_t io = { .send_downlink = fake_send, .ctx = NULL };
+    const ls_core_io_t io = { .send_downlink = fake_send, .random = fake_random, .ctx = NULL };
     ls_core_init(&g_core, &cfg, &io, NULL);
     g_core.model = &ls_robot_model_default;
     g_core.ctl = &g_ctl;
@@ -219,6 +237,12 @@ void setup_core(ls_State state)
     g_readout_rc = LS_EUNSUPPORTED;
     g_nrx = 0;
     g_now = 1000000;
+}
+
+/* A core with HOST_A connected and owning the device in `state`, HOST_B connected. */
+void setup_core(ls_State state)
+{
+    setup_bare_core(NULL);
     connect_host(HOST_A);
     connect_host(HOST_B);
     g_core.owner = 0;

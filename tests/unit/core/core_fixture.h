@@ -48,6 +48,8 @@ extern hal_arm_readout_t g_readout;
 extern int g_readout_rc;
 extern ls_core_t g_core;
 extern ls_Downlink g_rx[MAX_RX];
+extern uint8_t g_rx_raw[MAX_RX][LS_DOWNLINK_MAX]; /* each downlink's bytes as sent */
+extern size_t g_rx_len[MAX_RX];
 extern uint8_t g_rx_addr[MAX_RX];
 extern size_t g_nrx;
 extern uint64_t g_now;
@@ -72,6 +74,7 @@ ls_ConnectReq *connect_req(uint8_t addr);
 void connect_host(uint8_t addr);
 extern ls_DisconnectAction g_cfg_action;
 extern uint32_t g_cfg_timeout_ms;
+void setup_bare_core(ls_auth_t *auth);
 void setup_core(ls_State state);
 int setup_locked(void **state);
 const ls_Notice *nth_notice(size_t from, size_t k);

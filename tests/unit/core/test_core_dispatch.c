@@ -184,7 +184,7 @@ static void test_seq_reuse_with_another_request_is_refused(void **state)
     g_rq.cmd.set_speed.has_speed = true;
     assert_int_equal(resend_same_seq(HOST_A, &first), 1);
     const ls_Response *r = &g_rx[first].msg.response;
-    assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_ERR);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_SEQ_CONFLICT_ERR);
     assert_int_equal(r->seq, g_seq);
     assert_non_null(strstr(r->ret_msg, "reused"));
     assert_non_null(strstr(r->ret_msg, "setSpeed"));
@@ -195,7 +195,7 @@ static void test_seq_reuse_with_another_request_is_refused(void **state)
     /* the same seq with another command: refused as well */
     req(ls_Request_get_units_tag);
     assert_int_equal(resend_same_seq(HOST_A, &first), 1);
-    assert_int_equal(g_rx[first].msg.response.ret_code, ls_RetCode_CMD_PARAM_ERR);
+    assert_int_equal(g_rx[first].msg.response.ret_code, ls_RetCode_CMD_SEQ_CONFLICT_ERR);
     assert_non_null(strstr(g_rx[first].msg.response.ret_msg, "getUnits"));
     /* the original retransmitted after all that: still its cached answer */
     req(ls_Request_set_speed_tag)->cmd.set_speed.attribute = ls_SpeedType_PERCENT_SPEED;

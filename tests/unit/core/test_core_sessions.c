@@ -68,11 +68,11 @@ static void test_heartbeats_keep_a_session_only_with_its_token(void **state)
     const uint32_t tok_a = g_core.sessions[a].hb_token;
     const uint32_t tok_b = g_core.sessions[b].hb_token;
     assert_true(tok_a != 0u && tok_b != 0u && tok_a != tok_b);
-    const uint64_t late = t0 + 500000000u;                   /* well inside the 600 s time-out */
-    ls_core_on_heartbeat(&g_core, HOST_A, 0u, late);         /* bare */
-    ls_core_on_heartbeat(&g_core, HOST_A, tok_a ^ 1u, late); /* wrong */
-    ls_core_on_heartbeat(&g_core, HOST_A, tok_b, late);      /* B's token from A's address */
-    ls_core_on_heartbeat(&g_core, 0x30, 0u, late);           /* no session here: not ours, not counted */
+    const uint64_t late = t0 + 500000000u;                           /* well inside the 600 s time-out */
+    ls_core_on_heartbeat(&g_core, HOST_A, 0u, 0u, 0u, late);         /* bare */
+    ls_core_on_heartbeat(&g_core, HOST_A, 0u, 0u, tok_a ^ 1u, late); /* wrong */
+    ls_core_on_heartbeat(&g_core, HOST_A, 0u, 0u, tok_b, late);      /* B's token from A's address */
+    ls_core_on_heartbeat(&g_core, 0x30, 0u, 0u, 0u, late);           /* no session here: not ours, not counted */
     beat(HOST_B, late);
     assert_int_equal(g_core.hb_refused, 3);
     assert_int_equal(g_core.sessions[a].hb_refused, 3);

@@ -1,8 +1,9 @@
 /* ls_net, black box: CAN frames in on fake hal_can links, calls into the
  * core and frames out.
  *
- * The core is a test double: the three entry points the network layer
- * calls (ls_core_on_uplink, ls_core_on_heartbeat, ls_core_fault) are
+ * The core is a test double: the entry points the network layer calls
+ * (ls_core_on_uplink, ls_core_on_functional, ls_core_on_heartbeat,
+ * ls_core_emergency, and the lookups ls_core_session_of, ls_core_session_link) are
  * redirected here at link time (-Wl,--wrap, as tests/unit/core does for the
  * control loop), so a test sees exactly which messages reached the core, from
  * which address, without encoding protobuf requests; the real core's
@@ -115,7 +116,7 @@ static void link_put(fake_link_t *l, uint32_t id, uint8_t flags, const uint8_t *
 
 #define MAX_CALLS 64
 
-typedef enum { CALL_UPLINK = 1, CALL_HEARTBEAT, CALL_EMERGENCY } call_kind_t;
+typedef enum { CALL_UPLINK = 1, CALL_FUNCTIONAL, CALL_HEARTBEAT, CALL_EMERGENCY } call_kind_t;
 
 typedef struct {
     call_kind_t kind;
@@ -124,6 +125,7 @@ typedef struct {
     size_t len;
     char text[64];
     uint32_t token; /* a heartbeat's hb_token */
+    int link;       /* the link an uplink came on */
     uint64_t now_us;
 } call_t;
 
@@ -133,13 +135,19 @@ static ls_net_t g_net;
 static ls_core_t *const CORE = (ls_core_t *)&g_calls; /* an address the double checks, never dereferenced */
 static size_t g_echo_len;                             /* > 0: answer each uplink with this many bytes */
 
-void __wrap_ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t len, uint64_t now_us);
-void __wrap_ls_core_on_heartbeat(ls_core_t *core, uint8_t addr, uint32_t token, uint64_t now_us);
+void __wrap_ls_core_on_uplink(ls_core_t *core, uint8_t addr, int link, const uint8_t *buf, size_t len, uint64_t now_us);
+void __wrap_ls_core_on_functional(ls_core_t *core, uint8_t addr, int link, const uint8_t *buf, size_t len,
+                                  uint64_t now_us);
+void __wrap_ls_core_on_heartbeat(ls_core_t *core, uint8_t addr, uint8_t counter, uint16_t period_ms, uint32_t token,
+                                 uint64_t now_us);
 void __wrap_ls_core_emergency(ls_core_t *core, uint64_t now_us);
 int __wrap_ls_core_session_of(const ls_core_t *core, uint8_t addr);
+int __wrap_ls_core_session_link(const ls_core_t *core, uint8_t addr);
 
-/* Addresses the double says have a live session. */
+/* Addresses the double says have a live session, and the link each is bound
+ * to (-1: none; the session's link only counts where g_session is set). */
 static bool g_session[256];
+static int g_session_link[256];
 
 static call_t *record(ls_core_t *core, call_kind_t kind, uint8_t addr, uint64_t now_us)
 {
@@ -153,12 +161,13 @@ static call_t *record(ls_core_t *core, call_kind_t kind, uint8_t addr, uint64_t 
     return c;
 }
 
-void __wrap_ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t len, uint64_t now_us)
+void __wrap_ls_core_on_uplink(ls_core_t *core, uint8_t addr, int link, const uint8_t *buf, size_t len, uint64_t now_us)
 {
     call_t *c = record(core, CALL_UPLINK, addr, now_us);
     assert_true(len <= sizeof c->buf);
     memcpy(c->buf, buf, len);
     c->len = len;
+    c->link = link;
     if (g_echo_len > 0) {
         static uint8_t answer[LS_DOWNLINK_MAX];
         for (size_t i = 0; i < g_echo_len; i++) {
@@ -168,8 +177,21 @@ void __wrap_ls_core_on_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf,
     }
 }
 
-void __wrap_ls_core_on_heartbeat(ls_core_t *core, uint8_t addr, uint32_t token, uint64_t now_us)
+void __wrap_ls_core_on_functional(ls_core_t *core, uint8_t addr, int link, const uint8_t *buf, size_t len,
+                                  uint64_t now_us)
 {
+    call_t *c = record(core, CALL_FUNCTIONAL, addr, now_us);
+    assert_true(len <= sizeof c->buf);
+    memcpy(c->buf, buf, len);
+    c->len = len;
+    c->link = link;
+}
+
+void __wrap_ls_core_on_heartbeat(ls_core_t *core, uint8_t addr, uint8_t counter, uint16_t period_ms, uint32_t token,
+                                 uint64_t now_us)
+{
+    (void)counter;
+    (void)period_ms;
     record(core, CALL_HEARTBEAT, addr, now_us)->token = token;
 }
 
@@ -184,6 +206,12 @@ int __wrap_ls_core_session_of(const ls_core_t *core, uint8_t addr)
     return g_session[addr] ? 0 : -1;
 }
 
+int __wrap_ls_core_session_link(const ls_core_t *core, uint8_t addr)
+{
+    assert_ptr_equal(core, CORE);
+    return g_session[addr] ? g_session_link[addr] : -1;
+}
+
 /* ---------------------------------------------------------------- fixture */
 
 static fake_link_t g_link[3];
@@ -193,6 +221,7 @@ static void setup_net(size_t n_links)
     memset(g_link, 0, sizeof g_link);
     memset(g_calls, 0, sizeof g_calls);
     memset(g_session, 0, sizeof g_session);
+    memset(g_session_link, 0, sizeof g_session_link);
     g_ncalls = 0;
     g_echo_len = 0;
     ls_net_init(&g_net, NODE, CORE);
@@ -329,6 +358,7 @@ static void test_functional_single_frames(void **state)
     link_put(&g_link[0], func(LS_ADDR_ALL, SUP_A), HAL_CAN_F_EXT, ff, 8);
     ls_net_poll(&g_net, 2000);
     assert_int_equal(g_ncalls, 2);
+    assert_int_equal(g_calls[0].kind, CALL_FUNCTIONAL);
     assert_int_equal(g_calls[0].addr, SUP_A);
     assert_int_equal(g_calls[1].addr, SUP_B);
     assert_int_equal(g_calls[1].len, 2);
@@ -892,6 +922,7 @@ static void test_links_with_sessions_are_held_open(void **state)
     const uint8_t req[] = { 0x01 };
     put_sf(&g_link[1], phys(NODE, SUP_A), req, 1);
     g_session[SUP_A] = true;
+    g_session_link[SUP_A] = 1;
     ls_net_poll(&g_net, 1000);
     assert_int_equal(g_link[1].held, 1);
     assert_int_equal(g_link[0].held, 0);
@@ -961,6 +992,56 @@ static void test_bridging_between_links(void **state)
         }
         assert_int_equal(g_link[i].tx[g_link[i].n_tx - 1].id, phys(SUP_A, NODE));
     }
+}
+
+/* docs/protocol.md "Security": "Sessions bound to their link". A session
+ * connected on link 0: frames from its address on link 1 are dropped before
+ * they reach the core or its ISO-TP link, and are not bridged; on link 0
+ * they go on. Frames from the device's own address are dropped everywhere. */
+static void test_frames_of_a_session_from_another_link_are_dropped(void **state)
+{
+    (void)state;
+    setup_net(2);
+    g_session[SUP_A] = true;
+    g_session_link[SUP_A] = 0;
+    const uint8_t req[] = { 0x0A, 0x03, 0x08, 0x01 };
+    uint8_t hb[8] = { 1, 0, 1, 200, 0, 0x56, 0x34, 0x12 };
+    const uint8_t ff[8] = { 0x10, 0x20, 1, 2, 3, 4, 5, 6 };
+    const uint8_t fc_wait[8] = { 0x31, 0, 0, 0xCC, 0xCC, 0xCC, 0xCC, 0xCC };
+    put_sf(&g_link[1], phys(NODE, SUP_A), req, sizeof req);
+    put_sf(&g_link[1], func(LS_ADDR_ALL, SUP_A), req, sizeof req);
+    link_put(&g_link[1], LS_ID_HEARTBEAT | SUP_A, HAL_CAN_F_EXT, hb, 8);
+    link_put(&g_link[1], phys(NODE, SUP_A), HAL_CAN_F_EXT, ff, 8);
+    link_put(&g_link[1], phys(NODE, SUP_A), HAL_CAN_F_EXT, fc_wait, 8);
+    ls_net_poll(&g_net, 1000);
+    assert_int_equal(g_ncalls, 0);
+    assert_false(peer_used(SUP_A));      /* not even its ISO-TP link saw them */
+    assert_int_equal(g_link[0].n_tx, 0); /* nor were they bridged to the session's link */
+    assert_int_equal(describe_value("frames_foreign"), 5);
+    /* the same frames on the session's own link go on */
+    put_sf(&g_link[0], phys(NODE, SUP_A), req, sizeof req);
+    put_sf(&g_link[0], func(LS_ADDR_ALL, SUP_A), req, sizeof req);
+    link_put(&g_link[0], LS_ID_HEARTBEAT | SUP_A, HAL_CAN_F_EXT, hb, 8);
+    ls_net_poll(&g_net, 2000);
+    assert_int_equal(g_ncalls, 3);
+    assert_int_equal(g_calls[0].kind, CALL_UPLINK);
+    assert_int_equal(g_calls[0].link, 0);
+    assert_int_equal(g_calls[1].kind, CALL_FUNCTIONAL);
+    assert_int_equal(g_calls[2].kind, CALL_HEARTBEAT);
+    /* a source without a session may speak on any link; the link is passed on */
+    put_sf(&g_link[1], phys(NODE, SUP_B), req, sizeof req);
+    ls_net_poll(&g_net, 3000);
+    assert_int_equal(g_ncalls, 4);
+    assert_int_equal(g_calls[3].addr, SUP_B);
+    assert_int_equal(g_calls[3].link, 1);
+    /* a frame that claims to come from this device is forged, whatever the link */
+    put_sf(&g_link[0], phys(SUP_A, NODE), req, sizeof req);
+    link_put(&g_link[1], LS_ID_HEARTBEAT | NODE, HAL_CAN_F_EXT, hb, 8);
+    const size_t sent1 = g_link[1].n_tx;
+    ls_net_poll(&g_net, 4000);
+    assert_int_equal(g_ncalls, 4);
+    assert_int_equal(g_link[1].n_tx, sent1);
+    assert_int_equal(describe_value("frames_foreign"), 7);
 }
 
 static void test_single_link_does_not_echo(void **state)
@@ -1058,6 +1139,7 @@ int main(void)
         cmocka_unit_test(test_physical_single_frame_reaches_the_core),
         cmocka_unit_test(test_frames_that_are_not_ours_are_ignored),
         cmocka_unit_test(test_functional_single_frames),
+        cmocka_unit_test(test_frames_of_a_session_from_another_link_are_dropped),
         cmocka_unit_test(test_heartbeats),
         cmocka_unit_test(test_emergency_frames),
         cmocka_unit_test(test_interleaved_multi_frame_requests_stay_apart),

@@ -11,6 +11,15 @@ ALARM: NoticeKind
 ALARM_RSVP: NoticeKind
 ANGULAR_ACCEL: AccelType
 ANGULAR_SPEED: SpeedType
+AUTH_CHALLENGE_TTL_MS: AuthParam
+AUTH_HEARTBEAT_MAC_BITS: AuthParam
+AUTH_KEY_BYTES: AuthParam
+AUTH_MAC_BYTES: AuthParam
+AUTH_NONCE_BYTES: AuthParam
+AUTH_PARAM_NONE: AuthParam
+AUTH_POLICY_NONE: AuthPolicy
+AUTH_SIGNED: AuthPolicy
+AUTH_UNSIGNED: AuthPolicy
 AUX_NAMED_EVENT: EventId
 BASE_CARTESIAN_FRAME: ReferenceFrame
 CB_ALARM: CallbackType
@@ -19,6 +28,7 @@ CB_EVENT: CallbackType
 CB_EVENT_RSVP: CallbackType
 CENTIMETERS: LinearUnit
 CIRCULAR_MOTION: MotionType
+CMD_AUTH_ERR: RetCode
 CMD_BUSY_ERR: RetCode
 CMD_ERR: RetCode
 CMD_EXEC_OK: RetCode
@@ -30,6 +40,7 @@ CMD_NOT_OWNER_ERR: RetCode
 CMD_NO_RESOURCES_ERR: RetCode
 CMD_PARAM_ERR: RetCode
 CMD_PARAM_OUT_OF_RANGE_ERR: RetCode
+CMD_SEQ_CONFLICT_ERR: RetCode
 CMD_STARTED_OK: RetCode
 CMD_TIMEOUT_ERR: RetCode
 CMD_UNKNOWN_CMD_ERR: RetCode
@@ -184,12 +195,31 @@ class ActivateToolRes(_message.Message):
     __slots__ = []
     def __init__(self) -> None: ...
 
+class ChallengeReq(_message.Message):
+    __slots__ = ["host_nonce", "key_id"]
+    HOST_NONCE_FIELD_NUMBER: _ClassVar[int]
+    KEY_ID_FIELD_NUMBER: _ClassVar[int]
+    host_nonce: bytes
+    key_id: str
+    def __init__(self, key_id: _Optional[str] = ..., host_nonce: _Optional[bytes] = ...) -> None: ...
+
+class ChallengeRes(_message.Message):
+    __slots__ = ["auth_policy", "device_nonce", "key_id"]
+    AUTH_POLICY_FIELD_NUMBER: _ClassVar[int]
+    DEVICE_NONCE_FIELD_NUMBER: _ClassVar[int]
+    KEY_ID_FIELD_NUMBER: _ClassVar[int]
+    auth_policy: AuthPolicy
+    device_nonce: bytes
+    key_id: str
+    def __init__(self, device_nonce: _Optional[bytes] = ..., auth_policy: _Optional[_Union[AuthPolicy, str]] = ..., key_id: _Optional[str] = ...) -> None: ...
+
 class CommandSpec(_message.Message):
-    __slots__ = ["blocking", "host_timeout_ms", "name", "owner_only", "seed_section", "states", "summary"]
+    __slots__ = ["blocking", "host_timeout_ms", "name", "owner_only", "query", "seed_section", "states", "summary"]
     BLOCKING_FIELD_NUMBER: _ClassVar[int]
     HOST_TIMEOUT_MS_FIELD_NUMBER: _ClassVar[int]
     NAME_FIELD_NUMBER: _ClassVar[int]
     OWNER_ONLY_FIELD_NUMBER: _ClassVar[int]
+    QUERY_FIELD_NUMBER: _ClassVar[int]
     SEED_SECTION_FIELD_NUMBER: _ClassVar[int]
     STATES_FIELD_NUMBER: _ClassVar[int]
     SUMMARY_FIELD_NUMBER: _ClassVar[int]
@@ -197,10 +227,11 @@ class CommandSpec(_message.Message):
     host_timeout_ms: int
     name: str
     owner_only: bool
+    query: bool
     seed_section: str
     states: _containers.RepeatedScalarFieldContainer[State]
     summary: str
-    def __init__(self, name: _Optional[str] = ..., states: _Optional[_Iterable[_Union[State, str]]] = ..., blocking: bool = ..., owner_only: bool = ..., host_timeout_ms: _Optional[int] = ..., seed_section: _Optional[str] = ..., summary: _Optional[str] = ...) -> None: ...
+    def __init__(self, name: _Optional[str] = ..., states: _Optional[_Iterable[_Union[State, str]]] = ..., blocking: bool = ..., owner_only: bool = ..., host_timeout_ms: _Optional[int] = ..., seed_section: _Optional[str] = ..., summary: _Optional[str] = ..., query: bool = ...) -> None: ...
 
 class ComplyReq(_message.Message):
     __slots__ = ["compliance_speed_pct", "differential_gains", "envelope_max", "envelope_min", "max_timeout_s", "max_travel", "panic_stop_code", "proportional_gains", "sensor_type", "speed_pct", "thresholds"]
@@ -233,24 +264,29 @@ class ComplyRes(_message.Message):
     def __init__(self) -> None: ...
 
 class ConnectReq(_message.Message):
-    __slots__ = ["client_name", "client_nonce", "disconnect_action", "heartbeat_period_ms", "protocol_version", "schema_hash"]
+    __slots__ = ["client_name", "client_nonce", "disconnect_action", "heartbeat_period_ms", "host_nonce", "key_id", "protocol_version", "schema_hash"]
     CLIENT_NAME_FIELD_NUMBER: _ClassVar[int]
     CLIENT_NONCE_FIELD_NUMBER: _ClassVar[int]
     DISCONNECT_ACTION_FIELD_NUMBER: _ClassVar[int]
     HEARTBEAT_PERIOD_MS_FIELD_NUMBER: _ClassVar[int]
+    HOST_NONCE_FIELD_NUMBER: _ClassVar[int]
+    KEY_ID_FIELD_NUMBER: _ClassVar[int]
     PROTOCOL_VERSION_FIELD_NUMBER: _ClassVar[int]
     SCHEMA_HASH_FIELD_NUMBER: _ClassVar[int]
     client_name: str
     client_nonce: int
     disconnect_action: DisconnectAction
     heartbeat_period_ms: int
+    host_nonce: bytes
+    key_id: str
     protocol_version: int
     schema_hash: int
-    def __init__(self, protocol_version: _Optional[int] = ..., schema_hash: _Optional[int] = ..., client_name: _Optional[str] = ..., heartbeat_period_ms: _Optional[int] = ..., disconnect_action: _Optional[_Union[DisconnectAction, str]] = ..., client_nonce: _Optional[int] = ...) -> None: ...
+    def __init__(self, protocol_version: _Optional[int] = ..., schema_hash: _Optional[int] = ..., client_name: _Optional[str] = ..., heartbeat_period_ms: _Optional[int] = ..., disconnect_action: _Optional[_Union[DisconnectAction, str]] = ..., client_nonce: _Optional[int] = ..., key_id: _Optional[str] = ..., host_nonce: _Optional[bytes] = ...) -> None: ...
 
 class ConnectRes(_message.Message):
-    __slots__ = ["angular_unit", "client_nonce", "device_name", "disconnect_action", "firmware_version", "heartbeat_timeout_ms", "heartbeat_token", "joint_count", "linear_unit", "owner", "protocol_version", "schema_hash", "session_epoch", "state"]
+    __slots__ = ["angular_unit", "auth_policy", "client_nonce", "device_name", "disconnect_action", "firmware_version", "heartbeat_timeout_ms", "heartbeat_token", "joint_count", "linear_unit", "owner", "protocol_version", "schema_hash", "session_epoch", "session_signed", "state"]
     ANGULAR_UNIT_FIELD_NUMBER: _ClassVar[int]
+    AUTH_POLICY_FIELD_NUMBER: _ClassVar[int]
     CLIENT_NONCE_FIELD_NUMBER: _ClassVar[int]
     DEVICE_NAME_FIELD_NUMBER: _ClassVar[int]
     DISCONNECT_ACTION_FIELD_NUMBER: _ClassVar[int]
@@ -263,8 +299,10 @@ class ConnectRes(_message.Message):
     PROTOCOL_VERSION_FIELD_NUMBER: _ClassVar[int]
     SCHEMA_HASH_FIELD_NUMBER: _ClassVar[int]
     SESSION_EPOCH_FIELD_NUMBER: _ClassVar[int]
+    SESSION_SIGNED_FIELD_NUMBER: _ClassVar[int]
     STATE_FIELD_NUMBER: _ClassVar[int]
     angular_unit: AngularUnit
+    auth_policy: AuthPolicy
     client_nonce: int
     device_name: str
     disconnect_action: DisconnectAction
@@ -277,8 +315,9 @@ class ConnectRes(_message.Message):
     protocol_version: int
     schema_hash: int
     session_epoch: int
+    session_signed: bool
     state: State
-    def __init__(self, protocol_version: _Optional[int] = ..., schema_hash: _Optional[int] = ..., device_name: _Optional[str] = ..., joint_count: _Optional[int] = ..., firmware_version: _Optional[str] = ..., heartbeat_timeout_ms: _Optional[int] = ..., state: _Optional[_Union[State, str]] = ..., owner: bool = ..., session_epoch: _Optional[int] = ..., disconnect_action: _Optional[_Union[DisconnectAction, str]] = ..., linear_unit: _Optional[_Union[LinearUnit, str]] = ..., angular_unit: _Optional[_Union[AngularUnit, str]] = ..., heartbeat_token: _Optional[int] = ..., client_nonce: _Optional[int] = ...) -> None: ...
+    def __init__(self, protocol_version: _Optional[int] = ..., schema_hash: _Optional[int] = ..., device_name: _Optional[str] = ..., joint_count: _Optional[int] = ..., firmware_version: _Optional[str] = ..., heartbeat_timeout_ms: _Optional[int] = ..., state: _Optional[_Union[State, str]] = ..., owner: bool = ..., session_epoch: _Optional[int] = ..., disconnect_action: _Optional[_Union[DisconnectAction, str]] = ..., linear_unit: _Optional[_Union[LinearUnit, str]] = ..., angular_unit: _Optional[_Union[AngularUnit, str]] = ..., heartbeat_token: _Optional[int] = ..., client_nonce: _Optional[int] = ..., auth_policy: _Optional[_Union[AuthPolicy, str]] = ..., session_signed: bool = ...) -> None: ...
 
 class DeactivateReq(_message.Message):
     __slots__ = []
@@ -305,7 +344,8 @@ class DescribeReq(_message.Message):
     def __init__(self) -> None: ...
 
 class DescribeRes(_message.Message):
-    __slots__ = ["dio_units", "downlink_limits", "field_limits", "frame_angle_max_rad", "homing", "homing_timeout_ms", "joints", "max_angular_accel_rad_s2", "max_angular_speed_rad_s", "max_answer_bytes", "max_cycles", "max_dio_watches", "max_linear_accel_m_s2", "max_linear_speed_m_s", "max_notice_datum_bytes", "max_paths", "max_points_per_path", "max_sessions", "min_rate_pct", "reach_m", "robot_model", "sensors", "tools", "workspace_max_m", "workspace_min_m"]
+    __slots__ = ["auth_policy", "dio_units", "downlink_limits", "field_limits", "frame_angle_max_rad", "homing", "homing_timeout_ms", "joints", "max_angular_accel_rad_s2", "max_angular_speed_rad_s", "max_answer_bytes", "max_cycles", "max_dio_watches", "max_linear_accel_m_s2", "max_linear_speed_m_s", "max_notice_datum_bytes", "max_paths", "max_points_per_path", "max_sessions", "min_rate_pct", "reach_m", "robot_model", "sensors", "tools", "workspace_max_m", "workspace_min_m"]
+    AUTH_POLICY_FIELD_NUMBER: _ClassVar[int]
     DIO_UNITS_FIELD_NUMBER: _ClassVar[int]
     DOWNLINK_LIMITS_FIELD_NUMBER: _ClassVar[int]
     FIELD_LIMITS_FIELD_NUMBER: _ClassVar[int]
@@ -331,6 +371,7 @@ class DescribeRes(_message.Message):
     TOOLS_FIELD_NUMBER: _ClassVar[int]
     WORKSPACE_MAX_M_FIELD_NUMBER: _ClassVar[int]
     WORKSPACE_MIN_M_FIELD_NUMBER: _ClassVar[int]
+    auth_policy: AuthPolicy
     dio_units: _containers.RepeatedCompositeFieldContainer[DioUnitInfo]
     downlink_limits: _containers.RepeatedCompositeFieldContainer[FieldLimit]
     field_limits: _containers.RepeatedCompositeFieldContainer[FieldLimit]
@@ -356,7 +397,7 @@ class DescribeRes(_message.Message):
     tools: _containers.RepeatedScalarFieldContainer[str]
     workspace_max_m: _containers.RepeatedScalarFieldContainer[float]
     workspace_min_m: _containers.RepeatedScalarFieldContainer[float]
-    def __init__(self, max_sessions: _Optional[int] = ..., max_paths: _Optional[int] = ..., max_points_per_path: _Optional[int] = ..., max_dio_watches: _Optional[int] = ..., max_cycles: _Optional[int] = ..., min_rate_pct: _Optional[float] = ..., frame_angle_max_rad: _Optional[float] = ..., field_limits: _Optional[_Iterable[_Union[FieldLimit, _Mapping]]] = ..., dio_units: _Optional[_Iterable[_Union[DioUnitInfo, _Mapping]]] = ..., sensors: _Optional[_Iterable[_Union[SensorInfo, _Mapping]]] = ..., tools: _Optional[_Iterable[str]] = ..., robot_model: _Optional[str] = ..., joints: _Optional[_Iterable[_Union[JointLimit, _Mapping]]] = ..., max_linear_speed_m_s: _Optional[float] = ..., max_angular_speed_rad_s: _Optional[float] = ..., max_linear_accel_m_s2: _Optional[float] = ..., max_angular_accel_rad_s2: _Optional[float] = ..., workspace_min_m: _Optional[_Iterable[float]] = ..., workspace_max_m: _Optional[_Iterable[float]] = ..., reach_m: _Optional[float] = ..., max_answer_bytes: _Optional[int] = ..., max_notice_datum_bytes: _Optional[int] = ..., homing: _Optional[_Iterable[_Union[JointHoming, _Mapping]]] = ..., homing_timeout_ms: _Optional[int] = ..., downlink_limits: _Optional[_Iterable[_Union[FieldLimit, _Mapping]]] = ...) -> None: ...
+    def __init__(self, max_sessions: _Optional[int] = ..., max_paths: _Optional[int] = ..., max_points_per_path: _Optional[int] = ..., max_dio_watches: _Optional[int] = ..., max_cycles: _Optional[int] = ..., min_rate_pct: _Optional[float] = ..., frame_angle_max_rad: _Optional[float] = ..., field_limits: _Optional[_Iterable[_Union[FieldLimit, _Mapping]]] = ..., dio_units: _Optional[_Iterable[_Union[DioUnitInfo, _Mapping]]] = ..., sensors: _Optional[_Iterable[_Union[SensorInfo, _Mapping]]] = ..., tools: _Optional[_Iterable[str]] = ..., robot_model: _Optional[str] = ..., joints: _Optional[_Iterable[_Union[JointLimit, _Mapping]]] = ..., max_linear_speed_m_s: _Optional[float] = ..., max_angular_speed_rad_s: _Optional[float] = ..., max_linear_accel_m_s2: _Optional[float] = ..., max_angular_accel_rad_s2: _Optional[float] = ..., workspace_min_m: _Optional[_Iterable[float]] = ..., workspace_max_m: _Optional[_Iterable[float]] = ..., reach_m: _Optional[float] = ..., max_answer_bytes: _Optional[int] = ..., max_notice_datum_bytes: _Optional[int] = ..., homing: _Optional[_Iterable[_Union[JointHoming, _Mapping]]] = ..., homing_timeout_ms: _Optional[int] = ..., downlink_limits: _Optional[_Iterable[_Union[FieldLimit, _Mapping]]] = ..., auth_policy: _Optional[_Union[AuthPolicy, str]] = ...) -> None: ...
 
 class DescribeRobotReq(_message.Message):
     __slots__ = ["offset"]
@@ -397,14 +438,16 @@ class DisconnectRes(_message.Message):
     def __init__(self) -> None: ...
 
 class Downlink(_message.Message):
-    __slots__ = ["notice", "response", "rsvp_ack"]
+    __slots__ = ["mac", "notice", "response", "rsvp_ack"]
+    MAC_FIELD_NUMBER: _ClassVar[int]
     NOTICE_FIELD_NUMBER: _ClassVar[int]
     RESPONSE_FIELD_NUMBER: _ClassVar[int]
     RSVP_ACK_FIELD_NUMBER: _ClassVar[int]
+    mac: bytes
     notice: Notice
     response: Response
     rsvp_ack: RsvpAck
-    def __init__(self, response: _Optional[_Union[Response, _Mapping]] = ..., notice: _Optional[_Union[Notice, _Mapping]] = ..., rsvp_ack: _Optional[_Union[RsvpAck, _Mapping]] = ...) -> None: ...
+    def __init__(self, response: _Optional[_Union[Response, _Mapping]] = ..., notice: _Optional[_Union[Notice, _Mapping]] = ..., rsvp_ack: _Optional[_Union[RsvpAck, _Mapping]] = ..., mac: _Optional[bytes] = ...) -> None: ...
 
 class FieldLimit(_message.Message):
     __slots__ = ["max_bytes", "max_count", "path"]
@@ -789,10 +832,11 @@ class ReleaseRes(_message.Message):
     def __init__(self) -> None: ...
 
 class Request(_message.Message):
-    __slots__ = ["abort_motion", "activate", "activate_tool", "comply", "connect", "deactivate", "deactivate_tool", "describe", "describe_robot", "disconnect", "get_accelerations", "get_digital_io", "get_end_effector_state", "get_max_accelerations", "get_max_velocities", "get_motion_control_state", "get_robot_position", "get_sensor_reading", "get_tag_id", "get_tool", "get_tool_offsets", "get_units", "get_velocities", "lock", "manual_control", "move_absolute", "move_arc", "move_react", "move_relative", "path_clear_path", "path_load", "path_move", "put_tool", "release", "resume_motion", "send_command", "seq", "set_acceleration", "set_digital_io", "set_speed", "set_tool_offset", "set_units", "set_world_cartesian_frame", "signal_digital_io", "stop_motion"]
+    __slots__ = ["abort_motion", "activate", "activate_tool", "challenge", "comply", "connect", "deactivate", "deactivate_tool", "describe", "describe_robot", "disconnect", "get_accelerations", "get_digital_io", "get_end_effector_state", "get_max_accelerations", "get_max_velocities", "get_motion_control_state", "get_robot_position", "get_sensor_reading", "get_tag_id", "get_tool", "get_tool_offsets", "get_units", "get_velocities", "lock", "manual_control", "move_absolute", "move_arc", "move_react", "move_relative", "path_clear_path", "path_load", "path_move", "put_tool", "release", "resume_motion", "send_command", "seq", "set_acceleration", "set_digital_io", "set_speed", "set_tool_offset", "set_units", "set_world_cartesian_frame", "signal_digital_io", "stop_motion"]
     ABORT_MOTION_FIELD_NUMBER: _ClassVar[int]
     ACTIVATE_FIELD_NUMBER: _ClassVar[int]
     ACTIVATE_TOOL_FIELD_NUMBER: _ClassVar[int]
+    CHALLENGE_FIELD_NUMBER: _ClassVar[int]
     COMPLY_FIELD_NUMBER: _ClassVar[int]
     CONNECT_FIELD_NUMBER: _ClassVar[int]
     DEACTIVATE_FIELD_NUMBER: _ClassVar[int]
@@ -838,6 +882,7 @@ class Request(_message.Message):
     abort_motion: AbortMotionReq
     activate: ActivateReq
     activate_tool: ActivateToolReq
+    challenge: ChallengeReq
     comply: ComplyReq
     connect: ConnectReq
     deactivate: DeactivateReq
@@ -880,13 +925,14 @@ class Request(_message.Message):
     set_world_cartesian_frame: SetWorldCartesianFrameReq
     signal_digital_io: SignalDigitalIOReq
     stop_motion: StopMotionReq
-    def __init__(self, seq: _Optional[int] = ..., connect: _Optional[_Union[ConnectReq, _Mapping]] = ..., disconnect: _Optional[_Union[DisconnectReq, _Mapping]] = ..., lock: _Optional[_Union[LockReq, _Mapping]] = ..., release: _Optional[_Union[ReleaseReq, _Mapping]] = ..., activate: _Optional[_Union[ActivateReq, _Mapping]] = ..., deactivate: _Optional[_Union[DeactivateReq, _Mapping]] = ..., set_speed: _Optional[_Union[SetSpeedReq, _Mapping]] = ..., set_acceleration: _Optional[_Union[SetAccelerationReq, _Mapping]] = ..., set_tool_offset: _Optional[_Union[SetToolOffsetReq, _Mapping]] = ..., set_world_cartesian_frame: _Optional[_Union[SetWorldCartesianFrameReq, _Mapping]] = ..., set_units: _Optional[_Union[SetUnitsReq, _Mapping]] = ..., get_units: _Optional[_Union[GetUnitsReq, _Mapping]] = ..., get_velocities: _Optional[_Union[GetVelocitiesReq, _Mapping]] = ..., get_accelerations: _Optional[_Union[GetAccelerationsReq, _Mapping]] = ..., get_max_velocities: _Optional[_Union[GetMaxVelocitiesReq, _Mapping]] = ..., get_max_accelerations: _Optional[_Union[GetMaxAccelerationsReq, _Mapping]] = ..., get_tool_offsets: _Optional[_Union[GetToolOffsetsReq, _Mapping]] = ..., get_robot_position: _Optional[_Union[GetRobotPositionReq, _Mapping]] = ..., get_motion_control_state: _Optional[_Union[GetMotionControlStateReq, _Mapping]] = ..., get_tag_id: _Optional[_Union[GetTagIdReq, _Mapping]] = ..., move_relative: _Optional[_Union[MoveRelativeReq, _Mapping]] = ..., move_absolute: _Optional[_Union[MoveAbsoluteReq, _Mapping]] = ..., move_arc: _Optional[_Union[MoveArcReq, _Mapping]] = ..., path_load: _Optional[_Union[PathLoadReq, _Mapping]] = ..., path_clear_path: _Optional[_Union[PathClearPathReq, _Mapping]] = ..., path_move: _Optional[_Union[PathMoveReq, _Mapping]] = ..., stop_motion: _Optional[_Union[StopMotionReq, _Mapping]] = ..., resume_motion: _Optional[_Union[ResumeMotionReq, _Mapping]] = ..., abort_motion: _Optional[_Union[AbortMotionReq, _Mapping]] = ..., get_sensor_reading: _Optional[_Union[GetSensorReadingReq, _Mapping]] = ..., move_react: _Optional[_Union[MoveReactReq, _Mapping]] = ..., comply: _Optional[_Union[ComplyReq, _Mapping]] = ..., manual_control: _Optional[_Union[ManualControlReq, _Mapping]] = ..., get_end_effector_state: _Optional[_Union[GetEndEffectorStateReq, _Mapping]] = ..., get_tool: _Optional[_Union[GetToolReq, _Mapping]] = ..., put_tool: _Optional[_Union[PutToolReq, _Mapping]] = ..., activate_tool: _Optional[_Union[ActivateToolReq, _Mapping]] = ..., deactivate_tool: _Optional[_Union[DeactivateToolReq, _Mapping]] = ..., set_digital_io: _Optional[_Union[SetDigitalIOReq, _Mapping]] = ..., get_digital_io: _Optional[_Union[GetDigitalIOReq, _Mapping]] = ..., signal_digital_io: _Optional[_Union[SignalDigitalIOReq, _Mapping]] = ..., send_command: _Optional[_Union[SendCommandReq, _Mapping]] = ..., describe: _Optional[_Union[DescribeReq, _Mapping]] = ..., describe_robot: _Optional[_Union[DescribeRobotReq, _Mapping]] = ...) -> None: ...
+    def __init__(self, seq: _Optional[int] = ..., connect: _Optional[_Union[ConnectReq, _Mapping]] = ..., disconnect: _Optional[_Union[DisconnectReq, _Mapping]] = ..., lock: _Optional[_Union[LockReq, _Mapping]] = ..., release: _Optional[_Union[ReleaseReq, _Mapping]] = ..., activate: _Optional[_Union[ActivateReq, _Mapping]] = ..., deactivate: _Optional[_Union[DeactivateReq, _Mapping]] = ..., set_speed: _Optional[_Union[SetSpeedReq, _Mapping]] = ..., set_acceleration: _Optional[_Union[SetAccelerationReq, _Mapping]] = ..., set_tool_offset: _Optional[_Union[SetToolOffsetReq, _Mapping]] = ..., set_world_cartesian_frame: _Optional[_Union[SetWorldCartesianFrameReq, _Mapping]] = ..., set_units: _Optional[_Union[SetUnitsReq, _Mapping]] = ..., get_units: _Optional[_Union[GetUnitsReq, _Mapping]] = ..., get_velocities: _Optional[_Union[GetVelocitiesReq, _Mapping]] = ..., get_accelerations: _Optional[_Union[GetAccelerationsReq, _Mapping]] = ..., get_max_velocities: _Optional[_Union[GetMaxVelocitiesReq, _Mapping]] = ..., get_max_accelerations: _Optional[_Union[GetMaxAccelerationsReq, _Mapping]] = ..., get_tool_offsets: _Optional[_Union[GetToolOffsetsReq, _Mapping]] = ..., get_robot_position: _Optional[_Union[GetRobotPositionReq, _Mapping]] = ..., get_motion_control_state: _Optional[_Union[GetMotionControlStateReq, _Mapping]] = ..., get_tag_id: _Optional[_Union[GetTagIdReq, _Mapping]] = ..., move_relative: _Optional[_Union[MoveRelativeReq, _Mapping]] = ..., move_absolute: _Optional[_Union[MoveAbsoluteReq, _Mapping]] = ..., move_arc: _Optional[_Union[MoveArcReq, _Mapping]] = ..., path_load: _Optional[_Union[PathLoadReq, _Mapping]] = ..., path_clear_path: _Optional[_Union[PathClearPathReq, _Mapping]] = ..., path_move: _Optional[_Union[PathMoveReq, _Mapping]] = ..., stop_motion: _Optional[_Union[StopMotionReq, _Mapping]] = ..., resume_motion: _Optional[_Union[ResumeMotionReq, _Mapping]] = ..., abort_motion: _Optional[_Union[AbortMotionReq, _Mapping]] = ..., get_sensor_reading: _Optional[_Union[GetSensorReadingReq, _Mapping]] = ..., move_react: _Optional[_Union[MoveReactReq, _Mapping]] = ..., comply: _Optional[_Union[ComplyReq, _Mapping]] = ..., manual_control: _Optional[_Union[ManualControlReq, _Mapping]] = ..., get_end_effector_state: _Optional[_Union[GetEndEffectorStateReq, _Mapping]] = ..., get_tool: _Optional[_Union[GetToolReq, _Mapping]] = ..., put_tool: _Optional[_Union[PutToolReq, _Mapping]] = ..., activate_tool: _Optional[_Union[ActivateToolReq, _Mapping]] = ..., deactivate_tool: _Optional[_Union[DeactivateToolReq, _Mapping]] = ..., set_digital_io: _Optional[_Union[SetDigitalIOReq, _Mapping]] = ..., get_digital_io: _Optional[_Union[GetDigitalIOReq, _Mapping]] = ..., signal_digital_io: _Optional[_Union[SignalDigitalIOReq, _Mapping]] = ..., send_command: _Optional[_Union[SendCommandReq, _Mapping]] = ..., describe: _Optional[_Union[DescribeReq, _Mapping]] = ..., describe_robot: _Optional[_Union[DescribeRobotReq, _Mapping]] = ..., challenge: _Optional[_Union[ChallengeReq, _Mapping]] = ...) -> None: ...
 
 class Response(_message.Message):
-    __slots__ = ["abort_motion", "activate", "activate_tool", "comply", "connect", "deactivate", "deactivate_tool", "describe", "describe_robot", "disconnect", "get_accelerations", "get_digital_io", "get_end_effector_state", "get_max_accelerations", "get_max_velocities", "get_motion_control_state", "get_robot_position", "get_sensor_reading", "get_tag_id", "get_tool", "get_tool_offsets", "get_units", "get_velocities", "lock", "manual_control", "move_absolute", "move_arc", "move_react", "move_relative", "path_clear_path", "path_load", "path_move", "put_tool", "release", "resume_motion", "ret_code", "ret_msg", "send_command", "seq", "session_epoch", "set_acceleration", "set_digital_io", "set_speed", "set_tool_offset", "set_units", "set_world_cartesian_frame", "signal_digital_io", "stop_motion"]
+    __slots__ = ["abort_motion", "activate", "activate_tool", "challenge", "comply", "connect", "deactivate", "deactivate_tool", "describe", "describe_robot", "disconnect", "get_accelerations", "get_digital_io", "get_end_effector_state", "get_max_accelerations", "get_max_velocities", "get_motion_control_state", "get_robot_position", "get_sensor_reading", "get_tag_id", "get_tool", "get_tool_offsets", "get_units", "get_velocities", "lock", "manual_control", "move_absolute", "move_arc", "move_react", "move_relative", "path_clear_path", "path_load", "path_move", "put_tool", "release", "resume_motion", "ret_code", "ret_msg", "send_command", "seq", "session_epoch", "set_acceleration", "set_digital_io", "set_speed", "set_tool_offset", "set_units", "set_world_cartesian_frame", "signal_digital_io", "stop_motion"]
     ABORT_MOTION_FIELD_NUMBER: _ClassVar[int]
     ACTIVATE_FIELD_NUMBER: _ClassVar[int]
     ACTIVATE_TOOL_FIELD_NUMBER: _ClassVar[int]
+    CHALLENGE_FIELD_NUMBER: _ClassVar[int]
     COMPLY_FIELD_NUMBER: _ClassVar[int]
     CONNECT_FIELD_NUMBER: _ClassVar[int]
     DEACTIVATE_FIELD_NUMBER: _ClassVar[int]
@@ -935,6 +981,7 @@ class Response(_message.Message):
     abort_motion: AbortMotionRes
     activate: ActivateRes
     activate_tool: ActivateToolRes
+    challenge: ChallengeRes
     comply: ComplyRes
     connect: ConnectRes
     deactivate: DeactivateRes
@@ -980,7 +1027,7 @@ class Response(_message.Message):
     set_world_cartesian_frame: SetWorldCartesianFrameRes
     signal_digital_io: SignalDigitalIORes
     stop_motion: StopMotionRes
-    def __init__(self, seq: _Optional[int] = ..., ret_code: _Optional[int] = ..., ret_msg: _Optional[str] = ..., session_epoch: _Optional[int] = ..., connect: _Optional[_Union[ConnectRes, _Mapping]] = ..., disconnect: _Optional[_Union[DisconnectRes, _Mapping]] = ..., lock: _Optional[_Union[LockRes, _Mapping]] = ..., release: _Optional[_Union[ReleaseRes, _Mapping]] = ..., activate: _Optional[_Union[ActivateRes, _Mapping]] = ..., deactivate: _Optional[_Union[DeactivateRes, _Mapping]] = ..., set_speed: _Optional[_Union[SetSpeedRes, _Mapping]] = ..., set_acceleration: _Optional[_Union[SetAccelerationRes, _Mapping]] = ..., set_tool_offset: _Optional[_Union[SetToolOffsetRes, _Mapping]] = ..., set_world_cartesian_frame: _Optional[_Union[SetWorldCartesianFrameRes, _Mapping]] = ..., set_units: _Optional[_Union[SetUnitsRes, _Mapping]] = ..., get_units: _Optional[_Union[GetUnitsRes, _Mapping]] = ..., get_velocities: _Optional[_Union[GetVelocitiesRes, _Mapping]] = ..., get_accelerations: _Optional[_Union[GetAccelerationsRes, _Mapping]] = ..., get_max_velocities: _Optional[_Union[GetMaxVelocitiesRes, _Mapping]] = ..., get_max_accelerations: _Optional[_Union[GetMaxAccelerationsRes, _Mapping]] = ..., get_tool_offsets: _Optional[_Union[GetToolOffsetsRes, _Mapping]] = ..., get_robot_position: _Optional[_Union[GetRobotPositionRes, _Mapping]] = ..., get_motion_control_state: _Optional[_Union[GetMotionControlStateRes, _Mapping]] = ..., get_tag_id: _Optional[_Union[GetTagIdRes, _Mapping]] = ..., move_relative: _Optional[_Union[MoveRelativeRes, _Mapping]] = ..., move_absolute: _Optional[_Union[MoveAbsoluteRes, _Mapping]] = ..., move_arc: _Optional[_Union[MoveArcRes, _Mapping]] = ..., path_load: _Optional[_Union[PathLoadRes, _Mapping]] = ..., path_clear_path: _Optional[_Union[PathClearPathRes, _Mapping]] = ..., path_move: _Optional[_Union[PathMoveRes, _Mapping]] = ..., stop_motion: _Optional[_Union[StopMotionRes, _Mapping]] = ..., resume_motion: _Optional[_Union[ResumeMotionRes, _Mapping]] = ..., abort_motion: _Optional[_Union[AbortMotionRes, _Mapping]] = ..., get_sensor_reading: _Optional[_Union[GetSensorReadingRes, _Mapping]] = ..., move_react: _Optional[_Union[MoveReactRes, _Mapping]] = ..., comply: _Optional[_Union[ComplyRes, _Mapping]] = ..., manual_control: _Optional[_Union[ManualControlRes, _Mapping]] = ..., get_end_effector_state: _Optional[_Union[GetEndEffectorStateRes, _Mapping]] = ..., get_tool: _Optional[_Union[GetToolRes, _Mapping]] = ..., put_tool: _Optional[_Union[PutToolRes, _Mapping]] = ..., activate_tool: _Optional[_Union[ActivateToolRes, _Mapping]] = ..., deactivate_tool: _Optional[_Union[DeactivateToolRes, _Mapping]] = ..., set_digital_io: _Optional[_Union[SetDigitalIORes, _Mapping]] = ..., get_digital_io: _Optional[_Union[GetDigitalIORes, _Mapping]] = ..., signal_digital_io: _Optional[_Union[SignalDigitalIORes, _Mapping]] = ..., send_command: _Optional[_Union[SendCommandRes, _Mapping]] = ..., describe: _Optional[_Union[DescribeRes, _Mapping]] = ..., describe_robot: _Optional[_Union[DescribeRobotRes, _Mapping]] = ...) -> None: ...
+    def __init__(self, seq: _Optional[int] = ..., ret_code: _Optional[int] = ..., ret_msg: _Optional[str] = ..., session_epoch: _Optional[int] = ..., connect: _Optional[_Union[ConnectRes, _Mapping]] = ..., disconnect: _Optional[_Union[DisconnectRes, _Mapping]] = ..., lock: _Optional[_Union[LockRes, _Mapping]] = ..., release: _Optional[_Union[ReleaseRes, _Mapping]] = ..., activate: _Optional[_Union[ActivateRes, _Mapping]] = ..., deactivate: _Optional[_Union[DeactivateRes, _Mapping]] = ..., set_speed: _Optional[_Union[SetSpeedRes, _Mapping]] = ..., set_acceleration: _Optional[_Union[SetAccelerationRes, _Mapping]] = ..., set_tool_offset: _Optional[_Union[SetToolOffsetRes, _Mapping]] = ..., set_world_cartesian_frame: _Optional[_Union[SetWorldCartesianFrameRes, _Mapping]] = ..., set_units: _Optional[_Union[SetUnitsRes, _Mapping]] = ..., get_units: _Optional[_Union[GetUnitsRes, _Mapping]] = ..., get_velocities: _Optional[_Union[GetVelocitiesRes, _Mapping]] = ..., get_accelerations: _Optional[_Union[GetAccelerationsRes, _Mapping]] = ..., get_max_velocities: _Optional[_Union[GetMaxVelocitiesRes, _Mapping]] = ..., get_max_accelerations: _Optional[_Union[GetMaxAccelerationsRes, _Mapping]] = ..., get_tool_offsets: _Optional[_Union[GetToolOffsetsRes, _Mapping]] = ..., get_robot_position: _Optional[_Union[GetRobotPositionRes, _Mapping]] = ..., get_motion_control_state: _Optional[_Union[GetMotionControlStateRes, _Mapping]] = ..., get_tag_id: _Optional[_Union[GetTagIdRes, _Mapping]] = ..., move_relative: _Optional[_Union[MoveRelativeRes, _Mapping]] = ..., move_absolute: _Optional[_Union[MoveAbsoluteRes, _Mapping]] = ..., move_arc: _Optional[_Union[MoveArcRes, _Mapping]] = ..., path_load: _Optional[_Union[PathLoadRes, _Mapping]] = ..., path_clear_path: _Optional[_Union[PathClearPathRes, _Mapping]] = ..., path_move: _Optional[_Union[PathMoveRes, _Mapping]] = ..., stop_motion: _Optional[_Union[StopMotionRes, _Mapping]] = ..., resume_motion: _Optional[_Union[ResumeMotionRes, _Mapping]] = ..., abort_motion: _Optional[_Union[AbortMotionRes, _Mapping]] = ..., get_sensor_reading: _Optional[_Union[GetSensorReadingRes, _Mapping]] = ..., move_react: _Optional[_Union[MoveReactRes, _Mapping]] = ..., comply: _Optional[_Union[ComplyRes, _Mapping]] = ..., manual_control: _Optional[_Union[ManualControlRes, _Mapping]] = ..., get_end_effector_state: _Optional[_Union[GetEndEffectorStateRes, _Mapping]] = ..., get_tool: _Optional[_Union[GetToolRes, _Mapping]] = ..., put_tool: _Optional[_Union[PutToolRes, _Mapping]] = ..., activate_tool: _Optional[_Union[ActivateToolRes, _Mapping]] = ..., deactivate_tool: _Optional[_Union[DeactivateToolRes, _Mapping]] = ..., set_digital_io: _Optional[_Union[SetDigitalIORes, _Mapping]] = ..., get_digital_io: _Optional[_Union[GetDigitalIORes, _Mapping]] = ..., signal_digital_io: _Optional[_Union[SignalDigitalIORes, _Mapping]] = ..., send_command: _Optional[_Union[SendCommandRes, _Mapping]] = ..., describe: _Optional[_Union[DescribeRes, _Mapping]] = ..., describe_robot: _Optional[_Union[DescribeRobotRes, _Mapping]] = ..., challenge: _Optional[_Union[ChallengeRes, _Mapping]] = ...) -> None: ...
 
 class ResumeMotionReq(_message.Message):
     __slots__ = []
@@ -991,20 +1038,22 @@ class ResumeMotionRes(_message.Message):
     def __init__(self) -> None: ...
 
 class RsvpAck(_message.Message):
-    __slots__ = ["action", "ref_seq", "ret_code", "ret_msg", "rsvp_id", "session_epoch"]
+    __slots__ = ["action", "notice_seq", "ref_seq", "ret_code", "ret_msg", "rsvp_id", "session_epoch"]
     ACTION_FIELD_NUMBER: _ClassVar[int]
+    NOTICE_SEQ_FIELD_NUMBER: _ClassVar[int]
     REF_SEQ_FIELD_NUMBER: _ClassVar[int]
     RET_CODE_FIELD_NUMBER: _ClassVar[int]
     RET_MSG_FIELD_NUMBER: _ClassVar[int]
     RSVP_ID_FIELD_NUMBER: _ClassVar[int]
     SESSION_EPOCH_FIELD_NUMBER: _ClassVar[int]
     action: str
+    notice_seq: int
     ref_seq: int
     ret_code: int
     ret_msg: str
     rsvp_id: int
     session_epoch: int
-    def __init__(self, rsvp_id: _Optional[int] = ..., ret_code: _Optional[int] = ..., ret_msg: _Optional[str] = ..., action: _Optional[str] = ..., ref_seq: _Optional[int] = ..., session_epoch: _Optional[int] = ...) -> None: ...
+    def __init__(self, rsvp_id: _Optional[int] = ..., ret_code: _Optional[int] = ..., ret_msg: _Optional[str] = ..., action: _Optional[str] = ..., ref_seq: _Optional[int] = ..., session_epoch: _Optional[int] = ..., notice_seq: _Optional[int] = ...) -> None: ...
 
 class RsvpReply(_message.Message):
     __slots__ = ["data", "ret_code", "rsvp_id"]
@@ -1171,12 +1220,14 @@ class TagPoint(_message.Message):
     def __init__(self, pose: _Optional[_Iterable[float]] = ..., joints: _Optional[_Iterable[float]] = ..., tag_name: _Optional[str] = ..., tag_index: _Optional[int] = ..., time_delay_s: _Optional[float] = ..., transition_speed_pct: _Optional[float] = ..., speed_pct: _Optional[float] = ..., accel_pct: _Optional[float] = ..., aux_commands: _Optional[_Iterable[str]] = ...) -> None: ...
 
 class Uplink(_message.Message):
-    __slots__ = ["request", "rsvp_reply"]
+    __slots__ = ["mac", "request", "rsvp_reply"]
+    MAC_FIELD_NUMBER: _ClassVar[int]
     REQUEST_FIELD_NUMBER: _ClassVar[int]
     RSVP_REPLY_FIELD_NUMBER: _ClassVar[int]
+    mac: bytes
     request: Request
     rsvp_reply: RsvpReply
-    def __init__(self, request: _Optional[_Union[Request, _Mapping]] = ..., rsvp_reply: _Optional[_Union[RsvpReply, _Mapping]] = ...) -> None: ...
+    def __init__(self, request: _Optional[_Union[Request, _Mapping]] = ..., rsvp_reply: _Optional[_Union[RsvpReply, _Mapping]] = ..., mac: _Optional[bytes] = ...) -> None: ...
 
 class Protocol(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
     __slots__ = []
@@ -1197,6 +1248,12 @@ class State(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
     __slots__ = []
 
 class RetCode(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
+    __slots__ = []
+
+class AuthPolicy(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
+    __slots__ = []
+
+class AuthParam(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
     __slots__ = []
 
 class OffsetType(int, metaclass=_enum_type_wrapper.EnumTypeWrapper):
