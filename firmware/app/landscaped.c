@@ -20,6 +20,8 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/eventfd.h>
+#include <sys/mman.h>
+#include <sys/random.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -37,6 +39,7 @@
 #include "ls_core.h"
 #include "ls_core_events.h"
 #include "ls_drive_setup.h"
+#include "ls_keys.h"
 #include "ls_kin.h"
 #include "ls_link_open.h"
 #include "faulty_link.h"
@@ -215,6 +218,10 @@ static void send_heartbeat(ls_net_t *net, const ls_core_t *core, uint8_t counter
 }
 
 static ls_robot_model_t g_model; /* [robot] model, filled once before the threads start */
+/* The supervisors' keys: pages of their own, locked in RAM and left out of
+ * core dumps (docs/deploy.md "Signed supervisors"); wiped at exit. */
+#define KEY_PAGE 4096u
+static _Alignas(KEY_PAGE) ls_auth_t g_auth;
 static ls_core_t g_core;
 static ls_net_t g_net;
 static ls_control_t g_ctl;
@@ -283,6 +290,57 @@ static void describe_config(void *ctx, char *buf, size_t cap)
     for (size_t i = 0; i < o->n_links && n > 0 && (size_t)n < cap; i++) {
         n += snprintf(buf + n, cap - (size_t)n, "link=%s\n", o->links[i]);
     }
+    if (n > 0 && (size_t)n < cap) { /* where the keys are, never what */
+        n += snprintf(buf + n, cap - (size_t)n, "policy=%s\nkey_file=%s\nkeys=%u\nunsigned_queries=%s\n",
+                      o->auth_policy == (uint8_t)ls_AuthPolicy_AUTH_SIGNED ? "signed" : "unsigned",
+                      o->key_file[0] != '\0' ? o->key_file : "(none, or the credential " LS_KEYS_CREDENTIAL ")",
+                      (unsigned)g_auth.n_keys, o->unsigned_queries ? "true" : "false");
+    }
+}
+
+/* The device's nonces of signed connects (ls_core_io_t.random): the kernel's
+ * random source, which never blocks once it has been seeded at boot. */
+static int core_random(void *ctx, uint8_t *buf, size_t len)
+{
+    (void)ctx;
+    size_t got = 0;
+    while (got < len) {
+        const ssize_t n = getrandom(buf + got, len - got, 0);
+        if (n < 0 && errno != EINTR) {
+            return LS_EIO;
+        }
+        got += n > 0 ? (size_t)n : 0u;
+    }
+    return LS_OK;
+}
+
+/* The key file in effect into g_auth, its pages locked and kept out of core
+ * dumps. 0, or 1 with the cause logged (never a key's bytes). */
+static int load_keys(const ls_config_t *opt)
+{
+    ls_auth_init(&g_auth, (ls_AuthPolicy)opt->auth_policy, opt->unsigned_queries);
+    const size_t span = (sizeof g_auth + KEY_PAGE - 1u) / KEY_PAGE * KEY_PAGE;
+    if (madvise(&g_auth, span, MADV_DONTDUMP) != 0) {
+        LOG_WARN("keys: cannot leave them out of core dumps (madvise: %s)", strerror(errno));
+    }
+    if (mlock(&g_auth, sizeof g_auth) != 0) {
+        LOG_WARN("keys: cannot lock them in RAM (mlock: %s): they may be swapped out", strerror(errno));
+    }
+    char path[sizeof opt->key_file + 64];
+    char msg[512];
+    if (ls_keys_path(opt, path, sizeof path) == NULL) {
+        LOG_INFO("policy unsigned, no keys: any node on the bus may open a session");
+        return 0;
+    }
+    if (ls_keys_load(path, &g_auth, msg, sizeof msg) != LS_OK) {
+        ls_auth_wipe(&g_auth, sizeof g_auth);
+        LOG_ERR("%s", msg);
+        return 1;
+    }
+    LOG_INFO("policy %s, %u supervisor keys from %s",
+             opt->auth_policy == (uint8_t)ls_AuthPolicy_AUTH_SIGNED ? "signed" : "unsigned", (unsigned)g_auth.n_keys,
+             path);
+    return 0;
 }
 
 static void core_log_warn(void *ctx, const char *line)
@@ -596,8 +654,14 @@ static int start(const ls_config_t *opt)
         .joint_count = LS_N_JOINTS,
         .heartbeat_timeout_ms = opt->heartbeat_timeout_ms,
         .disconnect_action = (ls_DisconnectAction)opt->disconnect_action,
+        .auth = &g_auth,
     };
-    ls_core_io_t io = { .send_downlink = ls_net_send_downlink, .describe = ls_net_describe, .ctx = &g_net };
+    if (load_keys(opt) != 0) {
+        return 1;
+    }
+    ls_core_io_t io = {
+        .send_downlink = ls_net_send_downlink, .describe = ls_net_describe, .random = core_random, .ctx = &g_net
+    };
     g_cfg_running = opt;
     ls_core_actions_t act = { .describe_rt = describe_rt,
                               .log_warn = core_log_warn,
@@ -768,6 +832,7 @@ static void stop_everything(bool started)
         hal_dio_close(&g_dio);
     }
     ls_net_close(&g_net);
+    ls_auth_wipe(&g_auth, sizeof g_auth);
     const int wake_fd = g_wake_fd;
     g_wake_fd = NO_FD; /* the control thread has stopped; a late signal finds no fd */
     close(wake_fd);

@@ -27,6 +27,7 @@
 #include "hal_linux_socketcan.h"
 #include "ls_drive_setup.h"
 #include "ls_err.h"
+#include "ls_keys.h"
 #include "ls_robot_config.h"
 
 typedef struct {
@@ -419,10 +420,48 @@ static bool check_drives(report_t *r, const ls_config_t *cfg, bool config_ok)
     return true;
 }
 
+/* ---- the supervisors' keys ------------------------------------------------ */
+
+/* false when the key file's contents are refused (a refused configuration,
+ * exit 2); a file landscaped may not read, or others may, is the machine's
+ * (FAIL, exit 1). */
+static bool check_keys(report_t *r, const ls_config_t *cfg)
+{
+    const bool signed_policy = cfg->auth_policy == (uint8_t)ls_AuthPolicy_AUTH_SIGNED;
+    char path[sizeof cfg->key_file + 64];
+    char msg[512];
+    if (ls_keys_path(cfg, path, sizeof path) == NULL) {
+        report(r, LS_CHECK_PASS, "keys",
+               "none: policy unsigned, any node on the bus may open a session (docs/deploy.md \"Signed "
+               "supervisors\")");
+        return true;
+    }
+    static ls_auth_t auth; /* wiped before return: the keys stay nowhere */
+    ls_auth_init(&auth, signed_policy ? ls_AuthPolicy_AUTH_SIGNED : ls_AuthPolicy_AUTH_UNSIGNED, cfg->unsigned_queries);
+    const int k = ls_keys_load(path, &auth, msg, sizeof msg);
+    char names[LS_AUTH_MAX_KEYS * LS_AUTH_KEY_ID_SIZE + 16] = "";
+    size_t used = 0;
+    for (uint8_t i = 0; i < auth.n_keys && used < sizeof names; i++) {
+        const int w = snprintf(names + used, sizeof names - used, "%s%s", i > 0 ? ", " : "", auth.keys[i].id);
+        used += w > 0 ? (size_t)w : 0u;
+    }
+    const unsigned n = auth.n_keys;
+    ls_auth_wipe(&auth, sizeof auth);
+    if (k != LS_OK) {
+        report(r, LS_CHECK_FAIL, "keys", "%s", msg);
+        return k != LS_EINVAL;
+    }
+    report(r, LS_CHECK_PASS, "keys", "%s: %u key%s (%s), only its owner may read it; policy %s%s", path, n,
+           n == 1 ? "" : "s", names, signed_policy ? "signed" : "unsigned (keys sign the sessions that use one)",
+           signed_policy && cfg->unsigned_queries ? ", unsigned queries answered" : "");
+    return true;
+}
+
 int ls_check_run(const ls_config_t *cfg, FILE *out)
 {
     report_t r = { .out = out, .n = { 0, 0, 0 } };
     bool config_ok = check_config(&r, cfg);
+    config_ok = check_keys(&r, cfg) && config_ok;
     check_afcan(&r, cfg);
     check_links(&r, cfg);
     config_ok = check_drives(&r, cfg, config_ok) && config_ok;

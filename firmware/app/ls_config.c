@@ -1,6 +1,7 @@
 /* landscaped's configuration: INI file (inih) + getopt_long options, one key
  * table for both so a key and its option cannot disagree on what they accept. */
 #include "ls_config.h"
+#include "ls_keys.h"
 
 #include "faulty_link.h"
 #include "ls_ini_line.h"
@@ -352,6 +353,38 @@ static int set_rt_cpu(ls_config_t *cfg, const char *v, char *why, size_t whylen)
 {
     if (parse_int(v, -1, 1023, &cfg->rt_cpu) != 0) {
         return EXPECT("-1..1023 (CPU to pin the control thread to; -1 = no pinning)");
+    }
+    return 0;
+}
+
+static int set_auth_policy(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    if (strcmp(v, "unsigned") == 0) {
+        cfg->auth_policy = (uint8_t)ls_AuthPolicy_AUTH_UNSIGNED;
+    } else if (strcmp(v, "signed") == 0) {
+        cfg->auth_policy = (uint8_t)ls_AuthPolicy_AUTH_SIGNED;
+    } else {
+        return EXPECT("unsigned (anyone on the bus may connect) or signed (only supervisors holding a key of "
+                      "key_file)");
+    }
+    return 0;
+}
+
+static int set_key_file(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    size_t n = strlen(v);
+    if ((n > 0 && v[n - 1] == '/') || copy_str(cfg->key_file, sizeof cfg->key_file, v) != 0) {
+        cfg->key_file[0] = '\0';
+        return EXPECT("the path of the supervisors' key file (mode 0600), of at most %zu characters, or nothing",
+                      sizeof cfg->key_file - 1);
+    }
+    return 0;
+}
+
+static int set_unsigned_queries(ls_config_t *cfg, const char *v, char *why, size_t whylen)
+{
+    if (parse_bool(v, &cfg->unsigned_queries) != 0) {
+        return EXPECT("true or false (also yes/no, on/off, 1/0)");
     }
     return 0;
 }
@@ -955,11 +988,15 @@ static const key_def_t KEYS[] = {
     { "robot", "model", "model", false, set_model },
     { "drives", "quick_stop_option", NULL, false, set_drives_quick_stop },
     { "drives", "readouts", NULL, false, set_drives_readouts },
+    /* file only: the keys' home is a file of their own, never a command line */
+    { "security", "policy", NULL, false, set_auth_policy },
+    { "security", "key_file", NULL, false, set_key_file },
+    { "security", "unsigned_queries", NULL, false, set_unsigned_queries },
 };
 #define N_KEYS (sizeof KEYS / sizeof KEYS[0])
 
 static const char *SECTIONS =
-    "[device], [hal], [control], [dio], [manual], [drives], [joint.1] .. [joint.6] or [robot]";
+    "[device], [hal], [control], [dio], [manual], [drives], [joint.1] .. [joint.6], [robot] or [security]";
 
 static bool known_section(const char *s)
 {
@@ -994,6 +1031,7 @@ void ls_config_defaults(ls_config_t *cfg)
     cfg->node = 0x10;
     cfg->heartbeat_timeout_ms = 1000;
     cfg->disconnect_action = (uint8_t)ls_DisconnectAction_DISCONNECT_STOP_DEACTIVATE_RELEASE;
+    cfg->auth_policy = (uint8_t)ls_AuthPolicy_AUTH_UNSIGNED;
     (void)copy_str(cfg->arm, sizeof cfg->arm, "sim");
     (void)copy_str(cfg->dio, sizeof cfg->dio, "sim");
     (void)copy_str(cfg->clock, sizeof cfg->clock, "realtime");
@@ -1463,6 +1501,13 @@ int ls_config_validate(const ls_config_t *cfg, char *msg, size_t msglen)
         return opt_error(msg, msglen,
                          "[hal] dio = sim needs arm = sim: the simulated DIO lives in the simulated "
                          "world (use dio = gpiod:CHIP or none)");
+    }
+    char keys[sizeof cfg->key_file + 64];
+    if (cfg->auth_policy == (uint8_t)ls_AuthPolicy_AUTH_SIGNED && ls_keys_path(cfg, keys, sizeof keys) == NULL) {
+        return opt_error(msg, msglen,
+                         "[security] policy = signed needs the supervisors' keys: set key_file = PATH, or load the "
+                         "credential " LS_KEYS_CREDENTIAL " in landscaped.service (docs/deploy.md \"Signed "
+                         "supervisors\")");
     }
     const ls_config_manual_t *tp = &cfg->manual[LS_MANUAL_TEACHPENDANT];
     if (tp->path[0] != '\0') {

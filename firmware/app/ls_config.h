@@ -155,6 +155,11 @@ typedef struct {
     uint8_t speed_steps[LS_MANUAL_MAX_STEPS];
     /* [robot] */
     char model[256]; /* model = PATH of a robot model file (default "": the compiled-in ls-sim6) */
+    /* [security] (docs/protocol.md "Security"; file only: no key on a command line) */
+    uint8_t auth_policy;   /* policy = unsigned | signed (ls.AuthPolicy; default unsigned) */
+    char key_file[256];    /* key_file = PATH of the supervisors' keys ("" = none, or the service's
+                              credential LS_KEYS_CREDENTIAL: ls_keys_path) */
+    bool unsigned_queries; /* unsigned_queries = false (signed: answer queries without a session) */
     /* modes */
     bool check;   /* --check: self-check and exit */
     bool hal_sim; /* --hal sim: the skeleton's shorthand for arm=sim dio=sim clock=realtime */
@@ -186,8 +191,8 @@ int ls_config_load_file(ls_config_t *cfg, const char *path, char *msg, size_t ms
  * link, telemetry_hz <= rate_hz, inputs and outputs disjoint, estop_input
  * within the configured inputs and a DIO backend present for it,
  * setpoint_trace only with arm = sim, a teach pendant's map with an
- * enabling switch (docs/conformance.md "manualControl"). LS_OK, or
- * LS_EINVAL with msg. */
+ * enabling switch (docs/conformance.md "manualControl"), a key file for
+ * policy = signed. LS_OK, or LS_EINVAL with msg. */
 int ls_config_validate(const ls_config_t *cfg, char *msg, size_t msglen);
 
 /* The map a manual device kind uses: its <kind>_map's default with the

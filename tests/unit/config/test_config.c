@@ -241,7 +241,7 @@ static void test_unknown_section(void **state)
 {
     refused(*state, "[device]\nnode = 3\n[motors]\n",
             "3: unknown section [motors]; expected [device], [hal], [control], [dio], [manual], [drives], "
-            "[joint.1] .. [joint.6] or [robot]");
+            "[joint.1] .. [joint.6], [robot] or [security]");
 }
 
 static void test_robot_model_key(void **state)
@@ -258,7 +258,7 @@ static void test_key_outside_section(void **state)
 {
     refused(*state, "# no section yet\nnode = 3\n",
             "2: key 'node' outside any section: put it under [device], [hal], [control], [dio], [manual], [drives], "
-            "[joint.1] .. [joint.6] or [robot]");
+            "[joint.1] .. [joint.6], [robot] or [security]");
 }
 
 static void test_wrong_type(void **state)
@@ -409,7 +409,7 @@ static void test_byte_order_mark_and_nul(void **state)
     fx_t *f = *state;
     refused(f, "\xEF\xBB\xBF[motors]\n",
             "1: unknown section [motors]; expected [device], [hal], [control], [dio], [manual], [drives], [joint.1] "
-            ".. [joint.6] or [robot]");
+            ".. [joint.6], [robot] or [security]");
     unlink(f->path);
     assert_int_equal(load(f, "\xEF\xBB\xBF[device]\nnode = 7\n"), 0);
     assert_int_equal(f->cfg.node, 7);
@@ -862,7 +862,7 @@ static void test_drive_keys_refuse_bad_values_naming_what_is_allowed(void **stat
             "drive does when the controller's heartbeat stops: CiA 402 0x6007)");
     refused(f, "[joint.7]\nnode = 1\n",
             "1: unknown section [joint.7]; expected [device], [hal], [control], [dio], [manual], [drives], [joint.1] "
-            ".. [joint.6] or [robot]");
+            ".. [joint.6], [robot] or [security]");
     refused(f, "[joint.2]\nnode = 128\n",
             "2: [joint.2] node: got '128', expected 1..127 (the drive's CANopen node id)");
     refused(f, "[joint.2]\ncounts_per_rad = nan\n",
