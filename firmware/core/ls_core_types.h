@@ -147,6 +147,14 @@ typedef struct {
     pb_size_t pending_tag; /* command id of the deferred request (last_pending) */
 } ls_session_t;
 
+/* A session that ended, kept so that a request from its address names why it
+ * has none (a supervisor that never sent a disconnect learns someone did). */
+typedef struct {
+    uint8_t addr;
+    uint32_t epoch; /* 0: an empty entry */
+    char why[24];   /* "disconnect requested", "heartbeat lost" */
+} ls_session_end_t;
+
 /* Settings of seed 3.2, always in SI (m, rad, s) inside the firmware; the
  * handlers convert from and to the units of the calling session
  * (ls_session_t.units, setUnits). */
@@ -288,6 +296,8 @@ typedef struct ls_core {
     int homing;             /* the session whose sendCommand home waits (LS_CEV_HOMED), LS_NO_SESSION: none */
     uint32_t homing_joints; /* the joints it homes (bit j: joint j + 1) */
     ls_session_t sessions[LS_MAX_SUPERVISORS];
+    ls_session_end_t ended[LS_MAX_SUPERVISORS]; /* the latest sessions that ended, a ring */
+    uint8_t ended_next;
     char fault[LS_PB_FIELD_SIZE(ls_GetMotionControlStateRes, fault)]; /* latched fault, empty when none */
     /* seed 3.3.1 motionControlState (docs/state-machine.md) as the DBC's STATUS
      * st_motion code (LANDSCAPE_STATUS_ST_MOTION_*_CHOICE): the query sends its

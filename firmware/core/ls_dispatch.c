@@ -108,8 +108,23 @@ static int32_t dispatch(ls_core_t *core, uint8_t addr, ls_call_t *call, ls_Reque
     const bool sessionless_query = call->sup < 0 && (d->flags & LS_CMD_F_QUERY) != 0u &&
                                    ls_core_policy(core) == ls_AuthPolicy_AUTH_SIGNED && auth->unsigned_queries;
     if (call->sup < 0 && !sessionless_query) {
-        return ls_reply(call, ls_RetCode_CMD_NOT_CONNECTED_ERR,
-                        "%s: supervisor 0x%02X has no session: send connect first%s", d->name, addr,
+        /* Why it has none, when the device ended one of the address: a
+         * supervisor that sent no disconnect learns that someone did. */
+        const ls_session_end_t *end = NULL;
+        for (uint8_t k = 0; k < LS_MAX_SUPERVISORS; k++) {
+            const ls_session_end_t *e = &core->ended[(core->ended_next + LS_MAX_SUPERVISORS - 1u - k) %
+                                                     LS_MAX_SUPERVISORS];
+            if (e->epoch != 0u && e->addr == addr) {
+                end = e;
+                break;
+            }
+        }
+        char ended[64] = "";
+        if (end != NULL) {
+            ls_fmt_print(ended, sizeof ended, " (its session %u ended: %s)", (unsigned)end->epoch, end->why);
+        }
+        return ls_reply(call, ls_RetCode_CMD_NOT_CONNECTED_ERR, "%s: supervisor 0x%02X has no session%s: send connect first%s",
+                        d->name, addr, ended,
                         ls_core_policy(core) == ls_AuthPolicy_AUTH_SIGNED ? ", signed (docs/protocol.md \"Security\")"
                                                                           : "");
     }

@@ -36,6 +36,11 @@ void ls_session_drop(ls_core_t *core, int i, const char *why, uint64_t now_us)
     s->connected = false;
     s->signed_session = false;
     ls_auth_wipe(&s->key, sizeof s->key);
+    ls_session_end_t *e = &core->ended[core->ended_next];
+    core->ended_next = (uint8_t)((core->ended_next + 1u) % LS_MAX_SUPERVISORS);
+    e->addr = addr;
+    e->epoch = s->epoch;
+    ls_fmt_print(e->why, sizeof e->why, "%s", strcmp(why, "disconnect") == 0 ? "disconnect requested" : why);
     if (core->halt.answer_sup == i) {
         core->halt.answer_sup = LS_NO_SESSION; /* nobody to answer any more */
     }

@@ -358,6 +358,31 @@ static void test_send_command_status_at_its_longest_is_whole(void **state)
     assert_string_equal(out + n - strlen("last_counter=4294967295\n"), "last_counter=4294967295\n");
 }
 
+/* A request from an address whose session the device ended names why, so a
+ * supervisor that sent no disconnect learns that one came from its address
+ * (or that its heartbeats stopped arriving). */
+static void test_a_refusal_without_a_session_names_why_it_ended(void **state)
+{
+    (void)state;
+    req(ls_Request_release_tag);
+    assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
+    const uint32_t epoch = g_core.sessions[ls_core_session_of(&g_core, HOST_A)].epoch;
+    req(ls_Request_disconnect_tag);
+    assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_EXEC_OK);
+    req(ls_Request_get_units_tag);
+    const ls_Response *r = send_req(HOST_A);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_NOT_CONNECTED_ERR);
+    char want[128];
+    snprintf(want, sizeof want, "getUnits: supervisor 0x21 has no session (its session %u ended: disconnect requested)",
+             (unsigned)epoch);
+    assert_non_null(strstr(r->ret_msg, want));
+    /* an address that never had one: no cause */
+    req(ls_Request_get_units_tag);
+    r = send_req(0x33);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_NOT_CONNECTED_ERR);
+    assert_null(strstr(r->ret_msg, "ended"));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -370,6 +395,7 @@ int main(void)
         cmocka_unit_test(test_connect_narrows_the_disconnect_action),
         cmocka_unit_test(test_send_command_status_at_its_longest_is_whole),
         cmocka_unit_test(test_a_request_ends_the_connect_grace),
+        cmocka_unit_test_setup(test_a_refusal_without_a_session_names_why_it_ended, setup_locked),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
