@@ -10,6 +10,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <sodium/utils.h>
+
 #include "ls_ini_line.h"
 
 static int fail(char *msg, size_t msglen, int code, const char *fmt, ...) __attribute__((format(printf, 4, 5)));
@@ -73,32 +75,15 @@ static char *trim(char *s)
     return s;
 }
 
-static int hex_value(char c)
-{
-    if (c >= '0' && c <= '9') {
-        return c - '0';
-    }
-    if (c >= 'a' && c <= 'f') {
-        return c - 'a' + 10;
-    }
-    if (c >= 'A' && c <= 'F') {
-        return c - 'A' + 10;
-    }
-    return -1;
-}
-
-/* 2 * LS_AUTH_KEY_BYTES hex digits into key: LS_OK or LS_EINVAL. */
+/* 2 * LS_AUTH_KEY_BYTES hex digits into key: LS_OK or LS_EINVAL. libsodium's
+ * decoder runs in constant time, so a key's digits leak nothing by timing. */
 static int parse_key(const char *v, uint8_t *key)
 {
-    if (strlen(v) != 2u * LS_AUTH_KEY_BYTES) {
+    size_t got = 0;
+    if (strlen(v) != 2u * LS_AUTH_KEY_BYTES ||
+        sodium_hex2bin(key, LS_AUTH_KEY_BYTES, v, 2u * LS_AUTH_KEY_BYTES, NULL, &got, NULL) != 0 ||
+        got != LS_AUTH_KEY_BYTES) {
         return LS_EINVAL;
-    }
-    for (size_t i = 0; i < LS_AUTH_KEY_BYTES; i++) {
-        const int hi = hex_value(v[2 * i]), lo = hex_value(v[2 * i + 1]);
-        if (hi < 0 || lo < 0) {
-            return LS_EINVAL;
-        }
-        key[i] = (uint8_t)(hi << 4 | lo);
     }
     return LS_OK;
 }

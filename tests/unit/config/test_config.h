@@ -14,5 +14,6 @@ void tc_write_file(char *path, size_t pathlen, const char *text);
 
 int tc_run_config_tests(void);
 int tc_run_check_tests(void);
+int tc_run_keys_tests(void);
 
 #endif

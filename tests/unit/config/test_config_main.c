@@ -19,5 +19,6 @@ int main(void)
 {
     int failed = tc_run_config_tests();
     failed += tc_run_check_tests();
+    failed += tc_run_keys_tests();
     return failed;
 }
