@@ -11,7 +11,7 @@ NEGATIVE = [v.number for v in ls.RetCode.DESCRIPTOR.values if v.number < 0]
 
 def test_every_negative_code_has_its_own_subclass() -> None:
     classes = [type(error_for_code("lock", c, "")) for c in NEGATIVE]
-    assert len(set(classes)) == len(NEGATIVE) == 14
+    assert len(set(classes)) == len(NEGATIVE) == 16
     for code, cls in zip(NEGATIVE, classes, strict=True):
         assert cls is not CommandError and issubclass(cls, CommandError) and issubclass(cls, LandscapeError)
         assert cls.code == code
@@ -24,6 +24,7 @@ def test_every_negative_code_has_its_own_subclass() -> None:
     (ls.CMD_NOT_IMPLEMENTED_ERR, errors.NotImplementedByDeviceError),
     (ls.CMD_UNSUPPORTED_ERR, errors.UnsupportedError), (ls.CMD_FAULT_ERR, errors.FaultError),
     (ls.CMD_UNKNOWN_CMD_ERR, errors.UnknownCommandError), (ls.CMD_NO_RESOURCES_ERR, errors.NoResourcesError),
+    (ls.CMD_AUTH_ERR, errors.AuthError), (ls.CMD_SEQ_CONFLICT_ERR, errors.SeqConflictError),
 ])
 def test_named_subclasses(code: int, cls: type) -> None:
     e = error_for_code("moveAbsolute", code, "speed_pct 120 is outside 0..100")

@@ -30,6 +30,7 @@ import click
 from google.protobuf.descriptor import EnumDescriptor, FieldDescriptor
 
 from ._generated import landscape_pb2 as pb
+from .auth import SupervisorKey, load_key
 from .backend import Backend, BusBackend, SessionBackend, description_of
 from .bus import DEFAULT_DEVICE, HOST_POOL, BusSpec
 from .errors import (
@@ -298,6 +299,9 @@ class CliState:
     timeout_s: float | None
     json_out: bool
     no_session: bool = False
+    key_file: str | None = None
+    """--key-file / LANDSCAPE_KEY_FILE: this supervisor's key (docs/host-tool.md "Signed sessions")."""
+    key_id: str | None = None
     one_shot: bool = True
     """False in `run` and the shell, whose lines share one session."""
     follow_motions: bool = False
@@ -318,12 +322,16 @@ class CliState:
             if self.no_session:
                 self._refuse_second_supervisor()
             sup = Supervisor.open_bus(self.spec, device=self.device, source_address=self.source_address,
-                                      timeout_s=self.timeout_s, client_name="landscape-cli")
+                                      timeout_s=self.timeout_s, client_name="landscape-cli", key=self.key())
             sup.open()
             self.sup = sup
         elif not self.sup.connected:
             self.sup.connect()
         return self.sup
+
+    def key(self) -> SupervisorKey | None:
+        """The key --key-file names (KeyFileError, exit 2, when it cannot be used), or none."""
+        return load_key(self.key_file, self.key_id) if self.key_file else None
 
     def _refuse_second_supervisor(self) -> None:
         """--no-session while the background session speaks from the same address: two
@@ -865,6 +873,11 @@ def _print_version(ctx: click.Context, param: click.Parameter, value: bool) -> N
               help="python-can config context: section [NAME] of the config file, CAN_INTERFACE_NAME ...")
 @click.option("--can-config", default=None, metavar="FILE",
               help="python-can config file to read instead of ~/can.conf, /etc/can.conf, ~/.can, ~/.canrc")
+@click.option("--key-file", default=None, metavar="FILE", envvar="LANDSCAPE_KEY_FILE",
+              help="sign the session with a key of this file (NAME = 64 hex digits per line, mode 0600; "
+                   "env LANDSCAPE_KEY_FILE)")
+@click.option("--key-id", default=None, metavar="NAME", envvar="LANDSCAPE_KEY_ID",
+              help="which key of --key-file (default: its only one; env LANDSCAPE_KEY_ID)")
 @click.option("--no-session", is_flag=True,
               help="open a session of our own even when a background session (landscape session start) runs")
 @click.option("--json", "json_out", is_flag=True, help="print one JSON object per command")
@@ -875,7 +888,7 @@ def _print_version(ctx: click.Context, param: click.Parameter, value: bool) -> N
 @click.pass_context
 def cli(ctx: click.Context, interface: str | None, channel: str | None, bitrate: int | None, device: int,
         source_address: int | None, timeout: float | None, can_context: str | None, can_config: str | None,
-        no_session: bool, json_out: bool, verbose: int) -> None:
+        key_file: str | None, key_id: str | None, no_session: bool, json_out: bool, verbose: int) -> None:
     """Command a LandScape controller (landscaped) over CAN.
 
     Every schema command is a subcommand (landscape COMMAND --help). Exit codes: 0 ok,
@@ -884,7 +897,7 @@ def cli(ctx: click.Context, interface: str | None, channel: str | None, bitrate:
     if verbose:
         _verbose_logging(ctx, verbose)
     st = CliState(BusSpec(interface, channel, bitrate, can_context, can_config), device, source_address, timeout,
-                  json_out, no_session=no_session)
+                  json_out, no_session=no_session, key_file=key_file, key_id=key_id)
     ctx.obj = st
     ctx.call_on_close(st.close)
 

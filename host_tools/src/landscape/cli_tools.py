@@ -562,7 +562,7 @@ def _global_args(st: CliState) -> list[str]:
     spec = st.spec
     for opt, value in (("--interface", spec.interface), ("--channel", spec.channel), ("--bitrate", spec.bitrate),
                        ("--can-context", spec.context), ("--can-config", spec.config_file),
-                       ("--timeout", st.timeout_s)):
+                       ("--timeout", st.timeout_s), ("--key-file", st.key_file), ("--key-id", st.key_id)):
         if value is not None:
             out += [opt, str(value)]
     out += ["--device", f"{st.device:#04x}"]

@@ -141,7 +141,7 @@ class DeviceTimeoutError(CommandError):
 
 class NotConnectedError(CommandError):
     code = pb.CMD_NOT_CONNECTED_ERR
-    hint = "the session was dropped (heartbeat lost?); connect again"
+    hint = "the device has no session of this supervisor (its message says why it ended); connect again"
 
 
 class NotImplementedByDeviceError(CommandError):
@@ -174,12 +174,27 @@ class NoResourcesError(CommandError):
     hint = "a table on the device is full (supervisors, paths, points); free some"
 
 
+class AuthError(CommandError):
+    """The device's policy needs a signed session, or the keys of host and device differ."""
+
+    code = pb.CMD_AUTH_ERR
+    hint = "give this host a key of the device's key file: --key-file or LANDSCAPE_KEY_FILE"
+
+
+class SeqConflictError(CommandError):
+    """The device ran another request with this request's seq: another client speaks from this
+    address, or frames are forged on the bus (the library has retried once with a fresh seq)."""
+
+    code = pb.CMD_SEQ_CONFLICT_ERR
+    hint = "nothing ran: send it again with a fresh seq; pin a --source-address of your own"
+
+
 _BY_CODE: dict[int, type[CommandError]] = {
     cls.code: cls for cls in (
         GenericCommandError, ParamError, ParamOutOfRangeError, WrongStateError, NotOwnerError,
         BusyError, DeviceTimeoutError, NotConnectedError, NotImplementedByDeviceError,
         UnsupportedError, VersionMismatchCommandError, FaultError, UnknownCommandError,
-        NoResourcesError)
+        NoResourcesError, AuthError, SeqConflictError)
 }
 
 
@@ -199,3 +214,13 @@ def error_for_code(command: str, ret_code: int, ret_msg: str) -> CommandError:
 
 class ArgumentError(LandscapeError, ValueError):
     """A command was given an argument the schema does not have or cannot hold."""
+
+
+class KeyFileError(ArgumentError):
+    """The host's key file cannot be used: others may read it, a line is not a key, or it lacks
+    the key named (docs/host-tool.md "Signed sessions")."""
+
+
+class SignatureError(LandscapeError):
+    """The device's answer does not carry this host's key's signature: the device holds another
+    key of that name, or the answer is forged."""

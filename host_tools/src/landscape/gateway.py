@@ -762,6 +762,7 @@ class Gateway:
                 known = None  # the host's stand-in: let this session try the device's own
             sup = Supervisor(self._bus, device=device, source_address=addr, notifier=self._notifier,
                              client_name=client_name, heartbeat_period_ms=self.cfg.heartbeat_period_ms,
+                             key=self.cfg.key,
                              channel_name=self.channel, description=known)
             try:
                 await loop.run_in_executor(None, sup.open)

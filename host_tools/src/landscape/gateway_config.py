@@ -16,8 +16,9 @@ from pathlib import Path
 from typing import Any
 
 from ._generated import landscape_pb2 as pb
+from .auth import SupervisorKey, load_key
 from .bus import DEFAULT_HEARTBEAT_PERIOD_MS
-from .errors import ArgumentError
+from .errors import ArgumentError, KeyFileError
 
 DEFAULT_HOST = "127.0.0.1"
 DEFAULT_PORT = 4840  # the IANA port of OPC UA's binary protocol (opc.tcp)
@@ -54,6 +55,9 @@ class GatewayConfig:
     bitrate: int | None = None
     pool: tuple[int, ...] = DEFAULT_POOL
     heartbeat_period_ms: int = DEFAULT_HEARTBEAT_PERIOD_MS
+    #: [supervisors] key_file and key_id: the key every supervisor of the gateway signs its sessions
+    #: with (docs/protocol.md "Security"); None: unsigned sessions.
+    key: SupervisorKey | None = None
     users: dict[str, str] = field(default_factory=dict)  # name -> PBKDF2 hash
     certificate_users: list[CertificateUser] = field(default_factory=list)
     source: str = "defaults"
@@ -122,7 +126,7 @@ def _pool(where: str, value: object) -> tuple[int, ...]:
 _KNOWN: dict[str, set[str]] = {
     "server": {"host", "port", "security", "certificate", "private_key", "allow_anonymous", "session_timeout_s"},
     "bus": {"interface", "channel", "bitrate"},
-    "supervisors": {"pool", "heartbeat_period_ms"},
+    "supervisors": {"pool", "heartbeat_period_ms", "key_file", "key_id"},
     "users": set(),
     "certificate_users": set(),
 }
@@ -211,6 +215,16 @@ def parse_config(text: str, source: str = "<text>", *, base: Path | None = None)
                                      f"{pb.HEARTBEAT_PERIOD_MIN_MS}..{pb.HEARTBEAT_PERIOD_MAX_MS} "
                                      f"(docs/protocol.md \"Liveness\")")
         cfg.heartbeat_period_ms = hb
+    if "key_id" in sups and "key_file" not in sups:
+        raise GatewayConfigError(f"{source}: [supervisors] key_id names a key of key_file: give key_file too")
+    if "key_file" in sups:
+        key_file = path(f"{source}: [supervisors] key_file", sups["key_file"])
+        key_id = _typed(f"{source}: [supervisors] key_id", sups["key_id"], str, "a key name") \
+            if "key_id" in sups else None
+        try:
+            cfg.key = load_key(key_file, key_id)
+        except KeyFileError as exc:
+            raise GatewayConfigError(f"{source}: [supervisors] key_file: {exc}") from None
 
     for name, value in data.get("users", {}).items():
         cfg.users[name] = _check_hash(f"{source}: [users] {name}", value)

@@ -28,6 +28,7 @@ import isotp
 from google.protobuf import message_factory
 from google.protobuf.message import DecodeError, Message
 
+from . import auth
 from . import telemetry as tm
 from ._generated import landscape_pb2 as pb
 from .bus import (
@@ -58,6 +59,8 @@ from .errors import (
     LandscapeError,
     LinkLostError,
     ProtocolError,
+    SeqConflictError,
+    SignatureError,
     VersionMismatchError,
     error_for_code,
 )
@@ -173,6 +176,11 @@ class Supervisor(Commands):
     this run of it (the gateway's observer, for each OPC UA session's supervisor): the first
     connect takes it instead of reading the device's largest answer (about 140 frames) again.
     A later connect (after a dropped session; the device may have restarted) reads its own.
+
+    `key`: a key of the device's key file (``auth.load_key``): every connect is then a signed
+    one (a challenge first) and every message of the session both ways carries a MAC; a
+    downlink that does not verify is dropped and counted in `auth_refused` (docs/protocol.md
+    "Security"). None: an unsigned session, which a device of policy signed refuses.
     """
 
     def __init__(self, bus: can.BusABC, *, device: int = DEFAULT_DEVICE,
@@ -180,7 +188,7 @@ class Supervisor(Commands):
                  client_name: str = "landscape", heartbeat_period_ms: int = DEFAULT_HEARTBEAT_PERIOD_MS,
                  retries: int = 2, timeout_s: float | None = None, channel_name: str | None = None,
                  owns_bus: bool = False, disconnect_action: Enum | None = None,
-                 description: DeviceDescription | None = None) -> None:
+                 description: DeviceDescription | None = None, key: auth.SupervisorKey | None = None) -> None:
         if retries < 0:
             raise ArgumentError("retries must be >= 0")
         if heartbeat_period_ms <= 0:
@@ -198,6 +206,18 @@ class Supervisor(Commands):
         #: reconnect of this object is the same client, another object is another client).
         self.nonce = secrets.randbits(64)
         self._hb_token = 0  # ConnectRes.heartbeat_token of the current session
+        self.key = key
+        # A signed session (docs/protocol.md "Security"): what signs the uplinks and what the
+        # downlinks must verify with. "none": unsigned; "challenge": the challenge's answer is
+        # checked by _challenge; "connect": the session key of the connect under way;
+        # "session": the session's key and epoch.
+        self._auth_mode = "none"
+        self._ks: bytes | None = None
+        self._epoch = 0
+        self._hb_full = 0           # a signed session's heartbeat counter
+        self._last_notice_seq = 0   # a signed session's freshness of notices and acks
+        #: Downlinks that did not verify in a signed session (forged, or another key's).
+        self.auth_refused = 0
         self._given_description = description  # for the first connect only
         self._heard: dict[int, float] = {}  # supervisor address -> when its heartbeat was last heard
         self.client_name = client_name
@@ -218,6 +238,9 @@ class Supervisor(Commands):
         self._pending_seq: int | None = None
         self._pending_resp: pb.Response | None = None
         self._pending_bad: str | None = None  # why the answer to _pending_seq did not decode
+        self._pending_raw = b""               # the bytes of _pending_resp (a challenge's answer is checked)
+        self._pending_raw_last = b""          # the same, of the answer _transact returned last
+        self._pending_unsigned: pb.Response | None = None  # an unsigned refusal, taken if nothing signed comes
         # final notices by (session epoch, ref_seq): a late notice of an earlier session
         # never ends a request of this one that reused its seq
         self._finals: collections.OrderedDict[tuple[int, int], pb.Notice] = collections.OrderedDict()
@@ -246,12 +269,27 @@ class Supervisor(Commands):
         self._hb_thread: threading.Thread | None = None
         self._dispatch_q: queue.Queue[pb.Notice | None] = queue.Queue()
         self._running = False
-        self.connected = False
+        self._connected = False
         self.device_info: pb.ConnectRes | None = None
         self.connect_result: ConnectResult | None = None
         #: What the device published about itself (describe), read once per session at connect;
         #: every request is checked against its limits before it is sent.
         self.description: DeviceDescription | None = None
+
+    @property
+    def connected(self) -> bool:
+        """Whether the session lives as far as this host knows: connected, not dropped by the
+        device, and the link not lost (link_problem)."""
+        return self._connected and self.link_problem() is None
+
+    @connected.setter
+    def connected(self, value: bool) -> None:
+        self._connected = value
+
+    @property
+    def session_signed(self) -> bool:
+        """Whether the current session is a signed one (docs/protocol.md "Security")."""
+        return self._auth_mode == "session"
 
     # ------------------------------------------------------------ construction helpers
 
@@ -350,11 +388,24 @@ class Supervisor(Commands):
         with self._cv:
             self._finals.clear()
             self._acks.clear()
-        rv = self.request("connect", check=False, protocol_version=PROTOCOL_VERSION,
-                          schema_hash=SCHEMA_HASH, client_nonce=self.nonce, client_name=self.client_name,
-                          heartbeat_period_ms=self.heartbeat_period_ms,
-                          disconnect_action=self.disconnect_action)
+        signed: dict[str, Any] = {}
+        self._auth_mode = "none"
+        if self.key is not None:
+            host_nonce = secrets.token_bytes(auth.NONCE_BYTES)
+            self._ks = self._challenge(self.key, host_nonce)
+            self._auth_mode = "connect"
+            signed = {"key_id": self.key.key_id, "host_nonce": host_nonce}
+        try:
+            rv = self.request("connect", check=False, protocol_version=PROTOCOL_VERSION,
+                              schema_hash=SCHEMA_HASH, client_nonce=self.nonce, client_name=self.client_name,
+                              heartbeat_period_ms=self.heartbeat_period_ms,
+                              disconnect_action=self.disconnect_action, **signed)
+        except BaseException:
+            self._auth_mode = "none"
+            raise
         res = rv.message if isinstance(rv.message, pb.ConnectRes) else None
+        if rv.ret_code < 0 or res is None:
+            self._auth_mode = "none"
         if res is not None and res.client_nonce != self.nonce and rv.ret_code != pb.CMD_VERSION_MISMATCH_ERR:
             # the answer to another client's connect: another client speaks from this address
             raise AddressInUseError("connect", pb.CMD_NOT_OWNER_ERR,
@@ -378,6 +429,15 @@ class Supervisor(Commands):
             self._quiet_disconnect()
             raise VersionMismatchError(mismatch_message(PROTOCOL_VERSION, SCHEMA_HASH,
                                                         res.protocol_version, res.schema_hash))
+        if self.key is not None:
+            if not res.session_signed:
+                self._quiet_disconnect()
+                raise ProtocolError("the device accepted a signed connect as an unsigned session: its firmware "
+                                    "does not follow docs/protocol.md \"Security\"")
+            self._epoch = res.session_epoch
+            self._hb_full = 0
+            self._last_notice_seq = 0
+            self._auth_mode = "session"
         self.device_info = res
         self._hb_token = res.heartbeat_token
         self.connected = True
@@ -387,6 +447,35 @@ class Supervisor(Commands):
         self.description = given if given is not None else self._read_description()
         self.connect_result = ConnectResult(rv, res)
         return self.connect_result
+
+    def _challenge(self, key: auth.SupervisorKey, host_nonce: bytes) -> bytes:
+        """The first half of a signed connect: the device's nonce for `key`, and the session key
+        both derive from the two nonces. The device signs its answer with that key, so a device
+        holding another key of that name is found out here, before the connect."""
+        self._auth_mode = "challenge"
+        cmd = lookup("challenge")
+        req = build_request(cmd, 0, key_id=key.key_id, host_nonce=host_nonce)
+        with self._req_lock:
+            self._seq += 1
+            req.seq = self._seq
+            resp, raw = self._transact(cmd, req, None), self._pending_raw_last
+        rv = self._retval(cmd, resp)
+        if rv.ret_code < 0:
+            self._auth_mode = "none"
+            raise error_for_code(cmd.name, rv.ret_code, rv.ret_msg)
+        if not isinstance(rv.message, pb.ChallengeRes) or len(rv.message.device_nonce) != auth.NONCE_BYTES:
+            self._auth_mode = "none"
+            raise ProtocolError("the device answered the challenge without its nonce: is its firmware built from "
+                                "this tool's tree?")
+        ks = auth.session_key(key.key, host_nonce, rv.message.device_nonce, self.source_address, self.device)
+        if not auth.verify(ks, auth.DOWN, self.device, self.source_address, 0, raw):
+            self._auth_mode = "none"
+            where = key.source or "the key given"
+            raise SignatureError(
+                f"the device at {self.device:#04x} does not hold this host's key {key.key_id!r} ({where}): its answer "
+                f"to the challenge does not verify; the two key files differ for that name (or the answer is "
+                f"forged): compare them")
+        return ks
 
     def _read_description(self) -> DeviceDescription:
         """The device's describe answer, read once per session. It is the largest answer (about
@@ -413,9 +502,11 @@ class Supervisor(Commands):
 
     def disconnect(self, **opts: Unpack[CallOptions]) -> RetVal:
         """End the session at once (an owner's disconnect runs the device's disconnect handler)."""
-        rv = self.request("disconnect", **opts)
-        self.connected = False
-        self._stop_heartbeat()
+        try:
+            rv = self.request("disconnect", **opts)
+        finally:
+            self.connected = False
+            self._stop_heartbeat()
         return rv
 
     def _quiet_disconnect(self) -> None:
@@ -427,7 +518,7 @@ class Supervisor(Commands):
 
     def close(self) -> None:
         """Disconnect (best effort) and stop everything this Supervisor started. Idempotent."""
-        if self.connected and self._running and self.link_problem() is None:
+        if self.connected and self._running:
             try:
                 self.request("disconnect", check=False, timeout_s=min(self.timeout_s or 0.5, 0.5))
             except LandscapeError:
@@ -492,7 +583,7 @@ class Supervisor(Commands):
             return self._lost
         limit = self.device_silence_limit_s()
         heard = self._device_heard
-        if self.connected and limit is not None and heard is not None:
+        if self._connected and limit is not None and heard is not None:
             silent = time.monotonic() - heard
             if silent > limit:
                 return f"no heartbeat from it for {silent:.1f} s"
@@ -530,9 +621,17 @@ class Supervisor(Commands):
         next_t = time.monotonic()
         reported = False
         while not self._hb_stop.is_set():
+            token = self._hb_token
+            ks = self._ks if self._auth_mode == "session" else None
+            if ks is not None:
+                # a signed session: the MAC of a counter newer than the last (docs/protocol.md "Security")
+                self._hb_full += 1
+                counter = self._hb_full & 0xFF
+                token = auth.heartbeat_mac(ks, self.source_address, self._epoch, self._hb_full,
+                                           self.heartbeat_period_ms)
             try:
                 self.bus.send(tm.encode("HEARTBEAT", self.source_address, hb_role=1, hb_counter=counter,
-                                        hb_period_ms=self.heartbeat_period_ms, hb_token=self._hb_token))
+                                        hb_period_ms=self.heartbeat_period_ms, hb_token=token))
                 reported = False
             except Exception as exc:  # keep beating: a transient bus error must not end the session
                 if _line_gone(exc):
@@ -570,27 +669,52 @@ class Supervisor(Commands):
             self.description.check_request(req)
         if not self._running:
             raise LandscapeError("the session is not open: use `with Supervisor(bus) as sup:`")
-        if cmd.field != "connect" and cmd.field != "disconnect" and not self.connected:
+        if cmd.field != "connect" and cmd.field != "disconnect" and not self._connected:
             raise LandscapeError("not connected: call connect() first (or use the Supervisor as a context manager)")
-        with self._req_lock:
-            self._seq = self._seq + 1 if self._seq < 0xFFFFFFFF else 1
-            req.seq = self._seq
-            resp = self._transact(cmd, req, timeout_s)
-        rv = self._retval(cmd, resp)
-        if rv.ret_code == pb.CMD_NOT_CONNECTED_ERR and cmd.field not in ("connect", "disconnect") and self.connected:
-            # The device dropped this session (its heartbeats stopped reaching it for longer than its
-            # time-out: this process stalled, or the bus lost them). Every front end connects again
-            # on its next request when `connected` is False (session daemon, CLI, gateway).
-            log.warning("the device at %#04x dropped this session (%#04x): its heartbeats did not reach it in "
-                        "time; the next request connects again", self.device, self.source_address)
+        rv = self._send_with_new_seq(cmd, req, timeout_s)
+        if rv.ret_code == pb.CMD_SEQ_CONFLICT_ERR and cmd.field != "connect":
+            # Nothing ran: the device ran another request with this seq, which this host did not
+            # send (another client on this address, or a forged frame). Once with a fresh seq.
+            first = rv.seq
+            log.warning("%s: the device ran another request with seq %d (%s); sending it again with a fresh seq",
+                        cmd.name, first, rv.ret_msg)
+            rv = self._send_with_new_seq(cmd, req, timeout_s)
+            if rv.ret_code == pb.CMD_SEQ_CONFLICT_ERR and check:
+                raise SeqConflictError(
+                    cmd.name, rv.ret_code,
+                    f"{rv.ret_msg}; seq {first} was taken too: another client speaks from {self.source_address:#04x}, "
+                    f"or frames are forged on the bus: pin another --source-address, or sign the session "
+                    f"(docs/protocol.md \"Security\")")
+        if rv.ret_code == pb.CMD_NOT_CONNECTED_ERR and cmd.field not in ("connect", "disconnect") and self._connected:
+            # The device has no session of ours: it says why (its heartbeats stopped reaching it,
+            # or a disconnect came from this address). Every front end connects again on its next
+            # request when `connected` is False (session daemon, CLI, gateway).
+            log.warning("the device at %#04x ended this session of %#04x: %s; the next request connects again",
+                        self.device, self.source_address, rv.ret_msg)
             self.connected = False
         if check and rv.ret_code < 0:
             raise error_for_code(cmd.name, rv.ret_code, rv.ret_msg)
         return rv
 
+    def _send_with_new_seq(self, cmd: Command, req: pb.Request, timeout_s: float | None) -> RetVal:
+        with self._req_lock:
+            self._seq = self._seq + 1 if self._seq < 0xFFFFFFFF else 1
+            req.seq = self._seq
+            resp = self._transact(cmd, req, timeout_s)
+        return self._retval(cmd, resp)
+
+    def _sign(self, body: bytes) -> bytes:
+        """An uplink as it goes out: with its MAC field in a signed session or connect."""
+        ks = self._ks
+        if self._auth_mode == "session" and ks is not None:
+            return auth.sign(ks, auth.UP, self.source_address, self.device, self._epoch, body)
+        if self._auth_mode == "connect" and ks is not None:
+            return auth.sign(ks, auth.UP, self.source_address, self.device, 0, body)
+        return body
+
     def _transact(self, cmd: Command, req: pb.Request, timeout_s: float | None,
                   tries: int | None = None) -> pb.Response:
-        data = pb.Uplink(request=req).SerializeToString()
+        data = self._sign(pb.Uplink(request=req).SerializeToString())
         if len(data) > MAX_MESSAGE_BYTES:
             raise ArgumentError(f"{cmd.name}: the request is {len(data)} bytes, more than one ISO-TP "
                                 f"message holds ({MAX_MESSAGE_BYTES}); split it (e.g. several path-load calls)")
@@ -601,6 +725,7 @@ class Supervisor(Commands):
             self._pending_seq = req.seq
             self._pending_resp = None
             self._pending_bad = None
+            self._pending_unsigned = None
             self._mark = self._hist_base + len(self._hist)
         try:
             for attempt in range(tries):
@@ -619,7 +744,12 @@ class Supervisor(Commands):
                         self._cv.wait(min(left, 0.2))
                     if self._pending_resp is None and self._pending_bad is None:
                         self.check_link()
+                    if self._pending_resp is None and self._pending_unsigned is not None:
+                        # nothing signed came: the device's unsigned word that it has no session
+                        # of ours (it cannot sign for a session it no longer has)
+                        self._pending_resp = self._pending_unsigned
                     if self._pending_resp is not None:
+                        self._pending_raw_last = self._pending_raw
                         return self._pending_resp
                     if self._pending_bad is not None:
                         raise ProtocolError(f"{cmd.name} (seq {req.seq}): the controller answered, but its "
@@ -631,6 +761,7 @@ class Supervisor(Commands):
                 self._pending_seq = None
                 self._pending_resp = None
                 self._pending_bad = None
+                self._pending_unsigned = None
         raise ControllerTimeoutError(
             f"no answer from the controller at address {self.device:#04x} on {self.channel_name} to "
             f"{cmd.name} (seq {req.seq}, {tries} tries of {per_try:g} s): is landscaped running on that "
@@ -685,7 +816,7 @@ class Supervisor(Commands):
         reply = pb.RsvpReply(rsvp_id=rsvp_id, ret_code=ret_code, data=list(data))
         with self._cv:
             self._acks.pop(rsvp_id, None)  # a new answer: wait for its own acknowledgement
-        self._send(pb.Uplink(rsvp_reply=reply).SerializeToString())
+        self._send(self._sign(pb.Uplink(rsvp_reply=reply).SerializeToString()))
 
     def answer_rsvp(self, rsvp: int | pb.Notice, ret_code: int = pb.CMD_EXEC_OK, data: Sequence[str] = (), *,
                     timeout_s: float = 1.0, check: bool = True) -> pb.RsvpAck:
@@ -753,6 +884,10 @@ class Supervisor(Commands):
         try:
             dl.ParseFromString(data)
         except DecodeError as exc:
+            if self._auth_mode == "session" and self._ks is not None and not auth.verify(
+                    self._ks, auth.DOWN, self.device, self.source_address, self._epoch, data):
+                self.auth_refused += 1  # not the device's: nothing to fail a request for
+                return
             self.protocol_errors += 1
             what = undecodable_reason(data, exc)
             seq = response_seq(data)
@@ -769,8 +904,25 @@ class Supervisor(Commands):
             with self._cv:
                 if self._pending_seq is not None and dl.response.seq == self._pending_seq \
                         and self._pending_resp is None:
-                    self._pending_resp = dl.response
-                    self._cv.notify_all()
+                    if self._response_verifies(data, dl.response):
+                        self._pending_resp = dl.response
+                        self._pending_raw = data
+                        self._cv.notify_all()
+                    elif not auth.has_mac(data) and (
+                            dl.response.ret_code == pb.CMD_NOT_CONNECTED_ERR
+                            or (self._auth_mode == "connect" and dl.response.ret_code < 0)):
+                        # unsigned, so anyone's: taken only when nothing signed comes (_transact);
+                        # a refused connect carries no state to protect
+                        self._pending_unsigned = dl.response
+                        if self._auth_mode == "connect":
+                            self._pending_resp = dl.response
+                            self._pending_raw = data
+                            self._cv.notify_all()
+                    else:
+                        self.auth_refused += 1
+            return
+        if self._auth_mode == "session" and not self._fresh_and_signed(data, dl):
+            self.auth_refused += 1
             return
         if which == "notice":
             n = dl.notice
@@ -796,6 +948,28 @@ class Supervisor(Commands):
                 self._cv.notify_all()
             return
         self.protocol_errors += 1
+
+    def _response_verifies(self, data: bytes, res: pb.Response) -> bool:
+        """Whether an answer to the pending request carries the MAC it must (always, outside a
+        signed session; the challenge's answer is checked by _challenge)."""
+        ks = self._ks
+        if self._auth_mode in ("none", "challenge") or ks is None:
+            return True
+        epoch = res.session_epoch if self._auth_mode == "connect" else self._epoch
+        return auth.verify(ks, auth.DOWN, self.device, self.source_address, epoch, data)
+
+    def _fresh_and_signed(self, data: bytes, dl: pb.Downlink) -> bool:
+        """A notice or an RsvpAck of a signed session: its MAC verifies and its notice_seq is newer
+        than the last one taken (a replayed one is not)."""
+        ks = self._ks
+        if ks is None or not auth.verify(ks, auth.DOWN, self.device, self.source_address, self._epoch, data):
+            return False
+        seq = dl.notice.notice_seq if dl.WhichOneof("msg") == "notice" else dl.rsvp_ack.notice_seq
+        with self._cv:
+            if seq <= self._last_notice_seq:
+                return False
+            self._last_notice_seq = seq
+        return True
 
     @property
     def _hist_end(self) -> int:
