@@ -328,15 +328,19 @@ typedef struct ls_core {
     uint32_t auth_connects_refused;
     uint32_t functional_refused;
     uint32_t anonymous_stops;
-    /* Which key signs the downlinks being sent (ls_send_bytes): `set` false, the
-     * live signed session of their address (or none); else `key` (NULL: none)
-     * with `epoch`: the answer to a challenge or a connect. */
+    /* Which key signs the downlinks being sent (ls_send_bytes): `set` false, or
+     * to another address than `addr`, the live signed session of their address
+     * (or none); else `key` (NULL: none) with `epoch`: the answer to a
+     * challenge, a connect, or the disconnect that ended a signed session. */
     struct {
         bool set;
+        uint8_t addr;
         const ls_auth_session_key_t *key;
         uint32_t epoch;
     } tx_sign;
-    ls_auth_session_key_t connect_key; /* the session key of the connect or challenge being answered */
+    /* the session key of the connect or challenge being answered, or of the
+     * signed session a disconnect ends (its answer is still signed) */
+    ls_auth_session_key_t connect_key;
     /* scratch (kept here, not on the stack: the messages are large) */
     ls_Uplink up;
     ls_Downlink down; /* the response being built (handlers write into it) */

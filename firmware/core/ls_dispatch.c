@@ -285,8 +285,18 @@ static void run_request(ls_core_t *core, uint8_t addr, ls_Request *rq, int sup, 
                         const arrival_t *how)
 {
     ls_session_t *s = sup >= 0 ? &core->sessions[sup] : NULL;
-    /* disconnect ends the session it answers: its answer still carries that epoch */
+    /* disconnect ends the session it answers: its answer still carries that
+     * epoch, and a signed session's answer still its MAC (the key is wiped
+     * with the session) */
     ls_Response *res = ls_send_new_response(core, rq->seq, s != NULL ? s->epoch : 0u);
+    const bool ends_signed = s != NULL && s->signed_session && rq->which_cmd == ls_Request_disconnect_tag;
+    if (ends_signed) {
+        core->connect_key = s->key;
+        core->tx_sign.set = true;
+        core->tx_sign.addr = addr;
+        core->tx_sign.key = &core->connect_key;
+        core->tx_sign.epoch = s->epoch;
+    }
     ls_call_t call = { .core = core,
                        .sup = sup,
                        .req = rq,
@@ -317,6 +327,10 @@ static void run_request(ls_core_t *core, uint8_t addr, ls_Request *rq, int sup, 
         res->which_result = 0; /* no result on errors, but a version refusal's (connect_terms) */
     }
     ls_send_response(core, s, addr);
+    if (ends_signed) {
+        core->tx_sign.set = false;
+        ls_auth_wipe(&core->connect_key, sizeof core->connect_key);
+    }
 }
 
 /* A challenge: answered at once, outside every session (no seq rule, no
@@ -594,6 +608,7 @@ static bool verified(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t l
             return false;
         }
         core->tx_sign.set = true; /* unsigned: nothing verified */
+        core->tx_sign.addr = addr;
         core->tx_sign.key = NULL;
         answer_bad_request(core, addr, ls_RetCode_CMD_AUTH_ERR, rq->seq, "connect with key \"%s\" refused: %s",
                            c->key_id, why);
@@ -601,6 +616,7 @@ static bool verified(ls_core_t *core, uint8_t addr, const uint8_t *buf, size_t l
     }
     ls_auth_challenge_drop(auth, addr); /* a device nonce serves one connect */
     core->tx_sign.set = true;           /* refusals of this connect: signed for its client */
+    core->tx_sign.addr = addr;
     core->tx_sign.key = &core->connect_key;
     core->tx_sign.epoch = 0u;
     how->connect_key = &core->connect_key;

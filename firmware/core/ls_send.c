@@ -97,7 +97,7 @@ void ls_send_bytes(ls_core_t *core, uint8_t addr, uint8_t *buf, size_t len, size
 {
     const ls_auth_session_key_t *key = core->tx_sign.key;
     uint32_t epoch = core->tx_sign.epoch;
-    if (!core->tx_sign.set) {
+    if (!core->tx_sign.set || core->tx_sign.addr != addr) {
         const int i = ls_core_session_of(core, addr);
         key = i >= 0 && core->sessions[i].signed_session ? &core->sessions[i].key : NULL;
         epoch = i >= 0 ? core->sessions[i].epoch : 0u;

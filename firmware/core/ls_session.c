@@ -334,6 +334,7 @@ int32_t ls_session_connect(ls_core_t *core, uint8_t addr, ls_call_t *call)
     if (s->signed_session) {
         /* the acceptance is the session's first signed message, in its epoch */
         core->tx_sign.set = true;
+        core->tx_sign.addr = s->addr;
         core->tx_sign.key = &s->key;
         core->tx_sign.epoch = s->epoch;
     }
@@ -372,6 +373,7 @@ int32_t ls_session_challenge(ls_core_t *core, uint8_t addr, ls_call_t *call)
      * host knows now whether both hold the same key. */
     ls_auth_session_key(auth, c, addr, core->cfg.node_addr, &core->connect_key);
     core->tx_sign.set = true;
+    core->tx_sign.addr = addr;
     core->tx_sign.key = &core->connect_key;
     core->tx_sign.epoch = 0u;
     memcpy(rs->device_nonce.bytes, nd, sizeof nd);

@@ -166,6 +166,16 @@ static void test_a_signed_connect_opens_a_signed_session_whose_answers_verify(vo
     assert_int_equal(g_rx[d].msg.response.result.describe.auth_policy, ls_AuthPolicy_AUTH_SIGNED);
     /* the challenge's nonce served one connect: a second connect with it is refused */
     assert_int_equal(g_dev_auth.challenges[0].used, false);
+    /* the answer to the disconnect that ends the session still carries its MAC
+     * (signed_req verifies it), while another session's downlinks keep theirs */
+    req(ls_Request_release_tag);
+    assert_int_equal(code_at(signed_req(&c)), ls_RetCode_CMD_EXEC_OK);
+    req(ls_Request_disconnect_tag);
+    const int e = signed_req(&c);
+    assert_int_equal(code_at(e), ls_RetCode_CMD_EXEC_OK);
+    assert_int_equal(g_rx[e].msg.response.session_epoch, c.epoch);
+    assert_int_equal(ls_core_session_of(&g_core, OWNER), -1);
+    assert_false(g_core.tx_sign.set);
 }
 
 static void test_in_signed_mode_an_unsigned_connect_gets_no_session_slot(void **state)
