@@ -13,9 +13,11 @@ answered with decline and its effect, give control back, disconnect.
 from __future__ import annotations
 
 import hashlib
+import hmac
 import importlib.util
 import secrets
 import socket
+import struct
 import subprocess
 import threading
 import time
@@ -77,6 +79,10 @@ class RawClient:
         self.token = 0
         self.notices: list[Any] = []
         self.acks: list[Any] = []  # RsvpAck: the device's answer to each RsvpReply
+        # docs/protocol.md "Security": a signed session's key K_s and the epoch its MACs
+        # carry (0 for the challenge's answer and the connect); None: unsigned
+        self.ks: bytes | None = None
+        self.mac_epoch = 0
         self._notifier = can.Notifier(bus, [], timeout=0.01)
         address = isotp.Address(isotp.AddressingMode.NormalFixed_29bits, source_address=HOST,
                                 target_address=DEVICE)
@@ -100,24 +106,48 @@ class RawClient:
         # docs/protocol.md "Liveness": byte 0 hb_counter (+1 per frame), byte 2 hb_role 1,
         # bytes 3-4 hb_period_ms little-endian (the period stated at connect), bytes 5-7
         # hb_token little-endian (ConnectRes.heartbeat_token), byte 1 0
+        # docs/protocol.md "Security": in a signed session hb_token is the 24-bit MAC of a full
+        # counter (1 for the first heartbeat of the session) whose low 8 bits are byte 0
         period_ms = int(HEARTBEAT_PERIOD_S * 1000)
         counter = 0
+        full = 0
         while not self._stop.is_set():
             t = self.token
+            if self.ks is not None and self.epoch:
+                full += 1
+                counter = full & 0xFF
+                msg = b"LS1H" + bytes([HOST]) + struct.pack("<IIH", self.epoch, full, period_ms)
+                t = int.from_bytes(hmac.new(self.ks, msg, hashlib.sha256).digest()[:3], "little")
             data = bytes([counter, 0, 1, period_ms & 0xFF, period_ms >> 8, t & 0xFF, (t >> 8) & 0xFF, t >> 16])
             self.bus.send(can.Message(arbitration_id=HEARTBEAT_ID | HOST, is_extended_id=True, data=data))
             counter = (counter + 1) & 0xFF
             self._stop.wait(HEARTBEAT_PERIOD_S)
 
+    def mac(self, direction: bytes, source: int, target: int, body: bytes) -> bytes:
+        """docs/protocol.md "The signature": HMAC-SHA256 under K_s of the direction, both
+        addresses, the epoch (LE32) and the body, cut to 8 bytes."""
+        assert self.ks is not None
+        head = direction + bytes([source, target]) + struct.pack("<I", self.mac_epoch)
+        return hmac.new(self.ks, head + body, hashlib.sha256).digest()[:8]
+
     def send(self, uplink: Any) -> None:
-        self._stack.send(uplink.SerializeToString())
+        body = uplink.SerializeToString()
+        if self.ks is not None:
+            # the field mac (15, length-delimited: tag 0x7A, length 8) ends a signed message
+            body += b"\x7a\x08" + self.mac(b"LS1U", HOST, DEVICE, body)
+        self._stack.send(body)
 
     def _receive(self, timeout_s: float) -> Any | None:
         data = self._stack.recv(block=True, timeout=timeout_s)
         if data is None:
             return None
+        data = bytes(data)
+        if self.ks is not None:
+            assert data[-10:-8] == b"\x7a\x08", f"an unsigned downlink in a signed session: {data.hex()}"
+            assert hmac.compare_digest(data[-8:], self.mac(b"LS1D", DEVICE, HOST, data[:-10])), \
+                f"a downlink whose MAC does not verify: {data.hex()}"
         down = self.pb.Downlink()
-        down.ParseFromString(bytes(data))
+        down.ParseFromString(data)
         if down.WhichOneof("msg") == "notice":
             self.notices.append(down.notice)
         elif down.WhichOneof("msg") == "rsvp_ack":
@@ -190,6 +220,38 @@ def step_connect(c: RawClient) -> Any:
     c.token = res.connect.heartbeat_token
     c.epoch = res.connect.session_epoch
     assert c.epoch > 0 and res.session_epoch == c.epoch
+    return res.connect
+
+
+def step_signed_connect(c: RawClient, key_id: str, key: bytes) -> Any:
+    """docs/protocol.md "Signed connect": a challenge with our nonce, the session key from
+    both nonces, the challenge's answer verified, the connect signed at epoch 0, its
+    acceptance verified at the new session's epoch."""
+    pb = c.pb
+    host_nonce = secrets.token_bytes(16)
+    res = c.ok(challenge=pb.ChallengeReq(key_id=key_id, host_nonce=host_nonce))
+    assert res.challenge.auth_policy == pb.AUTH_SIGNED and len(res.challenge.device_nonce) == 16
+    # K_s = HMAC(K, "LS1K" | host_nonce | device_nonce | host | device); the answer was
+    # checked by _receive only from here on, so check it by hand
+    c.ks = hmac.new(key, b"LS1K" + host_nonce + res.challenge.device_nonce + bytes([HOST, DEVICE]),
+                    hashlib.sha256).digest()
+    c.mac_epoch = 0
+    connect = pb.ConnectReq(protocol_version=pb.PROTOCOL_VERSION, schema_hash=schema_hash(), client_nonce=c.nonce,
+                            client_name="raw-signed", heartbeat_period_ms=int(HEARTBEAT_PERIOD_S * 1000),
+                            key_id=key_id, host_nonce=host_nonce)
+    c.seq += 1
+    c.send(pb.Uplink(request=pb.Request(seq=c.seq, connect=connect)))
+    # the acceptance is signed in the session's epoch, which it carries: read it, then verify
+    data = bytes(c._stack.recv(block=True, timeout=5.0) or b"")
+    down = pb.Downlink()
+    down.ParseFromString(data)
+    res = down.response
+    assert res.ret_code == pb.CMD_EXEC_OK, f"{pb.RetCode.Name(res.ret_code)} {res.ret_msg}"
+    assert res.connect.session_signed and res.connect.auth_policy == pb.AUTH_SIGNED
+    c.mac_epoch = res.connect.session_epoch
+    assert hmac.compare_digest(data[-8:], c.mac(b"LS1D", DEVICE, HOST, data[:-10])), "the acceptance is not signed"
+    c.epoch = res.connect.session_epoch
+    c.token = res.connect.heartbeat_token
     return res.connect
 
 
@@ -358,6 +420,40 @@ def test_a_session_from_the_contract_alone(raw: RawClient, dio_socket: Path) -> 
     step_rsvp_decline(raw, dio_socket)
     step_give_back(raw)
     step_disconnect(raw)
+
+
+def test_a_signed_session_from_the_contract_alone(tmp_path: Path) -> None:
+    """docs/protocol.md "Security" alone: a device of policy signed refuses the unsigned
+    connect naming the policy, then serves a signed one: describe, a move, give back,
+    disconnect, with every message both ways signed and heartbeats carrying their MACs."""
+    pb = compile_schema(tmp_path)
+    key = secrets.token_bytes(32)
+    keys = tmp_path / "keys"
+    keys.write_text(f"raw = {key.hex()}\n")
+    keys.chmod(0o600)
+    conf = tmp_path / "landscaped.conf"
+    conf.write_text(f"[security]\npolicy = signed\nkey_file = {keys}\n")
+    controller = start_controller(tmp_path / "ls0", "--config", str(conf))
+    bus = open_slcan(controller.pty)
+    try:
+        with RawClient(bus, pb) as c:
+            res = c.call(connect=pb.ConnectReq(protocol_version=pb.PROTOCOL_VERSION, schema_hash=schema_hash(),
+                                               client_nonce=c.nonce, heartbeat_period_ms=200))
+            assert res.ret_code == pb.CMD_AUTH_ERR and "policy signed" in res.ret_msg, res.ret_msg
+            step_signed_connect(c, "raw", key)
+            d = step_describe(c)
+            assert d.auth_policy == pb.AUTH_SIGNED
+            step_take_control(c)
+            time.sleep(1.5)  # longer than the 1 s time-out: only signed heartbeats kept the session
+            step_move(c, d)
+            step_give_back(c)
+            c.ok(disconnect=pb.DisconnectReq())
+    finally:
+        bus.shutdown()
+        code = controller.stop()
+        log = controller.log.read_text(errors="replace")
+        assert code == 0, f"landscaped exited with {code}:\n{log[-4000:]}"
+        assert "Sanitizer" not in log, log[-4000:]
 
 
 def test_what_the_contract_refuses(raw: RawClient) -> None:
