@@ -83,6 +83,10 @@ static int32_t do_move(ls_core_t *core, ls_call_t *call, bool relative)
         if (n_values != 6) {
             return count_error(call, what, "values", n_values, 6);
         }
+        code = ls_mcmd_check_pose(core, call, what, "values", values, un, relative);
+        if (code != 0) {
+            return code;
+        }
         double d[6], P0[16], P1[16], W[16], T[16];
         ls_units_pose_to_si(un.linear, un.angular, values, d);
         ls_mcmd_tip_of(core, q0, P0);
@@ -157,6 +161,14 @@ int32_t ls_h_move_arc(struct ls_core *core, struct ls_call *call)
     if (!ls_mcmd_all_finite(r->arc_value, 6) || !ls_mcmd_all_finite(r->goal_value, 6)) {
         return ls_reply(call, ls_RetCode_CMD_PARAM_ERR, "moveArc: values must be finite numbers");
     }
+    const ls_units_t un = ls_core_units(core, call->sup);
+    named = ls_mcmd_check_pose(core, call, "moveArc", "arc_value", r->arc_value, un, true);
+    if (named == 0) {
+        named = ls_mcmd_check_pose(core, call, "moveArc", "goal_value", r->goal_value, un, true);
+    }
+    if (named != 0) {
+        return named;
+    }
     ls_ctl_snapshot_t snap;
     (void)ls_mcmd_snapshot(core, &snap);
     const double *q0 = snap.q_cmd_rad;
@@ -174,7 +186,6 @@ int32_t ls_h_move_arc(struct ls_core *core, struct ls_call *call)
     } else {
         ls_pose_from_xyzrpy(zero, F);
     }
-    const ls_units_t un = ls_core_units(core, call->sup);
     const double *src[2] = { r->arc_value, r->goal_value };
     double *dst[2] = { via, goal };
     for (int k = 0; k < 2; k++) {

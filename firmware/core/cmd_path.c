@@ -102,6 +102,12 @@ static int32_t load_point(ls_core_t *core, ls_call_t *call, const ls_PathLoadReq
                             "yaw), got %u",
                             k, (unsigned)tp->pose_count);
         }
+        char field[32];
+        ls_fmt_print(field, sizeof field, "point %d pose", k);
+        const int32_t bad = ls_mcmd_check_pose(core, call, "pathLoad", field, tp->pose, un, true);
+        if (bad != 0) {
+            return bad;
+        }
         double v[6];
         ls_units_pose_to_si(un.linear, un.angular, tp->pose, v);
         for (int i = 0; i < 6; i++) {

@@ -75,6 +75,13 @@
 #define LS_RATE_MIN_FRACTION 0.001
 #define LS_RATE_MIN_PCT (100.0 * LS_RATE_MIN_FRACTION)
 #define LS_FRAME_ANGLE_MAX_RAD (2.0 * LS_PI)
+/* A Cartesian target or offset of a move, an arc or a path point: each
+ * translation component within LS_POSE_REACH_FACTOR x the model's reach
+ * (two reaches span the workspace from any point of it, a world frame
+ * included), each angle within +-LS_FRAME_ANGLE_MAX_RAD; a finite value
+ * beyond is refused naming it before any planning (none may turn the tool to
+ * an orientation of its own, nor reach the planner as a NaN). */
+#define LS_POSE_REACH_FACTOR 2.0
 
 /* While the core follows the control loop's state by sampling its
  * snapshot (a halt coming to rest, a DIO write taking effect, a path's

@@ -438,6 +438,60 @@ static void test_range_refusals_speak_the_session_units(void **state)
     assert_non_null(strstr(r->ret_msg, want));
 }
 
+/* docs/protocol.md "Limits": a finite but absurd Cartesian value of a move, an
+ * arc or a path point is refused like a joint value, naming it and the bound,
+ * before anything is planned (a TOOL_FRAME yaw of -1e308 turned the tool to an
+ * orientation of its own; a far arc point was refused naming a NaN tip). */
+static void test_absurd_cartesian_values_are_refused_naming_them(void **state)
+{
+    (void)state;
+    g_core.state = ls_State_RESTING;
+    const double reach2 = LS_POSE_REACH_FACTOR * ls_robot_model_reach_m(g_core.model);
+    ls_MoveRelativeReq *m = &req(ls_Request_move_relative_tag)->cmd.move_relative;
+    snprintf(m->point_name, sizeof m->point_name, "p");
+    m->frame = ls_ReferenceFrame_TOOL_FRAME;
+    m->has_frame = true;
+    m->values_count = 6;
+    m->values[5] = -1e308;
+    const ls_Response *r = must(HOST_A);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    char want[160];
+    snprintf(want, sizeof want, "moveRelative: values yaw -1e+308 radians is out of range: allowed [-%g, %g] radians",
+             LS_FRAME_ANGLE_MAX_RAD, LS_FRAME_ANGLE_MAX_RAD);
+    assert_non_null(strstr(r->ret_msg, want));
+    ls_MoveArcReq *a = &req(ls_Request_move_arc_tag)->cmd.move_arc;
+    snprintf(a->point_name, sizeof a->point_name, "arc");
+    a->frame = ls_ReferenceFrame_BASE_CARTESIAN_FRAME;
+    a->has_frame = a->has_offset_type = true;
+    a->arc_value_count = a->goal_value_count = 6;
+    a->arc_value[0] = 1e308;
+    r = must(HOST_A);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    assert_non_null(strstr(r->ret_msg, "moveArc: arc_value x 1e+308 meters is out of range"));
+    assert_null(strstr(r->ret_msg, "nan"));
+    ls_MoveAbsoluteReq *b = &req(ls_Request_move_absolute_tag)->cmd.move_absolute;
+    snprintf(b->point_name, sizeof b->point_name, "p");
+    b->frame = ls_ReferenceFrame_WORLD_CARTESIAN_FRAME;
+    b->has_frame = true;
+    b->values_count = 6;
+    b->values[2] = reach2 * 1.01;
+    assert_int_equal(must(HOST_A)->ret_code, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    ls_PathLoadReq *pl = &req(ls_Request_path_load_tag)->cmd.path_load;
+    snprintf(pl->path_name, sizeof pl->path_name, "far");
+    pl->frame = ls_ReferenceFrame_BASE_CARTESIAN_FRAME;
+    pl->motion_type = ls_MotionType_STRAIGHT_MOTION;
+    pl->number_of_points = 1;
+    pl->has_frame = pl->has_motion_type = pl->has_offset_type = pl->has_number_of_points = true;
+    pl->tags_count = 1;
+    pl->tags[0].pose_count = 6;
+    pl->tags[0].pose[4] = 7.0;
+    r = must(HOST_A);
+    assert_int_equal(r->ret_code, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR);
+    assert_non_null(strstr(r->ret_msg, "pathLoad: point 0 pose pitch 7 radians is out of range"));
+    assert_int_equal(g_core.state, ls_State_RESTING);
+    assert_false(g_core.run.active);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -449,6 +503,7 @@ int main(void)
         cmocka_unit_test_setup(test_sensor_reading, setup_locked),
         cmocka_unit_test_setup(test_units_belong_to_the_session, setup_locked),
         cmocka_unit_test(test_range_refusals_speak_the_session_units),
+        cmocka_unit_test_setup(test_absurd_cartesian_values_are_refused_naming_them, setup_locked),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
