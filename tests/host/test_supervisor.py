@@ -410,3 +410,13 @@ def test_path_move_leaves_cycles_to_the_device(bus, notifier, device: FakeDevice
         assert not device.requests[-1].path_move.HasField("number_of_cycles")  # absent: the device runs 1
         sup.wait_complete(sup.path_move("p", number_of_cycles=0), timeout_s=5)
         assert device.requests[-1].path_move.HasField("number_of_cycles")  # 0 sent: the dry run
+
+
+def test_connected_is_false_once_the_link_is_lost(bus, notifier, device: FakeDevice) -> None:
+    """A supervisor whose line is gone says so through `connected` too, not only through
+    link_problem() (front ends connect again or stop when it is False)."""
+    with sup_on(bus, notifier) as sup:
+        assert sup.connected
+        sup._link_failed("the line closed")
+        assert not sup.connected
+        assert sup.link_problem() == "the line closed"
