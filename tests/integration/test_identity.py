@@ -85,9 +85,10 @@ def test_a_second_client_on_the_owners_address_is_refused_naming_it(rig: Rig) ->
     with Supervisor(owner_bus, source_address=FIRST, client_name="owner", owns_bus=True) as owner:
         owner.lock()
         epoch = owner.connect_result.device.session_epoch if owner.connect_result else 0
-        # opened now, as a program that starts later does (a bus opened earlier holds the owner's answers)
-        intruder = Supervisor(open_slcan(rig.ptys[1]), source_address=FIRST, client_name="recorder",
-                              owns_bus=True)
+        # on the owner's own link segment (from another one, its frames never reach a session:
+        # docs/protocol.md "Sessions bound to their link"): the owner's bus object and its listener
+        # thread (a pty has one reader), an ISO-TP stack of its own opened now
+        intruder = Supervisor(owner_bus, source_address=FIRST, client_name="recorder", notifier=owner._notifier)
         with pytest.raises(AddressInUseError) as exc:
             intruder.open()
         msg = str(exc.value)
@@ -131,7 +132,9 @@ def test_heartbeats_without_the_token_do_not_keep_an_abandoned_session(buses: li
             alarm = None
             sent = 0
             while time.monotonic() - t0 < HEARTBEAT_TIMEOUT_S + 2.0 and alarm is None:
-                buses[2].send(tm.encode("HEARTBEAT", victim_addr, hb_role=1, hb_counter=sent & 0xFF,
+                # on the victim's own segment: from another one the network layer drops them before
+                # the token is looked at (docs/protocol.md "Sessions bound to their link")
+                buses[1].send(tm.encode("HEARTBEAT", victim_addr, hb_role=1, hb_counter=sent & 0xFF,
                                         hb_period_ms=200, hb_token=forged))
                 sent += 1
                 for n in observer.notices(timeout_s=0.1):
