@@ -33,10 +33,19 @@ LTO = ["-flto", "-ffat-lto-objects"]
 ALLOCATORS = {"malloc", "free", "calloc", "realloc", "_malloc_r", "_free_r", "_calloc_r", "_realloc_r", "_sbrk",
               "_sbrk_r", "aligned_alloc", "posix_memalign", "memalign", "_Znwj", "_Znaj", "_ZdlPv", "_ZdaPv"}
 NANOPB_RUNTIME = ("pb_encode.c", "pb_decode.c", "pb_common.c")
+# libsodium's sources firmware/auth calls into (HMAC-SHA256, SHA-256, the constant-time compare and wipe), as
+# its own build compiles them; CONFIGURED is the macro by which a build without its autotools says it set the
+# platform up (no #warning), NATIVE_LITTLE_ENDIAN that the Cortex-M4 is little-endian.
+SODIUM_SOURCES = ("src/libsodium/crypto_auth/hmacsha256/auth_hmacsha256.c",
+                  "src/libsodium/crypto_hash/sha256/cp/hash_sha256_cp.c",
+                  "src/libsodium/crypto_verify/sodium/verify.c", "src/libsodium/sodium/utils.c")
+SODIUM_INCLUDE = "src/libsodium/include"
+SODIUM_DEFINES = ["CONFIGURED=1", "NATIVE_LITTLE_ENDIAN=1"]
 # What the image does with each library of landscaped's link closure that is not one of our targets.
 # A library missing here fails the benchmark: someone must decide what it means on a bare board.
 LIBRARIES = {
     "nanopb::protobuf-nanopb-static": "nanopb runtime, compiled from Debian's nanopb source package",
+    "PkgConfig::SODIUM": "libsodium's HMAC-SHA256 (firmware/auth), compiled from Debian's libsodium source package",
     "PkgConfig::EIGEN": "header-only",
     "m": "newlib's libm (-lm)",
     "Threads::Threads": "landscaped's threads (process glue): none on the bare board",
@@ -66,6 +75,8 @@ CXX_SUFFIXES = (".cpp", ".cc", ".cxx")
 
 def obj_stem(src: Path) -> str:
     """Object name for the per-part breakdown: the DBC code (also named landscape.c) stays apart."""
+    if "libsodium" in str(src):
+        return "sodium_" + src.stem
     return src.stem.replace("landscape", "dbc_landscape" if "dbc" in str(src) else "landscape")
 
 
@@ -118,23 +129,35 @@ def run(cmd: list[str], **kw: object) -> subprocess.CompletedProcess[str]:
 
 def nanopb_runtime() -> Path:
     """Debian's nanopb source package (the runtime matching Debian's generator), fetched once per
-    machine with a private apt configuration (the system's own apt sources, as deb-src; nothing of the
-    system's apt state changes) and kept in $LS_BENCH_CACHE (default ~/.cache/landscape-bench), so a fresh
-    build-bench (a CI clone) does not fetch it again. The PyPI `nanopb` sdist and wheel carry the generator
-    only, and libnanopb-dev only an x86 archive."""
-    version = run(["dpkg-query", "-W", "-f=${Version}", "nanopb"]).stdout.strip()
+    machine (debian_source). The PyPI `nanopb` sdist and wheel carry the generator only, and
+    libnanopb-dev only an x86 archive."""
+    return debian_source("nanopb", "nanopb", NANOPB_RUNTIME, "its generator made the codecs")
+
+
+def sodium_sources() -> Path:
+    """Debian's libsodium source package, of the version landscaped links (libsodium-dev), fetched once
+    per machine (debian_source): libsodium-dev carries an x86 archive only."""
+    return debian_source("libsodium", "libsodium-dev", SODIUM_SOURCES, "firmware/auth links it")
+
+
+def debian_source(package: str, installed: str, needed: tuple[str, ...], why: str) -> Path:
+    """The unpacked Debian source package `package` at the version of the installed `installed`, fetched
+    with a private apt configuration (the system's own apt sources, as deb-src; nothing of the system's apt
+    state changes) and kept in $LS_BENCH_CACHE (default ~/.cache/landscape-bench), so a fresh build-bench (a
+    CI clone) does not fetch it again. `needed`: the files it must hold."""
+    version = run(["dpkg-query", "-W", "-f=${Version}", installed]).stdout.strip()
     if not version:
-        raise BenchError("Debian's nanopb is not installed (its generator made the codecs): run .ci/setup")
+        raise BenchError(f"Debian's {installed} is not installed ({why}): run .ci/setup")
     upstream = version.split("-")[0].split(":")[-1]
-    src = CACHE / f"nanopb-{version.replace(':', '_')}" / f"nanopb-{upstream}"
-    if all((src / f).is_file() for f in NANOPB_RUNTIME):
+    src = CACHE / f"{package}-{version.replace(':', '_')}" / f"{package}-{upstream}"
+    if all((src / f).is_file() for f in needed):
         return src
     parts = deb_src_parts()
     if not parts:
         raise BenchError("no Debian archive in /etc/apt/sources.list or /etc/apt/sources.list.d/ to derive a deb-src "
-                         f"entry from; put nanopb's pb_encode.c/pb_decode.c/pb_common.c into {src}/")
+                         f"entry from; unpack {package}'s source into {src}/")
     src.parent.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(prefix="lsbench-nanopb-", dir=src.parent.parent) as tmpdir:
+    with tempfile.TemporaryDirectory(prefix=f"lsbench-{package}-", dir=src.parent.parent) as tmpdir:
         dest = Path(tmpdir)
         apt = dest / "apt"
         for d in ("parts", "lists/partial", "cache/archives/partial"):
@@ -144,10 +167,10 @@ def nanopb_runtime() -> Path:
         opts = ["-o", "Dir::Etc::SourceList=/dev/null", "-o", f"Dir::Etc::SourceParts={apt / 'parts'}",
                 "-o", f"Dir::State::Lists={apt / 'lists'}", "-o", f"Dir::Cache={apt / 'cache'}"]
         up = run(["apt-get", *opts, "update"])
-        got = run(["apt-get", *opts, "source", f"nanopb={version}"], cwd=dest) if up.returncode == 0 else up
+        got = run(["apt-get", *opts, "source", f"{package}={version}"], cwd=dest) if up.returncode == 0 else up
         fetched = dest / src.name
-        if not all((fetched / f).is_file() for f in NANOPB_RUNTIME):
-            raise BenchError(f"cannot fetch Debian's nanopb {version} source package: "
+        if not all((fetched / f).is_file() for f in needed):
+            raise BenchError(f"cannot fetch Debian's {package} {version} source package: "
                              f"{(got.stderr or got.stdout).strip()[-200:]}")
         src.parent.mkdir(exist_ok=True)
         if not src.exists():  # another run may have put it there meanwhile
@@ -216,6 +239,7 @@ def label(path: str) -> str:
                      ("ls_isotp", "firmware/isotp"), ("ls_traj", "firmware/motion/ls_traj.c"),
                      ("ls_ramp", "firmware/motion/ls_ramp.c"),
                      ("ls_robot_model", "firmware/model"), ("pb_", "nanopb runtime"),
+                     ("ls_auth", "firmware/auth"), ("sodium_", "libsodium (HMAC-SHA256, SHA-256)"),
                      ("landscape.pb", "generated nanopb codecs"),
                      ("dbc_landscape", "generated DBC code (cantools)"), ("hal.", "hal wrappers"),
                      ("fw_main", "bench main + HAL stubs, with the static ls_core_t and ls_net_t")):
@@ -312,13 +336,19 @@ class Image:
     flash_without_lto: int
 
 
-def build_image(targets: list[FwTarget], npb: Path | None, defines: list[str], tmp: Path) -> Image:
+def build_image(targets: list[FwTarget], npb: Path | None, sodium: Path | None, defines: list[str],
+                tmp: Path) -> Image:
     """Cross-compile and link the firmware's portable libraries + fw_main.c with `defines` added to every
     unit (a profile's), and measure the static RAM parts with fw_sizes.c under the same flags."""
     all_includes = list(dict.fromkeys(p for t in targets for p in t.includes))
     main_t = FwTarget("fw_main", [ROOT / "bench" / "footprint" / "fw_main.c"], all_includes)
-    runtime_t = FwTarget("nanopb runtime", [npb / f for f in NANOPB_RUNTIME]) if npb is not None else None
-    units = [(t, src) for t in [*targets, *([runtime_t] if runtime_t else []), main_t] for src in t.sources]
+    libs = []
+    if npb is not None:
+        libs.append(FwTarget("nanopb runtime", [npb / f for f in NANOPB_RUNTIME]))
+    if sodium is not None:
+        inc = sodium / SODIUM_INCLUDE
+        libs.append(FwTarget("libsodium", [sodium / f for f in SODIUM_SOURCES], [inc / "sodium"], SODIUM_DEFINES))
+    units = [(t, src) for t in [*targets, *libs, main_t] for src in t.sources]
     if any(src.suffix in CXX_SUFFIXES for _, src in units) and shutil.which(CXX) is None:
         raise BenchError(f"{CXX} is missing for the C++ sources: apt-get install gcc-arm-none-eabi")
     jobs = [(t, src, tmp / f"{i:02d}_{obj_stem(src)}.o") for i, (t, src) in enumerate(units)
@@ -331,7 +361,8 @@ def build_image(targets: list[FwTarget], npb: Path | None, defines: list[str], t
         cmd = [CXX, *CXXFLAGS] if src.suffix in CXX_SUFFIXES else [CC, *CFLAGS]
         if obj != sizes_job[2]:
             cmd += LTO
-        includes = [*([npb] if npb is not None else []), *t.includes]
+        includes = [*([npb] if npb is not None else []), *([sodium / SODIUM_INCLUDE] if sodium is not None else []),
+                    *t.includes]
         cc = run([*cmd, *t.options, *(f"-D{d}" for d in [*t.defines, *defines]), *(f"-I{p}" for p in includes),
                   "-c", str(src), "-o", str(obj)])
         return "" if cc.returncode == 0 else f"cross-compiling {src.name} ({t.name}) failed: " + \
@@ -344,7 +375,8 @@ def build_image(targets: list[FwTarget], npb: Path | None, defines: list[str], t
     objs, firmware_allocs = [obj for _, _, obj in jobs], set()
     for _, src, obj in jobs:
         undefined = set(run(["arm-none-eabi-nm", "-u", str(obj)]).stdout.split()) - {"U"}
-        if "fw_main" not in obj.name:
+        if "fw_main" not in obj.name and "libsodium" not in str(src):
+            # libsodium's utils.c has sodium_malloc: what counts is whether the image links an allocator (7c)
             firmware_allocs |= {f"{src.name}: {s}" for s in undefined & ALLOCATORS}
     elf, mapf = tmp / "fw.elf", tmp / "fw.map"
     ld = run([CC, *CFLAGS, *LTO, *LDFLAGS, *map(str, objs), f"-Wl,-Map={mapf}", "-o", str(elf), "-lm"])
@@ -375,11 +407,12 @@ def bench_footprint(quick: bool) -> Section:
         raise BenchError(f"sources missing (generated ones are made by the bench build): {', '.join(missing)}; "
                          "build with bench/run.py first")
     npb = nanopb_runtime() if "nanopb::protobuf-nanopb-static" in libraries else None
+    sodium = sodium_sources() if "PkgConfig::SODIUM" in libraries else None
     with tempfile.TemporaryDirectory(prefix="lsbench-fp-") as tmpdir:
         (Path(tmpdir) / "mcu").mkdir()
         (Path(tmpdir) / "linux").mkdir()
-        img = build_image(targets, npb, profiles["mcu"], Path(tmpdir) / "mcu")
-        ref = build_image(targets, npb, profiles["linux"], Path(tmpdir) / "linux")
+        img = build_image(targets, npb, sodium, profiles["mcu"], Path(tmpdir) / "mcu")
+        ref = build_image(targets, npb, sodium, profiles["linux"], Path(tmpdir) / "linux")
     text, data, bss, syms, firmware_allocs = img.text, img.data, img.bss, img.syms, img.firmware_allocs
     linked_allocs = sorted({line.split()[-1] for line in syms} & ALLOCATORS)
     why = re.findall(r"\((lib_a-[\w-]+\.o)\)\s*\n?\s+\S*\((lib_a-[\w-]+\.o)\) "

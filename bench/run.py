@@ -35,6 +35,7 @@ import b_heartbeat
 import b_ik
 import b_isotp
 import b_jitter
+import b_mac
 import b_otg
 import b_pathspeed
 import b_traj
@@ -74,6 +75,7 @@ BENCHES = [
     Bench(14, "Drive bus load per cycle", b_drives.bench_budget, ("bench_drive_budget",)),
     Bench(15, "SYNC period at the drives", b_drives.bench_sync, ("landscaped", "ls-simdrives")),
     Bench(16, "Tracking behind the drives", b_drives.bench_tracking, ("landscaped", "ls-simdrives")),
+    Bench(17, "A signed session's MAC per message", b_mac.bench_mac, ("bench_mac",)),
 ]
 
 
