@@ -1121,18 +1121,6 @@ static void ctx_error(ini_ctx_t *c, const char *fmt, ...)
     }
 }
 
-static char *trim(char *s)
-{
-    while (isspace((unsigned char)*s)) {
-        s++;
-    }
-    size_t n = strlen(s);
-    while (n > 0 && isspace((unsigned char)s[n - 1])) {
-        s[--n] = '\0';
-    }
-    return s;
-}
-
 /* inih's line source (ls_ini_next_line: counted lines, over-long lines and
  * NUL bytes refused, leading blanks dropped), which also refuses unknown
  * [sections] and stops at the first error. */
@@ -1152,7 +1140,7 @@ static char *ini_reader_fn(char *str, int num, void *stream)
         char *end = strchr(tmp, ']');
         if (end != NULL) {
             *end = '\0';
-            char *name = trim(tmp + 1);
+            char *name = ls_ini_trim(tmp + 1);
             if (!known_section(name)) {
                 ctx_error(c, "unknown section [%s]; expected %s", name, SECTIONS);
                 return NULL;

@@ -63,18 +63,6 @@ int ls_keys_check_mode(const char *path, char *msg, size_t msglen)
     return LS_OK;
 }
 
-static char *trim(char *s)
-{
-    while (isspace((unsigned char)*s)) {
-        s++;
-    }
-    size_t n = strlen(s);
-    while (n > 0 && isspace((unsigned char)s[n - 1])) {
-        s[--n] = '\0';
-    }
-    return s;
-}
-
 /* 2 * LS_AUTH_KEY_BYTES hex digits into key: LS_OK or LS_EINVAL. libsodium's
  * decoder runs in constant time, so a key's digits leak nothing by timing. */
 static int parse_key(const char *v, uint8_t *key)
@@ -96,8 +84,8 @@ static int take_line(char *s, ls_auth_t *auth, const char *path, int line, char 
         return fail(msg, msglen, LS_EINVAL, "%s:%d: expected NAME = 64 hex digits (one key per line)", path, line);
     }
     *eq = '\0';
-    const char *name = trim(s);
-    const char *value = trim(eq + 1);
+    const char *name = ls_ini_trim(s);
+    const char *value = ls_ini_trim(eq + 1);
     uint8_t key[LS_AUTH_KEY_BYTES];
     if (parse_key(value, key) != LS_OK) {
         /* never the value itself: it may be most of a key */
@@ -142,7 +130,7 @@ int ls_keys_load(const char *path, ls_auth_t *auth, char *msg, size_t msglen)
     int line = 0;
     r = LS_OK;
     while (r == LS_OK && ls_ini_next_line(buf, (int)sizeof buf, f, &line, why, sizeof why) != NULL) {
-        char *s = trim(buf);
+        char *s = ls_ini_trim(buf);
         if (s[0] != '\0' && s[0] != '#' && s[0] != ';') {
             r = take_line(s, auth, path, line, msg, msglen);
         }

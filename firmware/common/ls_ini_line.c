@@ -1,5 +1,6 @@
 #include "ls_ini_line.h"
 
+#include <ctype.h>
 #include <string.h>
 
 char *ls_ini_next_line(char *str, int num, FILE *f, int *line, char *why, size_t whylen)
@@ -29,4 +30,16 @@ char *ls_ini_next_line(char *str, int num, FILE *f, int *line, char *why, size_t
         memmove(str, start, strlen(start) + 1);
     }
     return str;
+}
+
+char *ls_ini_trim(char *s)
+{
+    while (isspace((unsigned char)*s)) {
+        s++;
+    }
+    size_t n = strlen(s);
+    while (n > 0 && isspace((unsigned char)s[n - 1])) {
+        s[--n] = '\0';
+    }
+    return s;
 }

@@ -19,4 +19,8 @@
  * set; the caller reports it with the file and *line). */
 char *ls_ini_next_line(char *str, int num, FILE *f, int *line, char *why, size_t whylen);
 
+/* s without its leading and trailing blanks: the trailing ones are cut in
+ * place (a NUL written), the result points into s. */
+char *ls_ini_trim(char *s);
+
 #endif

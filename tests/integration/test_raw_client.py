@@ -30,7 +30,7 @@ import can
 import isotp
 import pytest
 
-from conftest import open_slcan, start_controller
+from conftest import Controller, open_slcan, start_controller
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -386,6 +386,14 @@ def step_disconnect(c: RawClient) -> None:
 
 # ---------------------------------------------------------------- the tests
 
+def stopped_cleanly(controller: Controller) -> None:
+    """Stop landscaped; a crash, a sanitizer report or a leak at shutdown fails the test."""
+    code = controller.stop()
+    log = controller.log.read_text(errors="replace")
+    assert code == 0, f"landscaped exited with {code}:\n{log[-4000:]}"
+    assert "Sanitizer" not in log, log[-4000:]
+
+
 @pytest.fixture
 def dio_socket(tmp_path: Path) -> Path:
     return tmp_path / "dio.sock"
@@ -405,10 +413,7 @@ def raw(tmp_path: Path, dio_socket: Path) -> Iterator[RawClient]:
             yield client
     finally:
         bus.shutdown()
-        code = controller.stop()
-        log = controller.log.read_text(errors="replace")
-        assert code == 0, f"landscaped exited with {code}:\n{log[-4000:]}"
-        assert "Sanitizer" not in log, log[-4000:]
+        stopped_cleanly(controller)
 
 
 def test_a_session_from_the_contract_alone(raw: RawClient, dio_socket: Path) -> None:
@@ -450,10 +455,7 @@ def test_a_signed_session_from_the_contract_alone(tmp_path: Path) -> None:
             c.ok(disconnect=pb.DisconnectReq())
     finally:
         bus.shutdown()
-        code = controller.stop()
-        log = controller.log.read_text(errors="replace")
-        assert code == 0, f"landscaped exited with {code}:\n{log[-4000:]}"
-        assert "Sanitizer" not in log, log[-4000:]
+        stopped_cleanly(controller)
 
 
 def test_what_the_contract_refuses(raw: RawClient) -> None:

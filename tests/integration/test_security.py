@@ -66,22 +66,22 @@ def stop_rig(rig: Rig) -> None:
     assert "Sanitizer" not in log, log[-4000:]
 
 
-@pytest.fixture
-def signed(tmp_path: Path) -> Iterator[Rig]:
-    rig = start_rig(tmp_path, "signed")
+def running_rig(tmp_path: Path, policy: str) -> Iterator[Rig]:
+    rig = start_rig(tmp_path, policy)
     try:
         yield rig
     finally:
         stop_rig(rig)
+
+
+@pytest.fixture
+def signed(tmp_path: Path) -> Iterator[Rig]:
+    yield from running_rig(tmp_path, "signed")
 
 
 @pytest.fixture
 def unsigned(tmp_path: Path) -> Iterator[Rig]:
-    rig = start_rig(tmp_path, "unsigned")
-    try:
-        yield rig
-    finally:
-        stop_rig(rig)
+    yield from running_rig(tmp_path, "unsigned")
 
 
 class Forger:
@@ -221,6 +221,19 @@ def assert_in_control(sup: Supervisor, q_before: list[float]) -> None:
     assert sup.connected and sup.link_problem() is None
 
 
+def forged_while_active(sup: Supervisor, forger: Forger) -> list[float]:
+    """Lock and activate, the whole forgery set, the owner still in control, then the owner's own
+    move of joint 1 by +0.2 rad runs (no forged seq was consumed). The joints before the move."""
+    sup.lock()
+    sup.activate()
+    q0 = joints(sup)
+    forge_everything(sup, forger, seq_ahead=sup._seq + 1)
+    assert_in_control(sup, q0)
+    rv = sup.move_absolute("mine", [q0[0] + 0.2, *q0[1:]])
+    sup.wait_complete(rv, timeout_s=30)
+    return q0
+
+
 def test_signed_forgeries_change_nothing_and_the_owner_keeps_control(signed: Rig) -> None:
     key = auth.load_key(signed.key_file)
     recorded: list[bytes] = []
@@ -230,15 +243,7 @@ def test_signed_forgeries_change_nothing_and_the_owner_keeps_control(signed: Rig
     try:
         assert sup.session_signed and sup.connect_result is not None
         assert sup.connect_result.device.auth_policy == pb.AUTH_SIGNED
-        sup.lock()
-        sup.activate()
-        q0 = joints(sup)
-        forge_everything(sup, forger, seq_ahead=sup._seq + 1)
-        assert_in_control(sup, q0)
-
-        # the owner's own next requests run: no forged seq was consumed
-        rv = sup.move_absolute("mine", [q0[0] + 0.2, *q0[1:]])
-        sup.wait_complete(rv, timeout_s=30)
+        q0 = forged_while_active(sup, forger)
         q1 = joints(sup)
         assert abs(q1[0] - (q0[0] + 0.2)) < 1e-3
         back = sup.move_absolute("back", q0)
@@ -339,13 +344,7 @@ def test_unsigned_cross_link_forgeries_fail(unsigned: Rig) -> None:
     try:
         assert not sup.session_signed
         assert sup.connect_result is not None and sup.connect_result.device.auth_policy == pb.AUTH_UNSIGNED
-        sup.lock()
-        sup.activate()
-        q0 = joints(sup)
-        forge_everything(sup, forger, seq_ahead=sup._seq + 1)
-        assert_in_control(sup, q0)
-        rv = sup.move_absolute("mine", [q0[0] + 0.2, *q0[1:]])
-        sup.wait_complete(rv, timeout_s=30)
+        forged_while_active(sup, forger)
         assert counter(status(sup), "frames_foreign") > 0
         sup.deactivate()
         sup.release()

@@ -55,9 +55,22 @@ static void a_nul_byte_and_an_over_long_line_are_refused(void **state)
     fclose(f);
 }
 
+/* Blanks go from both ends, in place; a blank line becomes empty. */
+static void test_trim_cuts_the_blanks_at_both_ends(void **state)
+{
+    (void)state;
+    char a[] = " \t key = value \r\n";
+    assert_string_equal(ls_ini_trim(a), "key = value");
+    char b[] = " \t\n";
+    assert_string_equal(ls_ini_trim(b), "");
+    char c[] = "x";
+    assert_ptr_equal(ls_ini_trim(c), c);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_trim_cuts_the_blanks_at_both_ends),
         cmocka_unit_test(lines_are_counted_and_leading_blanks_dropped),
         cmocka_unit_test(a_nul_byte_and_an_over_long_line_are_refused),
     };
