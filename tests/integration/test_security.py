@@ -256,6 +256,12 @@ def test_signed_forgeries_change_nothing_and_the_owner_keeps_control(signed: Rig
         assert_in_control(sup, joints(sup))
         assert abs(joints(sup)[0] - q0[0]) < 1e-3, "a replayed move ran"
 
+        # the owner connects again while its signed session lives (its challenge signed in it):
+        # still the owner, in a new signed session
+        epoch = sup.connect_result.device.session_epoch
+        again = sup.connect()
+        assert again.device.owner and again.device.session_signed and again.device.session_epoch != epoch
+
         text = status(sup)
         assert counter(text, "auth_refused") >= 8, text  # MAC missing or wrong
         assert counter(text, "auth_stale") >= 1, text     # the replay

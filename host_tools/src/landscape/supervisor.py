@@ -216,6 +216,7 @@ class Supervisor(Commands):
         self._epoch = 0
         self._hb_full = 0           # a signed session's heartbeat counter
         self._last_notice_seq = 0   # a signed session's freshness of notices and acks
+        self._challenge_signer: tuple[bytes, int] | None = None  # (K_s, epoch) a challenge is signed in
         #: Downlinks that did not verify in a signed session (forged, or another key's).
         self.auth_refused = 0
         self._given_description = description  # for the first connect only
@@ -389,10 +390,13 @@ class Supervisor(Commands):
             self._finals.clear()
             self._acks.clear()
         signed: dict[str, Any] = {}
+        # a signed session of ours that the device may still hold (a reconnect): the device takes
+        # nothing unsigned from its address, so the challenge goes out signed in it
+        live = (self._ks, self._epoch) if self._auth_mode == "session" and self._ks is not None else None
         self._auth_mode = "none"
         if self.key is not None:
             host_nonce = secrets.token_bytes(auth.NONCE_BYTES)
-            self._ks = self._challenge(self.key, host_nonce)
+            self._ks = self._challenge(self.key, host_nonce, live)
             self._auth_mode = "connect"
             signed = {"key_id": self.key.key_id, "host_nonce": host_nonce}
         try:
@@ -448,17 +452,21 @@ class Supervisor(Commands):
         self.connect_result = ConnectResult(rv, res)
         return self.connect_result
 
-    def _challenge(self, key: auth.SupervisorKey, host_nonce: bytes) -> bytes:
+    def _challenge(self, key: auth.SupervisorKey, host_nonce: bytes, live: tuple[bytes, int] | None) -> bytes:
         """The first half of a signed connect: the device's nonce for `key`, and the session key
         both derive from the two nonces. The device signs its answer with that key, so a device
         holding another key of that name is found out here, before the connect."""
         self._auth_mode = "challenge"
+        self._challenge_signer = live
         cmd = lookup("challenge")
         req = build_request(cmd, 0, key_id=key.key_id, host_nonce=host_nonce)
         with self._req_lock:
             self._seq += 1
             req.seq = self._seq
-            resp, raw = self._transact(cmd, req, None), self._pending_raw_last
+            try:
+                resp, raw = self._transact(cmd, req, None), self._pending_raw_last
+            finally:
+                self._challenge_signer = None
         rv = self._retval(cmd, resp)
         if rv.ret_code < 0:
             self._auth_mode = "none"
@@ -710,6 +718,9 @@ class Supervisor(Commands):
             return auth.sign(ks, auth.UP, self.source_address, self.device, self._epoch, body)
         if self._auth_mode == "connect" and ks is not None:
             return auth.sign(ks, auth.UP, self.source_address, self.device, 0, body)
+        live = self._challenge_signer
+        if self._auth_mode == "challenge" and live is not None:
+            return auth.sign(live[0], auth.UP, self.source_address, self.device, live[1], body)
         return body
 
     def _transact(self, cmd: Command, req: pb.Request, timeout_s: float | None,
