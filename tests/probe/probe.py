@@ -218,6 +218,9 @@ ABSURD_TAGS: list[list[dict[str, Any]]] = [
 ]
 
 
+# bytes fields (a challenge's nonce): empty, one short, far over the schema's size, all ones
+BYTES: list[bytes] = [b"", b"\x00" * 15, b"\xa5" * 300, b"\xff" * 16]
+
 def absurd_values(fd: FieldDescriptor) -> list[Any]:
     """Values of `fd`'s wire type that make no sense for it."""
     if fd.type == FieldDescriptor.TYPE_MESSAGE:
@@ -228,6 +231,8 @@ def absurd_values(fd: FieldDescriptor) -> list[Any]:
         one = ENUM_NUMBERS
     elif fd.type == FieldDescriptor.TYPE_STRING:
         one = STRINGS
+    elif fd.type == FieldDescriptor.TYPE_BYTES:
+        one = BYTES
     elif fd.type == FieldDescriptor.TYPE_BOOL:
         one = [True]
     elif fd.type in (FieldDescriptor.TYPE_UINT32, FieldDescriptor.TYPE_UINT64):
