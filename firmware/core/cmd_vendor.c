@@ -32,7 +32,7 @@ int32_t ls_h_send_command(struct ls_core *core, struct ls_call *call)
     ls_SendCommandRes *r = &call->res->result.send_command;
     out_t o = { r->result, sizeof r->result, 0 };
     if (strcmp(in, "help") == 0 || in[0] == '\0') {
-        put(&o, "help\nversion\nstatus\nfaults\nevents\nrtstats\nconfig\nstopping\ndrives\nhome\n");
+        put(&o, "help\nversion\nstatus\nsecurity\nfaults\nevents\nrtstats\nconfig\nstopping\ndrives\nhome\n");
     } else if (strcmp(in, "version") == 0) {
         put(&o, "firmware=%s\nprotocol=%u\nschema=%08X\n", core->cfg.firmware_version,
             (unsigned)ls_Protocol_PROTOCOL_VERSION, (unsigned)LS_SCHEMA_HASH);
@@ -49,23 +49,16 @@ int32_t ls_h_send_command(struct ls_core *core, struct ls_call *call)
         put(&o, "fault=%s\nrx_malformed=%u\ntx_lost=%u\nsessions_dropped=%u\nhb_refused=%u\nconnects_refused=%u\n",
             core->fault, (unsigned)core->rx_malformed, (unsigned)core->tx_lost, (unsigned)core->sessions_dropped,
             (unsigned)core->hb_refused, (unsigned)core->connects_refused);
-        put(&o,
-            "policy=%s auth_refused=%u auth_stale=%u auth_connects_refused=%u functional_refused=%u "
-            "anonymous_stops=%u\n",
-            ls_core_policy(core) == ls_AuthPolicy_AUTH_SIGNED ? "signed" : "unsigned", (unsigned)core->auth_refused,
-            (unsigned)core->auth_stale, (unsigned)core->auth_connects_refused, (unsigned)core->functional_refused,
-            (unsigned)core->anonymous_stops);
         for (int i = 0; i < LS_MAX_SUPERVISORS; i++) {
             const ls_session_t *s = &core->sessions[i];
             if (s->connected) {
                 /* executed= stays last: tools read it as the line's tail */
                 put(&o,
                     "session 0x%02X name=%s units=%s,%s heartbeat_timeout_ms=%u disconnect_action=%s hb_refused=%u "
-                    "link=%d signed=%s auth_refused=%u executed=%u\n",
+                    "executed=%u\n",
                     s->addr, s->name, ls_units_linear_name(s->units.linear), ls_units_angular_name(s->units.angular),
                     (unsigned)s->heartbeat_timeout_ms, ls_core_disconnect_action_name(s->disconnect_action),
-                    (unsigned)s->hb_refused, s->link, s->signed_session ? "yes" : "no", (unsigned)s->auth_refused,
-                    (unsigned)s->executed);
+                    (unsigned)s->hb_refused, (unsigned)s->executed);
             }
         }
         for (int i = 0; i < LS_MAX_DIO_WATCHES; i++) {
@@ -118,6 +111,25 @@ int32_t ls_h_send_command(struct ls_core *core, struct ls_call *call)
         const int32_t code = ls_drv_readouts(core, call, in + 6, o.buf, o.cap);
         if (code != ls_RetCode_CMD_EXEC_OK) {
             return code;
+        }
+    } else if (strcmp(in, "security") == 0) {
+        /* docs/protocol.md "Security": the policy, what was refused, and the
+         * link and signing of each session (never a key) */
+        const ls_auth_t *auth = core->cfg.auth;
+        put(&o,
+            "policy=%s\nkeys=%u\nunsigned_queries=%s\nauth_refused=%u\nauth_stale=%u\nauth_connects_refused=%u\n"
+            "functional_refused=%u\nanonymous_stops=%u\nchallenges_replaced=%u\n",
+            ls_core_policy(core) == ls_AuthPolicy_AUTH_SIGNED ? "signed" : "unsigned",
+            auth != NULL ? (unsigned)auth->n_keys : 0u, auth != NULL && auth->unsigned_queries ? "true" : "false",
+            (unsigned)core->auth_refused, (unsigned)core->auth_stale, (unsigned)core->auth_connects_refused,
+            (unsigned)core->functional_refused, (unsigned)core->anonymous_stops,
+            auth != NULL ? (unsigned)auth->challenges_replaced : 0u);
+        for (int i = 0; i < LS_MAX_SUPERVISORS; i++) {
+            const ls_session_t *s = &core->sessions[i];
+            if (s->connected) {
+                put(&o, "session 0x%02X link=%d signed=%s auth_refused=%u\n", s->addr, s->link,
+                    s->signed_session ? "yes" : "no", (unsigned)s->auth_refused);
+            }
         }
     } else if (strcmp(in, "stopping") == 0) {
         if (core->model == NULL) {

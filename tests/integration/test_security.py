@@ -149,8 +149,9 @@ def joints(sup: Supervisor) -> list[float]:
     return list(m.joints)
 
 
-def status(sup: Supervisor) -> str:
-    return str(sup.send_command("status").result["result"])
+def status(sup: Supervisor, what: str = "security") -> str:
+    """sendCommand `what`: "security" (docs/protocol.md "Security"), "status" (the transport's counters)."""
+    return str(sup.send_command(what).result["result"])
 
 
 def counter(text: str, name: str) -> int:
@@ -356,7 +357,7 @@ def test_unsigned_cross_link_forgeries_fail(unsigned: Rig) -> None:
         assert not sup.session_signed
         assert sup.connect_result is not None and sup.connect_result.device.auth_policy == pb.AUTH_UNSIGNED
         forged_while_active(sup, forger)
-        assert counter(status(sup), "frames_foreign") > 0
+        assert counter(status(sup, "status"), "frames_foreign") > 0
         sup.deactivate()
         sup.release()
     finally:

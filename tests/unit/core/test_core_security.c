@@ -468,9 +468,9 @@ static void test_a_session_is_bound_to_the_link_its_connect_came_on(void **state
     ls_core_on_uplink(&g_core, OWNER, 2, g_buf, os.bytes_written, g_now);
     assert_int_equal(ls_core_session_link(&g_core, OWNER), 2);
     assert_int_equal(ls_core_session_link(&g_core, ROGUE), LS_NO_SESSION);
-    /* unsigned sessions are told apart by their link too: sendCommand status shows it */
+    /* unsigned sessions are told apart by their link too: sendCommand security shows it */
     req(ls_Request_send_command_tag);
-    snprintf(g_rq.cmd.send_command.input, sizeof g_rq.cmd.send_command.input, "status");
+    snprintf(g_rq.cmd.send_command.input, sizeof g_rq.cmd.send_command.input, "security");
     g_rq.seq = ++g_seq;
     memset(&g_up, 0, sizeof g_up);
     g_up.which_msg = ls_Uplink_request_tag;
@@ -478,8 +478,8 @@ static void test_a_session_is_bound_to_the_link_its_connect_came_on(void **state
     os = pb_ostream_from_buffer(g_buf, sizeof g_buf);
     assert_true(pb_encode(&os, ls_Uplink_fields, &g_up));
     ls_core_on_uplink(&g_core, OWNER, 2, g_buf, os.bytes_written, g_now);
-    assert_non_null(strstr(g_rx[g_nrx - 1u].msg.response.result.send_command.result, "link=2 signed=no"));
-    assert_non_null(strstr(g_rx[g_nrx - 1u].msg.response.result.send_command.result, "policy=unsigned"));
+    assert_non_null(strstr(g_rx[g_nrx - 1u].msg.response.result.send_command.result, "session 0x21 link=2 signed=no auth_refused=0\n"));
+    assert_non_null(strstr(g_rx[g_nrx - 1u].msg.response.result.send_command.result, "policy=unsigned\nkeys=0\n"));
 }
 
 int main(void)
