@@ -499,7 +499,7 @@ static void on_verified_uplink(ls_core_t *core, uint8_t addr, const uint8_t *buf
         uint32_t rsvp_id = 0;
         if (cmd == 0u && scan_rsvp_reply(buf, len, &rsvp_id)) {
             ls_rsvp_refuse(core, addr, rsvp_id, "did not decode (%s): %s: send one within describe's field_limits",
-                           PB_GET_ERROR(&is), fault != LS_WIRE_FITS ? where : "a value exceeds the firmware's limits");
+                           PB_GET_ERROR(is), fault != LS_WIRE_FITS ? where : "a value exceeds the firmware's limits");
             return;
         }
         if (fault != LS_WIRE_FITS) {

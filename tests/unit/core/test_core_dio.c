@@ -369,7 +369,7 @@ static void test_a_reply_the_device_cannot_take_is_refused_with_an_ack(void **st
     }
     const uint32_t malformed = g_core.rx_malformed;
     size_t before = g_nrx;
-    ls_core_on_uplink(&g_core, HOST_A, buf, len, g_now);
+    ls_core_on_uplink(&g_core, HOST_A, 0, buf, len, g_now);
     const ls_RsvpAck *a = the_ack(before, HOST_A);
     assert_int_equal(a->rsvp_id, (uint32_t)id);
     assert_int_equal(a->ret_code, ls_RetCode_CMD_PARAM_ERR);
@@ -385,7 +385,7 @@ static void test_a_reply_the_device_cannot_take_is_refused_with_an_ack(void **st
     buf[1] = (uint8_t)(2u + 2u + 3u);
     buf[8] = 0xFF;
     before = g_nrx;
-    ls_core_on_uplink(&g_core, HOST_A, buf, 2u + 4u + 3u, g_now);
+    ls_core_on_uplink(&g_core, HOST_A, 0, buf, 2u + 4u + 3u, g_now);
     a = the_ack(before, HOST_A);
     assert_int_equal(a->ret_code, ls_RetCode_CMD_PARAM_ERR);
     assert_non_null(strstr(a->ret_msg, "not valid UTF-8"));
