@@ -140,8 +140,8 @@ def test_owner_heartbeat_loss_deactivates_and_releases(bus: can.BusABC) -> None:
 def test_send_command_vendor_hooks(bus: can.BusABC) -> None:
     with Supervisor(bus, client_name="vendor") as sup:
         helps = sup.request("sendCommand", input="help").result["result"].split()
-        assert helps == ["help", "version", "status", "faults", "events", "rtstats", "config", "stopping", "drives",
-                         "home"]
+        assert helps == ["help", "version", "status", "security", "faults", "events", "rtstats", "config", "stopping",
+                         "drives", "home"]
         # the simulated arm has no drives to read and nothing to home: one line each, naming why
         rv = sup.request("sendCommand", check=False, input="drives")
         assert rv.ret_code == pb.CMD_UNSUPPORTED_ERR
