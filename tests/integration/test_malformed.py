@@ -323,7 +323,7 @@ def test_unknown_command_id_is_answered_with_unknown_cmd(sup: Supervisor, reader
     res = reader.response(seq)
     assert res.ret_code == pb.CMD_UNKNOWN_CMD_ERR
     assert res.ret_msg == (f"command id {number} is not in this firmware's schema: update the firmware or the "
-                           f"host tool (they must come from the same tree)")
+                           f"client (they must come from the same schema)")
     assert res.WhichOneof("result") is None
 
 
