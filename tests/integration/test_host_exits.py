@@ -161,6 +161,34 @@ def test_the_shell_says_it_once_and_ends_with_exit_4(doomed: Controller) -> None
     assert took < EXIT_WITHIN_S
 
 
+def test_the_shell_idle_at_its_prompt_ends_when_the_device_goes(doomed: Controller) -> None:
+    """Nothing typed, nothing running: the shell's own session sees the device's heartbeat
+    answers stop, says it once and ends with exit 4 without waiting for a line."""
+    proc = popen(doomed, "shell", stdin=subprocess.PIPE)
+    assert proc.stdin is not None
+    proc.stdin.write("lock\n")
+    proc.stdin.flush()
+    wait_for_line(proc, "lock: CMD_EXEC_OK")
+    t0 = time.monotonic()
+    doomed.proc.send_signal(signal.SIGKILL)
+    try:
+        proc.wait(timeout=EXIT_WITHIN_S + 22)  # stdin stays open: no line comes, no end of input
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        raise AssertionError(f"the shell did not exit within {EXIT_WITHIN_S + 22} s of the kill") from None
+    took = time.monotonic() - t0
+    assert proc.stderr is not None
+    err = "\n".join(line for line in proc.stderr.read().splitlines() if not line.startswith(PROMPT_TOOLKIT_NOTE))
+    proc.stdin.close()
+    print(f"shell idle: exit {proc.returncode} {took:.2f} s after the kill: {err.strip()}")  # pytest -s
+    assert "Traceback" not in err and "Exception in thread" not in err, err
+    assert proc.returncode == 4, (proc.returncode, err)
+    lines = err.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("landscaped at 0x10 on slcan:"), err
+    assert " stopped answering: " in lines[0] and lines[0].endswith("then rerun the command"), err
+    assert took < EXIT_WITHIN_S, took
+
+
 def test_a_background_session_and_its_clients(doomed: Controller, tmp_path: Path) -> None:
     os.environ["XDG_RUNTIME_DIR"] = str(tmp_path)
     try:

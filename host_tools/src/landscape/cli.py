@@ -15,7 +15,7 @@ import sys
 import threading
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import TYPE_CHECKING, Any, NoReturn
 
 import click
 
@@ -54,6 +54,9 @@ from .registry import (
 )
 from .session import SessionClient, SessionError
 from .supervisor import Supervisor
+
+if TYPE_CHECKING:
+    from prompt_toolkit.application import Application
 
 log = logging.getLogger("landscape.cli")
 
@@ -341,6 +344,47 @@ def stop_followed(st: CliState) -> bool:
     return True
 
 
+class LinkWatch:
+    """The shell's own session watched while the prompt waits for a line: a device that stops
+    answering (its heartbeat answers stop) is said at once and ends the prompt, so the shell
+    exits 4 then, not at the next line. A background session's link is its process's to watch;
+    the shell learns of its loss at its next line."""
+
+    PERIOD_S = 0.2
+
+    def __init__(self, st: CliState, app: Application[str]) -> None:
+        self.st = st
+        self.app = app
+        self.stop = threading.Event()
+        self.thread = threading.Thread(target=self._run, daemon=True, name="landscape-shell-link")
+
+    def __enter__(self) -> LinkWatch:
+        self.thread.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop.set()
+        self.thread.join(2.0)
+
+    def _run(self) -> None:
+        while not self.stop.wait(self.PERIOD_S):
+            sup = self.st.sup
+            if sup is None or self.st.lost is not None:
+                continue
+            try:
+                sup.check_link()
+            except LinkLostError as exc:
+                say_link_lost(self.st, exc, classify(exc)[1])
+                loop = self.app.loop
+                if self.app.is_running and loop is not None:
+                    loop.call_soon_threadsafe(self._end_prompt)
+                return
+
+    def _end_prompt(self) -> None:
+        if self.app.is_running:
+            self.app.exit(exception=EOFError())
+
+
 @cli.command("shell")
 @click.pass_context
 def shell_cmd(ctx: click.Context) -> None:
@@ -367,8 +411,9 @@ def shell_cmd(ctx: click.Context) -> None:
     published = published_choices(st.backend())
     session: PromptSession[str] = PromptSession(
         history=history, completer=shell_completer(names, lambda: list(history.get_strings())[-500:], published))
+    watch = LinkWatch(st, session.app)
     # On a terminal, lines a followed motion prints go above the prompt, which is redrawn.
-    with patch_stdout(raw=True) if sys.stdout.isatty() else contextlib.nullcontext():
+    with watch, patch_stdout(raw=True) if sys.stdout.isatty() else contextlib.nullcontext():
         while st.lost is None:
             try:
                 line = session.prompt("landscape> ")
