@@ -36,8 +36,7 @@ int main(int argc, char **argv)
     memset(hn, 0x11, sizeof hn);
     memset(dn, 0x22, sizeof dn);
     ls_auth_init(&auth, ls_AuthPolicy_AUTH_SIGNED, false);
-    if (ls_auth_add_key(&auth, "bench", key) != LS_OK ||
-        ls_auth_challenge_put(&auth, 0xF1, 0, hn, dn, 0u) != LS_OK) {
+    if (ls_auth_add_key(&auth, "bench", key) != LS_OK || ls_auth_challenge_put(&auth, 0xF1, 0, hn, dn, 0u) != LS_OK) {
         return 1;
     }
     const ls_auth_challenge_t *c = ls_auth_challenge_find(&auth, 0xF1, hn, sizeof hn, 0u);

@@ -153,8 +153,8 @@ bool ls_mcmd_all_finite(const double *v, size_t n)
     return true;
 }
 
-int32_t ls_mcmd_check_pose(const ls_core_t *core, ls_call_t *call, const char *what, const char *field,
-                           const double *v, ls_units_t un, bool translations)
+int32_t ls_mcmd_check_pose(const ls_core_t *core, ls_call_t *call, const char *what, const char *field, const double *v,
+                           ls_units_t un, bool translations)
 {
     static const char *const names[6] = { "x", "y", "z", "roll", "pitch", "yaw" };
     const double reach_m = LS_POSE_REACH_FACTOR * ls_robot_model_reach_m(core->model);
@@ -163,12 +163,12 @@ int32_t ls_mcmd_check_pose(const ls_core_t *core, ls_call_t *call, const char *w
         const double si = angle ? ls_units_to_si_angular(un.angular, v[i]) : ls_units_to_si_linear(un.linear, v[i]);
         const double max_si = angle ? LS_FRAME_ANGLE_MAX_RAD : reach_m;
         if (fabs(si) > max_si) {
-            const double max = angle ? ls_units_from_si_angular(un.angular, max_si)
-                                     : ls_units_from_si_linear(un.linear, max_si);
+            const double max =
+                angle ? ls_units_from_si_angular(un.angular, max_si) : ls_units_from_si_linear(un.linear, max_si);
             const char *unit = angle ? ls_units_angular_name(un.angular) : ls_units_linear_name(un.linear);
             return ls_reply(call, ls_RetCode_CMD_PARAM_OUT_OF_RANGE_ERR,
-                            "%s: %s %s %g %s is out of range: allowed [-%g, %g] %s (docs/protocol.md \"Limits\")",
-                            what, field, names[i], v[i], unit, max, max, unit);
+                            "%s: %s %s %g %s is out of range: allowed [-%g, %g] %s (docs/protocol.md \"Limits\")", what,
+                            field, names[i], v[i], unit, max, max, unit);
         }
     }
     return 0;

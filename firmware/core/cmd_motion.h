@@ -60,8 +60,8 @@ int ls_mcmd_tip_within(const ls_core_t *core, ls_units_t un, const double p_m[3]
  * LS_POSE_REACH_FACTOR (an absolute target's position is the workspace
  * check's, ls_mcmd_tip_within): 0, or CMD_PARAM_OUT_OF_RANGE_ERR answered
  * naming the value and the bound. */
-int32_t ls_mcmd_check_pose(const ls_core_t *core, ls_call_t *call, const char *what, const char *field,
-                           const double *v, ls_units_t un, bool translations);
+int32_t ls_mcmd_check_pose(const ls_core_t *core, ls_call_t *call, const char *what, const char *field, const double *v,
+                           ls_units_t un, bool translations);
 /* CMD_UNSUPPORTED_ERR: no arm is composed. */
 int32_t ls_mcmd_no_arm(ls_call_t *call, const char *what);
 /* The plan slot, or NULL after answering in *code: CMD_BUSY_ERR, or a joint

@@ -112,8 +112,8 @@ static int32_t dispatch(ls_core_t *core, uint8_t addr, ls_call_t *call, ls_Reque
          * supervisor that sent no disconnect learns that someone did. */
         const ls_session_end_t *end = NULL;
         for (uint8_t k = 0; k < LS_MAX_SUPERVISORS; k++) {
-            const ls_session_end_t *e = &core->ended[(core->ended_next + LS_MAX_SUPERVISORS - 1u - k) %
-                                                     LS_MAX_SUPERVISORS];
+            const ls_session_end_t *e =
+                &core->ended[(core->ended_next + LS_MAX_SUPERVISORS - 1u - k) % LS_MAX_SUPERVISORS];
             if (e->epoch != 0u && e->addr == addr) {
                 end = e;
                 break;
@@ -123,8 +123,8 @@ static int32_t dispatch(ls_core_t *core, uint8_t addr, ls_call_t *call, ls_Reque
         if (end != NULL) {
             ls_fmt_print(ended, sizeof ended, " (its session %u ended: %s)", (unsigned)end->epoch, end->why);
         }
-        return ls_reply(call, ls_RetCode_CMD_NOT_CONNECTED_ERR, "%s: supervisor 0x%02X has no session%s: send connect first%s",
-                        d->name, addr, ended,
+        return ls_reply(call, ls_RetCode_CMD_NOT_CONNECTED_ERR,
+                        "%s: supervisor 0x%02X has no session%s: send connect first%s", d->name, addr, ended,
                         ls_core_policy(core) == ls_AuthPolicy_AUTH_SIGNED ? ", signed (docs/protocol.md \"Security\")"
                                                                           : "");
     }

@@ -209,9 +209,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         const snap_t before = snapshot();
         memcpy(buf, rec, len);
         switch (kind % 6u) {
-        case 0: /* as it comes */
-            ls_core_on_uplink(&g_core, OWNER, 0, buf, len, g_now);
-            break;
+        case 0: /* as it comes */ ls_core_on_uplink(&g_core, OWNER, 0, buf, len, g_now); break;
         case 1: { /* with a MAC field of the input's last bytes */
             const size_t body = len > LS_AUTH_MAC_BYTES ? len - LS_AUTH_MAC_BYTES : 0u;
             memcpy(buf, rec, body);

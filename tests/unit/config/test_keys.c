@@ -28,8 +28,8 @@ static void test_a_key_file_of_its_owner_loads_every_key(void **state)
     (void)state;
     ls_auth_t auth;
     char msg[256];
-    assert_int_equal(load("# ops keys\nops = " KEY_HEX "\n\n; bench\nbench=" KEY_HEX "\n", 0600, &auth, msg, sizeof msg),
-                     LS_OK);
+    assert_int_equal(
+        load("# ops keys\nops = " KEY_HEX "\n\n; bench\nbench=" KEY_HEX "\n", 0600, &auth, msg, sizeof msg), LS_OK);
     assert_int_equal(auth.n_keys, 2);
     assert_int_equal(ls_auth_key_index(&auth, "bench"), 1);
     assert_int_equal(auth.keys[0].key[0], 0x00);
@@ -53,9 +53,9 @@ static void test_bad_lines_are_named_without_their_digits(void **state)
     ls_auth_t auth;
     char msg[256];
     /* one digit short, and not hex: the line and the name, never the value */
-    assert_int_equal(load("ops = 00112233445566778899aabbccddeeff00112233445566778899aabbccddeef\n", 0600, &auth, msg,
-                          sizeof msg),
-                     LS_EINVAL);
+    assert_int_equal(
+        load("ops = 00112233445566778899aabbccddeeff00112233445566778899aabbccddeef\n", 0600, &auth, msg, sizeof msg),
+        LS_EINVAL);
     assert_non_null(strstr(msg, ":1: key \"ops\": expected 64 hex digits (32 random bytes), got 63 characters"));
     assert_null(strstr(msg, "00112233"));
     assert_int_equal(load("a = " KEY_HEX "\nops = zz112233445566778899aabbccddeeff00112233445566778899aabbccddeeff\n",

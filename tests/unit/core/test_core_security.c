@@ -478,7 +478,8 @@ static void test_a_session_is_bound_to_the_link_its_connect_came_on(void **state
     os = pb_ostream_from_buffer(g_buf, sizeof g_buf);
     assert_true(pb_encode(&os, ls_Uplink_fields, &g_up));
     ls_core_on_uplink(&g_core, OWNER, 2, g_buf, os.bytes_written, g_now);
-    assert_non_null(strstr(g_rx[g_nrx - 1u].msg.response.result.send_command.result, "session 0x21 link=2 signed=no auth_refused=0\n"));
+    assert_non_null(strstr(g_rx[g_nrx - 1u].msg.response.result.send_command.result,
+                           "session 0x21 link=2 signed=no auth_refused=0\n"));
     assert_non_null(strstr(g_rx[g_nrx - 1u].msg.response.result.send_command.result, "policy=unsigned\nkeys=0\n"));
 }
 
