@@ -189,6 +189,47 @@ def test_the_shell_idle_at_its_prompt_ends_when_the_device_goes(doomed: Controll
     assert took < EXIT_WITHIN_S, took
 
 
+def test_the_shell_through_a_background_session_ends_when_the_session_goes(doomed: Controller,
+                                                                          tmp_path: Path) -> None:
+    """The shell spoke through a background session that held the lock; the device dies and
+    the session process with it. The shell's next line ends it with exit 4 and one line,
+    never a session of its own opened without the lock and the units."""
+    os.environ["XDG_RUNTIME_DIR"] = str(tmp_path)
+    try:
+        assert doomed.cli("session", "start", "--lock").returncode == 0
+        proc = popen(doomed, "shell", stdin=subprocess.PIPE)
+        assert proc.stdin is not None and proc.stderr is not None and proc.stdout is not None
+        proc.stdin.write("get-motion-control-state\n")
+        proc.stdin.flush()
+        wait_for_line(proc, "get-motion-control-state: CMD_EXEC_OK")
+        doomed.proc.send_signal(signal.SIGKILL)
+        doomed.proc.wait(10)
+        deadline = time.monotonic() + 10
+        while doomed.cli("session", "status").returncode != 1 and time.monotonic() < deadline:
+            time.sleep(0.2)  # the session process saw its device go and stopped
+        proc.stdin.write("get-motion-control-state\n")
+        proc.stdin.flush()
+        try:
+            proc.wait(timeout=EXIT_WITHIN_S + 22)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            raise AssertionError(f"the shell did not end: {proc.communicate()}") from None
+        out, err = proc.stdout.read(), proc.stderr.read()
+        proc.stdin.close()
+        err = "\n".join(line for line in err.splitlines() if not line.startswith(PROMPT_TOOLKIT_NOTE))
+        print(f"shell through a session: exit {proc.returncode}: {err.strip()}")  # pytest -s
+        assert "Traceback" not in err and proc.returncode == 4, (proc.returncode, err)
+        assert len(err.splitlines()) == 1, err
+        # the session gone (its socket closed), or met on its way out (it says why)
+        gone = "the background session at " in err and ("and its lock and units with it" in err
+                                                         or "is stopping" in err)
+        assert gone or " stopped answering: " in err, err
+        assert "CMD_EXEC_OK" not in out and "no controller" not in err, (out, err)
+    finally:
+        doomed.cli("session", "stop")
+        os.environ.pop("XDG_RUNTIME_DIR", None)
+
+
 def test_a_background_session_and_its_clients(doomed: Controller, tmp_path: Path) -> None:
     os.environ["XDG_RUNTIME_DIR"] = str(tmp_path)
     try:

@@ -52,7 +52,7 @@ from .notices import SI, Units
 from .registry import (
     enum_aliases,
 )
-from .session import SessionClient, SessionError
+from .session import SessionClient, SessionError, SessionGoneError
 from .supervisor import Supervisor
 
 if TYPE_CHECKING:
@@ -204,9 +204,11 @@ def shell_line(ctx: click.Context, line: str, names: Sequence[str]) -> bool:
     except Exception as exc:  # noqa: BLE001 (one line, never a traceback; the shell goes on)
         code, msg = classify(exc)
         st = state_of(ctx)
-        if isinstance(exc, LinkLostError):
+        if isinstance(exc, (LinkLostError, SessionGoneError)):
+            # the device, or the background session that held the lock and units, is gone:
+            # nothing more this shell can do (never a session of its own opened behind the user)
             say_link_lost(st, exc, msg)  # a follower may have said it already
-            return False  # the device is gone: nothing more this shell can do
+            return False
         click.echo(msg if code is not None else f"error: {type(exc).__name__}: {one_line(exc)}", err=True)
         if code in (EXIT_BUS, EXIT_VERSION, EXIT_ERROR) and st.client is not None:
             st.client.close()   # a broken session connection is opened afresh by the next line

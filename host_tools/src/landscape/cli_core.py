@@ -58,7 +58,7 @@ from .registry import (
     parse_enum,
 )
 from .retval import RetVal
-from .session import SessionClient, socket_path
+from .session import SessionClient, SessionGoneError, socket_path
 from .supervisor import Supervisor
 
 log = logging.getLogger("landscape.cli")
@@ -310,8 +310,9 @@ class CliState:
     sup: Supervisor | None = None
     client: SessionClient | None = None
     failures: list[str] = field(default_factory=list)
-    lost: LinkLostError | None = None
-    """The shell: the device went away (reported once, as it happened); the shell ends with exit 4."""
+    lost: LinkLostError | SessionGoneError | None = None
+    """The shell: the device (or the background session it spoke through) went away, reported once
+    as it happened; the shell ends with exit 4."""
 
     def socket_path(self) -> Path:
         return socket_path(self.spec, self.device, self.source_address)
@@ -438,7 +439,8 @@ def call(backend: Backend, cmd: Command, fields: dict[str, Any], *, wait: bool, 
 _LINK_LOST_SAID = threading.Lock()
 
 
-def say_link_lost(st: CliState, exc: LinkLostError, line: str, then: Callable[[], None] | None = None) -> None:
+def say_link_lost(st: CliState, exc: LinkLostError | SessionGoneError, line: str,
+                  then: Callable[[], None] | None = None) -> None:
     """The shell's lost link, said once (by the first thread to see it: the prompt's or a
     follower's), then recorded in st.lost, on which the shell ends with exit 4. `then` runs
     between the two (a follower marks itself ended there, so that the shell, once it sees
@@ -489,7 +491,7 @@ class MotionFollower:
                 return
             code, msg = classify(exc)
             line = f"error: {msg}" if code is not None else f"error: {type(exc).__name__}: {one_line(exc)}"
-            if not (isinstance(exc, LinkLostError) and self.st is not None):
+            if not (isinstance(exc, (LinkLostError, SessionGoneError)) and self.st is not None):
                 click.echo(line, err=True)
                 self.ended.set()
                 return

@@ -68,6 +68,11 @@ class SessionError(LandscapeError):
     """No session runs, or the session process does not answer."""
 
 
+class SessionGoneError(SessionError):
+    """The session process a client talked to went away (it stopped, as it does when its device
+    stops answering): a client that held its lock and units must not carry on without them."""
+
+
 def socket_path(spec: BusSpec, device: int, source_address: int | None) -> Path:
     """Where the session of `device` on the bus of `spec` listens: $XDG_RUNTIME_DIR/landscape-
     <device>-<hash>.sock (else the temp directory). The hash covers the resolved interface and
@@ -108,7 +113,7 @@ def retval_from_dict(d: dict[str, Any]) -> RetVal:
 
 
 def error_from_dict(d: dict[str, Any]) -> LandscapeError:
-    cls = getattr(errors, str(d.get("type")), None)
+    cls = SessionGoneError if d.get("type") == SessionGoneError.__name__ else getattr(errors, str(d.get("type")), None)
     message = str(d.get("message", "the session process failed"))
     if isinstance(cls, type) and issubclass(cls, LandscapeError) and not issubclass(cls, errors.CommandError) \
             and cls is not errors.AlarmError:
@@ -238,6 +243,7 @@ class SessionServer:
                         obj = json.loads(line)
                         if not isinstance(obj, dict):
                             raise ArgumentError("each line must be a JSON object")
+                        self._check_alive()
                         if obj.get("op") == "watch":
                             self._watch(conn, send, notices_only=bool(obj.get("notices_only")))
                             return
@@ -248,6 +254,16 @@ class SessionServer:
                         return
             except (OSError, ValueError):
                 return  # the client went away
+
+    def _check_alive(self) -> None:
+        """A request that meets the session on its way out (its device gone, or stopped) gets
+        why, never what the closed Supervisor would say of a session not opened."""
+        why = self.sup.link_problem()
+        if why is not None:
+            raise self.sup._link_lost_error(why)
+        if self._stop.is_set():
+            raise SessionGoneError(f"the background session at {self.path} is stopping (`landscape session "
+                                   f"stop`, or its device stopped answering): start it again")
 
     def _handle(self, obj: dict[str, Any], send: Callable[[dict[str, Any]], None]) -> None:
         op = obj.get("op")
@@ -422,13 +438,19 @@ class SessionClient:
     def __exit__(self, *exc: object) -> None:
         self.close()
 
+    def _gone(self, detail: str) -> SessionGoneError:
+        return SessionGoneError(
+            f"the background session at {self.path} ended ({detail}), and its lock and units with it: it "
+            f"stops when its device stops answering or `landscape session stop` ends it; its log "
+            f"{self.path.with_suffix('.log')} says which; start it again "
+            f"(`landscape session start`)")
+
     def _send(self, obj: dict[str, Any]) -> None:
         self._drain()
         try:
             self._sock.sendall((json.dumps(obj) + "\n").encode())
         except OSError as exc:
-            raise SessionError(f"the session at {self.path} went away ({exc.strerror}): check "
-                               f"`landscape session status`") from None
+            raise self._gone(exc.strerror or str(exc)) from None
 
     def _read(self, timeout_s: float | None = None) -> dict[str, Any]:
         self._sock.settimeout(timeout_s if timeout_s is not None else self._read_timeout_s)
@@ -438,10 +460,9 @@ class SessionClient:
             raise SessionError(f"the session at {self.path} did not answer within "
                                f"{timeout_s or self._read_timeout_s:g} s") from None
         except OSError as exc:
-            raise SessionError(f"the session at {self.path} went away ({exc}): check "
-                               f"`landscape session status`") from None
+            raise self._gone(str(exc)) from None
         if not line:
-            raise SessionError(f"the session at {self.path} closed the connection: check `landscape session status`")
+            raise self._gone("it closed the connection")
         obj = json.loads(line)
         if "error" in obj:
             self._open_stream = False
