@@ -1057,6 +1057,21 @@ def still(sup: Supervisor, seconds: float = 1.0) -> list[float]:
     return p1
 
 
+def at_rest(sup: Supervisor, within_s: float = 5.0) -> list[float]:
+    """The tip once the stop ramp has ended: two positions 0.5 s apart within 0.1 mm, looked
+    for up to `within_s` (in the emulated guest the ramp's end comes later than the notice of
+    its start); then still for a second more."""
+    deadline = time.monotonic() + within_s
+    p0 = tip(sup)
+    while True:
+        time.sleep(0.5)
+        p1 = tip(sup)
+        if math.dist(p0, p1) < 1e-4:
+            return still(sup)
+        assert time.monotonic() < deadline, f"the tip still moves {within_s:g} s after the stop began"
+        p0 = p1
+
+
 def dist(a: list[float], b: list[float]) -> float:
     return math.dist(a, b)
 
@@ -1123,7 +1138,7 @@ def test_a_virtual_pendant_jogs_only_while_its_enabling_switch_is_held(
         emit(pad, (e.EV_KEY, e.BTN_TL, 0))  # released: it brakes on the ramp
         wait_notice(sup, "manualSwitch", switch="released")
         p2 = tip(sup)
-        p3 = still(sup, 1.5)
+        p3 = at_rest(sup)
         print(f"\npendant: jogged {1000 * dist(p0, p1):.1f} mm; after the release notice {1000 * dist(p2, p3):.2f} mm "
               f"(ramp bound {1000 * PENDANT_STOP_M:.0f} mm)")
         assert dist(p2, p3) <= PENDANT_STOP_M * 1.05
