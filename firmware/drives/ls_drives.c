@@ -371,6 +371,11 @@ static void axis_ready(ls_drives_t *d, uint8_t j)
     a->last_age = 0;
     a->ready_sync = d->master.sync_count;
     a->rebooting = false;
+    /* A drive that booted starts its CiA 402 state machine anew: what the
+     * stepper latched of it before (a step a dead drive did not follow)
+     * would otherwise fail the enable that configured it again. */
+    (void)ls_402_init(&a->ax, &a->ax.cfg);
+    memset(&a->out, 0, sizeof a->out);
     /* The script confirmed CSP; a drive that booted has forgotten its homing. */
     a->mode_shown = LS_CO_MODE_CSP;
     a->mode_known = true;
